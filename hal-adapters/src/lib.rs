@@ -1,0 +1,29 @@
+//! `hal-adapters`: the sensor layer between IMU hardware (or recordings) and the navigation core.
+//!
+//! - [`sample`]: the IMU sample type every source produces ([`ImuSample`], [`SampleFlags`]).
+//! - [`Imu`]: the trait of sample sources (SPI drivers, replays).
+//! - [`recording`]: the project's binary recording format, its reader ([`recording::Replay`]) and
+//!   writer.
+//! - [`io`]: byte sources for replays: slices (always), semihosting files (feature
+//!   `semihosting`), std files (feature `std`).
+//!
+//! `no_std`, no allocation; it does not depend on `nav-core`.
+#![cfg_attr(not(feature = "std"), no_std)]
+#![deny(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod io;
+pub mod recording;
+pub mod sample;
+
+pub use sample::{ImuSample, Motion, SampleFlags};
+
+/// A source of IMU samples: an SPI driver or a replayed recording.
+pub trait Imu {
+    /// Hard failure of the source (bus error, corrupt recording...). Data-quality problems are
+    /// [`SampleFlags`] on the sample instead.
+    type Error: core::fmt::Debug + core::fmt::Display;
+
+    /// Reads the next sample: `Ok(None)` at the end of a recording.
+    fn read_sample(&mut self) -> Result<Option<ImuSample>, Self::Error>;
+}

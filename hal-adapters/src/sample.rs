@@ -1,0 +1,89 @@
+//! The IMU sample type.
+
+use bitflags::bitflags;
+
+/// The inertial measurement of one sample, body axes forward-right-down (FRD).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Motion {
+    /// Integrated outputs over the interval (what good IMUs deliver).
+    Increments {
+        /// Angle increment, integral of `omega_ib_b` [rad].
+        delta_theta_ib_b: [f32; 3],
+        /// Velocity increment, integral of `f_ib_b` [m/s].
+        delta_v_ib_b: [f32; 3],
+    },
+    /// Instantaneous outputs at the end of the interval (typical MEMS data registers).
+    Rates {
+        /// Angular rate `omega_ib_b` [rad/s].
+        omega_ib_b: [f32; 3],
+        /// Specific force `f_ib_b` [m/s^2].
+        f_ib_b: [f32; 3],
+    },
+}
+
+bitflags! {
+    /// Per-sample data-quality flags. A flagged sample is still delivered; consumers decide
+    /// (see [`SampleFlags::usable`]).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+    pub struct SampleFlags: u16 {
+        /// A gyro axis was at full scale (clipped).
+        const GYRO_SATURATED = 1 << 0;
+        /// An accelerometer axis was at full scale (clipped).
+        const ACCEL_SATURATED = 1 << 1;
+        /// The sensor repeated its previous data (stale counter).
+        const STALE = 1 << 2;
+        /// One or more samples were missed before this one (the interval is longer).
+        const GAP = 1 << 3;
+        /// A value is NaN or infinite.
+        const NON_FINITE = 1 << 4;
+        /// The interval `dt_s` is zero, negative, or implausibly long (time went backwards or
+        /// jumped).
+        const BAD_INTERVAL = 1 << 5;
+        /// The sensor reported an internal fault for this sample.
+        const DEVICE_FAULT = 1 << 6;
+    }
+}
+
+impl SampleFlags {
+    /// Flags that make a sample unusable for navigation.
+    pub const UNUSABLE: Self = Self::STALE
+        .union(Self::NON_FINITE)
+        .union(Self::BAD_INTERVAL)
+        .union(Self::DEVICE_FAULT);
+
+    /// `true` when the sample may be fed to the navigation core.
+    pub fn usable(self) -> bool {
+        !self.intersects(Self::UNUSABLE)
+    }
+}
+
+/// One IMU sample, as every source (driver or replay) produces it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImuSample {
+    /// Time at the end of the interval (data-ready) [us]: the board's monotonic clock for a
+    /// driver, the recording's clock for a replay.
+    pub t_us: u64,
+    /// Sequence number, counting every sample the source produced (gaps show missed samples).
+    pub seq: u32,
+    /// Length of the interval the measurement covers [s].
+    pub dt_s: f32,
+    /// The measurement.
+    pub motion: Motion,
+    /// Sensor temperature [deg C]; NaN when unknown.
+    pub temperature_c: f32,
+    /// Data-quality flags.
+    pub flags: SampleFlags,
+}
+
+impl ImuSample {
+    /// Angle [rad] and velocity [m/s] increments over the interval (rates are multiplied by
+    /// `dt_s`).
+    pub fn increments(&self) -> ([f32; 3], [f32; 3]) {
+        match self.motion {
+            Motion::Increments { delta_theta_ib_b, delta_v_ib_b } => (delta_theta_ib_b, delta_v_ib_b),
+            Motion::Rates { omega_ib_b, f_ib_b } => {
+                (omega_ib_b.map(|w| w * self.dt_s), f_ib_b.map(|f| f * self.dt_s))
+            }
+        }
+    }
+}

@@ -1,0 +1,76 @@
+//! Attitude helpers: rotation-vector quaternion update and Euler angles.
+//!
+//! Euler angles are the aerospace z-y-x sequence: `c_b_n = Rz(yaw) Ry(pitch) Rx(roll)` with NED
+//! navigation axes and FRD body axes (Groves eq. 2.22; Titterton & Weston eq. 3.47).
+
+use crate::Scalar;
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+/// The quaternion of a rotation vector `phi` [rad]: `q = [cos(|phi|/2), sin(|phi|/2) phi/|phi|]`
+/// (Savage (7.1.2-20); Groves eq. 5.75). Exact for any angle, so the attitude update is exact for
+/// a constant body rate. Below 1e-3 rad the series of `sin(x/2)/x` is used (error < 1e-16 in
+/// f64), which keeps tiny increments accurate in f32.
+#[inline]
+pub fn rotation_vector_quat<T: Scalar>(phi: &Vector3<T>) -> UnitQuaternion<T> {
+    let a2 = phi.norm_squared();
+    let (w, s) = if a2 < T::c(1e-6) {
+        // cos(a/2) = 1 - a^2/8 + a^4/384;  sin(a/2)/a = 1/2 - a^2/48 + a^4/3840
+        let a4 = a2 * a2;
+        (
+            T::one() - a2 / T::c(8.0) + a4 / T::c(384.0),
+            T::c(0.5) - a2 / T::c(48.0) + a4 / T::c(3840.0),
+        )
+    } else {
+        let a = a2.sqrt();
+        let half = a * T::c(0.5);
+        (half.cos(), half.sin() / a)
+    };
+    UnitQuaternion::new_unchecked(Quaternion::new(w, phi.x * s, phi.y * s, phi.z * s))
+}
+
+/// Roll, pitch and yaw [rad] of `q_b_n` (yaw in (-pi, pi]).
+#[inline]
+pub fn euler<T: Scalar>(q_b_n: &UnitQuaternion<T>) -> (T, T, T) {
+    q_b_n.euler_angles()
+}
+
+/// `q_b_n` from roll, pitch and yaw [rad].
+#[inline]
+pub fn from_euler<T: Scalar>(roll: T, pitch: T, yaw: T) -> UnitQuaternion<T> {
+    UnitQuaternion::from_euler_angles(roll, pitch, yaw)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn constant_rate_is_exact_in_many_steps() {
+        // 400 steps of a constant rate compose to the single rotation of the total angle.
+        let omega = Vector3::new(0.3, -1.1, 2.0_f64);
+        let dt = 0.0025;
+        let mut q = UnitQuaternion::identity();
+        for _ in 0..400 {
+            q *= rotation_vector_quat(&(omega * dt));
+        }
+        let exact = UnitQuaternion::from_scaled_axis(omega * 1.0);
+        assert!(q.angle_to(&exact) < 1e-12, "{}", q.angle_to(&exact));
+    }
+
+    proptest! {
+        #[test]
+        fn matches_axis_angle(x in -3.0..3.0_f64, y in -3.0..3.0_f64, z in -3.0..3.0_f64, s in -12i32..0) {
+            let phi = Vector3::new(x, y, z) * 10f64.powi(s);
+            let q = rotation_vector_quat(&phi);
+            prop_assert!((q.norm() - 1.0).abs() < 1e-14);
+            prop_assert!(q.angle_to(&UnitQuaternion::from_scaled_axis(phi)) < 1e-14);
+        }
+
+        #[test]
+        fn euler_round_trip(r in -3.1..3.1_f64, p in -1.5..1.5_f64, y in -3.1..3.1_f64) {
+            let (r2, p2, y2) = euler(&from_euler(r, p, y));
+            prop_assert!((r - r2).abs() < 1e-9 && (p - p2).abs() < 1e-9 && (y - y2).abs() < 1e-9);
+        }
+    }
+}

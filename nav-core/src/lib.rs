@@ -1,0 +1,32 @@
+//! `nav-core`: the strapdown navigation core shared by the firmware (f32 on a Cortex-M4F) and the
+//! host harness (f32 or f64).
+//!
+//! `#![no_std]`, no allocation, no I/O: it knows nothing of sensors, RTIC, files or std. Inputs are
+//! IMU increments ([`ImuIncrement`]); outputs are a navigation state ([`NavState`]) and alignment
+//! results. Frames and units follow Groves' notation: `c_b_n` rotates body (forward-right-down)
+//! vectors into the local-level navigation frame (north-east-down), `omega_ib_b` is the body rate
+//! relative to inertial space in body axes, `f_ib_b` is specific force. SI units throughout.
+#![no_std]
+#![deny(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod alignment;
+pub mod attitude;
+pub mod earth;
+pub mod increment;
+pub mod output;
+pub mod position;
+pub mod scalar;
+pub mod state;
+pub mod strapdown;
+
+pub use alignment::{AlignError, AlignmentResult, StaticAlignment};
+pub use increment::{ImuIncrement, InputError, InputLimits};
+pub use output::Solution;
+pub use position::Position;
+pub use scalar::Scalar;
+pub use state::NavState;
+pub use strapdown::{MechanizationConfig, Strapdown};
+
+/// Re-exported linear-algebra types used in the public API.
+pub use nalgebra::{UnitQuaternion, Vector3};

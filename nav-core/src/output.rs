@@ -1,0 +1,111 @@
+//! The navigation solution as output: degrees and plain numbers, one CSV row per solution.
+//!
+//! The firmware and the host harness both write their solution logs through [`Solution`]'s
+//! `Display`, so equal states print as equal text. Latitude and longitude are printed from the
+//! fixed-point position as exact decimal nanodegrees; the other values are widened to `f64` and
+//! printed in Rust's shortest round-trip form (platform independent).
+
+use crate::{NavState, Scalar};
+use core::fmt;
+
+/// Column header of the solution CSV (more columns may be appended later).
+pub const CSV_HEADER: &str = "t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,pitch_deg,yaw_deg";
+
+/// One navigation solution in output units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Solution {
+    /// Time of the sample that produced it [us].
+    pub t_us: u64,
+    /// Latitude [nanodegrees].
+    pub lat_ndeg: i64,
+    /// Longitude [nanodegrees].
+    pub lon_ndeg: i64,
+    /// Ellipsoidal height [m].
+    pub h_m: f64,
+    /// Velocity `v_eb_n` north, east, down [m/s].
+    pub v_eb_n: [f64; 3],
+    /// Roll [deg].
+    pub roll_deg: f64,
+    /// Pitch [deg].
+    pub pitch_deg: f64,
+    /// Yaw (true heading) [deg], in (-180, 180].
+    pub yaw_deg: f64,
+}
+
+impl Solution {
+    /// The solution of `state` at time `t_us` [us].
+    pub fn from_state<T: Scalar>(t_us: u64, state: &NavState<T>) -> Self {
+        let (roll, pitch, yaw) = state.euler();
+        Self {
+            t_us,
+            lat_ndeg: state.position.lat_ndeg(),
+            lon_ndeg: state.position.lon_ndeg(),
+            h_m: state.position.h_f64(),
+            v_eb_n: [state.v_eb_n.x.to_f64(), state.v_eb_n.y.to_f64(), state.v_eb_n.z.to_f64()],
+            roll_deg: roll.to_f64().to_degrees(),
+            pitch_deg: pitch.to_f64().to_degrees(),
+            yaw_deg: yaw.to_f64().to_degrees(),
+        }
+    }
+}
+
+/// Writes `value / 10^digits` exactly, e.g. `-0.000000500` for (-500, 9).
+fn write_decimal(f: &mut fmt::Formatter<'_>, value: i64, digits: u32) -> fmt::Result {
+    let scale = 10_u64.pow(digits);
+    let sign = if value < 0 { "-" } else { "" };
+    let mag = value.unsigned_abs();
+    write!(f, "{sign}{}.{:0width$}", mag / scale, mag % scale, width = digits as usize)
+}
+
+impl fmt::Display for Solution {
+    /// One CSV row matching [`CSV_HEADER`] (no line terminator).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write_decimal(f, self.t_us as i64, 6)?;
+        f.write_str(",")?;
+        write_decimal(f, self.lat_ndeg, 9)?;
+        f.write_str(",")?;
+        write_decimal(f, self.lon_ndeg, 9)?;
+        let [vn, ve, vd] = self.v_eb_n;
+        write!(
+            f,
+            ",{},{},{},{},{},{},{}",
+            self.h_m, vn, ve, vd, self.roll_deg, self.pitch_deg, self.yaw_deg
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Buf<const N: usize>([u8; N], usize);
+    impl<const N: usize> fmt::Write for Buf<N> {
+        fn write_str(&mut self, s: &str) -> fmt::Result {
+            let end = self.1 + s.len();
+            self.0.get_mut(self.1..end).ok_or(fmt::Error)?.copy_from_slice(s.as_bytes());
+            self.1 = end;
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn formats_a_row() {
+        let s = Solution {
+            t_us: 60_002_500,
+            lat_ndeg: 45_123_456_789,
+            lon_ndeg: -500,
+            h_m: 100.25,
+            v_eb_n: [0.5, -0.0, 1e-7],
+            roll_deg: 1.5,
+            pitch_deg: -2.0,
+            yaw_deg: 30.0,
+        };
+        let mut b = Buf([0; 128], 0);
+        fmt::Write::write_fmt(&mut b, format_args!("{s}")).unwrap();
+        assert_eq!(
+            core::str::from_utf8(&b.0[..b.1]).unwrap(),
+            "60.002500,45.123456789,-0.000000500,100.25,0.5,-0,0.0000001,1.5,-2,30"
+        );
+        assert_eq!(CSV_HEADER.split(',').count(), 10);
+    }
+}
