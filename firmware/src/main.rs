@@ -1,2 +1,398 @@
+//! The navigation firmware: an RTIC 2 app for an STM32F405 IMU board (QEMU netduinoplus2 for now).
+//!
+//! A sample's way: data-ready interrupt (`data_ready`, highest priority) -> `rtic_sync` channel ->
+//! `navigate` (steps `nav-core`, writes the solution log) -> `align` (lowest priority: static
+//! alignment) -> back to `navigate`, which starts navigating from the aligned attitude.
+//!
+//! On the `qemu` board the IMU's data-ready line is emulated: the `pace` task pends `EXTI0` (the
+//! line a real data-ready pin uses) every 2.5 ms of SysTick time, and `data_ready` reads the next
+//! sample of a recording through semihosting. Under QEMU's `-icount shift=0` one guest instruction
+//! takes exactly 1 ns of virtual time, so SysTick timing is exact and the instruction counts this
+//! firmware prints are repeatable.
 #![no_std]
 #![no_main]
+#![deny(unsafe_code)]
+
+#[cfg(not(feature = "qemu"))]
+compile_error!("only the `qemu` board exists until the SPI IMU drivers land; build with --features qemu");
+
+use firmware as _; // logger, panic and HardFault handlers
+
+#[rtic::app(device = stm32f4::stm32f405, peripherals = true, dispatchers = [USART1, USART2, USART3])]
+mod app {
+    use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+    use cortex_m::peripheral::{NVIC, SYST};
+    use embedded_io::Write as _;
+    use firmware::{ExitCode, config::Config, exit, line};
+    use hal_adapters::io::{Buffered, SemihostingFile};
+    use hal_adapters::recording::Replay;
+    use hal_adapters::{Imu, ImuSample};
+    use nav_core::alignment::{AlignError, AlignmentResult, StaticAlignment, samples_for};
+    use nav_core::output::CSV_HEADER;
+    use nav_core::{ImuIncrement, InputLimits, MechanizationConfig, NavState, Position, Solution, Strapdown};
+    use rtic_monotonics::systick::prelude::*;
+    use rtic_sync::channel::{Receiver, Sender};
+    use rtic_sync::make_channel;
+    use stm32f4::stm32f405::Interrupt;
+
+    /// Core clock [Hz]: 168 MHz on the real board and in QEMU's netduinoplus2.
+    const SYSCLK_HZ: u32 = 168_000_000;
+    /// SysTick monotonic rate [Hz] (500 us ticks; finer times read the SysTick counter).
+    const TICK_HZ: u32 = 2_000;
+    systick_monotonic!(Mono, 2_000);
+    /// SysTick counts per monotonic tick.
+    const COUNTS_PER_TICK: u64 = (SYSCLK_HZ / TICK_HZ) as u64;
+    /// The IMU's data-ready period: 400 Hz.
+    const DATA_READY_TICKS: u64 = (TICK_HZ / 400) as u64;
+    /// A duration in monotonic ticks.
+    type MonoDuration = fugit::Duration<u64, 1, 2_000>;
+
+    const SAMPLE_CAP: usize = 16;
+    const ALIGN_CAP: usize = 32;
+    /// Bytes read from the host per semihosting call.
+    const READ_CHUNK: usize = 512;
+
+    type Source = Replay<Buffered<SemihostingFile, READ_CHUNK>>;
+    type AlignOutcome = Result<AlignmentResult<f32>, AlignError>;
+
+    /// What the data-ready interrupt hands to navigation.
+    pub enum DataReady {
+        /// A sample and its data-ready time on the board's clock [us].
+        Sample { sample: ImuSample, t_ready_us: u64 },
+        /// The recording ended.
+        End,
+        /// The source failed (already logged).
+        SourceError,
+    }
+
+    /// Samples lost because the channel to `navigate` was full.
+    static OVERRUNS: AtomicU32 = AtomicU32::new(0);
+    /// Data-ready edges lost because the previous one was still pending.
+    static MISSED: AtomicU32 = AtomicU32::new(0);
+    /// Set once the end of the recording has been delivered: the pacer stops.
+    static STOP: AtomicBool = AtomicBool::new(false);
+
+    /// What `navigate` needs besides its channels.
+    pub struct NavSetup {
+        position: Position,
+        n_align: u32,
+        log_every: u32,
+        out: SemihostingFile,
+    }
+
+    #[shared]
+    struct Shared {}
+
+    #[local]
+    struct Local {
+        source: Source,
+        samples_tx: Sender<'static, DataReady, SAMPLE_CAP>,
+    }
+
+    #[init]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        // The qemu board has no RCC model: clock set-up would hang, so it is skipped and the
+        // core runs at QEMU's fixed 168 MHz.
+        Mono::start(cx.core.SYST, SYSCLK_HZ);
+        let config = read_config();
+        defmt::info!(
+            "config: lat {=f64} deg, lon {=f64} deg, h {=f64} m, align {=f64} s, log every {=u32}",
+            config.lat_deg, config.lon_deg, config.h_m, config.align_s, config.log_every
+        );
+        let file = SemihostingFile::open(config.imu_cstr()).unwrap_or_else(|_| {
+            defmt::error!("cannot open the recording {=[u8]:a}", config.imu_path.as_slice());
+            exit(ExitCode::Recording)
+        });
+        let source = Replay::new(Buffered::new(file)).unwrap_or_else(|e| {
+            defmt::error!("recording {=[u8]:a}: {}", config.imu_path.as_slice(), defmt::Display2Format(&e));
+            exit(ExitCode::Recording)
+        });
+        let header = *source.header();
+        defmt::info!("recording: {=u32} samples at {=f64} Hz", header.sample_count, header.rate_hz);
+        let mut out = SemihostingFile::create(config.out_cstr()).unwrap_or_else(|_| {
+            defmt::error!("cannot create the solution log {=[u8]:a}", config.out_path.as_slice());
+            exit(ExitCode::Output)
+        });
+        write_line(&mut out, CSV_HEADER);
+
+        let (samples_tx, samples_rx) = make_channel!(DataReady, SAMPLE_CAP);
+        let (align_tx, align_rx) = make_channel!(ImuIncrement<f32>, ALIGN_CAP);
+        let (result_tx, result_rx) = make_channel!(AlignOutcome, 1);
+        let position = Position::from_degrees(config.lat_deg, config.lon_deg, config.h_m);
+        let n_align = samples_for(config.align_s, header.rate_hz);
+        let setup = NavSetup { position, n_align, log_every: config.log_every, out };
+        if navigate::spawn(samples_rx, align_tx, result_rx, setup).is_err()
+            || align::spawn(align_rx, result_tx, n_align, position).is_err()
+            || pace::spawn().is_err()
+        {
+            defmt::panic!("task spawn failed");
+        }
+        (Shared {}, Local { source, samples_tx })
+    }
+
+    /// Sleeps between interrupts (under QEMU's `sleep=off` the idle time then costs no host time).
+    #[idle]
+    fn idle(_: idle::Context) -> ! {
+        loop {
+            cortex_m::asm::wfi();
+        }
+    }
+
+    /// Parses the semihosting command line; exits with [`ExitCode::Config`] on error.
+    fn read_config() -> Config {
+        let args = semihosting::experimental::env::args::<512>().unwrap_or_else(|_| {
+            defmt::error!("no semihosting command line: run through firmware/qemu-run.sh");
+            exit(ExitCode::Config)
+        });
+        let mut words = (&args).map(|a| a.unwrap_or(""));
+        let _program = words.next();
+        Config::parse(words).unwrap_or_else(|e| {
+            defmt::error!("bad arguments ({}); usage: firmware IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY]", e);
+            exit(ExitCode::Config)
+        })
+    }
+
+    /// SysTick counts since start (monotonic ticks plus the counter's progress in this tick).
+    fn systick_counts() -> u64 {
+        loop {
+            let before = Mono::now().as_ticks();
+            let current = u64::from(SYST::get_current());
+            if Mono::now().as_ticks() == before {
+                return before * COUNTS_PER_TICK + (COUNTS_PER_TICK - 1 - current);
+            }
+        }
+    }
+
+    /// Board time [us].
+    fn now_us() -> u64 {
+        systick_counts() / u64::from(SYSCLK_HZ / 1_000_000)
+    }
+
+    /// Guest instructions in `counts` SysTick counts: 1 ns per instruction under QEMU's
+    /// `-icount shift=0`, 168 counts per us.
+    fn counts_to_instructions(counts: u64) -> u64 {
+        counts * 1_000_000_000 / u64::from(SYSCLK_HZ)
+    }
+
+    /// Emulated data-ready line: pends `EXTI0` every 2.5 ms, exactly.
+    #[task(priority = 3)]
+    async fn pace(_: pace::Context) {
+        let mut next = Mono::now();
+        while !STOP.load(Ordering::Relaxed) {
+            next += MonoDuration::from_ticks(DATA_READY_TICKS);
+            Mono::delay_until(next).await;
+            if NVIC::is_pending(Interrupt::EXTI0) {
+                MISSED.fetch_add(1, Ordering::Relaxed);
+            }
+            rtic::pend(Interrupt::EXTI0);
+        }
+    }
+
+    /// IMU data ready: timestamp, read the sample, hand it on. Never blocks.
+    #[task(binds = EXTI0, priority = 4, local = [source, samples_tx, done: bool = false])]
+    fn data_ready(cx: data_ready::Context) {
+        let t_ready_us = now_us();
+        if *cx.local.done {
+            return;
+        }
+        let (msg, last) = match cx.local.source.read_sample() {
+            Ok(Some(sample)) => (DataReady::Sample { sample, t_ready_us }, false),
+            Ok(None) => (DataReady::End, true),
+            Err(e) => {
+                defmt::error!("recording: {}", defmt::Display2Format(&e));
+                (DataReady::SourceError, true)
+            }
+        };
+        match cx.local.samples_tx.try_send(msg) {
+            Ok(()) if last => {
+                *cx.local.done = true;
+                STOP.store(true, Ordering::Relaxed);
+            }
+            Ok(()) => {}
+            // A lost end marker is sent again at the next data-ready (the source stays ended).
+            Err(_) => {
+                OVERRUNS.fetch_add(1, Ordering::Relaxed);
+            }
+        }
+    }
+
+    /// Per-step instruction statistics.
+    #[derive(Default)]
+    struct StepCost {
+        max: u64,
+        sum: u64,
+        n: u64,
+    }
+
+    /// Counters reported at the end.
+    #[derive(Default)]
+    struct Counters {
+        samples: u32,
+        flagged: u32,
+        rejected: u32,
+        nav_steps: u32,
+    }
+
+    /// Navigation: aligns (through `align`), then steps the strapdown mechanization on every
+    /// sample and logs the solution. Same semantics as the host harness's `pipeline`.
+    #[task(priority = 2)]
+    async fn navigate(
+        _: navigate::Context,
+        mut samples_rx: Receiver<'static, DataReady, SAMPLE_CAP>,
+        mut align_tx: Sender<'static, ImuIncrement<f32>, ALIGN_CAP>,
+        mut result_rx: Receiver<'static, AlignOutcome, 1>,
+        setup: NavSetup,
+    ) {
+        let NavSetup { position, n_align, log_every, mut out } = setup;
+        let limits = InputLimits::default();
+        let mut nav: Option<Strapdown<f32>> = None;
+        let mut aligned: Option<AlignmentResult<f32>> = None;
+        let (mut counters, mut cost) = (Counters::default(), StepCost::default());
+        let (mut forwarded, mut last_t_us, mut last_ready_us) = (0_u32, 0_u64, 0_u64);
+        loop {
+            let Ok(msg) = samples_rx.recv().await else {
+                defmt::panic!("sample channel closed");
+            };
+            let (sample, t_ready_us) = match msg {
+                DataReady::Sample { sample, t_ready_us } => (sample, t_ready_us),
+                DataReady::SourceError => exit(ExitCode::Recording),
+                DataReady::End => break,
+            };
+            counters.samples += 1;
+            last_ready_us = t_ready_us;
+            if !sample.flags.usable() {
+                counters.flagged += 1;
+                defmt::warn!("sample {=u32} flagged {}: not navigated", sample.seq, sample.flags);
+                continue;
+            }
+            let (delta_theta_ib_b, delta_v_ib_b) = sample.increments();
+            let inc = ImuIncrement::new(delta_theta_ib_b, delta_v_ib_b, sample.dt_s);
+            if let Some(nav) = nav.as_mut() {
+                let start = systick_counts();
+                let stepped = nav.step(&inc);
+                let spent = counts_to_instructions(systick_counts() - start);
+                if stepped.is_err() {
+                    counters.rejected += 1;
+                    continue;
+                }
+                cost.max = cost.max.max(spent);
+                cost.sum += spent;
+                cost.n += 1;
+                counters.nav_steps += 1;
+                last_t_us = sample.t_us;
+                if counters.nav_steps % log_every == 0 {
+                    write_line(&mut out, Solution::from_state(sample.t_us, nav.state()));
+                }
+                continue;
+            }
+            // Aligning: the alignment task averages; navigation waits for its answer.
+            if inc.check(&limits).is_err() {
+                counters.rejected += 1;
+                continue;
+            }
+            if align_tx.send(inc).await.is_err() {
+                defmt::panic!("alignment channel closed");
+            }
+            forwarded += 1;
+            if forwarded == n_align {
+                let result = match result_rx.recv().await {
+                    Ok(Ok(result)) => result,
+                    Ok(Err(e)) => {
+                        defmt::error!("alignment failed after {=u32} samples: {}", n_align, defmt::Display2Format(&e));
+                        exit(ExitCode::Alignment)
+                    }
+                    Err(_) => defmt::panic!("alignment result channel closed"),
+                };
+                log_alignment(&result);
+                let start = NavState::at_rest(position, result.q_b_n());
+                let n = Strapdown::new(start, MechanizationConfig::default());
+                write_line(&mut out, Solution::from_state(sample.t_us, n.state()));
+                nav = Some(n);
+                aligned = Some(result);
+            }
+        }
+
+        // End of the recording.
+        let Some(nav) = nav else {
+            defmt::error!("recording ended during alignment: {=u32} of {=u32} samples", forwarded, n_align);
+            exit(ExitCode::Alignment)
+        };
+        let last = Solution::from_state(last_t_us, nav.state());
+        if counters.nav_steps % log_every != 0 {
+            write_line(&mut out, last);
+        }
+        report(&counters, &cost, aligned.as_ref(), &last, last_ready_us);
+        exit(ExitCode::Success)
+    }
+
+    /// Static alignment, below navigation: accumulates `n_align` increments and solves.
+    #[task(priority = 1)]
+    async fn align(
+        _: align::Context,
+        mut align_rx: Receiver<'static, ImuIncrement<f32>, ALIGN_CAP>,
+        mut result_tx: Sender<'static, AlignOutcome, 1>,
+        n_align: u32,
+        position: Position,
+    ) {
+        let mut acc = StaticAlignment::<f32>::new();
+        defmt::info!("aligning: static analytic, {=u32} samples", n_align);
+        while let Ok(inc) = align_rx.recv().await {
+            acc.add(&inc);
+            if acc.samples() == n_align {
+                let outcome = acc.solve(position.lat::<f32>(), position.h::<f32>());
+                if result_tx.send(outcome).await.is_err() {
+                    defmt::panic!("alignment result channel closed");
+                }
+                return;
+            }
+        }
+    }
+
+    fn write_line(out: &mut SemihostingFile, value: impl core::fmt::Display) {
+        let ok = line(value).is_some_and(|l| out.write_all(l.as_bytes()).is_ok());
+        if !ok {
+            defmt::error!("cannot write the solution log");
+            exit(ExitCode::Output);
+        }
+    }
+
+    fn log_alignment(r: &AlignmentResult<f32>) {
+        defmt::info!(
+            "aligned after {=u32} samples ({=f32} s): roll {=f32} deg, pitch {=f32} deg, yaw {=f32} deg; |f| {=f32} m/s^2, |omega| {=f32} deg/h",
+            r.samples,
+            r.duration,
+            r.roll.to_degrees(),
+            r.pitch.to_degrees(),
+            r.yaw.to_degrees(),
+            r.f_mean,
+            r.omega_mean.to_degrees() * 3600.0
+        );
+    }
+
+    fn report(c: &Counters, cost: &StepCost, aligned: Option<&AlignmentResult<f32>>, last: &Solution, last_ready_us: u64) {
+        let mean = if cost.n > 0 { cost.sum / cost.n } else { 0 };
+        defmt::info!(
+            "summary: samples {=u32}, flagged {=u32}, rejected {=u32}, navigated {=u32}, missed {=u32}, channel overruns {=u32}, last data-ready at {=u64} us",
+            c.samples,
+            c.flagged,
+            c.rejected,
+            c.nav_steps,
+            MISSED.load(Ordering::Relaxed),
+            OVERRUNS.load(Ordering::Relaxed),
+            last_ready_us
+        );
+        defmt::info!("instructions per navigation step: max {=u64}, mean {=u64}", cost.max, mean);
+        if let Some(r) = aligned {
+            defmt::info!(
+                "alignment: roll {=f32} deg, pitch {=f32} deg, yaw {=f32} deg",
+                r.roll.to_degrees(),
+                r.pitch.to_degrees(),
+                r.yaw.to_degrees()
+            );
+        }
+        defmt::info!(
+            "solution at t={=u64} us: lat {=i64} ndeg, lon {=i64} ndeg, h {=f64} m, v_n {=f64} v_e {=f64} v_d {=f64} m/s, roll {=f64} pitch {=f64} yaw {=f64} deg",
+            last.t_us, last.lat_ndeg, last.lon_ndeg, last.h_m, last.v_eb_n[0], last.v_eb_n[1], last.v_eb_n[2], last.roll_deg, last.pitch_deg, last.yaw_deg
+        );
+    }
+}

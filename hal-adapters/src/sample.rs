@@ -4,6 +4,7 @@ use bitflags::bitflags;
 
 /// The inertial measurement of one sample, body axes forward-right-down (FRD).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Motion {
     /// Integrated outputs over the interval (what good IMUs deliver).
     Increments {
@@ -57,8 +58,17 @@ impl SampleFlags {
     }
 }
 
+/// Logs the raw bits, e.g. `SampleFlags(0x0028)` for `GAP | BAD_INTERVAL`.
+#[cfg(feature = "defmt")]
+impl defmt::Format for SampleFlags {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(f, "SampleFlags({=u16:#06x})", self.bits());
+    }
+}
+
 /// One IMU sample, as every source (driver or replay) produces it.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ImuSample {
     /// Time at the end of the interval (data-ready) [us]: the board's monotonic clock for a
     /// driver, the recording's clock for a replay.

@@ -1,1 +1,27 @@
-//! placeholder
+//! `host-tests`: the desktop harness around `nav-core` and `hal-adapters`.
+//!
+//! A recording's way through the harness: a file ([`imu_csv`], [`psins`] or the project's binary
+//! format) -> [`recording_io::Recording`] -> bytes of the binary format ->
+//! [`hal_adapters::recording::Replay`] (flags NaN samples and bad intervals, measures `dt`) ->
+//! [`pipeline::run`] (static alignment, then strapdown navigation) -> solution log (CSV rows of
+//! [`nav_core::Solution`]). Binary files are replayed straight from disk; CSV and PSINS files are
+//! converted in memory first, so every format goes through the same flagging and `dt` code.
+//!
+//! - [`imu_csv`]: the CSV increment format (reader and writer).
+//! - [`psins`]: reader of PSINS `.imu` text recordings.
+//! - [`recording_io`]: format detection, the common in-memory recording, binary writer, replay
+//!   sources.
+//! - [`generate`]: exact synthetic recordings of a stationary body.
+//! - [`pipeline`]: the replay pipeline (the same semantics as the firmware's tasks).
+//! - [`replay`]: a file replayed end to end (open, run, attach the replay counters).
+//!
+//! The `nav` binary (`src/bin/nav.rs`) is the command-line front end.
+#![deny(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod generate;
+pub mod imu_csv;
+pub mod pipeline;
+pub mod psins;
+pub mod recording_io;
+pub mod replay;

@@ -131,6 +131,14 @@ impl<T: Scalar> StaticAlignment<T> {
     }
 }
 
+/// Number of samples a static alignment of `seconds` [s] averages at `rate_hz` [Hz]:
+/// `max(1, ceil(seconds * rate_hz))` (a 1e-9 slack absorbs rounding of exact products), so the
+/// firmware and the host harness stop aligning on the same sample.
+pub fn samples_for(seconds: f64, rate_hz: f64) -> u32 {
+    let n = nalgebra::ComplexField::ceil(seconds * rate_hz - 1e-9);
+    if n.is_finite() && n >= 1.0 { n.min(f64::from(u32::MAX)) as u32 } else { 1 }
+}
+
 /// Kahan-compensated running sum.
 #[derive(Clone, Copy, Debug)]
 struct Kahan<T: Scalar> {
@@ -203,6 +211,15 @@ mod tests {
             assert!((f64::from(res32.roll) - r).abs() < 1e-5);
             assert!((f64::from(res32.yaw) - y).abs() < 1e-3, "{} vs {y}", res32.yaw);
         }
+    }
+
+    #[test]
+    fn alignment_window_in_samples() {
+        assert_eq!(samples_for(30.0, 400.0), 12_000);
+        assert_eq!(samples_for(0.1, 400.0), 40);
+        assert_eq!(samples_for(0.0001, 400.0), 1);
+        assert_eq!(samples_for(f64::NAN, 400.0), 1);
+        assert_eq!(samples_for(2.0 / 3.0, 100.0), 67);
     }
 
     #[test]

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Cargo runner for thumbv7em-none-eabihf: boots ELF in QEMU's netduinoplus2 (an STM32F405) with
+# exact instruction counting and decodes the defmt log. Usage: qemu-run.sh ELF [ARG...]; the ARGs
+# become the firmware's semihosting command line (IMU_FILE OUT_FILE LAT LON H ALIGN_S [LOG_EVERY]),
+# paths relative to the current directory. Exits with the firmware's exit code.
+set -uo pipefail
+elf=$1
+shift
+for tool in qemu-system-arm defmt-print; do
+  command -v "$tool" >/dev/null || { echo "qemu-run.sh: $tool not found (cargo xtask setup installs it)" >&2; exit 127; }
+done
+semi="enable=on,target=native,arg=firmware"
+for a in "$@"; do
+  case $a in *,*) echo "qemu-run.sh: argument '$a' contains a comma (QEMU cannot pass it)" >&2; exit 2 ;; esac
+  semi+=",arg=$a"
+done
+qemu-system-arm -cpu cortex-m4 -machine netduinoplus2 -nographic -monitor none -serial null \
+  -semihosting-config "$semi" -icount shift=0,align=off,sleep=off -kernel "$elf" \
+  | defmt-print -e "$elf" --show-skipped-frames
+exit "${PIPESTATUS[0]}"

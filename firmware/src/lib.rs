@@ -1,0 +1,63 @@
+//! Board-independent support for the navigation firmware: exit codes, the panic and HardFault
+//! handlers (knurling app-template style), the run configuration, and small output helpers.
+//!
+//! Navigation math lives in `nav-core`; sensor sources in `hal-adapters`; the RTIC app in
+//! `main.rs` only wires them together.
+#![no_std]
+#![warn(missing_docs)]
+
+use core::fmt::Write as _;
+use defmt_semihosting as _; // global defmt logger over semihosting stdout
+
+pub mod config;
+
+/// Process exit codes: every failure has its own, so CI and scripts can tell them apart.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+#[repr(i32)]
+pub enum ExitCode {
+    /// The recording was navigated to its end.
+    Success = 0,
+    /// A Rust panic (message in the defmt log).
+    Panic = 1,
+    /// A HardFault exception (stacked PC in the defmt log).
+    HardFault = 2,
+    /// Bad command-line (semihosting) arguments.
+    Config = 3,
+    /// The recording could not be opened, or it is truncated or corrupt.
+    Recording = 4,
+    /// Alignment failed (base moving, bad sensors...).
+    Alignment = 5,
+    /// The solution log could not be written.
+    Output = 6,
+}
+
+/// Ends the program (QEMU: with this exit status; a real board stops in a breakpoint loop when
+/// no debugger answers semihosting, so only call this under a debugger or QEMU).
+pub fn exit(code: ExitCode) -> ! {
+    defmt::flush();
+    semihosting::process::exit(code as i32)
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    defmt::error!("panic: {}", defmt::Display2Format(info));
+    exit(ExitCode::Panic)
+}
+
+// cortex-m-rt requires `unsafe` on the HardFault handler's signature; it only logs and exits.
+#[allow(unsafe_code)]
+#[cortex_m_rt::exception]
+unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    defmt::error!("HardFault at pc={=u32:#010x} lr={=u32:#010x}", frame.pc(), frame.lr());
+    exit(ExitCode::HardFault)
+}
+
+/// A line of text formatted into a fixed buffer (no allocation).
+pub type Line = heapless::String<320>;
+
+/// Formats `value` followed by a newline into a [`Line`]; `None` if it does not fit.
+pub fn line(value: impl core::fmt::Display) -> Option<Line> {
+    let mut s = Line::new();
+    writeln!(s, "{value}").ok()?;
+    Some(s)
+}

@@ -1,0 +1,472 @@
+//! The CSV IMU recording format: one row of increments per sampling interval.
+//!
+//! ```text
+//! t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,dv_y_mps,dv_z_mps[,temp_c]
+//! 0.0025,1.2e-7,0,-1.3e-7,0.0009,-0.0006,-0.0245[,25]
+//! ```
+//!
+//! Each row holds the angle increment `delta_theta_ib_b` [rad] and the velocity increment
+//! `delta_v_ib_b` [m/s] over the interval that ENDS at `t_s` [s], body axes forward-right-down.
+//! The optional `temp_c` column is the sensor temperature [deg C] (empty or `NaN`: unknown).
+//!
+//! NaN and infinite increments are parsed, not refused (the replay flags them), and so is time
+//! that does not increase (the replay flags the interval); a time that is negative or not a
+//! number cannot be placed on the recording's clock and is an error.
+
+use serde::Serialize;
+use std::fmt;
+use std::fs::File;
+use std::io::{self, BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+/// Column names without the optional temperature.
+pub const COLUMNS: [&str; 7] = [
+    "t_s",
+    "dtheta_x_rad",
+    "dtheta_y_rad",
+    "dtheta_z_rad",
+    "dv_x_mps",
+    "dv_y_mps",
+    "dv_z_mps",
+];
+/// Name of the optional eighth column.
+pub const TEMPERATURE_COLUMN: &str = "temp_c";
+
+/// One row: the increments over the interval ending at `t_s`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CsvRow {
+    /// End of the interval [s] on the recording's clock.
+    pub t_s: f64,
+    /// Angle increment, integral of `omega_ib_b` over the interval, body FRD [rad].
+    pub delta_theta_ib_b: [f32; 3],
+    /// Velocity increment, integral of `f_ib_b` over the interval, body FRD [m/s].
+    pub delta_v_ib_b: [f32; 3],
+    /// Sensor temperature [deg C]; NaN when unknown or absent.
+    pub temperature_c: f32,
+}
+
+/// A CSV recording: its rows and whether the file had the temperature column.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImuCsv {
+    /// `true` when the header had the `temp_c` column.
+    pub has_temperature: bool,
+    /// The rows, in file order.
+    pub rows: Vec<CsvRow>,
+}
+
+/// A CSV reading or writing error, naming the file and (for content errors) the line.
+#[derive(Debug)]
+pub struct CsvError {
+    /// The file.
+    pub path: PathBuf,
+    /// 1-based line number, when the error is about a line.
+    pub line: Option<u64>,
+    /// What went wrong.
+    pub kind: CsvErrorKind,
+}
+
+/// What went wrong in a CSV file.
+#[derive(Debug)]
+pub enum CsvErrorKind {
+    /// The file is empty: no header row.
+    MissingHeader,
+    /// The first row is not the expected header.
+    WrongHeader {
+        /// The header row found.
+        found: String,
+    },
+    /// A row has fewer columns than the header: the first missing one.
+    MissingColumn {
+        /// Name of the first missing column.
+        column: &'static str,
+        /// Number of fields found on the line.
+        found: usize,
+    },
+    /// A row has more columns than the header.
+    ExtraColumns {
+        /// Number of columns expected.
+        expected: usize,
+        /// Number of fields found.
+        found: usize,
+    },
+    /// A field is not a number.
+    NotANumber {
+        /// Column name.
+        column: &'static str,
+        /// The field's text.
+        found: String,
+    },
+    /// The time is negative, NaN or infinite.
+    BadTime {
+        /// The field's text.
+        found: String,
+    },
+    /// Malformed CSV (quoting, invalid UTF-8).
+    Syntax(String),
+    /// The file could not be opened, read or written.
+    Io(io::Error),
+}
+
+impl fmt::Display for CsvError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: ", self.path.display())?;
+        if let Some(line) = self.line {
+            write!(f, "line {line}: ")?;
+        }
+        match &self.kind {
+            CsvErrorKind::MissingHeader => {
+                write!(
+                    f,
+                    "empty file: expected the header row '{}'",
+                    header_line(false)
+                )
+            }
+            CsvErrorKind::WrongHeader { found } => write!(
+                f,
+                "expected the header row '{}' (optionally followed by ',{TEMPERATURE_COLUMN}'), found '{found}'",
+                header_line(false)
+            ),
+            CsvErrorKind::MissingColumn { column, found } => {
+                write!(
+                    f,
+                    "column {column}: missing (the line has only {found} columns)"
+                )
+            }
+            CsvErrorKind::ExtraColumns { expected, found } => {
+                write!(
+                    f,
+                    "expected {expected} columns as in the header, found {found}"
+                )
+            }
+            CsvErrorKind::NotANumber { column, found } => {
+                write!(f, "column {column}: expected a number, found '{found}'")
+            }
+            CsvErrorKind::BadTime { found } => write!(
+                f,
+                "column t_s: expected a finite, non-negative time in seconds, found '{found}'"
+            ),
+            CsvErrorKind::Syntax(msg) => write!(f, "malformed CSV: {msg}"),
+            CsvErrorKind::Io(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for CsvError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &self.kind {
+            CsvErrorKind::Io(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+/// The header row, with or without the temperature column.
+pub fn header_line(with_temperature: bool) -> String {
+    let mut s = COLUMNS.join(",");
+    if with_temperature {
+        s.push(',');
+        s.push_str(TEMPERATURE_COLUMN);
+    }
+    s
+}
+
+/// Reads a CSV recording from `path`.
+pub fn read(path: &Path) -> Result<ImuCsv, CsvError> {
+    let file = File::open(path).map_err(|e| error(path, None, CsvErrorKind::Io(e)))?;
+    read_from(BufReader::new(file), path)
+}
+
+/// Reads a CSV recording from `reader`; `path` names it in errors.
+pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<ImuCsv, CsvError> {
+    let mut csv = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(reader);
+    let mut records = csv.records();
+
+    let header = match records.next() {
+        None => return Err(error(path, None, CsvErrorKind::MissingHeader)),
+        Some(r) => r.map_err(|e| csv_error(path, e))?,
+    };
+    let header_line_no = header.position().map(|p| p.line());
+    let names: Vec<&str> = header.iter().collect();
+    let has_temperature = if names == COLUMNS {
+        false
+    } else if names.len() == COLUMNS.len() + 1
+        && names[..COLUMNS.len()] == COLUMNS
+        && names[COLUMNS.len()] == TEMPERATURE_COLUMN
+    {
+        true
+    } else {
+        let found = names.join(",");
+        return Err(error(
+            path,
+            header_line_no,
+            CsvErrorKind::WrongHeader { found },
+        ));
+    };
+    let width = COLUMNS.len() + usize::from(has_temperature);
+
+    let mut rows = Vec::new();
+    for record in records {
+        let record = record.map_err(|e| csv_error(path, e))?;
+        let line = record.position().map(|p| p.line());
+        let at = |kind| error(path, line, kind);
+        if record.len() < width {
+            let column = if record.len() < COLUMNS.len() {
+                COLUMNS[record.len()]
+            } else {
+                TEMPERATURE_COLUMN
+            };
+            return Err(at(CsvErrorKind::MissingColumn {
+                column,
+                found: record.len(),
+            }));
+        }
+        if record.len() > width {
+            return Err(at(CsvErrorKind::ExtraColumns {
+                expected: width,
+                found: record.len(),
+            }));
+        }
+        let t_text = &record[0];
+        let t_s: f64 = t_text.parse().map_err(|_| {
+            at(CsvErrorKind::NotANumber {
+                column: COLUMNS[0],
+                found: t_text.to_owned(),
+            })
+        })?;
+        if !(t_s.is_finite() && t_s >= 0.0) {
+            return Err(at(CsvErrorKind::BadTime {
+                found: t_text.to_owned(),
+            }));
+        }
+        // Increments are parsed straight to f32 (correctly rounded, no double rounding through
+        // f64), so writing and reading back is lossless.
+        let number = |i: usize| -> Result<f32, CsvError> {
+            record[i].parse().map_err(|_| {
+                at(CsvErrorKind::NotANumber {
+                    column: COLUMNS[i],
+                    found: record[i].to_owned(),
+                })
+            })
+        };
+        let delta_theta_ib_b = [number(1)?, number(2)?, number(3)?];
+        let delta_v_ib_b = [number(4)?, number(5)?, number(6)?];
+        let temperature_c = match record.get(COLUMNS.len()) {
+            None | Some("") => f32::NAN,
+            Some(text) => text.parse().map_err(|_| {
+                at(CsvErrorKind::NotANumber {
+                    column: TEMPERATURE_COLUMN,
+                    found: text.to_owned(),
+                })
+            })?,
+        };
+        rows.push(CsvRow {
+            t_s,
+            delta_theta_ib_b,
+            delta_v_ib_b,
+            temperature_c,
+        });
+    }
+    Ok(ImuCsv {
+        has_temperature,
+        rows,
+    })
+}
+
+/// Writes `csv` to `path` (created or truncated).
+pub fn write(path: &Path, csv: &ImuCsv) -> Result<(), CsvError> {
+    let file = File::create(path).map_err(|e| error(path, None, CsvErrorKind::Io(e)))?;
+    let mut out = BufWriter::new(file);
+    write_to(&mut out, csv).map_err(|e| error(path, None, CsvErrorKind::Io(e)))?;
+    out.flush()
+        .map_err(|e| error(path, None, CsvErrorKind::Io(e)))
+}
+
+/// One row as written: the field names are the column names. Floats are printed in their
+/// shortest round-trip form, so a written file reads back bit for bit.
+#[derive(Serialize)]
+struct RowOut {
+    t_s: f64,
+    dtheta_x_rad: f32,
+    dtheta_y_rad: f32,
+    dtheta_z_rad: f32,
+    dv_x_mps: f32,
+    dv_y_mps: f32,
+    dv_z_mps: f32,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    temp_c: Option<f32>,
+}
+
+/// Writes the header and the rows of `csv` to `out`.
+pub fn write_to<W: Write>(out: W, csv: &ImuCsv) -> io::Result<()> {
+    let mut w = csv::WriterBuilder::new()
+        .has_headers(false)
+        .from_writer(out);
+    w.write_record(header_line(csv.has_temperature).split(','))?;
+    for row in &csv.rows {
+        let [dtheta_x_rad, dtheta_y_rad, dtheta_z_rad] = row.delta_theta_ib_b;
+        let [dv_x_mps, dv_y_mps, dv_z_mps] = row.delta_v_ib_b;
+        w.serialize(RowOut {
+            t_s: row.t_s,
+            dtheta_x_rad,
+            dtheta_y_rad,
+            dtheta_z_rad,
+            dv_x_mps,
+            dv_y_mps,
+            dv_z_mps,
+            temp_c: csv.has_temperature.then_some(row.temperature_c),
+        })?;
+    }
+    w.flush()
+}
+
+fn error(path: &Path, line: Option<u64>, kind: CsvErrorKind) -> CsvError {
+    CsvError {
+        path: path.to_owned(),
+        line,
+        kind,
+    }
+}
+
+fn csv_error(path: &Path, e: csv::Error) -> CsvError {
+    let line = e.position().map(|p| p.line());
+    let kind = match e.into_kind() {
+        csv::ErrorKind::Io(e) => CsvErrorKind::Io(e),
+        csv::ErrorKind::Utf8 { err, .. } => CsvErrorKind::Syntax(format!("invalid UTF-8: {err}")),
+        other => CsvErrorKind::Syntax(format!("{other:?}")),
+    };
+    error(path, line, kind)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<ImuCsv, CsvError> {
+        read_from(text.as_bytes(), Path::new("mem.csv"))
+    }
+
+    const HEADER: &str = "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,dv_y_mps,dv_z_mps";
+
+    #[test]
+    fn reads_rows_with_and_without_temperature() {
+        let csv = parse(&format!(
+            "{HEADER}\n0.01,1e-7,2,3,4,5,-0.098\n0.02,0,0,0,0,0,0\n"
+        ))
+        .unwrap();
+        assert!(!csv.has_temperature);
+        assert_eq!(csv.rows.len(), 2);
+        assert_eq!(csv.rows[0].t_s, 0.01);
+        assert_eq!(csv.rows[0].delta_theta_ib_b, [1e-7, 2.0, 3.0]);
+        assert_eq!(csv.rows[0].delta_v_ib_b, [4.0, 5.0, -0.098]);
+        assert!(csv.rows[0].temperature_c.is_nan());
+
+        let csv = parse(&format!(
+            "{HEADER},temp_c\n1, 0,0,0,0,0,0 ,24.5\n2,0,0,0,0,0,0,\n"
+        ))
+        .unwrap();
+        assert!(csv.has_temperature);
+        assert_eq!(csv.rows[0].temperature_c, 24.5);
+        assert!(csv.rows[1].temperature_c.is_nan());
+    }
+
+    #[test]
+    fn parses_non_finite_values_and_decreasing_time() {
+        let csv = parse(&format!(
+            "{HEADER}\n2,NaN,inf,-inf,nan,0,0\n1,0,0,0,0,0,0\n"
+        ))
+        .unwrap();
+        let r = csv.rows[0];
+        assert!(r.delta_theta_ib_b[0].is_nan() && r.delta_v_ib_b[0].is_nan());
+        assert_eq!(r.delta_theta_ib_b[1], f32::INFINITY);
+        assert_eq!(r.delta_theta_ib_b[2], f32::NEG_INFINITY);
+        assert_eq!(csv.rows[1].t_s, 1.0);
+    }
+
+    #[test]
+    fn errors_name_file_line_and_column() {
+        let text = format!("{HEADER}\n0.01,0,0,0,0,0,0\n0.02,0,0,0,0,abc,0\n");
+        let msg = parse(&text).unwrap_err().to_string();
+        assert_eq!(
+            msg,
+            "mem.csv: line 3: column dv_y_mps: expected a number, found 'abc'"
+        );
+
+        let msg = parse(&format!("{HEADER}\n0.01,0,0,0,0,0\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("line 2: column dv_z_mps: missing"), "{msg}");
+
+        let msg = parse(&format!("{HEADER}\n0.01,0,0,0,0,0,0,7\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("line 2: expected 7 columns"), "{msg}");
+
+        let msg = parse("t,gx,gy,gz,ax,ay,az\n1,0,0,0,0,0,0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("line 1: expected the header row 't_s,dtheta_x_rad"),
+            "{msg}"
+        );
+        assert!(msg.contains("found 't,gx,gy,gz,ax,ay,az'"), "{msg}");
+
+        let msg = parse("").unwrap_err().to_string();
+        assert!(msg.contains("empty file"), "{msg}");
+
+        let msg = parse(&format!("{HEADER}\n-1,0,0,0,0,0,0\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("line 2: column t_s: expected a finite, non-negative time"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn write_then_read_is_lossless() {
+        let rows = vec![
+            CsvRow {
+                t_s: 60.0025,
+                delta_theta_ib_b: [1.234_567_9e-7, -3.0e-30, f32::NAN],
+                delta_v_ib_b: [0.1 + 1e-8, f32::INFINITY, -0.024_512_3],
+                temperature_c: 25.0,
+            },
+            CsvRow {
+                t_s: 0.1 + 0.2,
+                delta_theta_ib_b: [0.0, -0.0, f32::MIN_POSITIVE],
+                delta_v_ib_b: [f32::MAX, 1.0, 2.0],
+                temperature_c: f32::NAN,
+            },
+        ];
+        for has_temperature in [false, true] {
+            let csv = ImuCsv {
+                has_temperature,
+                rows: rows.clone(),
+            };
+            let mut bytes = Vec::new();
+            write_to(&mut bytes, &csv).unwrap();
+            let back = read_from(bytes.as_slice(), Path::new("x")).unwrap();
+            assert_eq!(back.has_temperature, has_temperature);
+            for (a, b) in rows.iter().zip(&back.rows) {
+                assert_eq!(a.t_s.to_bits(), b.t_s.to_bits());
+                let bits = |r: &CsvRow| {
+                    r.delta_theta_ib_b
+                        .iter()
+                        .chain(&r.delta_v_ib_b)
+                        .map(|x| x.to_bits())
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(bits(a), bits(b));
+                if has_temperature {
+                    assert_eq!(a.temperature_c.to_bits(), b.temperature_c.to_bits());
+                } else {
+                    assert!(b.temperature_c.is_nan());
+                }
+            }
+        }
+    }
+}

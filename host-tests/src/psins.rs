@@ -1,0 +1,416 @@
+//! Reader of PSINS `.imu` text recordings (the PSINS toolbox's SIMU log format).
+//!
+//! Lines starting with `%` are comments, blank lines are skipped. Then three header lines:
+//! 1. `pitch0 roll0 yaw0` [deg], `VE0 VN0 VU0` [m/s];
+//! 2. `latitude0 longitude0` [deg], `height0` [m], `t0` [s], sampling interval [ms], `g` [m/s^2];
+//! 3. scale factors `gf_x gf_y gf_z` [arcsec per count], `af_x af_y af_z` [micro-g * s per count].
+//!
+//! Then one line per sample: six integer counts, the gyro angle increments x y z and the
+//! accelerometer velocity increments x y z over the sampling interval, body axes
+//! right-forward-up (RFU). The reader converts them to SI (rad, m/s with the header's `g`) and to
+//! the project's forward-right-down (FRD) body axes: `x_frd = y_rfu, y_frd = x_rfu, z_frd =
+//! -z_rfu`.
+
+use std::fmt;
+use std::fs::File;
+use std::io::{self, BufRead, BufReader};
+use std::path::{Path, PathBuf};
+
+/// Radians per arcsecond.
+const RAD_PER_ARCSEC: f64 = std::f64::consts::PI / (180.0 * 3600.0);
+
+/// The three header lines of a PSINS file.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PsinsHeader {
+    /// Initial pitch [deg] ("maybe inaccurate" in the toolbox's own words).
+    pub pitch0_deg: f64,
+    /// Initial roll [deg].
+    pub roll0_deg: f64,
+    /// Initial yaw [deg] (PSINS convention: East-North-Up navigation frame).
+    pub yaw0_deg: f64,
+    /// Initial velocity east, north, up [m/s].
+    pub v_enu0_mps: [f64; 3],
+    /// Initial latitude [deg].
+    pub lat_deg: f64,
+    /// Initial longitude [deg].
+    pub lon_deg: f64,
+    /// Initial height [m].
+    pub h_m: f64,
+    /// Start time `t0` [s]: the first sample's interval starts here.
+    pub t0_s: f64,
+    /// Sampling interval [ms].
+    pub interval_ms: f64,
+    /// Gravity used by the accelerometer scale [m/s^2].
+    pub g_mps2: f64,
+    /// Gyro scale factors x y z (RFU) [arcsec per count].
+    pub gyro_scale_arcsec: [f64; 3],
+    /// Accelerometer scale factors x y z (RFU) [micro-g * s per count].
+    pub accel_scale_ug_s: [f64; 3],
+}
+
+impl PsinsHeader {
+    /// Sampling interval [s].
+    pub fn interval_s(&self) -> f64 {
+        self.interval_ms * 1e-3
+    }
+
+    /// Nominal sampling rate [Hz].
+    pub fn rate_hz(&self) -> f64 {
+        1e3 / self.interval_ms
+    }
+
+    /// Converts one line of counts (RFU) to increments in SI, FRD axes.
+    pub fn convert(&self, counts: [i64; 6]) -> PsinsSample {
+        let gyro_rfu: [f64; 3] =
+            core::array::from_fn(|i| counts[i] as f64 * self.gyro_scale_arcsec[i] * RAD_PER_ARCSEC);
+        let accel_rfu: [f64; 3] = core::array::from_fn(|i| {
+            counts[3 + i] as f64 * self.accel_scale_ug_s[i] * 1e-6 * self.g_mps2
+        });
+        PsinsSample {
+            delta_theta_ib_b: rfu_to_frd(gyro_rfu),
+            delta_v_ib_b: rfu_to_frd(accel_rfu),
+        }
+    }
+}
+
+/// RFU body axes to FRD: forward is RFU's y, right is RFU's x, down is minus RFU's z.
+pub fn rfu_to_frd([x, y, z]: [f64; 3]) -> [f64; 3] {
+    [y, x, -z]
+}
+
+/// One sample in SI units and FRD body axes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PsinsSample {
+    /// Angle increment over the interval, body FRD [rad].
+    pub delta_theta_ib_b: [f64; 3],
+    /// Velocity increment over the interval, body FRD [m/s].
+    pub delta_v_ib_b: [f64; 3],
+}
+
+/// A PSINS recording: the header and the samples, sample `k` covering the interval
+/// `[t0 + k * interval, t0 + (k + 1) * interval]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PsinsRecording {
+    /// The header.
+    pub header: PsinsHeader,
+    /// The samples, in file order.
+    pub samples: Vec<PsinsSample>,
+}
+
+/// A PSINS reading error, naming the file and (for content errors) the line.
+#[derive(Debug)]
+pub struct PsinsError {
+    /// The file.
+    pub path: PathBuf,
+    /// 1-based line number, when the error is about a line.
+    pub line: Option<u64>,
+    /// What went wrong.
+    pub kind: PsinsErrorKind,
+}
+
+/// What went wrong in a PSINS file.
+#[derive(Debug)]
+pub enum PsinsErrorKind {
+    /// The file ended before the three header lines.
+    MissingHeader {
+        /// Which header line (1, 2 or 3) is missing.
+        which: usize,
+    },
+    /// A header line does not hold six numbers.
+    BadHeaderLine {
+        /// Which header line (1, 2 or 3).
+        which: usize,
+        /// What the line should hold.
+        expected: &'static str,
+        /// The line's text.
+        found: String,
+    },
+    /// A header value is out of its domain (interval, g, scales, t0).
+    BadHeaderValue {
+        /// Which value and what it must be.
+        what: &'static str,
+        /// The value found.
+        found: f64,
+    },
+    /// A sample line does not hold six integer counts.
+    BadCounts {
+        /// 1-based field position (1..=6) of the first bad field, 7 for extra fields.
+        field: usize,
+        /// The line's text.
+        found: String,
+    },
+    /// The file could not be opened or read.
+    Io(io::Error),
+}
+
+const HEADER_EXPECTED: [&str; 3] = [
+    "6 numbers: pitch0 roll0 yaw0 [deg], VE0 VN0 VU0 [m/s]",
+    "6 numbers: latitude0 longitude0 [deg], height0 [m], t0 [s], interval [ms], g [m/s^2]",
+    "6 numbers: gyro scales x y z [arcsec/count], accel scales x y z [ug*s/count]",
+];
+
+const COUNT_NAMES: [&str; 6] = [
+    "gyro x", "gyro y", "gyro z", "accel x", "accel y", "accel z",
+];
+
+impl fmt::Display for PsinsError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: ", self.path.display())?;
+        if let Some(line) = self.line {
+            write!(f, "line {line}: ")?;
+        }
+        match &self.kind {
+            PsinsErrorKind::MissingHeader { which } => write!(
+                f,
+                "file ended before header line {which} ({})",
+                HEADER_EXPECTED[which - 1]
+            ),
+            PsinsErrorKind::BadHeaderLine {
+                which,
+                expected,
+                found,
+            } => {
+                write!(
+                    f,
+                    "header line {which}: expected {expected}, found '{found}'"
+                )
+            }
+            PsinsErrorKind::BadHeaderValue { what, found } => {
+                write!(f, "header: {what}, found {found}")
+            }
+            PsinsErrorKind::BadCounts { field, found } if *field <= 6 => write!(
+                f,
+                "expected 6 integer counts (gyro x y z, accel x y z): field {field} ({}) is not an integer or is missing, in '{found}'",
+                COUNT_NAMES[field - 1]
+            ),
+            PsinsErrorKind::BadCounts { found, .. } => write!(
+                f,
+                "expected 6 integer counts (gyro x y z, accel x y z), found more fields in '{found}'"
+            ),
+            PsinsErrorKind::Io(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for PsinsError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &self.kind {
+            PsinsErrorKind::Io(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+/// Reads a PSINS recording from `path`.
+pub fn read(path: &Path) -> Result<PsinsRecording, PsinsError> {
+    let file = File::open(path).map_err(|e| error(path, None, PsinsErrorKind::Io(e)))?;
+    read_from(BufReader::new(file), path)
+}
+
+/// Reads a PSINS recording from `reader`; `path` names it in errors.
+pub fn read_from<R: BufRead>(reader: R, path: &Path) -> Result<PsinsRecording, PsinsError> {
+    let mut header_values: Vec<[f64; 6]> = Vec::with_capacity(3);
+    let mut header: Option<PsinsHeader> = None;
+    let mut samples = Vec::new();
+    for (index, line) in reader.lines().enumerate() {
+        let line_no = index as u64 + 1;
+        let at = |kind| error(path, Some(line_no), kind);
+        let line = line.map_err(|e| at(PsinsErrorKind::Io(e)))?;
+        let text = line.trim();
+        if text.is_empty() || text.starts_with('%') {
+            continue;
+        }
+        match &header {
+            Some(h) => {
+                let counts = parse_counts(text).map_err(|field| {
+                    at(PsinsErrorKind::BadCounts {
+                        field,
+                        found: text.to_owned(),
+                    })
+                })?;
+                samples.push(h.convert(counts));
+            }
+            None => {
+                let which = header_values.len() + 1;
+                let values = parse_six::<f64>(text)
+                    .filter(|v| v.iter().all(|x| x.is_finite()))
+                    .ok_or_else(|| {
+                        at(PsinsErrorKind::BadHeaderLine {
+                            which,
+                            expected: HEADER_EXPECTED[which - 1],
+                            found: text.to_owned(),
+                        })
+                    })?;
+                if which == 2 {
+                    check_line_2(&values).map_err(at)?;
+                }
+                header_values.push(values);
+                if header_values.len() == 3 {
+                    header = Some(build_header(&header_values));
+                }
+            }
+        }
+    }
+    match header {
+        Some(header) => Ok(PsinsRecording { header, samples }),
+        None => Err(error(
+            path,
+            None,
+            PsinsErrorKind::MissingHeader {
+                which: header_values.len() + 1,
+            },
+        )),
+    }
+}
+
+/// Domain checks of header line 2 (position, time, interval, g).
+fn check_line_2(v: &[f64; 6]) -> Result<(), PsinsErrorKind> {
+    let [lat_deg, _, _, t0_s, interval_ms, g_mps2] = *v;
+    let bad = |what, found| Err(PsinsErrorKind::BadHeaderValue { what, found });
+    if interval_ms <= 0.0 {
+        return bad("the sampling interval [ms] must be positive", interval_ms);
+    }
+    if g_mps2 <= 0.0 {
+        return bad("g [m/s^2] must be positive", g_mps2);
+    }
+    if t0_s < 0.0 {
+        return bad("t0 [s] must not be negative", t0_s);
+    }
+    if !(-90.0..=90.0).contains(&lat_deg) {
+        return bad("latitude [deg] must be within [-90, 90]", lat_deg);
+    }
+    Ok(())
+}
+
+fn build_header(v: &[[f64; 6]]) -> PsinsHeader {
+    let [pitch0_deg, roll0_deg, yaw0_deg, ve, vn, vu] = v[0];
+    let [lat_deg, lon_deg, h_m, t0_s, interval_ms, g_mps2] = v[1];
+    let [gx, gy, gz, ax, ay, az] = v[2];
+    PsinsHeader {
+        pitch0_deg,
+        roll0_deg,
+        yaw0_deg,
+        v_enu0_mps: [ve, vn, vu],
+        lat_deg,
+        lon_deg,
+        h_m,
+        t0_s,
+        interval_ms,
+        g_mps2,
+        gyro_scale_arcsec: [gx, gy, gz],
+        accel_scale_ug_s: [ax, ay, az],
+    }
+}
+
+/// Six whitespace-separated values, or `None`.
+fn parse_six<T: std::str::FromStr + Copy + Default>(text: &str) -> Option<[T; 6]> {
+    let mut out = [T::default(); 6];
+    let mut fields = text.split_whitespace();
+    for slot in &mut out {
+        *slot = fields.next()?.parse().ok()?;
+    }
+    fields.next().is_none().then_some(out)
+}
+
+/// Six integer counts, or the 1-based position of the first bad field (7: extra fields).
+fn parse_counts(text: &str) -> Result<[i64; 6], usize> {
+    let mut out = [0_i64; 6];
+    let mut fields = text.split_whitespace();
+    for (i, slot) in out.iter_mut().enumerate() {
+        *slot = fields.next().and_then(|f| f.parse().ok()).ok_or(i + 1)?;
+    }
+    match fields.next() {
+        None => Ok(out),
+        Some(_) => Err(7),
+    }
+}
+
+fn error(path: &Path, line: Option<u64>, kind: PsinsErrorKind) -> PsinsError {
+    PsinsError {
+        path: path.to_owned(),
+        line,
+        kind,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TEXT: &str = "% comment\n%\n\n0 0 -90.6 0 0 0\n34.246048 108.909664 380.0 0 10 9.780327\n0.1 0.1 0.1 125 125 125\n-7 9 3 0 0 80\n  2 -4 7 0 2 80  \n";
+
+    fn parse(text: &str) -> Result<PsinsRecording, PsinsError> {
+        read_from(text.as_bytes(), Path::new("mem.imu"))
+    }
+
+    #[test]
+    fn reads_header_and_converts_counts() {
+        let r = parse(TEXT).unwrap();
+        let h = r.header;
+        assert_eq!(
+            (h.lat_deg, h.lon_deg, h.h_m, h.t0_s),
+            (34.246048, 108.909664, 380.0, 0.0)
+        );
+        assert_eq!(
+            (h.interval_ms, h.g_mps2, h.yaw0_deg),
+            (10.0, 9.780327, -90.6)
+        );
+        assert_eq!(h.rate_hz(), 100.0);
+        assert_eq!(r.samples.len(), 2);
+        let s = r.samples[0];
+        // gyro RFU (-7, 9, 3) * 0.1 arcsec -> FRD (9, -7, -3) * 0.1 arcsec.
+        let arcsec = std::f64::consts::PI / 648_000.0;
+        let expect = [0.9 * arcsec, -0.7 * arcsec, -0.3 * arcsec];
+        for (a, b) in s.delta_theta_ib_b.iter().zip(expect) {
+            assert!((a - b).abs() < 1e-20, "{a} vs {b}");
+        }
+        // accel z_rfu = 80 * 125 ug*s = 0.01 g*s up -> FRD z = -0.01 * g m/s.
+        assert_eq!(s.delta_v_ib_b[0], 0.0);
+        assert!((s.delta_v_ib_b[2] + 0.01 * 9.780327).abs() < 1e-15);
+        assert!((r.samples[1].delta_v_ib_b[0] - 2.0 * 125e-6 * 9.780327).abs() < 1e-15);
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let bad = TEXT.replace("2 -4 7 0 2 80", "2 -4 7 x 2 80");
+        let msg = parse(&bad).unwrap_err().to_string();
+        assert!(
+            msg.starts_with("mem.imu: line 8: expected 6 integer counts"),
+            "{msg}"
+        );
+        assert!(msg.contains("field 4 (accel x)"), "{msg}");
+
+        let bad = TEXT.replace("2 -4 7 0 2 80", "2 -4 7 0 2");
+        let msg = parse(&bad).unwrap_err().to_string();
+        assert!(
+            msg.contains("line 8") && msg.contains("field 6 (accel z)"),
+            "{msg}"
+        );
+
+        let bad = TEXT.replace("2 -4 7 0 2 80", "2 -4 7 0 2 80 1");
+        let msg = parse(&bad).unwrap_err().to_string();
+        assert!(
+            msg.contains("line 8") && msg.contains("found more fields"),
+            "{msg}"
+        );
+
+        let bad = TEXT.replace("380.0 0 10", "380.0 0 0");
+        let msg = parse(&bad).unwrap_err().to_string();
+        assert!(
+            msg.contains("line 5: header: the sampling interval"),
+            "{msg}"
+        );
+
+        let bad = TEXT.replace("0.1 0.1 0.1 125 125 125", "0.1 0.1 0.1 125 125");
+        let msg = parse(&bad).unwrap_err().to_string();
+        assert!(
+            msg.contains("line 6: header line 3: expected 6 numbers"),
+            "{msg}"
+        );
+
+        let msg = parse("% only comments\n0 0 0 0 0 0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("file ended before header line 2"), "{msg}");
+    }
+}

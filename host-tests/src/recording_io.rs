@@ -1,0 +1,439 @@
+//! Recordings on disk: format detection, the common in-memory form, the binary writer and the
+//! replay sources.
+//!
+//! Every format is read into a [`Recording`] (the binary format's header values and records). For
+//! a replay, binary files are read straight from disk by [`Replay`]; CSV and PSINS recordings are
+//! encoded into the binary format in memory and replayed from there, so the sample flags and the
+//! measured `dt` come from the same code whatever the input format.
+//!
+//! Conversion of timed increments to the binary format: `t_ns = round(t_s * 1e9)` (the end of each
+//! interval); the nominal rate is `1 / median interval` (CSV) or the PSINS header's; the header's
+//! `t0_ns` (start of the first interval) is `t_ns[0] - round(nominal period)`.
+
+use crate::{imu_csv, psins};
+use anyhow::{Context, Result, anyhow, bail, ensure};
+use core::convert::Infallible;
+use hal_adapters::io::StdReader;
+use hal_adapters::recording::{
+    FormatError, HEADER_LEN, Header, Kind, MAGIC, RECORD_LEN, Record, Replay, ReplayError,
+    ReplayStats,
+};
+use hal_adapters::{Imu, ImuSample};
+use std::fs::{self, File};
+use std::io::{BufReader, BufWriter, Read, Write};
+use std::path::Path;
+
+/// A recording file's format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// The project's binary format (`hal_adapters::recording`).
+    Binary,
+    /// The CSV increment format ([`imu_csv`]).
+    Csv,
+    /// PSINS `.imu` text ([`psins`]).
+    Psins,
+}
+
+impl core::fmt::Display for Format {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::Binary => "binary",
+            Self::Csv => "CSV",
+            Self::Psins => "PSINS",
+        })
+    }
+}
+
+/// Detects the format of `path`: by the binary magic bytes, the CSV header (`t_s,...`) or a PSINS
+/// `%` comment on the first line; failing those, by the extension (`.bin`, `.csv`, `.imu`), so a
+/// damaged file still gets the format's own error message.
+pub fn detect(path: &Path) -> Result<Format> {
+    let mut head = Vec::with_capacity(256);
+    File::open(path)
+        .and_then(|f| f.take(256).read_to_end(&mut head))
+        .with_context(|| format!("recording {}", path.display()))?;
+    if head.starts_with(&MAGIC) {
+        return Ok(Format::Binary);
+    }
+    let text = String::from_utf8_lossy(&head);
+    let first = text.trim_start_matches('\u{feff}').trim_start();
+    if first.starts_with("t_s,") || first.starts_with("t_s\n") {
+        return Ok(Format::Csv);
+    }
+    if first.starts_with('%') {
+        return Ok(Format::Psins);
+    }
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("bin") => Ok(Format::Binary),
+        Some("csv") => Ok(Format::Csv),
+        Some("imu") => Ok(Format::Psins),
+        _ => bail!(
+            "recording {}: unknown format: expected the binary magic {:?}, a CSV header starting \
+             with 't_s,', a PSINS file starting with '%', or the extension .bin, .csv or .imu",
+            path.display(),
+            String::from_utf8_lossy(&MAGIC)
+        ),
+    }
+}
+
+/// A recording in memory: the binary format's header values and records.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Recording {
+    /// What the records hold: increments over the interval, or rates at its end.
+    pub kind: Kind,
+    /// Nominal sampling rate [Hz].
+    pub rate_hz: f64,
+    /// Start of the first interval [ns] on the recording's clock.
+    pub t0_ns: u64,
+    /// The records (each timed at the END of its interval).
+    pub records: Vec<Record>,
+}
+
+impl Recording {
+    /// The binary header of this recording.
+    pub fn header(&self) -> Result<Header> {
+        let sample_count = u32::try_from(self.records.len())
+            .context("too many records for the binary format (more than 2^32 - 1)")?;
+        let header = Header {
+            kind: self.kind,
+            rate_hz: self.rate_hz,
+            t0_ns: self.t0_ns,
+            sample_count,
+        };
+        header.validate().map_err(|e| anyhow!("{e}"))?;
+        Ok(header)
+    }
+
+    /// The recording encoded in the binary format.
+    pub fn to_bytes(&self) -> Result<Vec<u8>> {
+        let mut bytes = Vec::with_capacity(HEADER_LEN + RECORD_LEN * self.records.len());
+        bytes.extend_from_slice(&self.header()?.encode());
+        for r in &self.records {
+            bytes.extend_from_slice(&r.encode());
+        }
+        Ok(bytes)
+    }
+
+    /// Builds a recording of increments from a CSV file's rows (see the module docs).
+    pub fn from_csv(csv: &imu_csv::ImuCsv) -> Result<Self> {
+        ensure!(
+            csv.rows.len() >= 2,
+            "at least 2 samples are needed to find the sampling rate"
+        );
+        let t_ns: Vec<u64> = csv.rows.iter().map(|r| seconds_to_ns(r.t_s)).collect();
+        let mut intervals: Vec<i128> = t_ns
+            .windows(2)
+            .map(|w| i128::from(w[1]) - i128::from(w[0]))
+            .collect();
+        intervals.sort_unstable();
+        let n = intervals.len();
+        let median_ns = if n % 2 == 1 {
+            intervals[n / 2] as f64
+        } else {
+            (intervals[n / 2 - 1] + intervals[n / 2]) as f64 / 2.0
+        };
+        ensure!(
+            median_ns > 0.0,
+            "the median sampling interval is {median_ns} ns: time does not increase"
+        );
+        let rate_hz = 1e9 / median_ns;
+        let records = csv
+            .rows
+            .iter()
+            .zip(&t_ns)
+            .map(|(r, &t_ns)| Record {
+                t_ns,
+                gyro: r.delta_theta_ib_b,
+                accel: r.delta_v_ib_b,
+                temperature_c: r.temperature_c,
+            })
+            .collect();
+        // A first sample at t = 0 gives t0 = 0: its zero interval is flagged on replay.
+        let t0_ns = t_ns[0].saturating_sub(median_ns.round() as u64);
+        Ok(Self {
+            kind: Kind::Increments,
+            rate_hz,
+            t0_ns,
+            records,
+        })
+    }
+
+    /// Builds a recording of increments from a PSINS file (see the module docs).
+    pub fn from_psins(p: &psins::PsinsRecording) -> Self {
+        let period_ns = (p.header.interval_ms * 1e6).round() as u64;
+        let t0_ns = seconds_to_ns(p.header.t0_s);
+        let to_f32 = |v: [f64; 3]| v.map(|x| x as f32);
+        let records = p
+            .samples
+            .iter()
+            .zip(1_u64..)
+            .map(|(s, k)| Record {
+                t_ns: t0_ns + k * period_ns,
+                gyro: to_f32(s.delta_theta_ib_b),
+                accel: to_f32(s.delta_v_ib_b),
+                temperature_c: f32::NAN,
+            })
+            .collect();
+        Self {
+            kind: Kind::Increments,
+            rate_hz: p.header.rate_hz(),
+            t0_ns,
+            records,
+        }
+    }
+
+    /// The recording as CSV rows (increments only: CSV has no rates).
+    pub fn to_csv(&self) -> Result<imu_csv::ImuCsv> {
+        ensure!(
+            matches!(self.kind, Kind::Increments),
+            "the CSV format holds increments, this recording holds rates"
+        );
+        let rows = self
+            .records
+            .iter()
+            .map(|r| imu_csv::CsvRow {
+                t_s: r.t_ns as f64 / 1e9,
+                delta_theta_ib_b: r.gyro,
+                delta_v_ib_b: r.accel,
+                temperature_c: r.temperature_c,
+            })
+            .collect();
+        let has_temperature = self.records.iter().any(|r| !r.temperature_c.is_nan());
+        Ok(imu_csv::ImuCsv {
+            has_temperature,
+            rows,
+        })
+    }
+}
+
+/// `round(t_s * 1e9)` [ns]; `t_s` must be finite and non-negative (the readers check it).
+fn seconds_to_ns(t_s: f64) -> u64 {
+    (t_s * 1e9).round() as u64
+}
+
+/// Reads any recording file into memory (format from [`detect`]). Errors name the file and the
+/// line or byte offset.
+pub fn read(path: &Path) -> Result<Recording> {
+    match detect(path)? {
+        Format::Csv => {
+            let csv = imu_csv::read(path)?;
+            Recording::from_csv(&csv).with_context(|| format!("recording {}", path.display()))
+        }
+        Format::Psins => Ok(Recording::from_psins(&psins::read(path)?)),
+        Format::Binary => read_binary(path),
+    }
+}
+
+/// Reads a binary recording, checked by a full [`Replay`] pass first (so truncation and CRC errors
+/// read exactly as they do on replay).
+fn read_binary(path: &Path) -> Result<Recording> {
+    let context = || format!("recording {}", path.display());
+    let bytes = fs::read(path).with_context(context)?;
+    let mut replay = Replay::new(bytes.as_slice()).map_err(|e| in_file(path, format_error(e)))?;
+    while replay
+        .read_sample()
+        .map_err(|e| in_file(path, format_error(e)))?
+        .is_some()
+    {}
+    let header = *replay.header();
+    let records = (0..header.sample_count)
+        .map(|index| {
+            let offset = HEADER_LEN + RECORD_LEN * index as usize;
+            let chunk: &[u8; RECORD_LEN] = bytes[offset..offset + RECORD_LEN]
+                .try_into()
+                .expect("the replay pass checked the length");
+            Record::decode(chunk, offset as u64, index)
+        })
+        .collect::<Result<Vec<_>, FormatError>>()
+        .map_err(|e| in_file(path, e))?;
+    Ok(Recording {
+        kind: header.kind,
+        rate_hz: header.rate_hz,
+        t0_ns: header.t0_ns,
+        records,
+    })
+}
+
+/// An error of the recording `path`: "recording PATH: byte offset ... (record ...): ...".
+pub fn in_file(path: &Path, e: impl core::fmt::Display) -> anyhow::Error {
+    anyhow!("recording {}: {e}", path.display())
+}
+
+/// An infallible reader's replay error is a format error.
+fn format_error(e: ReplayError<Infallible>) -> FormatError {
+    match e {
+        ReplayError::Format(f) => f,
+        ReplayError::Io(never) => match never {},
+    }
+}
+
+/// Writes a binary recording to `path` (created or truncated).
+pub fn write_binary(
+    path: &Path,
+    kind: Kind,
+    rate_hz: f64,
+    t0_ns: u64,
+    records: &[Record],
+) -> Result<()> {
+    let context = || format!("writing {}", path.display());
+    let sample_count = u32::try_from(records.len())
+        .context("too many records for the binary format (more than 2^32 - 1)")
+        .with_context(context)?;
+    let header = Header {
+        kind,
+        rate_hz,
+        t0_ns,
+        sample_count,
+    };
+    header
+        .validate()
+        .map_err(|e| anyhow!("writing {}: {e}", path.display()))?;
+    let mut out = BufWriter::new(File::create(path).with_context(context)?);
+    out.write_all(&header.encode()).with_context(context)?;
+    for r in records {
+        out.write_all(&r.encode()).with_context(context)?;
+    }
+    out.flush().with_context(context)
+}
+
+/// Writes `recording` to `path`: CSV when the name ends in `.csv`, binary otherwise.
+pub fn write(path: &Path, recording: &Recording) -> Result<()> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+    {
+        let csv = recording
+            .to_csv()
+            .with_context(|| format!("writing {}", path.display()))?;
+        Ok(imu_csv::write(path, &csv)?)
+    } else {
+        let r = recording;
+        write_binary(path, r.kind, r.rate_hz, r.t0_ns, &r.records)
+    }
+}
+
+/// An owned byte buffer read through `embedded_io` (the replay of an in-memory recording).
+#[derive(Clone, Debug, Default)]
+pub struct MemReader {
+    bytes: Vec<u8>,
+    pos: usize,
+}
+
+impl MemReader {
+    /// A reader at the start of `bytes`.
+    pub fn new(bytes: Vec<u8>) -> Self {
+        Self { bytes, pos: 0 }
+    }
+}
+
+impl embedded_io::ErrorType for MemReader {
+    type Error = Infallible;
+}
+
+impl embedded_io::Read for MemReader {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
+        let rest = &self.bytes[self.pos..];
+        let n = rest.len().min(buf.len());
+        buf[..n].copy_from_slice(&rest[..n]);
+        self.pos += n;
+        Ok(n)
+    }
+}
+
+/// Error of a [`ReplaySource`]: reading the file failed, or the recording is invalid.
+#[derive(Debug)]
+pub enum SourceError {
+    /// Reading the file failed.
+    Io(std::io::Error),
+    /// The recording is invalid; `Display` gives e.g. `byte offset 1288 (record 31): record CRC
+    /// mismatch (corrupt data)`.
+    Format(FormatError),
+}
+
+impl core::fmt::Display for SourceError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Io(e) => write!(f, "read error: {e}"),
+            Self::Format(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for SourceError {}
+
+impl From<ReplayError<std::io::Error>> for SourceError {
+    fn from(e: ReplayError<std::io::Error>) -> Self {
+        match e {
+            ReplayError::Io(e) => Self::Io(e),
+            ReplayError::Format(e) => Self::Format(e),
+        }
+    }
+}
+
+/// A replay of any recording file.
+pub enum ReplaySource {
+    /// A binary file, read from disk as it goes.
+    File(Replay<StdReader>),
+    /// A CSV or PSINS recording converted to the binary format in memory.
+    Memory(Replay<MemReader>),
+}
+
+impl ReplaySource {
+    /// Opens `path` for replay (format from [`detect`]). Errors name the file.
+    pub fn open(path: &Path) -> Result<(Self, Format)> {
+        let context = || format!("recording {}", path.display());
+        let format = detect(path)?;
+        let source = match format {
+            Format::Binary => {
+                let file = File::open(path).with_context(context)?;
+                let reader = StdReader::new(BufReader::new(file));
+                Self::File(Replay::new(reader).map_err(|e| in_file(path, SourceError::from(e)))?)
+            }
+            Format::Csv | Format::Psins => {
+                Self::from_recording(&read(path)?).with_context(context)?
+            }
+        };
+        Ok((source, format))
+    }
+
+    /// Replays an in-memory recording through the binary format.
+    pub fn from_recording(recording: &Recording) -> Result<Self> {
+        let reader = MemReader::new(recording.to_bytes()?);
+        Ok(Self::Memory(
+            Replay::new(reader).map_err(|e| anyhow!("{}", format_error(e)))?,
+        ))
+    }
+
+    /// The recording's header.
+    pub fn header(&self) -> &Header {
+        match self {
+            Self::File(r) => r.header(),
+            Self::Memory(r) => r.header(),
+        }
+    }
+
+    /// The replay's counters so far.
+    pub fn stats(&self) -> ReplayStats {
+        match self {
+            Self::File(r) => r.stats(),
+            Self::Memory(r) => r.stats(),
+        }
+    }
+}
+
+impl Imu for ReplaySource {
+    type Error = SourceError;
+
+    fn read_sample(&mut self) -> Result<Option<ImuSample>, SourceError> {
+        match self {
+            Self::File(r) => r.read_sample().map_err(SourceError::from),
+            Self::Memory(r) => r
+                .read_sample()
+                .map_err(|e| SourceError::Format(format_error(e))),
+        }
+    }
+}

@@ -1,0 +1,273 @@
+//! Damaged and dirty recordings: hard format errors name the file and the position; data-quality
+//! problems (NaN, time not increasing) are flagged, counted and kept away from nav-core.
+
+mod common;
+
+use common::{parse_log, replay, replay_error};
+use hal_adapters::recording::{HEADER_LEN, RECORD_LEN, Record};
+use host_tests::generate::Stationary;
+use host_tests::recording_io::{self, Recording};
+use host_tests::replay::ReplayOptions;
+use std::path::{Path, PathBuf};
+
+fn scenario() -> Stationary {
+    Stationary {
+        seconds: 20.0,
+        ..Stationary::default()
+    } // 8000 samples at 400 Hz
+}
+
+fn options() -> ReplayOptions {
+    let s = scenario();
+    ReplayOptions {
+        lat_deg: s.lat_deg,
+        lon_deg: s.lon_deg,
+        h_m: s.h_m,
+        align_seconds: 5.0,
+        log_every: 40,
+    }
+}
+
+fn clean() -> Recording {
+    scenario().recording().unwrap()
+}
+
+fn write_bytes(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+const CSV_HEADER: &str = "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,dv_y_mps,dv_z_mps";
+
+/// A small valid CSV body: `n` level samples at rest, 100 Hz.
+fn csv_text(n: usize) -> String {
+    let mut text = format!("{CSV_HEADER}\n");
+    for k in 1..=n {
+        text.push_str(&format!(
+            "{},0.0000005,0,-0.0000005,0,0,-0.098\n",
+            k as f64 / 100.0
+        ));
+    }
+    text
+}
+
+#[test]
+fn truncated_binary() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = clean().to_bytes().unwrap();
+    // Cut record 100 after 13 of its 40 bytes.
+    let cut = HEADER_LEN + RECORD_LEN * 100 + 13;
+    let path = write_bytes(dir.path(), "cut.bin", &bytes[..cut]);
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.contains(&format!("recording {}", path.display())),
+        "{msg}"
+    );
+    assert!(msg.contains("byte offset 4048 (record 100)"), "{msg}");
+    assert!(msg.contains("truncated") || msg.contains("ends"), "{msg}");
+    // The converter reads binaries with the same checks.
+    let msg = format!("{:#}", recording_io::read(&path).unwrap_err());
+    assert!(
+        msg.contains("cut.bin") && msg.contains("byte offset 4048 (record 100)"),
+        "{msg}"
+    );
+
+    // Cut inside the header.
+    let path = write_bytes(dir.path(), "stub.bin", &bytes[..20]);
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.contains("stub.bin") && msg.contains("byte offset 0"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn corrupt_record() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = clean().to_bytes().unwrap();
+    bytes[HEADER_LEN + RECORD_LEN * 31 + 17] ^= 0x10; // a gyro byte of record 31
+    let path = write_bytes(dir.path(), "flip.bin", &bytes);
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.contains(&format!(
+            "recording {}: byte offset 1288 (record 31): record CRC mismatch",
+            path.display()
+        )),
+        "{msg}"
+    );
+}
+
+#[test]
+fn bad_magic() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = clean().to_bytes().unwrap();
+    bytes[..8].copy_from_slice(b"NAVIMU\n\0"); // line endings mangled by a text-mode transfer
+    let path = write_bytes(dir.path(), "mangled.bin", &bytes);
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.contains("mangled.bin")
+            && msg.contains("byte offset 0")
+            && msg.contains("not a NAVIMU recording"),
+        "{msg}"
+    );
+
+    // Neither binary nor text we know, with an unknown extension.
+    let path = write_bytes(dir.path(), "mystery.dat", b"\x00\x01garbage");
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.contains("mystery.dat") && msg.contains("unknown format"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn csv_with_a_non_number() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = csv_text(30).replace(
+        "0.16,0.0000005,0,-0.0000005,0,0,-0.098",
+        "0.16,0.0000005,0,-0.0000005,0,abc,-0.098",
+    );
+    let path = write_bytes(dir.path(), "bad.csv", text.as_bytes());
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.contains(&format!(
+            "{}: line 17: column dv_y_mps: expected a number, found 'abc'",
+            path.display()
+        )),
+        "{msg}"
+    );
+}
+
+#[test]
+fn csv_with_a_missing_column_or_header() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = csv_text(30).replace(
+        "0.05,0.0000005,0,-0.0000005,0,0,-0.098",
+        "0.05,0.0000005,0,-0.0000005,0,0",
+    );
+    let path = write_bytes(dir.path(), "short.csv", text.as_bytes());
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.contains("short.csv: line 6: column dv_z_mps: missing"),
+        "{msg}"
+    );
+
+    let text = csv_text(3).replace("dv_z_mps", "dv_z");
+    let path = write_bytes(dir.path(), "header.csv", text.as_bytes());
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.contains("header.csv: line 1: expected the header row"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn psins_with_a_bad_count_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text =
+        String::from("% test\n0 0 0 0 0 0\n45 7.5 150 0 10 9.8\n0.1 0.1 0.1 125 125 125\n");
+    for _ in 0..20 {
+        text.push_str("1 2 -1 0 0 80\n");
+    }
+    text.push_str("1 2 -1 0 0.5 80\n"); // line 25
+    let path = write_bytes(dir.path(), "bad.imu", text.as_bytes());
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.contains("bad.imu: line 25: expected 6 integer counts"),
+        "{msg}"
+    );
+    assert!(msg.contains("field 5 (accel y)"), "{msg}");
+}
+
+#[test]
+fn recording_ending_during_alignment() {
+    let dir = tempfile::tempdir().unwrap();
+    let short = Stationary {
+        seconds: 2.0,
+        ..scenario()
+    }
+    .recording()
+    .unwrap();
+    let path = dir.path().join("two-seconds.bin");
+    recording_io::write(&path, &short).unwrap();
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.contains("two-seconds.bin: recording ended during alignment: 800 of 2000 samples"),
+        "{msg}"
+    );
+}
+
+/// Duplicates record `k` (the copy has a zero interval).
+fn duplicate(records: &mut Vec<Record>, k: usize) {
+    let copy = records[k];
+    records.insert(k + 1, copy);
+}
+
+#[test]
+fn zero_intervals_are_flagged_and_skipped() {
+    // Two duplicated records, one during the alignment and one during the navigation: both have
+    // a zero interval. Skipping them must give exactly the clean recording's log (a fed zero-dt
+    // increment would be rejected and counted by nav-core instead, and the counts would shift).
+    let dir = tempfile::tempdir().unwrap();
+    let clean = clean();
+    let mut dirty = clean.clone();
+    duplicate(&mut dirty.records, 5000);
+    duplicate(&mut dirty.records, 1000);
+    let (clean_path, dirty_path) = (dir.path().join("clean.bin"), dir.path().join("dirty.bin"));
+    recording_io::write(&clean_path, &clean).unwrap();
+    recording_io::write(&dirty_path, &dirty).unwrap();
+
+    let (c, clean_log) = replay::<f32>(&clean_path, &options());
+    let (d, dirty_log) = replay::<f32>(&dirty_path, &options());
+    let (c, d) = (c.report, d.report);
+    assert_eq!((d.samples, d.flagged, d.rejected), (c.samples + 2, 2, 0));
+    assert_eq!(d.source.unwrap().bad_interval, 2);
+    assert_eq!(d.nav_steps, c.nav_steps);
+    assert_eq!(dirty_log, clean_log);
+}
+
+#[test]
+fn nan_and_backwards_time_are_flagged_and_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let clean = clean();
+    let n = clean.records.len() as u32;
+    let mut dirty = clean.clone();
+    // Time going backwards by 1 us: an extra record inserted after record 6999 (navigation).
+    let mut back = dirty.records[6999];
+    back.t_ns -= 1000;
+    dirty.records.insert(7000, back);
+    // A NaN gyro value replacing record 1500's (alignment) and an infinite one at 3000.
+    dirty.records[1500].gyro[1] = f32::NAN;
+    dirty.records[3000].accel[2] = f32::NEG_INFINITY;
+    let path = dir.path().join("nan.bin");
+    recording_io::write(&path, &dirty).unwrap();
+
+    let (fr, log) = replay::<f64>(&path, &options());
+    let r = fr.report;
+    let stats = r.source.unwrap();
+    assert_eq!((r.samples, r.flagged, r.rejected), (n + 1, 3, 0));
+    assert_eq!((stats.non_finite, stats.bad_interval), (2, 1));
+    // 2000 samples aligned (the NaN one does not count), the rest navigated but for 3 skipped.
+    assert_eq!(r.n_align, 2000);
+    assert_eq!(r.nav_steps, n + 1 - 3 - 2000);
+    // The output is finite and the body still at rest: skipping a 2.5 ms rest interval loses
+    // nothing, and the record after the backward step has a 1 us longer dt than its increments,
+    // a velocity error of g * 1 us = 1e-5 m/s.
+    let rows = parse_log(&log);
+    for row in &rows {
+        let values = [
+            row.lat_deg,
+            row.lon_deg,
+            row.h_m,
+            row.v_ned[0],
+            row.v_ned[1],
+            row.v_ned[2],
+        ];
+        assert!(
+            values.iter().chain(&row.rpy_deg).all(|v| v.is_finite()),
+            "{row:?}"
+        );
+        assert!(row.v_ned.iter().all(|v| v.abs() < 1e-3), "{row:?}");
+    }
+}

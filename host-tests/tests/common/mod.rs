@@ -1,0 +1,72 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use host_tests::pipeline::Report;
+use host_tests::replay::{FileReport, ReplayOptions, replay_file};
+use nav_core::Scalar;
+use std::path::Path;
+
+/// Mean Earth radius [m], to turn latitude/longitude differences into metres (1e-3 relative is
+/// plenty for error bounds).
+pub const EARTH_RADIUS_M: f64 = 6_371_000.0;
+
+/// One parsed row of a solution log.
+#[derive(Clone, Copy, Debug)]
+pub struct Row {
+    pub t_s: f64,
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    pub h_m: f64,
+    pub v_ned: [f64; 3],
+    pub rpy_deg: [f64; 3],
+}
+
+/// Parses a solution log, checking its header line.
+pub fn parse_log(text: &str) -> Vec<Row> {
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some(nav_core::output::CSV_HEADER),
+        "log header"
+    );
+    lines
+        .map(|line| {
+            let v: Vec<f64> = line
+                .split(',')
+                .map(|f| f.parse().unwrap_or_else(|_| panic!("bad field in {line}")))
+                .collect();
+            assert_eq!(v.len(), 10, "{line}");
+            Row {
+                t_s: v[0],
+                lat_deg: v[1],
+                lon_deg: v[2],
+                h_m: v[3],
+                v_ned: [v[4], v[5], v[6]],
+                rpy_deg: [v[7], v[8], v[9]],
+            }
+        })
+        .collect()
+}
+
+/// Replays `path` in precision `T`; returns the report and the log text.
+pub fn replay<T: Scalar>(path: &Path, options: &ReplayOptions) -> (FileReport, String) {
+    let mut log = Vec::new();
+    let report = replay_file::<T, _>(path, options, &mut log)
+        .unwrap_or_else(|e| panic!("replay of {} failed: {e:#}", path.display()));
+    (report, String::from_utf8(log).unwrap())
+}
+
+/// Replays `path` expecting an error; returns its full message (with the context chain).
+pub fn replay_error(path: &Path, options: &ReplayOptions) -> String {
+    match replay_file::<f64, _>(path, options, std::io::sink()) {
+        Ok(r) => panic!("replay of {} succeeded: {:?}", path.display(), r.report),
+        Err(e) => format!("{e:#}"),
+    }
+}
+
+/// Expected number of solution rows: the alignment row, one every `log_every` navigation steps,
+/// and the last step when it was not logged.
+pub fn expected_rows(report: &Report, log_every: u32) -> u32 {
+    let n = report.nav_steps;
+    1 + n / log_every + u32::from(!n.is_multiple_of(log_every))
+}

@@ -1,0 +1,317 @@
+//! generate -> replay on exact stationary data: the alignment recovers the generated attitude and
+//! the navigation stays put, within bounds derived from the rounding of the data and arithmetic.
+//!
+//! Error budget. The generator computes the inputs in f64 and stores them as f32, so every
+//! increment component carries the same relative error of at most eps = 2^-24 = 6.0e-8, and the
+//! replay's `dt` (an f32 of the nanosecond interval) carries another eps. Nothing else is inexact
+//! in the data: the analytic alignment on exact averages is exact.
+//! - Levelling `roll = atan2(-f_y, -f_z)` (and pitch alike): component errors of relative eps move
+//!   the angle by at most ~2 eps = 1.2e-7 rad = 6.8e-6 deg.
+//! - Gyrocompassing: gyro errors of eps |omega| over the horizontal Earth rate Omega cos(lat), plus
+//!   the levelling error leaking the vertical Earth rate (tilt * tan(lat)): at 45 deg at most
+//!   ~eps * sqrt(2) + 2 eps = 2e-7 rad = 1.2e-5 deg.
+//! - Navigation: specific-force error eps g (f32 data) + eps g (f32 dt against the f64 gravity
+//!   term) + tilt error 2 eps g = 4 eps g = 2.4e-6 m/s^2. Over T = 50 s of navigation that is at
+//!   most a T = 1.2e-4 m/s and a T^2 / 2 = 3e-3 m. Neither the Schuler loop (84 min) nor the
+//!   vertical channel (time constant sqrt(R / 2 g) = 570 s; cosh(50 / 570) = 1.004) amplifies it
+//!   noticeably in 50 s. The asserted bounds add a margin of about 5 to these.
+//! - f32 arithmetic adds, per operation, a relative error eps. In the alignment (Kahan sums, about
+//!   twenty operations) that is ~10 eps on each angle: 6e-7 rad = 3.4e-5 deg (levelling) and, over
+//!   cos(45 deg), 1e-6 rad = 5e-5 deg (heading). In the navigation each of the N = 20,000 steps
+//!   rounds the attitude update by ~2 eps; as a random walk that is 2 eps sqrt(N) = 1.7e-5 rad of
+//!   tilt, so g * 1.7e-5 rad = 1.7e-4 m/s^2, i.e. 8.5e-3 m/s and 0.21 m after 50 s; the velocity
+//!   sum rounds by eps |dv| = 1.5e-9 m/s per step, 3e-5 m/s in all. Bounds with a margin of 5.
+
+mod common;
+
+use common::{EARTH_RADIUS_M, Row, expected_rows, parse_log, replay};
+use host_tests::generate::Stationary;
+use host_tests::recording_io;
+use host_tests::replay::ReplayOptions;
+use nav_core::Scalar;
+use std::path::Path;
+use std::process::Command;
+
+const ALIGN_SECONDS: f64 = 10.0;
+
+/// Bounds for one precision (see the module docs for the derivations).
+struct Bounds {
+    level_deg: f64,
+    heading_deg: f64,
+    speed_mps: f64,
+    position_m: f64,
+    attitude_drift_deg: f64,
+}
+
+const F64_BOUNDS: Bounds = Bounds {
+    level_deg: 1e-5,
+    heading_deg: 5e-5,
+    speed_mps: 1e-3,
+    position_m: 0.015,
+    attitude_drift_deg: 1e-5,
+};
+
+const F32_BOUNDS: Bounds = Bounds {
+    level_deg: 2e-4,
+    heading_deg: 3e-4,
+    speed_mps: 0.05,
+    position_m: 1.0,
+    attitude_drift_deg: 5e-3,
+};
+
+fn scenario() -> Stationary {
+    Stationary::default() // 60 s at 400 Hz, 45 N 7.5 E 150 m, roll 1.5, pitch -2, yaw 30 deg
+}
+
+fn options(s: &Stationary) -> ReplayOptions {
+    ReplayOptions {
+        lat_deg: s.lat_deg,
+        lon_deg: s.lon_deg,
+        h_m: s.h_m,
+        align_seconds: ALIGN_SECONDS,
+        log_every: 40,
+    }
+}
+
+fn angle_error_deg(a: f64, b: f64) -> f64 {
+    (a - b + 180.0).rem_euclid(360.0) - 180.0
+}
+
+fn check<T: Scalar>(path: &Path, s: &Stationary, b: &Bounds) {
+    let (fr, log) = replay::<T>(path, &options(s));
+    let r = fr.report;
+    let n = s.sample_count() as u32;
+    let n_align = (ALIGN_SECONDS * s.rate_hz) as u32;
+    assert_eq!(
+        (r.samples, r.flagged, r.rejected, r.n_align, r.nav_steps),
+        (n, 0, 0, n_align, n - n_align)
+    );
+    assert_eq!(
+        r.source.unwrap(),
+        Default::default(),
+        "no missed, non-finite or bad-interval samples"
+    );
+
+    let a = r.alignment;
+    assert_eq!(a.samples, n_align);
+    assert!(
+        (a.duration_s - ALIGN_SECONDS).abs() < 1e-4,
+        "{}",
+        a.duration_s
+    );
+    assert!(
+        angle_error_deg(a.roll_deg, s.roll_deg).abs() < b.level_deg,
+        "roll {}",
+        a.roll_deg
+    );
+    assert!(
+        angle_error_deg(a.pitch_deg, s.pitch_deg).abs() < b.level_deg,
+        "pitch {}",
+        a.pitch_deg
+    );
+    assert!(
+        angle_error_deg(a.yaw_deg, s.yaw_deg).abs() < b.heading_deg,
+        "yaw {}",
+        a.yaw_deg
+    );
+
+    let rows = parse_log(&log);
+    assert_eq!(rows.len() as u32, r.rows);
+    assert_eq!(r.rows, expected_rows(&r, 40));
+    // The first row is the aligned state at rest, at the end of the last alignment sample.
+    assert_eq!(rows[0].t_s, ALIGN_SECONDS);
+    assert_eq!(rows[0].v_ned, [0.0; 3]);
+    assert_eq!(rows.last().unwrap().t_s, s.seconds);
+    let lat0 = s.lat_deg.to_radians();
+    for row in &rows {
+        let Row {
+            lat_deg,
+            lon_deg,
+            h_m,
+            v_ned,
+            rpy_deg,
+            ..
+        } = *row;
+        let north_m = (lat_deg - s.lat_deg).to_radians() * EARTH_RADIUS_M;
+        let east_m = (lon_deg - s.lon_deg).to_radians() * EARTH_RADIUS_M * lat0.cos();
+        let speed = v_ned.iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert!(speed < b.speed_mps, "t {}: v {v_ned:?}", row.t_s);
+        assert!(
+            north_m.abs() < b.position_m && east_m.abs() < b.position_m,
+            "t {}: {north_m} m N, {east_m} m E",
+            row.t_s
+        );
+        assert!((h_m - s.h_m).abs() < b.position_m, "t {}: h {h_m}", row.t_s);
+        let aligned = [a.roll_deg, a.pitch_deg, a.yaw_deg];
+        for (now, then) in rpy_deg.iter().zip(aligned) {
+            assert!(
+                angle_error_deg(*now, then).abs() < b.attitude_drift_deg,
+                "t {}: {rpy_deg:?}",
+                row.t_s
+            );
+        }
+    }
+}
+
+#[test]
+fn generate_then_replay_f64_and_f32() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("still.bin");
+    let s = scenario();
+    recording_io::write(&path, &s.recording().unwrap()).unwrap();
+    check::<f64>(&path, &s, &F64_BOUNDS);
+    check::<f32>(&path, &s, &F32_BOUNDS);
+}
+
+#[test]
+fn another_attitude_and_site() {
+    // Southern hemisphere, heading near +-180 deg, larger tilts.
+    let s = Stationary {
+        lat_deg: -33.9,
+        lon_deg: -70.6,
+        h_m: 2500.0,
+        roll_deg: -12.0,
+        pitch_deg: 8.5,
+        yaw_deg: -175.0,
+        rate_hz: 200.0,
+        seconds: 30.0,
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("south.bin");
+    recording_io::write(&path, &s.recording().unwrap()).unwrap();
+    // Shorter navigation (20 s): the f64 budget above holds a fortiori; tan(33.9 deg) < 1.
+    check::<f64>(&path, &s, &F64_BOUNDS);
+    check::<f32>(&path, &s, &F32_BOUNDS);
+}
+
+fn nav(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_nav"))
+        .args(args)
+        .output()
+        .expect("run nav")
+}
+
+#[test]
+fn cli_generate_and_replay() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("cli.bin");
+    let log = dir.path().join("cli-log.csv");
+    let (rec_s, log_s) = (rec.to_str().unwrap(), log.to_str().unwrap());
+
+    let out = nav(&[
+        "generate",
+        "--out",
+        rec_s,
+        "--seconds",
+        "20",
+        "--rate",
+        "400",
+        "--lat",
+        "-20",
+        "--lon",
+        "-45",
+        "--h",
+        "10",
+        "--pitch",
+        "-3",
+        "--yaw",
+        "-100",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    let out = nav(&[
+        "replay",
+        "--imu",
+        rec_s,
+        "--lat",
+        "-20",
+        "--lon",
+        "-45",
+        "--h",
+        "10",
+        "--align-seconds",
+        "5",
+        "--out",
+        log_s,
+        "--log-every",
+        "33",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("samples 8000: flagged 0"), "{stdout}");
+    assert!(stdout.contains("alignment over 2000 samples"), "{stdout}");
+
+    // 8000 samples, 2000 aligned, 6000 steps: the alignment row, 181 periodic rows (5973 steps)
+    // and the last step.
+    let text = std::fs::read_to_string(&log).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some(nav_core::output::CSV_HEADER));
+    assert_eq!(lines.count(), 1 + 181 + 1);
+    let rows = parse_log(&text);
+    assert_eq!(rows[0].t_s, 5.0);
+    assert_eq!(rows[1].t_s, 5.0 + 33.0 / 400.0);
+    assert_eq!(rows.last().unwrap().t_s, 20.0);
+    // The default precision is f32; the roll is the generator's default, 1.5 deg.
+    let [roll, pitch, yaw] = rows[0].rpy_deg;
+    let b = &F32_BOUNDS;
+    assert!(
+        (roll - 1.5).abs() < b.level_deg && (pitch + 3.0).abs() < b.level_deg,
+        "{roll} {pitch}"
+    );
+    assert!((yaw + 100.0).abs() < b.heading_deg, "{yaw}");
+}
+
+#[test]
+fn cli_reports_errors_without_panicking() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("short.bin");
+    let bytes = scenario().recording().unwrap().to_bytes().unwrap();
+    std::fs::write(&rec, &bytes[..48 + 40 * 10 + 7]).unwrap();
+    let log = dir.path().join("log.csv");
+    let out = nav(&[
+        "replay",
+        "--imu",
+        rec.to_str().unwrap(),
+        "--lat",
+        "45",
+        "--lon",
+        "7.5",
+        "--h",
+        "150",
+        "--align-seconds",
+        "1",
+        "--out",
+        log.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(rec.to_str().unwrap()) && stderr.contains("byte offset 448 (record 10)"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+
+    let missing = dir.path().join("missing.bin");
+    let out = nav(&[
+        "convert",
+        "--in",
+        missing.to_str().unwrap(),
+        "--out",
+        log.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("missing.bin"), "{stderr}");
+
+    // Bad arguments are clap's usage errors (status 2).
+    let out = nav(&["replay", "--imu", "x.bin"]);
+    assert_eq!(out.status.code(), Some(2));
+}
