@@ -34,7 +34,15 @@ pub enum ConfigError {
     Invalid(&'static str),
 }
 
-const NAMES: [&str; 7] = ["IMU_FILE", "OUT_FILE", "LAT_DEG", "LON_DEG", "H_M", "ALIGN_S", "LOG_EVERY"];
+const NAMES: [&str; 7] = [
+    "IMU_FILE",
+    "OUT_FILE",
+    "LAT_DEG",
+    "LON_DEG",
+    "H_M",
+    "ALIGN_S",
+    "LOG_EVERY",
+];
 
 impl Config {
     /// Parses the arguments after the program name.
@@ -42,13 +50,22 @@ impl Config {
         let mut next = |i: usize| args.next().ok_or(ConfigError::Missing(NAMES[i]));
         let imu_path = c_path(next(0)?).ok_or(ConfigError::Invalid(NAMES[0]))?;
         let out_path = c_path(next(1)?).ok_or(ConfigError::Invalid(NAMES[1]))?;
-        let num = |i: usize, s: &str| s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or(ConfigError::Invalid(NAMES[i]));
+        let num = |i: usize, s: &str| {
+            s.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or(ConfigError::Invalid(NAMES[i]))
+        };
         let lat_deg = num(2, next(2)?)?;
         let lon_deg = num(3, next(3)?)?;
         let h_m = num(4, next(4)?)?;
         let align_s = num(5, next(5)?)?;
         let log_every = match next(6) {
-            Ok(s) => s.parse::<u32>().ok().filter(|&n| n > 0).ok_or(ConfigError::Invalid(NAMES[6]))?,
+            Ok(s) => s
+                .parse::<u32>()
+                .ok()
+                .filter(|&n| n > 0)
+                .ok_or(ConfigError::Invalid(NAMES[6]))?,
             Err(_) => 40,
         };
         if !(-90.0..=90.0).contains(&lat_deg) {
@@ -57,7 +74,15 @@ impl Config {
         if !(align_s > 0.0 && align_s < 3600.0) {
             return Err(ConfigError::Invalid(NAMES[5]));
         }
-        Ok(Self { imu_path, out_path, lat_deg, lon_deg, h_m, align_s, log_every })
+        Ok(Self {
+            imu_path,
+            out_path,
+            lat_deg,
+            lon_deg,
+            h_m,
+            align_s,
+            log_every,
+        })
     }
 
     /// The recording's path as a C string.

@@ -48,7 +48,11 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 #[allow(unsafe_code)]
 #[cortex_m_rt::exception]
 unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
-    defmt::error!("HardFault at pc={=u32:#010x} lr={=u32:#010x}", frame.pc(), frame.lr());
+    defmt::error!(
+        "HardFault at pc={=u32:#010x} lr={=u32:#010x}",
+        frame.pc(),
+        frame.lr()
+    );
     exit(ExitCode::HardFault)
 }
 

@@ -14,7 +14,9 @@
 #![deny(unsafe_code)]
 
 #[cfg(not(feature = "qemu"))]
-compile_error!("only the `qemu` board exists until the SPI IMU drivers land; build with --features qemu");
+compile_error!(
+    "only the `qemu` board exists until the SPI IMU drivers land; build with --features qemu"
+);
 
 use firmware as _; // logger, panic and HardFault handlers
 
@@ -29,7 +31,9 @@ mod app {
     use hal_adapters::{Imu, ImuSample};
     use nav_core::alignment::{AlignError, AlignmentResult, StaticAlignment, samples_for};
     use nav_core::output::CSV_HEADER;
-    use nav_core::{ImuIncrement, InputLimits, MechanizationConfig, NavState, Position, Solution, Strapdown};
+    use nav_core::{
+        ImuIncrement, InputLimits, MechanizationConfig, NavState, Position, Solution, Strapdown,
+    };
     use rtic_monotonics::systick::prelude::*;
     use rtic_sync::channel::{Receiver, Sender};
     use rtic_sync::make_channel;
@@ -97,20 +101,38 @@ mod app {
         let config = read_config();
         defmt::info!(
             "config: lat {=f64} deg, lon {=f64} deg, h {=f64} m, align {=f64} s, log every {=u32}",
-            config.lat_deg, config.lon_deg, config.h_m, config.align_s, config.log_every
+            config.lat_deg,
+            config.lon_deg,
+            config.h_m,
+            config.align_s,
+            config.log_every
         );
         let file = SemihostingFile::open(config.imu_cstr()).unwrap_or_else(|_| {
-            defmt::error!("cannot open the recording {=[u8]:a}", config.imu_path.as_slice());
+            defmt::error!(
+                "cannot open the recording {=[u8]:a}",
+                config.imu_path.as_slice()
+            );
             exit(ExitCode::Recording)
         });
         let source = Replay::new(Buffered::new(file)).unwrap_or_else(|e| {
-            defmt::error!("recording {=[u8]:a}: {}", config.imu_path.as_slice(), defmt::Display2Format(&e));
+            defmt::error!(
+                "recording {=[u8]:a}: {}",
+                config.imu_path.as_slice(),
+                defmt::Display2Format(&e)
+            );
             exit(ExitCode::Recording)
         });
         let header = *source.header();
-        defmt::info!("recording: {=u32} samples at {=f64} Hz", header.sample_count, header.rate_hz);
+        defmt::info!(
+            "recording: {=u32} samples at {=f64} Hz",
+            header.sample_count,
+            header.rate_hz
+        );
         let mut out = SemihostingFile::create(config.out_cstr()).unwrap_or_else(|_| {
-            defmt::error!("cannot create the solution log {=[u8]:a}", config.out_path.as_slice());
+            defmt::error!(
+                "cannot create the solution log {=[u8]:a}",
+                config.out_path.as_slice()
+            );
             exit(ExitCode::Output)
         });
         write_line(&mut out, CSV_HEADER);
@@ -120,7 +142,12 @@ mod app {
         let (result_tx, result_rx) = make_channel!(AlignOutcome, 1);
         let position = Position::from_degrees(config.lat_deg, config.lon_deg, config.h_m);
         let n_align = samples_for(config.align_s, header.rate_hz);
-        let setup = NavSetup { position, n_align, log_every: config.log_every, out };
+        let setup = NavSetup {
+            position,
+            n_align,
+            log_every: config.log_every,
+            out,
+        };
         if navigate::spawn(samples_rx, align_tx, result_rx, setup).is_err()
             || align::spawn(align_rx, result_tx, n_align, position).is_err()
             || pace::spawn().is_err()
@@ -144,8 +171,15 @@ mod app {
             defmt::error!("no semihosting command line: run through firmware/qemu-run.sh");
             exit(ExitCode::Config)
         });
-        let mut words = (&args).map(|a| a.unwrap_or(""));
-        let _program = words.next();
+        let mut words = (&args).map(|a| a.unwrap_or("")).skip(1).peekable();
+        // Diagnostics: `--crash panic|hardfault` checks that failures reach the exit status.
+        if words.peek() == Some(&"--crash") {
+            match words.nth(1) {
+                Some("panic") => panic!("crash test requested"),
+                Some("hardfault") => cortex_m::asm::udf(),
+                _ => {}
+            }
+        }
         Config::parse(words).unwrap_or_else(|e| {
             defmt::error!("bad arguments ({}); usage: firmware IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY]", e);
             exit(ExitCode::Config)
@@ -243,7 +277,12 @@ mod app {
         mut result_rx: Receiver<'static, AlignOutcome, 1>,
         setup: NavSetup,
     ) {
-        let NavSetup { position, n_align, log_every, mut out } = setup;
+        let NavSetup {
+            position,
+            n_align,
+            log_every,
+            mut out,
+        } = setup;
         let limits = InputLimits::default();
         let mut nav: Option<Strapdown<f32>> = None;
         let mut aligned: Option<AlignmentResult<f32>> = None;
@@ -262,7 +301,11 @@ mod app {
             last_ready_us = t_ready_us;
             if !sample.flags.usable() {
                 counters.flagged += 1;
-                defmt::warn!("sample {=u32} flagged {}: not navigated", sample.seq, sample.flags);
+                defmt::warn!(
+                    "sample {=u32} flagged {}: not navigated",
+                    sample.seq,
+                    sample.flags
+                );
                 continue;
             }
             let (delta_theta_ib_b, delta_v_ib_b) = sample.increments();
@@ -298,7 +341,11 @@ mod app {
                 let result = match result_rx.recv().await {
                     Ok(Ok(result)) => result,
                     Ok(Err(e)) => {
-                        defmt::error!("alignment failed after {=u32} samples: {}", n_align, defmt::Display2Format(&e));
+                        defmt::error!(
+                            "alignment failed after {=u32} samples: {}",
+                            n_align,
+                            defmt::Display2Format(&e)
+                        );
                         exit(ExitCode::Alignment)
                     }
                     Err(_) => defmt::panic!("alignment result channel closed"),
@@ -314,7 +361,11 @@ mod app {
 
         // End of the recording.
         let Some(nav) = nav else {
-            defmt::error!("recording ended during alignment: {=u32} of {=u32} samples", forwarded, n_align);
+            defmt::error!(
+                "recording ended during alignment: {=u32} of {=u32} samples",
+                forwarded,
+                n_align
+            );
             exit(ExitCode::Alignment)
         };
         let last = Solution::from_state(last_t_us, nav.state());
@@ -369,8 +420,14 @@ mod app {
         );
     }
 
-    fn report(c: &Counters, cost: &StepCost, aligned: Option<&AlignmentResult<f32>>, last: &Solution, last_ready_us: u64) {
-        let mean = if cost.n > 0 { cost.sum / cost.n } else { 0 };
+    fn report(
+        c: &Counters,
+        cost: &StepCost,
+        aligned: Option<&AlignmentResult<f32>>,
+        last: &Solution,
+        last_ready_us: u64,
+    ) {
+        let mean = cost.sum.checked_div(cost.n).unwrap_or(0);
         defmt::info!(
             "summary: samples {=u32}, flagged {=u32}, rejected {=u32}, navigated {=u32}, missed {=u32}, channel overruns {=u32}, last data-ready at {=u64} us",
             c.samples,
@@ -381,7 +438,11 @@ mod app {
             OVERRUNS.load(Ordering::Relaxed),
             last_ready_us
         );
-        defmt::info!("instructions per navigation step: max {=u64}, mean {=u64}", cost.max, mean);
+        defmt::info!(
+            "instructions per navigation step: max {=u64}, mean {=u64}",
+            cost.max,
+            mean
+        );
         if let Some(r) = aligned {
             defmt::info!(
                 "alignment: roll {=f32} deg, pitch {=f32} deg, yaw {=f32} deg",
@@ -392,7 +453,16 @@ mod app {
         }
         defmt::info!(
             "solution at t={=u64} us: lat {=i64} ndeg, lon {=i64} ndeg, h {=f64} m, v_n {=f64} v_e {=f64} v_d {=f64} m/s, roll {=f64} pitch {=f64} yaw {=f64} deg",
-            last.t_us, last.lat_ndeg, last.lon_ndeg, last.h_m, last.v_eb_n[0], last.v_eb_n[1], last.v_eb_n[2], last.roll_deg, last.pitch_deg, last.yaw_deg
+            last.t_us,
+            last.lat_ndeg,
+            last.lon_ndeg,
+            last.h_m,
+            last.v_eb_n[0],
+            last.v_eb_n[1],
+            last.v_eb_n[2],
+            last.roll_deg,
+            last.pitch_deg,
+            last.yaw_deg
         );
     }
 }

@@ -49,7 +49,12 @@ pub struct Buffered<R, const N: usize> {
 impl<R, const N: usize> Buffered<R, N> {
     /// Wraps `inner` with an empty buffer.
     pub fn new(inner: R) -> Self {
-        Buffered { inner, buf: [0; N], pos: 0, len: 0 }
+        Buffered {
+            inner,
+            buf: [0; N],
+            pos: 0,
+            len: 0,
+        }
     }
 
     /// The inner reader.
@@ -282,7 +287,11 @@ mod tests {
     #[test]
     fn buffered_reads_inner_in_chunks() {
         let bytes = data(1000);
-        let mut reader = Buffered::<_, 512>::new(Trickle { data: &bytes, max: usize::MAX, reads: 0 });
+        let mut reader = Buffered::<_, 512>::new(Trickle {
+            data: &bytes,
+            max: usize::MAX,
+            reads: 0,
+        });
         assert_eq!(drain(&mut reader, 40), bytes);
         // 512 + 488 + the read that finds EOF.
         assert_eq!(reader.inner().reads, 3);
@@ -293,8 +302,11 @@ mod tests {
         let bytes = data(1000);
         for max in [1, 3, 39, 40, 41, 511, 512, 513] {
             for chunk in [1, 7, 40, 512, 600] {
-                let mut reader =
-                    Buffered::<_, 512>::new(Trickle { data: &bytes, max, reads: 0 });
+                let mut reader = Buffered::<_, 512>::new(Trickle {
+                    data: &bytes,
+                    max,
+                    reads: 0,
+                });
                 assert_eq!(drain(&mut reader, chunk), bytes, "max {max}, chunk {chunk}");
             }
         }
@@ -303,7 +315,11 @@ mod tests {
     #[test]
     fn buffered_large_read_bypasses_buffer() {
         let bytes = data(100);
-        let mut reader = Buffered::<_, 16>::new(Trickle { data: &bytes, max: usize::MAX, reads: 0 });
+        let mut reader = Buffered::<_, 16>::new(Trickle {
+            data: &bytes,
+            max: usize::MAX,
+            reads: 0,
+        });
         let mut small = [0u8; 4];
         assert_eq!(reader.read(&mut small), Ok(4));
         assert_eq!(reader.buffered(), &bytes[4..16]);
@@ -319,7 +335,11 @@ mod tests {
     #[test]
     fn buffered_bufread() {
         let bytes = data(50);
-        let mut reader = Buffered::<_, 8>::new(Trickle { data: &bytes, max: 5, reads: 0 });
+        let mut reader = Buffered::<_, 8>::new(Trickle {
+            data: &bytes,
+            max: 5,
+            reads: 0,
+        });
         assert_eq!(reader.fill_buf(), Ok(&bytes[..5]));
         reader.consume(3);
         assert_eq!(reader.fill_buf(), Ok(&bytes[3..5]));
@@ -330,7 +350,11 @@ mod tests {
     #[test]
     fn zero_sized_buffer_passes_through() {
         let bytes = data(100);
-        let mut reader = Buffered::<_, 0>::new(Trickle { data: &bytes, max: 9, reads: 0 });
+        let mut reader = Buffered::<_, 0>::new(Trickle {
+            data: &bytes,
+            max: 9,
+            reads: 0,
+        });
         assert_eq!(drain(&mut reader, 40), bytes);
     }
 
@@ -340,11 +364,21 @@ mod tests {
         use crate::Imu;
         use crate::recording::{Header, Kind, Record, ReplayError, Writer};
 
-        let header = Header { kind: Kind::Increments, rate_hz: 200.0, t0_ns: 0, sample_count: 2 };
+        let header = Header {
+            kind: Kind::Increments,
+            rate_hz: 200.0,
+            t0_ns: 0,
+            sample_count: 2,
+        };
         let sink = embedded_io_adapters::std::FromStd::new(Vec::new());
         let mut writer = Writer::new(sink, header).unwrap();
         for t_ns in [5_000_000, 10_000_000] {
-            let record = Record { t_ns, gyro: [0.0; 3], accel: [0.0, 0.0, -0.05], temperature_c: 20.0 };
+            let record = Record {
+                t_ns,
+                gyro: [0.0; 3],
+                accel: [0.0, 0.0, -0.05],
+                temperature_c: 20.0,
+            };
             writer.write_record(&record).unwrap();
         }
         let bytes = writer.finish().unwrap().into_inner();

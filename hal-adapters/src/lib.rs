@@ -10,6 +10,8 @@
 //! `no_std`, no allocation; it does not depend on `nav-core`.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![deny(unsafe_code)]
+// Units are written `[m/s]` in docs (project convention), which rustdoc would read as links.
+#![allow(rustdoc::broken_intra_doc_links)]
 #![warn(missing_docs)]
 
 pub mod io;

@@ -183,10 +183,16 @@ impl Header {
             return Err(err(FormatErrorKind::HeaderCrc, 0));
         }
         if usize::from(u16_at(bytes, H_HEADER_LEN)) != HEADER_LEN {
-            return Err(err(FormatErrorKind::BadHeader("header_len is not 48"), H_HEADER_LEN));
+            return Err(err(
+                FormatErrorKind::BadHeader("header_len is not 48"),
+                H_HEADER_LEN,
+            ));
         }
         if usize::from(u16_at(bytes, H_RECORD_LEN)) != RECORD_LEN {
-            return Err(err(FormatErrorKind::BadHeader("record_len is not 40"), H_RECORD_LEN));
+            return Err(err(
+                FormatErrorKind::BadHeader("record_len is not 40"),
+                H_RECORD_LEN,
+            ));
         }
         let Some(kind) = Kind::from_code(u16_at(bytes, H_KIND)) else {
             return Err(err(
@@ -196,10 +202,16 @@ impl Header {
         };
         let rate_hz = f64::from_le_bytes(array_at(bytes, H_RATE_HZ));
         if !rate_is_valid(rate_hz) {
-            return Err(err(FormatErrorKind::BadHeader("rate_hz is not finite and > 0"), H_RATE_HZ));
+            return Err(err(
+                FormatErrorKind::BadHeader("rate_hz is not finite and > 0"),
+                H_RATE_HZ,
+            ));
         }
         if bytes[H_RESERVED..H_CRC].iter().any(|&b| b != 0) {
-            return Err(err(FormatErrorKind::BadHeader("reserved bytes are not zero"), H_RESERVED));
+            return Err(err(
+                FormatErrorKind::BadHeader("reserved bytes are not zero"),
+                H_RESERVED,
+            ));
         }
         Ok(Header {
             kind,
@@ -268,7 +280,11 @@ impl Record {
 
     /// Decodes a record after checking its CRC. `offset` (the record's byte offset in the file)
     /// and `index` (its record index) only go into the error.
-    pub fn decode(bytes: &[u8; RECORD_LEN], offset: u64, index: u32) -> Result<Record, FormatError> {
+    pub fn decode(
+        bytes: &[u8; RECORD_LEN],
+        offset: u64,
+        index: u32,
+    ) -> Result<Record, FormatError> {
         if u32_at(bytes, R_CRC) != CRC32.checksum(&bytes[..R_CRC]) {
             return Err(FormatError {
                 kind: FormatErrorKind::RecordCrc,
@@ -352,7 +368,12 @@ pub struct FormatError {
 
 impl FormatError {
     fn in_header(kind: FormatErrorKind, offset: u64) -> FormatError {
-        FormatError { kind, offset, record: None, expected_records: None }
+        FormatError {
+            kind,
+            offset,
+            record: None,
+            expected_records: None,
+        }
     }
 }
 
@@ -375,7 +396,10 @@ impl fmt::Display for FormatError {
                 record_offset(expected)
             ),
             (FormatErrorKind::Truncated, Some(index), None) => {
-                write!(f, "file ends inside the recording: record {index} is incomplete")
+                write!(
+                    f,
+                    "file ends inside the recording: record {index} is incomplete"
+                )
             }
             (FormatErrorKind::TrailingData, _, Some(expected)) => write!(
                 f,
@@ -546,7 +570,12 @@ impl<R: Read> Replay<R> {
             flags |= SampleFlags::BAD_INTERVAL;
             0.0
         };
-        if !record.gyro.iter().chain(record.accel.iter()).all(|v| v.is_finite()) {
+        if !record
+            .gyro
+            .iter()
+            .chain(record.accel.iter())
+            .all(|v| v.is_finite())
+        {
             flags |= SampleFlags::NON_FINITE;
         }
 
@@ -560,10 +589,14 @@ impl<R: Read> Replay<R> {
         self.prev_t_ns = record.t_ns;
 
         let motion = match self.header.kind {
-            Kind::Increments => {
-                Motion::Increments { delta_theta_ib_b: record.gyro, delta_v_ib_b: record.accel }
-            }
-            Kind::Rates => Motion::Rates { omega_ib_b: record.gyro, f_ib_b: record.accel },
+            Kind::Increments => Motion::Increments {
+                delta_theta_ib_b: record.gyro,
+                delta_v_ib_b: record.accel,
+            },
+            Kind::Rates => Motion::Rates {
+                omega_ib_b: record.gyro,
+                f_ib_b: record.accel,
+            },
         };
         ImuSample {
             t_us: record.t_ns / 1000,
@@ -681,7 +714,11 @@ impl<W: Write> Writer<W> {
     pub fn new(mut writer: W, header: Header) -> Result<Self, WriteError<W::Error>> {
         header.validate().map_err(WriteError::InvalidHeader)?;
         writer.write_all(&header.encode()).map_err(WriteError::Io)?;
-        Ok(Writer { writer, header, written: 0 })
+        Ok(Writer {
+            writer,
+            header,
+            written: 0,
+        })
     }
 
     /// Writes the next record.
@@ -689,7 +726,9 @@ impl<W: Write> Writer<W> {
         if self.written >= self.header.sample_count {
             return Err(WriteError::TooManyRecords(self.header.sample_count));
         }
-        self.writer.write_all(&record.encode()).map_err(WriteError::Io)?;
+        self.writer
+            .write_all(&record.encode())
+            .map_err(WriteError::Io)?;
         self.written += 1;
         Ok(())
     }

@@ -90,10 +90,14 @@ impl ImuSample {
     /// `dt_s`).
     pub fn increments(&self) -> ([f32; 3], [f32; 3]) {
         match self.motion {
-            Motion::Increments { delta_theta_ib_b, delta_v_ib_b } => (delta_theta_ib_b, delta_v_ib_b),
-            Motion::Rates { omega_ib_b, f_ib_b } => {
-                (omega_ib_b.map(|w| w * self.dt_s), f_ib_b.map(|f| f * self.dt_s))
-            }
+            Motion::Increments {
+                delta_theta_ib_b,
+                delta_v_ib_b,
+            } => (delta_theta_ib_b, delta_v_ib_b),
+            Motion::Rates { omega_ib_b, f_ib_b } => (
+                omega_ib_b.map(|w| w * self.dt_s),
+                f_ib_b.map(|f| f * self.dt_s),
+            ),
         }
     }
 }

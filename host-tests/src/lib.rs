@@ -17,6 +17,8 @@
 //!
 //! The `nav` binary (`src/bin/nav.rs`) is the command-line front end.
 #![deny(unsafe_code)]
+// Units are written `[m/s]` in docs (project convention), which rustdoc would read as links.
+#![allow(rustdoc::broken_intra_doc_links)]
 #![warn(missing_docs)]
 
 pub mod generate;

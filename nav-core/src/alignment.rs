@@ -61,7 +61,9 @@ impl core::fmt::Display for AlignError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(match self {
             Self::NoSamples => "no samples to align on",
-            Self::SpecificForceNotGravity => "mean specific force is not gravity (base accelerating?)",
+            Self::SpecificForceNotGravity => {
+                "mean specific force is not gravity (base accelerating?)"
+            }
             Self::BaseRotating => "mean angular rate exceeds the Earth rate (base turning?)",
             Self::HeadingUnobservable => "horizontal Earth rate too small for gyrocompassing",
         })
@@ -79,7 +81,12 @@ impl<T: Scalar> Default for StaticAlignment<T> {
 impl<T: Scalar> StaticAlignment<T> {
     /// An empty accumulator.
     pub fn new() -> Self {
-        Self { sum_dtheta: Kahan3::new(), sum_dv: Kahan3::new(), sum_dt: Kahan::new(), samples: 0 }
+        Self {
+            sum_dtheta: Kahan3::new(),
+            sum_dv: Kahan3::new(),
+            sum_dt: Kahan::new(),
+            samples: 0,
+        }
     }
 
     /// Adds one (already validated) increment.
@@ -121,13 +128,23 @@ impl<T: Scalar> StaticAlignment<T> {
         }
         // Levelling, Groves eq. 5.101 (f = -g at rest).
         let roll = (-f_ib_b.y).atan2(-f_ib_b.z);
-        let pitch = f_ib_b.x.atan2((f_ib_b.y * f_ib_b.y + f_ib_b.z * f_ib_b.z).sqrt());
+        let pitch = f_ib_b
+            .x
+            .atan2((f_ib_b.y * f_ib_b.y + f_ib_b.z * f_ib_b.z).sqrt());
         // Gyrocompassing, Groves eq. 5.103: the levelled gyro vector points north.
         let (sr, cr) = (roll.sin(), roll.cos());
         let (sp, cp) = (pitch.sin(), pitch.cos());
         let w = omega_ib_b;
         let yaw = (-w.y * cr + w.z * sr).atan2(w.x * cp + w.y * sr * sp + w.z * cr * sp);
-        Ok(AlignmentResult { roll, pitch, yaw, samples: self.samples, duration, f_mean, omega_mean })
+        Ok(AlignmentResult {
+            roll,
+            pitch,
+            yaw,
+            samples: self.samples,
+            duration,
+            f_mean,
+            omega_mean,
+        })
     }
 }
 
@@ -136,7 +153,11 @@ impl<T: Scalar> StaticAlignment<T> {
 /// firmware and the host harness stop aligning on the same sample.
 pub fn samples_for(seconds: f64, rate_hz: f64) -> u32 {
     let n = nalgebra::ComplexField::ceil(seconds * rate_hz - 1e-9);
-    if n.is_finite() && n >= 1.0 { n.min(f64::from(u32::MAX)) as u32 } else { 1 }
+    if n.is_finite() && n >= 1.0 {
+        n.min(f64::from(u32::MAX)) as u32
+    } else {
+        1
+    }
 }
 
 /// Kahan-compensated running sum.
@@ -148,7 +169,10 @@ struct Kahan<T: Scalar> {
 
 impl<T: Scalar> Kahan<T> {
     fn new() -> Self {
-        Self { sum: T::zero(), carry: T::zero() }
+        Self {
+            sum: T::zero(),
+            carry: T::zero(),
+        }
     }
 
     #[inline]
@@ -207,9 +231,15 @@ mod tests {
             assert!((res.yaw - y).abs() < 1e-6, "{} vs {y}", res.yaw);
             // f32 over a minute of samples: Kahan summation keeps the heading to ~1e-3 rad
             // (f32 resolution of the ~7e-8 rad per-sample horizontal Earth-rate increments).
-            let res32 = feed::<f32>(r, p, y, lat, 24_000).solve(lat as f32, 0.0).unwrap();
+            let res32 = feed::<f32>(r, p, y, lat, 24_000)
+                .solve(lat as f32, 0.0)
+                .unwrap();
             assert!((f64::from(res32.roll) - r).abs() < 1e-5);
-            assert!((f64::from(res32.yaw) - y).abs() < 1e-3, "{} vs {y}", res32.yaw);
+            assert!(
+                (f64::from(res32.yaw) - y).abs() < 1e-3,
+                "{} vs {y}",
+                res32.yaw
+            );
         }
     }
 
@@ -225,14 +255,24 @@ mod tests {
     #[test]
     fn reports_failures() {
         let lat = 45f64.to_radians();
-        assert_eq!(StaticAlignment::<f64>::new().solve(lat, 0.0), Err(AlignError::NoSamples));
+        assert_eq!(
+            StaticAlignment::<f64>::new().solve(lat, 0.0),
+            Err(AlignError::NoSamples)
+        );
         let mut a = feed::<f64>(0.0, 0.0, 0.0, lat, 100);
         a.add(&ImuIncrement::new([0.0; 3], [1.0, 0.0, 0.0], 0.0025));
         assert_eq!(a.solve(lat, 0.0), Err(AlignError::SpecificForceNotGravity));
         let mut a = feed::<f64>(0.0, 0.0, 0.0, lat, 100);
-        a.add(&ImuIncrement::new([0.0, 0.0, 0.01], [0.0, 0.0, -0.0245], 0.0025));
+        a.add(&ImuIncrement::new(
+            [0.0, 0.0, 0.01],
+            [0.0, 0.0, -0.0245],
+            0.0025,
+        ));
         assert_eq!(a.solve(lat, 0.0), Err(AlignError::BaseRotating));
         let polar = 89.5f64.to_radians();
-        assert_eq!(feed::<f64>(0.0, 0.0, 0.0, polar, 100).solve(polar, 0.0), Err(AlignError::HeadingUnobservable));
+        assert_eq!(
+            feed::<f64>(0.0, 0.0, 0.0, polar, 100).solve(polar, 0.0),
+            Err(AlignError::HeadingUnobservable)
+        );
     }
 }

@@ -8,6 +8,8 @@
 //! relative to inertial space in body axes, `f_ib_b` is specific force. SI units throughout.
 #![no_std]
 #![deny(unsafe_code)]
+// Units are written `[m/s]` in docs (project convention), which rustdoc would read as links.
+#![allow(rustdoc::broken_intra_doc_links)]
 #![warn(missing_docs)]
 
 pub mod alignment;

@@ -9,7 +9,8 @@ use crate::{NavState, Scalar};
 use core::fmt;
 
 /// Column header of the solution CSV (more columns may be appended later).
-pub const CSV_HEADER: &str = "t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,pitch_deg,yaw_deg";
+pub const CSV_HEADER: &str =
+    "t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,pitch_deg,yaw_deg";
 
 /// One navigation solution in output units.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,7 +42,11 @@ impl Solution {
             lat_ndeg: state.position.lat_ndeg(),
             lon_ndeg: state.position.lon_ndeg(),
             h_m: state.position.h_f64(),
-            v_eb_n: [state.v_eb_n.x.to_f64(), state.v_eb_n.y.to_f64(), state.v_eb_n.z.to_f64()],
+            v_eb_n: [
+                state.v_eb_n.x.to_f64(),
+                state.v_eb_n.y.to_f64(),
+                state.v_eb_n.z.to_f64(),
+            ],
             roll_deg: roll.to_f64().to_degrees(),
             pitch_deg: pitch.to_f64().to_degrees(),
             yaw_deg: yaw.to_f64().to_degrees(),
@@ -54,7 +59,13 @@ fn write_decimal(f: &mut fmt::Formatter<'_>, value: i64, digits: u32) -> fmt::Re
     let scale = 10_u64.pow(digits);
     let sign = if value < 0 { "-" } else { "" };
     let mag = value.unsigned_abs();
-    write!(f, "{sign}{}.{:0width$}", mag / scale, mag % scale, width = digits as usize)
+    write!(
+        f,
+        "{sign}{}.{:0width$}",
+        mag / scale,
+        mag % scale,
+        width = digits as usize
+    )
 }
 
 impl fmt::Display for Solution {
@@ -82,7 +93,10 @@ mod tests {
     impl<const N: usize> fmt::Write for Buf<N> {
         fn write_str(&mut self, s: &str) -> fmt::Result {
             let end = self.1 + s.len();
-            self.0.get_mut(self.1..end).ok_or(fmt::Error)?.copy_from_slice(s.as_bytes());
+            self.0
+                .get_mut(self.1..end)
+                .ok_or(fmt::Error)?
+                .copy_from_slice(s.as_bytes());
             self.1 = end;
             Ok(())
         }

@@ -84,7 +84,9 @@ impl Position {
             .lat_ht
             .saturating_add(I1F63::saturating_from_num(d_lat / pi))
             .clamp(-half, half);
-        self.lon_ht = self.lon_ht.wrapping_add(I1F63::wrapping_from_num(d_lon / pi));
+        self.lon_ht = self
+            .lon_ht
+            .wrapping_add(I1F63::wrapping_from_num(d_lon / pi));
         self.h_m = self.h_m.saturating_add(I32F32::saturating_from_num(d_h));
     }
 }
@@ -124,7 +126,10 @@ mod tests {
         p.add(0.01_f64, 0.002_f64.to_radians(), 0.0);
         assert_eq!(p.lat_ndeg(), 90_000_000_000);
         assert_eq!(p.lon_ndeg(), -179_999_000_000);
-        assert_eq!(Position::from_degrees(0.0, 540.0, 0.0).lon_ndeg(), -180_000_000_000);
+        assert_eq!(
+            Position::from_degrees(0.0, 540.0, 0.0).lon_ndeg(),
+            -180_000_000_000
+        );
     }
 
     #[test]

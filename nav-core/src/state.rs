@@ -17,7 +17,11 @@ pub struct NavState<T: Scalar> {
 impl<T: Scalar> NavState<T> {
     /// A body at rest at `position` with attitude `q_b_n`.
     pub fn at_rest(position: Position, q_b_n: UnitQuaternion<T>) -> Self {
-        Self { q_b_n, v_eb_n: Vector3::zeros(), position }
+        Self {
+            q_b_n,
+            v_eb_n: Vector3::zeros(),
+            position,
+        }
     }
 
     /// Roll, pitch, yaw [rad] (z-y-x Euler angles of `q_b_n`).

@@ -4,9 +4,9 @@
 //! rates):
 //! - attitude: `q_b_n(k) = q(-zeta) * q_b_n(k-1) * q(delta_theta)`, `zeta = (omega_ie_n +
 //!   omega_en_n) dt`, with the exact rotation-vector quaternion `q(.)`;
-//! - velocity: `v(k) = v(k-1) + (I - [zeta x]/2) c_b_n(k-1) (delta_v + delta_theta x delta_v / 2)
-//!   + (g_n - (2 omega_ie_n + omega_en_n) x v) dt` (rotation compensation of the body and
-//!   navigation frames, Savage (7.2.2.2-11) and (7.2.2.2-21));
+//! - velocity: `v(k) = v(k-1) + dv_n + (g_n - (2 omega_ie_n + omega_en_n) x v) dt` with
+//!   `dv_n = (I - [zeta x]/2) c_b_n(k-1) (delta_v + delta_theta x delta_v / 2)` (rotation
+//!   compensation of the body and navigation frames, Savage (7.2.2.2-11) and (7.2.2.2-21));
 //! - position: trapezoidal integration of the NED velocity into latitude, longitude and height.
 //!
 //! Coning/sculling corrections, the oblate gravitation model, selectable attitude integrators and
@@ -14,7 +14,7 @@
 //! their switches will live.
 
 use crate::attitude::rotation_vector_quat;
-use crate::earth;
+use crate::earth::LocalEarth;
 use crate::{ImuIncrement, InputError, InputLimits, NavState, Scalar};
 use nalgebra::Vector3;
 
@@ -27,7 +27,9 @@ pub struct MechanizationConfig<T: Scalar> {
 
 impl<T: Scalar> Default for MechanizationConfig<T> {
     fn default() -> Self {
-        Self { limits: InputLimits::default() }
+        Self {
+            limits: InputLimits::default(),
+        }
     }
 }
 
@@ -43,7 +45,12 @@ pub struct Strapdown<T: Scalar> {
 impl<T: Scalar> Strapdown<T> {
     /// Starts navigating from `initial`.
     pub fn new(initial: NavState<T>, config: MechanizationConfig<T>) -> Self {
-        Self { state: initial, config, steps: 0, rejected: 0 }
+        Self {
+            state: initial,
+            config,
+            steps: 0,
+            rejected: 0,
+        }
     }
 
     /// The current navigation state.
@@ -75,11 +82,9 @@ impl<T: Scalar> Strapdown<T> {
         }
         let s = &mut self.state;
         let dt = inc.dt;
-        let lat = s.position.lat::<T>();
-        let h = s.position.h::<T>();
-        let (r_meridian, r_transverse) = earth::radii(lat);
-        let omega_ie_n = earth::omega_ie_n(lat);
-        let omega_en_n = earth::omega_en_n(lat, h, &s.v_eb_n);
+        let earth = LocalEarth::new(s.position.lat::<T>(), s.position.h::<T>());
+        let omega_ie_n = earth.omega_ie_n();
+        let omega_en_n = earth.omega_en_n(&s.v_eb_n);
 
         // Navigation-frame rotation over the interval.
         let zeta = (omega_ie_n + omega_en_n) * dt;
@@ -92,19 +97,20 @@ impl<T: Scalar> Strapdown<T> {
         let dv_n = dv_n0 - zeta.cross(&dv_n0) * half;
 
         // Attitude: body rotation then navigation-frame rotation.
-        s.q_b_n = rotation_vector_quat(&(-zeta)) * s.q_b_n * rotation_vector_quat(&inc.delta_theta_ib_b);
+        s.q_b_n =
+            rotation_vector_quat(&(-zeta)) * s.q_b_n * rotation_vector_quat(&inc.delta_theta_ib_b);
         s.q_b_n.renormalize_fast();
 
         // Velocity: specific force, gravity, Coriolis and transport rate.
-        let g_n = Vector3::new(T::zero(), T::zero(), earth::normal_gravity(lat, h));
+        let g_n = Vector3::new(T::zero(), T::zero(), earth.g);
         let coriolis = (omega_ie_n * T::c(2.0) + omega_en_n).cross(&s.v_eb_n);
         let v_old = s.v_eb_n;
         s.v_eb_n = v_old + dv_n + (g_n - coriolis) * dt;
 
         // Position: trapezoidal rule on the velocity.
         let v_mid = (v_old + s.v_eb_n) * half;
-        let d_lat = v_mid.x / (r_meridian + h) * dt;
-        let d_lon = v_mid.y / ((r_transverse + h) * lat.cos()) * dt;
+        let d_lat = v_mid.x / (earth.r_meridian + earth.h) * dt;
+        let d_lon = v_mid.y / ((earth.r_transverse + earth.h) * earth.cos_lat) * dt;
         let d_h = -v_mid.z * dt;
         s.position.add(d_lat, d_lon, d_h);
 
@@ -124,7 +130,11 @@ mod tests {
         let q_n_b = q_b_n.inverse();
         let omega_ib_b = q_n_b * earth::omega_ie_n(lat);
         let f_ib_b = q_n_b * Vector3::new(0.0, 0.0, -earth::normal_gravity(lat, h));
-        ImuIncrement { delta_theta_ib_b: omega_ib_b * dt, delta_v_ib_b: f_ib_b * dt, dt }
+        ImuIncrement {
+            delta_theta_ib_b: omega_ib_b * dt,
+            delta_v_ib_b: f_ib_b * dt,
+            dt,
+        }
     }
 
     #[test]
@@ -159,7 +169,10 @@ mod tests {
     #[test]
     fn free_fall_free_of_specific_force_accelerates_at_g() {
         // Zero specific force and zero rate: the body falls; 1 s gives ~g m/s down.
-        let start = NavState::at_rest(Position::from_degrees(0.0, 0.0, 1000.0), UnitQuaternion::identity());
+        let start = NavState::at_rest(
+            Position::from_degrees(0.0, 0.0, 1000.0),
+            UnitQuaternion::identity(),
+        );
         let mut nav = Strapdown::new(start, MechanizationConfig::default());
         let inc = ImuIncrement::new([0.0; 3], [0.0; 3], 0.0025_f64);
         for _ in 0..400 {

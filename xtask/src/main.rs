@@ -39,13 +39,18 @@ fn main() -> Result<()> {
 }
 
 fn workspace_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("xtask lives in the workspace").to_path_buf()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives in the workspace")
+        .to_path_buf()
 }
 
 /// Runs a command, echoing it; fails with its exit status.
 fn run(cmd: &mut Command) -> Result<()> {
     eprintln!("$ {}", show(cmd));
-    let status = cmd.status().with_context(|| format!("cannot start {}", show(cmd)))?;
+    let status = cmd
+        .status()
+        .with_context(|| format!("cannot start {}", show(cmd)))?;
     if !status.success() {
         bail!("`{}` failed with {status}", show(cmd));
     }
@@ -66,13 +71,22 @@ fn cargo() -> Command {
 }
 
 fn have(tool: &str, arg: &str) -> bool {
-    Command::new(tool).arg(arg).output().is_ok_and(|o| o.status.success())
+    Command::new(tool)
+        .arg(arg)
+        .output()
+        .is_ok_and(|o| o.status.success())
 }
 
 /// Checks and installs the prerequisites.
 fn setup() -> Result<()> {
-    let targets = Command::new("rustup").args(["target", "list", "--installed"]).output();
-    let installed = targets.as_ref().is_ok_and(|o| String::from_utf8_lossy(&o.stdout).lines().any(|l| l.trim() == THUMB));
+    let targets = Command::new("rustup")
+        .args(["target", "list", "--installed"])
+        .output();
+    let installed = targets.as_ref().is_ok_and(|o| {
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .any(|l| l.trim() == THUMB)
+    });
     if !installed {
         eprintln!("setup: installing the Rust target {THUMB}");
         run(Command::new("rustup").args(["target", "add", THUMB]))?;
@@ -101,13 +115,20 @@ fn setup() -> Result<()> {
 }
 
 fn is_root() -> bool {
-    Command::new("id").arg("-u").output().is_ok_and(|o| o.stdout.starts_with(b"0\n"))
+    Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| o.stdout.starts_with(b"0\n"))
 }
 
 /// Builds the firmware (release) and returns its ELF path.
 fn build_firmware(root: &Path) -> Result<PathBuf> {
     run(cargo().args(["build", "--release", "-p", "firmware", "--target", THUMB]))?;
-    Ok(root.join("target").join(THUMB).join("release").join("firmware"))
+    Ok(root
+        .join("target")
+        .join(THUMB)
+        .join("release")
+        .join("firmware"))
 }
 
 fn nav_bin(root: &Path) -> Result<PathBuf> {
@@ -122,15 +143,40 @@ fn demo(root: &Path) -> Result<()> {
     let elf = build_firmware(root)?;
     std::fs::create_dir_all(root.join("out"))?;
     run(Command::new(&nav).args([
-        "generate", "--out", "out/demo.bin", "--seconds", "60", "--rate", "400", "--lat", DEMO_SITE[0], "--lon",
-        DEMO_SITE[1], "--h", DEMO_SITE[2], "--roll", "1.5", "--pitch", "-2", "--yaw", "30",
+        "generate",
+        "--out",
+        "out/demo.bin",
+        "--seconds",
+        "60",
+        "--rate",
+        "400",
+        "--lat",
+        DEMO_SITE[0],
+        "--lon",
+        DEMO_SITE[1],
+        "--h",
+        DEMO_SITE[2],
+        "--roll",
+        "1.5",
+        "--pitch",
+        "-2",
+        "--yaw",
+        "30",
     ]))?;
     let started = std::time::Instant::now();
-    run(Command::new("bash").arg("firmware/qemu-run.sh").arg(&elf).args(["out/demo.bin", "out/solution-firmware.csv"]).args(DEMO_SITE).arg(DEMO_ALIGN_S))?;
+    run(Command::new("bash")
+        .arg("firmware/qemu-run.sh")
+        .arg(&elf)
+        .args(["out/demo.bin", "out/solution-firmware.csv"])
+        .args(DEMO_SITE)
+        .arg(DEMO_ALIGN_S))?;
     let qemu_s = started.elapsed().as_secs_f64();
     let log = std::fs::read_to_string(root.join("out/solution-firmware.csv"))?;
     let rows: Vec<&str> = log.lines().collect();
-    println!("\nsolution log out/solution-firmware.csv: {} rows; first and last:", rows.len().saturating_sub(1));
+    println!(
+        "\nsolution log out/solution-firmware.csv: {} rows; first and last:",
+        rows.len().saturating_sub(1)
+    );
     for l in rows.iter().take(2).chain(rows.last()) {
         println!("  {l}");
     }
@@ -142,7 +188,9 @@ fn demo(root: &Path) -> Result<()> {
 fn test(root: &Path) -> Result<()> {
     setup()?;
     let elf = build_firmware(root)?;
-    run(cargo().args(["test", "--workspace", "--exclude", "firmware"]).env("FIRMWARE_ELF", &elf))
+    run(cargo()
+        .args(["test", "--workspace", "--exclude", "firmware"])
+        .env("FIRMWARE_ELF", &elf))
 }
 
 /// Flash and RAM use of the release firmware.
@@ -150,15 +198,19 @@ fn size(root: &Path) -> Result<(u64, u64, u64)> {
     let elf = build_firmware(root)?;
     let data = std::fs::read(&elf).with_context(|| format!("read {}", elf.display()))?;
     let (text, data_sz, bss) = section_sizes(&data)?;
-    println!("firmware size: text {text} B, data {data_sz} B, bss {bss} B; flash {} B of 1048576, static RAM {} B of 131072", text + data_sz, data_sz + bss);
+    println!(
+        "firmware size: text {text} B, data {data_sz} B, bss {bss} B; flash {} B of 1048576, static RAM {} B of 131072",
+        text + data_sz,
+        data_sz + bss
+    );
     Ok((text, data_sz, bss))
 }
 
 /// Sums allocated ELF sections like `size -A`: executable or read-only (text), initialised
 /// writable (data), NOBITS (bss).
 fn section_sizes(elf: &[u8]) -> Result<(u64, u64, u64)> {
-    use object::read::elf::{ElfFile32, FileHeader as _, SectionHeader as _};
     use object::elf;
+    use object::read::elf::{ElfFile32, FileHeader as _, SectionHeader as _};
     let file = ElfFile32::<object::Endianness>::parse(elf).context("not a 32-bit ELF")?;
     let endian = file.endian();
     let (mut text, mut data, mut bss) = (0, 0, 0);
@@ -182,8 +234,43 @@ fn section_sizes(elf: &[u8]) -> Result<(u64, u64, u64)> {
 /// Formatting, clippy (host and thumb) and docs.
 fn lint() -> Result<()> {
     run(cargo().args(["fmt", "--all", "--", "--check"]))?;
-    run(cargo().args(["clippy", "--workspace", "--exclude", "firmware", "--all-targets", "--", "-D", "warnings"]))?;
-    run(cargo().args(["clippy", "--target", THUMB, "-p", "nav-core", "-p", "hal-adapters", "-p", "firmware", "--", "-D", "warnings"]))?;
-    run(cargo().args(["clippy", "--target", THUMB, "-p", "hal-adapters", "--features", "semihosting,defmt", "--", "-D", "warnings"]))?;
-    run(cargo().args(["doc", "--no-deps", "-p", "nav-core", "-p", "hal-adapters"]).env("RUSTDOCFLAGS", "-D warnings"))
+    run(cargo().args([
+        "clippy",
+        "--workspace",
+        "--exclude",
+        "firmware",
+        "--all-targets",
+        "--",
+        "-D",
+        "warnings",
+    ]))?;
+    run(cargo().args([
+        "clippy",
+        "--target",
+        THUMB,
+        "-p",
+        "nav-core",
+        "-p",
+        "hal-adapters",
+        "-p",
+        "firmware",
+        "--",
+        "-D",
+        "warnings",
+    ]))?;
+    run(cargo().args([
+        "clippy",
+        "--target",
+        THUMB,
+        "-p",
+        "hal-adapters",
+        "--features",
+        "semihosting,defmt",
+        "--",
+        "-D",
+        "warnings",
+    ]))?;
+    run(cargo()
+        .args(["doc", "--no-deps", "-p", "nav-core", "-p", "hal-adapters"])
+        .env("RUSTDOCFLAGS", "-D warnings"))
 }

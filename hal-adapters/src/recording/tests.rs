@@ -13,7 +13,12 @@ const PERIOD_NS: u64 = 10_000_000;
 const T0_NS: u64 = 1_000_000_000;
 
 fn header(kind: Kind, sample_count: u32) -> Header {
-    Header { kind, rate_hz: RATE_HZ, t0_ns: T0_NS, sample_count }
+    Header {
+        kind,
+        rate_hz: RATE_HZ,
+        t0_ns: T0_NS,
+        sample_count,
+    }
 }
 
 fn record(t_ns: u64) -> Record {
@@ -27,7 +32,9 @@ fn record(t_ns: u64) -> Record {
 
 /// Records `1..=n` periods after `T0_NS`.
 fn regular_records(n: u32) -> Vec<Record> {
-    (1..=u64::from(n)).map(|k| record(T0_NS + k * PERIOD_NS)).collect()
+    (1..=u64::from(n))
+        .map(|k| record(T0_NS + k * PERIOD_NS))
+        .collect()
 }
 
 fn file(header: &Header, records: &[Record]) -> Vec<u8> {
@@ -78,7 +85,10 @@ fn replay_error(bytes: &[u8]) -> FormatError {
 /// Sample with every float as bits, so that NaNs compare.
 fn bits(sample: &ImuSample) -> (u64, u32, u32, [u32; 3], [u32; 3], bool, u32, u16) {
     let (increments, gyro, accel) = match sample.motion {
-        Motion::Increments { delta_theta_ib_b, delta_v_ib_b } => (true, delta_theta_ib_b, delta_v_ib_b),
+        Motion::Increments {
+            delta_theta_ib_b,
+            delta_v_ib_b,
+        } => (true, delta_theta_ib_b, delta_v_ib_b),
         Motion::Rates { omega_ib_b, f_ib_b } => (false, omega_ib_b, f_ib_b),
     };
     (
@@ -113,7 +123,12 @@ impl Write for VecSink {
 }
 
 fn error(kind: FormatErrorKind, offset: u64, record: Option<u32>) -> FormatError {
-    FormatError { kind, offset, record, expected_records: None }
+    FormatError {
+        kind,
+        offset,
+        record,
+        expected_records: None,
+    }
 }
 
 // ---- encoding against the spec, written out independently -------------------------------
@@ -149,8 +164,12 @@ const SPEC_RECORD: [u8; 40] = [
 
 #[test]
 fn header_encodes_to_spec_bytes() {
-    let header =
-        Header { kind: Kind::Rates, rate_hz: 200.0, t0_ns: 1_000_000_000, sample_count: 3 };
+    let header = Header {
+        kind: Kind::Rates,
+        rate_hz: 200.0,
+        t0_ns: 1_000_000_000,
+        sample_count: 3,
+    };
     assert_eq!(header.encode(), SPEC_HEADER);
     assert_eq!(Header::decode(&SPEC_HEADER), Ok(header));
     assert_eq!(header.period_ns(), 5e6);
@@ -188,7 +207,13 @@ fn spec_file_replays() {
     let sample = samples[0];
     assert_eq!(sample.t_us, 1_005_000);
     assert_eq!(sample.dt_s, 0.005);
-    assert_eq!(sample.motion, Motion::Rates { omega_ib_b: [0.25, -0.5, 1.0], f_ib_b: [0.0, 0.0, -9.75] });
+    assert_eq!(
+        sample.motion,
+        Motion::Rates {
+            omega_ib_b: [0.25, -0.5, 1.0],
+            f_ib_b: [0.0, 0.0, -9.75]
+        }
+    );
     assert_eq!(sample.temperature_c, 25.5);
     assert_eq!(sample.flags, SampleFlags::empty());
 }
@@ -208,10 +233,18 @@ fn kind_codes() {
 #[test]
 fn header_round_trip() {
     for kind in [Kind::Increments, Kind::Rates] {
-        for (rate_hz, t0_ns, sample_count) in
-            [(1.0, 0, 0), (400.0, u64::MAX, u32::MAX), (f64::MIN_POSITIVE, 12_345, 7), (f64::MAX, 1, 1)]
-        {
-            let header = Header { kind, rate_hz, t0_ns, sample_count };
+        for (rate_hz, t0_ns, sample_count) in [
+            (1.0, 0, 0),
+            (400.0, u64::MAX, u32::MAX),
+            (f64::MIN_POSITIVE, 12_345, 7),
+            (f64::MAX, 1, 1),
+        ] {
+            let header = Header {
+                kind,
+                rate_hz,
+                t0_ns,
+                sample_count,
+            };
             assert_eq!(Header::decode(&header.encode()), Ok(header));
         }
     }
@@ -222,14 +255,28 @@ fn record_round_trip() {
     let records = [
         record(0),
         record(u64::MAX),
-        Record { t_ns: 5, gyro: [f32::NAN, f32::INFINITY, -0.0], accel: [f32::MIN, f32::MAX, 1e-45], temperature_c: f32::NAN },
+        Record {
+            t_ns: 5,
+            gyro: [f32::NAN, f32::INFINITY, -0.0],
+            accel: [f32::MIN, f32::MAX, 1e-45],
+            temperature_c: f32::NAN,
+        },
     ];
     for record in records {
         let decoded = Record::decode(&record.encode(), 0, 0).unwrap();
         assert_eq!(decoded.t_ns, record.t_ns);
-        assert_eq!(decoded.gyro.map(f32::to_bits), record.gyro.map(f32::to_bits));
-        assert_eq!(decoded.accel.map(f32::to_bits), record.accel.map(f32::to_bits));
-        assert_eq!(decoded.temperature_c.to_bits(), record.temperature_c.to_bits());
+        assert_eq!(
+            decoded.gyro.map(f32::to_bits),
+            record.gyro.map(f32::to_bits)
+        );
+        assert_eq!(
+            decoded.accel.map(f32::to_bits),
+            record.accel.map(f32::to_bits)
+        );
+        assert_eq!(
+            decoded.temperature_c.to_bits(),
+            record.temperature_c.to_bits()
+        );
     }
 }
 
@@ -242,7 +289,10 @@ fn writer_round_trip_and_count_checks() {
         writer.write_record(record).unwrap();
     }
     assert_eq!(writer.written(), 3);
-    assert!(matches!(writer.write_record(&records[0]), Err(WriteError::TooManyRecords(3))));
+    assert!(matches!(
+        writer.write_record(&records[0]),
+        Err(WriteError::TooManyRecords(3))
+    ));
     let bytes = writer.finish().unwrap();
     assert_eq!(bytes.0, file(&header, &records));
 
@@ -250,10 +300,16 @@ fn writer_round_trip_and_count_checks() {
     writer.write_record(&records[0]).unwrap();
     assert!(matches!(
         writer.finish(),
-        Err(WriteError::TooFewRecords { expected: 3, written: 1 })
+        Err(WriteError::TooFewRecords {
+            expected: 3,
+            written: 1
+        })
     ));
 
-    let bad = Header { rate_hz: f64::NAN, ..header };
+    let bad = Header {
+        rate_hz: f64::NAN,
+        ..header
+    };
     assert!(matches!(
         Writer::new(VecSink::default(), bad),
         Err(WriteError::InvalidHeader(FormatError { offset: 16, .. }))
@@ -267,7 +323,13 @@ fn regular_recording_replays() {
     for kind in [Kind::Increments, Kind::Rates] {
         let records = regular_records(5);
         let (samples, end) = replay_all(&file(&header(kind, 5), &records));
-        assert_eq!(end, Ok(ReplayStats { samples: 5, ..ReplayStats::default() }));
+        assert_eq!(
+            end,
+            Ok(ReplayStats {
+                samples: 5,
+                ..ReplayStats::default()
+            })
+        );
         assert_eq!(samples.len(), 5);
         for (i, (sample, record)) in samples.iter().zip(&records).enumerate() {
             assert_eq!(sample.seq, i as u32);
@@ -276,10 +338,14 @@ fn regular_recording_replays() {
             assert_eq!(sample.temperature_c, 24.5);
             assert_eq!(sample.flags, SampleFlags::empty());
             let expected = match kind {
-                Kind::Increments => {
-                    Motion::Increments { delta_theta_ib_b: record.gyro, delta_v_ib_b: record.accel }
-                }
-                Kind::Rates => Motion::Rates { omega_ib_b: record.gyro, f_ib_b: record.accel },
+                Kind::Increments => Motion::Increments {
+                    delta_theta_ib_b: record.gyro,
+                    delta_v_ib_b: record.accel,
+                },
+                Kind::Rates => Motion::Rates {
+                    omega_ib_b: record.gyro,
+                    f_ib_b: record.accel,
+                },
             };
             assert_eq!(sample.motion, expected);
         }
@@ -308,7 +374,14 @@ fn nan_sample_is_flagged_not_an_error() {
     records[2].accel[2] = f32::NEG_INFINITY;
     records[3].temperature_c = f32::NAN; // unknown temperature: fine
     let (samples, end) = replay_all(&file(&header(Kind::Increments, 4), &records));
-    assert_eq!(end, Ok(ReplayStats { samples: 4, non_finite: 2, ..ReplayStats::default() }));
+    assert_eq!(
+        end,
+        Ok(ReplayStats {
+            samples: 4,
+            non_finite: 2,
+            ..ReplayStats::default()
+        })
+    );
     assert_eq!(samples[0].flags, SampleFlags::empty());
     assert_eq!(samples[1].flags, SampleFlags::NON_FINITE);
     assert_eq!(samples[2].flags, SampleFlags::NON_FINITE);
@@ -327,7 +400,14 @@ fn time_going_backwards_is_bad_interval() {
         record(T0_NS + 2 * PERIOD_NS + PERIOD_NS / 2), // one period after the previous record
     ];
     let (samples, end) = replay_all(&file(&header(Kind::Rates, 5), &records));
-    assert_eq!(end, Ok(ReplayStats { samples: 5, bad_interval: 2, ..ReplayStats::default() }));
+    assert_eq!(
+        end,
+        Ok(ReplayStats {
+            samples: 5,
+            bad_interval: 2,
+            ..ReplayStats::default()
+        })
+    );
     assert_eq!(samples[2].flags, SampleFlags::BAD_INTERVAL);
     assert_eq!(samples[2].dt_s, 0.0);
     assert_eq!(samples[3].flags, SampleFlags::BAD_INTERVAL);
@@ -338,9 +418,20 @@ fn time_going_backwards_is_bad_interval() {
 
 #[test]
 fn three_period_gap() {
-    let records = [record(T0_NS + PERIOD_NS), record(T0_NS + 4 * PERIOD_NS), record(T0_NS + 5 * PERIOD_NS)];
+    let records = [
+        record(T0_NS + PERIOD_NS),
+        record(T0_NS + 4 * PERIOD_NS),
+        record(T0_NS + 5 * PERIOD_NS),
+    ];
     let (samples, end) = replay_all(&file(&header(Kind::Increments, 3), &records));
-    assert_eq!(end, Ok(ReplayStats { samples: 3, missed: 2, ..ReplayStats::default() }));
+    assert_eq!(
+        end,
+        Ok(ReplayStats {
+            samples: 3,
+            missed: 2,
+            ..ReplayStats::default()
+        })
+    );
     assert_eq!(samples[1].flags, SampleFlags::GAP);
     assert!(samples[1].flags.usable());
     assert_eq!(samples[1].dt_s, 0.03);
@@ -360,7 +451,8 @@ fn interval_thresholds() {
         (u64::MAX - T0_NS, SampleFlags::BAD_INTERVAL, 0),
     ];
     for (delta_ns, flags, missed) in cases {
-        let (samples, end) = replay_all(&file(&header(Kind::Rates, 1), &[record(T0_NS + delta_ns)]));
+        let (samples, end) =
+            replay_all(&file(&header(Kind::Rates, 1), &[record(T0_NS + delta_ns)]));
         assert_eq!(samples[0].flags, flags, "delta {delta_ns} ns");
         assert_eq!(samples[0].dt_s, (delta_ns as f64 * 1e-9) as f32);
         assert_eq!(end.unwrap().missed, missed, "delta {delta_ns} ns");
@@ -373,16 +465,25 @@ fn interval_thresholds() {
 fn bad_magic() {
     let mut bytes = file(&header(Kind::Rates, 1), &regular_records(1));
     bytes[3] = b'X';
-    assert_eq!(replay_error(&bytes), error(FormatErrorKind::BadMagic, 0, None));
+    assert_eq!(
+        replay_error(&bytes),
+        error(FormatErrorKind::BadMagic, 0, None)
+    );
 
     // A text-mode transfer that turned CR LF into LF.
     let good = file(&header(Kind::Rates, 1), &regular_records(1));
     let mut mangled = good[..6].to_vec();
     mangled.extend_from_slice(&good[7..]);
-    assert_eq!(replay_error(&mangled), error(FormatErrorKind::BadMagic, 0, None));
+    assert_eq!(
+        replay_error(&mangled),
+        error(FormatErrorKind::BadMagic, 0, None)
+    );
 
     // Too short to be a header, and not a recording either.
-    assert_eq!(replay_error(b"time,gx\n"), error(FormatErrorKind::BadMagic, 0, None));
+    assert_eq!(
+        replay_error(b"time,gx\n"),
+        error(FormatErrorKind::BadMagic, 0, None)
+    );
 }
 
 #[test]
@@ -390,20 +491,32 @@ fn unsupported_version() {
     let mut bytes = file(&header(Kind::Rates, 0), &[]);
     bytes[8] = 2;
     fix_header_crc(&mut bytes);
-    assert_eq!(replay_error(&bytes), error(FormatErrorKind::UnsupportedVersion(2), 8, None));
+    assert_eq!(
+        replay_error(&bytes),
+        error(FormatErrorKind::UnsupportedVersion(2), 8, None)
+    );
     // Reported before the CRC: another version may have another header layout.
     bytes[8] = 7;
-    assert_eq!(replay_error(&bytes), error(FormatErrorKind::UnsupportedVersion(7), 8, None));
+    assert_eq!(
+        replay_error(&bytes),
+        error(FormatErrorKind::UnsupportedVersion(7), 8, None)
+    );
 }
 
 #[test]
 fn header_crc() {
     let mut bytes = file(&header(Kind::Rates, 1), &regular_records(1));
     bytes[30] ^= 0x01; // in t0_ns
-    assert_eq!(replay_error(&bytes), error(FormatErrorKind::HeaderCrc, 0, None));
+    assert_eq!(
+        replay_error(&bytes),
+        error(FormatErrorKind::HeaderCrc, 0, None)
+    );
     let mut bytes = file(&header(Kind::Rates, 1), &regular_records(1));
     bytes[47] ^= 0x80; // in the CRC itself
-    assert_eq!(replay_error(&bytes), error(FormatErrorKind::HeaderCrc, 0, None));
+    assert_eq!(
+        replay_error(&bytes),
+        error(FormatErrorKind::HeaderCrc, 0, None)
+    );
 }
 
 #[test]
@@ -414,14 +527,23 @@ fn bad_header_fields() {
         fix_header_crc(&mut bytes);
         replay_error(&bytes)
     };
-    let bad_header = |offset| move |e: FormatError| {
-        assert!(matches!(e.kind, FormatErrorKind::BadHeader(_)), "{e:?}");
-        assert_eq!((e.offset, e.record), (offset, None), "{e:?}");
+    let bad_header = |offset| {
+        move |e: FormatError| {
+            assert!(matches!(e.kind, FormatErrorKind::BadHeader(_)), "{e:?}");
+            assert_eq!((e.offset, e.record), (offset, None), "{e:?}");
+        }
     };
     bad_header(10)(patch(10, &40u16.to_le_bytes()));
     bad_header(12)(patch(12, &48u16.to_le_bytes()));
     bad_header(14)(patch(14, &2u16.to_le_bytes()));
-    for rate_hz in [0.0, -0.0, -100.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+    for rate_hz in [
+        0.0,
+        -0.0,
+        -100.0,
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ] {
         bad_header(16)(patch(16, &f64::to_le_bytes(rate_hz)));
     }
     bad_header(36)(patch(43, &[1]));
@@ -438,8 +560,14 @@ fn record_crc() {
     let (samples, end) = replay_all(&bytes);
     assert_eq!(samples.len(), 31);
     let error = end.unwrap_err();
-    assert_eq!(error, self::error(FormatErrorKind::RecordCrc, 1288, Some(31)));
-    assert_eq!(error.to_string(), "byte offset 1288 (record 31): record CRC mismatch (corrupt data)");
+    assert_eq!(
+        error,
+        self::error(FormatErrorKind::RecordCrc, 1288, Some(31))
+    );
+    assert_eq!(
+        error.to_string(),
+        "byte offset 1288 (record 31): record CRC mismatch (corrupt data)"
+    );
 }
 
 #[test]
@@ -478,7 +606,10 @@ fn truncated() {
 
     // Inside the header (and the empty file).
     for len in [0, 5, 8, 47] {
-        assert_eq!(replay_error(&bytes[..len]), error_at_header(FormatErrorKind::Truncated));
+        assert_eq!(
+            replay_error(&bytes[..len]),
+            error_at_header(FormatErrorKind::Truncated)
+        );
     }
     assert_eq!(
         replay_error(&bytes[..20]).to_string(),
@@ -516,17 +647,22 @@ fn trailing_data() {
 #[test]
 fn replay_error_display() {
     let error: ReplayError<Infallible> = error_at_header(FormatErrorKind::HeaderCrc).into();
-    assert_eq!(error.to_string(), "invalid recording: byte offset 0: header CRC mismatch (corrupt header)");
+    assert_eq!(
+        error.to_string(),
+        "invalid recording: byte offset 0: header CRC mismatch (corrupt header)"
+    );
 }
 
 // ---- byte sources -----------------------------------------------------------------------------
 
-/// Hands out at most `max` bytes per read; fails every `fail_every`-th read (once per call).
+/// Hands out at most `max` bytes per read; once the header is delivered, fails every
+/// `fail_every`-th read.
 struct Flaky<'a> {
     data: &'a [u8],
     max: usize,
     fail_every: usize,
     reads: usize,
+    delivered: usize,
 }
 
 #[derive(Debug, PartialEq)]
@@ -553,12 +689,13 @@ impl embedded_io::ErrorType for Flaky<'_> {
 impl Read for Flaky<'_> {
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, Glitch> {
         self.reads += 1;
-        if self.reads % self.fail_every == 0 {
+        if self.delivered >= HEADER_LEN && self.reads % self.fail_every == 0 {
             return Err(Glitch);
         }
         let n = buf.len().min(self.max).min(self.data.len());
         buf[..n].copy_from_slice(&self.data[..n]);
         self.data = &self.data[n..];
+        self.delivered += n;
         Ok(n)
     }
 }
@@ -571,15 +708,8 @@ fn short_reads_and_io_errors_resume_in_place() {
     let (expected, _) = replay_all(&bytes);
 
     for max in [1, 3, 7, 40, 41, 1000] {
-        let flaky = Flaky { data: &bytes, max, fail_every: 4, reads: 0 };
-        let mut replay = loop {
-            // `new` consumes the source: retry from scratch on an I/O error.
-            match Replay::new(Flaky { reads: 0, ..flaky }) {
-                Ok(replay) => break replay,
-                Err(ReplayError::Io(Glitch)) => continue,
-                Err(ReplayError::Format(e)) => panic!("{e}"),
-            }
-        };
+        let flaky = Flaky { data: &bytes, max, fail_every: 4, reads: 0, delivered: 0 };
+        let mut replay = Replay::new(flaky).unwrap();
         let mut samples = Vec::new();
         let mut io_errors = 0;
         loop {
@@ -589,10 +719,14 @@ fn short_reads_and_io_errors_resume_in_place() {
                 Err(ReplayError::Io(Glitch)) => io_errors += 1,
                 Err(ReplayError::Format(e)) => panic!("max {max}: {e}"),
             }
-            assert!(io_errors < 10_000);
+            assert!(io_errors < 10_000, "max {max}: replay does not progress");
         }
-        assert!(max > 40 || io_errors > 0);
-        assert_eq!(samples.iter().map(bits).collect::<Vec<_>>(), expected.iter().map(bits).collect::<Vec<_>>(), "max {max}");
+        assert!(io_errors > 0, "max {max}");
+        assert_eq!(
+            samples.iter().map(bits).collect::<Vec<_>>(),
+            expected.iter().map(bits).collect::<Vec<_>>(),
+            "max {max}"
+        );
         assert_eq!(replay.stats().missed, 2);
     }
 }
@@ -614,29 +748,49 @@ fn buffered_replay_matches() {
 
 fn any_record() -> impl Strategy<Value = Record> {
     let float = any::<u32>().prop_map(f32::from_bits);
-    (any::<u64>(), [float.clone(), float.clone(), float.clone()], [float.clone(), float.clone(), float.clone()], float)
-        .prop_map(|(t_ns, gyro, accel, temperature_c)| Record { t_ns, gyro, accel, temperature_c })
+    (
+        any::<u64>(),
+        [float.clone(), float.clone(), float.clone()],
+        [float.clone(), float.clone(), float.clone()],
+        float,
+    )
+        .prop_map(|(t_ns, gyro, accel, temperature_c)| Record {
+            t_ns,
+            gyro,
+            accel,
+            temperature_c,
+        })
 }
 
 /// A plausible record (near-regular timing, finite values): what a real file holds.
 fn plausible_records(n: usize) -> impl Strategy<Value = Vec<Record>> {
-    proptest::collection::vec((0..3 * PERIOD_NS, [-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0]), n)
-        .prop_map(|steps| {
-            let mut t_ns = T0_NS;
-            steps
-                .into_iter()
-                .map(|(step, v)| {
-                    t_ns += step;
-                    Record { t_ns, gyro: v, accel: v.map(|x| 10.0 * x), temperature_c: 25.0 }
-                })
-                .collect()
-        })
+    proptest::collection::vec(
+        (0..3 * PERIOD_NS, [-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0]),
+        n,
+    )
+    .prop_map(|steps| {
+        let mut t_ns = T0_NS;
+        steps
+            .into_iter()
+            .map(|(step, v)| {
+                t_ns += step;
+                Record {
+                    t_ns,
+                    gyro: v,
+                    accel: v.map(|x| 10.0 * x),
+                    temperature_c: 25.0,
+                }
+            })
+            .collect()
+    })
 }
 
 fn any_rate() -> impl Strategy<Value = f64> {
     prop_oneof![
         1.0f64..10_000.0,
-        any::<u64>().prop_map(f64::from_bits).prop_filter("valid rate", |r| rate_is_valid(*r)),
+        any::<u64>()
+            .prop_map(f64::from_bits)
+            .prop_filter("valid rate", |r| rate_is_valid(*r)),
     ]
 }
 

@@ -1,0 +1,237 @@
+//! End-to-end: the firmware in QEMU and the host harness replay the same recording and must write
+//! the same solution log.
+//!
+//! Needs `qemu-system-arm`, `defmt-print` and the `thumbv7em-none-eabihf` target (`cargo xtask
+//! setup` installs them). `cargo xtask test` builds the firmware first and passes its path in
+//! `FIRMWARE_ELF`; without it this test builds the firmware into `target/e2e` (a separate target
+//! directory, because the running `cargo test` holds the lock on the main one).
+
+use host_tests::generate::Stationary;
+use host_tests::recording_io;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const THUMB: &str = "thumbv7em-none-eabihf";
+
+fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
+}
+
+fn firmware_elf() -> PathBuf {
+    if let Some(p) = std::env::var_os("FIRMWARE_ELF") {
+        return PathBuf::from(p);
+    }
+    let root = workspace_root();
+    let target_dir = root.join("target/e2e");
+    let status = Command::new(env!("CARGO"))
+        .args(["build", "--release", "-p", "firmware", "--target", THUMB])
+        .arg("--target-dir")
+        .arg(&target_dir)
+        .current_dir(&root)
+        .status()
+        .expect("run cargo build for the firmware");
+    assert!(status.success(), "firmware build failed");
+    target_dir.join(THUMB).join("release/firmware")
+}
+
+fn require(tool: &str) {
+    let ok = Command::new(tool)
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    assert!(
+        ok,
+        "{tool} is not installed: run `cargo xtask setup` (the README's test command does)"
+    );
+}
+
+/// Runs the firmware in QEMU on `args` (from `dir`); returns (exit code, decoded defmt log).
+fn run_firmware(dir: &Path, args: &[&str]) -> (i32, String) {
+    require("qemu-system-arm");
+    require("defmt-print");
+    let elf = firmware_elf();
+    let script = workspace_root().join("firmware/qemu-run.sh");
+    let out: Output = Command::new("bash")
+        .arg(script)
+        .arg(&elf)
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run qemu-run.sh");
+    let log = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (out.status.code().unwrap_or(-1), log)
+}
+
+fn nav(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_nav"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run nav")
+}
+
+/// The number after `key` in the defmt log's summary (from its `summary:` line on), e.g.
+/// `missed 0`.
+fn field(log: &str, key: &str) -> u64 {
+    let log = log.find("summary:").map_or(log, |at| &log[at..]);
+    let at = log
+        .find(key)
+        .unwrap_or_else(|| panic!("'{key}' not in the firmware log:\n{log}"));
+    let rest = &log[at + key.len()..];
+    let digits: String = rest
+        .trim_start()
+        .chars()
+        .take_while(char::is_ascii_digit)
+        .collect();
+    digits
+        .parse()
+        .unwrap_or_else(|_| panic!("no number after '{key}' in:\n{log}"))
+}
+
+/// 20 s at rest at 45 deg N with attitude (1.5, -2, 30) deg, plus two bad samples in the
+/// navigation phase: a NaN gyro value (sample 5000) and a repeated timestamp (sample 6000).
+fn recording_with_bad_samples(path: &Path) {
+    let scenario = Stationary {
+        seconds: 20.0,
+        ..Stationary::default()
+    };
+    let mut rec = scenario.recording().unwrap();
+    rec.records[5000].gyro[1] = f32::NAN;
+    rec.records[6000].t_ns = rec.records[5999].t_ns;
+    recording_io::write(path, &rec).unwrap();
+}
+
+#[test]
+fn firmware_in_qemu_matches_host_replay() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    recording_with_bad_samples(&d.join("rec.bin"));
+    let s = Stationary::default();
+    let (lat, lon, h) = (
+        s.lat_deg.to_string(),
+        s.lon_deg.to_string(),
+        s.h_m.to_string(),
+    );
+
+    let started = std::time::Instant::now();
+    let (code, log) = run_firmware(d, &["rec.bin", "fw.csv", &lat, &lon, &h, "10", "40"]);
+    println!("{log}\nQEMU run: {:.2} s", started.elapsed().as_secs_f64());
+    assert_eq!(code, 0, "firmware exit code {code}; log:\n{log}");
+    assert_eq!(field(&log, "missed"), 0, "missed data-ready interrupts");
+    assert_eq!(field(&log, "channel overruns"), 0, "channel overruns");
+    assert_eq!(field(&log, "summary: samples"), 8000);
+    assert_eq!(
+        field(&log, "flagged"),
+        2,
+        "the NaN and the zero-interval samples"
+    );
+    let max = field(&log, "instructions per navigation step: max");
+    println!("max guest instructions per navigation step: {max}");
+
+    let site = ["--lat", &lat, "--lon", &lon, "--h", &h];
+    let args = [
+        &[
+            "replay",
+            "--imu",
+            "rec.bin",
+            "--align-seconds",
+            "10",
+            "--out",
+            "host.csv",
+            "--log-every",
+            "40",
+        ][..],
+        &site,
+    ]
+    .concat();
+    let out = nav(d, &args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
+    let host = std::fs::read_to_string(d.join("host.csv")).unwrap();
+    // Header, the aligned state at 10 s, then 3998 navigation steps logged every 40 (99 rows)
+    // and the final one.
+    assert_eq!(host.lines().count(), 1 + 1 + 99 + 1, "host log rows");
+    assert_eq!(
+        fw.lines().count(),
+        host.lines().count(),
+        "row counts differ"
+    );
+    // Both sides run the same f32 code with libm's functions and IEEE single arithmetic (Rust
+    // does not contract to FMA), so the logs are expected to be identical text.
+    for (i, (a, b)) in fw.lines().zip(host.lines()).enumerate() {
+        assert_eq!(
+            a,
+            b,
+            "line {} differs:\nfirmware: {a}\nhost:     {b}",
+            i + 1
+        );
+    }
+}
+
+/// A truncated and a corrupt recording stop the firmware with the recording exit code (4) and a
+/// defmt error naming the byte offset.
+#[test]
+fn firmware_rejects_truncated_and_corrupt_recordings() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let rec = Stationary {
+        seconds: 2.0,
+        ..Stationary::default()
+    }
+    .recording()
+    .unwrap();
+    let bytes = rec.to_bytes().unwrap();
+    std::fs::write(d.join("truncated.bin"), &bytes[..bytes.len() - 13]).unwrap();
+    let mut corrupt = bytes.clone();
+    corrupt[48 + 40 * 300 + 10] ^= 0x40;
+    std::fs::write(d.join("corrupt.bin"), &corrupt).unwrap();
+    std::fs::write(
+        d.join("garbage.bin"),
+        b"this is not a recording at all, just text\n",
+    )
+    .unwrap();
+
+    for (file, expect) in [
+        ("truncated.bin", "byte offset"),
+        ("corrupt.bin", "record 300"),
+        ("garbage.bin", "byte offset 0"),
+    ] {
+        let (code, log) = run_firmware(d, &[file, "out.csv", "45", "7.5", "150", "1"]);
+        assert_eq!(code, 4, "{file}: exit code {code}; log:\n{log}");
+        assert!(
+            log.contains("ERROR") && log.contains(expect),
+            "{file}: expected an error with '{expect}':\n{log}"
+        );
+    }
+    let (code, log) = run_firmware(d, &["missing.bin", "out.csv", "45", "7.5", "150", "1"]);
+    assert_eq!(code, 4, "missing file: {log}");
+    let (code, log) = run_firmware(d, &["truncated.bin", "out.csv", "95", "7.5", "150", "1"]);
+    assert_eq!(code, 3, "latitude 95 must be refused: {log}");
+}
+
+/// A panic and a HardFault end the run with their own exit codes (1, 2) and a logged message.
+#[test]
+fn firmware_panic_and_hardfault_exit_nonzero() {
+    let dir = tempfile::tempdir().unwrap();
+    let (code, log) = run_firmware(dir.path(), &["--crash", "panic"]);
+    assert_eq!(code, 1, "panic exit code; log:\n{log}");
+    assert!(
+        log.contains("panic") && log.contains("crash test requested"),
+        "{log}"
+    );
+    let (code, log) = run_firmware(dir.path(), &["--crash", "hardfault"]);
+    assert_eq!(code, 2, "HardFault exit code; log:\n{log}");
+    assert!(log.contains("HardFault at pc="), "{log}");
+}
