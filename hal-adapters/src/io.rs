@@ -157,6 +157,18 @@ mod semihosting_file {
 
     impl core::error::Error for SemihostingError {}
 
+    /// So that `ReplayError<SemihostingError>` can be logged with defmt.
+    #[cfg(feature = "defmt")]
+    impl defmt::Format for SemihostingError {
+        fn format(&self, f: defmt::Formatter<'_>) {
+            defmt::write!(
+                f,
+                "semihosting I/O error: {}",
+                defmt::Display2Format(&self.0)
+            );
+        }
+    }
+
     impl embedded_io::Error for SemihostingError {
         fn kind(&self) -> embedded_io::ErrorKind {
             use embedded_io::ErrorKind as E;

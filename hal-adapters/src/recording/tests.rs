@@ -689,7 +689,7 @@ impl embedded_io::ErrorType for Flaky<'_> {
 impl Read for Flaky<'_> {
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, Glitch> {
         self.reads += 1;
-        if self.delivered >= HEADER_LEN && self.reads % self.fail_every == 0 {
+        if self.delivered >= HEADER_LEN && self.reads.is_multiple_of(self.fail_every) {
             return Err(Glitch);
         }
         let n = buf.len().min(self.max).min(self.data.len());
@@ -708,7 +708,13 @@ fn short_reads_and_io_errors_resume_in_place() {
     let (expected, _) = replay_all(&bytes);
 
     for max in [1, 3, 7, 40, 41, 1000] {
-        let flaky = Flaky { data: &bytes, max, fail_every: 4, reads: 0, delivered: 0 };
+        let flaky = Flaky {
+            data: &bytes,
+            max,
+            fail_every: 4,
+            reads: 0,
+            delivered: 0,
+        };
         let mut replay = Replay::new(flaky).unwrap();
         let mut samples = Vec::new();
         let mut io_errors = 0;
