@@ -301,11 +301,15 @@ mod app {
             last_ready_us = t_ready_us;
             if !sample.flags.usable() {
                 counters.flagged += 1;
-                defmt::warn!(
-                    "sample {=u32} flagged {}: not navigated",
-                    sample.seq,
-                    sample.flags
-                );
+                // The first ten, then every thousandth: a failing sensor must not flood the log.
+                if counters.flagged <= 10 || counters.flagged % 1000 == 0 {
+                    defmt::warn!(
+                        "sample {=u32} flagged {}: not navigated ({=u32} so far)",
+                        sample.seq,
+                        sample.flags,
+                        counters.flagged
+                    );
+                }
                 continue;
             }
             let (delta_theta_ib_b, delta_v_ib_b) = sample.increments();

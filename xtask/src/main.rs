@@ -234,18 +234,8 @@ fn section_sizes(elf: &[u8]) -> Result<(u64, u64, u64)> {
 /// Formatting, clippy (host and thumb) and docs.
 fn lint() -> Result<()> {
     run(cargo().args(["fmt", "--all", "--", "--check"]))?;
-    run(cargo().args([
-        "clippy",
-        "--workspace",
-        "--exclude",
-        "firmware",
-        "--all-targets",
-        "--",
-        "-D",
-        "warnings",
-    ]))?;
-    run(cargo().args([
-        "clippy",
+    let host = ["--workspace", "--exclude", "firmware", "--all-targets"];
+    let thumb = [
         "--target",
         THUMB,
         "-p",
@@ -254,22 +244,21 @@ fn lint() -> Result<()> {
         "hal-adapters",
         "-p",
         "firmware",
-        "--",
-        "-D",
-        "warnings",
-    ]))?;
-    run(cargo().args([
-        "clippy",
+    ];
+    let thumb_features = [
         "--target",
         THUMB,
         "-p",
         "hal-adapters",
         "--features",
         "semihosting,defmt",
-        "--",
-        "-D",
-        "warnings",
-    ]))?;
+    ];
+    for selection in [&host[..], &thumb, &thumb_features] {
+        run(cargo()
+            .arg("clippy")
+            .args(selection)
+            .args(["--", "-D", "warnings"]))?;
+    }
     run(cargo()
         .args(["doc", "--no-deps", "-p", "nav-core", "-p", "hal-adapters"])
         .env("RUSTDOCFLAGS", "-D warnings"))
