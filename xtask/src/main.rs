@@ -6,6 +6,8 @@
 //!   prints the decoded defmt log and the navigation result.
 //! - `test`: builds the firmware, then runs every test of the workspace (the QEMU end-to-end test
 //!   included).
+//! - `bench`: the benchmark figures: guest instructions per navigation step in QEMU, host
+//!   samples per second, flash and RAM.
 //! - `size`: release build of the firmware and its flash/RAM use.
 //! - `lint`: `cargo fmt --check`, clippy with `-D warnings` for the host crates and for the
 //!   no_std crates and the firmware on the thumb target, and the docs with `-D warnings`.
@@ -30,9 +32,10 @@ fn main() -> Result<()> {
         Some("demo") => demo(&root),
         Some("test") => test(&root),
         Some("size") => size(&root).map(|_| ()),
+        Some("bench") => bench(&root),
         Some("lint") => lint(),
         _ => {
-            eprintln!("usage: cargo xtask <setup|demo|test|size|lint>");
+            eprintln!("usage: cargo xtask <setup|demo|test|bench|size|lint>");
             std::process::exit(2)
         }
     }
@@ -138,38 +141,9 @@ fn nav_bin(root: &Path) -> Result<PathBuf> {
 
 /// The main job: demo recording -> firmware in QEMU -> decoded log and solution.
 fn demo(root: &Path) -> Result<()> {
-    setup()?;
-    let nav = nav_bin(root)?;
-    let elf = build_firmware(root)?;
-    std::fs::create_dir_all(root.join("out"))?;
-    run(Command::new(&nav).args([
-        "generate",
-        "--out",
-        "out/demo.bin",
-        "--seconds",
-        "60",
-        "--rate",
-        "400",
-        "--lat",
-        DEMO_SITE[0],
-        "--lon",
-        DEMO_SITE[1],
-        "--h",
-        DEMO_SITE[2],
-        "--roll",
-        "1.5",
-        "--pitch",
-        "-2",
-        "--yaw",
-        "30",
-    ]))?;
+    let (nav, elf) = prepare_demo(root)?;
     let started = std::time::Instant::now();
-    run(Command::new("bash")
-        .arg("firmware/qemu-run.sh")
-        .arg(&elf)
-        .args(["out/demo.bin", "out/solution-firmware.csv"])
-        .args(DEMO_SITE)
-        .arg(DEMO_ALIGN_S))?;
+    run(&mut qemu(&elf))?;
     let qemu_s = started.elapsed().as_secs_f64();
     let log = std::fs::read_to_string(root.join("out/solution-firmware.csv"))?;
     let rows: Vec<&str> = log.lines().collect();
@@ -181,6 +155,139 @@ fn demo(root: &Path) -> Result<()> {
         println!("  {l}");
     }
     println!("QEMU run time: {qemu_s:.1} s (60 s of data at 400 Hz)");
+
+    // The harness on the same recording, same precision: the logs must be identical.
+    let out = output(&mut host_replay(&nav, "f32", "out/solution-host.csv"))?;
+    let host = std::fs::read_to_string(root.join("out/solution-host.csv"))?;
+    if host != log {
+        bail!("the firmware's and the host's solution logs differ (out/solution-*.csv)");
+    }
+    println!(
+        "host harness (nav replay, f32): identical solution log\n{}",
+        out.trim_end()
+    );
+    Ok(())
+}
+
+/// Generates the demo recording and builds the harness and the firmware.
+fn prepare_demo(root: &Path) -> Result<(PathBuf, PathBuf)> {
+    setup()?;
+    let nav = nav_bin(root)?;
+    let elf = build_firmware(root)?;
+    std::fs::create_dir_all(root.join("out"))?;
+    let attitude = ["--roll", "1.5", "--pitch", "-2", "--yaw", "30"];
+    let site = [
+        "--lat",
+        DEMO_SITE[0],
+        "--lon",
+        DEMO_SITE[1],
+        "--h",
+        DEMO_SITE[2],
+    ];
+    run(Command::new(&nav)
+        .args([
+            "generate",
+            "--out",
+            "out/demo.bin",
+            "--seconds",
+            "60",
+            "--rate",
+            "400",
+        ])
+        .args(site)
+        .args(attitude))?;
+    Ok((nav, elf))
+}
+
+/// The firmware in QEMU on the demo recording.
+fn qemu(elf: &Path) -> Command {
+    let mut c = Command::new("bash");
+    c.arg("firmware/qemu-run.sh")
+        .arg(elf)
+        .args(["out/demo.bin", "out/solution-firmware.csv"])
+        .args(DEMO_SITE)
+        .arg(DEMO_ALIGN_S);
+    c
+}
+
+/// `nav replay` of the demo recording.
+fn host_replay(nav: &Path, precision: &str, out: &str) -> Command {
+    let mut c = Command::new(nav);
+    c.args([
+        "replay",
+        "--imu",
+        "out/demo.bin",
+        "--align-seconds",
+        DEMO_ALIGN_S,
+        "--out",
+        out,
+    ])
+    .args([
+        "--lat",
+        DEMO_SITE[0],
+        "--lon",
+        DEMO_SITE[1],
+        "--h",
+        DEMO_SITE[2],
+    ])
+    .args(["--precision", precision]);
+    c
+}
+
+/// Runs a command and returns its standard output (failing on a non-zero status).
+fn output(cmd: &mut Command) -> Result<String> {
+    eprintln!("$ {}", show(cmd));
+    let out = cmd
+        .output()
+        .with_context(|| format!("cannot start {}", show(cmd)))?;
+    if !out.status.success() {
+        bail!(
+            "`{}` failed with {}:\n{}",
+            show(cmd),
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    Ok(String::from_utf8_lossy(&out.stdout).into_owned())
+}
+
+/// The first number after `key` in `text`.
+fn number_after(text: &str, key: &str) -> Result<f64> {
+    let at = text
+        .find(key)
+        .with_context(|| format!("'{key}' not found in:\n{text}"))?;
+    let rest = text[at + key.len()..].trim_start();
+    let end = rest
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(rest.len());
+    rest[..end]
+        .parse()
+        .with_context(|| format!("no number after '{key}'"))
+}
+
+/// Benchmark figures: guest instructions per navigation step (QEMU icount), host samples per
+/// second, flash and RAM.
+fn bench(root: &Path) -> Result<()> {
+    let (nav, elf) = prepare_demo(root)?;
+    let log = output(&mut qemu(&elf))?;
+    let max = number_after(&log, "instructions per navigation step: max")?;
+    let mean = number_after(&log, "mean")?;
+    let f32_speed = number_after(
+        &output(&mut host_replay(&nav, "f32", "out/bench-f32.csv"))?,
+        "speed:",
+    )?;
+    let f64_speed = number_after(
+        &output(&mut host_replay(&nav, "f64", "out/bench-f64.csv"))?,
+        "speed:",
+    )?;
+    let (text, data, bss) = size(root)?;
+    println!("\n| figure | value |\n|---|---|");
+    println!("| guest instructions per navigation step (f32, QEMU icount), max | {max:.0} |");
+    println!("| guest instructions per navigation step (f32, QEMU icount), mean | {mean:.0} |");
+    println!("| host replay, f32, samples/s (one thread, I/O included) | {f32_speed:.0} |");
+    println!("| host replay, f64, samples/s (one thread, I/O included) | {f64_speed:.0} |");
+    println!("| flash (text + data) [B] | {} |", text + data);
+    println!("| static RAM (data + bss) [B] | {} |", data + bss);
     Ok(())
 }
 
