@@ -176,14 +176,6 @@ fn prepare_demo(root: &Path) -> Result<(PathBuf, PathBuf)> {
     let elf = build_firmware(root)?;
     std::fs::create_dir_all(root.join("out"))?;
     let attitude = ["--roll", "1.5", "--pitch", "-2", "--yaw", "30"];
-    let site = [
-        "--lat",
-        DEMO_SITE[0],
-        "--lon",
-        DEMO_SITE[1],
-        "--h",
-        DEMO_SITE[2],
-    ];
     run(Command::new(&nav)
         .args([
             "generate",
@@ -194,9 +186,15 @@ fn prepare_demo(root: &Path) -> Result<(PathBuf, PathBuf)> {
             "--rate",
             "400",
         ])
-        .args(site)
+        .args(site_args())
         .args(attitude))?;
     Ok((nav, elf))
+}
+
+/// The demo site as `nav` options.
+fn site_args() -> [&'static str; 6] {
+    let [lat, lon, h] = DEMO_SITE;
+    ["--lat", lat, "--lon", lon, "--h", h]
 }
 
 /// The firmware in QEMU on the demo recording.
@@ -222,14 +220,7 @@ fn host_replay(nav: &Path, precision: &str, out: &str) -> Command {
         "--out",
         out,
     ])
-    .args([
-        "--lat",
-        DEMO_SITE[0],
-        "--lon",
-        DEMO_SITE[1],
-        "--h",
-        DEMO_SITE[2],
-    ])
+    .args(site_args())
     .args(["--precision", precision]);
     c
 }
