@@ -132,6 +132,12 @@ fn firmware_in_qemu_matches_host_replay() {
         2,
         "the NaN and the zero-interval samples"
     );
+    // Data-ready k (from 1) fires at k * 2.5 ms of SysTick time: exactly 400 Hz under icount.
+    assert_eq!(
+        field(&log, "last data-ready at"),
+        8000 * 2500,
+        "data-ready pacing [us]"
+    );
     let max = field(&log, "instructions per navigation step: max");
     println!("max guest instructions per navigation step: {max}");
 
