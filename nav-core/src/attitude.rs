@@ -8,24 +8,34 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 /// The quaternion of a rotation vector `phi` [rad]: `q = [cos(|phi|/2), sin(|phi|/2) phi/|phi|]`
 /// (Savage (7.1.2-20); Groves eq. 5.75). Exact for any angle, so the attitude update is exact for
-/// a constant body rate. Below 1e-3 rad the series of `sin(x/2)/x` is used (error < 1e-16 in
-/// f64), which keeps tiny increments accurate in f32.
+/// a constant body rate. Up to [`Scalar::ROTATION_SERIES_MAX2`] the Taylor series of
+/// `cos(x/2)` and `sin(x/2)/x` to `x^6` is used: exact to the working precision, no
+/// trigonometry (the `f32` libm functions run in soft double precision on a Cortex-M4F), and
+/// accurate for tiny angles.
 #[inline]
 pub fn rotation_vector_quat<T: Scalar>(phi: &Vector3<T>) -> UnitQuaternion<T> {
-    let a2 = phi.norm_squared();
-    let (w, s) = if a2 < T::c(1e-6) {
-        // cos(a/2) = 1 - a^2/8 + a^4/384;  sin(a/2)/a = 1/2 - a^2/48 + a^4/3840
-        let a4 = a2 * a2;
-        (
-            T::one() - a2 / T::c(8.0) + a4 / T::c(384.0),
-            T::c(0.5) - a2 / T::c(48.0) + a4 / T::c(3840.0),
-        )
+    let (w, s) = rotation_vector_terms(phi.norm_squared());
+    UnitQuaternion::new_unchecked(Quaternion::new(T::one() + w, phi.x * s, phi.y * s, phi.z * s))
+}
+
+/// `(cos(a/2) - 1, sin(a/2)/a)` for `a2 = a^2` [rad^2]; the first term without cancellation,
+/// so `q(phi) - 1` stays accurate for tiny angles.
+#[inline]
+pub fn rotation_vector_terms<T: Scalar>(a2: T) -> (T, T) {
+    if a2 < T::c(T::ROTATION_SERIES_MAX2) {
+        // cos(a/2) - 1 = -a^2/8 + a^4/384 - a^6/46080
+        // sin(a/2)/a = 1/2 - a^2/48 + a^4/3840 - a^6/645120
+        let c = a2 * (T::c(-1.0 / 8.0) + a2 * (T::c(1.0 / 384.0) + a2 * T::c(-1.0 / 46080.0)));
+        let s = T::c(0.5)
+            + a2 * (T::c(-1.0 / 48.0) + a2 * (T::c(1.0 / 3840.0) + a2 * T::c(-1.0 / 645_120.0)));
+        (c, s)
     } else {
         let a = a2.sqrt();
-        let half = a * T::c(0.5);
-        (half.cos(), half.sin() / a)
-    };
-    UnitQuaternion::new_unchecked(Quaternion::new(w, phi.x * s, phi.y * s, phi.z * s))
+        let quarter = a * T::c(0.25);
+        let sq = quarter.sin();
+        // cos(a/2) - 1 = -2 sin^2(a/4)
+        (T::c(-2.0) * sq * sq, (a * T::c(0.5)).sin() / a)
+    }
 }
 
 /// Roll, pitch and yaw [rad] of `q_b_n` (yaw in (-pi, pi]).

@@ -14,9 +14,12 @@
 
 pub mod alignment;
 pub mod attitude;
+pub mod calibration;
+pub mod coning;
 pub mod earth;
 pub mod increment;
 pub mod output;
+pub mod poisson;
 pub mod position;
 pub mod scalar;
 pub mod state;
@@ -28,7 +31,9 @@ pub use output::Solution;
 pub use position::Position;
 pub use scalar::Scalar;
 pub use state::NavState;
-pub use strapdown::{MechanizationConfig, Strapdown};
+pub use calibration::{ImuCalibration, ImuCompensation};
+pub use poisson::DcmIntegrator;
+pub use strapdown::{AttitudeMethod, MechanizationConfig, NavFrame, Strapdown};
 
 /// Re-exported linear-algebra types used in the public API.
 pub use nalgebra::{UnitQuaternion, Vector3};

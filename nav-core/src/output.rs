@@ -23,7 +23,7 @@ pub struct Solution {
     pub lon_ndeg: i64,
     /// Ellipsoidal height [m].
     pub h_m: f64,
-    /// Velocity `v_eb_n` north, east, down [m/s].
+    /// Velocity `v_eb_n` north, east, down (NED, whatever the mechanization frame) [m/s].
     pub v_eb_n: [f64; 3],
     /// Roll [deg].
     pub roll_deg: f64,
@@ -36,20 +36,25 @@ pub struct Solution {
 impl Solution {
     /// The solution of `state` at time `t_us` [us].
     pub fn from_state<T: Scalar>(t_us: u64, state: &NavState<T>) -> Self {
-        let (roll, pitch, yaw) = state.euler();
+        // NED quantities in f64 (at the output rate only).
+        let wide = NavState::<f64> {
+            q_b_n: nalgebra::UnitQuaternion::new_unchecked(nalgebra::Quaternion::from(
+                state.q_b_n.quaternion().coords.map(T::to_f64),
+            )),
+            v_eb_n: state.v_eb_n.map(T::to_f64),
+            position: state.position,
+        };
+        let (q_b_ned, v_eb_ned) = wide.ned();
+        let (roll, pitch, yaw) = q_b_ned.euler_angles();
         Self {
             t_us,
             lat_ndeg: state.position.lat_ndeg(),
             lon_ndeg: state.position.lon_ndeg(),
             h_m: state.position.h_f64(),
-            v_eb_n: [
-                state.v_eb_n.x.to_f64(),
-                state.v_eb_n.y.to_f64(),
-                state.v_eb_n.z.to_f64(),
-            ],
-            roll_deg: roll.to_f64().to_degrees(),
-            pitch_deg: pitch.to_f64().to_degrees(),
-            yaw_deg: yaw.to_f64().to_degrees(),
+            v_eb_n: v_eb_ned.into(),
+            roll_deg: roll.to_degrees(),
+            pitch_deg: pitch.to_degrees(),
+            yaw_deg: yaw.to_degrees(),
         }
     }
 }

@@ -1,34 +1,75 @@
-//! Strapdown mechanization in the local-level NED frame (spine version).
+//! Strapdown mechanization in a local-level frame: NED or wander azimuth.
 //!
-//! Per increment (Groves §5.4 / Titterton & Weston §3.5, first-order in the navigation-frame
-//! rates):
-//! - attitude: `q_b_n(k) = q(-zeta) * q_b_n(k-1) * q(delta_theta)`, `zeta = (omega_ie_n +
-//!   omega_en_n) dt`, with the exact rotation-vector quaternion `q(.)`;
-//! - velocity: `v(k) = v(k-1) + dv_n + (g_n - (2 omega_ie_n + omega_en_n) x v) dt` with
-//!   `dv_n = (I - [zeta x]/2) c_b_n(k-1) (delta_v + delta_theta x delta_v / 2)` (rotation
-//!   compensation of the body and navigation frames, Savage (7.2.2.2-11) and (7.2.2.2-21));
-//! - position: trapezoidal integration of the NED velocity into latitude, longitude and height.
+//! Per increment (Savage, *Strapdown Analytics*, ch. 7; Groves §5.4–5.5; Titterton & Weston
+//! ch. 3), with the navigation-frame quantities taken at the start of the interval:
+//! 1. sensor error compensation ([`crate::calibration`], seed 000 eqs. 3 and 8);
+//! 2. coning and sculling ([`crate::coning`]): rotation vector `phi_b` and velocity increment
+//!    `dv_b` in body axes at the start of the interval;
+//! 3. Earth quantities from the position matrix's vertical row `c_n` (no trigonometry):
+//!    `omega_ie_n = Omega c_n`, transport rate `rho_n` ([`LocalEarth::transport_rate`], plus
+//!    `-v_E tan(lat) / (R_E + h)` about down in the NED frame), `zeta = (omega_ie_n + rho_n) dt`;
+//! 4. velocity: `v(k) = v(k-1) + dv_n + (g_n - (2 omega_ie_n + rho_n) x v(k-1)) dt`,
+//!    `dv_n = (I - [zeta x] / 2) C_b_n(k-1) dv_b` (Savage (7.2.2.2-21));
+//! 5. attitude: `q_b_n(k) = q(-zeta) q_b_n(k-1) q(phi_b)` (Savage (7.1.2-14)) — or Poisson's
+//!    DCM equation with a selectable integrator ([`crate::poisson`], seed 000);
+//! 6. position: `C_n_e(k) = C_n_e(k-1) exp([xi x])`, `xi = rho_n(v_mid) dt` with the
+//!    trapezoidal velocity `v_mid`, and `h(k) = h(k-1) - v_D,mid dt` ([`Position`], fixed
+//!    point).
 //!
-//! Coning/sculling corrections, the oblate gravitation model, selectable attitude integrators and
-//! the wander-azimuth frame come with the full mechanization; [`MechanizationConfig`] is where
-//! their switches will live.
+//! The wander-azimuth frame (seeds 003, 004) has no vertical transport rate: it works over the
+//! poles; NED outputs come from its wander angle ([`NavState::ned`]). The NED frame is singular
+//! at the poles (`tan(lat)`), as in any NED mechanization.
 
-use crate::attitude::rotation_vector_quat;
-use crate::earth::LocalEarth;
+use crate::calibration::ImuCompensation;
+use crate::coning::ConingSculling;
+use crate::earth::{LocalEarth, OMEGA_IE};
+use crate::poisson::{DcmIntegrator, PoissonDcm};
 use crate::{ImuIncrement, InputError, InputLimits, NavState, Scalar};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
+
+/// The local-level navigation frame of the mechanization.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NavFrame {
+    /// North-east-down: the frame turns about the vertical to stay north (singular at a pole).
+    Ned,
+    /// Wander azimuth: no rotation about the vertical relative to the Earth
+    /// (`omega_en_n . u_d = 0`); the wander angle is kept in the position.
+    WanderAzimuth,
+}
+
+/// How the attitude is integrated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AttitudeMethod {
+    /// Rotation-vector quaternion update, exact for a constant rate (the default).
+    RotationVector,
+    /// Poisson's DCM equation (seed 000) with the rate modelled linear over the interval from
+    /// the current and previous increments, re-orthonormalised every step.
+    Poisson(DcmIntegrator),
+}
 
 /// Mechanization options.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MechanizationConfig<T: Scalar> {
     /// Limits every increment is checked against before use.
     pub limits: InputLimits<T>,
+    /// The navigation frame (default wander azimuth).
+    pub frame: NavFrame,
+    /// The attitude integration (default rotation vector).
+    pub attitude: AttitudeMethod,
+    /// Two-sample coning and sculling compensation (default on).
+    pub coning_sculling: bool,
+    /// Sensor error compensation (default identity).
+    pub compensation: ImuCompensation<T>,
 }
 
 impl<T: Scalar> Default for MechanizationConfig<T> {
     fn default() -> Self {
         Self {
             limits: InputLimits::default(),
+            frame: NavFrame::WanderAzimuth,
+            attitude: AttitudeMethod::RotationVector,
+            coning_sculling: true,
+            compensation: ImuCompensation::default(),
         }
     }
 }
@@ -38,19 +79,27 @@ impl<T: Scalar> Default for MechanizationConfig<T> {
 pub struct Strapdown<T: Scalar> {
     state: NavState<T>,
     config: MechanizationConfig<T>,
+    cs: ConingSculling<T>,
+    /// Poisson mode: the DCM and the previous mean rate (for the linear rate model).
+    dcm: Option<(PoissonDcm<T>, Option<Vector3<T>>)>,
     steps: u32,
     rejected: u32,
 }
 
 impl<T: Scalar> Strapdown<T> {
-    /// Starts navigating from `initial`.
+    /// Starts navigating from `initial`. In the NED frame the position's frame is turned to
+    /// north first.
     pub fn new(initial: NavState<T>, config: MechanizationConfig<T>) -> Self {
-        Self {
+        let mut s = Self {
             state: initial,
             config,
+            cs: ConingSculling::new(),
+            dcm: None,
             steps: 0,
             rejected: 0,
-        }
+        };
+        s.set_state(initial);
+        s
     }
 
     /// The current navigation state.
@@ -58,9 +107,26 @@ impl<T: Scalar> Strapdown<T> {
         &self.state
     }
 
-    /// Replaces the state (e.g. after alignment or a filter correction).
+    /// The configuration.
+    pub fn config(&self) -> &MechanizationConfig<T> {
+        &self.config
+    }
+
+    /// Replaces the state (e.g. after alignment or a filter correction). In the NED frame a
+    /// state in a wander frame is converted to NED.
     pub fn set_state(&mut self, state: NavState<T>) {
-        self.state = state;
+        self.state = if self.config.frame == NavFrame::Ned {
+            state.to_ned_frame()
+        } else {
+            state
+        };
+        self.dcm = match self.config.attitude {
+            AttitudeMethod::RotationVector => None,
+            AttitudeMethod::Poisson(m) => Some((
+                PoissonDcm::new(self.state.q_b_n.to_rotation_matrix().into_inner(), m),
+                None,
+            )),
+        };
     }
 
     /// Number of increments integrated.
@@ -73,50 +139,130 @@ impl<T: Scalar> Strapdown<T> {
         self.rejected
     }
 
+    /// Forgets the previous increment (call after a gap in the data so the two-sample terms do
+    /// not span it).
+    pub fn restart_increments(&mut self) {
+        self.cs.reset();
+        if let Some((_, prev)) = &mut self.dcm {
+            *prev = None;
+        }
+    }
+
     /// Integrates one increment. An increment that fails [`ImuIncrement::check`] is counted and
-    /// refused; the state is then unchanged.
+    /// refused; the state is then unchanged (and the two-sample history restarts).
     pub fn step(&mut self, inc: &ImuIncrement<T>) -> Result<(), InputError> {
         if let Err(e) = inc.check(&self.config.limits) {
             self.rejected = self.rejected.saturating_add(1);
+            self.restart_increments();
             return Err(e);
         }
-        let s = &mut self.state;
         let dt = inc.dt;
-        let earth = LocalEarth::new(s.position.lat::<T>(), s.position.h::<T>());
-        let omega_ie_n = earth.omega_ie_n();
-        let omega_en_n = earth.omega_en_n(&s.v_eb_n);
-
-        // Navigation-frame rotation over the interval.
-        let zeta = (omega_ie_n + omega_en_n) * dt;
-
-        // Velocity increment resolved at mid-interval: body rotation compensation
-        // `delta_theta x delta_v / 2` and the navigation-frame term `-zeta x dv_n / 2`.
         let half = T::c(0.5);
-        let dv_b = inc.delta_v_ib_b + inc.delta_theta_ib_b.cross(&inc.delta_v_ib_b) * half;
-        let dv_n0 = s.q_b_n * dv_b;
+        let comp = &self.config.compensation;
+        let d_theta = comp.gyro.apply(&inc.delta_theta_ib_b, dt);
+        let d_v = comp.accel.apply(&inc.delta_v_ib_b, dt);
+        let c = self
+            .cs
+            .compensate(&d_theta, &d_v, dt, self.config.coning_sculling);
+
+        let s = &mut self.state;
+        let c_n = s.position.vertical_row::<T>();
+        let sin_lat = -c_n.z;
+        let cos2_lat = c_n.x * c_n.x + c_n.y * c_n.y;
+        let earth = LocalEarth::from_sin_lat(sin_lat, cos2_lat, s.position.h::<T>());
+        let omega_ie_n = c_n * T::c(OMEGA_IE);
+        let rho_n = transport_rate(self.config.frame, &earth, &c_n, &s.v_eb_n);
+        let zeta = (omega_ie_n + rho_n) * dt;
+
+        // Velocity (Savage (7.2.2.2-21)), Coriolis and gravity at the start of the interval.
+        let dv_n0 = s.q_b_n * c.delta_v_b;
         let dv_n = dv_n0 - zeta.cross(&dv_n0) * half;
-
-        // Attitude: body rotation then navigation-frame rotation.
-        s.q_b_n =
-            rotation_vector_quat(&(-zeta)) * s.q_b_n * rotation_vector_quat(&inc.delta_theta_ib_b);
-        s.q_b_n.renormalize_fast();
-
-        // Velocity: specific force, gravity, Coriolis and transport rate.
         let g_n = Vector3::new(T::zero(), T::zero(), earth.g);
-        let coriolis = (omega_ie_n * T::c(2.0) + omega_en_n).cross(&s.v_eb_n);
+        let coriolis = (omega_ie_n * T::c(2.0) + rho_n).cross(&s.v_eb_n);
         let v_old = s.v_eb_n;
         s.v_eb_n = v_old + dv_n + (g_n - coriolis) * dt;
 
-        // Position: trapezoidal rule on the velocity.
+        // Attitude.
+        match &mut self.dcm {
+            None => s.q_b_n = rotation_vector_update(&s.q_b_n, &c.phi_b, &zeta),
+            Some((dcm, prev)) => {
+                s.q_b_n = poisson_update(dcm, prev, &d_theta, &zeta, dt);
+            }
+        }
+
+        // Position: trapezoidal velocity, frame rotation and height.
         let v_mid = (v_old + s.v_eb_n) * half;
-        let d_lat = v_mid.x / (earth.r_meridian + earth.h) * dt;
-        let d_lon = v_mid.y / ((earth.r_transverse + earth.h) * earth.cos_lat) * dt;
-        let d_h = -v_mid.z * dt;
-        s.position.add(d_lat, d_lon, d_h);
+        let xi = transport_rate(self.config.frame, &earth, &c_n, &v_mid) * dt;
+        s.position.rotate(&xi);
+        s.position.add_height(-v_mid.z * dt);
 
         self.steps = self.steps.wrapping_add(1);
         Ok(())
     }
+}
+
+/// `rho_n` [rad/s] of `frame` for velocity `v` [m/s].
+#[inline]
+fn transport_rate<T: Scalar>(
+    frame: NavFrame,
+    earth: &LocalEarth<T>,
+    c_n: &Vector3<T>,
+    v: &Vector3<T>,
+) -> Vector3<T> {
+    let mut rho = earth.transport_rate(c_n, v);
+    if frame == NavFrame::Ned {
+        // -v_E tan(lat) / (R_E + h); cos(lat) floored at 1e-9 (1 cm from the pole).
+        let cos_lat = earth.cos2_lat.sqrt().max(T::c(1e-9));
+        rho.z = -v.y * earth.sin_lat / (cos_lat * (earth.r_transverse + earth.h));
+    }
+    rho
+}
+
+/// `q(-zeta) q q(phi)`, computed as `q + delta` with the small `delta = q p + z q + z q p`
+/// (`p = q(phi) - 1`, `z = q(-zeta) - 1`) so that two nearly cancelling rotations (a body at
+/// rest follows the Earth) leave `q` bit-exact in `f32`; then a first-order renormalisation.
+#[inline]
+fn rotation_vector_update<T: Scalar>(
+    q_b_n: &UnitQuaternion<T>,
+    phi_b: &Vector3<T>,
+    zeta: &Vector3<T>,
+) -> UnitQuaternion<T> {
+    let q = *q_b_n.quaternion();
+    let p = small_rotation(phi_b);
+    let z = small_rotation(&(-zeta));
+    let qp = q * p;
+    let delta = qp + z * q + z * qp;
+    let n = q + delta;
+    let n2 = n.norm_squared();
+    UnitQuaternion::new_unchecked(n * ((T::c(3.0) - n2) * T::c(0.5)))
+}
+
+/// `q(phi) - 1` [-] without cancellation in the scalar part.
+#[inline]
+fn small_rotation<T: Scalar>(phi: &Vector3<T>) -> Quaternion<T> {
+    let (w, s) = crate::attitude::rotation_vector_terms(phi.norm_squared());
+    Quaternion::from_parts(w, phi * s)
+}
+
+/// Poisson mode: the rate is modelled `omega(s) = mean + b (s - dt/2)` over the interval from
+/// the current and previous mean rates; `dC/dt = C [omega x] - [omega_in x] C`.
+fn poisson_update<T: Scalar>(
+    dcm: &mut PoissonDcm<T>,
+    prev: &mut Option<Vector3<T>>,
+    d_theta: &Vector3<T>,
+    zeta: &Vector3<T>,
+    dt: T,
+) -> UnitQuaternion<T> {
+    let mean = d_theta / dt;
+    let slope = prev.map_or(Vector3::zeros(), |p| (mean - p) / dt);
+    *prev = Some(mean);
+    let omega_in = zeta.cross_matrix() / dt;
+    let half_dt = dt * T::c(0.5);
+    dcm.step(T::zero(), dt, |t, c: &Matrix3<T>| {
+        let omega = mean + slope * (t - half_dt);
+        c * omega.cross_matrix() - omega_in * c
+    });
+    UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*dcm.dcm()))
 }
 
 #[cfg(test)]

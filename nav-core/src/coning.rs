@@ -1,0 +1,154 @@
+//! Two-sample coning and sculling compensation from increments (previous sample plus current
+//! sample), exact for angular rate and specific force linear in time over two intervals.
+//!
+//! - Rotation vector (Savage §7.1.1.1, the two-sample algorithm with one previous sample;
+//!   Titterton & Weston §11.2.1): `phi = dtheta_k + dtheta_{k-1} x dtheta_k / 12`.
+//! - Velocity (Savage (7.2.2.2-11) and (7.2.2.2-22)): rotation compensation
+//!   `dtheta_k x dv_k / 2` plus sculling `(dtheta_{k-1} x dv_k + dv_{k-1} x dtheta_k) / 12`.
+//!
+//! The previous sample is used only when it is contiguous (same interval length to 1 %); after
+//! a gap, a refused increment or a reset, the step falls back to the single-sample terms.
+
+use crate::Scalar;
+use nalgebra::Vector3;
+
+/// Increments compensated for coning and sculling, in body axes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Compensated<T: Scalar> {
+    /// Rotation vector of the body over the interval [rad].
+    pub phi_b: Vector3<T>,
+    /// Velocity increment resolved in the body axes at the start of the interval [m/s].
+    pub delta_v_b: Vector3<T>,
+}
+
+/// Keeps the previous increment for the two-sample terms.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ConingSculling<T: Scalar> {
+    prev: Option<(Vector3<T>, Vector3<T>, T)>,
+}
+
+impl<T: Scalar> ConingSculling<T> {
+    /// No previous sample yet.
+    pub fn new() -> Self {
+        Self { prev: None }
+    }
+
+    /// Forgets the previous sample (after a gap or a rejected increment).
+    pub fn reset(&mut self) {
+        self.prev = None;
+    }
+
+    /// Compensates the increment `delta_theta` [rad], `delta_v` [m/s] over `dt` [s]; with
+    /// `two_sample == false` only the rotation compensation `dtheta x dv / 2` is applied.
+    #[inline]
+    pub fn compensate(
+        &mut self,
+        delta_theta: &Vector3<T>,
+        delta_v: &Vector3<T>,
+        dt: T,
+        two_sample: bool,
+    ) -> Compensated<T> {
+        let half = T::c(0.5);
+        let mut phi_b = *delta_theta;
+        let mut delta_v_b = delta_v + delta_theta.cross(delta_v) * half;
+        if let Some((theta_prev, v_prev, dt_prev)) = self.prev {
+            if two_sample && (dt - dt_prev).abs() <= dt * T::c(0.01) {
+                let twelfth = T::c(1.0 / 12.0);
+                phi_b += theta_prev.cross(delta_theta) * twelfth;
+                delta_v_b +=
+                    (theta_prev.cross(delta_v) + v_prev.cross(delta_theta)) * twelfth;
+            }
+        }
+        self.prev = Some((*delta_theta, *delta_v, dt));
+        Compensated { phi_b, delta_v_b }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::attitude::rotation_vector_quat;
+    use nalgebra::{Quaternion, UnitQuaternion};
+    use std::println;
+
+    /// Classical coning with half-angle `a` [rad] at `w` [rad/s]:
+    /// `q(t) = [cos(a/2), sin(a/2) cos(wt), sin(a/2) sin(wt), 0]`, body rate
+    /// `w (-sin a sin wt, sin a cos wt, -2 sin^2(a/2))`.
+    fn q_true(a: f64, w: f64, t: f64) -> UnitQuaternion<f64> {
+        let (s, c) = ((a / 2.0).sin(), (a / 2.0).cos());
+        UnitQuaternion::from_quaternion(Quaternion::new(c, s * (w * t).cos(), s * (w * t).sin(), 0.0))
+    }
+
+    /// Exact angle increment over [t0, t1] (the rate integrates in closed form).
+    fn dtheta(a: f64, w: f64, t0: f64, t1: f64) -> Vector3<f64> {
+        let sa = a.sin();
+        Vector3::new(
+            sa * ((w * t1).cos() - (w * t0).cos()),
+            sa * ((w * t1).sin() - (w * t0).sin()),
+            -2.0 * (a / 2.0).sin().powi(2) * w * (t1 - t0),
+        )
+    }
+
+    /// Drift rate [rad/s] of the attitude computed at 400 Hz, with or without the coning term:
+    /// the growth of the error from 5 s to 10 s (whole coning periods), which leaves out the
+    /// first interval's error (it has no previous sample).
+    fn drift_rate(a: f64, w: f64, coning: bool) -> f64 {
+        let dt = 1.0 / 400.0;
+        let mut q = q_true(a, w, 0.0);
+        let mut cs = ConingSculling::new();
+        let mut err_5s = 0.0;
+        for k in 0..4000 {
+            let th = dtheta(a, w, k as f64 * dt, (k + 1) as f64 * dt);
+            let c = cs.compensate(&th, &Vector3::zeros(), dt, coning);
+            q *= rotation_vector_quat(&c.phi_b);
+            if k + 1 == 2000 {
+                err_5s = q.angle_to(&q_true(a, w, 5.0));
+            }
+        }
+        (q.angle_to(&q_true(a, w, 10.0)) - err_5s) / 5.0
+    }
+
+    #[test]
+    fn coning_drift_is_removed_to_the_theoretical_residual() {
+        // Per interval T the true coning term is sin^2(a) (x - sin x) / 2, x = w T; the
+        // correction dtheta_{k-1} x dtheta_k / 12 matches it to sin^2(a) x^5 / 60
+        // (x^3/12 - x^5/240 against x^3/12 - x^5/48). Drift rates: uncorrected
+        // sin^2(a) w^3 T^2 / 12, corrected sin^2(a) w^5 T^4 / 60; ratio 5 / x^2.
+        let (a, w, t) = (1f64.to_radians(), 2.0 * core::f64::consts::PI * 5.0, 0.0025);
+        let x = w * t;
+        let uncorrected = drift_rate(a, w, false);
+        let corrected = drift_rate(a, w, true);
+        let s2 = a.sin().powi(2);
+        let theory_uncorrected = s2 * (x - x.sin()) / 2.0 / t;
+        // Exact first-order residual; its leading term is s2 w^5 T^4 / 60.
+        let theory_corrected =
+            s2 * ((x - x.sin()) / 2.0 - (x / 2.0).sin().powi(2) * x.sin() / 3.0) / t;
+        assert!((theory_corrected / (s2 * w.powi(5) * t.powi(4) / 60.0) - 1.0).abs() < 0.01);
+        println!(
+            "coning 1 deg at 5 Hz, 400 Hz: drift uncorrected {uncorrected:.4e} rad/s \
+             (theory {theory_uncorrected:.4e}), corrected {corrected:.4e} rad/s \
+             (theory {theory_corrected:.4e}), improvement {:.0}x",
+            uncorrected / corrected
+        );
+        assert!((uncorrected / theory_uncorrected - 1.0).abs() < 0.02);
+        assert!((corrected / theory_corrected - 1.0).abs() < 0.01);
+        assert!(uncorrected / corrected >= 100.0);
+    }
+
+    #[test]
+    fn two_sample_terms_need_contiguous_samples() {
+        let mut cs = ConingSculling::<f64>::new();
+        let a = Vector3::new(1e-3, 0.0, 0.0);
+        let b = Vector3::new(0.0, 1e-3, 0.0);
+        cs.compensate(&a, &b, 0.0025, true);
+        // Different interval length: no coning term.
+        let c = cs.compensate(&b, &a, 0.005, true);
+        assert_eq!(c.phi_b, b);
+        cs.reset();
+        let c = cs.compensate(&a, &b, 0.005, true);
+        assert_eq!(c.phi_b, a);
+        let c = cs.compensate(&b, &a, 0.005, true);
+        assert!((c.phi_b - b - a.cross(&b) / 12.0).norm() < 1e-18);
+    }
+}
