@@ -14,6 +14,7 @@
 //! - [`generate`]: exact synthetic recordings of a stationary body.
 //! - [`pipeline`]: the replay pipeline (the same semantics as the firmware's tasks).
 //! - [`replay`]: a file replayed end to end (open, run, attach the replay counters).
+//! - [`truth`]: exactly known trajectories and their exact increments (physics tests).
 //!
 //! The `nav` binary (`src/bin/nav.rs`) is the command-line front end.
 #![deny(unsafe_code)]
@@ -27,3 +28,4 @@ pub mod pipeline;
 pub mod psins;
 pub mod recording_io;
 pub mod replay;
+pub mod truth;

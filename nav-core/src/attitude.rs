@@ -15,7 +15,12 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 #[inline]
 pub fn rotation_vector_quat<T: Scalar>(phi: &Vector3<T>) -> UnitQuaternion<T> {
     let (w, s) = rotation_vector_terms(phi.norm_squared());
-    UnitQuaternion::new_unchecked(Quaternion::new(T::one() + w, phi.x * s, phi.y * s, phi.z * s))
+    UnitQuaternion::new_unchecked(Quaternion::new(
+        T::one() + w,
+        phi.x * s,
+        phi.y * s,
+        phi.z * s,
+    ))
 }
 
 /// `(cos(a/2) - 1, sin(a/2)/a)` for `a2 = a^2` [rad^2]; the first term without cancellation,
@@ -36,6 +41,16 @@ pub fn rotation_vector_terms<T: Scalar>(a2: T) -> (T, T) {
         // cos(a/2) - 1 = -2 sin^2(a/4)
         (T::c(-2.0) * sq * sq, (a * T::c(0.5)).sin() / a)
     }
+}
+
+/// `q` rounded to the working scalar.
+pub fn quat_from_f64<T: Scalar>(q: &UnitQuaternion<f64>) -> UnitQuaternion<T> {
+    UnitQuaternion::new_unchecked(Quaternion::from(q.quaternion().coords.map(T::c)))
+}
+
+/// `q` widened to `f64` (exact).
+pub fn quat_to_f64<T: Scalar>(q: &UnitQuaternion<T>) -> UnitQuaternion<f64> {
+    UnitQuaternion::new_unchecked(Quaternion::from(q.quaternion().coords.map(T::to_f64)))
 }
 
 /// Roll, pitch and yaw [rad] of `q_b_n` (yaw in (-pi, pi]).

@@ -47,17 +47,7 @@ impl TriadErrors {
     fn model_matrix(&self) -> Matrix3<f64> {
         let [xy, xz, yx, yz, zx, zy] = self.misalignment;
         let [sx, sy, sz] = self.scale;
-        Matrix3::new(
-            1.0 + sx,
-            xy,
-            xz,
-            yx,
-            1.0 + sy,
-            yz,
-            zx,
-            zy,
-            1.0 + sz,
-        )
+        Matrix3::new(1.0 + sx, xy, xz, yx, 1.0 + sy, yz, zx, zy, 1.0 + sz)
     }
 }
 
@@ -111,10 +101,15 @@ impl fmt::Display for CalibrationError {
             Self::Syntax { line } => write!(f, "calibration line {line}: expected `key = values`"),
             Self::UnknownKey { line } => write!(f, "calibration line {line}: unknown key"),
             Self::BadValues { line } => {
-                write!(f, "calibration line {line}: wrong number of values or not a finite number")
+                write!(
+                    f,
+                    "calibration line {line}: wrong number of values or not a finite number"
+                )
             }
             Self::Duplicate { line } => write!(f, "calibration line {line}: key given twice"),
-            Self::Singular => f.write_str("calibration: scale/misalignment matrix is not invertible or implausible"),
+            Self::Singular => f.write_str(
+                "calibration: scale/misalignment matrix is not invertible or implausible",
+            ),
         }
     }
 }
@@ -286,7 +281,10 @@ mod tests {
         assert_eq!(cal.accel.scale, [1e-4, 0.0, 0.0]);
         assert_eq!(cal.accel.misalignment[5], 1e-3);
         assert_eq!(cal.gyro.scale, [0.0; 3]);
-        assert_eq!(ImuCalibration::parse("").unwrap(), ImuCalibration::default());
+        assert_eq!(
+            ImuCalibration::parse("").unwrap(),
+            ImuCalibration::default()
+        );
     }
 
     #[test]
@@ -299,7 +297,10 @@ mod tests {
             ("gyro_scale = 0 0 0 0", BadValues { line: 1 }),
             ("gyro_scale = 0 nan 0", BadValues { line: 1 }),
             ("gyro_scale = 0 x 0", BadValues { line: 1 }),
-            ("gyro_scale = 0 0 0\ngyro_scale = 0 0 0", Duplicate { line: 2 }),
+            (
+                "gyro_scale = 0 0 0\ngyro_scale = 0 0 0",
+                Duplicate { line: 2 },
+            ),
             ("accel_scale = -1 0 0", Singular),
             ("accel_misalignment = 0.7 0 0 0 0 0", Singular),
         ];

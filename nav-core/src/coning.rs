@@ -51,13 +51,13 @@ impl<T: Scalar> ConingSculling<T> {
         let half = T::c(0.5);
         let mut phi_b = *delta_theta;
         let mut delta_v_b = delta_v + delta_theta.cross(delta_v) * half;
-        if let Some((theta_prev, v_prev, dt_prev)) = self.prev {
-            if two_sample && (dt - dt_prev).abs() <= dt * T::c(0.01) {
-                let twelfth = T::c(1.0 / 12.0);
-                phi_b += theta_prev.cross(delta_theta) * twelfth;
-                delta_v_b +=
-                    (theta_prev.cross(delta_v) + v_prev.cross(delta_theta)) * twelfth;
-            }
+        if let Some((theta_prev, v_prev, dt_prev)) = self.prev
+            && two_sample
+            && (dt - dt_prev).abs() <= dt * T::c(0.01)
+        {
+            let twelfth = T::c(1.0 / 12.0);
+            phi_b += theta_prev.cross(delta_theta) * twelfth;
+            delta_v_b += (theta_prev.cross(delta_v) + v_prev.cross(delta_theta)) * twelfth;
         }
         self.prev = Some((*delta_theta, *delta_v, dt));
         Compensated { phi_b, delta_v_b }
@@ -77,7 +77,12 @@ mod tests {
     /// `w (-sin a sin wt, sin a cos wt, -2 sin^2(a/2))`.
     fn q_true(a: f64, w: f64, t: f64) -> UnitQuaternion<f64> {
         let (s, c) = ((a / 2.0).sin(), (a / 2.0).cos());
-        UnitQuaternion::from_quaternion(Quaternion::new(c, s * (w * t).cos(), s * (w * t).sin(), 0.0))
+        UnitQuaternion::from_quaternion(Quaternion::new(
+            c,
+            s * (w * t).cos(),
+            s * (w * t).sin(),
+            0.0,
+        ))
     }
 
     /// Exact angle increment over [t0, t1] (the rate integrates in closed form).

@@ -239,12 +239,21 @@ mod tests {
             let r = geodetic_to_ecef(lat, 0.4, 0.0);
             let gamma = normal_gravity(lat, 0.0);
             let g_wgs = gravity_ecef_with(&r, i_wgs84);
-            assert!((g_wgs.norm() - gamma).abs() < j4_g, "{lat_deg}: {} {gamma}", g_wgs.norm());
+            assert!(
+                (g_wgs.norm() - gamma).abs() < j4_g,
+                "{lat_deg}: {} {gamma}",
+                g_wgs.norm()
+            );
             // Direction: along the ellipsoid normal (down) to within the same truncation.
-            let down = -Vector3::new(lat.cos() * 0.4f64.cos(), lat.cos() * 0.4f64.sin(), lat.sin());
+            let down = -Vector3::new(
+                lat.cos() * 0.4f64.cos(),
+                lat.cos() * 0.4f64.sin(),
+                lat.sin(),
+            );
             assert!(g_wgs.normalize().cross(&down).norm() < j4_rad, "{lat_deg}");
             let g_seed = gravity_ecef(&r);
-            let di_term = (gravitation_with(&r, OBLATENESS_I) - gravitation_with(&r, i_wgs84)).norm();
+            let di_term =
+                (gravitation_with(&r, OBLATENESS_I) - gravitation_with(&r, i_wgs84)).norm();
             assert!(
                 (g_seed.norm() - gamma).abs() < di_term + j4_g,
                 "{lat_deg}: {} {gamma} {di_term}",
@@ -266,13 +275,20 @@ mod tests {
         // NED -> wander: rotate by -alpha about down.
         let rot = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), -alpha);
         let v_w = rot * v_ned;
-        let c_w = Vector3::new(lat.cos() * alpha.cos(), -lat.cos() * alpha.sin(), -lat.sin());
+        let c_w = Vector3::new(
+            lat.cos() * alpha.cos(),
+            -lat.cos() * alpha.sin(),
+            -lat.sin(),
+        );
         let rho_w = e.transport_rate(&c_w, &v_w);
         let expect = rot * Vector3::new(ned.x, ned.y, 0.0);
         assert!((rho_w - expect).norm() < 1e-18, "{rho_w} {expect}");
         // At the pole the wander rate stays finite.
         let p = LocalEarth::new(core::f64::consts::FRAC_PI_2, 0.0);
-        let rho = p.transport_rate(&Vector3::new(0.0, 0.0, -1.0), &Vector3::new(250.0, 0.0, 0.0));
+        let rho = p.transport_rate(
+            &Vector3::new(0.0, 0.0, -1.0),
+            &Vector3::new(250.0, 0.0, 0.0),
+        );
         assert!(rho.norm().is_finite() && (rho.y + 250.0 / p.r_meridian).abs() < 1e-15);
     }
 

@@ -26,14 +26,17 @@ pub mod state;
 pub mod strapdown;
 
 pub use alignment::{AlignError, AlignmentResult, StaticAlignment};
+pub use calibration::{ImuCalibration, ImuCompensation};
 pub use increment::{ImuIncrement, InputError, InputLimits};
 pub use output::Solution;
+pub use poisson::DcmIntegrator;
 pub use position::Position;
 pub use scalar::Scalar;
 pub use state::NavState;
-pub use calibration::{ImuCalibration, ImuCompensation};
-pub use poisson::DcmIntegrator;
-pub use strapdown::{AttitudeMethod, MechanizationConfig, NavFrame, Strapdown};
+pub use strapdown::{AttitudeMethod, MechanizationConfig, NavFrame, Strapdown, VerticalChannel};
 
 /// Re-exported linear-algebra types used in the public API.
 pub use nalgebra::{UnitQuaternion, Vector3};
+
+/// The linear-algebra crate of the public API (so users share its exact version and features).
+pub use nalgebra;

@@ -38,9 +38,7 @@ impl Solution {
     pub fn from_state<T: Scalar>(t_us: u64, state: &NavState<T>) -> Self {
         // NED quantities in f64 (at the output rate only).
         let wide = NavState::<f64> {
-            q_b_n: nalgebra::UnitQuaternion::new_unchecked(nalgebra::Quaternion::from(
-                state.q_b_n.quaternion().coords.map(T::to_f64),
-            )),
+            q_b_n: crate::attitude::quat_to_f64(&state.q_b_n),
             v_eb_n: state.v_eb_n.map(T::to_f64),
             position: state.position,
         };

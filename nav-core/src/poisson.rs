@@ -85,9 +85,8 @@ impl<T: Scalar> PoissonDcm<T> {
                 let [f1, f2, f3] = &self.history;
                 let k = h / T::c(24.0);
                 // Adams–Bashforth 4 predictor, Adams–Moulton 3-step (order 4) corrector.
-                let p = c + (f0 * T::c(55.0) - f1 * T::c(59.0) + f2 * T::c(37.0)
-                    - f3 * T::c(9.0))
-                    * k;
+                let p =
+                    c + (f0 * T::c(55.0) - f1 * T::c(59.0) + f2 * T::c(37.0) - f3 * T::c(9.0)) * k;
                 let fp = f(t0 + h, &p);
                 c + (fp * T::c(9.0) + f0 * T::c(19.0) - f1 * T::c(5.0) + f2) * k
             }
@@ -136,7 +135,9 @@ mod tests {
         fn c(&self, t: f64) -> Matrix3<f64> {
             let (s, c) = ((self.a / 2.0).sin(), (self.a / 2.0).cos());
             let q = Quaternion::new(c, s * (self.w * t).cos(), s * (self.w * t).sin(), 0.0);
-            UnitQuaternion::from_quaternion(q).to_rotation_matrix().into_inner()
+            UnitQuaternion::from_quaternion(q)
+                .to_rotation_matrix()
+                .into_inner()
         }
         fn omega(&self, t: f64) -> Vector3<f64> {
             let sa = self.a.sin();

@@ -217,7 +217,11 @@ mod tests {
     fn vertical_row_is_sin_and_cos_of_latitude() {
         let p = Position::with_wander(0.6, 1.0, 0.25, 0.0);
         let c = p.vertical_row::<f64>();
-        let expect = Vector3::new(0.6f64.cos() * 0.25f64.cos(), -0.6f64.cos() * 0.25f64.sin(), -0.6f64.sin());
+        let expect = Vector3::new(
+            0.6f64.cos() * 0.25f64.cos(),
+            -0.6f64.cos() * 0.25f64.sin(),
+            -0.6f64.sin(),
+        );
         assert!((c - expect).norm() < 1e-15, "{c} {expect}");
     }
 
@@ -225,7 +229,10 @@ mod tests {
     fn bad_inputs_give_a_valid_position() {
         let p = Position::from_radians(f64::NAN, f64::INFINITY, f64::NAN);
         assert_eq!((p.lat_ndeg(), p.lon_ndeg(), p.h_f64()), (0, 0, 0.0));
-        assert_eq!(Position::from_degrees(95.0, 0.0, 0.0).lat_ndeg(), 90_000_000_000);
+        assert_eq!(
+            Position::from_degrees(95.0, 0.0, 0.0).lat_ndeg(),
+            90_000_000_000
+        );
     }
 
     #[test]

@@ -47,6 +47,17 @@ pub enum AttitudeMethod {
     Poisson(DcmIntegrator),
 }
 
+/// Treatment of the vertical channel, unstable in free inertial navigation (a height error
+/// lowers computed gravity and grows with time constant `sqrt(R / 2g)` ~ 570 s).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VerticalChannel {
+    /// Integrated freely from the accelerometers (default).
+    Free,
+    /// Height and vertical velocity held at their current values: a ship at sea level (seed
+    /// 000), or a vehicle whose height comes from elsewhere.
+    Hold,
+}
+
 /// Mechanization options.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MechanizationConfig<T: Scalar> {
@@ -60,6 +71,8 @@ pub struct MechanizationConfig<T: Scalar> {
     pub coning_sculling: bool,
     /// Sensor error compensation (default identity).
     pub compensation: ImuCompensation<T>,
+    /// Vertical channel (default free).
+    pub vertical: VerticalChannel,
 }
 
 impl<T: Scalar> Default for MechanizationConfig<T> {
@@ -70,14 +83,27 @@ impl<T: Scalar> Default for MechanizationConfig<T> {
             attitude: AttitudeMethod::RotationVector,
             coning_sculling: true,
             compensation: ImuCompensation::default(),
+            vertical: VerticalChannel::Free,
         }
     }
 }
 
 /// The strapdown integrator: owns the navigation state and advances it one increment at a time.
+///
+/// Attitude and velocity are accumulated with compensated (Kahan) summation: at 400 Hz the
+/// per-step changes of a slow vehicle (Earth rate, Schuler tilt: 1e-15..1e-7) are far below the
+/// `f32` spacing of a quaternion component (6e-8) and would otherwise be lost, exactly as a
+/// floating-point position would stop moving. The carries make the `f32` accumulation behave
+/// like ~48-bit arithmetic for a few extra additions per step.
 #[derive(Clone, Debug)]
 pub struct Strapdown<T: Scalar> {
+    /// The output state (`q_b_n` normalised).
     state: NavState<T>,
+    /// Attitude as integrated (norm within `1e-4` of 1) and its summation carry.
+    q: Quaternion<T>,
+    q_carry: Quaternion<T>,
+    /// Summation carry of the velocity.
+    v_carry: Vector3<T>,
     config: MechanizationConfig<T>,
     cs: ConingSculling<T>,
     /// Poisson mode: the DCM and the previous mean rate (for the linear rate model).
@@ -92,6 +118,9 @@ impl<T: Scalar> Strapdown<T> {
     pub fn new(initial: NavState<T>, config: MechanizationConfig<T>) -> Self {
         let mut s = Self {
             state: initial,
+            q: *initial.q_b_n.quaternion(),
+            q_carry: Quaternion::default(),
+            v_carry: Vector3::zeros(),
             config,
             cs: ConingSculling::new(),
             dcm: None,
@@ -120,6 +149,9 @@ impl<T: Scalar> Strapdown<T> {
         } else {
             state
         };
+        self.q = *self.state.q_b_n.quaternion();
+        self.q_carry = Quaternion::default();
+        self.v_carry = Vector3::zeros();
         self.dcm = match self.config.attitude {
             AttitudeMethod::RotationVector => None,
             AttitudeMethod::Poisson(m) => Some((
@@ -174,19 +206,43 @@ impl<T: Scalar> Strapdown<T> {
         let rho_n = transport_rate(self.config.frame, &earth, &c_n, &s.v_eb_n);
         let zeta = (omega_ie_n + rho_n) * dt;
 
-        // Velocity (Savage (7.2.2.2-21)), Coriolis and gravity at the start of the interval.
-        let dv_n0 = s.q_b_n * c.delta_v_b;
+        // Velocity (Savage (7.2.2.2-21)), Coriolis and gravity at the start of the interval; the
+        // increment is summed before it meets the velocity (at rest its terms cancel).
+        let c_b_n = dcm_of(&self.q);
+        let dv_n0 = c_b_n * c.delta_v_b;
         let dv_n = dv_n0 - zeta.cross(&dv_n0) * half;
         let g_n = Vector3::new(T::zero(), T::zero(), earth.g);
         let coriolis = (omega_ie_n * T::c(2.0) + rho_n).cross(&s.v_eb_n);
+        let mut delta_v = dv_n + (g_n - coriolis) * dt;
+        if self.config.vertical == VerticalChannel::Hold {
+            delta_v.z = T::zero();
+        }
         let v_old = s.v_eb_n;
-        s.v_eb_n = v_old + dv_n + (g_n - coriolis) * dt;
+        kahan_add(
+            s.v_eb_n.as_mut_slice(),
+            self.v_carry.as_mut_slice(),
+            delta_v.as_slice(),
+        );
 
         // Attitude.
         match &mut self.dcm {
-            None => s.q_b_n = rotation_vector_update(&s.q_b_n, &c.phi_b, &zeta),
+            None => {
+                let delta = rotation_vector_delta(&self.q, &c.phi_b, &zeta);
+                kahan_add(
+                    self.q.coords.as_mut_slice(),
+                    self.q_carry.coords.as_mut_slice(),
+                    delta.coords.as_slice(),
+                );
+                let n2 = self.q.norm_squared();
+                if (n2 - T::one()).abs() > T::c(1e-4) {
+                    self.q /= n2.sqrt();
+                    self.q_carry = Quaternion::default();
+                }
+                s.q_b_n = UnitQuaternion::new_normalize(self.q);
+            }
             Some((dcm, prev)) => {
                 s.q_b_n = poisson_update(dcm, prev, &d_theta, &zeta, dt);
+                self.q = *s.q_b_n.quaternion();
             }
         }
 
@@ -218,23 +274,50 @@ fn transport_rate<T: Scalar>(
     rho
 }
 
-/// `q(-zeta) q q(phi)`, computed as `q + delta` with the small `delta = q p + z q + z q p`
-/// (`p = q(phi) - 1`, `z = q(-zeta) - 1`) so that two nearly cancelling rotations (a body at
-/// rest follows the Earth) leave `q` bit-exact in `f32`; then a first-order renormalisation.
+/// The change `delta` with `q + delta = q(-zeta) q q(phi)`: `delta = q p + z q + z q p`
+/// (`p = q(phi) - 1`, `z = q(-zeta) - 1`, Savage (7.1.2-14)), small and free of the
+/// cancellation of two nearly opposite rotations (a body at rest follows the Earth).
 #[inline]
-fn rotation_vector_update<T: Scalar>(
-    q_b_n: &UnitQuaternion<T>,
+fn rotation_vector_delta<T: Scalar>(
+    q: &Quaternion<T>,
     phi_b: &Vector3<T>,
     zeta: &Vector3<T>,
-) -> UnitQuaternion<T> {
-    let q = *q_b_n.quaternion();
+) -> Quaternion<T> {
     let p = small_rotation(phi_b);
     let z = small_rotation(&(-zeta));
     let qp = q * p;
-    let delta = qp + z * q + z * qp;
-    let n = q + delta;
-    let n2 = n.norm_squared();
-    UnitQuaternion::new_unchecked(n * ((T::c(3.0) - n2) * T::c(0.5)))
+    qp + z * q + z * qp
+}
+
+/// `C_b_n` of a quaternion of any norm: `C = M(q) / |q|^2` (Savage (3.2.4.1-3)).
+#[inline]
+fn dcm_of<T: Scalar>(q: &Quaternion<T>) -> Matrix3<T> {
+    let (w, x, y, z) = (q.w, q.i, q.j, q.k);
+    let k = T::one() / q.norm_squared();
+    let two = T::c(2.0);
+    Matrix3::new(
+        (w * w + x * x - y * y - z * z) * k,
+        two * (x * y - w * z) * k,
+        two * (x * z + w * y) * k,
+        two * (x * y + w * z) * k,
+        (w * w - x * x + y * y - z * z) * k,
+        two * (y * z - w * x) * k,
+        two * (x * z - w * y) * k,
+        two * (y * z + w * x) * k,
+        (w * w - x * x - y * y + z * z) * k,
+    )
+}
+
+/// Compensated summation `sum += add` per element, the rounding remainder kept in `carry`
+/// (Kahan 1965; Higham, *Accuracy and Stability of Numerical Algorithms*, §4.3).
+#[inline]
+fn kahan_add<T: Scalar>(sum: &mut [T], carry: &mut [T], add: &[T]) {
+    for ((s, c), a) in sum.iter_mut().zip(carry.iter_mut()).zip(add) {
+        let y = *a + *c;
+        let t = *s + y;
+        *c = y - (t - *s);
+        *s = t;
+    }
 }
 
 /// `q(phi) - 1` [-] without cancellation in the scalar part.
