@@ -1,5 +1,5 @@
 //! The run configuration, given as semihosting arguments by the QEMU runner:
-//! `firmware IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY]`.
+//! `firmware IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]`.
 
 use core::ffi::CStr;
 
@@ -23,6 +23,8 @@ pub struct Config {
     pub align_s: f64,
     /// Write a solution row every this many navigation steps.
     pub log_every: u32,
+    /// Sensor calibration (nav-core's text form), NUL-terminated; none: identity.
+    pub cal_path: Option<heapless::Vec<u8, MAX_PATH>>,
 }
 
 /// What is wrong with the arguments.
@@ -34,7 +36,7 @@ pub enum ConfigError {
     Invalid(&'static str),
 }
 
-const NAMES: [&str; 7] = [
+const NAMES: [&str; 8] = [
     "IMU_FILE",
     "OUT_FILE",
     "LAT_DEG",
@@ -42,7 +44,12 @@ const NAMES: [&str; 7] = [
     "H_M",
     "ALIGN_S",
     "LOG_EVERY",
+    "CAL_FILE",
 ];
+
+/// The usage line for error messages.
+pub const USAGE: &str =
+    "firmware IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
 
 impl Config {
     /// Parses the arguments after the program name.
@@ -68,6 +75,10 @@ impl Config {
                 .ok_or(ConfigError::Invalid(NAMES[6]))?,
             Err(_) => 40,
         };
+        let cal_path = match next(7) {
+            Ok(s) => Some(c_path(s).ok_or(ConfigError::Invalid(NAMES[7]))?),
+            Err(_) => None,
+        };
         if !(-90.0..=90.0).contains(&lat_deg) {
             return Err(ConfigError::Invalid(NAMES[2]));
         }
@@ -82,12 +93,20 @@ impl Config {
             h_m,
             align_s,
             log_every,
+            cal_path,
         })
     }
 
     /// The recording's path as a C string.
     pub fn imu_cstr(&self) -> &CStr {
         CStr::from_bytes_with_nul(&self.imu_path).unwrap_or(c"")
+    }
+
+    /// The calibration file's path as a C string, if one was given.
+    pub fn cal_cstr(&self) -> Option<&CStr> {
+        self.cal_path
+            .as_ref()
+            .map(|p| CStr::from_bytes_with_nul(p).unwrap_or(c""))
     }
 
     /// The solution log's path as a C string.

@@ -27,14 +27,19 @@ mod app {
     use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
     use cortex_m::peripheral::{NVIC, SYST};
     use embedded_io::Write as _;
-    use firmware::{ExitCode, config::Config, exit, line};
+    use firmware::{
+        ExitCode,
+        config::{Config, USAGE},
+        exit, line,
+    };
     use hal_adapters::io::{Buffered, SemihostingFile};
     use hal_adapters::recording::Replay;
-    use hal_adapters::{Imu, ImuSample};
+    use hal_adapters::{Imu, ImuSample, SampleFlags};
     use nav_core::alignment::{AlignError, AlignmentResult, StaticAlignment, samples_for};
     use nav_core::output::CSV_HEADER;
     use nav_core::{
-        ImuIncrement, InputLimits, MechanizationConfig, NavState, Position, Solution, Strapdown,
+        ImuCalibration, ImuIncrement, InputLimits, MechanizationConfig, NavState, Position,
+        Solution, Strapdown,
     };
     use rtic_monotonics::systick::prelude::*;
     use rtic_sync::channel::{Receiver, Sender};
@@ -95,6 +100,8 @@ mod app {
     struct Local {
         source: Source,
         samples_tx: Sender<'static, DataReady, SAMPLE_CAP>,
+        /// Mechanization settings (with the loaded calibration) for `navigate`.
+        mechanization: MechanizationConfig<f32>,
     }
 
     #[init]
@@ -111,6 +118,10 @@ mod app {
             config.align_s,
             config.log_every
         );
+        let mechanization = MechanizationConfig {
+            compensation: read_calibration(&config),
+            ..MechanizationConfig::default()
+        };
         let file = SemihostingFile::open(config.imu_cstr()).unwrap_or_else(|_| {
             defmt::error!(
                 "cannot open the recording {=[u8]:a}",
@@ -158,7 +169,14 @@ mod app {
         {
             defmt::panic!("task spawn failed");
         }
-        (Shared {}, Local { source, samples_tx })
+        (
+            Shared {},
+            Local {
+                source,
+                samples_tx,
+                mechanization,
+            },
+        )
     }
 
     /// Sleeps between interrupts (under QEMU's `sleep=off` the idle time then costs no host time).
@@ -185,9 +203,44 @@ mod app {
             }
         }
         Config::parse(words).unwrap_or_else(|e| {
-            defmt::error!("bad arguments ({}); usage: firmware IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY]", e);
+            defmt::error!("bad arguments ({}); usage: {=str}", e, USAGE);
             exit(ExitCode::Config)
         })
+    }
+
+    /// Loads the sensor calibration (identity without a file); exits with
+    /// [`ExitCode::Config`] when it cannot be read or parsed.
+    fn read_calibration(config: &Config) -> nav_core::ImuCompensation<f32> {
+        let Some(path) = config.cal_cstr() else {
+            return nav_core::ImuCompensation::default();
+        };
+        let fail = |what: &dyn core::fmt::Display| -> ! {
+            defmt::error!(
+                "calibration {=[u8]:a}: {}",
+                config.cal_path.as_deref().unwrap_or_default(),
+                defmt::Display2Format(what)
+            );
+            exit(ExitCode::Config)
+        };
+        let mut file = SemihostingFile::open(path).unwrap_or_else(|_| fail(&"cannot open"));
+        let mut text = [0_u8; 2048];
+        let mut len = 0;
+        loop {
+            match embedded_io::Read::read(&mut file, &mut text[len..]) {
+                Ok(0) => break,
+                Ok(n) => len += n,
+                Err(_) => fail(&"read error"),
+            }
+            if len == text.len() {
+                fail(&"longer than 2048 bytes");
+            }
+        }
+        let text = core::str::from_utf8(&text[..len]).unwrap_or_else(|_| fail(&"not UTF-8 text"));
+        let compensation = ImuCalibration::parse(text)
+            .and_then(|c| c.compensation::<f32>())
+            .unwrap_or_else(|e| fail(&e));
+        defmt::info!("calibration loaded: {=usize} bytes", len);
+        compensation
     }
 
     /// SysTick counts since start (monotonic ticks plus the counter's progress in this tick).
@@ -273,14 +326,15 @@ mod app {
 
     /// Navigation: aligns (through `align`), then steps the strapdown mechanization on every
     /// sample and logs the solution. Same semantics as the host harness's `pipeline`.
-    #[task(priority = 2)]
+    #[task(priority = 2, local = [mechanization])]
     async fn navigate(
-        _: navigate::Context,
+        cx: navigate::Context,
         mut samples_rx: Receiver<'static, DataReady, SAMPLE_CAP>,
         mut align_tx: Sender<'static, ImuIncrement<f32>, ALIGN_CAP>,
         mut result_rx: Receiver<'static, AlignOutcome, 1>,
         setup: NavSetup,
     ) {
+        let mechanization = *cx.local.mechanization;
         let NavSetup {
             position,
             n_align,
@@ -303,6 +357,12 @@ mod app {
             };
             counters.samples += 1;
             last_ready_us = t_ready_us;
+            if !sample.flags.usable() || sample.flags.contains(SampleFlags::GAP) {
+                // The two-sample coning/sculling terms must not span a hole in the data.
+                if let Some(nav) = nav.as_mut() {
+                    nav.restart_increments();
+                }
+            }
             if !sample.flags.usable() {
                 counters.flagged += 1;
                 // The first ten, then every thousandth: a failing sensor must not flood the log.
@@ -360,7 +420,7 @@ mod app {
                 };
                 log_alignment(&result);
                 let start = NavState::at_rest(position, result.q_b_n());
-                let n = Strapdown::new(start, MechanizationConfig::default());
+                let n = Strapdown::new(start, mechanization);
                 write_line(&mut out, Solution::from_state(sample.t_us, n.state()));
                 nav = Some(n);
                 aligned = Some(result);

@@ -14,6 +14,7 @@
 //! - [`generate`]: exact synthetic recordings of a stationary body.
 //! - [`pipeline`]: the replay pipeline (the same semantics as the firmware's tasks).
 //! - [`replay`]: a file replayed end to end (open, run, attach the replay counters).
+//! - [`bench`]: the mechanization's host benchmark (`nav bench`).
 //! - [`truth`]: exactly known trajectories and their exact increments (physics tests).
 //!
 //! The `nav` binary (`src/bin/nav.rs`) is the command-line front end.
@@ -22,6 +23,7 @@
 #![allow(rustdoc::broken_intra_doc_links)]
 #![warn(missing_docs)]
 
+pub mod bench;
 pub mod generate;
 pub mod imu_csv;
 pub mod pipeline;

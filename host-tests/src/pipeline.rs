@@ -20,11 +20,11 @@
 //!
 //! The log is [`CSV_HEADER`] then one [`Solution`] row (its `Display`) per line.
 
-use hal_adapters::Imu;
+use hal_adapters::{Imu, SampleFlags};
 use nav_core::output::CSV_HEADER;
 use nav_core::{
-    AlignError, AlignmentResult, ImuIncrement, InputLimits, MechanizationConfig, NavState,
-    Position, Scalar, Solution, StaticAlignment, Strapdown,
+    AlignError, AlignmentResult, ImuCalibration, ImuIncrement, InputLimits, MechanizationConfig,
+    NavState, Position, Scalar, Solution, StaticAlignment, Strapdown,
 };
 use std::fmt;
 use std::io::{self, Write};
@@ -47,6 +47,8 @@ pub struct PipelineConfig {
     pub log_every: u32,
     /// Nominal sampling rate [Hz] (from the recording's header).
     pub rate_hz: f64,
+    /// Sensor calibration applied before the mechanization (default identity).
+    pub calibration: ImuCalibration,
 }
 
 impl PipelineConfig {
@@ -220,6 +222,13 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
     let n_align = config.n_align();
     let position = Position::from_degrees(config.lat_deg, config.lon_deg, config.h_m);
     let limits = InputLimits::<T>::default();
+    let mechanization = MechanizationConfig::<T> {
+        compensation: config
+            .calibration
+            .compensation()
+            .map_err(|e| PipelineError::Config(e.to_string()))?,
+        ..MechanizationConfig::default()
+    };
     let row = |out: &mut W, s: &Solution| writeln!(out, "{s}").map_err(PipelineError::Output);
 
     writeln!(out, "{CSV_HEADER}").map_err(PipelineError::Output)?;
@@ -231,6 +240,12 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
 
     while let Some(s) = source.read_sample().map_err(PipelineError::Source)? {
         samples = samples.saturating_add(1);
+        if !s.flags.usable() || s.flags.contains(SampleFlags::GAP) {
+            // The two-sample coning/sculling terms must not span a hole in the data.
+            if let Phase::Navigating { nav, .. } = &mut phase {
+                nav.restart_increments();
+            }
+        }
         if !s.flags.usable() {
             flagged = flagged.saturating_add(1);
             continue;
@@ -252,10 +267,8 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
                                 samples: acc.samples(),
                                 error,
                             })?;
-                    let nav = Strapdown::new(
-                        NavState::at_rest(position, res.q_b_n()),
-                        MechanizationConfig::default(),
-                    );
+                    let nav =
+                        Strapdown::new(NavState::at_rest(position, res.q_b_n()), mechanization);
                     // The aligned attitude at rest, at the time of the last alignment sample.
                     let sol = Solution::from_state(s.t_us, nav.state());
                     row(&mut out, &sol)?;
@@ -366,6 +379,7 @@ mod tests {
             align_seconds,
             log_every,
             rate_hz: 100.0,
+            calibration: ImuCalibration::default(),
         }
     }
 

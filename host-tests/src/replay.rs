@@ -4,7 +4,7 @@
 use crate::pipeline::{self, PipelineConfig, Report, SourceCounters};
 use crate::recording_io::{Format, ReplaySource, in_file};
 use anyhow::{Result, anyhow};
-use nav_core::Scalar;
+use nav_core::{ImuCalibration, Scalar};
 use std::io::Write;
 use std::path::Path;
 
@@ -21,6 +21,8 @@ pub struct ReplayOptions {
     pub align_seconds: f64,
     /// Navigation steps between logged solutions (>= 1).
     pub log_every: u32,
+    /// Sensor calibration (default identity).
+    pub calibration: ImuCalibration,
 }
 
 impl ReplayOptions {
@@ -33,6 +35,7 @@ impl ReplayOptions {
             align_seconds: self.align_seconds,
             log_every: self.log_every,
             rate_hz,
+            calibration: self.calibration,
         }
     }
 }

@@ -25,6 +25,7 @@ fn options() -> ReplayOptions {
         h_m: s.h_m,
         align_seconds: 5.0,
         log_every: 40,
+        calibration: Default::default(),
     }
 }
 

@@ -16,6 +16,7 @@ fn options(s: &Stationary) -> ReplayOptions {
         h_m: s.h_m,
         align_seconds: 3.0,
         log_every: 25,
+        calibration: Default::default(),
     }
 }
 

@@ -77,6 +77,7 @@ fn lasergyro_replays() {
         h_m: 380.0,
         align_seconds: 60.0,
         log_every: 100,
+        calibration: Default::default(),
     };
     let (fr, log) = common::replay::<f64>(&path, &options);
     let r = fr.report;

@@ -120,10 +120,25 @@ fn firmware_in_qemu_matches_host_replay() {
         s.h_m.to_string(),
     );
 
+    // A non-trivial calibration both sides must load and apply identically.
+    std::fs::write(
+        d.join("imu.cal"),
+        "# test calibration\n\
+         gyro_bias_rad_s = 2e-6 -1e-6 5e-7\n\
+         gyro_scale = 1e-4 -2e-4 0\n\
+         accel_bias_m_s2 = 0.002, -0.001, 0.003\n\
+         accel_misalignment = 1e-4 0 0 -1e-4 0 2e-4\n",
+    )
+    .unwrap();
+
     let started = std::time::Instant::now();
-    let (code, log) = run_firmware(d, &["rec.bin", "fw.csv", &lat, &lon, &h, "10", "40"]);
+    let (code, log) = run_firmware(
+        d,
+        &["rec.bin", "fw.csv", &lat, &lon, &h, "10", "40", "imu.cal"],
+    );
     println!("{log}\nQEMU run: {:.2} s", started.elapsed().as_secs_f64());
     assert_eq!(code, 0, "firmware exit code {code}; log:\n{log}");
+    assert!(log.contains("calibration loaded"), "{log}");
     assert_eq!(field(&log, "missed"), 0, "missed data-ready interrupts");
     assert_eq!(field(&log, "channel overruns"), 0, "channel overruns");
     assert_eq!(field(&log, "summary: samples"), 8000);
@@ -153,6 +168,8 @@ fn firmware_in_qemu_matches_host_replay() {
             "host.csv",
             "--log-every",
             "40",
+            "--calibration",
+            "imu.cal",
         ][..],
         &site,
     ]
@@ -225,6 +242,27 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
     assert_eq!(code, 4, "missing file: {log}");
     let (code, log) = run_firmware(d, &["truncated.bin", "out.csv", "95", "7.5", "150", "1"]);
     assert_eq!(code, 3, "latitude 95 must be refused: {log}");
+    // A calibration with a typo is refused with its line number, before any navigation.
+    std::fs::write(
+        d.join("bad.cal"),
+        "gyro_bias_rad_s = 0 0 0\naccel_scale = 0 0\n",
+    )
+    .unwrap();
+    let (code, log) = run_firmware(
+        d,
+        &[
+            "truncated.bin",
+            "out.csv",
+            "45",
+            "7.5",
+            "150",
+            "1",
+            "40",
+            "bad.cal",
+        ],
+    );
+    assert_eq!(code, 3, "bad calibration: {log}");
+    assert!(log.contains("calibration line 2"), "{log}");
 }
 
 /// A panic and a HardFault end the run with their own exit codes (1, 2) and a logged message.

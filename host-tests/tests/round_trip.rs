@@ -70,6 +70,7 @@ fn options(s: &Stationary) -> ReplayOptions {
         h_m: s.h_m,
         align_seconds: ALIGN_SECONDS,
         log_every: 40,
+        calibration: Default::default(),
     }
 }
 

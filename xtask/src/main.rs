@@ -271,10 +271,15 @@ fn bench(root: &Path) -> Result<()> {
         &output(&mut host_replay(&nav, "f64", "out/bench-f64.csv"))?,
         "speed:",
     )?;
+    let mech = output(Command::new(&nav).arg("bench"))?;
+    let mech_f32 = number_after(&mech, "mechanization f32:")?;
+    let mech_f64 = number_after(&mech, "mechanization f64:")?;
     let (text, data, bss) = size(root)?;
     println!("\n| figure | value |\n|---|---|");
     println!("| guest instructions per navigation step (f32, QEMU icount), max | {max:.0} |");
     println!("| guest instructions per navigation step (f32, QEMU icount), mean | {mean:.0} |");
+    println!("| host mechanization, f32, steps/s (one thread, no I/O) | {mech_f32:.0} |");
+    println!("| host mechanization, f64, steps/s (one thread, no I/O) | {mech_f64:.0} |");
     println!("| host replay, f32, samples/s (one thread, I/O included) | {f32_speed:.0} |");
     println!("| host replay, f64, samples/s (one thread, I/O included) | {f64_speed:.0} |");
     println!("| flash (text + data) [B] | {} |", text + data);
