@@ -6,6 +6,9 @@
 //!   writer.
 //! - [`io`]: byte sources for replays: slices (always), semihosting files (feature
 //!   `semihosting`), std files (feature `std`).
+//! - [`drivers`]: SPI IMU drivers (ADIS16505/ADIS16465, ICM-42688-P) over `embedded-hal` 1.0.
+//! - [`sim`]: simulated IMUs on the bus, answering from a sample source, so the drivers run
+//!   without hardware (in QEMU and on the host).
 //!
 //! `no_std`, no allocation; it does not depend on `nav-core`.
 #![cfg_attr(not(feature = "std"), no_std)]
@@ -14,9 +17,11 @@
 #![allow(rustdoc::broken_intra_doc_links)]
 #![warn(missing_docs)]
 
+pub mod drivers;
 pub mod io;
 pub mod recording;
 pub mod sample;
+pub mod sim;
 
 pub use sample::{ImuSample, Motion, SampleFlags};
 
