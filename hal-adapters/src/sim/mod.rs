@@ -1,0 +1,322 @@
+//! Simulated IMUs on the bus: software [`SpiDevice`]s that answer like an ADIS16505 / ADIS16465
+//! ([`SimAdis16505`]) or an ICM-42688-P ([`SimIcm42688`]) from a stream of samples (any
+//! [`Imu`], typically a [`crate::recording::Replay`]).
+//!
+//! The real drivers run over them unchanged, so the firmware in QEMU exercises the driver code
+//! path (init sequence, burst or FIFO read, checksum, counters, conversion) without hardware.
+//! `no_std`, no allocation, deterministic (integer state and `f32` arithmetic only, no time
+//! source): the host harness running the same simulation and driver gets bit-identical samples.
+//!
+//! Each data read (an ADIS burst, an ICM FIFO read that finds the FIFO empty) takes the next
+//! source sample. The simulated device converts it from body axes to sensor axes with the
+//! transpose of its [`Mounting`] and to register counts (nearest count, clamped to the
+//! register's range), so a driver configured with the same mounting gets the source back within
+//! one count. Recording events become what the device would show:
+//!
+//! | source sample | ADIS16505 | ICM-42688-P |
+//! | --- | --- | --- |
+//! | interval of `k` periods (`dt_s / T` rounded; 2.5 ms) | `DATA_CNTR` advances by `k`: the driver flags `GAP` (`k` 2..=10) or `BAD_INTERVAL`, increments per period = sample / `k` | first packet's timestamp jumps by `k - 1` output periods: same flags, rates = sample / `dt_s` |
+//! | `dt_s <= 0` (`BAD_INTERVAL` in the replay) | `DATA_CNTR` repeated: `STALE` | timestamps repeated: `STALE` |
+//! | a NaN or infinite value (`NON_FINITE`) | [`NonFinite::BadChecksum`] (default): a frame with a wrong checksum, the driver returns [`Error::Checksum`], the next sample shows the lost one as a `GAP`; or [`NonFinite::ZeroFrame`] | the invalid-data marker in all five packets: `NON_FINITE`, zero increments |
+//! | NaN temperature (unknown) | `TEMP_OUT` = 0 (0 deg C) | invalid temperature: NaN |
+//! | value beyond the register range | clamped: the driver flags saturation | clamped to full scale: saturation |
+//! | end of the source | every bus transaction fails with [`SimError::End`] | the same |
+//!
+//! # Firmware use
+//! ```
+//! use hal_adapters::drivers::adis16505::{Adis16505, Config, Model, Range};
+//! use hal_adapters::drivers::Error;
+//! use hal_adapters::recording::Replay;
+//! use hal_adapters::sim::{NoDelay, SimAdis16505, SimError};
+//! # use hal_adapters::recording::{Header, Kind, Record, Writer};
+//! # let mut file = [0u8; 48 + 2 * 40];
+//! # let header = Header { kind: Kind::Increments, rate_hz: 400.0, t0_ns: 0, sample_count: 2 };
+//! # let mut w = Writer::new(&mut file[..], header).unwrap();
+//! # for i in 1..=2u64 {
+//! #     let record = Record { t_ns: i * 2_500_000, gyro: [1e-4, 0.0, 0.0],
+//! #         accel: [0.0, 0.0, -0.0245], temperature_c: 25.0 };
+//! #     w.write_record(&record).unwrap();
+//! # }
+//! # w.finish().unwrap();
+//! # let bytes: &[u8] = &file;
+//!
+//! // init: the recording becomes a device on the bus, the driver initialises it.
+//! let model = Model::Adis16505(Range::Dps500);
+//! let replay = Replay::new(bytes).expect("valid recording");
+//! let mut imu = Adis16505::new(SimAdis16505::new(replay, model), Config::new(model));
+//! imu.init(&mut NoDelay)?;
+//!
+//! // data-ready: timestamp first, then one burst.
+//! let t_ready_us = 2_500; // the board's clock at the edge
+//! match imu.read_sample(t_ready_us) {
+//!     Ok(sample) => { /* try_send(sample) */ }
+//!     Err(Error::Spi(SimError::End)) => { /* the recording is over */ }
+//!     Err(e) if e.is_transient() => { /* counted in imu.health(); wait for the next edge */ }
+//!     Err(e) => panic!("IMU failed: {e}"),
+//! }
+//! // The recording's own time of that sample, if the log should carry it:
+//! let t_recording_us = imu.bus().last_source_sample().map(|s| s.t_us);
+//! assert_eq!(t_recording_us, Some(2_500));
+//! # Ok::<(), Error<SimError<hal_adapters::recording::ReplayError<core::convert::Infallible>>>>(())
+//! ```
+//! The host harness gets the same samples as an [`Imu`] from [`SimulatedImu`].
+
+mod adis16505;
+mod icm42688;
+
+pub use adis16505::{NonFinite, SimAdis16505};
+pub use icm42688::SimIcm42688;
+
+use core::fmt;
+
+use embedded_hal::delay::DelayNs;
+use embedded_hal::spi::{ErrorKind, Operation};
+
+use crate::drivers::adis16505::{self as adis, Adis16505};
+use crate::drivers::icm42688::{self as icm, Icm42688};
+use crate::drivers::{Error, ImuDriver, Mounting};
+use crate::{Imu, ImuSample, Motion};
+
+/// A [`DelayNs`] that returns at once: a simulated device needs no waiting.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoDelay;
+
+impl DelayNs for NoDelay {
+    fn delay_ns(&mut self, _ns: u32) {}
+}
+
+/// Error of a simulated device's bus: the end of its sample source, or the source's error.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SimError<E> {
+    /// The source has no more samples.
+    End,
+    /// The source failed (carried).
+    Source(E),
+}
+
+impl<E: fmt::Debug> embedded_hal::spi::Error for SimError<E> {
+    fn kind(&self) -> ErrorKind {
+        ErrorKind::Other
+    }
+}
+
+impl<E: fmt::Display> fmt::Display for SimError<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SimError::End => write!(f, "end of the simulated device's samples"),
+            SimError::Source(e) => write!(f, "simulated device's source failed: {e}"),
+        }
+    }
+}
+
+/// A simulated device: which source sample it serves.
+pub trait SimulatedBus {
+    /// The source sample behind the latest data read (its `t_us` is the recording's clock).
+    fn last_source_sample(&self) -> Option<&ImuSample>;
+}
+
+/// Consecutive transient driver errors [`SimulatedImu`] skips before it reports one.
+const MAX_CONSECUTIVE_TRANSIENT: u32 = 64;
+
+/// A driver over a simulated device, as an [`Imu`]: the host harness's way to run the exact
+/// sample path of the firmware.
+///
+/// Each [`Imu::read_sample`] is one data-ready: [`ImuDriver::read_sample`], with `t_us` set to
+/// the source sample's `t_us` (the recording's clock, as [`crate::recording::Replay`] gives).
+/// Transient driver errors (a corrupt frame standing for a non-finite sample) are skipped like a
+/// data-ready whose burst was rejected, and counted in the driver's health; the end of the
+/// source is `Ok(None)`.
+pub struct SimulatedImu<D> {
+    driver: D,
+}
+
+impl<D> SimulatedImu<D> {
+    /// Wraps an initialised driver.
+    pub fn new(driver: D) -> Self {
+        SimulatedImu { driver }
+    }
+
+    /// The driver.
+    pub fn driver(&self) -> &D {
+        &self.driver
+    }
+
+    /// The driver, mutably.
+    pub fn driver_mut(&mut self) -> &mut D {
+        &mut self.driver
+    }
+
+    /// Gives the driver back.
+    pub fn into_driver(self) -> D {
+        self.driver
+    }
+}
+
+impl<S: Imu> SimulatedImu<Adis16505<SimAdis16505<S>>> {
+    /// A simulated ADIS16505/ADIS16465 answering from `source`, with the driver configured by
+    /// `config` (the device shares its model and mounting) and initialised.
+    pub fn adis16505(source: S, config: adis::Config) -> Result<Self, Error<SimError<S::Error>>> {
+        let bus = SimAdis16505::new(source, config.model).with_mounting(config.mounting);
+        let mut driver = Adis16505::new(bus, config);
+        driver.init(&mut NoDelay)?;
+        Ok(Self::new(driver))
+    }
+}
+
+impl<S: Imu> SimulatedImu<Icm42688<SimIcm42688<S>>> {
+    /// A simulated ICM-42688-P answering from `source`, with the driver configured by `config`
+    /// (the device shares its mounting) and initialised.
+    pub fn icm42688(source: S, config: icm::Config) -> Result<Self, Error<SimError<S::Error>>> {
+        let bus = SimIcm42688::new(source).with_mounting(config.mounting);
+        let mut driver = Icm42688::new(bus, config);
+        driver.init(&mut NoDelay)?;
+        Ok(Self::new(driver))
+    }
+}
+
+impl<D, E> Imu for SimulatedImu<D>
+where
+    D: ImuDriver<BusError = SimError<E>>,
+    D::Bus: SimulatedBus,
+    E: fmt::Debug,
+{
+    type Error = Error<SimError<E>>;
+
+    fn read_sample(&mut self) -> Result<Option<ImuSample>, Self::Error> {
+        let mut transient = 0;
+        loop {
+            match self.driver.read_sample(0) {
+                Ok(mut sample) => {
+                    if let Some(source) = self.driver.bus().last_source_sample() {
+                        sample.t_us = source.t_us;
+                    }
+                    return Ok(Some(sample));
+                }
+                Err(Error::Spi(SimError::End)) => return Ok(None),
+                Err(e) if e.is_transient() && transient < MAX_CONSECUTIVE_TRANSIENT => {
+                    transient += 1;
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+}
+
+/// Feeds every byte of a transaction's operations, in order, through `clock` (MOSI in, MISO
+/// out). Bytes a `Read` sends are 0x00; a `Transfer`'s shorter side is padded with 0x00 or
+/// dropped.
+fn for_each_byte<E>(
+    operations: &mut [Operation<'_, u8>],
+    mut clock: impl FnMut(u8) -> Result<u8, E>,
+) -> Result<(), E> {
+    for op in operations {
+        match op {
+            Operation::Read(buf) => {
+                for b in buf.iter_mut() {
+                    *b = clock(0x00)?;
+                }
+            }
+            Operation::Write(buf) => {
+                for &b in buf.iter() {
+                    clock(b)?;
+                }
+            }
+            Operation::Transfer(read, write) => {
+                for i in 0..read.len().max(write.len()) {
+                    let miso = clock(write.get(i).copied().unwrap_or(0x00))?;
+                    if let Some(r) = read.get_mut(i) {
+                        *r = miso;
+                    }
+                }
+            }
+            Operation::TransferInPlace(buf) => {
+                for b in buf.iter_mut() {
+                    *b = clock(*b)?;
+                }
+            }
+            Operation::DelayNs(_) => {}
+        }
+    }
+    Ok(())
+}
+
+/// The next source sample, or the bus error that ends or fails the simulation.
+fn next_sample<S: Imu>(source: &mut S) -> Result<ImuSample, SimError<S::Error>> {
+    match source.read_sample() {
+        Ok(Some(sample)) => Ok(sample),
+        Ok(None) => Err(SimError::End),
+        Err(e) => Err(SimError::Source(e)),
+    }
+}
+
+/// Output periods `T` [s] that the sample's interval spans, rounded; 0 for `dt_s <= 0` or NaN.
+fn periods(sample: &ImuSample, period_s: f32) -> u16 {
+    if sample.dt_s > 0.0 {
+        round(sample.dt_s / period_s).clamp(1, i32::from(u16::MAX)) as u16
+    } else {
+        0
+    }
+}
+
+/// `true` if every inertial value of the sample is finite.
+fn is_finite(sample: &ImuSample) -> bool {
+    let (a, b) = match sample.motion {
+        Motion::Increments {
+            delta_theta_ib_b,
+            delta_v_ib_b,
+        } => (delta_theta_ib_b, delta_v_ib_b),
+        Motion::Rates { omega_ib_b, f_ib_b } => (omega_ib_b, f_ib_b),
+    };
+    a.iter().chain(b.iter()).all(|v| v.is_finite())
+}
+
+/// The sample as rates [rad/s], [m/s^2] (increments divided by `dt_s`; zero for `dt_s <= 0`).
+fn rates(sample: &ImuSample) -> ([f32; 3], [f32; 3]) {
+    match sample.motion {
+        Motion::Rates { omega_ib_b, f_ib_b } => (omega_ib_b, f_ib_b),
+        Motion::Increments {
+            delta_theta_ib_b,
+            delta_v_ib_b,
+        } => {
+            if sample.dt_s > 0.0 {
+                let dt = sample.dt_s;
+                (
+                    delta_theta_ib_b.map(|d| d / dt),
+                    delta_v_ib_b.map(|d| d / dt),
+                )
+            } else {
+                ([0.0; 3], [0.0; 3])
+            }
+        }
+    }
+}
+
+/// The sample's increments [rad], [m/s] per output period, over `periods` periods.
+fn increments_per_period(sample: &ImuSample, periods: u16) -> ([f32; 3], [f32; 3]) {
+    let (dtheta, dv) = sample.increments();
+    if periods > 1 {
+        let k = f32::from(periods);
+        (dtheta.map(|d| d / k), dv.map(|d| d / k))
+    } else {
+        (dtheta, dv)
+    }
+}
+
+/// Nearest integer, halves away from zero; saturates; NaN gives 0.
+#[inline]
+fn round(x: f32) -> i32 {
+    if x >= 0.0 {
+        (x + 0.5) as i32
+    } else {
+        (x - 0.5) as i32
+    }
+}
+
+/// Body-axis vector to sensor-axis counts: `round(counts_per_unit * c_s_b^T v)`, clamped to
+/// `[-limit, limit]`.
+fn to_counts(mounting: &Mounting, v_b: [f32; 3], counts_per_unit: f32, limit: i32) -> [i32; 3] {
+    mounting
+        .to_sensor(v_b)
+        .map(|v| round(v * counts_per_unit).clamp(-limit, limit))
+}

@@ -1,0 +1,328 @@
+//! A recording replayed through a simulated device and the real driver comes back within one
+//! register count, with the recording's gaps, bad samples and clipping showing as the driver's
+//! flags.
+
+mod common;
+
+use core::f32::consts::PI;
+
+use hal_adapters::drivers::adis16505::{self, Model, Range};
+use hal_adapters::drivers::icm42688;
+use hal_adapters::drivers::{ImuDriver, Mounting, SignedAxis};
+use hal_adapters::recording::{Kind, Record, Replay};
+use hal_adapters::sim::{NoDelay, NonFinite, SimAdis16505, SimError, SimulatedImu};
+use hal_adapters::{Imu, ImuSample, SampleFlags};
+
+use common::{PERIOD_NS, T0_NS, recording};
+
+const DEG: f32 = PI / 180.0;
+const T_S: f32 = 0.0025;
+/// Records with special contents.
+const GAP_AT: usize = 40; // 3 periods after the previous record
+const NAN_AT: usize = 80;
+const CLIP_AT: usize = 120; // 700 deg/s about z
+const STALE_AT: usize = 160; // same time as the previous record
+const LONG_GAP_AT: usize = 200; // 12 periods
+const N: usize = 240;
+
+/// A recording of a slow coning-like motion at rest-level gravity, with the special records.
+/// `kind` decides whether the records hold increments or rates.
+fn records(kind: Kind) -> Vec<Record> {
+    let mut t_ns = T0_NS;
+    let mut out = Vec::new();
+    for i in 0..N {
+        let periods = match i {
+            GAP_AT => 3,
+            STALE_AT => 0,
+            LONG_GAP_AT => 12,
+            _ => 1,
+        };
+        t_ns += periods * PERIOD_NS;
+        let x = i as f32 * 0.05;
+        // Rates [rad/s] and specific force [m/s^2].
+        let mut omega = [
+            20.0 * DEG * (x).sin(),
+            -15.0 * DEG * (1.3 * x).cos(),
+            5.0 * DEG + 0.001 * x,
+        ];
+        let f = [0.3 * (0.7 * x).sin(), -0.2, -9.80665 + 0.05 * x.cos()];
+        if i == CLIP_AT {
+            omega[2] = 700.0 * DEG;
+        }
+        let dt = periods as f32 * T_S;
+        let (mut gyro, accel) = match kind {
+            Kind::Increments => (omega.map(|w| w * dt), f.map(|a| a * dt)),
+            Kind::Rates => (omega, f),
+        };
+        if i == NAN_AT {
+            gyro[1] = f32::NAN;
+        }
+        out.push(Record {
+            t_ns,
+            gyro,
+            accel,
+            temperature_c: 30.0 + 0.01 * i as f32,
+        });
+    }
+    out
+}
+
+fn replay(bytes: &[u8]) -> Replay<&[u8]> {
+    Replay::new(bytes).unwrap()
+}
+
+fn all<I: Imu>(imu: &mut I) -> Vec<ImuSample> {
+    let mut out = Vec::new();
+    while let Some(s) = imu.read_sample().unwrap() {
+        out.push(s);
+        assert!(out.len() <= N, "the simulation does not end");
+    }
+    out
+}
+
+/// Output periods of an interval.
+fn periods(dt_s: f32) -> f32 {
+    (dt_s / T_S).round()
+}
+
+/// Checks one driver sample against its recording sample: increments (the recording's, scaled
+/// to the interval the driver reports) within half a count per period plus `f32` rounding.
+fn check_increments(got: &ImuSample, want: &ImuSample, lsb: (f32, f32)) {
+    let (g_got, a_got) = got.increments();
+    let (g_want, a_want) = want.increments();
+    let k_got = periods(got.dt_s).max(1.0);
+    let k_want = periods(want.dt_s).max(1.0);
+    let scale = k_got / k_want;
+    for axis in 0..3 {
+        for (got, want, lsb, what) in [
+            (g_got[axis], g_want[axis] * scale, lsb.0, "dtheta"),
+            (a_got[axis], a_want[axis] * scale, lsb.1, "dv"),
+        ] {
+            let tol = 0.5 * lsb * k_got + 2e-6 * want.abs() + 1e-12;
+            assert!(
+                (got - want).abs() <= tol,
+                "seq {} {what}[{axis}]: {got} vs {want} (tol {tol})",
+                got
+            );
+        }
+    }
+}
+
+#[test]
+fn adis16505_increments_round_trip() {
+    let bytes = recording(Kind::Increments, &records(Kind::Increments));
+    let model = Model::Adis16505(Range::Dps500);
+    let mounting = Mounting::FLU_TO_FRD;
+    let config = adis16505::Config::new(model).with_mounting(mounting);
+    let mut sim = SimulatedImu::adis16505(replay(&bytes), config).unwrap();
+    let got = all(&mut sim);
+    let want = all(&mut replay(&bytes));
+    // The NaN record is lost (bad checksum): one sample fewer.
+    assert_eq!(got.len(), want.len() - 1);
+
+    // 32-bit delta LSBs of the -2 model: 720 deg / 2^31, 100 m/s / 2^31.
+    let lsb = (720.0 * DEG / 2f32.powi(31), 100.0 / 2f32.powi(31));
+    let mut got_iter = got.iter();
+    for (i, w) in want.iter().enumerate() {
+        if i == NAN_AT {
+            continue;
+        }
+        let g = got_iter.next().unwrap();
+        assert_eq!(g.t_us, w.t_us, "record {i}");
+        let expected = match i {
+            GAP_AT => SampleFlags::GAP,
+            // The lost record shows as a one-sample gap.
+            _ if i == NAN_AT + 1 => SampleFlags::GAP,
+            CLIP_AT => SampleFlags::GYRO_SATURATED,
+            STALE_AT => SampleFlags::STALE,
+            LONG_GAP_AT => SampleFlags::BAD_INTERVAL,
+            _ => SampleFlags::empty(),
+        };
+        assert_eq!(g.flags, expected, "record {i}");
+        if i != STALE_AT {
+            check_increments(g, w, lsb);
+        }
+        assert!(
+            (g.temperature_c - w.temperature_c).abs() <= 0.05 + 1e-4,
+            "record {i}"
+        );
+    }
+    let h = sim.driver().health();
+    assert_eq!(h.checksum_errors, 1);
+    assert_eq!(h.missed, 2 + 1 + 11);
+    assert_eq!((h.stale, h.gyro_clips), (1, [0, 0, 1]));
+}
+
+#[test]
+fn adis16465_rates_round_trip() {
+    let bytes = recording(Kind::Rates, &records(Kind::Rates));
+    let model = Model::Adis16465(Range::Dps500);
+    let config = adis16505::Config::new(model);
+    // The zero-frame answer to the NaN record this time.
+    let bus = SimAdis16505::new(replay(&bytes), model).with_non_finite(NonFinite::ZeroFrame);
+    let mut driver = adis16505::Adis16505::new(bus, config);
+    driver.init(&mut NoDelay).unwrap();
+    let mut sim = SimulatedImu::new(driver);
+    let got = all(&mut sim);
+    let want = all(&mut replay(&bytes));
+    assert_eq!(got.len(), want.len() - 1);
+    // 16-bit: 40 LSB/(deg/s), 4000 LSB/g.
+    let (g_lsb, a_lsb) = (DEG / 40.0, 9.80665 / 4000.0);
+    let mut got_iter = got.iter();
+    for (i, w) in want.iter().enumerate() {
+        if i == NAN_AT {
+            continue;
+        }
+        let g = got_iter.next().unwrap();
+        let (
+            hal_adapters::Motion::Rates { omega_ib_b, f_ib_b },
+            hal_adapters::Motion::Rates {
+                omega_ib_b: w_omega,
+                f_ib_b: w_f,
+            },
+        ) = (g.motion, w.motion)
+        else {
+            panic!("rates expected");
+        };
+        for axis in 0..3 {
+            assert!(
+                (omega_ib_b[axis] - w_omega[axis]).abs() <= 0.5 * g_lsb + 1e-6,
+                "{i}"
+            );
+            assert!(
+                (f_ib_b[axis] - w_f[axis]).abs() <= 0.5 * a_lsb + 1e-5,
+                "{i}"
+            );
+        }
+        if i == CLIP_AT {
+            assert_eq!(g.flags, SampleFlags::GYRO_SATURATED);
+        }
+    }
+    assert_eq!(sim.driver().health().checksum_errors, 1);
+}
+
+#[test]
+fn icm42688_round_trip() {
+    let bytes = recording(Kind::Increments, &records(Kind::Increments));
+    let mounting =
+        Mounting::from_axes([SignedAxis::PlusY, SignedAxis::MinusX, SignedAxis::PlusZ]).unwrap();
+    let config = icm42688::Config { mounting };
+    let mut sim = SimulatedImu::icm42688(replay(&bytes), config).unwrap();
+    let got = all(&mut sim);
+    let want = all(&mut replay(&bytes));
+    assert_eq!(got.len(), want.len());
+    // 19-bit gyro 131 LSB/(deg/s), 18-bit accel 8192 LSB/g, as increments over one period.
+    let lsb = (DEG / 131.0 * T_S, 9.80665 / 8192.0 * T_S);
+    for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+        assert_eq!(g.t_us, w.t_us);
+        let expected = match i {
+            GAP_AT => SampleFlags::GAP,
+            NAN_AT => SampleFlags::NON_FINITE,
+            STALE_AT => SampleFlags::STALE,
+            LONG_GAP_AT => SampleFlags::BAD_INTERVAL,
+            _ => SampleFlags::empty(),
+        };
+        assert_eq!(g.flags, expected, "record {i}");
+        match i {
+            NAN_AT => assert_eq!(g.increments(), ([0.0; 3], [0.0; 3])),
+            STALE_AT => {}
+            _ => check_increments(g, w, lsb),
+        }
+        assert!(
+            (g.temperature_c - w.temperature_c).abs() <= 0.01,
+            "record {i}"
+        );
+    }
+    let h = sim.driver().health();
+    assert_eq!((h.invalid, h.stale, h.missed), (1, 1, 5 * 2 + 5 * 11));
+}
+
+#[test]
+fn icm42688_clips_beyond_2000_deg_s() {
+    let mut recs = records(Kind::Rates);
+    recs[CLIP_AT].gyro[2] = 2100.0 * DEG;
+    recs[CLIP_AT].accel[0] = -17.0 * 9.80665;
+    let bytes = recording(Kind::Rates, &recs);
+    let mut sim = SimulatedImu::icm42688(replay(&bytes), icm42688::Config::default()).unwrap();
+    let got = all(&mut sim);
+    assert_eq!(
+        got[CLIP_AT].flags,
+        SampleFlags::GYRO_SATURATED | SampleFlags::ACCEL_SATURATED
+    );
+    assert_eq!(sim.driver().health().gyro_clips, [0, 0, 1]);
+    assert_eq!(sim.driver().health().accel_clips, [1, 0, 0]);
+}
+
+#[test]
+fn simulation_is_deterministic() {
+    let bytes = recording(Kind::Increments, &records(Kind::Increments));
+    let bits = |samples: Vec<ImuSample>| -> Vec<(u64, u32, u32, [u32; 6], u16)> {
+        samples
+            .iter()
+            .map(|s| {
+                let (g, a) = s.increments();
+                let v = [g[0], g[1], g[2], a[0], a[1], a[2]].map(f32::to_bits);
+                (s.t_us, s.seq, s.dt_s.to_bits(), v, s.flags.bits())
+            })
+            .collect()
+    };
+    let config = adis16505::Config::new(Model::Adis16505(Range::Dps2000));
+    let a = all(&mut SimulatedImu::adis16505(replay(&bytes), config).unwrap());
+    let b = all(&mut SimulatedImu::adis16505(replay(&bytes), config).unwrap());
+    assert_eq!(bits(a), bits(b));
+    let c = all(&mut SimulatedImu::icm42688(replay(&bytes), Default::default()).unwrap());
+    let d = all(&mut SimulatedImu::icm42688(replay(&bytes), Default::default()).unwrap());
+    assert_eq!(bits(c), bits(d));
+}
+
+#[test]
+fn firmware_style_reads_end_with_the_recording() {
+    // What the data-ready interrupt does: read at each edge with the board's time.
+    let bytes = recording(Kind::Increments, &records(Kind::Increments)[..10]);
+    let model = Model::Adis16505(Range::Dps125);
+    let mut imu = adis16505::Adis16505::new(
+        SimAdis16505::new(replay(&bytes), model),
+        adis16505::Config::new(model),
+    );
+    imu.init(&mut NoDelay).unwrap();
+    let mut t_us = 0;
+    let mut n = 0;
+    loop {
+        t_us += 2500;
+        match imu.read_sample(t_us) {
+            Ok(s) => {
+                assert_eq!(s.t_us, t_us);
+                assert!(s.flags.usable());
+                n += 1;
+            }
+            Err(hal_adapters::drivers::Error::Spi(SimError::End)) => break,
+            Err(e) => panic!("{e}"),
+        }
+    }
+    assert_eq!(n, 10);
+    assert_eq!(imu.bus().bursts(), 10);
+    assert_eq!(ImuDriver::health(&imu).samples, 10);
+}
+
+#[test]
+fn icm_sim_answers_nothing_until_configured() {
+    // A FIFO read before init finds no data: the driver reports NotReady, not garbage.
+    let bytes = recording(Kind::Increments, &records(Kind::Increments)[..3]);
+    let mut imu = icm42688::Icm42688::new(
+        hal_adapters::sim::SimIcm42688::new(replay(&bytes)),
+        icm42688::Config::default(),
+    );
+    assert!(matches!(
+        imu.read_sample(0),
+        Err(hal_adapters::drivers::Error::NotReady)
+    ));
+    imu.init(&mut NoDelay).unwrap();
+    assert!(imu.read_sample(0).unwrap().flags.is_empty());
+    imu.bus_mut().inject_fifo_overflow();
+    assert!(matches!(
+        imu.read_sample(0),
+        Err(hal_adapters::drivers::Error::FifoOverflow)
+    ));
+    // After the flush, the next sample reports the loss.
+    assert_eq!(imu.read_sample(0).unwrap().flags, SampleFlags::GAP);
+}
