@@ -10,6 +10,7 @@ use core::fmt::Write as _;
 use defmt_semihosting as _; // global defmt logger over semihosting stdout
 
 pub mod config;
+pub mod imu;
 
 /// Process exit codes: every failure has its own, so CI and scripts can tell them apart.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]

@@ -27,14 +27,17 @@ mod app {
     use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
     use cortex_m::peripheral::{NVIC, SYST};
     use embedded_io::Write as _;
+    use firmware::imu::{BoardImu, Device};
     use firmware::{
         ExitCode,
         config::{Config, USAGE},
         exit, line,
     };
+    use hal_adapters::drivers::{Error as ImuError, Health};
     use hal_adapters::io::{Buffered, SemihostingFile};
     use hal_adapters::recording::Replay;
-    use hal_adapters::{Imu, ImuSample, SampleFlags};
+    use hal_adapters::sim::SimError;
+    use hal_adapters::{ImuSample, SampleFlags};
     use nav_core::alignment::{AlignError, AlignmentResult, StaticAlignment, samples_for};
     use nav_core::output::CSV_HEADER;
     use nav_core::{
@@ -65,15 +68,22 @@ mod app {
     /// Bytes read from the host per semihosting call.
     const READ_CHUNK: usize = 512;
 
-    type Source = Replay<Buffered<SemihostingFile, READ_CHUNK>>;
+    /// The recording the simulated IMU answers from.
+    type Recording = Replay<Buffered<SemihostingFile, READ_CHUNK>>;
     type AlignOutcome = Result<AlignmentResult<f32>, AlignError>;
 
     /// What the data-ready interrupt hands to navigation.
     pub enum DataReady {
-        /// A sample and its data-ready time on the board's clock [us].
-        Sample { sample: ImuSample, t_ready_us: u64 },
-        /// The recording ended.
-        End,
+        /// A sample, its data-ready time on the board's clock [us], and the guest instructions
+        /// of its bus transaction and of its decoding.
+        Sample {
+            sample: ImuSample,
+            t_ready_us: u64,
+            bus_instr: u32,
+            decode_instr: u32,
+        },
+        /// The recording ended; the driver's final counters.
+        End { health: Health },
         /// The source failed (already logged).
         SourceError,
     }
@@ -98,7 +108,7 @@ mod app {
 
     #[local]
     struct Local {
-        source: Source,
+        imu: BoardImu<Recording>,
         samples_tx: Sender<'static, DataReady, SAMPLE_CAP>,
         /// Mechanization settings (with the loaded calibration) for `navigate`.
         mechanization: MechanizationConfig<f32>,
@@ -109,7 +119,7 @@ mod app {
         // The qemu board has no RCC model: clock set-up would hang, so it is skipped and the
         // core runs at QEMU's fixed 168 MHz.
         Mono::start(cx.core.SYST, SYSCLK_HZ);
-        let config = read_config();
+        let (device, config) = read_config();
         defmt::info!(
             "config: lat {=f64} deg, lon {=f64} deg, h {=f64} m, align {=f64} s, log every {=u32}",
             config.lat_deg,
@@ -143,6 +153,11 @@ mod app {
             header.sample_count,
             header.rate_hz
         );
+        let imu = BoardImu::new(device, source).unwrap_or_else(|e| {
+            defmt::error!("IMU {} init failed: {}", device, e);
+            exit(ExitCode::Recording)
+        });
+        defmt::info!("IMU: {} over a simulated SPI device", device);
         let mut out = SemihostingFile::create(config.out_cstr()).unwrap_or_else(|_| {
             defmt::error!(
                 "cannot create the solution log {=[u8]:a}",
@@ -172,7 +187,7 @@ mod app {
         (
             Shared {},
             Local {
-                source,
+                imu,
                 samples_tx,
                 mechanization,
             },
@@ -187,8 +202,9 @@ mod app {
         }
     }
 
-    /// Parses the semihosting command line; exits with [`ExitCode::Config`] on error.
-    fn read_config() -> Config {
+    /// Parses the semihosting command line (`[--device adis16505|icm42688] ARGS...`); exits with
+    /// [`ExitCode::Config`] on error.
+    fn read_config() -> (Device, Config) {
         let args = semihosting::experimental::env::args::<512>().unwrap_or_else(|_| {
             defmt::error!("no semihosting command line: run through firmware/qemu-run.sh");
             exit(ExitCode::Config)
@@ -202,10 +218,23 @@ mod app {
                 _ => {}
             }
         }
-        Config::parse(words).unwrap_or_else(|e| {
-            defmt::error!("bad arguments ({}); usage: {=str}", e, USAGE);
+        let mut device = Device::Adis16505;
+        if words.peek() == Some(&"--device") {
+            let name = words.nth(1).unwrap_or("");
+            device = Device::parse(name).unwrap_or_else(|| {
+                defmt::error!("unknown device {=str}: adis16505 or icm42688", name);
+                exit(ExitCode::Config)
+            });
+        }
+        let config = Config::parse(words).unwrap_or_else(|e| {
+            defmt::error!(
+                "bad arguments ({}); usage: [--device adis16505|icm42688] {=str}",
+                e,
+                USAGE
+            );
             exit(ExitCode::Config)
-        })
+        });
+        (device, config)
     }
 
     /// Loads the sensor calibration (identity without a file); exits with
@@ -279,18 +308,45 @@ mod app {
         }
     }
 
-    /// IMU data ready: timestamp, read the sample, hand it on. Never blocks.
-    #[task(binds = EXTI0, priority = 4, local = [source, samples_tx, done: bool = false])]
+    /// IMU data ready: timestamp, read one sample through the driver, hand it on. Never blocks.
+    #[task(binds = EXTI0, priority = 4, local = [imu, samples_tx, done: bool = false])]
     fn data_ready(cx: data_ready::Context) {
         let t_ready_us = now_us();
         if *cx.local.done {
             return;
         }
-        let (msg, last) = match cx.local.source.read_sample() {
-            Ok(Some(sample)) => (DataReady::Sample { sample, t_ready_us }, false),
-            Ok(None) => (DataReady::End, true),
-            Err(e) => {
+        let imu = cx.local.imu;
+        let read = imu.read(t_ready_us, systick_counts);
+        let (msg, last) = match read.result {
+            Ok(sample) => (
+                DataReady::Sample {
+                    sample,
+                    t_ready_us,
+                    bus_instr: counts_to_instructions(read.bus_counts) as u32,
+                    decode_instr: counts_to_instructions(read.decode_counts) as u32,
+                },
+                false,
+            ),
+            Err(ImuError::Spi(SimError::End)) => {
+                // The simulated device ends the recording by failing the bus: not a bus error.
+                let mut health = imu.health();
+                health.bus_errors = health.bus_errors.saturating_sub(1);
+                (DataReady::End { health }, true)
+            }
+            Err(ImuError::Spi(SimError::Source(e))) => {
                 defmt::error!("recording: {}", defmt::Display2Format(&e));
+                (DataReady::SourceError, true)
+            }
+            Err(e) if e.is_transient() => {
+                // A corrupt frame: counted in the driver's health, nothing to navigate.
+                let n = imu.health().checksum_errors;
+                if n <= 10 || n % 1000 == 0 {
+                    defmt::warn!("IMU frame rejected: {} ({=u32} so far)", e, n);
+                }
+                return;
+            }
+            Err(e) => {
+                defmt::error!("IMU failed: {}", e);
                 (DataReady::SourceError, true)
             }
         };
@@ -307,12 +363,32 @@ mod app {
         }
     }
 
-    /// Per-step instruction statistics.
+    /// Instruction statistics of a repeated piece of work.
     #[derive(Default)]
     struct StepCost {
         max: u64,
         sum: u64,
         n: u64,
+    }
+
+    impl StepCost {
+        fn add(&mut self, instructions: u64) {
+            self.max = self.max.max(instructions);
+            self.sum += instructions;
+            self.n += 1;
+        }
+
+        fn mean(&self) -> u64 {
+            self.sum.checked_div(self.n).unwrap_or(0)
+        }
+    }
+
+    /// The IMU read's costs and the driver's final counters.
+    #[derive(Default)]
+    struct ImuStats {
+        bus: StepCost,
+        decode: StepCost,
+        health: Health,
     }
 
     /// Counters reported at the end.
@@ -345,15 +421,28 @@ mod app {
         let mut nav: Option<Strapdown<f32>> = None;
         let mut aligned: Option<AlignmentResult<f32>> = None;
         let (mut counters, mut cost) = (Counters::default(), StepCost::default());
+        let mut imu = ImuStats::default();
         let (mut forwarded, mut last_t_us, mut last_ready_us) = (0_u32, 0_u64, 0_u64);
         loop {
             let Ok(msg) = samples_rx.recv().await else {
                 defmt::panic!("sample channel closed");
             };
             let (sample, t_ready_us) = match msg {
-                DataReady::Sample { sample, t_ready_us } => (sample, t_ready_us),
+                DataReady::Sample {
+                    sample,
+                    t_ready_us,
+                    bus_instr,
+                    decode_instr,
+                } => {
+                    imu.bus.add(bus_instr.into());
+                    imu.decode.add(decode_instr.into());
+                    (sample, t_ready_us)
+                }
                 DataReady::SourceError => exit(ExitCode::Recording),
-                DataReady::End => break,
+                DataReady::End { health } => {
+                    imu.health = health;
+                    break;
+                }
             };
             counters.samples += 1;
             last_ready_us = t_ready_us;
@@ -386,9 +475,7 @@ mod app {
                     counters.rejected += 1;
                     continue;
                 }
-                cost.max = cost.max.max(spent);
-                cost.sum += spent;
-                cost.n += 1;
+                cost.add(spent);
                 counters.nav_steps += 1;
                 last_t_us = sample.t_us;
                 if counters.nav_steps % log_every == 0 {
@@ -414,6 +501,7 @@ mod app {
                             n_align,
                             defmt::Display2Format(&e)
                         );
+                        log_imu_costs(&imu);
                         exit(ExitCode::Alignment)
                     }
                     Err(_) => defmt::panic!("alignment result channel closed"),
@@ -440,7 +528,14 @@ mod app {
         if counters.nav_steps % log_every != 0 {
             write_line(&mut out, last);
         }
-        report(&counters, &cost, aligned.as_ref(), &last, last_ready_us);
+        report(
+            &counters,
+            &cost,
+            &imu,
+            aligned.as_ref(),
+            &last,
+            last_ready_us,
+        );
         exit(ExitCode::Success)
     }
 
@@ -488,14 +583,24 @@ mod app {
         );
     }
 
+    fn log_imu_costs(imu: &ImuStats) {
+        defmt::info!(
+            "instructions per IMU read: decode + conversion max {=u64}, mean {=u64}; bus transaction (simulated device included) max {=u64}, mean {=u64}",
+            imu.decode.max,
+            imu.decode.mean(),
+            imu.bus.max,
+            imu.bus.mean()
+        );
+    }
+
     fn report(
         c: &Counters,
         cost: &StepCost,
+        imu: &ImuStats,
         aligned: Option<&AlignmentResult<f32>>,
         last: &Solution,
         last_ready_us: u64,
     ) {
-        let mean = cost.sum.checked_div(cost.n).unwrap_or(0);
         defmt::info!(
             "summary: samples {=u32}, flagged {=u32}, rejected {=u32}, navigated {=u32}, missed {=u32}, channel overruns {=u32}, last data-ready at {=u64} us",
             c.samples,
@@ -509,8 +614,23 @@ mod app {
         defmt::info!(
             "instructions per navigation step: max {=u64}, mean {=u64}",
             cost.max,
-            mean
+            cost.mean()
         );
+        let h = &imu.health;
+        defmt::info!(
+            "IMU driver: samples {=u32}, checksum errors {=u32}, stale {=u32}, device missed {=u32}, bus errors {=u32}, faults {=u32}, FIFO overflows {=u32}, invalid {=u32}, gyro clips {}, accel clips {}",
+            h.samples,
+            h.checksum_errors,
+            h.stale,
+            h.missed,
+            h.bus_errors,
+            h.device_faults,
+            h.fifo_overflows,
+            h.invalid,
+            h.gyro_clips,
+            h.accel_clips
+        );
+        log_imu_costs(imu);
         if let Some(r) = aligned {
             defmt::info!(
                 "alignment: roll {=f32} deg, pitch {=f32} deg, yaw {=f32} deg",

@@ -86,8 +86,9 @@ fn periods(dt_s: f32) -> f32 {
 }
 
 /// Checks one driver sample against its recording sample: increments (the recording's, scaled
-/// to the interval the driver reports) within half a count per period plus `f32` rounding.
-fn check_increments(got: &ImuSample, want: &ImuSample, lsb: (f32, f32)) {
+/// to the interval the driver reports) within `counts` counts per period plus `f32` rounding
+/// (half a count when rounded, one when the device carries its remainder).
+fn check_increments(got: &ImuSample, want: &ImuSample, lsb: (f32, f32), counts: f32) {
     let (g_got, a_got) = got.increments();
     let (g_want, a_want) = want.increments();
     let k_got = periods(got.dt_s).max(1.0);
@@ -98,7 +99,7 @@ fn check_increments(got: &ImuSample, want: &ImuSample, lsb: (f32, f32)) {
             (g_got[axis], g_want[axis] * scale, lsb.0, "dtheta"),
             (a_got[axis], a_want[axis] * scale, lsb.1, "dv"),
         ] {
-            let tol = 0.5 * lsb * k_got + 2e-6 * want.abs() + 1e-12;
+            let tol = counts * lsb * k_got + 2e-6 * want.abs() + 1e-12;
             assert!(
                 (got - want).abs() <= tol,
                 "seq {} {what}[{axis}]: {got} vs {want} (tol {tol})",
@@ -140,7 +141,8 @@ fn adis16505_increments_round_trip() {
         };
         assert_eq!(g.flags, expected, "record {i}");
         if i != STALE_AT {
-            check_increments(g, w, lsb);
+            // Delta outputs carry their rounding remainder: up to one count.
+            check_increments(g, w, lsb, 1.0);
         }
         assert!(
             (g.temperature_c - w.temperature_c).abs() <= 0.05 + 1e-4,
@@ -226,7 +228,7 @@ fn icm42688_round_trip() {
         match i {
             NAN_AT => assert_eq!(g.increments(), ([0.0; 3], [0.0; 3])),
             STALE_AT => {}
-            _ => check_increments(g, w, lsb),
+            _ => check_increments(g, w, lsb, 0.5),
         }
         assert!(
             (g.temperature_c - w.temperature_c).abs() <= 0.01,
@@ -325,4 +327,39 @@ fn icm_sim_answers_nothing_until_configured() {
     ));
     // After the flush, the next sample reports the loss.
     assert_eq!(imu.read_sample(0).unwrap().flags, SampleFlags::GAP);
+}
+
+/// The simulated ADIS16505 carries the rounding remainder of its delta outputs like an
+/// integrating sensor: a constant input of 10.3 counts per sample (about the Earth rate) sums
+/// to within one count after 4000 samples, where plain rounding would lose 0.3 count per sample
+/// (a 3 % bias, 1.2 deg of gyrocompass heading).
+#[test]
+fn adis16505_deltas_carry_their_rounding() {
+    let lsb_rad = 720.0 * DEG / 2f32.powi(31);
+    let dtheta = 10.3 * lsb_rad;
+    let mut t_ns = T0_NS;
+    let recs: Vec<Record> = (0..4000)
+        .map(|_| {
+            t_ns += PERIOD_NS;
+            Record {
+                t_ns,
+                gyro: [dtheta, 0.0, 0.0],
+                accel: [0.0, 0.0, -9.8 * T_S],
+                temperature_c: 25.0,
+            }
+        })
+        .collect();
+    let bytes = recording(Kind::Increments, &recs);
+    let model = Model::Adis16505(Range::Dps500);
+    let mut sim = SimulatedImu::adis16505(replay(&bytes), adis16505::Config::new(model)).unwrap();
+    let mut got = Vec::new();
+    while let Some(s) = sim.read_sample().unwrap() {
+        got.push(s);
+    }
+    assert_eq!(got.len(), 4000);
+    let sum_counts: f64 = got
+        .iter()
+        .map(|s| f64::from(s.increments().0[0]) / f64::from(lsb_rad))
+        .sum();
+    assert!((sum_counts - 4000.0 * 10.3).abs() <= 1.0, "{sum_counts}");
 }

@@ -4,9 +4,27 @@
 use crate::pipeline::{self, PipelineConfig, Report, SourceCounters};
 use crate::recording_io::{Format, ReplaySource, in_file};
 use anyhow::{Result, anyhow};
+use hal_adapters::Imu;
+use hal_adapters::drivers::Mounting;
+use hal_adapters::drivers::adis16505::{self, Model};
+use hal_adapters::drivers::icm42688;
+use hal_adapters::sim::SimulatedImu;
 use nav_core::{ImuCalibration, Scalar};
 use std::io::Write;
 use std::path::Path;
+
+/// What produces the samples: the recording itself, or a simulated IMU answering from it on an
+/// SPI bus, read by the real driver (the firmware's path on the `qemu` board).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum ImuDevice {
+    /// The recording's samples as they are.
+    #[default]
+    Recording,
+    /// The board's ADIS16505 ([`Model::BOARD`]), 32-bit delta bursts.
+    Adis16505,
+    /// A TDK ICM-42688-P, 2 kHz FIFO integrated to 400 Hz.
+    Icm42688,
+}
 
 /// The pipeline settings that do not come from the recording.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,6 +41,8 @@ pub struct ReplayOptions {
     pub log_every: u32,
     /// Sensor calibration (default identity).
     pub calibration: ImuCalibration,
+    /// The sample path (default: the recording as it is).
+    pub device: ImuDevice,
 }
 
 impl ReplayOptions {
@@ -58,16 +78,30 @@ pub fn replay_file<T: Scalar, W: Write>(
     out: W,
 ) -> Result<FileReport> {
     let (mut source, format) = ReplaySource::open(path)?;
-    let rate_hz = source.header().rate_hz;
-    let result = pipeline::run::<T, _, _>(&options.with_rate(rate_hz), &mut source, out);
-    let mut report = match result {
-        Ok(report) => report,
-        Err(pipeline::PipelineError::Output(e)) => {
-            return Err(anyhow!(e).context("writing the log"));
+    let config = options.with_rate(source.header().rate_hz);
+    let stats = match options.device {
+        ImuDevice::Recording => {
+            let report = run_source::<T, _, _>(path, &config, &mut source, out)?;
+            (report, source.stats())
         }
-        Err(e) => return Err(in_file(path, e)),
+        ImuDevice::Adis16505 => {
+            let driver_config = adis16505::Config::new(Model::BOARD);
+            let mut imu = SimulatedImu::adis16505(source, driver_config)
+                .map_err(|e| anyhow!("simulated ADIS16505: {e}"))?;
+            let report = run_source::<T, _, _>(path, &config, &mut imu, out)?;
+            (report, imu.driver().bus().source().stats())
+        }
+        ImuDevice::Icm42688 => {
+            let driver_config = icm42688::Config {
+                mounting: Mounting::IDENTITY,
+            };
+            let mut imu = SimulatedImu::icm42688(source, driver_config)
+                .map_err(|e| anyhow!("simulated ICM-42688-P: {e}"))?;
+            let report = run_source::<T, _, _>(path, &config, &mut imu, out)?;
+            (report, imu.driver().bus().source().stats())
+        }
     };
-    let stats = source.stats();
+    let (mut report, stats) = stats;
     report.source = Some(SourceCounters {
         missed: stats.missed,
         non_finite: stats.non_finite,
@@ -75,7 +109,24 @@ pub fn replay_file<T: Scalar, W: Write>(
     });
     Ok(FileReport {
         format,
-        rate_hz,
+        rate_hz: config.rate_hz,
         report,
     })
+}
+
+/// Runs the pipeline over `source`, naming `path` in its errors.
+fn run_source<T: Scalar, I: Imu, W: Write>(
+    path: &Path,
+    config: &PipelineConfig,
+    source: &mut I,
+    out: W,
+) -> Result<Report>
+where
+    I::Error: std::error::Error + Send + Sync + 'static,
+{
+    match pipeline::run::<T, _, _>(config, source, out) {
+        Ok(report) => Ok(report),
+        Err(pipeline::PipelineError::Output(e)) => Err(anyhow!(e).context("writing the log")),
+        Err(e) => Err(in_file(path, e)),
+    }
 }

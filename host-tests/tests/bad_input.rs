@@ -26,6 +26,7 @@ fn options() -> ReplayOptions {
         align_seconds: 5.0,
         log_every: 40,
         calibration: Default::default(),
+        device: Default::default(),
     }
 }
 

@@ -17,6 +17,7 @@ fn options(s: &Stationary) -> ReplayOptions {
         align_seconds: 3.0,
         log_every: 25,
         calibration: Default::default(),
+        device: Default::default(),
     }
 }
 

@@ -78,6 +78,7 @@ fn lasergyro_replays() {
         align_seconds: 60.0,
         log_every: 100,
         calibration: Default::default(),
+        device: Default::default(),
     };
     let (fr, log) = common::replay::<f64>(&path, &options);
     let r = fr.report;

@@ -139,14 +139,18 @@ fn firmware_in_qemu_matches_host_replay() {
     println!("{log}\nQEMU run: {:.2} s", started.elapsed().as_secs_f64());
     assert_eq!(code, 0, "firmware exit code {code}; log:\n{log}");
     assert!(log.contains("calibration loaded"), "{log}");
+    assert!(
+        log.contains("IMU: Adis16505 over a simulated SPI device"),
+        "{log}"
+    );
     assert_eq!(field(&log, "missed"), 0, "missed data-ready interrupts");
     assert_eq!(field(&log, "channel overruns"), 0, "channel overruns");
-    assert_eq!(field(&log, "summary: samples"), 8000);
-    assert_eq!(
-        field(&log, "flagged"),
-        2,
-        "the NaN and the zero-interval samples"
-    );
+    // The NaN record reaches the driver as a frame with a bad checksum: rejected and counted,
+    // and the next sample shows the gap. The repeated timestamp is a repeated DATA_CNTR: stale.
+    assert_eq!(field(&log, "summary: samples"), 7999);
+    assert_eq!(field(&log, "flagged"), 1, "the stale sample");
+    assert_eq!(field(&log, "checksum errors"), 1, "the NaN record's frame");
+    assert_eq!(field(&log, "bus errors"), 0);
     // Data-ready k (from 1) fires at k * 2.5 ms of SysTick time: exactly 400 Hz under icount.
     assert_eq!(
         field(&log, "last data-ready at"),
@@ -170,6 +174,8 @@ fn firmware_in_qemu_matches_host_replay() {
             "40",
             "--calibration",
             "imu.cal",
+            "--device",
+            "adis16505",
         ][..],
         &site,
     ]
@@ -263,6 +269,42 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
     );
     assert_eq!(code, 3, "bad calibration: {log}");
     assert!(log.contains("calibration line 2"), "{log}");
+}
+
+/// The ICM-42688-P path runs in the firmware too; a consumer gyro's 20-bit resolution
+/// (1/131 deg/s per count over five packets) does not see the Earth rate, so static
+/// gyrocompassing must fail loudly (exit 5) instead of reporting a heading of 0.
+#[test]
+fn firmware_runs_the_icm42688_driver_and_refuses_a_blind_gyrocompass() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let rec = Stationary {
+        seconds: 3.0,
+        ..Stationary::default()
+    }
+    .recording()
+    .unwrap();
+    recording_io::write(&d.join("rec.bin"), &rec).unwrap();
+    let (code, log) = run_firmware(
+        d,
+        &[
+            "--device", "icm42688", "rec.bin", "out.csv", "45", "7.5", "150", "2",
+        ],
+    );
+    assert_eq!(code, 5, "exit code; log:\n{log}");
+    assert!(
+        log.contains("IMU: Icm42688 over a simulated SPI device"),
+        "{log}"
+    );
+    assert!(log.contains("gyrocompassing"), "{log}");
+    assert!(log.contains("instructions per IMU read"), "{log}");
+    let (code, log) = run_firmware(
+        d,
+        &[
+            "--device", "bmi088", "rec.bin", "out.csv", "45", "7.5", "150", "2",
+        ],
+    );
+    assert_eq!(code, 3, "unknown device: {log}");
 }
 
 /// A panic and a HardFault end the run with their own exit codes (1, 2) and a logged message.

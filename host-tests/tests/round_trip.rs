@@ -71,6 +71,7 @@ fn options(s: &Stationary) -> ReplayOptions {
         align_seconds: ALIGN_SECONDS,
         log_every: 40,
         calibration: Default::default(),
+        device: Default::default(),
     }
 }
 

@@ -53,7 +53,9 @@ pub enum AlignError {
     SpecificForceNotGravity,
     /// The mean angular rate exceeds 3x the Earth rate: the base was turning.
     BaseRotating,
-    /// The horizontal Earth rate is too small to gyrocompass (within ~1 deg of a pole).
+    /// The horizontal Earth rate is too small to gyrocompass: within ~1 deg of a pole, or the
+    /// levelled gyros measure less than half of `Omega cos(lat)` (a gyro too coarse or too
+    /// biased to see the Earth's rotation).
     HeadingUnobservable,
 }
 
@@ -65,7 +67,9 @@ impl core::fmt::Display for AlignError {
                 "mean specific force is not gravity (base accelerating?)"
             }
             Self::BaseRotating => "mean angular rate exceeds the Earth rate (base turning?)",
-            Self::HeadingUnobservable => "horizontal Earth rate too small for gyrocompassing",
+            Self::HeadingUnobservable => {
+                "horizontal Earth rate not measurable for gyrocompassing (near a pole, or gyros too coarse or biased)"
+            }
         })
     }
 }
@@ -135,7 +139,16 @@ impl<T: Scalar> StaticAlignment<T> {
         let (sr, cr) = (roll.sin(), roll.cos());
         let (sp, cp) = (pitch.sin(), pitch.cos());
         let w = omega_ib_b;
-        let yaw = (-w.y * cr + w.z * sr).atan2(w.x * cp + w.y * sr * sp + w.z * cr * sp);
+        let (east, north) = (
+            -w.y * cr + w.z * sr,
+            w.x * cp + w.y * sr * sp + w.z * cr * sp,
+        );
+        // The levelled horizontal rate must be the Earth's, Omega cos(lat): half of it or less
+        // means the gyros cannot see it and the heading would be noise or a bias.
+        if (east * east + north * north).sqrt() < T::c(0.5 * earth::OMEGA_IE) * lat.cos() {
+            return Err(AlignError::HeadingUnobservable);
+        }
+        let yaw = east.atan2(north);
         Ok(AlignmentResult {
             roll,
             pitch,
@@ -274,5 +287,16 @@ mod tests {
             feed::<f64>(0.0, 0.0, 0.0, polar, 100).solve(polar, 0.0),
             Err(AlignError::HeadingUnobservable)
         );
+        // A gyro that does not see the Earth rate (consumer MEMS resolution): no heading.
+        let mut blind = StaticAlignment::<f64>::new();
+        let g = earth::normal_gravity(lat, 0.0);
+        for _ in 0..100 {
+            blind.add(&ImuIncrement::new(
+                [0.0; 3],
+                [0.0, 0.0, -g * 0.0025],
+                0.0025,
+            ));
+        }
+        assert_eq!(blind.solve(lat, 0.0), Err(AlignError::HeadingUnobservable));
     }
 }

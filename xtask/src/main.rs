@@ -163,7 +163,7 @@ fn demo(root: &Path) -> Result<()> {
         bail!("the firmware's and the host's solution logs differ (out/solution-*.csv)");
     }
     println!(
-        "host harness (nav replay, f32): identical solution log\n{}",
+        "host harness (nav replay, f32, simulated ADIS16505 + driver): identical solution log\n{}",
         out.trim_end()
     );
     Ok(())
@@ -197,11 +197,27 @@ fn site_args() -> [&'static str; 6] {
     ["--lat", lat, "--lon", lon, "--h", h]
 }
 
+/// `(max, mean)` guest instructions of an IMU sample's decode and conversion, from a firmware
+/// log.
+fn imu_costs(log: &str) -> Result<(f64, f64)> {
+    let at = log
+        .find("decode + conversion")
+        .with_context(|| format!("no IMU read costs in:\n{log}"))?;
+    let part = &log[at..];
+    Ok((number_after(part, "max")?, number_after(part, "mean")?))
+}
+
 /// The firmware in QEMU on the demo recording.
 fn qemu(elf: &Path) -> Command {
+    qemu_with_device(elf, "adis16505")
+}
+
+/// The firmware in QEMU on the demo recording with the simulated `device`.
+fn qemu_with_device(elf: &Path, device: &str) -> Command {
     let mut c = Command::new("bash");
     c.arg("firmware/qemu-run.sh")
         .arg(elf)
+        .args(["--device", device])
         .args(["out/demo.bin", "out/solution-firmware.csv"])
         .args(DEMO_SITE)
         .arg(DEMO_ALIGN_S);
@@ -221,7 +237,7 @@ fn host_replay(nav: &Path, precision: &str, out: &str) -> Command {
         out,
     ])
     .args(site_args())
-    .args(["--precision", precision]);
+    .args(["--precision", precision, "--device", "adis16505"]);
     c
 }
 
@@ -261,8 +277,19 @@ fn number_after(text: &str, key: &str) -> Result<f64> {
 fn bench(root: &Path) -> Result<()> {
     let (nav, elf) = prepare_demo(root)?;
     let log = output(&mut qemu(&elf))?;
-    let max = number_after(&log, "instructions per navigation step: max")?;
-    let mean = number_after(&log, "mean")?;
+    let step = &log[log.find("instructions per navigation step").unwrap_or(0)..];
+    let max = number_after(step, "instructions per navigation step: max")?;
+    let mean = number_after(step, "mean")?;
+    let adis = imu_costs(&log)?;
+    // The ICM-42688-P path: its gyros cannot gyrocompass, so the run ends at the alignment
+    // (exit 5) after logging the driver's costs.
+    let icm_log = {
+        let mut c = qemu_with_device(&elf, "icm42688");
+        eprintln!("$ {}", show(&c));
+        let out = c.output().context("run QEMU")?;
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let icm = imu_costs(&icm_log)?;
     let f32_speed = number_after(
         &output(&mut host_replay(&nav, "f32", "out/bench-f32.csv"))?,
         "speed:",
@@ -278,6 +305,14 @@ fn bench(root: &Path) -> Result<()> {
     println!("\n| figure | value |\n|---|---|");
     println!("| guest instructions per navigation step (f32, QEMU icount), max | {max:.0} |");
     println!("| guest instructions per navigation step (f32, QEMU icount), mean | {mean:.0} |");
+    println!(
+        "| guest instructions per IMU sample, decode + conversion, ADIS16505 (max / mean) | {:.0} / {:.0} |",
+        adis.0, adis.1
+    );
+    println!(
+        "| guest instructions per IMU sample, decode + conversion, ICM-42688-P, 5 FIFO packets (max / mean) | {:.0} / {:.0} |",
+        icm.0, icm.1
+    );
     println!("| host mechanization, f32, steps/s (one thread, no I/O) | {mech_f32:.0} |");
     println!("| host mechanization, f64, steps/s (one thread, no I/O) | {mech_f64:.0} |");
     println!("| host replay, f32, samples/s (one thread, I/O included) | {f32_speed:.0} |");

@@ -4,7 +4,7 @@ use embedded_hal::spi::{ErrorType, Operation, SpiDevice};
 
 use super::{
     SimError, SimulatedBus, for_each_byte, increments_per_period, is_finite, next_sample, periods,
-    rates, round, to_counts,
+    rates, round, to_counts, to_counts_carry,
 };
 use crate::drivers::Mounting;
 use crate::drivers::adis16505::regs;
@@ -61,6 +61,8 @@ pub struct SimAdis16505<S: Imu> {
     burst: [u8; regs::BURST32_LEN],
     rates: Counts,
     deltas: Counts,
+    /// Rounding remainders of the delta outputs [counts], gyro then accelerometer.
+    carry: [[f32; 3]; 2],
     last_sample: Option<ImuSample>,
     bursts: u32,
 }
@@ -89,6 +91,7 @@ impl<S: Imu> SimAdis16505<S> {
                 gyro: (1.0 / model.delta_angle_rad_per_lsb()) as f32,
                 accel: (1.0 / model.delta_velocity_mps_per_lsb()) as f32,
             },
+            carry: [[0.0; 3]; 2],
             last_sample: None,
             bursts: 0,
         };
@@ -139,6 +142,7 @@ impl<S: Imu> SimAdis16505<S> {
         self.regs[usize::from(regs::MSC_CTRL / 2)] = regs::MSC_CTRL_DEFAULT;
         self.regs[usize::from(regs::PROD_ID / 2)] = self.model.prod_id();
         self.pending_read = 0;
+        self.carry = [[0.0; 3]; 2];
     }
 
     fn reg(&self, addr: u8) -> u16 {
@@ -248,8 +252,18 @@ impl<S: Imu> SimAdis16505<S> {
         } else {
             (1.0, i32::from(i16::MAX))
         };
-        let gyro = to_counts(&self.mounting, gyro, counts.gyro * scale, limit);
-        let accel = to_counts(&self.mounting, accel, counts.accel * scale, limit);
+        let (gyro, accel) = if deltas && finite {
+            let [carry_g, carry_a] = &mut self.carry;
+            (
+                to_counts_carry(&self.mounting, gyro, counts.gyro * scale, limit, carry_g),
+                to_counts_carry(&self.mounting, accel, counts.accel * scale, limit, carry_a),
+            )
+        } else {
+            (
+                to_counts(&self.mounting, gyro, counts.gyro * scale, limit),
+                to_counts(&self.mounting, accel, counts.accel * scale, limit),
+            )
+        };
         let temp = if sample.temperature_c.is_finite() {
             round(sample.temperature_c / TEMP_C_PER_LSB).clamp(-32768, 32767)
         } else {

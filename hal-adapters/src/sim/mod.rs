@@ -10,8 +10,9 @@
 //! Each data read (an ADIS burst, an ICM FIFO read that finds the FIFO empty) takes the next
 //! source sample. The simulated device converts it from body axes to sensor axes with the
 //! transpose of its [`Mounting`] and to register counts (nearest count, clamped to the
-//! register's range), so a driver configured with the same mounting gets the source back within
-//! one count. Recording events become what the device would show:
+//! register's range; delta outputs carry the rounding remainder to the next sample, as an
+//! integrating sensor does), so a driver configured with the same mounting gets the source back
+//! within one count. Recording events become what the device would show:
 //!
 //! | source sample | ADIS16505 | ICM-42688-P |
 //! | --- | --- | --- |
@@ -311,6 +312,29 @@ fn round(x: f32) -> i32 {
     } else {
         (x - 0.5) as i32
     }
+}
+
+/// [`to_counts`] for integrated outputs (delta angle, delta velocity): the rounding remainder
+/// is carried to the next sample, as an integrating sensor's accumulator does, so the sum of the
+/// output counts follows the sum of the inputs to within one count instead of drifting by up to
+/// half a count per sample (a constant input, e.g. the Earth rate at rest, would otherwise
+/// become a bias of up to 0.5 LSB per sample).
+fn to_counts_carry(
+    mounting: &Mounting,
+    v_b: [f32; 3],
+    counts_per_unit: f32,
+    limit: i32,
+    carry: &mut [f32; 3],
+) -> [i32; 3] {
+    let v_s = mounting.to_sensor(v_b);
+    let mut out = [0; 3];
+    for ((o, v), c) in out.iter_mut().zip(v_s).zip(carry.iter_mut()) {
+        let x = v * counts_per_unit + *c;
+        *o = round(x).clamp(-limit, limit);
+        // |x - o| <= 0.5 unless clamped; keep the remainder bounded either way.
+        *c = (x - *o as f32).clamp(-1.0, 1.0);
+    }
+    out
 }
 
 /// Body-axis vector to sensor-axis counts: `round(counts_per_unit * c_s_b^T v)`, clamped to

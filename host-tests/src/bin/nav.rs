@@ -7,6 +7,7 @@
 //! nav bench    [--passes 10]
 //! nav replay   --imu FILE --lat DEG --lon DEG --h M --align-seconds S --out FILE
 //!              [--log-every 40] [--precision f32|f64] [--calibration FILE]
+//!              [--device recording|adis16505|icm42688]
 //! ```
 //! Output recordings are binary unless the file name ends in `.csv`. Errors name the file and the
 //! line or byte offset, and exit with status 1.
@@ -16,7 +17,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use host_tests::generate::Stationary;
 use host_tests::pipeline::DEFAULT_LOG_EVERY;
 use host_tests::recording_io;
-use host_tests::replay::{FileReport, ReplayOptions, replay_file};
+use host_tests::replay::{FileReport, ImuDevice, ReplayOptions, replay_file};
 use nav_core::ImuCalibration;
 use std::fs::File;
 use std::io::BufWriter;
@@ -115,6 +116,10 @@ enum Command {
         /// misalignments); identity without it.
         #[arg(long, value_name = "FILE")]
         calibration: Option<PathBuf>,
+        /// The sample path: the recording as it is, or a simulated IMU on an SPI bus read by its
+        /// real driver (the firmware's path on the `qemu` board is `adis16505`).
+        #[arg(long, value_enum, default_value_t = ImuDevice::Recording)]
+        device: ImuDevice,
     },
 }
 
@@ -205,6 +210,7 @@ fn run(cli: Cli) -> Result<()> {
             log_every,
             precision,
             calibration,
+            device,
         } => {
             let calibration = match calibration {
                 None => ImuCalibration::default(),
@@ -222,6 +228,7 @@ fn run(cli: Cli) -> Result<()> {
                 align_seconds,
                 log_every,
                 calibration,
+                device,
             };
             let file = File::create(&out).with_context(|| format!("creating {}", out.display()))?;
             let writer = BufWriter::new(file);

@@ -108,6 +108,10 @@ pub enum Model {
 }
 
 impl Model {
+    /// The part fitted on the navigation board: ADIS16505-2 (+-500 deg/s, +-8 g). The firmware
+    /// and the host harness both simulate it.
+    pub const BOARD: Model = Model::Adis16505(Range::Dps500);
+
     /// `PROD_ID` (the part number in binary: 16505 = 0x4079, 16465 = 0x4051; Linux
     /// `ADIS16475_DATA(16505, ...)`).
     pub const fn prod_id(self) -> u16 {
