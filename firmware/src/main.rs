@@ -340,7 +340,7 @@ mod app {
             Err(e) if e.is_transient() => {
                 // A corrupt frame: counted in the driver's health, nothing to navigate.
                 let n = imu.health().checksum_errors;
-                if n <= 10 || n % 1000 == 0 {
+                if n <= 10 || n.is_multiple_of(1000) {
                     defmt::warn!("IMU frame rejected: {} ({=u32} so far)", e, n);
                 }
                 return;
