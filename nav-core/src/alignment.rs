@@ -127,17 +127,17 @@ impl<T: Scalar> StaticAlignment<T> {
         if omega_mean > T::c(3.0 * earth::OMEGA_IE) {
             return Err(AlignError::BaseRotating);
         }
-        if lat.cos() < T::c(0.02) {
+        if lat.pcos() < T::c(0.02) {
             return Err(AlignError::HeadingUnobservable);
         }
         // Levelling, Groves eq. 5.101 (f = -g at rest).
-        let roll = (-f_ib_b.y).atan2(-f_ib_b.z);
+        let roll = (-f_ib_b.y).patan2(-f_ib_b.z);
         let pitch = f_ib_b
             .x
-            .atan2((f_ib_b.y * f_ib_b.y + f_ib_b.z * f_ib_b.z).sqrt());
+            .patan2((f_ib_b.y * f_ib_b.y + f_ib_b.z * f_ib_b.z).sqrt());
         // Gyrocompassing, Groves eq. 5.103: the levelled gyro vector points north.
-        let (sr, cr) = (roll.sin(), roll.cos());
-        let (sp, cp) = (pitch.sin(), pitch.cos());
+        let (sr, cr) = (roll.psin(), roll.pcos());
+        let (sp, cp) = (pitch.psin(), pitch.pcos());
         let w = omega_ib_b;
         let (east, north) = (
             -w.y * cr + w.z * sr,
@@ -145,10 +145,10 @@ impl<T: Scalar> StaticAlignment<T> {
         );
         // The levelled horizontal rate must be the Earth's, Omega cos(lat): half of it or less
         // means the gyros cannot see it and the heading would be noise or a bias.
-        if (east * east + north * north).sqrt() < T::c(0.5 * earth::OMEGA_IE) * lat.cos() {
+        if (east * east + north * north).sqrt() < T::c(0.5 * earth::OMEGA_IE) * lat.pcos() {
             return Err(AlignError::HeadingUnobservable);
         }
-        let yaw = east.atan2(north);
+        let yaw = east.patan2(north);
         Ok(AlignmentResult {
             roll,
             pitch,
@@ -165,7 +165,7 @@ impl<T: Scalar> StaticAlignment<T> {
 /// `max(1, ceil(seconds * rate_hz))` (a 1e-9 slack absorbs rounding of exact products), so the
 /// firmware and the host harness stop aligning on the same sample.
 pub fn samples_for(seconds: f64, rate_hz: f64) -> u32 {
-    let n = nalgebra::ComplexField::ceil(seconds * rate_hz - 1e-9);
+    let n = libm::ceil(seconds * rate_hz - 1e-9);
     if n.is_finite() && n >= 1.0 {
         n.min(f64::from(u32::MAX)) as u32
     } else {

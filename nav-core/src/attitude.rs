@@ -37,9 +37,9 @@ pub fn rotation_vector_terms<T: Scalar>(a2: T) -> (T, T) {
     } else {
         let a = a2.sqrt();
         let quarter = a * T::c(0.25);
-        let sq = quarter.sin();
+        let sq = quarter.psin();
         // cos(a/2) - 1 = -2 sin^2(a/4)
-        (T::c(-2.0) * sq * sq, (a * T::c(0.5)).sin() / a)
+        (T::c(-2.0) * sq * sq, (a * T::c(0.5)).psin() / a)
     }
 }
 
@@ -53,16 +53,55 @@ pub fn quat_to_f64<T: Scalar>(q: &UnitQuaternion<T>) -> UnitQuaternion<f64> {
     UnitQuaternion::new_unchecked(Quaternion::from(q.quaternion().coords.map(T::to_f64)))
 }
 
-/// Roll, pitch and yaw [rad] of `q_b_n` (yaw in (-pi, pi]).
+/// Roll, pitch and yaw [rad] of `q_b_n` (yaw in (-pi, pi]); Titterton & Weston eq. 3.66 in
+/// quaternion form.
 #[inline]
 pub fn euler<T: Scalar>(q_b_n: &UnitQuaternion<T>) -> (T, T, T) {
-    q_b_n.euler_angles()
+    let (w, x, y, z) = (q_b_n.w, q_b_n.i, q_b_n.j, q_b_n.k);
+    let (one, two) = (T::one(), T::c(2.0));
+    let roll = (two * (w * x + y * z)).patan2(one - two * (x * x + y * y));
+    let sin_pitch = (two * (w * y - z * x)).max(-one).min(one);
+    let yaw = (two * (w * z + x * y)).patan2(one - two * (y * y + z * z));
+    (roll, sin_pitch.pasin(), yaw)
 }
 
-/// `q_b_n` from roll, pitch and yaw [rad].
+/// `q_b_n` from roll, pitch and yaw [rad]: `q = q_z(yaw) q_y(pitch) q_x(roll)`.
 #[inline]
 pub fn from_euler<T: Scalar>(roll: T, pitch: T, yaw: T) -> UnitQuaternion<T> {
-    UnitQuaternion::from_euler_angles(roll, pitch, yaw)
+    let half = T::c(0.5);
+    let (sr, cr) = ((roll * half).psin(), (roll * half).pcos());
+    let (sp, cp) = ((pitch * half).psin(), (pitch * half).pcos());
+    let (sy, cy) = ((yaw * half).psin(), (yaw * half).pcos());
+    UnitQuaternion::new_unchecked(Quaternion::new(
+        cr * cp * cy + sr * sp * sy,
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+    ))
+}
+
+/// The rotation by `angle` [rad] about the z axis (down in a local-level frame).
+#[inline]
+pub fn about_z<T: Scalar>(angle: T) -> UnitQuaternion<T> {
+    let half = angle * T::c(0.5);
+    UnitQuaternion::new_unchecked(Quaternion::new(
+        half.pcos(),
+        T::zero(),
+        T::zero(),
+        half.psin(),
+    ))
+}
+
+/// The rotation by `angle` [rad] about the y axis.
+#[inline]
+pub fn about_y<T: Scalar>(angle: T) -> UnitQuaternion<T> {
+    let half = angle * T::c(0.5);
+    UnitQuaternion::new_unchecked(Quaternion::new(
+        half.pcos(),
+        T::zero(),
+        half.psin(),
+        T::zero(),
+    ))
 }
 
 #[cfg(test)]
@@ -96,6 +135,11 @@ mod tests {
         fn euler_round_trip(r in -3.1..3.1_f64, p in -1.5..1.5_f64, y in -3.1..3.1_f64) {
             let (r2, p2, y2) = euler(&from_euler(r, p, y));
             prop_assert!((r - r2).abs() < 1e-9 && (p - p2).abs() < 1e-9 && (y - y2).abs() < 1e-9);
+            // The same convention as nalgebra's (R = Rz Ry Rx).
+            let q = from_euler(r, p, y);
+            prop_assert!(q.angle_to(&UnitQuaternion::from_euler_angles(r, p, y)) < 1e-12);
+            prop_assert!(about_z(y).angle_to(&UnitQuaternion::from_euler_angles(0.0, 0.0, y)) < 1e-12);
+            prop_assert!(about_y(p).angle_to(&UnitQuaternion::from_euler_angles(0.0, p, 0.0)) < 1e-12);
         }
     }
 }

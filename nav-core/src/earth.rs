@@ -52,8 +52,8 @@ impl<T: Scalar> LocalEarth<T> {
     /// `cos`; the navigation step uses [`LocalEarth::from_sin_lat`] instead).
     #[inline]
     pub fn new(lat: T, h: T) -> Self {
-        let c = lat.cos();
-        Self::from_sin_lat(lat.sin(), c * c, h)
+        let c = lat.pcos();
+        Self::from_sin_lat(lat.psin(), c * c, h)
     }
 
     /// Earth quantities from `sin(lat)`, `cos(lat)^2` [-] and height `h` [m].
@@ -137,7 +137,7 @@ pub fn radii<T: Scalar>(lat: T) -> (T, T) {
 /// (Groves eq. 2.123).
 pub fn omega_ie_n<T: Scalar>(lat: T) -> Vector3<T> {
     let w = T::c(OMEGA_IE);
-    Vector3::new(w * lat.cos(), T::zero(), -w * lat.sin())
+    Vector3::new(w * lat.pcos(), T::zero(), -w * lat.psin())
 }
 
 /// WGS-84 normal gravity magnitude [m/s^2] at geodetic latitude `lat` [rad] and height `h` [m]:
@@ -181,7 +181,7 @@ pub fn gravitation_with<T: Scalar>(r: &Vector3<T>, i: T) -> Vector3<T> {
 /// (Groves eq. 2.112).
 pub fn geodetic_to_ecef(lat: f64, lon: f64, h: f64) -> Vector3<f64> {
     let (s, c) = (libm_sin(lat), libm_cos(lat));
-    let r_e = A_M / nalgebra::ComplexField::sqrt(1.0 - E2 * s * s);
+    let r_e = A_M / libm::sqrt(1.0 - E2 * s * s);
     Vector3::new(
         (r_e + h) * c * libm_cos(lon),
         (r_e + h) * c * libm_sin(lon),
@@ -204,11 +204,11 @@ fn gravity_ecef_with(r_e: &Vector3<f64>, i: f64) -> Vector3<f64> {
 }
 
 fn libm_sin(x: f64) -> f64 {
-    nalgebra::ComplexField::sin(x)
+    libm::sin(x)
 }
 
 fn libm_cos(x: f64) -> f64 {
-    nalgebra::ComplexField::cos(x)
+    libm::cos(x)
 }
 
 #[cfg(test)]

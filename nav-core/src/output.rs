@@ -43,7 +43,7 @@ impl Solution {
             position: state.position,
         };
         let (q_b_ned, v_eb_ned) = wide.ned();
-        let (roll, pitch, yaw) = q_b_ned.euler_angles();
+        let (roll, pitch, yaw) = crate::attitude::euler(&q_b_ned);
         Self {
             t_us,
             lat_ndeg: state.position.lat_ndeg(),

@@ -16,9 +16,9 @@
 //! range +-2.1e9 m).
 
 use crate::Scalar;
-use crate::attitude::rotation_vector_terms;
+use crate::attitude::{about_y, about_z, rotation_vector_terms};
 use fixed::types::{I2F62, I32F32};
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Quaternion, Vector3};
 
 /// Position of the body and orientation of the local-level navigation frame, fixed point.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,9 +53,7 @@ impl Position {
         };
         let lon = if lon.is_finite() { lon } else { 0.0 };
         let wander = if wander.is_finite() { wander } else { 0.0 };
-        let q = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), lon)
-            * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), -(half_pi + lat))
-            * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), wander);
+        let q = about_z(lon) * about_y(-(half_pi + lat)) * about_z(wander);
         let c = q.into_inner().coords;
         Self {
             q_n_e: [c.w, c.x, c.y, c.z].map(I2F62::saturating_from_num),
@@ -181,17 +179,17 @@ fn vertical_row<T: Scalar>(q: &Quaternion<T>) -> Vector3<T> {
 }
 
 fn libm_atan2(y: f64, x: f64) -> f64 {
-    nalgebra::RealField::atan2(y, x)
+    libm::atan2(y, x)
 }
 
 fn libm_hypot(x: f64, y: f64) -> f64 {
-    nalgebra::ComplexField::hypot(x, y)
+    libm::hypot(x, y)
 }
 
 /// Radians to nanodegrees, rounded to nearest.
 fn rad_to_ndeg(a: f64) -> i64 {
     let ndeg = a.to_degrees() * 1e9;
-    nalgebra::ComplexField::round(ndeg) as i64
+    libm::round(ndeg) as i64
 }
 
 #[cfg(test)]

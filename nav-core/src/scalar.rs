@@ -1,4 +1,9 @@
 //! The scalar type the navigation code is generic over: `f32` on the MCU, `f64` on the host.
+//!
+//! Transcendental functions go through [`Scalar::psin`] and friends, which call the `libm` crate
+//! directly: nalgebra's own `sin` & co. go through `num-traits`, whose `std` feature (switched on
+//! by any crate in a host build, e.g. proptest) replaces them with the host C library's, which
+//! can differ by an ulp and would break the firmware/harness bit-identity.
 
 use fixed::traits::{FromFixed, ToFixed};
 use nalgebra::RealField;
@@ -14,6 +19,14 @@ pub trait Scalar: RealField + Copy + ToFixed + FromFixed {
     fn to_f64(self) -> f64;
     /// `true` when the value is neither NaN nor infinite.
     fn finite(self) -> bool;
+    /// `sin` from the `libm` crate: the same bits on every target (see the module docs).
+    fn psin(self) -> Self;
+    /// `cos` from the `libm` crate.
+    fn pcos(self) -> Self;
+    /// `atan2(self, x)` from the `libm` crate.
+    fn patan2(self, x: Self) -> Self;
+    /// `asin` from the `libm` crate.
+    fn pasin(self) -> Self;
     /// Largest squared rotation angle [rad^2] for which the series of
     /// [`crate::attitude::rotation_vector_quat`] (to the 6th power) is exact to this precision:
     /// the first omitted term is `x^8 / 10321920` relative.
@@ -21,6 +34,22 @@ pub trait Scalar: RealField + Copy + ToFixed + FromFixed {
 }
 
 impl Scalar for f32 {
+    #[inline]
+    fn psin(self) -> Self {
+        libm::sinf(self)
+    }
+    #[inline]
+    fn pcos(self) -> Self {
+        libm::cosf(self)
+    }
+    #[inline]
+    fn patan2(self, x: Self) -> Self {
+        libm::atan2f(self, x)
+    }
+    #[inline]
+    fn pasin(self) -> Self {
+        libm::asinf(self)
+    }
     // x = 0.5 rad: 3.8e-10 < 6e-8 (f32 epsilon / 2); covers 2000 deg/s at 400 Hz.
     const ROTATION_SERIES_MAX2: f64 = 0.25;
     #[inline]
@@ -38,6 +67,22 @@ impl Scalar for f32 {
 }
 
 impl Scalar for f64 {
+    #[inline]
+    fn psin(self) -> Self {
+        libm::sin(self)
+    }
+    #[inline]
+    fn pcos(self) -> Self {
+        libm::cos(self)
+    }
+    #[inline]
+    fn patan2(self, x: Self) -> Self {
+        libm::atan2(self, x)
+    }
+    #[inline]
+    fn pasin(self) -> Self {
+        libm::asin(self)
+    }
     // x = 0.05 rad: 3.8e-18 < 1.1e-16.
     const ROTATION_SERIES_MAX2: f64 = 0.0025;
     #[inline]

@@ -30,8 +30,7 @@ impl<T: Scalar> NavState<T> {
     /// NED attitude `q_b_ned` and velocity `v_eb_ned` [m/s]: the navigation-frame values turned
     /// by the wander angle `alpha` about down, `C_n_ned = Rz(alpha)`.
     pub fn ned(&self) -> (UnitQuaternion<T>, Vector3<T>) {
-        let q_n_ned =
-            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), T::c(self.position.wander_f64()));
+        let q_n_ned = attitude::about_z(T::c(self.position.wander_f64()));
         (q_n_ned * self.q_b_n, q_n_ned * self.v_eb_n)
     }
 
