@@ -6,9 +6,13 @@
 //! pair (`nav replay --device ...`), so both navigate bit-identical samples.
 
 use hal_adapters::drivers::adis16505::{self as adis, Adis16505, Model};
+use hal_adapters::drivers::bmi088::{self as bmi, Bmi088};
 use hal_adapters::drivers::icm42688::{self as icm, Icm42688};
 use hal_adapters::drivers::{Error, Health, Mounting};
-use hal_adapters::sim::{NoDelay, SimAdis16505, SimError, SimIcm42688};
+use hal_adapters::sim::{
+    NoDelay, SimAdis16505, SimBmi088, SimBmi088Accel, SimBmi088Gyro, SimError, SimIcm42688,
+    SimulatedBus,
+};
 use hal_adapters::{Imu, ImuSample};
 
 /// Which device sits on the bus.
@@ -19,6 +23,8 @@ pub enum Device {
     Adis16505,
     /// TDK ICM-42688-P (2 kHz FIFO, five packets per 400 Hz increment).
     Icm42688,
+    /// Bosch BMI088 (two chip selects, 400 Hz data registers, rates).
+    Bmi088,
 }
 
 impl Device {
@@ -27,6 +33,7 @@ impl Device {
         match name {
             "adis16505" => Some(Self::Adis16505),
             "icm42688" => Some(Self::Icm42688),
+            "bmi088" => Some(Self::Bmi088),
             _ => None,
         }
     }
@@ -36,18 +43,20 @@ impl Device {
 }
 
 /// The IMU driver over a simulated device fed by `S`.
-pub enum BoardImu<S: Imu> {
+pub enum BoardImu<S: Imu + 'static> {
     /// ADIS16505 driver and device.
     Adis(Adis16505<SimAdis16505<S>>),
     /// ICM-42688-P driver and device.
     Icm(Icm42688<SimIcm42688<S>>),
+    /// BMI088 driver over the two chip selects of one simulated device.
+    Bmi(Bmi088<SimBmi088Gyro<'static, S>, SimBmi088Accel<'static, S>>),
 }
 
 /// A driver error on the simulated bus.
 pub type ImuError<S> = Error<SimError<<S as Imu>::Error>>;
 
 /// One data-ready's read: the sample (or the error) and the guest-instruction split.
-pub struct Read<S: Imu> {
+pub struct Read<S: Imu + 'static> {
     /// The sample, with `t_us` the recording's time of the sample.
     pub result: Result<ImuSample, ImuError<S>>,
     /// SysTick counts of the bus transaction (on QEMU: the simulated device's answer).
@@ -56,9 +65,14 @@ pub struct Read<S: Imu> {
     pub decode_counts: u64,
 }
 
-impl<S: Imu> BoardImu<S> {
+impl<S: Imu + 'static> BoardImu<S> {
     /// The driver for `device` over a simulated device answering from `source`, initialised.
-    pub fn new(device: Device, source: S) -> Result<Self, ImuError<S>> {
+    /// The BMI088's device is shared by its two chip selects and lives in `bmi_slot`.
+    pub fn new(
+        device: Device,
+        source: S,
+        bmi_slot: &'static mut Option<SimBmi088<S>>,
+    ) -> Result<Self, ImuError<S>> {
         let mounting = Mounting::IDENTITY;
         Ok(match device {
             Device::Adis16505 => {
@@ -73,6 +87,17 @@ impl<S: Imu> BoardImu<S> {
                 let mut driver = Icm42688::new(bus, icm::Config { mounting });
                 driver.init(&mut NoDelay)?;
                 Self::Icm(driver)
+            }
+            Device::Bmi088 => {
+                let sim: &'static SimBmi088<S> =
+                    bmi_slot.insert(SimBmi088::new(source).with_mounting(mounting));
+                let config = bmi::Config {
+                    mounting,
+                    ..bmi::Config::default()
+                };
+                let mut driver = Bmi088::new(sim.gyro(), sim.accel(), config);
+                driver.init(&mut NoDelay)?;
+                Self::Bmi(driver)
             }
         })
     }
@@ -98,6 +123,11 @@ impl<S: Imu> BoardImu<S> {
                 }
                 (c1, decoded)
             }
+            Self::Bmi(d) => {
+                let bus = d.read_frames();
+                let c1 = counts();
+                (c1, bus.and_then(|()| d.decode_frames(t_ready_us)))
+            }
         };
         let c2 = counts();
         let result = result.map(|mut s| {
@@ -118,6 +148,7 @@ impl<S: Imu> BoardImu<S> {
         match self {
             Self::Adis(d) => d.health(),
             Self::Icm(d) => d.health(),
+            Self::Bmi(d) => d.health(),
         }
     }
 
@@ -125,6 +156,7 @@ impl<S: Imu> BoardImu<S> {
         match self {
             Self::Adis(d) => d.bus().last_source_sample(),
             Self::Icm(d) => d.bus().last_source_sample(),
+            Self::Bmi(d) => SimulatedBus::last_source_sample(d.bus()),
         }
     }
 }

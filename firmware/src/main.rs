@@ -36,7 +36,7 @@ mod app {
     use hal_adapters::drivers::{Error as ImuError, Health};
     use hal_adapters::io::{Buffered, SemihostingFile};
     use hal_adapters::recording::Replay;
-    use hal_adapters::sim::SimError;
+    use hal_adapters::sim::{SimBmi088, SimError};
     use hal_adapters::{ImuSample, SampleFlags};
     use nav_core::alignment::{AlignError, AlignmentResult, StaticAlignment, samples_for};
     use nav_core::output::CSV_HEADER;
@@ -114,7 +114,7 @@ mod app {
         mechanization: MechanizationConfig<f32>,
     }
 
-    #[init]
+    #[init(local = [bmi_sim: Option<SimBmi088<Recording>> = None])]
     fn init(cx: init::Context) -> (Shared, Local) {
         // The qemu board has no RCC model: clock set-up would hang, so it is skipped and the
         // core runs at QEMU's fixed 168 MHz.
@@ -153,7 +153,7 @@ mod app {
             header.sample_count,
             header.rate_hz
         );
-        let imu = BoardImu::new(device, source).unwrap_or_else(|e| {
+        let imu = BoardImu::new(device, source, cx.local.bmi_sim).unwrap_or_else(|e| {
             defmt::error!("IMU {} init failed: {}", device, e);
             exit(ExitCode::Recording)
         });
@@ -202,7 +202,7 @@ mod app {
         }
     }
 
-    /// Parses the semihosting command line (`[--device adis16505|icm42688] ARGS...`); exits with
+    /// Parses the semihosting command line (`[--device adis16505|icm42688|bmi088] ARGS...`); exits with
     /// [`ExitCode::Config`] on error.
     fn read_config() -> (Device, Config) {
         let args = semihosting::experimental::env::args::<512>().unwrap_or_else(|_| {
@@ -222,13 +222,13 @@ mod app {
         if words.peek() == Some(&"--device") {
             let name = words.nth(1).unwrap_or("");
             device = Device::parse(name).unwrap_or_else(|| {
-                defmt::error!("unknown device {=str}: adis16505 or icm42688", name);
+                defmt::error!("unknown device {=str}: adis16505, icm42688 or bmi088", name);
                 exit(ExitCode::Config)
             });
         }
         let config = Config::parse(words).unwrap_or_else(|e| {
             defmt::error!(
-                "bad arguments ({}); usage: [--device adis16505|icm42688] {=str}",
+                "bad arguments ({}); usage: [--device adis16505|icm42688|bmi088] {=str}",
                 e,
                 USAGE
             );

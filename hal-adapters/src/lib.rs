@@ -6,7 +6,8 @@
 //!   writer.
 //! - [`io`]: byte sources for replays: slices (always), semihosting files (feature
 //!   `semihosting`), std files (feature `std`).
-//! - [`drivers`]: SPI IMU drivers (ADIS16505/ADIS16465, ICM-42688-P) over `embedded-hal` 1.0.
+//! - [`drivers`]: SPI IMU drivers (ADIS16505/ADIS16465, ICM-42688-P, BMI088) over
+//!   `embedded-hal` 1.0.
 //! - [`sim`]: simulated IMUs on the bus, answering from a sample source, so the drivers run
 //!   without hardware (in QEMU and on the host).
 //!

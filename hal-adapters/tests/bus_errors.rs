@@ -4,6 +4,7 @@ use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
 use embedded_hal_mock::eh1::delay::NoopDelay;
 use hal_adapters::drivers::Error;
 use hal_adapters::drivers::adis16505::{Adis16505, Config, Model, Range};
+use hal_adapters::drivers::bmi088::{self, Bmi088};
 use hal_adapters::drivers::icm42688::{self, Icm42688};
 
 /// Answers with zeros for `ok` transactions, then fails every one.
@@ -86,6 +87,46 @@ fn icm_bus_errors_are_reported_and_counted() {
         imu.init(&mut NoopDelay::new()),
         Err(Error::WrongId { found: 0, .. })
     ));
+}
+
+#[test]
+fn bmi088_bus_errors_on_either_chip_select() {
+    // The gyro fails at once.
+    let mut imu = Bmi088::new(
+        FailingSpi::failing_after(0),
+        FailingSpi::failing_after(100),
+        bmi088::Config::default(),
+    );
+    assert_eq!(
+        imu.init(&mut NoopDelay::new()),
+        Err(Error::Spi(ErrorKind::ChipSelectFault))
+    );
+    assert_eq!(
+        imu.read_sample(0),
+        Err(Error::Spi(ErrorKind::ChipSelectFault))
+    );
+    assert_eq!(imu.health().bus_errors, 2);
+
+    // A gyro answering zeros is a wrong ID, not a bus error; then the data read fails on the
+    // accelerometer's chip select after the gyro's succeeded.
+    let mut imu = Bmi088::new(
+        FailingSpi::failing_after(100),
+        FailingSpi::failing_after(0),
+        bmi088::Config::default(),
+    );
+    assert_eq!(
+        imu.init(&mut NoopDelay::new()),
+        Err(Error::WrongId {
+            expected: 0x0F,
+            found: 0
+        })
+    );
+    assert_eq!(
+        imu.read_sample(0),
+        Err(Error::Spi(ErrorKind::ChipSelectFault))
+    );
+    assert_eq!(imu.health().bus_errors, 1);
+    assert_eq!(imu.health().samples, 0);
 }
 
 #[test]

@@ -5,6 +5,9 @@ use embedded_hal::spi::{ErrorType, Operation, SpiDevice};
 use embedded_hal_mock::eh1::delay::NoopDelay;
 use hal_adapters::ImuSample;
 use hal_adapters::drivers::adis16505::{self, Adis16505, Model, Range, checksum, decode_burst};
+use hal_adapters::drivers::bmi088::{
+    self, AccelRange, Bmi088, GyroRange, decode_accel, decode_gyro, temperature_c,
+};
 use hal_adapters::drivers::icm42688::{self, Icm42688, decode_packet, raw20};
 use proptest::prelude::*;
 
@@ -82,8 +85,49 @@ fn adis_configs() -> impl Strategy<Value = adis16505::Config> {
     })
 }
 
+fn bmi088_configs() -> impl Strategy<Value = bmi088::Config> {
+    (0u8..8, 0u8..4).prop_map(|(g, a)| bmi088::Config {
+        gyro_range: GyroRange::from_code(g),
+        accel_range: AccelRange::from_code(a),
+        ..Default::default()
+    })
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn bmi088_driver_survives_any_bytes(
+        config in bmi088_configs(),
+        gyro in proptest::collection::vec(any::<u8>(), 0..200),
+        accel in proptest::collection::vec(any::<u8>(), 0..400),
+    ) {
+        let mut imu = Bmi088::new(NoiseSpi::new(gyro), NoiseSpi::new(accel), config);
+        let _ = imu.init(&mut NoopDelay::new());
+        for t in 0..16 {
+            match imu.read_sample(t) {
+                Ok(s) => check(&s),
+                Err(e) => prop_assert!(e.is_transient(), "{e}"),
+            }
+        }
+    }
+
+    #[test]
+    fn bmi088_decoders_are_total_and_finite(
+        gyro in proptest::array::uniform6(any::<u8>()),
+        accel in proptest::collection::vec(any::<u8>(), 18),
+    ) {
+        let mut frame = [0u8; 18];
+        frame.copy_from_slice(&accel);
+        let a = decode_accel(&frame);
+        prop_assert!(a.sensortime <= 0xFF_FFFF);
+        prop_assert!((-1024..=1023).contains(&a.temp));
+        let t = temperature_c(a.temp);
+        prop_assert!(t.is_finite() || a.temp == -1024);
+        for v in decode_gyro(&gyro).into_iter().chain(a.accel) {
+            prop_assert!((-32768..=32767).contains(&v));
+        }
+    }
 
     #[test]
     fn adis_driver_survives_any_bytes(

@@ -11,7 +11,7 @@ use hal_adapters::drivers::icm42688::{Config, Icm42688};
 use hal_adapters::drivers::{Error, Mounting};
 use hal_adapters::{ImuSample, Motion, SampleFlags};
 
-use common::assert_close;
+use common::{assert_close, register_read, register_write};
 
 // Bank 0 (PX4 InvenSense_ICM42688P_registers.hpp, Betaflight accgyro_spi_icm426xx.c).
 const DEVICE_CONFIG: u8 = 0x11;
@@ -32,7 +32,6 @@ const INT_CONFIG1: u8 = 0x64;
 const INT_SOURCE0: u8 = 0x65;
 const WHO_AM_I: u8 = 0x75;
 const REG_BANK_SEL: u8 = 0x76;
-const READ: u8 = 0x80;
 
 /// 20-bit scales: 131 LSB/(deg/s) x 2, 8192 LSB/g x 4; packet period 0.5 ms.
 const GYRO_RAD_S_PER_LSB: f32 = PI / 180.0 / 262.0;
@@ -40,20 +39,11 @@ const ACCEL_MPS2_PER_LSB: f32 = 9.806_65 / 32768.0;
 const PACKET_S: f32 = 0.0005;
 
 fn write(reg: u8, value: u8) -> Vec<Spi<u8>> {
-    vec![
-        Spi::transaction_start(),
-        Spi::write_vec(vec![reg, value]),
-        Spi::transaction_end(),
-    ]
+    register_write(reg, value)
 }
 
 fn read(reg: u8, value: u8) -> Vec<Spi<u8>> {
-    vec![
-        Spi::transaction_start(),
-        Spi::write_vec(vec![reg | READ]),
-        Spi::read_vec(vec![value]),
-        Spi::transaction_end(),
-    ]
+    register_read(reg, vec![value])
 }
 
 /// One FIFO read: INT_STATUS, FIFO_COUNT (big-endian) and packet bytes.
@@ -63,12 +53,7 @@ fn fifo_read(int_status: u8, count: u16, packets: &[[u8; 20]]) -> Vec<Spi<u8>> {
     for p in packets {
         bytes.extend_from_slice(p);
     }
-    vec![
-        Spi::transaction_start(),
-        Spi::write_vec(vec![INT_STATUS | READ]),
-        Spi::read_vec(bytes),
-        Spi::transaction_end(),
-    ]
+    register_read(INT_STATUS, bytes)
 }
 
 /// A 20-byte high-resolution packet: header 0x78, accel and gyro 20-bit, temperature,

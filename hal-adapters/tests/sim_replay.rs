@@ -363,3 +363,111 @@ fn adis16505_deltas_carry_their_rounding() {
         .sum();
     assert!((sum_counts - 4000.0 * 10.3).abs() <= 1.0, "{sum_counts}");
 }
+
+/// The BMI088's rates (gyro and accelerometer on their two chip selects, one source) come
+/// back within half a count, with the recording's events as flags.
+#[test]
+fn bmi088_round_trip() {
+    use hal_adapters::drivers::bmi088::{self, AccelRange, GyroRange};
+    use hal_adapters::sim::SimBmi088;
+
+    for kind in [Kind::Rates, Kind::Increments] {
+        let bytes = recording(kind, &records(kind));
+        let mounting =
+            Mounting::from_axes([SignedAxis::PlusY, SignedAxis::MinusX, SignedAxis::PlusZ])
+                .unwrap();
+        let config = bmi088::Config {
+            gyro_range: GyroRange::Dps500,
+            accel_range: AccelRange::G3,
+            mounting,
+        };
+        let device = SimBmi088::new(replay(&bytes));
+        let mut sim = SimulatedImu::bmi088(&device, config).unwrap();
+        let got = all(&mut sim);
+        let want = all(&mut replay(&bytes));
+        assert_eq!(got.len(), want.len());
+        // 65.536 LSB/(deg/s) at +-500 deg/s, 10922.67 LSB/g at +-3 g.
+        let (g_lsb, a_lsb) = (DEG * 500.0 / 32768.0, 9.80665 * 3.0 / 32768.0);
+        for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+            assert_eq!(g.t_us, w.t_us, "record {i}");
+            let expected = match i {
+                GAP_AT => SampleFlags::GAP,
+                // A non-finite record: the device holds its data and sensor time; the next
+                // sample shows the time lost.
+                NAN_AT | STALE_AT => SampleFlags::STALE,
+                _ if i == NAN_AT + 1 => SampleFlags::GAP,
+                CLIP_AT => SampleFlags::GYRO_SATURATED,
+                LONG_GAP_AT => SampleFlags::BAD_INTERVAL,
+                _ => SampleFlags::empty(),
+            };
+            assert_eq!(g.flags, expected, "{kind:?} record {i}");
+            if matches!(i, NAN_AT | STALE_AT | CLIP_AT) {
+                continue;
+            }
+            let (hal_adapters::Motion::Rates { omega_ib_b, f_ib_b }, Some((w_omega, w_f))) =
+                (g.motion, rates_of(w))
+            else {
+                panic!("rates expected");
+            };
+            for axis in 0..3 {
+                let (dg, da) = (
+                    (omega_ib_b[axis] - w_omega[axis]).abs(),
+                    (f_ib_b[axis] - w_f[axis]).abs(),
+                );
+                assert!(dg <= 0.5 * g_lsb + 1e-6, "{kind:?} {i} omega[{axis}] {dg}");
+                assert!(da <= 0.5 * a_lsb + 1e-5, "{kind:?} {i} f[{axis}] {da}");
+            }
+            assert!(
+                (g.temperature_c - w.temperature_c).abs() <= 0.0625 + 1e-4,
+                "record {i}"
+            );
+        }
+        let h = sim.driver().health();
+        assert_eq!((h.stale, h.missed), (2, 2 + 1 + 11));
+        assert_eq!(h.gyro_clips, [0, 0, 1]);
+        assert_eq!(device.samples_served(), N as u32);
+    }
+}
+
+/// A recording sample as rates [rad/s], [m/s^2].
+fn rates_of(s: &ImuSample) -> Option<([f32; 3], [f32; 3])> {
+    match s.motion {
+        hal_adapters::Motion::Rates { omega_ib_b, f_ib_b } => Some((omega_ib_b, f_ib_b)),
+        hal_adapters::Motion::Increments {
+            delta_theta_ib_b,
+            delta_v_ib_b,
+        } => (s.dt_s > 0.0).then(|| {
+            (
+                delta_theta_ib_b.map(|d| d / s.dt_s),
+                delta_v_ib_b.map(|d| d / s.dt_s),
+            )
+        }),
+    }
+}
+
+/// The simulated accelerometer answers in I2C mode (0xFF) until a chip-select edge, then with
+/// a dummy byte before each read.
+#[test]
+fn bmi088_sim_accelerometer_needs_the_switch_to_spi() {
+    use embedded_hal::spi::{Operation, SpiDevice};
+    use hal_adapters::sim::SimBmi088;
+
+    let bytes = recording(Kind::Increments, &records(Kind::Increments)[..2]);
+    let device = SimBmi088::new(replay(&bytes));
+    let mut accel = device.accel();
+    let mut read_id = || {
+        let mut buf = [0u8; 2];
+        accel
+            .transaction(&mut [Operation::Write(&[0x80]), Operation::Read(&mut buf)])
+            .unwrap();
+        buf[1]
+    };
+    assert_eq!(read_id(), 0xFF);
+    assert_eq!(read_id(), 0x1E);
+    // No data before both sensors are switched on.
+    let mut gyro = device.gyro();
+    let mut rate = [0u8; 6];
+    gyro.transaction(&mut [Operation::Write(&[0x82]), Operation::Read(&mut rate)])
+        .unwrap();
+    assert_eq!(device.samples_served(), 0);
+}

@@ -7,8 +7,8 @@ use anyhow::{Result, anyhow};
 use hal_adapters::Imu;
 use hal_adapters::drivers::Mounting;
 use hal_adapters::drivers::adis16505::{self, Model};
-use hal_adapters::drivers::icm42688;
-use hal_adapters::sim::SimulatedImu;
+use hal_adapters::drivers::{bmi088, icm42688};
+use hal_adapters::sim::{SimBmi088, SimulatedImu};
 use nav_core::{ImuCalibration, Scalar};
 use std::io::Write;
 use std::path::Path;
@@ -24,6 +24,8 @@ pub enum ImuDevice {
     Adis16505,
     /// A TDK ICM-42688-P, 2 kHz FIFO integrated to 400 Hz.
     Icm42688,
+    /// A Bosch BMI088, 400 Hz data registers (rates), two chip selects.
+    Bmi088,
 }
 
 /// The pipeline settings that do not come from the recording.
@@ -99,6 +101,13 @@ pub fn replay_file<T: Scalar, W: Write>(
                 .map_err(|e| anyhow!("simulated ICM-42688-P: {e}"))?;
             let report = run_source::<T, _, _>(path, &config, &mut imu, out)?;
             (report, imu.driver().bus().source().stats())
+        }
+        ImuDevice::Bmi088 => {
+            let device = SimBmi088::new(source);
+            let mut imu = SimulatedImu::bmi088(&device, bmi088::Config::default())
+                .map_err(|e| anyhow!("simulated BMI088: {e}"))?;
+            let report = run_source::<T, _, _>(path, &config, &mut imu, out)?;
+            (report, device.into_source().stats())
         }
     };
     let (mut report, stats) = stats;

@@ -271,11 +271,11 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
     assert!(log.contains("calibration line 2"), "{log}");
 }
 
-/// The ICM-42688-P path runs in the firmware too; a consumer gyro's 20-bit resolution
-/// (1/131 deg/s per count over five packets) does not see the Earth rate, so static
-/// gyrocompassing must fail loudly (exit 5) instead of reporting a heading of 0.
+/// The ICM-42688-P and BMI088 paths run in the firmware too; a consumer gyro's resolution
+/// (ICM: 1/131 deg/s per count over five packets; BMI088: 1/16.4 deg/s) does not see the Earth
+/// rate, so static gyrocompassing must fail loudly (exit 5) instead of reporting a heading of 0.
 #[test]
-fn firmware_runs_the_icm42688_driver_and_refuses_a_blind_gyrocompass() {
+fn firmware_runs_the_mems_drivers_and_refuses_a_blind_gyrocompass() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let rec = Stationary {
@@ -285,23 +285,25 @@ fn firmware_runs_the_icm42688_driver_and_refuses_a_blind_gyrocompass() {
     .recording()
     .unwrap();
     recording_io::write(&d.join("rec.bin"), &rec).unwrap();
+    for (device, name) in [("icm42688", "Icm42688"), ("bmi088", "Bmi088")] {
+        let (code, log) = run_firmware(
+            d,
+            &[
+                "--device", device, "rec.bin", "out.csv", "45", "7.5", "150", "2",
+            ],
+        );
+        assert_eq!(code, 5, "{device}: exit code; log:\n{log}");
+        assert!(
+            log.contains(&format!("IMU: {name} over a simulated SPI device")),
+            "{log}"
+        );
+        assert!(log.contains("gyrocompassing"), "{log}");
+        assert!(log.contains("instructions per IMU read"), "{log}");
+    }
     let (code, log) = run_firmware(
         d,
         &[
-            "--device", "icm42688", "rec.bin", "out.csv", "45", "7.5", "150", "2",
-        ],
-    );
-    assert_eq!(code, 5, "exit code; log:\n{log}");
-    assert!(
-        log.contains("IMU: Icm42688 over a simulated SPI device"),
-        "{log}"
-    );
-    assert!(log.contains("gyrocompassing"), "{log}");
-    assert!(log.contains("instructions per IMU read"), "{log}");
-    let (code, log) = run_firmware(
-        d,
-        &[
-            "--device", "bmi088", "rec.bin", "out.csv", "45", "7.5", "150", "2",
+            "--device", "mpu6050", "rec.bin", "out.csv", "45", "7.5", "150", "2",
         ],
     );
     assert_eq!(code, 3, "unknown device: {log}");

@@ -197,6 +197,16 @@ fn site_args() -> [&'static str; 6] {
     ["--lat", lat, "--lon", lon, "--h", h]
 }
 
+/// `(max, mean)` guest instructions of an IMU sample's decode and conversion with the simulated
+/// `device` on the demo recording (the run's exit status does not matter: the costs are logged
+/// even when the alignment fails).
+fn device_costs(elf: &Path, device: &str) -> Result<(f64, f64)> {
+    let mut c = qemu_with_device(elf, device);
+    eprintln!("$ {}", show(&c));
+    let out = c.output().context("run QEMU")?;
+    imu_costs(&String::from_utf8_lossy(&out.stdout))
+}
+
 /// `(max, mean)` guest instructions of an IMU sample's decode and conversion, from a firmware
 /// log.
 fn imu_costs(log: &str) -> Result<(f64, f64)> {
@@ -281,15 +291,10 @@ fn bench(root: &Path) -> Result<()> {
     let max = number_after(step, "instructions per navigation step: max")?;
     let mean = number_after(step, "mean")?;
     let adis = imu_costs(&log)?;
-    // The ICM-42688-P path: its gyros cannot gyrocompass, so the run ends at the alignment
-    // (exit 5) after logging the driver's costs.
-    let icm_log = {
-        let mut c = qemu_with_device(&elf, "icm42688");
-        eprintln!("$ {}", show(&c));
-        let out = c.output().context("run QEMU")?;
-        String::from_utf8_lossy(&out.stdout).into_owned()
-    };
-    let icm = imu_costs(&icm_log)?;
+    // The ICM-42688-P and BMI088 paths: their gyros cannot gyrocompass, so the runs end at the
+    // alignment (exit 5) after logging the driver's costs.
+    let icm = device_costs(&elf, "icm42688")?;
+    let bmi = device_costs(&elf, "bmi088")?;
     let f32_speed = number_after(
         &output(&mut host_replay(&nav, "f32", "out/bench-f32.csv"))?,
         "speed:",
@@ -312,6 +317,10 @@ fn bench(root: &Path) -> Result<()> {
     println!(
         "| guest instructions per IMU sample, decode + conversion, ICM-42688-P, 5 FIFO packets (max / mean) | {:.0} / {:.0} |",
         icm.0, icm.1
+    );
+    println!(
+        "| guest instructions per IMU sample, decode + conversion, BMI088, gyro + accel frames (max / mean) | {:.0} / {:.0} |",
+        bmi.0, bmi.1
     );
     println!("| host mechanization, f32, steps/s (one thread, no I/O) | {mech_f32:.0} |");
     println!("| host mechanization, f64, steps/s (one thread, no I/O) | {mech_f64:.0} |");

@@ -4,6 +4,8 @@
 //!   reads with checksum, 400 Hz increments (ADIS16505) or rates (ADIS16465).
 //! - [`icm42688`]: TDK InvenSense ICM-42688-P (consumer MEMS IMU), 2 kHz 20-bit FIFO packets
 //!   integrated into 400 Hz increments.
+//! - [`bmi088`]: Bosch BMI088 (consumer MEMS IMU), gyro and accelerometer on two chip selects,
+//!   native 400 Hz rates.
 //!
 //! # Common shape
 //! A driver owns its `SpiDevice` (chip select and its timing belong to it; `release()` hands it
@@ -12,10 +14,12 @@
 //! [`crate::ImuSample`] in body axes forward-right-down (FRD) and SI units, after only the
 //! datasheet scaling and the nominal [`Mounting`] rotation (calibration belongs in `nav-core`),
 //! with data-quality [`crate::SampleFlags`] and [`Health`] counters. Hard failures are
-//! [`Error`]s. Both drivers implement [`ImuDriver`].
+//! [`Error`]s. All drivers implement [`ImuDriver`]; the BMI088 owns two `SpiDevice`s (one per
+//! chip select), so its [`ImuDriver::Bus`] is the pair `(gyro, accel)`.
 //!
 //! Each `read_sample` is split into a bus half (`read_burst` / `read_fifo`, one SPI
-//! transaction) and a decode half (`decode_burst` / `decode_fifo`: integer decoding, one
+//! transaction; `read_frames`, one per chip select) and a decode half (`decode_burst` /
+//! `decode_fifo` / `decode_frames`: integer decoding, one
 //! 3x3 `f32` matrix product per vector with the sensitivity folded into the mounting matrix,
 //! no `f64`, no trigonometry, no division on the ADIS path), so the cost of each can be
 //! measured on the target.
@@ -60,6 +64,30 @@
 //! | ICM timestamp: 1 us resolution with `TMST_RES = 0`, absolute (not delta) in the FIFO | PX4 register comments; PX4 itself scales FIFO timestamps by 16 x 32/30 us and calls the resolution undocumented | **doubtful**: used only to detect gaps, with a 1.5-period margin |
 //! | ICM reading from `INT_STATUS` runs on into `FIFO_DATA`, which does not auto-increment; an empty FIFO reads with header bit 7 set | PX4 (reads that way) | not confirmed |
 //! | ICM reset values used by the simulated device (`INTF_CONFIG1` 0x91, `TMST_CONFIG` 0x23) | driver comments | not confirmed |
+//!
+//! BMI088: datasheet rev. 1.3 (BST-BMI088-DS001-13), pages 20, 21 and 27 (register
+//! descriptions of the data, sensor time, status and temperature registers) could be read here;
+//! other pages only through Bosch's BMI08x sensor API (`bmi08_defs.h`, `bmi08g.c`, v1.6.0) and
+//! forum answers by Bosch moderators.
+//!
+//! | fact | sources | datasheet |
+//! | ---- | ------- | --------- |
+//! | BMI088 `GYRO_CHIP_ID` 0x00 = 0x0F, `ACC_CHIP_ID` 0x00 = 0x1E | Bosch API | confirmed (p. 20, 27) |
+//! | rate data 0x02..=0x07 and acceleration 0x12..=0x17 LSB first, 16-bit two's complement, LSB read locks the MSB | Bosch API | confirmed (p. 20, 27) |
+//! | gyro +32767 LSB = +2000 deg/s at code 0; 32768 LSB at the range used (16.384 LSB/(deg/s)), codes 0..4 = 2000/1000/500/250/125 deg/s | Bosch API, PX4 | 32767 = 2000 deg/s confirmed (p. 27); codes not confirmed |
+//! | accel `ACC_RANGE` codes 0..3 = +-3/6/12/24 g, mg = raw / 32768 * 1000 * 1.5 * 2^(code+1) | Bosch API (`* 1.5`), PX4 | **conflict**: rev. 1.3 p. 21 prints the formula without the factor 1.5 (i.e. +-2..16 g); the factor is used, as by Bosch's own code |
+//! | sensor time 0x18..=0x1A, 24-bit, 39.0625 us per count, wraps after 655.36 s | Bosch API | confirmed (p. 21) |
+//! | temperature 0x22/0x23, 11-bit, 0.125 deg C/LSB + 23 deg C, `TEMP_MSB` 0x80 invalid, updated every 1.28 s | Bosch API | confirmed (p. 21) |
+//! | `ACC_ERR_REG` 0x02 bit 0 fatal, bits 4:2 error code; `ACC_STATUS` 0x03; `ACC_INT_STAT_1` 0x1D bit 7 cleared on read | Bosch API | confirmed (p. 20, 21) |
+//! | `GYRO_INT_STAT_1` 0x0A bit 7 clears itself after 280-400 us (so no use for staleness) | - | confirmed (p. 27) |
+//! | reading the reserved/status bytes 0x1B..=0x21 inside the accelerometer burst has no side effect beyond clearing `ACC_INT_STAT_1` | none found | **assumed** |
+//! | accelerometer SPI read returns one dummy byte first; starts in I2C mode until a CSB1 rising edge (dummy read of `ACC_CHIP_ID`), also after its soft reset | Bosch API, Bosch forum | not confirmed (datasheet section not reachable) |
+//! | `ACC_PWR_CONF` 0x7C (0x00 active, 0x03 suspend), `ACC_PWR_CTRL` 0x7D (0x04 on); waits 5 ms each | Bosch API (`BMI08_POWER_CONFIG_DELAY`) | not confirmed (450 us quoted by other drivers) |
+//! | soft reset 0xB6 to `ACC_SOFTRESET` 0x7E (1 ms) and `GYRO_SOFTRESET` 0x14 (30 ms) | Bosch API | not confirmed |
+//! | `ACC_CONF` 0x40 = 0xAA (normal filter, 400 Hz), reset 0xA8; `ACC_RANGE` 0x41 reset 0x01 | Bosch API | not confirmed |
+//! | `GYRO_BANDWIDTH` 0x10 code 0x03 = 400 Hz ODR / 47 Hz, bit 7 reads 1; `GYRO_LPM1` 0x11 = 0 normal; `GYRO_INT_CTRL` 0x15 bit 7; `INT3_INT4_IO_CONF` 0x16 bit 0 level, bit 1 open drain; `INT3_INT4_IO_MAP` 0x18 bit 0 | Bosch API | not confirmed |
+//! | data registers update in step with the sensor time (one sample per 64 counts at 400 Hz), so elapsed sensor time counts output periods | BMI160 datasheet table 11 (same family) | **assumed** for the BMI088 |
+//! | SPI up to 10 MHz, modes 0 and 3 | Bosch API examples | not confirmed |
 
 /// The accessors and the [`ImuDriver`] implementation every driver shares: fields `spi`,
 /// `config` and `health`, inherent `init` and `read_sample`; expanded in the driver's module.
@@ -117,6 +145,7 @@ macro_rules! driver_common {
 use driver_common;
 
 pub mod adis16505;
+pub mod bmi088;
 mod error;
 mod health;
 pub mod icm42688;

@@ -1,6 +1,7 @@
 //! Simulated IMUs on the bus: software [`SpiDevice`]s that answer like an ADIS16505 / ADIS16465
-//! ([`SimAdis16505`]) or an ICM-42688-P ([`SimIcm42688`]) from a stream of samples (any
-//! [`Imu`], typically a [`crate::recording::Replay`]).
+//! ([`SimAdis16505`]), an ICM-42688-P ([`SimIcm42688`]) or a BMI088 ([`SimBmi088`], two chip
+//! selects over one shared state) from a stream of samples (any [`Imu`], typically a
+//! [`crate::recording::Replay`]).
 //!
 //! The real drivers run over them unchanged, so the firmware in QEMU exercises the driver code
 //! path (init sequence, burst or FIFO read, checksum, counters, conversion) without hardware.
@@ -22,6 +23,13 @@
 //! | NaN temperature (unknown) | `TEMP_OUT` = 0 (0 deg C) | invalid temperature: NaN |
 //! | value beyond the register range | clamped: the driver flags saturation | clamped to full scale: saturation |
 //! | end of the source | every bus transaction fails with [`SimError::End`] | the same |
+//!
+//! The BMI088 ([`SimBmi088`]) takes the next source sample at each gyro data read (the driver
+//! reads at the gyro's data-ready) into both sensors' rate registers (nearest count, clamped to
+//! +-32767: saturation) and advances its sensor time by `k` periods of 64 counts (`k` as above):
+//! the driver sees `GAP` / `BAD_INTERVAL`; `dt_s <= 0` holds data and sensor time: `STALE`. A
+//! non-finite sample also holds them (`STALE`), and the next sample's sensor time covers the
+//! lost period (`GAP`). A NaN temperature becomes the invalid marker (NaN again).
 //!
 //! # Firmware use
 //! ```
@@ -63,9 +71,11 @@
 //! The host harness gets the same samples as an [`Imu`] from [`SimulatedImu`].
 
 mod adis16505;
+mod bmi088;
 mod icm42688;
 
 pub use adis16505::{NonFinite, SimAdis16505};
+pub use bmi088::{SimBmi088, SimBmi088Accel, SimBmi088Gyro};
 pub use icm42688::SimIcm42688;
 
 use core::fmt;
@@ -74,6 +84,7 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::spi::{ErrorKind, Operation};
 
 use crate::drivers::adis16505::{self as adis, Adis16505};
+use crate::drivers::bmi088::{self as bmi, Bmi088};
 use crate::drivers::icm42688::{self as icm, Icm42688};
 use crate::drivers::{Error, ImuDriver, Mounting};
 use crate::{Imu, ImuSample, Motion};
@@ -171,6 +182,21 @@ impl<S: Imu> SimulatedImu<Icm42688<SimIcm42688<S>>> {
     pub fn icm42688(source: S, config: icm::Config) -> Result<Self, Error<SimError<S::Error>>> {
         let bus = SimIcm42688::new(source).with_mounting(config.mounting);
         let mut driver = Icm42688::new(bus, config);
+        driver.init(&mut NoDelay)?;
+        Ok(Self::new(driver))
+    }
+}
+
+impl<'a, S: Imu> SimulatedImu<Bmi088<SimBmi088Gyro<'a, S>, SimBmi088Accel<'a, S>>> {
+    /// A simulated BMI088 (`device`, which takes the mounting of `config`), with the driver
+    /// configured by `config` over its two chip selects and initialised. The device lives
+    /// outside (both chip selects borrow it); [`SimBmi088::into_source`] gives the source back.
+    pub fn bmi088(
+        device: &'a SimBmi088<S>,
+        config: bmi::Config,
+    ) -> Result<Self, Error<SimError<S::Error>>> {
+        device.set_mounting(config.mounting);
+        let mut driver = Bmi088::new(device.gyro(), device.accel(), config);
         driver.init(&mut NoDelay)?;
         Ok(Self::new(driver))
     }

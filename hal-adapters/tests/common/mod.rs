@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+use embedded_hal_mock::eh1::spi::Transaction as Spi;
 use hal_adapters::recording::{Header, Kind, Record};
 
 /// 400 Hz: 2.5 ms.
@@ -33,4 +34,24 @@ pub fn assert_close(a: [f32; 3], b: [f32; 3], tol: [f32; 3], what: &str) {
             tol[i]
         );
     }
+}
+
+/// An 8-bit register write `[reg, value]` in one chip-select frame.
+pub fn register_write(reg: u8, value: u8) -> Vec<Spi<u8>> {
+    vec![
+        Spi::transaction_start(),
+        Spi::write_vec(vec![reg, value]),
+        Spi::transaction_end(),
+    ]
+}
+
+/// An 8-bit register read: the address with bit 7 set, then `response` (the value, after any
+/// dummy bytes the device sends first).
+pub fn register_read(reg: u8, response: Vec<u8>) -> Vec<Spi<u8>> {
+    vec![
+        Spi::transaction_start(),
+        Spi::write_vec(vec![reg | 0x80]),
+        Spi::read_vec(response),
+        Spi::transaction_end(),
+    ]
 }

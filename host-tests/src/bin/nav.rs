@@ -7,7 +7,7 @@
 //! nav bench    [--passes 10]
 //! nav replay   --imu FILE --lat DEG --lon DEG --h M --align-seconds S --out FILE
 //!              [--log-every 40] [--precision f32|f64] [--calibration FILE]
-//!              [--device recording|adis16505|icm42688]
+//!              [--device recording|adis16505|icm42688|bmi088]
 //! ```
 //! Output recordings are binary unless the file name ends in `.csv`. Errors name the file and the
 //! line or byte offset, and exit with status 1.
