@@ -38,6 +38,8 @@ pub struct PoissonDcm<T: Scalar> {
     /// `f` at the previous three steps, newest first (multistep history).
     history: [Matrix3<T>; 3],
     n_history: usize,
+    /// Step of the history [s]: a different step restarts the multistep method.
+    h_history: T,
 }
 
 impl<T: Scalar> PoissonDcm<T> {
@@ -48,6 +50,7 @@ impl<T: Scalar> PoissonDcm<T> {
             c,
             history: [Matrix3::zeros(); 3],
             n_history: 0,
+            h_history: T::zero(),
         }
     }
 
@@ -68,8 +71,12 @@ impl<T: Scalar> PoissonDcm<T> {
     }
 
     /// Advances by `h` [s] from `t0` [s] for `dC/dt = f(t, C)`, then re-orthonormalises.
-    /// Multistep methods assume a constant `h`.
+    /// Multistep methods need a constant `h`: a different one restarts them (with RK4).
     pub fn step<F: Fn(T, &Matrix3<T>) -> Matrix3<T>>(&mut self, t0: T, h: T, f: F) {
+        if (h - self.h_history).abs() > h * T::c(1e-6) {
+            self.n_history = 0;
+            self.h_history = h;
+        }
         let c = self.c;
         let half = T::c(0.5);
         let f0 = f(t0, &c);
@@ -96,7 +103,15 @@ impl<T: Scalar> PoissonDcm<T> {
             self.n_history = (self.n_history + 1).min(3);
         }
         self.c = next;
-        orthonormalize(&mut self.c);
+        // One iteration is enough for small steps; a large step (a big rotation through a
+        // low-order method) may need a few more to converge.
+        for _ in 0..4 {
+            orthonormalize(&mut self.c);
+            let e = self.c * self.c.transpose() - Matrix3::identity();
+            if e.amax() < T::default_epsilon() * T::c(16.0) {
+                break;
+            }
+        }
     }
 }
 

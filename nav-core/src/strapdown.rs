@@ -345,7 +345,8 @@ fn poisson_update<T: Scalar>(
         let omega = mean + slope * (t - half_dt);
         c * omega.cross_matrix() - omega_in * c
     });
-    UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*dcm.dcm()))
+    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*dcm.dcm()));
+    UnitQuaternion::new_normalize(q.into_inner())
 }
 
 #[cfg(test)]
@@ -411,5 +412,59 @@ mod tests {
         let s = nav.state();
         assert!((s.v_eb_n.z - g).abs() < 2e-3 * g, "{}", s.v_eb_n);
         assert!((1000.0 - s.position.h_f64() - 0.5 * g).abs() < 0.01 * g);
+    }
+}
+
+#[cfg(test)]
+mod robustness {
+    use super::*;
+    use crate::{Position, attitude::from_euler};
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Any increments within the input limits, in any frame and with any attitude method,
+        /// keep the state finite and the attitude a unit quaternion; anything else is refused.
+        #[test]
+        fn any_accepted_input_keeps_the_state_finite(
+            // Rates [rad/s] and specific forces [m/s^2] within the default limits (2000 deg/s,
+            // 50 g), intervals 0.5..20 ms.
+            seeds in proptest::collection::vec((-34.0f32..34.0, -34.0f32..34.0, -34.0f32..34.0,
+                                                -480.0f32..480.0, -480.0f32..480.0, -480.0f32..480.0,
+                                                0.0005f32..0.02), 1..200),
+            lat in -90.0f64..90.0,
+            wander in any::<bool>(),
+            poisson in any::<bool>(),
+            junk in any::<u32>(),
+        ) {
+            let config = MechanizationConfig {
+                frame: if wander { NavFrame::WanderAzimuth } else { NavFrame::Ned },
+                attitude: if poisson {
+                    AttitudeMethod::Poisson(DcmIntegrator::Abm4)
+                } else {
+                    AttitudeMethod::RotationVector
+                },
+                ..MechanizationConfig::default()
+            };
+            let start = NavState::at_rest(
+                Position::from_degrees(lat, 10.0, 100.0),
+                from_euler(0.1f32, -0.2, 2.0),
+            );
+            let mut nav = Strapdown::new(start, config);
+            for (i, &(a, b, c, d, e, f, dt)) in seeds.iter().enumerate() {
+                let inc = ImuIncrement::new([a * dt, b * dt, c * dt], [d * dt, e * dt, f * dt], dt);
+                prop_assert!(nav.step(&inc).is_ok());
+                // A garbage value now and then is refused and changes nothing.
+                if junk.rotate_left(i as u32) & 7 == 0 {
+                    let before = *nav.state();
+                    let bad = ImuIncrement::new([f32::NAN, 0.0, 0.0], [0.0; 3], dt);
+                    prop_assert!(nav.step(&bad).is_err());
+                    prop_assert_eq!(nav.state(), &before);
+                }
+            }
+            let s = nav.state();
+            prop_assert!(s.v_eb_n.iter().all(|x| x.is_finite()));
+            prop_assert!((s.q_b_n.norm() - 1.0).abs() < 1e-5);
+            prop_assert!(s.position.lat_f64().is_finite() && s.position.h_f64().is_finite());
+        }
     }
 }
