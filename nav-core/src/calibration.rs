@@ -287,6 +287,16 @@ mod tests {
         );
     }
 
+    proptest::proptest! {
+        /// No text can panic the parser; whatever it accepts is a usable calibration.
+        #[test]
+        fn any_text_parses_or_is_refused(text in "(([a-z_]{0,20} *= *)?[-0-9e., a-z]{0,40}\n){0,8}") {
+            if let Ok(cal) = ImuCalibration::parse(&text) {
+                proptest::prop_assert!(cal.compensation::<f32>().is_ok());
+            }
+        }
+    }
+
     #[test]
     fn refuses_bad_text() {
         use CalibrationError::*;
