@@ -23,8 +23,9 @@
 use hal_adapters::{Imu, SampleFlags};
 use nav_core::output::CSV_HEADER;
 use nav_core::{
-    AlignError, AlignmentResult, ImuCalibration, ImuIncrement, InputLimits, MechanizationConfig,
-    NavState, Position, Scalar, Solution, StaticAlignment, Strapdown,
+    AlignError, AlignmentResult, AttitudeMethod, ImuCalibration, ImuIncrement, InputLimits,
+    MechanizationConfig, NavFrame, NavState, Position, Scalar, Solution, StaticAlignment,
+    Strapdown, VerticalChannel,
 };
 use std::fmt;
 use std::io::{self, Write};
@@ -49,6 +50,31 @@ pub struct PipelineConfig {
     pub rate_hz: f64,
     /// Sensor calibration applied before the mechanization (default identity).
     pub calibration: ImuCalibration,
+    /// Frame, attitude integrator and vertical channel of the mechanization.
+    pub choices: MechanizationChoices,
+}
+
+/// The selectable parts of the mechanization (nav-core's defaults: wander azimuth, rotation
+/// vector, free vertical channel).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MechanizationChoices {
+    /// Navigation frame.
+    pub frame: NavFrame,
+    /// Attitude integration.
+    pub attitude: AttitudeMethod,
+    /// Vertical channel.
+    pub vertical: VerticalChannel,
+}
+
+impl Default for MechanizationChoices {
+    fn default() -> Self {
+        let d = MechanizationConfig::<f64>::default();
+        Self {
+            frame: d.frame,
+            attitude: d.attitude,
+            vertical: d.vertical,
+        }
+    }
 }
 
 impl PipelineConfig {
@@ -227,6 +253,9 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
             .calibration
             .compensation()
             .map_err(|e| PipelineError::Config(e.to_string()))?,
+        frame: config.choices.frame,
+        attitude: config.choices.attitude,
+        vertical: config.choices.vertical,
         ..MechanizationConfig::default()
     };
     let row = |out: &mut W, s: &Solution| writeln!(out, "{s}").map_err(PipelineError::Output);
@@ -380,6 +409,7 @@ mod tests {
             log_every,
             rate_hz: 100.0,
             calibration: ImuCalibration::default(),
+            choices: MechanizationChoices::default(),
         }
     }
 

@@ -1,7 +1,7 @@
 //! A recording file replayed end to end: open (any format), run the [`pipeline`] in the chosen
 //! precision, attach the replay's counters, and name the file in every error.
 
-use crate::pipeline::{self, PipelineConfig, Report, SourceCounters};
+use crate::pipeline::{self, MechanizationChoices, PipelineConfig, Report, SourceCounters};
 use crate::recording_io::{Format, ReplaySource, in_file};
 use anyhow::{Result, anyhow};
 use hal_adapters::Imu;
@@ -43,6 +43,8 @@ pub struct ReplayOptions {
     pub log_every: u32,
     /// Sensor calibration (default identity).
     pub calibration: ImuCalibration,
+    /// Frame, attitude integrator and vertical channel.
+    pub choices: MechanizationChoices,
     /// The sample path (default: the recording as it is).
     pub device: ImuDevice,
 }
@@ -58,6 +60,7 @@ impl ReplayOptions {
             log_every: self.log_every,
             rate_hz,
             calibration: self.calibration,
+            choices: self.choices,
         }
     }
 }

@@ -27,6 +27,7 @@ fn options() -> ReplayOptions {
         log_every: 40,
         calibration: Default::default(),
         device: Default::default(),
+        choices: Default::default(),
     }
 }
 

@@ -18,6 +18,7 @@ fn options(s: &Stationary) -> ReplayOptions {
         log_every: 25,
         calibration: Default::default(),
         device: Default::default(),
+        choices: Default::default(),
     }
 }
 

@@ -79,6 +79,7 @@ fn lasergyro_replays() {
         log_every: 100,
         calibration: Default::default(),
         device: Default::default(),
+        choices: Default::default(),
     };
     let (fr, log) = common::replay::<f64>(&path, &options);
     let r = fr.report;

@@ -72,6 +72,7 @@ fn options(s: &Stationary) -> ReplayOptions {
         log_every: 40,
         calibration: Default::default(),
         device: Default::default(),
+        choices: Default::default(),
     }
 }
 
@@ -316,4 +317,74 @@ fn cli_reports_errors_without_panicking() {
     // Bad arguments are clap's usage errors (status 2).
     let out = nav(&["replay", "--imu", "x.bin"]);
     assert_eq!(out.status.code(), Some(2));
+}
+
+/// Every selectable mechanization (frame, attitude integrator, vertical channel) keeps the
+/// stationary recording within the f64 bounds of the module docs: the choices change the
+/// algorithm, not the physics of exact data.
+#[test]
+fn every_mechanization_choice_stays_within_the_bounds() {
+    use host_tests::pipeline::MechanizationChoices;
+    use nav_core::{AttitudeMethod, DcmIntegrator, NavFrame, VerticalChannel};
+    let s = scenario();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("rest.bin");
+    recording_io::write(&path, &s.recording().unwrap()).unwrap();
+    let poisson = AttitudeMethod::Poisson;
+    for (frame, attitude, vertical) in [
+        (
+            NavFrame::Ned,
+            AttitudeMethod::RotationVector,
+            VerticalChannel::Free,
+        ),
+        (
+            NavFrame::WanderAzimuth,
+            poisson(DcmIntegrator::Euler),
+            VerticalChannel::Free,
+        ),
+        (
+            NavFrame::Ned,
+            poisson(DcmIntegrator::Heun),
+            VerticalChannel::Hold,
+        ),
+        (
+            NavFrame::WanderAzimuth,
+            poisson(DcmIntegrator::Rk4),
+            VerticalChannel::Free,
+        ),
+        (
+            NavFrame::WanderAzimuth,
+            poisson(DcmIntegrator::Abm4),
+            VerticalChannel::Hold,
+        ),
+    ] {
+        let options = ReplayOptions {
+            choices: MechanizationChoices {
+                frame,
+                attitude,
+                vertical,
+            },
+            ..options(&s)
+        };
+        let (_, log) = replay::<f64>(&path, &options);
+        let last = *parse_log(&log).last().unwrap();
+        let north_m = (last.lat_deg - s.lat_deg).to_radians() * EARTH_RADIUS_M;
+        let east_m =
+            (last.lon_deg - s.lon_deg).to_radians() * EARTH_RADIUS_M * s.lat_deg.to_radians().cos();
+        let moved = (north_m.powi(2) + east_m.powi(2) + (last.h_m - s.h_m).powi(2)).sqrt();
+        let speed = last.v_ned.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let what = format!("{frame:?} {attitude:?} {vertical:?}");
+        assert!(moved < F64_BOUNDS.position_m, "{what}: moved {moved} m");
+        assert!(speed < F64_BOUNDS.speed_mps, "{what}: {speed} m/s");
+        for (got, want) in last
+            .rpy_deg
+            .iter()
+            .zip([s.roll_deg, s.pitch_deg, s.yaw_deg])
+        {
+            assert!(
+                angle_error_deg(*got, want).abs() < F64_BOUNDS.heading_deg,
+                "{what}: {got}"
+            );
+        }
+    }
 }

@@ -7,7 +7,8 @@
 //! nav bench    [--passes 10]
 //! nav replay   --imu FILE --lat DEG --lon DEG --h M --align-seconds S --out FILE
 //!              [--log-every 40] [--precision f32|f64] [--calibration FILE]
-//!              [--device recording|adis16505|icm42688|bmi088]
+//!              [--device recording|adis16505|icm42688|bmi088] [--frame wander|ned]
+//!              [--attitude rotation-vector|euler|heun|rk4|abm4] [--vertical free|hold]
 //! ```
 //! Output recordings are binary unless the file name ends in `.csv`. Errors name the file and the
 //! line or byte offset, and exit with status 1.
@@ -16,9 +17,10 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use host_tests::generate::Stationary;
 use host_tests::pipeline::DEFAULT_LOG_EVERY;
+use host_tests::pipeline::MechanizationChoices;
 use host_tests::recording_io;
 use host_tests::replay::{FileReport, ImuDevice, ReplayOptions, replay_file};
-use nav_core::ImuCalibration;
+use nav_core::{AttitudeMethod, DcmIntegrator, ImuCalibration, NavFrame, VerticalChannel};
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
@@ -120,7 +122,59 @@ enum Command {
         /// real driver (the firmware's path on the `qemu` board is `adis16505`).
         #[arg(long, value_enum, default_value_t = ImuDevice::Recording)]
         device: ImuDevice,
+        /// Navigation frame of the mechanization (outputs are NED either way).
+        #[arg(long, value_enum, default_value_t = Frame::Wander)]
+        frame: Frame,
+        /// Attitude integration: rotation-vector quaternion, or Poisson's DCM equation with an
+        /// integrator.
+        #[arg(long, value_enum, default_value_t = Attitude::RotationVector)]
+        attitude: Attitude,
+        /// Vertical channel: integrated freely, or held at the start height.
+        #[arg(long, value_enum, default_value_t = Vertical::Free)]
+        vertical: Vertical,
     },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Frame {
+    Ned,
+    Wander,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Attitude {
+    RotationVector,
+    Euler,
+    Heun,
+    Rk4,
+    Abm4,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Vertical {
+    Free,
+    Hold,
+}
+
+/// The mechanization choices of the command line.
+fn choices(frame: Frame, attitude: Attitude, vertical: Vertical) -> MechanizationChoices {
+    MechanizationChoices {
+        frame: match frame {
+            Frame::Ned => NavFrame::Ned,
+            Frame::Wander => NavFrame::WanderAzimuth,
+        },
+        attitude: match attitude {
+            Attitude::RotationVector => AttitudeMethod::RotationVector,
+            Attitude::Euler => AttitudeMethod::Poisson(DcmIntegrator::Euler),
+            Attitude::Heun => AttitudeMethod::Poisson(DcmIntegrator::Heun),
+            Attitude::Rk4 => AttitudeMethod::Poisson(DcmIntegrator::Rk4),
+            Attitude::Abm4 => AttitudeMethod::Poisson(DcmIntegrator::Abm4),
+        },
+        vertical: match vertical {
+            Vertical::Free => VerticalChannel::Free,
+            Vertical::Hold => VerticalChannel::Hold,
+        },
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -211,6 +265,9 @@ fn run(cli: Cli) -> Result<()> {
             precision,
             calibration,
             device,
+            frame,
+            attitude,
+            vertical,
         } => {
             let calibration = match calibration {
                 None => ImuCalibration::default(),
@@ -229,6 +286,7 @@ fn run(cli: Cli) -> Result<()> {
                 log_every,
                 calibration,
                 device,
+                choices: choices(frame, attitude, vertical),
             };
             let file = File::create(&out).with_context(|| format!("creating {}", out.display()))?;
             let writer = BufWriter::new(file);
