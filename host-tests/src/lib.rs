@@ -24,10 +24,17 @@
 #![warn(missing_docs)]
 
 pub mod bench;
+pub mod emulate;
 pub mod generate;
 pub mod imu_csv;
+pub mod kf_gins;
 pub mod pipeline;
 pub mod psins;
 pub mod recording_io;
 pub mod replay;
+pub mod report;
+pub mod sensor_model;
+pub mod simulate;
+pub mod trajectory;
 pub mod truth;
+pub mod truth_csv;

@@ -2,15 +2,15 @@
 //! replay sources.
 //!
 //! Every format is read into a [`Recording`] (the binary format's header values and records). For
-//! a replay, binary files are read straight from disk by [`Replay`]; CSV and PSINS recordings are
-//! encoded into the binary format in memory and replayed from there, so the sample flags and the
-//! measured `dt` come from the same code whatever the input format.
+//! a replay, binary files are read straight from disk by [`Replay`]; CSV, PSINS and KF-GINS
+//! recordings are encoded into the binary format in memory and replayed from there, so the sample
+//! flags and the measured `dt` come from the same code whatever the input format.
 //!
 //! Conversion of timed increments to the binary format: `t_ns = round(t_s * 1e9)` (the end of each
-//! interval); the nominal rate is `1 / median interval` (CSV) or the PSINS header's; the header's
-//! `t0_ns` (start of the first interval) is `t_ns[0] - round(nominal period)`.
+//! interval); the nominal rate is `1 / median interval` (CSV, KF-GINS) or the PSINS header's; the
+//! header's `t0_ns` (start of the first interval) is `t_ns[0] - round(nominal period)`.
 
-use crate::{imu_csv, psins};
+use crate::{imu_csv, kf_gins, psins};
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use core::convert::Infallible;
 use hal_adapters::io::StdReader;
@@ -32,6 +32,8 @@ pub enum Format {
     Csv,
     /// PSINS `.imu` text ([`psins`]).
     Psins,
+    /// KF-GINS IMU text ([`kf_gins`]).
+    KfGins,
 }
 
 impl core::fmt::Display for Format {
@@ -40,13 +42,15 @@ impl core::fmt::Display for Format {
             Self::Binary => "binary",
             Self::Csv => "CSV",
             Self::Psins => "PSINS",
+            Self::KfGins => "KF-GINS",
         })
     }
 }
 
-/// Detects the format of `path`: by the binary magic bytes, the CSV header (`t_s,...`) or a PSINS
-/// `%` comment on the first line; failing those, by the extension (`.bin`, `.csv`, `.imu`), so a
-/// damaged file still gets the format's own error message.
+/// Detects the format of `path`: by the binary magic bytes, the CSV header (`t_s,...`), a PSINS
+/// `%` comment on the first line, or a first line of 7 (or 8) numbers (KF-GINS); failing those, by
+/// the extension (`.bin`, `.csv`, `.imu`, `.txt` for KF-GINS), so a damaged file still gets the
+/// format's own error message.
 pub fn detect(path: &Path) -> Result<Format> {
     let mut head = Vec::with_capacity(256);
     File::open(path)
@@ -63,6 +67,9 @@ pub fn detect(path: &Path) -> Result<Format> {
     if first.starts_with('%') {
         return Ok(Format::Psins);
     }
+    if kf_gins::looks_like_imu(first) {
+        return Ok(Format::KfGins);
+    }
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -71,9 +78,11 @@ pub fn detect(path: &Path) -> Result<Format> {
         Some("bin") => Ok(Format::Binary),
         Some("csv") => Ok(Format::Csv),
         Some("imu") => Ok(Format::Psins),
+        Some("txt") => Ok(Format::KfGins),
         _ => bail!(
             "recording {}: unknown format: expected the binary magic {:?}, a CSV header starting \
-             with 't_s,', a PSINS file starting with '%', or the extension .bin, .csv or .imu",
+             with 't_s,', a PSINS file starting with '%', a KF-GINS line of 7 numbers, or the \
+             extension .bin, .csv, .imu or .txt",
             path.display(),
             String::from_utf8_lossy(&MAGIC)
         ),
@@ -186,6 +195,12 @@ impl Recording {
         }
     }
 
+    /// Builds a recording of increments from a KF-GINS IMU file (as from CSV: rate from the median
+    /// interval; increments rounded to f32).
+    pub fn from_kf_gins(imu: &kf_gins::KfGinsImu) -> Result<Self> {
+        Self::from_csv(&imu.to_imu_csv())
+    }
+
     /// The recording as CSV rows (increments only: CSV has no rates).
     pub fn to_csv(&self) -> Result<imu_csv::ImuCsv> {
         ensure!(
@@ -224,6 +239,8 @@ pub fn read(path: &Path) -> Result<Recording> {
             Recording::from_csv(&csv).with_context(|| format!("recording {}", path.display()))
         }
         Format::Psins => Ok(Recording::from_psins(&psins::read(path)?)),
+        Format::KfGins => Recording::from_kf_gins(&kf_gins::read_imu(path)?)
+            .with_context(|| format!("recording {}", path.display())),
         Format::Binary => read_binary(path),
     }
 }
@@ -378,7 +395,7 @@ impl From<ReplayError<std::io::Error>> for SourceError {
 pub enum ReplaySource {
     /// A binary file, read from disk as it goes.
     File(Replay<StdReader>),
-    /// A CSV or PSINS recording converted to the binary format in memory.
+    /// A CSV, PSINS or KF-GINS recording converted to the binary format in memory.
     Memory(Replay<MemReader>),
 }
 
@@ -393,7 +410,7 @@ impl ReplaySource {
                 let reader = StdReader::new(BufReader::new(file));
                 Self::File(Replay::new(reader).map_err(|e| in_file(path, SourceError::from(e)))?)
             }
-            Format::Csv | Format::Psins => {
+            Format::Csv | Format::Psins | Format::KfGins => {
                 Self::from_recording(&read(path)?).with_context(context)?
             }
         };

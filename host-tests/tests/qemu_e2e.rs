@@ -6,8 +6,10 @@
 //! `FIRMWARE_ELF`; without it this test builds the firmware into `target/e2e` (a separate target
 //! directory, because the running `cargo test` holds the lock on the main one).
 
-use host_tests::generate::Stationary;
-use host_tests::recording_io;
+use host_tests::recording_io::{self, Recording};
+use host_tests::sensor_model::Grade;
+use host_tests::simulate::{SimOptions, simulate};
+use host_tests::trajectory::scenarios::{Scenario, Static};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -95,14 +97,19 @@ fn field(log: &str, key: &str) -> u64 {
         .unwrap_or_else(|_| panic!("no number after '{key}' in:\n{log}"))
 }
 
-/// 20 s at rest at 45 deg N with attitude (1.5, -2, 30) deg, plus two bad samples in the
+/// `seconds` of the simulator's `static` scenario (45 deg N, 7.5 deg E, 150 m, attitude (1.5,
+/// -2, 30) deg) sensed by `grade` (seed 3).
+fn static_recording(seconds: f64, grade: Grade) -> Recording {
+    let mut opts = SimOptions::new(Scenario::by_name("static").unwrap(), grade);
+    opts.seconds = Some(seconds);
+    opts.seed = 3;
+    simulate(&opts, |_, _| {}).unwrap().recording
+}
+
+/// 20 s of the `static` scenario with FOG-grade sensor errors, plus two bad samples in the
 /// navigation phase: a NaN gyro value (sample 5000) and a repeated timestamp (sample 6000).
 fn recording_with_bad_samples(path: &Path) {
-    let scenario = Stationary {
-        seconds: 20.0,
-        ..Stationary::default()
-    };
-    let mut rec = scenario.recording().unwrap();
+    let mut rec = static_recording(20.0, Grade::Fog);
     rec.records[5000].gyro[1] = f32::NAN;
     rec.records[6000].t_ns = rec.records[5999].t_ns;
     recording_io::write(path, &rec).unwrap();
@@ -113,7 +120,7 @@ fn firmware_in_qemu_matches_host_replay() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     recording_with_bad_samples(&d.join("rec.bin"));
-    let s = Stationary::default();
+    let s = Static::default();
     let (lat, lon, h) = (
         s.lat_deg.to_string(),
         s.lon_deg.to_string(),
@@ -215,12 +222,7 @@ fn firmware_in_qemu_matches_host_replay() {
 fn firmware_rejects_truncated_and_corrupt_recordings() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let rec = Stationary {
-        seconds: 2.0,
-        ..Stationary::default()
-    }
-    .recording()
-    .unwrap();
+    let rec = static_recording(2.0, Grade::Ideal);
     let bytes = rec.to_bytes().unwrap();
     std::fs::write(d.join("truncated.bin"), &bytes[..bytes.len() - 13]).unwrap();
     let mut corrupt = bytes.clone();
@@ -278,12 +280,7 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
 fn firmware_runs_the_mems_drivers_and_refuses_a_blind_gyrocompass() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let rec = Stationary {
-        seconds: 3.0,
-        ..Stationary::default()
-    }
-    .recording()
-    .unwrap();
+    let rec = static_recording(3.0, Grade::Ideal);
     recording_io::write(&d.join("rec.bin"), &rec).unwrap();
     for (device, name) in [("icm42688", "Icm42688"), ("bmi088", "Bmi088")] {
         let (code, log) = run_firmware(

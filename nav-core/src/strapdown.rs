@@ -1,14 +1,15 @@
 //! Strapdown mechanization in a local-level frame: NED or wander azimuth.
 //!
 //! Per increment (Savage, *Strapdown Analytics*, ch. 7; Groves §5.4–5.5; Titterton & Weston
-//! ch. 3), with the navigation-frame quantities taken at the start of the interval:
+//! ch. 3), with the navigation-frame quantities taken at mid-interval (predicted: `c_n`
+//! turned by half the start's transport rate, the height and velocity advanced by half a step):
 //! 1. sensor error compensation ([`crate::calibration`], seed 000 eqs. 3 and 8);
 //! 2. coning and sculling ([`crate::coning`]): rotation vector `phi_b` and velocity increment
 //!    `dv_b` in body axes at the start of the interval;
 //! 3. Earth quantities from the position matrix's vertical row `c_n` (no trigonometry):
 //!    `omega_ie_n = Omega c_n`, transport rate `rho_n` ([`LocalEarth::transport_rate`], plus
 //!    `-v_E tan(lat) / (R_E + h)` about down in the NED frame), `zeta = (omega_ie_n + rho_n) dt`;
-//! 4. velocity: `v(k) = v(k-1) + dv_n + (g_n - (2 omega_ie_n + rho_n) x v(k-1)) dt`,
+//! 4. velocity: `v(k) = v(k-1) + dv_n + (g_n - (2 omega_ie_n + rho_n) x v_mid) dt`,
 //!    `dv_n = (I - [zeta x] / 2) C_b_n(k-1) dv_b` (Savage (7.2.2.2-21));
 //! 5. attitude: `q_b_n(k) = q(-zeta) q_b_n(k-1) q(phi_b)` (Savage (7.1.2-14)) — or Poisson's
 //!    DCM equation with a selectable integrator ([`crate::poisson`], seed 000);
@@ -161,6 +162,23 @@ impl<T: Scalar> Strapdown<T> {
         };
     }
 
+    /// Vertical-channel aiding: replaces the height [m] and the down velocity [m/s] with an
+    /// external reference's (barometric altimeter, depth sensor, or a test's truth), as an
+    /// aircraft SINS does to keep its unstable free-inertial vertical channel bounded (Groves
+    /// §5.7). Non-finite values are refused (returns `false`, state unchanged).
+    pub fn aid_vertical(&mut self, h_m: f64, v_down: T) -> bool {
+        if !h_m.is_finite() || !v_down.finite() {
+            return false;
+        }
+        let p = &mut self.state.position;
+        if !p.add_height(h_m - p.h_f64()) {
+            return false;
+        }
+        self.state.v_eb_n.z = v_down;
+        self.v_carry.z = T::zero();
+        true
+    }
+
     /// Number of increments integrated.
     pub fn steps(&self) -> u32 {
         self.steps
@@ -198,23 +216,38 @@ impl<T: Scalar> Strapdown<T> {
             .compensate(&d_theta, &d_v, dt, self.config.coning_sculling);
 
         let s = &mut self.state;
-        let c_n = s.position.vertical_row::<T>();
-        let sin_lat = -c_n.z;
-        let cos2_lat = c_n.x * c_n.x + c_n.y * c_n.y;
-        let earth = LocalEarth::from_sin_lat(sin_lat, cos2_lat, s.position.h::<T>());
+        let hold = self.config.vertical == VerticalChannel::Hold;
+        let frame = self.config.frame;
+        // Navigation-frame quantities at mid-interval, predicted from the start (the frame turns
+        // at `rho_n`: `d c_n/dt = -rho_n x c_n`). Start-of-interval values would leave a bias
+        // of dt/2 times their rate of change: 3.5e-12 rad/s of tilt drift at 900 km/h.
+        let c_n0 = s.position.vertical_row::<T>();
+        let h_mid = s.position.h::<T>() - s.v_eb_n.z * dt * half;
+        let earth0 = LocalEarth::from_sin_lat(-c_n0.z, c_n0.x * c_n0.x + c_n0.y * c_n0.y, h_mid);
+        let rho_0 = transport_rate(frame, &earth0, &c_n0, &s.v_eb_n);
+        let c_n = c_n0 - rho_0.cross(&c_n0) * (dt * half);
+        let earth = LocalEarth::from_sin_lat(-c_n.z, c_n.x * c_n.x + c_n.y * c_n.y, h_mid);
         let omega_ie_n = c_n * T::c(OMEGA_IE);
-        let rho_n = transport_rate(self.config.frame, &earth, &c_n, &s.v_eb_n);
-        let zeta = (omega_ie_n + rho_n) * dt;
+        let two_omega_ie_n = omega_ie_n * T::c(2.0);
 
-        // Velocity (Savage (7.2.2.2-21)), Coriolis and gravity at the start of the interval; the
-        // increment is summed before it meets the velocity (at rest its terms cancel).
+        // Velocity (Savage (7.2.2.2-21)); the increment is summed before it meets the velocity
+        // (at rest its terms cancel).
         let c_b_n = dcm_of(&self.q);
         let dv_n0 = c_b_n * c.delta_v_b;
-        let dv_n = dv_n0 - zeta.cross(&dv_n0) * half;
+        let dv_n = dv_n0 - ((omega_ie_n + rho_0) * dt).cross(&dv_n0) * half;
+        // Coriolis and transport terms at the mid-interval velocity, predicted with the
+        // start-of-interval ones (one corrector pass).
         let g_n = Vector3::new(T::zero(), T::zero(), earth.g);
-        let coriolis = (omega_ie_n * T::c(2.0) + rho_n).cross(&s.v_eb_n);
+        let mut predicted = dv_n + (g_n - (two_omega_ie_n + rho_0).cross(&s.v_eb_n)) * dt;
+        if hold {
+            predicted.z = T::zero();
+        }
+        let v_mid = s.v_eb_n + predicted * half;
+        let rho_n = transport_rate(frame, &earth, &c_n, &v_mid);
+        let zeta = (omega_ie_n + rho_n) * dt;
+        let coriolis = (two_omega_ie_n + rho_n).cross(&v_mid);
         let mut delta_v = dv_n + (g_n - coriolis) * dt;
-        if self.config.vertical == VerticalChannel::Hold {
+        if hold {
             delta_v.z = T::zero();
         }
         let v_old = s.v_eb_n;
@@ -248,7 +281,7 @@ impl<T: Scalar> Strapdown<T> {
 
         // Position: trapezoidal velocity, frame rotation and height.
         let v_mid = (v_old + s.v_eb_n) * half;
-        let xi = transport_rate(self.config.frame, &earth, &c_n, &v_mid) * dt;
+        let xi = transport_rate(frame, &earth, &c_n, &v_mid) * dt;
         s.position.rotate(&xi);
         s.position.add_height(-v_mid.z * dt);
 
@@ -383,6 +416,30 @@ mod tests {
         assert!((s.position.lat::<f64>() - lat).abs() * 6.4e6 < 1e-3);
         assert!((s.position.h_f64() - h).abs() < 1e-3);
         assert!(s.q_b_n.angle_to(&q) < 1e-9);
+    }
+
+    #[test]
+    fn vertical_aiding_bounds_the_free_channel() {
+        // An accelerometer bias of 1e-3 m/s^2 down: the free vertical channel runs away
+        // (e-folding in sqrt(R / 2g) = 570 s); aided every step it stays on the reference.
+        let (lat, h) = (45f64.to_radians(), 100.0);
+        let q = UnitQuaternion::identity();
+        let mut inc = rest_increment(lat, h, &q, 0.0025);
+        inc.delta_v_ib_b.z += 1e-3 * 0.0025;
+        let start = NavState::at_rest(Position::from_radians(lat, 0.3, h), q);
+        let mut free = Strapdown::new(start, MechanizationConfig::default());
+        let mut aided = free.clone();
+        for _ in 0..400 * 600 {
+            free.step(&inc).unwrap();
+            aided.step(&inc).unwrap();
+            assert!(aided.aid_vertical(h, 0.0));
+        }
+        // Free: at least the integrated bias, 1e-3 * 600^2 / 2 = 180 m.
+        assert!((free.state().position.h_f64() - h).abs() > 180.0);
+        assert_eq!(aided.state().position.h_f64(), h);
+        assert_eq!(aided.state().v_eb_n.z, 0.0);
+        assert!(!aided.aid_vertical(f64::NAN, 0.0) && !aided.aid_vertical(h, f64::INFINITY));
+        assert_eq!(aided.state().position.h_f64(), h);
     }
 
     #[test]

@@ -18,10 +18,16 @@ use std::process::Command;
 
 const THUMB: &str = "thumbv7em-none-eabihf";
 
-/// The demo: 60 s at rest at 45 deg N, 7.5 deg E, 150 m, attitude (1.5, -2, 30) deg; 30 s of
-/// static alignment, then 30 s of navigation.
-const DEMO_SITE: [&str; 3] = ["45", "7.5", "150"];
-const DEMO_ALIGN_S: &str = "30";
+/// The demo: `nav sim land-vehicle` with the `fog` grade at 45 deg N, 7.5 deg E, 250 m: the car
+/// stands still for 20 s (15 s of static alignment), then drives (starts, turns, stops) for
+/// 100 s.
+const DEMO_SITE: [&str; 3] = ["45", "7.5", "250"];
+const DEMO_ALIGN_S: &str = "15";
+/// Length of the demo recording [s].
+const DEMO_SECONDS: &str = "120";
+/// The demo recording and its truth.
+const DEMO_IMU: &str = "out/demo/imu.bin";
+const DEMO_TRUTH: &str = "out/demo/truth.csv";
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -154,7 +160,17 @@ fn demo(root: &Path) -> Result<()> {
     for l in rows.iter().take(2).chain(rows.last()) {
         println!("  {l}");
     }
-    println!("QEMU run time: {qemu_s:.1} s (60 s of data at 400 Hz)");
+    println!("QEMU run time: {qemu_s:.1} s ({DEMO_SECONDS} s of data at 400 Hz)");
+    // Against the simulator's truth.
+    run(Command::new(&nav).args([
+        "report",
+        "--solution",
+        "out/solution-firmware.csv",
+        "--truth",
+        DEMO_TRUTH,
+        "--at",
+        "15,60,120",
+    ]))?;
 
     // The harness on the same recording, same precision: the logs must be identical.
     let out = output(&mut host_replay(&nav, "f32", "out/solution-host.csv"))?;
@@ -175,19 +191,27 @@ fn prepare_demo(root: &Path) -> Result<(PathBuf, PathBuf)> {
     let nav = nav_bin(root)?;
     let elf = build_firmware(root)?;
     std::fs::create_dir_all(root.join("out"))?;
-    let attitude = ["--roll", "1.5", "--pitch", "-2", "--yaw", "30"];
-    run(Command::new(&nav)
-        .args([
-            "generate",
-            "--out",
-            "out/demo.bin",
-            "--seconds",
-            "60",
-            "--rate",
-            "400",
-        ])
-        .args(site_args())
-        .args(attitude))?;
+    let [lat, lon, h] = DEMO_SITE;
+    run(Command::new(&nav).args([
+        "sim",
+        "land-vehicle",
+        "--grade",
+        "fog",
+        "--seed",
+        "7",
+        "--seconds",
+        DEMO_SECONDS,
+        "--format",
+        "bin",
+        "--out",
+        "out/demo",
+        "--set",
+        &format!("lat_deg={lat}"),
+        "--set",
+        &format!("lon_deg={lon}"),
+        "--set",
+        &format!("h_m={h}"),
+    ]))?;
     Ok((nav, elf))
 }
 
@@ -228,7 +252,7 @@ fn qemu_with_device(elf: &Path, device: &str) -> Command {
     c.arg("firmware/qemu-run.sh")
         .arg(elf)
         .args(["--device", device])
-        .args(["out/demo.bin", "out/solution-firmware.csv"])
+        .args([DEMO_IMU, "out/solution-firmware.csv"])
         .args(DEMO_SITE)
         .arg(DEMO_ALIGN_S);
     c
@@ -240,7 +264,7 @@ fn host_replay(nav: &Path, precision: &str, out: &str) -> Command {
     c.args([
         "replay",
         "--imu",
-        "out/demo.bin",
+        DEMO_IMU,
         "--align-seconds",
         DEMO_ALIGN_S,
         "--out",

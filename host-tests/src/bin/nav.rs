@@ -3,12 +3,18 @@
 //! ```text
 //! nav generate --out FILE [--seconds 60] [--rate 400] [--lat 45] [--lon 7.5] [--h 150]
 //!              [--roll 1.5] [--pitch -2] [--yaw 30]
+//! nav sim      SCENARIO --out DIR [--grade ideal|fog|rlg|mems-tactical|mems-consumer]
+//!              [--seconds N] [--rate 400] [--seed 1] [--set KEY=VALUE]... [--truth-rate 50]
+//!              [--format both|bin|csv] [--list-params]
 //! nav convert  --in FILE --out FILE
 //! nav bench    [--passes 10]
 //! nav replay   --imu FILE --lat DEG --lon DEG --h M --align-seconds S --out FILE
 //!              [--log-every 40] [--precision f32|f64] [--calibration FILE]
 //!              [--device recording|adis16505|icm42688|bmi088] [--frame wander|ned]
 //!              [--attitude rotation-vector|euler|heun|rk4|abm4] [--vertical free|hold]
+//! nav report   --solution FILE --truth FILE [--at 60,300] [--plots DIR]
+//! nav emulate  --truth FILE --out FILE [--preset none|seed004-rlg] [--errors FILE]
+//!              [--set 'KEY = V1 V2 V3']... [--vertical aided|free] [--errors-out FILE]
 //! ```
 //! Output recordings are binary unless the file name ends in `.csv`. Errors name the file and the
 //! line or byte offset, and exit with status 1.
@@ -39,6 +45,67 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Emulate a SINS with given errors along a truth trajectory (seed 004): propagate the
+    /// linearised error model and write truth + errors in the trajectory CSV format. Errors come
+    /// from the preset, then the error file, then each --set line (see `host_tests::emulate`
+    /// for the keys; e.g. `gyro_drift_deg_h = 0.01 0.01 0.01`).
+    Emulate {
+        /// Truth trajectory (CSV: t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,...).
+        #[arg(long, value_name = "FILE")]
+        truth: PathBuf,
+        /// Displayed trajectory to write (the same CSV format).
+        #[arg(long, value_name = "FILE")]
+        out: PathBuf,
+        /// Starting errors.
+        #[arg(long, value_enum, default_value_t = host_tests::emulate::Preset::None)]
+        preset: host_tests::emulate::Preset,
+        /// Error file (`key = v1 v2 v3` lines; the key's suffix is the unit).
+        #[arg(long, value_name = "FILE")]
+        errors: Option<PathBuf>,
+        /// One `key = v1 v2 v3` line applied after the file (repeatable).
+        #[arg(long, value_name = "KEY = V1 V2 V3")]
+        set: Vec<String>,
+        /// Vertical channel: aided by baro/truth (dh = dv_D = 0) or free inertial.
+        #[arg(long, value_enum, default_value_t = host_tests::emulate::Vertical::Aided)]
+        vertical: host_tests::emulate::Vertical,
+        /// Also write the error series (CSV: attitude, velocity and position errors).
+        #[arg(long, value_name = "FILE")]
+        errors_out: Option<PathBuf>,
+    },
+    /// Simulate a scenario: exact increments through a sensor grade's error model, written as
+    /// DIR/imu.bin and DIR/imu.csv (recordings), DIR/truth.csv and DIR/scenario.txt.
+    #[command(allow_negative_numbers = true)]
+    Sim {
+        /// static, ship-rocking, auv-bench, flight or land-vehicle.
+        scenario: String,
+        /// Output directory (created if missing).
+        #[arg(long, value_name = "DIR", required_unless_present = "list_params")]
+        out: Option<PathBuf>,
+        /// Sensor grade: ideal, fog, rlg, mems-tactical, mems-consumer.
+        #[arg(long, default_value = "ideal")]
+        grade: host_tests::sensor_model::Grade,
+        /// Length [s] (default: the scenario's own).
+        #[arg(long)]
+        seconds: Option<f64>,
+        /// IMU rate [Hz].
+        #[arg(long, default_value_t = 400.0)]
+        rate: f64,
+        /// Seed of every random draw (same seed, same files).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Scenario parameter `KEY=VALUE` (repeatable; see --list-params).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Truth rate [Hz] (must divide the IMU rate).
+        #[arg(long, default_value_t = 50.0)]
+        truth_rate: f64,
+        /// Recording files to write.
+        #[arg(long, value_enum, default_value_t = SimFormat::Both)]
+        format: SimFormat,
+        /// Print the scenario's parameters with their defaults and exit.
+        #[arg(long)]
+        list_params: bool,
+    },
     /// Benchmark the mechanization alone (no I/O): steps per second on one thread, f32 and f64,
     /// over 10 min of exact 400 Hz increments of a 900 km/h flight.
     Bench {
@@ -77,8 +144,8 @@ enum Command {
         #[arg(long, default_value_t = 30.0)]
         yaw: f64,
     },
-    /// Convert a recording (CSV, PSINS or binary; auto-detected) to binary, or to CSV when the
-    /// output ends in .csv.
+    /// Convert a recording (CSV, PSINS, KF-GINS or binary; auto-detected) to binary, or to CSV
+    /// when the output ends in .csv.
     Convert {
         /// Input recording.
         #[arg(long = "in", value_name = "FILE")]
@@ -90,7 +157,7 @@ enum Command {
     /// Align and navigate over a recording (any format), writing the solution log as CSV.
     #[command(allow_negative_numbers = true)]
     Replay {
-        /// Input recording (binary, CSV or PSINS; auto-detected).
+        /// Input recording (binary, CSV, PSINS or KF-GINS; auto-detected).
         #[arg(long, value_name = "FILE")]
         imu: PathBuf,
         /// Latitude of the site [deg].
@@ -132,6 +199,23 @@ enum Command {
         /// Vertical channel: integrated freely, or held at the start height.
         #[arg(long, value_enum, default_value_t = Vertical::Free)]
         vertical: Vertical,
+    },
+    /// Compare a solution log with a truth trajectory: RMS, max and chosen-time errors of
+    /// position, velocity and attitude, and optional SVG plots.
+    Report {
+        /// Solution log (CSV of `nav replay`, or a KF-GINS .nav result).
+        #[arg(long, value_name = "FILE")]
+        solution: PathBuf,
+        /// Truth trajectory (CSV with the solution log's header, or a KF-GINS .nav file).
+        #[arg(long, value_name = "FILE")]
+        truth: PathBuf,
+        /// Times [s] after the start of the truth (its first row) at which to print the errors (nearest row),
+        /// comma-separated.
+        #[arg(long, value_name = "S,...", value_delimiter = ',')]
+        at: Vec<f64>,
+        /// Directory for the SVG plots (created if missing).
+        #[arg(long, value_name = "DIR")]
+        plots: Option<PathBuf>,
     },
 }
 
@@ -183,6 +267,115 @@ enum Precision {
     F64,
 }
 
+/// Recording files of `nav sim`.
+#[derive(Clone, Copy, ValueEnum)]
+enum SimFormat {
+    /// imu.bin only.
+    Bin,
+    /// imu.csv only.
+    Csv,
+    /// Both.
+    Both,
+}
+
+/// `nav sim`'s arguments.
+struct SimArgs {
+    scenario: String,
+    out: Option<PathBuf>,
+    grade: host_tests::sensor_model::Grade,
+    seconds: Option<f64>,
+    rate: f64,
+    seed: u64,
+    set: Vec<String>,
+    truth_rate: f64,
+    format: SimFormat,
+    list_params: bool,
+}
+
+fn sim(a: SimArgs) -> Result<()> {
+    use host_tests::simulate::{Formats, SimOptions, simulate, write};
+    use host_tests::trajectory::scenarios::Scenario;
+    let mut scenario = Scenario::by_name(&a.scenario)?;
+    for kv in &a.set {
+        let (k, v) = kv
+            .split_once('=')
+            .with_context(|| format!("--set {kv:?}: expected KEY=VALUE"))?;
+        let v: f64 = v
+            .trim()
+            .parse()
+            .with_context(|| format!("--set {kv:?}: the value is not a number"))?;
+        scenario.set(k.trim(), v)?;
+    }
+    if a.list_params {
+        println!("{} parameters:", scenario.name());
+        for (k, v, doc) in scenario.describe() {
+            println!("  {k} = {v}  ({doc})");
+        }
+        return Ok(());
+    }
+    let Some(out) = a.out else {
+        anyhow::bail!("--out DIR is required");
+    };
+    let opts = SimOptions {
+        seconds: a.seconds,
+        rate_hz: a.rate,
+        truth_rate_hz: a.truth_rate,
+        seed: a.seed,
+        formats: match a.format {
+            SimFormat::Bin => Formats::Binary,
+            SimFormat::Csv => Formats::Csv,
+            SimFormat::Both => Formats::Both,
+        },
+        ..SimOptions::new(scenario, a.grade)
+    };
+    let bar = progress_bar();
+    let sim = simulate(&opts, |done, total| {
+        if let Some(b) = &bar {
+            b.set_length(total);
+            b.set_position(done);
+        }
+    })?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let files = write(&out, &opts, &sim)?;
+    let n = sim.recording.records.len();
+    println!(
+        "{} ({} grade, seed {}): {n} samples at {} Hz ({:.1} s)",
+        opts.scenario.name(),
+        opts.grade,
+        opts.seed,
+        opts.rate_hz,
+        n as f64 / opts.rate_hz
+    );
+    for p in [&files.binary, &files.csv].into_iter().flatten() {
+        println!("  recording  {}", p.display());
+    }
+    println!("  truth      {}", files.truth.display());
+    println!("  scenario   {}", files.description.display());
+    let c = sim.counters;
+    if c.gyro_saturated + c.accel_saturated > 0 {
+        println!(
+            "  saturated samples: gyro {}, accelerometer {}",
+            c.gyro_saturated, c.accel_saturated
+        );
+    }
+    Ok(())
+}
+
+/// A progress bar on stderr when it is a terminal; `None` when piped.
+fn progress_bar() -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    std::io::stderr().is_terminal().then(|| {
+        let b = indicatif::ProgressBar::new(0);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} samples, {eta} left")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    })
+}
+
 fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
@@ -195,6 +388,53 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Sim {
+            scenario,
+            out,
+            grade,
+            seconds,
+            rate,
+            seed,
+            set,
+            truth_rate,
+            format,
+            list_params,
+        } => sim(SimArgs {
+            scenario,
+            out,
+            grade,
+            seconds,
+            rate,
+            seed,
+            set,
+            truth_rate,
+            format,
+            list_params,
+        }),
+        Command::Emulate {
+            truth,
+            out,
+            preset,
+            errors,
+            set,
+            vertical,
+            errors_out,
+        } => {
+            let job = host_tests::emulate::EmulateJob {
+                truth: &truth,
+                out: &out,
+                preset,
+                errors_file: errors.as_deref(),
+                set: &set,
+                options: host_tests::emulate::EmulatorOptions {
+                    vertical,
+                    ..Default::default()
+                },
+                errors_out: errors_out.as_deref(),
+            };
+            print!("{}", job.run()?);
+            Ok(())
+        }
         Command::Generate {
             out,
             seconds,
@@ -252,6 +492,16 @@ fn run(cli: Cli) -> Result<()> {
                 recording.rate_hz,
                 out.display()
             );
+            Ok(())
+        }
+        Command::Report {
+            solution,
+            truth,
+            at,
+            plots,
+        } => {
+            let text = host_tests::report::report_files(&solution, &truth, &at, plots.as_deref())?;
+            print!("{text}");
             Ok(())
         }
         Command::Replay {

@@ -1,0 +1,642 @@
+//! Readers of the text formats of KF-GINS (the open-source EKF GNSS/INS program of the i2Nav group,
+//! Wuhan University) and of its datasets (awesome-gins-datasets).
+//!
+//! Both are plain numbers, one record a line, separated by spaces, tabs or commas (runs of
+//! separators count as one, as in KF-GINS's own loader); no header. Blank lines and lines starting
+//! with `#` or `%` are skipped.
+//!
+//! IMU file (7 columns): GNSS seconds of week [s], angle increments x y z [rad], velocity
+//! increments x y z [m/s], body axes forward-right-down, each over the interval ending at the
+//! time tag. KF-GINS's optional 8th column (odometer, config `imudatalen: 8`) is accepted and
+//! ignored. Time must increase from line to line; NaN or infinite increments are parsed, not
+//! refused (the replay flags them), as in the project's CSV format.
+//!
+//! Trajectory file (`truth.nav`, and KF-GINS's own `KF_GINS_Navresult.nav`; 11 columns): GNSS week,
+//! GNSS seconds of week [s], latitude, longitude [deg], ellipsoidal height [m], velocity north,
+//! east, down [m/s], roll, pitch, yaw [deg] (z-y-x Euler angles, FRD body to NED). Every value
+//! must be finite, the week a non-negative whole number that does not change within the file, and
+//! time must not go backwards. Times are returned as seconds of week: the IMU file has no week.
+
+use crate::imu_csv::{CsvRow, ImuCsv};
+use crate::truth::Truth;
+use nav_core::Vector3;
+use nav_core::attitude::from_euler;
+use std::fmt;
+use std::fs::File;
+use std::io::{self, BufRead, BufReader};
+use std::path::{Path, PathBuf};
+
+/// IMU file columns, as named in errors.
+pub const IMU_COLUMNS: [&str; 7] = [
+    "seconds of week",
+    "dtheta x",
+    "dtheta y",
+    "dtheta z",
+    "dv x",
+    "dv y",
+    "dv z",
+];
+
+/// Trajectory (`.nav`) file columns, as named in errors.
+pub const NAV_COLUMNS: [&str; 11] = [
+    "week",
+    "seconds of week",
+    "latitude",
+    "longitude",
+    "height",
+    "v north",
+    "v east",
+    "v down",
+    "roll",
+    "pitch",
+    "yaw",
+];
+
+/// Column positions in [`NAV_COLUMNS`].
+const WEEK: usize = 0;
+const SOW: usize = 1;
+const LAT: usize = 2;
+const LON: usize = 3;
+const H: usize = 4;
+const VEL: usize = 5;
+const ATT: usize = 8;
+
+/// One IMU line: the increments over the interval ending at `t_s`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KfGinsImuRow {
+    /// End of the interval: GNSS seconds of week [s].
+    pub t_s: f64,
+    /// Angle increment, integral of `omega_ib_b` over the interval, body FRD [rad].
+    pub delta_theta_ib_b: [f64; 3],
+    /// Velocity increment, integral of `f_ib_b` over the interval, body FRD [m/s].
+    pub delta_v_ib_b: [f64; 3],
+}
+
+/// A KF-GINS IMU file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KfGinsImu {
+    /// The rows, in file order (time increasing).
+    pub rows: Vec<KfGinsImuRow>,
+}
+
+impl KfGinsImu {
+    /// The rows in the project's CSV form (increments rounded to f32 as the binary format stores
+    /// them; no temperature).
+    pub fn to_imu_csv(&self) -> ImuCsv {
+        let to_f32 = |v: [f64; 3]| v.map(|x| x as f32);
+        ImuCsv {
+            has_temperature: false,
+            rows: self
+                .rows
+                .iter()
+                .map(|r| CsvRow {
+                    t_s: r.t_s,
+                    delta_theta_ib_b: to_f32(r.delta_theta_ib_b),
+                    delta_v_ib_b: to_f32(r.delta_v_ib_b),
+                    temperature_c: f32::NAN,
+                })
+                .collect(),
+        }
+    }
+}
+
+/// A KF-GINS reading error, naming the file and (for content errors) the line.
+#[derive(Debug)]
+pub struct KfGinsError {
+    /// The file.
+    pub path: PathBuf,
+    /// 1-based line number, when the error is about a line.
+    pub line: Option<u64>,
+    /// What went wrong.
+    pub kind: KfGinsErrorKind,
+}
+
+/// Which KF-GINS file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileKind {
+    /// The IMU text file (7 columns).
+    Imu,
+    /// The trajectory file (`.nav`, 11 columns).
+    Nav,
+}
+
+impl FileKind {
+    fn columns(self) -> &'static [&'static str] {
+        match self {
+            Self::Imu => &IMU_COLUMNS,
+            Self::Nav => &NAV_COLUMNS,
+        }
+    }
+}
+
+/// What went wrong in a KF-GINS file.
+#[derive(Debug)]
+pub enum KfGinsErrorKind {
+    /// The file holds no data line.
+    Empty(FileKind),
+    /// A line has the wrong number of fields.
+    ColumnCount {
+        /// The file's kind.
+        file: FileKind,
+        /// Number of fields found.
+        found: usize,
+    },
+    /// A field is not a number.
+    NotANumber {
+        /// Column name.
+        column: &'static str,
+        /// The field's text.
+        found: String,
+    },
+    /// A field is NaN or infinite where a finite number is needed.
+    NotFinite {
+        /// Column name.
+        column: &'static str,
+        /// The field's text.
+        found: String,
+    },
+    /// The time is negative.
+    NegativeTime {
+        /// The time found [s].
+        t_s: f64,
+    },
+    /// The GNSS week is not a non-negative whole number.
+    BadWeek {
+        /// The week found.
+        week: f64,
+    },
+    /// The GNSS week changes within the file.
+    WeekChange {
+        /// The previous row's week.
+        from: f64,
+        /// This row's week.
+        to: f64,
+    },
+    /// The latitude is outside [-90, 90] deg.
+    BadLatitude {
+        /// The latitude found [deg].
+        lat_deg: f64,
+    },
+    /// An IMU time is not later than the previous line's.
+    TimeNotIncreasing {
+        /// This line's time [s].
+        t_s: f64,
+        /// The previous line's time [s].
+        previous_t_s: f64,
+    },
+    /// A trajectory time is earlier than the previous line's.
+    TimeBackwards {
+        /// This line's time [s].
+        t_s: f64,
+        /// The previous line's time [s].
+        previous_t_s: f64,
+    },
+    /// The file could not be opened or read.
+    Io(io::Error),
+}
+
+impl fmt::Display for KfGinsError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: ", self.path.display())?;
+        if let Some(line) = self.line {
+            write!(f, "line {line}: ")?;
+        }
+        match &self.kind {
+            KfGinsErrorKind::Empty(file) => write!(
+                f,
+                "no data: expected lines of {} numbers ({})",
+                file.columns().len(),
+                file.columns().join(", ")
+            ),
+            KfGinsErrorKind::ColumnCount { file, found } => {
+                match file {
+                    FileKind::Imu => write!(
+                        f,
+                        "expected 7 numbers (seconds of week, dtheta x y z [rad], dv x y z [m/s]; \
+                         an 8th, odometer, column is allowed), found {found}"
+                    )?,
+                    FileKind::Nav => write!(
+                        f,
+                        "expected 11 numbers (week, seconds of week, latitude, longitude \
+                         [deg], height [m], v north east down [m/s], roll, pitch, yaw [deg]), \
+                         found {found}"
+                    )?,
+                }
+                match (file, found) {
+                    (FileKind::Imu, 11) => f.write_str(" (is this a KF-GINS .nav trajectory?)"),
+                    (FileKind::Nav, 7 | 8) => f.write_str(" (is this a KF-GINS IMU file?)"),
+                    _ => Ok(()),
+                }
+            }
+            KfGinsErrorKind::NotANumber { column, found } => {
+                write!(f, "column {column}: expected a number, found '{found}'")
+            }
+            KfGinsErrorKind::NotFinite { column, found } => {
+                write!(
+                    f,
+                    "column {column}: expected a finite number, found '{found}'"
+                )
+            }
+            KfGinsErrorKind::NegativeTime { t_s } => write!(
+                f,
+                "column seconds of week: expected a non-negative time, found {t_s} s"
+            ),
+            KfGinsErrorKind::BadWeek { week } => write!(
+                f,
+                "column week: expected a non-negative whole GNSS week, found {week}"
+            ),
+            KfGinsErrorKind::WeekChange { from, to } => write!(
+                f,
+                "column week: the GNSS week changes from {from} to {to}; times are seconds of \
+                 week, so a file must stay within one week"
+            ),
+            KfGinsErrorKind::BadLatitude { lat_deg } => {
+                write!(f, "column latitude: {lat_deg} deg is outside [-90, 90]")
+            }
+            KfGinsErrorKind::TimeNotIncreasing { t_s, previous_t_s } => write!(
+                f,
+                "column seconds of week: time does not increase: {t_s} s after {previous_t_s} s \
+                 on the previous line"
+            ),
+            KfGinsErrorKind::TimeBackwards { t_s, previous_t_s } => write!(
+                f,
+                "column seconds of week: time goes backwards: {t_s} s after {previous_t_s} s on \
+                 the previous line"
+            ),
+            KfGinsErrorKind::Io(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for KfGinsError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &self.kind {
+            KfGinsErrorKind::Io(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+/// The fields of a line: separated by any run of spaces, tabs and commas.
+fn fields(text: &str) -> impl Iterator<Item = &str> {
+    text.split([' ', '\t', ','])
+        .map(str::trim)
+        .filter(|f| !f.is_empty())
+}
+
+/// A line to skip: blank or a comment.
+fn skipped(text: &str) -> bool {
+    text.is_empty() || text.starts_with('#') || text.starts_with('%')
+}
+
+/// `true` when the first data line of `head` (the start of a file) is a complete line of 7 or 8
+/// numbers: a KF-GINS IMU file (a `.nav` trajectory has 11, PSINS lines 6).
+pub fn looks_like_imu(head: &str) -> bool {
+    let head = head.trim_start_matches('\u{feff}');
+    // Only complete lines: the last piece may be cut off.
+    let mut lines: Vec<&str> = head.split('\n').collect();
+    lines.pop();
+    lines
+        .into_iter()
+        .map(str::trim)
+        .find(|l| !skipped(l))
+        .is_some_and(|l| {
+            let f: Vec<&str> = fields(l).collect();
+            matches!(f.len(), 7 | 8) && f.iter().all(|x| x.parse::<f64>().is_ok())
+        })
+}
+
+/// Reads a KF-GINS IMU file.
+pub fn read_imu(path: &Path) -> Result<KfGinsImu, KfGinsError> {
+    let file = File::open(path).map_err(|e| error(path, None, KfGinsErrorKind::Io(e)))?;
+    read_imu_from(BufReader::new(file), path)
+}
+
+/// Reads a KF-GINS IMU file from `reader`; `path` names it in errors.
+pub fn read_imu_from<R: BufRead>(reader: R, path: &Path) -> Result<KfGinsImu, KfGinsError> {
+    let mut rows: Vec<KfGinsImuRow> = Vec::new();
+    for_each_line(reader, path, FileKind::Imu, |values, at| {
+        let number = |i: usize| parse(values[i], IMU_COLUMNS[i]).map_err(at);
+        let t_s = number(0)?;
+        check_time(t_s, values[0]).map_err(at)?;
+        if let Some(previous) = rows.last()
+            && t_s <= previous.t_s
+        {
+            return Err(at(KfGinsErrorKind::TimeNotIncreasing {
+                t_s,
+                previous_t_s: previous.t_s,
+            }));
+        }
+        rows.push(KfGinsImuRow {
+            t_s,
+            delta_theta_ib_b: [number(1)?, number(2)?, number(3)?],
+            delta_v_ib_b: [number(4)?, number(5)?, number(6)?],
+        });
+        Ok(())
+    })?;
+    Ok(KfGinsImu { rows })
+}
+
+/// Reads a KF-GINS trajectory (`.nav`) file; times are seconds of week.
+pub fn read_truth(path: &Path) -> Result<Vec<Truth>, KfGinsError> {
+    let file = File::open(path).map_err(|e| error(path, None, KfGinsErrorKind::Io(e)))?;
+    read_truth_from(BufReader::new(file), path)
+}
+
+/// Reads a KF-GINS trajectory from `reader`; `path` names it in errors.
+pub fn read_truth_from<R: BufRead>(reader: R, path: &Path) -> Result<Vec<Truth>, KfGinsError> {
+    let mut rows: Vec<Truth> = Vec::new();
+    let mut week0: Option<f64> = None;
+    for_each_line(reader, path, FileKind::Nav, |fields, at| {
+        let mut v = [0.0_f64; NAV_COLUMNS.len()];
+        for (i, slot) in v.iter_mut().enumerate() {
+            let x = parse(fields[i], NAV_COLUMNS[i]).map_err(at)?;
+            if !x.is_finite() {
+                return Err(at(KfGinsErrorKind::NotFinite {
+                    column: NAV_COLUMNS[i],
+                    found: fields[i].to_owned(),
+                }));
+            }
+            *slot = x;
+        }
+        let week = v[WEEK];
+        if week < 0.0 || week.fract() != 0.0 {
+            return Err(at(KfGinsErrorKind::BadWeek { week }));
+        }
+        match week0 {
+            Some(w) if w != week => {
+                return Err(at(KfGinsErrorKind::WeekChange { from: w, to: week }));
+            }
+            _ => week0 = Some(week),
+        }
+        check_time(v[SOW], fields[SOW]).map_err(at)?;
+        if let Some(previous) = rows.last()
+            && v[SOW] < previous.t_s
+        {
+            return Err(at(KfGinsErrorKind::TimeBackwards {
+                t_s: v[SOW],
+                previous_t_s: previous.t_s,
+            }));
+        }
+        if !(-90.0..=90.0).contains(&v[LAT]) {
+            return Err(at(KfGinsErrorKind::BadLatitude { lat_deg: v[LAT] }));
+        }
+        rows.push(Truth {
+            t_s: v[SOW],
+            lat: v[LAT].to_radians(),
+            lon: v[LON].to_radians(),
+            h: v[H],
+            v_eb_ned: Vector3::new(v[VEL], v[VEL + 1], v[VEL + 2]),
+            q_b_ned: from_euler(
+                v[ATT].to_radians(),
+                v[ATT + 1].to_radians(),
+                v[ATT + 2].to_radians(),
+            ),
+        });
+        Ok(())
+    })?;
+    Ok(rows)
+}
+
+/// Makes an error of the current line.
+type LineError<'a> = &'a dyn Fn(KfGinsErrorKind) -> KfGinsError;
+
+/// Calls `row(fields, at)` for each data line with the right number of fields; `at` makes
+/// an error of that line. Errors when there is no data line.
+fn for_each_line<R: BufRead>(
+    reader: R,
+    path: &Path,
+    file: FileKind,
+    mut row: impl FnMut(&[&str], LineError) -> Result<(), KfGinsError>,
+) -> Result<(), KfGinsError> {
+    let width = file.columns().len();
+    let mut any = false;
+    for (index, line) in reader.lines().enumerate() {
+        let line_no = index as u64 + 1;
+        let at = |kind| error(path, Some(line_no), kind);
+        let line = line.map_err(|e| at(KfGinsErrorKind::Io(e)))?;
+        let text = line.trim().trim_start_matches('\u{feff}');
+        if skipped(text) {
+            continue;
+        }
+        let values: Vec<&str> = fields(text).collect();
+        let allowed = match file {
+            FileKind::Imu => matches!(values.len(), 7 | 8),
+            FileKind::Nav => values.len() == width,
+        };
+        if !allowed {
+            return Err(at(KfGinsErrorKind::ColumnCount {
+                file,
+                found: values.len(),
+            }));
+        }
+        row(&values, &at)?;
+        any = true;
+    }
+    if any {
+        Ok(())
+    } else {
+        Err(error(path, None, KfGinsErrorKind::Empty(file)))
+    }
+}
+
+fn parse(text: &str, column: &'static str) -> Result<f64, KfGinsErrorKind> {
+    text.parse().map_err(|_| KfGinsErrorKind::NotANumber {
+        column,
+        found: text.to_owned(),
+    })
+}
+
+/// A time must be finite and non-negative (it becomes nanoseconds on the recording's clock).
+fn check_time(t_s: f64, text: &str) -> Result<(), KfGinsErrorKind> {
+    if !t_s.is_finite() {
+        Err(KfGinsErrorKind::NotFinite {
+            column: "seconds of week",
+            found: text.to_owned(),
+        })
+    } else if t_s < 0.0 {
+        Err(KfGinsErrorKind::NegativeTime { t_s })
+    } else {
+        Ok(())
+    }
+}
+
+fn error(path: &Path, line: Option<u64>, kind: KfGinsErrorKind) -> KfGinsError {
+    KfGinsError {
+        path: path.to_owned(),
+        line,
+        kind,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nav_core::UnitQuaternion;
+
+    /// Three lines as KF-GINS's demo data looks (200 Hz, seconds of week), one with commas and
+    /// an odometer column.
+    const IMU: &str = "456300.005000000  -0.000011342  0.000002745 -0.000003281  0.000220490 -0.000030405 -0.049042720\n\
+                       456300.010000000\t-0.000011120\t0.000002540\t-0.000003501\t0.000222310\t-0.000030801\t-0.049046570\n\
+                       \n\
+                       456300.015,-1.1e-5, 2.6e-6,-3.4e-6,0.00022,-3.1e-5,-0.04904, 0.0\n";
+
+    fn imu(text: &str) -> Result<KfGinsImu, KfGinsError> {
+        read_imu_from(text.as_bytes(), Path::new("mem.txt"))
+    }
+
+    fn nav(text: &str) -> Result<Vec<Truth>, KfGinsError> {
+        read_truth_from(text.as_bytes(), Path::new("mem.nav"))
+    }
+
+    #[test]
+    fn reads_imu_lines() {
+        let r = imu(IMU).unwrap();
+        assert_eq!(r.rows.len(), 3);
+        assert_eq!(r.rows[0].t_s, 456_300.005);
+        assert_eq!(
+            r.rows[0].delta_theta_ib_b,
+            [-0.000011342, 0.000002745, -0.000003281]
+        );
+        assert_eq!(r.rows[1].delta_v_ib_b[2], -0.049046570);
+        assert_eq!(r.rows[2].t_s, 456_300.015);
+        assert_eq!(r.rows[2].delta_v_ib_b, [0.00022, -3.1e-5, -0.04904]);
+        let csv = r.to_imu_csv();
+        assert_eq!(csv.rows[0].delta_v_ib_b[2], -0.049_042_72_f64 as f32);
+        assert!(csv.rows[0].temperature_c.is_nan());
+    }
+
+    #[test]
+    fn detects_imu_files_only() {
+        assert!(looks_like_imu(IMU));
+        assert!(looks_like_imu(&format!("# comment\n\n{IMU}")));
+        // A .nav line (11 numbers), a PSINS header line (6), a CSV header, a cut-off line.
+        assert!(!looks_like_imu(
+            "0 456300.005 30.44 114.47 20.9 0 0 0 0.85 -2.03 185.7\n"
+        ));
+        assert!(!looks_like_imu("0 0 -90.6 0 0 0\n1 2 3 4 5 6 7\n"));
+        assert!(!looks_like_imu(
+            "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,dv_y_mps,dv_z_mps\n"
+        ));
+        assert!(!looks_like_imu("456300.005 1 2 3 4 5 6"));
+    }
+
+    #[test]
+    fn imu_errors_name_file_line_and_column() {
+        let msg = |text: &str| imu(text).unwrap_err().to_string();
+        let bad = IMU.replace("0.000002540", "0.0000x2540");
+        assert_eq!(
+            msg(&bad),
+            "mem.txt: line 2: column dtheta y: expected a number, found '0.0000x2540'"
+        );
+        let bad = IMU.replace("456300.010000000", "456300.005");
+        assert_eq!(
+            msg(&bad),
+            "mem.txt: line 2: column seconds of week: time does not increase: 456300.005 s after \
+             456300.005 s on the previous line"
+        );
+        let m = msg("1 2 3 4 5 6\n");
+        assert!(
+            m.starts_with("mem.txt: line 1: expected 7 numbers") && m.ends_with("found 6"),
+            "{m}"
+        );
+        let m = msg("0 456300.005 30.44 114.47 20.9 0 0 0 0.85 -2.03 185.7\n");
+        assert!(
+            m.ends_with("found 11 (is this a KF-GINS .nav trajectory?)"),
+            "{m}"
+        );
+        assert!(msg("-1 0 0 0 0 0 0\n").contains("non-negative time"));
+        assert!(msg("# only a comment\n").contains("no data"));
+        // NaN increments are parsed (the replay flags them), a NaN time is not.
+        assert!(imu("1 NaN 0 0 0 0 0\n").unwrap().rows[0].delta_theta_ib_b[0].is_nan());
+        assert_eq!(
+            msg("nan 0 0 0 0 0 0\n"),
+            "mem.txt: line 1: column seconds of week: expected a finite number, found 'nan'"
+        );
+    }
+
+    #[test]
+    fn recording_io_detects_and_converts() {
+        use crate::recording_io::{self, Format};
+        use hal_adapters::recording::Kind;
+        let dir = tempfile::tempdir().unwrap();
+        // 200 Hz with one 10 ms gap; any file name.
+        let text: String = [0, 1, 2, 4, 5]
+            .iter()
+            .map(|k| {
+                format!(
+                    "{} 1e-6 0 0 0 0 -0.049\n",
+                    456_300.0 + 0.005 * f64::from(*k)
+                )
+            })
+            .collect();
+        let path = dir.path().join("imu.data");
+        std::fs::write(&path, &text).unwrap();
+        assert_eq!(recording_io::detect(&path).unwrap(), Format::KfGins);
+        let r = recording_io::read(&path).unwrap();
+        assert_eq!(r.kind, Kind::Increments);
+        assert_eq!(r.records.len(), 5);
+        assert!((r.rate_hz - 200.0).abs() < 1e-6, "{}", r.rate_hz);
+        assert_eq!(r.records[0].t_ns, 456_300_000_000_000);
+        assert_eq!(r.t0_ns, 456_299_995_000_000);
+        assert_eq!(r.records[3].t_ns, 456_300_020_000_000);
+        assert_eq!(r.records[0].gyro, [1e-6, 0.0, 0.0]);
+        assert!(r.records[0].temperature_c.is_nan());
+
+        // A damaged .txt file gets the KF-GINS reader's message.
+        let bad = dir.path().join("bad.txt");
+        std::fs::write(&bad, "456300 1 2 3\n").unwrap();
+        assert_eq!(recording_io::detect(&bad).unwrap(), Format::KfGins);
+        let msg = format!("{:#}", recording_io::read(&bad).unwrap_err());
+        assert!(msg.contains("bad.txt: line 1: expected 7 numbers"), "{msg}");
+    }
+
+    /// KF-GINS writes `%-15.9lf ` fields: left-aligned, trailing blanks.
+    const NAV: &str = "0.000000000     456300.005000000 30.444787370    114.471863205   20.899000000    0.000100000     -0.000200000    0.000300000     0.854215020     -2.034802950    185.702351330   \n\
+                       0.000000000     456300.010000000 30.444787371    114.471863205   20.899100000    0.000100000     -0.000200000    0.000300000     0.854215020     -2.034802950    185.702351330   \n";
+
+    #[test]
+    fn reads_nav_lines() {
+        let t = nav(NAV).unwrap();
+        assert_eq!(t.len(), 2);
+        assert_eq!(t[0].t_s, 456_300.005);
+        assert_eq!(t[0].lat, 30.444787370_f64.to_radians());
+        assert_eq!(t[0].lon, 114.471863205_f64.to_radians());
+        assert_eq!(t[1].h, 20.8991);
+        assert_eq!(t[0].v_eb_ned, Vector3::new(0.0001, -0.0002, 0.0003));
+        let q = UnitQuaternion::from_euler_angles(
+            0.854215020_f64.to_radians(),
+            (-2.034802950_f64).to_radians(),
+            185.702351330_f64.to_radians(),
+        );
+        assert!(t[0].q_b_ned.angle_to(&q) < 1e-15);
+    }
+
+    #[test]
+    fn nav_errors_name_file_line_and_column() {
+        let msg = |text: &str| nav(text).unwrap_err().to_string();
+        let second = NAV.lines().nth(1).unwrap();
+        let first = NAV.lines().next().unwrap();
+        assert_eq!(
+            msg(&format!("{second}\n{first}\n")),
+            "mem.nav: line 2: column seconds of week: time goes backwards: 456300.005 s after \
+             456300.01 s on the previous line"
+        );
+        assert_eq!(
+            msg(&NAV.replace("185.702351330   \n0.0", "NaN\n0.0")),
+            "mem.nav: line 1: column yaw: expected a finite number, found 'NaN'"
+        );
+        assert!(msg(&NAV.replacen("0.000000000 ", "1.5 ", 1)).contains("line 1: column week"));
+        let m = msg(&NAV.replacen("0.000000000 ", "1 ", 1));
+        assert!(
+            m.contains("line 2: column week: the GNSS week changes from 1 to 0"),
+            "{m}"
+        );
+        let m = msg("456300.005 1 2 3 4 5 6\n");
+        assert!(m.ends_with("found 7 (is this a KF-GINS IMU file?)"), "{m}");
+        assert!(msg(&NAV.replace("30.444787370", "91")).contains("latitude: 91 deg"));
+        // Equal times are allowed in a trajectory.
+        let first = format!("{first}\n");
+        nav(&first.repeat(2)).unwrap();
+    }
+}

@@ -1,0 +1,843 @@
+//! A navigation solution compared with a truth trajectory: errors, statistics, a table and SVG
+//! plots (`nav report`).
+//!
+//! Each solution row is compared with the truth at the same time: the truth is interpolated
+//! linearly in time between its rows (latitude, longitude, height, velocity; attitude by slerp).
+//! Solution rows outside the truth's time span (with 1 us of slack, the solution log's
+//! resolution) are skipped and counted. Errors are solution minus truth:
+//! - position north and east [m]: the latitude and longitude differences times the radii of
+//!   curvature at the truth (`(R_N + h) dlat`, `(R_E + h) cos(lat) dlon`), their horizontal
+//!   norm, and the height difference [m];
+//! - velocity north, east, down [m/s];
+//! - roll, pitch and yaw differences [deg], each wrapped to [-180, 180), and the total rotation
+//!   angle of `q_true^-1 q_sol` [deg] (free of the Euler angles' singularities).
+
+use crate::truth::Truth;
+use crate::{kf_gins, truth_csv};
+use anyhow::{Context, Result, anyhow, bail, ensure};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use nav_core::attitude::euler;
+use nav_core::earth::radii;
+use plotters::prelude::*;
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::fs::File;
+use std::io::{BufRead, BufReader, IsTerminal, Read};
+use std::path::{Path, PathBuf};
+
+/// Slack [s] at the ends of the truth's span: the solution log's time resolution.
+pub const SPAN_SLACK_S: f64 = 1e-6;
+
+/// Files at least this large [bytes] get a progress bar while read (when stderr is a terminal).
+const PROGRESS_MIN_BYTES: u64 = 4 << 20;
+
+/// At most this many points per plotted line (min and max of each bucket are kept).
+const PLOT_MAX_POINTS: usize = 4000;
+
+/// The errors of one solution row (solution minus truth).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErrorSample {
+    /// Time of the solution row [s].
+    pub t_s: f64,
+    /// Position error north, `(R_N + h) (lat_sol - lat_true)` [m].
+    pub north_m: f64,
+    /// Position error east, `(R_E + h) cos(lat) (lon_sol - lon_true)` [m].
+    pub east_m: f64,
+    /// Horizontal position error, `hypot(north, east)` [m].
+    pub horizontal_m: f64,
+    /// Height error, `h_sol - h_true` [m].
+    pub height_m: f64,
+    /// Velocity error `v_eb_ned` north, east, down [m/s].
+    pub v_ned_mps: [f64; 3],
+    /// Roll error [deg], in [-180, 180).
+    pub roll_deg: f64,
+    /// Pitch error [deg].
+    pub pitch_deg: f64,
+    /// Yaw (heading) error [deg], in [-180, 180).
+    pub yaw_deg: f64,
+    /// Rotation angle of `q_true^-1 q_sol` [deg], in [0, 180].
+    pub rotation_deg: f64,
+}
+
+/// The errors of a solution against a truth.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ErrorSeries {
+    /// Time of the truth's first row [s] (the start of a simulated recording): the origin of
+    /// relative times.
+    pub t_start_s: f64,
+    /// The truth's time span [s].
+    pub truth_span_s: (f64, f64),
+    /// One sample per compared solution row, in solution order.
+    pub samples: Vec<ErrorSample>,
+    /// Solution rows skipped because they are before the truth's span.
+    pub skipped_before: usize,
+    /// Solution rows skipped because they are after the truth's span.
+    pub skipped_after: usize,
+}
+
+/// An error quantity of an [`ErrorSample`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quantity {
+    /// Position north [m].
+    North,
+    /// Position east [m].
+    East,
+    /// Horizontal position [m].
+    Horizontal,
+    /// Height [m].
+    Height,
+    /// Velocity north [m/s].
+    VelocityNorth,
+    /// Velocity east [m/s].
+    VelocityEast,
+    /// Velocity down [m/s].
+    VelocityDown,
+    /// Roll [deg].
+    Roll,
+    /// Pitch [deg].
+    Pitch,
+    /// Yaw [deg].
+    Yaw,
+    /// Total attitude rotation [deg].
+    Rotation,
+}
+
+impl Quantity {
+    /// Every quantity, in table order.
+    pub const ALL: [Self; 11] = [
+        Self::North,
+        Self::East,
+        Self::Horizontal,
+        Self::Height,
+        Self::VelocityNorth,
+        Self::VelocityEast,
+        Self::VelocityDown,
+        Self::Roll,
+        Self::Pitch,
+        Self::Yaw,
+        Self::Rotation,
+    ];
+
+    /// Short name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::North => "north",
+            Self::East => "east",
+            Self::Horizontal => "horizontal",
+            Self::Height => "height",
+            Self::VelocityNorth => "v north",
+            Self::VelocityEast => "v east",
+            Self::VelocityDown => "v down",
+            Self::Roll => "roll",
+            Self::Pitch => "pitch",
+            Self::Yaw => "yaw",
+            Self::Rotation => "rotation",
+        }
+    }
+
+    /// Unit.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Self::North | Self::East | Self::Horizontal | Self::Height => "m",
+            Self::VelocityNorth | Self::VelocityEast | Self::VelocityDown => "m/s",
+            Self::Roll | Self::Pitch | Self::Yaw | Self::Rotation => "deg",
+        }
+    }
+
+    /// The quantity's value in `e`.
+    pub fn of(self, e: &ErrorSample) -> f64 {
+        match self {
+            Self::North => e.north_m,
+            Self::East => e.east_m,
+            Self::Horizontal => e.horizontal_m,
+            Self::Height => e.height_m,
+            Self::VelocityNorth => e.v_ned_mps[0],
+            Self::VelocityEast => e.v_ned_mps[1],
+            Self::VelocityDown => e.v_ned_mps[2],
+            Self::Roll => e.roll_deg,
+            Self::Pitch => e.pitch_deg,
+            Self::Yaw => e.yaw_deg,
+            Self::Rotation => e.rotation_deg,
+        }
+    }
+}
+
+/// Statistics of one quantity over a series.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErrorStats {
+    /// Root mean square, in the quantity's unit.
+    pub rms: f64,
+    /// Largest absolute value, in the quantity's unit.
+    pub max_abs: f64,
+    /// Time of the largest absolute value (its first occurrence) [s].
+    pub t_max_s: f64,
+}
+
+impl ErrorSeries {
+    /// Statistics of `q`; `None` for an empty series.
+    pub fn stats(&self, q: Quantity) -> Option<ErrorStats> {
+        let first = self.samples.first()?;
+        let mut sum2 = 0.0;
+        let (mut max_abs, mut t_max_s) = (q.of(first).abs(), first.t_s);
+        for e in &self.samples {
+            let x = q.of(e);
+            sum2 += x * x;
+            if x.abs() > max_abs {
+                (max_abs, t_max_s) = (x.abs(), e.t_s);
+            }
+        }
+        Some(ErrorStats {
+            rms: (sum2 / self.samples.len() as f64).sqrt(),
+            max_abs,
+            t_max_s,
+        })
+    }
+
+    /// The sample nearest in time to `t_s` [s] (the earlier one on a tie); `None` when empty.
+    pub fn nearest(&self, t_s: f64) -> Option<&ErrorSample> {
+        let k = self.samples.partition_point(|e| e.t_s < t_s);
+        let after = self.samples.get(k);
+        let before = k.checked_sub(1).and_then(|i| self.samples.get(i));
+        match (before, after) {
+            (Some(b), Some(a)) => Some(if t_s - b.t_s <= a.t_s - t_s { b } else { a }),
+            (b, a) => b.or(a),
+        }
+    }
+}
+
+/// Compares `solution` with `truth` (both in time order; see the module docs). Errors when the
+/// truth is empty or not in time order, or when no solution row lies within the truth's span.
+pub fn compare(solution: &[Truth], truth: &[Truth]) -> Result<ErrorSeries> {
+    let (Some(first), Some(last)) = (truth.first(), truth.last()) else {
+        bail!("the truth has no rows");
+    };
+    let Some(start) = solution.first() else {
+        bail!("the solution has no rows");
+    };
+    if let Some(k) = truth.windows(2).position(|w| w[1].t_s < w[0].t_s) {
+        bail!(
+            "truth time goes backwards at row {}: {} s after {} s",
+            k + 2,
+            truth[k + 1].t_s,
+            truth[k].t_s
+        );
+    }
+    let (t0, t1) = (first.t_s, last.t_s);
+    let mut series = ErrorSeries {
+        t_start_s: t0,
+        truth_span_s: (t0, t1),
+        samples: Vec::with_capacity(solution.len()),
+        skipped_before: 0,
+        skipped_after: 0,
+    };
+    for s in solution {
+        match interpolate(truth, s.t_s) {
+            Some(t) => series.samples.push(errors(s, &t)),
+            None if s.t_s < t0 => series.skipped_before += 1,
+            None => series.skipped_after += 1,
+        }
+    }
+    if series.samples.is_empty() {
+        let t_end = solution.last().map_or(start.t_s, |s| s.t_s);
+        bail!(
+            "no solution row within the truth's time span [{t0}, {t1}] s (the solution spans \
+             [{}, {t_end}] s)",
+            start.t_s
+        );
+    }
+    Ok(series)
+}
+
+/// The truth at `t_s` [s]: linear in time between the rows around it, attitude by slerp; `None`
+/// outside the span (beyond [`SPAN_SLACK_S`]). `truth` must be in time order.
+pub fn interpolate(truth: &[Truth], t_s: f64) -> Option<Truth> {
+    let (first, last) = (truth.first()?, truth.last()?);
+    if !(t_s >= first.t_s - SPAN_SLACK_S && t_s <= last.t_s + SPAN_SLACK_S) {
+        return None;
+    }
+    // The first row later than t_s; the row before it is at or before t_s.
+    let k = truth.partition_point(|r| r.t_s <= t_s);
+    let (a, b) = match k {
+        0 => return Some(Truth { t_s, ..*first }),
+        k if k == truth.len() => return Some(Truth { t_s, ..*last }),
+        k => (&truth[k - 1], &truth[k]),
+    };
+    if a.t_s == t_s {
+        // On a row: exactly that row (slerp at 0 would round).
+        return Some(*a);
+    }
+    // a.t_s < t_s < b.t_s, so the span is positive.
+    let f = (t_s - a.t_s) / (b.t_s - a.t_s);
+    let lerp = |x: f64, y: f64| x + f * (y - x);
+    let q_b_ned = a
+        .q_b_ned
+        .try_slerp(&b.q_b_ned, f, 1e-12)
+        // Half a turn between rows: no unique path; take the nearer row.
+        .unwrap_or(if f < 0.5 { a.q_b_ned } else { b.q_b_ned });
+    Some(Truth {
+        t_s,
+        lat: lerp(a.lat, b.lat),
+        lon: wrap_pi(a.lon + f * wrap_pi(b.lon - a.lon)),
+        h: lerp(a.h, b.h),
+        v_eb_ned: a.v_eb_ned + (b.v_eb_ned - a.v_eb_ned) * f,
+        q_b_ned,
+    })
+}
+
+/// The errors of `sol` against `truth` at the same time.
+fn errors(sol: &Truth, truth: &Truth) -> ErrorSample {
+    let (r_n, r_e) = radii(truth.lat);
+    let north_m = (sol.lat - truth.lat) * (r_n + truth.h);
+    let east_m = wrap_pi(sol.lon - truth.lon) * (r_e + truth.h) * truth.lat.cos();
+    let (roll_s, pitch_s, yaw_s) = euler(&sol.q_b_ned);
+    let (roll_t, pitch_t, yaw_t) = euler(&truth.q_b_ned);
+    let dq = truth.q_b_ned.inverse() * sol.q_b_ned;
+    // 2 atan2(|v|, |w|): accurate for small angles too (acos(|w|) is not).
+    let rotation = 2.0 * dq.imag().norm().atan2(dq.w.abs());
+    let dv = sol.v_eb_ned - truth.v_eb_ned;
+    ErrorSample {
+        t_s: sol.t_s,
+        north_m,
+        east_m,
+        horizontal_m: north_m.hypot(east_m),
+        height_m: sol.h - truth.h,
+        v_ned_mps: [dv.x, dv.y, dv.z],
+        roll_deg: wrap_pi(roll_s - roll_t).to_degrees(),
+        pitch_deg: (pitch_s - pitch_t).to_degrees(),
+        yaw_deg: wrap_pi(yaw_s - yaw_t).to_degrees(),
+        rotation_deg: rotation.to_degrees(),
+    }
+}
+
+/// `a` [rad] wrapped to [-pi, pi).
+fn wrap_pi(a: f64) -> f64 {
+    (a + PI).rem_euclid(2.0 * PI) - PI
+}
+
+/// Reads a trajectory: a CSV with the solution log's header (truth files, `nav replay` logs) or a
+/// KF-GINS `.nav` file (first data line all numbers). Shows a progress bar for large files when
+/// `progress` is set and stderr is a terminal.
+pub fn read_trajectory(path: &Path, progress: bool) -> Result<Vec<Truth>> {
+    let file = File::open(path).with_context(|| format!("{}", path.display()))?;
+    let len = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let bar = (progress && len >= PROGRESS_MIN_BYTES && std::io::stderr().is_terminal())
+        .then(|| progress_bar(path, len));
+    let reader: Box<dyn Read> = match &bar {
+        Some(bar) => Box::new(bar.wrap_read(file)),
+        None => Box::new(file),
+    };
+    let mut reader = BufReader::new(reader);
+    let is_kf_gins = first_data_line(&mut reader)
+        .with_context(|| format!("{}", path.display()))?
+        .is_some_and(|line| {
+            line.split([' ', '\t', ','])
+                .all(|f| f.is_empty() || f.parse::<f64>().is_ok())
+        });
+    let rows = if is_kf_gins {
+        kf_gins::read_truth_from(reader, path).map_err(anyhow::Error::from)
+    } else {
+        truth_csv::read_from(reader, path).map_err(anyhow::Error::from)
+    };
+    // Cleared on errors too, so the message is not printed after a stale bar.
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    rows
+}
+
+/// The first line that is not blank or a `#`/`%` comment, without consuming the buffer.
+fn first_data_line<R: BufRead>(reader: &mut R) -> std::io::Result<Option<String>> {
+    let head = reader.fill_buf()?;
+    let text = String::from_utf8_lossy(head);
+    Ok(text
+        .trim_start_matches('\u{feff}')
+        .lines()
+        .map(str::trim)
+        .find(|l| !(l.is_empty() || l.starts_with('#') || l.starts_with('%')))
+        .map(str::to_owned))
+}
+
+fn progress_bar(path: &Path, len: u64) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
+    if let Ok(style) =
+        ProgressStyle::with_template("{msg} [{bar:40}] {bytes}/{total_bytes} ({eta})")
+    {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_message(format!("reading {}", path.display()));
+    bar
+}
+
+/// `x` with about 4 significant digits, fixed-point when readable.
+fn number(x: f64) -> String {
+    let a = x.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if !(1e-3..1e6).contains(&a) {
+        format!("{x:.3e}")
+    } else {
+        let decimals = (3 - a.log10().floor() as i32).clamp(0, 6) as usize;
+        format!("{x:.decimals$}")
+    }
+}
+
+/// The statistics table: one row per [`Quantity`], columns RMS, max |e|, its time and the value
+/// at each time of `at_s` [s since [`ErrorSeries::t_start_s`]] (nearest compared row).
+pub fn format_table(series: &ErrorSeries, at_s: &[f64]) -> String {
+    let t0 = series.t_start_s;
+    let mut header = vec![
+        "error (solution - truth)".to_owned(),
+        "RMS".to_owned(),
+        "max |e|".to_owned(),
+        "t(max) - t0 [s]".to_owned(),
+    ];
+    let at_rows: Vec<Option<&ErrorSample>> = at_s.iter().map(|&t| series.nearest(t0 + t)).collect();
+    header.extend(at_s.iter().map(|t| format!("at t0 + {t} s")));
+    let mut rows = vec![header];
+    for q in Quantity::ALL {
+        let Some(s) = series.stats(q) else { continue };
+        let mut row = vec![
+            format!("{} [{}]", q.name(), q.unit()),
+            number(s.rms),
+            number(s.max_abs),
+            format!("{:.3}", s.t_max_s - t0),
+        ];
+        row.extend(
+            at_rows
+                .iter()
+                .map(|e| e.map_or("-".into(), |e| number(q.of(e)))),
+        );
+        rows.push(row);
+    }
+    let widths: Vec<usize> = (0..rows[0].len())
+        .map(|c| rows.iter().map(|r| r[c].len()).max().unwrap_or(0))
+        .collect();
+    let mut out = String::new();
+    for row in &rows {
+        for (c, cell) in row.iter().enumerate() {
+            if c == 0 {
+                let _ = write!(out, "{cell:<w$}", w = widths[c]);
+            } else {
+                let _ = write!(out, "  {cell:>w$}", w = widths[c]);
+            }
+        }
+        out.push('\n');
+    }
+    for (&t, e) in at_s.iter().zip(&at_rows) {
+        if let Some(e) = e
+            && (e.t_s - (t0 + t)).abs() > SPAN_SLACK_S
+        {
+            let _ = writeln!(
+                out,
+                "at t0 + {t} s: the nearest compared row is at t0 + {:.6} s",
+                e.t_s - t0
+            );
+        }
+    }
+    out
+}
+
+/// Compares the trajectory files `solution` and `truth` (see [`read_trajectory`]) and returns
+/// the report: what was compared, the table of [`format_table`] and, with `plots`, the SVG files
+/// written there (see [`write_plots`]).
+pub fn report_files(
+    solution: &Path,
+    truth: &Path,
+    at_s: &[f64],
+    plots: Option<&Path>,
+) -> Result<String> {
+    if let Some(t) = at_s.iter().find(|t| !t.is_finite()) {
+        bail!("--at {t}: expected finite times in seconds");
+    }
+    let sol = read_trajectory(solution, true)?;
+    let tru = read_trajectory(truth, true)?;
+    let series = compare(&sol, &tru).with_context(|| {
+        format!(
+            "comparing the solution {} with the truth {}",
+            solution.display(),
+            truth.display()
+        )
+    })?;
+    let (t_a, t_b) = series.truth_span_s;
+    let mut out = format!(
+        "solution {} ({} rows) against truth {} ({} rows, t = {t_a} .. {t_b} s)\n\
+         compared {} rows, skipped {} before and {} after the truth's span; t0 = {} s (the \
+         truth's first row)\n",
+        solution.display(),
+        sol.len(),
+        truth.display(),
+        tru.len(),
+        series.samples.len(),
+        series.skipped_before,
+        series.skipped_after,
+        series.t_start_s
+    );
+    out.push_str(&format_table(&series, at_s));
+    if let Some(dir) = plots {
+        for path in write_plots(&series, dir)? {
+            let _ = writeln!(out, "plot: {}", path.display());
+        }
+    }
+    Ok(out)
+}
+
+/// One plot: a file name, a title, the y axis and its lines.
+struct PlotSpec {
+    file: &'static str,
+    title: &'static str,
+    y_desc: &'static str,
+    lines: &'static [Quantity],
+}
+
+const PLOTS: [PlotSpec; 3] = [
+    PlotSpec {
+        file: "attitude_errors.svg",
+        title: "Attitude errors (solution - truth)",
+        y_desc: "error [deg]",
+        lines: &[Quantity::Roll, Quantity::Pitch, Quantity::Yaw],
+    },
+    PlotSpec {
+        file: "velocity_errors.svg",
+        title: "Velocity errors (solution - truth)",
+        y_desc: "error [m/s]",
+        lines: &[
+            Quantity::VelocityNorth,
+            Quantity::VelocityEast,
+            Quantity::VelocityDown,
+        ],
+    },
+    PlotSpec {
+        file: "position_errors.svg",
+        title: "Position errors (solution - truth)",
+        y_desc: "error [m]",
+        lines: &[
+            Quantity::North,
+            Quantity::East,
+            Quantity::Horizontal,
+            Quantity::Height,
+        ],
+    },
+];
+
+const COLORS: [RGBColor; 4] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+];
+
+/// Writes `attitude_errors.svg`, `velocity_errors.svg` and `position_errors.svg` into `dir`
+/// (created if missing): the errors against time since [`ErrorSeries::t_start_s`]. Returns the
+/// files written.
+pub fn write_plots(series: &ErrorSeries, dir: &Path) -> Result<Vec<PathBuf>> {
+    ensure!(!series.samples.is_empty(), "no errors to plot");
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    PLOTS
+        .iter()
+        .map(|spec| {
+            let path = dir.join(spec.file);
+            plot(&path, spec, series).map_err(|e| anyhow!("writing {}: {e}", path.display()))?;
+            Ok(path)
+        })
+        .collect()
+}
+
+fn plot(path: &Path, spec: &PlotSpec, series: &ErrorSeries) -> Result<(), String> {
+    let t0 = series.t_start_s;
+    let lines: Vec<(Quantity, Vec<(f64, f64)>)> = spec
+        .lines
+        .iter()
+        .map(|&q| {
+            let points: Vec<(f64, f64)> = series
+                .samples
+                .iter()
+                .map(|e| (e.t_s - t0, q.of(e)))
+                .collect();
+            (q, decimate(&points, PLOT_MAX_POINTS))
+        })
+        .collect();
+    let all = || lines.iter().flat_map(|(_, p)| p.iter());
+    let (x_lo, x_hi) = padded_range(all().map(|p| p.0), 0.0);
+    let (y_lo, y_hi) = padded_range(all().map(|p| p.1), 0.05);
+
+    let e = |e: &dyn std::fmt::Display| e.to_string();
+    let root = SVGBackend::new(path, (1000, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(spec.title, ("sans-serif", 22))
+        .margin(15)
+        .x_label_area_size(50)
+        .y_label_area_size(90)
+        .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)
+        .map_err(|x| e(&x))?;
+    chart
+        .configure_mesh()
+        .x_desc(format!(
+            "time since the start of the truth [s] (t0 = {t0} s)"
+        ))
+        .y_desc(spec.y_desc)
+        .y_label_formatter(&|y| tick_label(*y, y_hi - y_lo))
+        .draw()
+        .map_err(|x| e(&x))?;
+    for (i, (q, points)) in lines.into_iter().enumerate() {
+        let color = COLORS[i % COLORS.len()];
+        chart
+            .draw_series(LineSeries::new(points, &color))
+            .map_err(|x| e(&x))?
+            .label(format!("{} [{}]", q.name(), q.unit()))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|x| e(&x))?;
+    root.present().map_err(|x| e(&x))
+}
+
+/// A tick label for `y` on an axis spanning `span`: enough decimals for ticks a tenth of the
+/// span apart, scientific when that would take more than 4.
+fn tick_label(y: f64, span: f64) -> String {
+    let decimals = (1 - (span / 10.0).log10().floor() as i32).max(0) as usize;
+    if y == 0.0 {
+        "0".into()
+    } else if decimals > 4 || y.abs() >= 1e6 {
+        format!("{y:.2e}")
+    } else {
+        format!("{y:.decimals$}")
+    }
+}
+
+/// The range of `values`, widened by `pad` of its width on each side; never empty.
+fn padded_range(values: impl Iterator<Item = f64>, pad: f64) -> (f64, f64) {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    });
+    if !(lo.is_finite() && hi.is_finite()) {
+        return (-1.0, 1.0);
+    }
+    let width = hi - lo;
+    if width <= 1e-12 * lo.abs().max(hi.abs()).max(1e-300) {
+        // A constant: a unit window around it (or its own scale).
+        let half = if lo == 0.0 { 1.0 } else { 0.1 * lo.abs() };
+        return (lo - half, hi + half);
+    }
+    (lo - pad * width, hi + pad * width)
+}
+
+/// At most about `max_points` points: the minimum and maximum of each of `max_points / 2` time
+/// buckets, in time order, so the envelope (and every peak) stays.
+fn decimate(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f64)> {
+    if points.len() <= max_points {
+        return points.to_vec();
+    }
+    let buckets = (max_points / 2).max(1);
+    let size = points.len().div_ceil(buckets);
+    let mut out = Vec::with_capacity(2 * buckets);
+    for chunk in points.chunks(size) {
+        let lo = chunk.iter().min_by(|a, b| a.1.total_cmp(&b.1));
+        let hi = chunk.iter().max_by(|a, b| a.1.total_cmp(&b.1));
+        if let (Some(&lo), Some(&hi)) = (lo, hi) {
+            if lo.0 <= hi.0 {
+                out.extend([lo, hi]);
+            } else {
+                out.extend([hi, lo]);
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nav_core::attitude::from_euler;
+    use nav_core::{UnitQuaternion, Vector3};
+
+    /// A truth row at `t_s`: moving north-east, turning, at 45 deg latitude.
+    fn row(t_s: f64) -> Truth {
+        Truth {
+            t_s,
+            lat: 45f64.to_radians() + 1e-6 * t_s,
+            lon: 7.5f64.to_radians() + 2e-6 * t_s,
+            h: 150.0 + 0.5 * t_s,
+            v_eb_ned: Vector3::new(6.0 + t_s, 10.0, -0.5),
+            q_b_ned: from_euler(
+                2f64.to_radians(),
+                -3f64.to_radians(),
+                (30.0 + 10.0 * t_s).to_radians(),
+            ),
+        }
+    }
+
+    fn truth() -> Vec<Truth> {
+        (0..=10).map(|k| row(k as f64)).collect()
+    }
+
+    #[test]
+    fn identical_inputs_give_zero_errors() {
+        let t = truth();
+        let series = compare(&t, &t).unwrap();
+        assert_eq!(series.samples.len(), t.len());
+        assert_eq!((series.skipped_before, series.skipped_after), (0, 0));
+        for q in Quantity::ALL {
+            let s = series.stats(q).unwrap();
+            assert_eq!((s.rms, s.max_abs), (0.0, 0.0), "{q:?}");
+        }
+    }
+
+    #[test]
+    fn known_offsets_give_those_errors() {
+        let t = truth();
+        let sol: Vec<Truth> = t
+            .iter()
+            .map(|r| {
+                let (r_n, _) = radii(r.lat);
+                let (roll, pitch, yaw) = euler(&r.q_b_ned);
+                Truth {
+                    lat: r.lat + 10.0 / (r_n + r.h),
+                    v_eb_ned: r.v_eb_ned + Vector3::new(0.0, 0.1, 0.0),
+                    q_b_ned: from_euler(roll, pitch, yaw + 1f64.to_radians()),
+                    ..*r
+                }
+            })
+            .collect();
+        let series = compare(&sol, &t).unwrap();
+        for e in &series.samples {
+            assert!((e.north_m - 10.0).abs() < 1e-8, "{e:?}");
+            assert!(e.east_m.abs() < 1e-8 && (e.horizontal_m - 10.0).abs() < 1e-8);
+            assert_eq!(e.height_m, 0.0);
+            assert_eq!(e.v_ned_mps[0], 0.0);
+            assert!((e.v_ned_mps[1] - 0.1).abs() < 1e-14);
+            assert!((e.yaw_deg - 1.0).abs() < 1e-9, "{e:?}");
+            assert!(e.roll_deg.abs() < 1e-9 && e.pitch_deg.abs() < 1e-9);
+            // A yaw offset is a rotation by the same angle (about the rotated z axis).
+            assert!((e.rotation_deg - 1.0).abs() < 1e-9, "{e:?}");
+        }
+        let s = series.stats(Quantity::Yaw).unwrap();
+        assert!((s.rms - 1.0).abs() < 1e-9 && (s.max_abs - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn yaw_error_wraps() {
+        let mut a = row(0.0);
+        a.q_b_ned = from_euler(0.0, 0.0, 179f64.to_radians());
+        let mut b = a;
+        b.q_b_ned = from_euler(0.0, 0.0, (-179f64).to_radians());
+        let e = compare(&[b], &[a]).unwrap().samples[0];
+        assert!((e.yaw_deg - 2.0).abs() < 1e-9 && (e.rotation_deg - 2.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn interpolates_between_truth_rows() {
+        let t = truth();
+        // 2.25 s: a quarter of the way from row 2 to row 3.
+        let i = interpolate(&t, 2.25).unwrap();
+        let (a, b) = (row(2.0), row(3.0));
+        assert!((i.lat - (a.lat + 0.25 * (b.lat - a.lat))).abs() < 1e-15);
+        assert!((i.h - 151.125).abs() < 1e-12);
+        assert!((i.v_eb_ned.x - 8.25).abs() < 1e-12);
+        // The yaw turns 10 deg/s about a fixed roll and pitch: slerp is a quarter of the
+        // rotation between the rows.
+        let rel = a.q_b_ned.inverse() * b.q_b_ned;
+        let expect = a.q_b_ned * UnitQuaternion::from_scaled_axis(rel.scaled_axis() * 0.25);
+        assert!(i.q_b_ned.angle_to(&expect) < 1e-12);
+
+        // A solution on the interpolated truth has no error; rows outside the span are skipped.
+        let sol = [Truth { t_s: -1.0, ..i }, i, Truth { t_s: 10.5, ..i }];
+        let series = compare(&sol, &t).unwrap();
+        assert_eq!(series.samples.len(), 1);
+        assert_eq!((series.skipped_before, series.skipped_after), (1, 1));
+        assert!(series.samples[0].horizontal_m < 1e-9);
+        assert!(series.samples[0].rotation_deg < 1e-9);
+        assert_eq!(series.t_start_s, t[0].t_s);
+
+        // The ends are inside (with 1 us of slack), beyond them not.
+        assert!(interpolate(&t, 10.0 + 0.5e-6).is_some());
+        assert!(interpolate(&t, -2e-6).is_none());
+        let err = compare(&[row(20.0)], &t).unwrap_err().to_string();
+        assert!(
+            err.contains("no solution row within the truth's time span"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn table_has_stats_and_at_columns() {
+        let t = truth();
+        let mut sol = t.clone();
+        for r in &mut sol {
+            r.h += r.t_s; // height error = t
+        }
+        let series = compare(&sol, &t).unwrap();
+        let table = format_table(&series, &[3.0, 7.4]);
+        let height = table.lines().find(|l| l.starts_with("height [m]")).unwrap();
+        let cells: Vec<&str> = height.split_whitespace().collect();
+        // rms of 0..=10 = sqrt(385 / 11), max 10 at t 10, value 3 at 3 s and 7 at 7.4 s.
+        assert_eq!(cells[2..], ["5.916", "10.00", "10.000", "3.000", "7.000"]);
+        assert!(table.contains("at t0 + 7.4 s: the nearest compared row is at t0 + 7.000000 s"));
+        assert!(table.lines().next().unwrap().contains("at t0 + 3 s"));
+    }
+
+    #[test]
+    fn reports_files_and_writes_svg_plots() {
+        let dir = tempfile::tempdir().unwrap();
+        let (sol_path, truth_path) = (dir.path().join("sol.csv"), dir.path().join("truth.nav"));
+        // The solution as `nav replay` writes it (nav-core's header, extra columns ignored).
+        let t = truth();
+        truth_csv::write(&sol_path, &t).unwrap();
+        // The truth as a KF-GINS .nav file.
+        let mut nav = String::new();
+        for r in &t {
+            let (roll, pitch, yaw) = euler(&r.q_b_ned);
+            let v = r.v_eb_ned;
+            writeln!(
+                nav,
+                "0 {} {} {} {} {} {} {} {} {} {}",
+                r.t_s,
+                r.lat.to_degrees(),
+                r.lon.to_degrees(),
+                r.h,
+                v.x,
+                v.y,
+                v.z,
+                roll.to_degrees(),
+                pitch.to_degrees(),
+                yaw.to_degrees()
+            )
+            .unwrap();
+        }
+        std::fs::write(&truth_path, nav).unwrap();
+        let plots = dir.path().join("plots");
+        let text = report_files(&sol_path, &truth_path, &[5.0], Some(&plots)).unwrap();
+        assert!(
+            text.contains("compared 11 rows, skipped 0 before and 0 after"),
+            "{text}"
+        );
+        for name in ["attitude_errors", "velocity_errors", "position_errors"] {
+            let svg = std::fs::read_to_string(plots.join(format!("{name}.svg"))).unwrap();
+            assert!(svg.starts_with("<svg") && svg.len() > 1000, "{name}");
+            assert!(svg.contains("time since the start of the truth [s]"));
+            assert!(text.contains(&format!("{name}.svg")));
+        }
+        let svg = std::fs::read_to_string(plots.join("velocity_errors.svg")).unwrap();
+        assert!(svg.contains("error [m/s]") && svg.contains("v north [m/s]"));
+
+        let err = report_files(&sol_path, &dir.path().join("missing.nav"), &[], None)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("missing.nav"), "{err}");
+    }
+
+    #[test]
+    fn decimation_keeps_peaks() {
+        let points: Vec<(f64, f64)> = (0..100_000)
+            .map(|k| (k as f64, if k == 54_321 { 9.0 } else { (k % 7) as f64 }))
+            .collect();
+        let d = decimate(&points, 1000);
+        assert!(d.len() <= 1000);
+        assert!(d.contains(&(54_321.0, 9.0)));
+        assert!(d.windows(2).all(|w| w[0].0 <= w[1].0));
+    }
+}

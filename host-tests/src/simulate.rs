@@ -1,0 +1,232 @@
+//! `nav sim`: a scenario's exact increments ([`crate::trajectory`]) through a sensor error model
+//! ([`crate::sensor_model`]) into files.
+//!
+//! `DIR/imu.bin` (the binary recording the firmware replays) and/or `DIR/imu.csv` (the CSV
+//! recording format), `DIR/truth.csv` (the truth at `truth_rate_hz`), and `DIR/scenario.txt`
+//! (`key = value` lines: scenario, grade, seed, rates, parameters, the start, and the `nav
+//! replay` command that navigates the recording). Same options and seed: the same files, byte
+//! for byte.
+
+use crate::recording_io::{self, Recording};
+use crate::sensor_model::{ErrorInjector, Grade, InjectorCounters};
+use crate::trajectory::scenarios::Scenario;
+use crate::trajectory::{Sampling, generate};
+use crate::truth::Truth;
+use crate::truth_csv::TruthWriter;
+use crate::{generate::TEMPERATURE_C, imu_csv};
+use anyhow::{Context, Result, bail, ensure};
+use hal_adapters::recording::{Kind, Record};
+use std::fmt::Write as _;
+use std::fs::{self, File};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Which recording files to write.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Formats {
+    /// `imu.bin` only.
+    Binary,
+    /// `imu.csv` only.
+    Csv,
+    /// Both.
+    #[default]
+    Both,
+}
+
+/// What to simulate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimOptions {
+    /// The scenario with its parameters.
+    pub scenario: Scenario,
+    /// Sensor grade.
+    pub grade: Grade,
+    /// Length [s]; `None`: the scenario's own.
+    pub seconds: Option<f64>,
+    /// IMU rate [Hz].
+    pub rate_hz: f64,
+    /// Truth output rate [Hz] (must divide `rate_hz`).
+    pub truth_rate_hz: f64,
+    /// Seed of every random draw.
+    pub seed: u64,
+    /// Recording files.
+    pub formats: Formats,
+}
+
+impl SimOptions {
+    /// Defaults: 400 Hz, truth at 50 Hz, seed 1, both formats.
+    pub fn new(scenario: Scenario, grade: Grade) -> Self {
+        Self {
+            scenario,
+            grade,
+            seconds: None,
+            rate_hz: 400.0,
+            truth_rate_hz: 50.0,
+            seed: 1,
+            formats: Formats::Both,
+        }
+    }
+}
+
+/// A simulated run in memory.
+#[derive(Clone, Debug)]
+pub struct Simulated {
+    /// The sensed recording (increments, `f32`).
+    pub recording: Recording,
+    /// Truth at the start and at the end of every `truth_every`-th sample.
+    pub truth: Vec<Truth>,
+    /// What the sensor model did.
+    pub counters: InjectorCounters,
+}
+
+/// Runs the simulation in memory; `progress(done, total)` is called every 4096 samples.
+pub fn simulate(opts: &SimOptions, mut progress: impl FnMut(u64, u64)) -> Result<Simulated> {
+    ensure!(
+        opts.rate_hz.is_finite() && opts.rate_hz > 0.0 && opts.rate_hz <= 100_000.0,
+        "the rate must be within (0, 100000] Hz, not {}",
+        opts.rate_hz
+    );
+    let every = (opts.rate_hz / opts.truth_rate_hz).round();
+    ensure!(
+        opts.truth_rate_hz > 0.0
+            && every >= 1.0
+            && (every * opts.truth_rate_hz - opts.rate_hz).abs() < 1e-9 * opts.rate_hz,
+        "the truth rate {} Hz must divide the IMU rate {} Hz",
+        opts.truth_rate_hz,
+        opts.rate_hz
+    );
+    let every = every as u64;
+    let traj = opts.scenario.build()?;
+    let seconds = opts.seconds.unwrap_or(traj.duration_s());
+    ensure!(
+        seconds.is_finite() && seconds > 0.0,
+        "the length must be positive, not {seconds} s"
+    );
+    let sampling = Sampling::new(opts.rate_hz, seconds);
+    ensure!(
+        sampling.n <= u64::from(u32::MAX),
+        "{} samples do not fit the binary format",
+        sampling.n
+    );
+    let mut injector = ErrorInjector::new(opts.grade.model(), opts.seed)
+        .map_err(|e| anyhow::anyhow!("grade {}: {e}", opts.grade))?;
+    let mut records = Vec::with_capacity(sampling.n as usize);
+    let mut truth = vec![crate::trajectory::Generator::new(traj.as_ref()).truth()];
+    generate(traj.as_ref(), sampling, |k, t_ns, exact, t| {
+        let sensed = injector.apply(exact);
+        let f32s = |v: &nav_core::Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
+        records.push(Record {
+            t_ns,
+            gyro: f32s(&sensed.delta_theta_ib_b),
+            accel: f32s(&sensed.delta_v_ib_b),
+            temperature_c: TEMPERATURE_C,
+        });
+        if (k + 1) % every == 0 {
+            truth.push(*t);
+        }
+        if k % 4096 == 0 {
+            progress(k, sampling.n);
+        }
+    });
+    progress(sampling.n, sampling.n);
+    Ok(Simulated {
+        recording: Recording {
+            kind: Kind::Increments,
+            rate_hz: opts.rate_hz,
+            t0_ns: 0,
+            records,
+        },
+        truth,
+        counters: injector.counters(),
+    })
+}
+
+/// The files written by [`write`].
+#[derive(Clone, Debug)]
+pub struct SimFiles {
+    /// `imu.bin`, if written.
+    pub binary: Option<PathBuf>,
+    /// `imu.csv`, if written.
+    pub csv: Option<PathBuf>,
+    /// `truth.csv`.
+    pub truth: PathBuf,
+    /// `scenario.txt`.
+    pub description: PathBuf,
+}
+
+/// Writes `sim` of `opts` into `dir` (created if missing).
+pub fn write(dir: &Path, opts: &SimOptions, sim: &Simulated) -> Result<SimFiles> {
+    fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let binary = dir.join("imu.bin");
+    let csv = dir.join("imu.csv");
+    let want_bin = opts.formats != Formats::Csv;
+    let want_csv = opts.formats != Formats::Binary;
+    let r = &sim.recording;
+    if want_bin {
+        recording_io::write_binary(&binary, r.kind, r.rate_hz, r.t0_ns, &r.records)?;
+    }
+    if want_csv {
+        imu_csv::write(&csv, &r.to_csv()?)?;
+    }
+    let truth = dir.join("truth.csv");
+    let file = File::create(&truth).with_context(|| format!("creating {}", truth.display()))?;
+    let mut w = TruthWriter::new(BufWriter::new(file))?;
+    for t in &sim.truth {
+        w.write(t)?;
+    }
+    w.finish()?.flush()?;
+    let description = dir.join("scenario.txt");
+    let replay_file = if want_bin { &binary } else { &csv };
+    fs::write(&description, describe(opts, sim, replay_file)?)
+        .with_context(|| format!("writing {}", description.display()))?;
+    Ok(SimFiles {
+        binary: want_bin.then_some(binary),
+        csv: want_csv.then_some(csv),
+        truth,
+        description,
+    })
+}
+
+/// The `scenario.txt` text.
+pub fn describe(opts: &SimOptions, sim: &Simulated, imu: &Path) -> Result<String> {
+    let Some(start) = sim.truth.first() else {
+        bail!("no truth");
+    };
+    let mut s = String::new();
+    let mut scenario = opts.scenario.clone();
+    let samples = sim.recording.records.len();
+    let (roll, pitch, yaw) = nav_core::attitude::euler(&start.q_b_ned);
+    let c = &sim.counters;
+    writeln!(
+        s,
+        "# nav sim: exact increments of a scenario through a sensor error model"
+    )?;
+    writeln!(s, "scenario = {}", scenario.name())?;
+    writeln!(s, "grade = {}", opts.grade)?;
+    writeln!(s, "seed = {}", opts.seed)?;
+    writeln!(s, "rate_hz = {}", opts.rate_hz)?;
+    writeln!(s, "truth_rate_hz = {}", opts.truth_rate_hz)?;
+    writeln!(s, "samples = {samples}")?;
+    writeln!(s, "seconds = {}", samples as f64 / opts.rate_hz)?;
+    writeln!(s, "gyro_saturated_samples = {}", c.gyro_saturated)?;
+    writeln!(s, "accel_saturated_samples = {}", c.accel_saturated)?;
+    writeln!(s, "# parameters")?;
+    for (key, value, doc) in scenario.describe() {
+        writeln!(s, "{key} = {value}  # {doc}")?;
+    }
+    writeln!(s, "# start (truth at t = 0)")?;
+    writeln!(s, "start_lat_deg = {}", start.lat.to_degrees())?;
+    writeln!(s, "start_lon_deg = {}", start.lon.to_degrees())?;
+    writeln!(s, "start_h_m = {}", start.h)?;
+    writeln!(s, "start_roll_deg = {}", roll.to_degrees())?;
+    writeln!(s, "start_pitch_deg = {}", pitch.to_degrees())?;
+    writeln!(s, "start_yaw_deg = {}", yaw.to_degrees())?;
+    writeln!(
+        s,
+        "# replay: nav replay --imu {} --lat {} --lon {} --h {} --align-seconds 60 --out solution.csv",
+        imu.display(),
+        start.lat.to_degrees(),
+        start.lon.to_degrees(),
+        start.h
+    )?;
+    Ok(s)
+}

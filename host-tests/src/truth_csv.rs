@@ -1,0 +1,478 @@
+//! The trajectory CSV format: truth files and the solution logs of `nav replay` share it.
+//!
+//! ```text
+//! t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,pitch_deg,yaw_deg
+//! 12.5,45.000000123,7.5,150,0.01,-0.002,0,1.5,-2,30
+//! ```
+//!
+//! The header is nav-core's [`CSV_HEADER`]: time [s], geodetic latitude and longitude [deg],
+//! ellipsoidal height [m], velocity `v_eb_n` north, east, down [m/s], and the z-y-x Euler angles
+//! of `q_b_ned` (FRD body axes to NED; roll, pitch, yaw) [deg]. Columns are found by name, so
+//! columns appended later (or in another order) are ignored.
+//!
+//! Every value must be a finite number, the latitude within [-90, 90] deg, and time must not go
+//! backwards (equal times are allowed).
+//!
+//! The writer prints floats in their shortest round-trip form, so degrees keep the full f64
+//! resolution (1.4e-14 deg at 100 deg, 2 nm on the Earth). Reading back is exact for time, height
+//! and velocity; latitude, longitude and attitude pass through the deg <-> rad conversion and the
+//! Euler angles, which round to within a few ulp (below 1e-12 deg).
+
+use crate::truth::Truth;
+use nav_core::Vector3;
+use nav_core::attitude::{euler, from_euler};
+use nav_core::output::CSV_HEADER;
+use std::fmt;
+use std::fs::File;
+use std::io::{self, BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+/// The column names, in the order the writer uses (nav-core's [`CSV_HEADER`]).
+pub const COLUMNS: [&str; 10] = [
+    "t_s",
+    "lat_deg",
+    "lon_deg",
+    "h_m",
+    "v_n_mps",
+    "v_e_mps",
+    "v_d_mps",
+    "roll_deg",
+    "pitch_deg",
+    "yaw_deg",
+];
+
+/// Column positions in [`COLUMNS`].
+const T: usize = 0;
+const LAT: usize = 1;
+const LON: usize = 2;
+const H: usize = 3;
+const VEL: usize = 4;
+const ATT: usize = 7;
+
+/// A trajectory CSV reading or writing error, naming the file and (for content errors) the line.
+#[derive(Debug)]
+pub struct TruthCsvError {
+    /// The file.
+    pub path: PathBuf,
+    /// 1-based line number, when the error is about a line.
+    pub line: Option<u64>,
+    /// What went wrong.
+    pub kind: TruthCsvErrorKind,
+}
+
+/// What went wrong in a trajectory CSV file.
+#[derive(Debug)]
+pub enum TruthCsvErrorKind {
+    /// The file is empty: no header row.
+    MissingHeader,
+    /// The header lacks a required column.
+    HeaderMissingColumn {
+        /// The missing column's name.
+        column: &'static str,
+        /// The header row found.
+        found: String,
+    },
+    /// A row is shorter than the header: a required column is missing.
+    MissingColumn {
+        /// Name of the missing column.
+        column: &'static str,
+        /// Number of fields found on the line.
+        found: usize,
+    },
+    /// A field is not a number.
+    NotANumber {
+        /// Column name.
+        column: &'static str,
+        /// The field's text.
+        found: String,
+    },
+    /// A field is NaN or infinite.
+    NotFinite {
+        /// Column name.
+        column: &'static str,
+        /// The field's text.
+        found: String,
+    },
+    /// The latitude is outside [-90, 90] deg.
+    BadLatitude {
+        /// The latitude found [deg].
+        lat_deg: f64,
+    },
+    /// The time is earlier than the previous row's.
+    TimeBackwards {
+        /// This row's time [s].
+        t_s: f64,
+        /// The previous row's time [s].
+        previous_t_s: f64,
+    },
+    /// Malformed CSV (quoting, invalid UTF-8).
+    Syntax(String),
+    /// The file could not be opened, read or written.
+    Io(io::Error),
+}
+
+impl fmt::Display for TruthCsvError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: ", self.path.display())?;
+        if let Some(line) = self.line {
+            write!(f, "line {line}: ")?;
+        }
+        match &self.kind {
+            TruthCsvErrorKind::MissingHeader => {
+                write!(f, "empty file: expected the header row '{CSV_HEADER}'")
+            }
+            TruthCsvErrorKind::HeaderMissingColumn { column, found } => write!(
+                f,
+                "the header has no column {column}: expected the columns '{CSV_HEADER}', found '{found}'"
+            ),
+            TruthCsvErrorKind::MissingColumn { column, found } => {
+                write!(
+                    f,
+                    "column {column}: missing (the line has only {found} columns)"
+                )
+            }
+            TruthCsvErrorKind::NotANumber { column, found } => {
+                write!(f, "column {column}: expected a number, found '{found}'")
+            }
+            TruthCsvErrorKind::NotFinite { column, found } => {
+                write!(
+                    f,
+                    "column {column}: expected a finite number, found '{found}'"
+                )
+            }
+            TruthCsvErrorKind::BadLatitude { lat_deg } => write!(
+                f,
+                "column lat_deg: latitude {lat_deg} deg is outside [-90, 90]"
+            ),
+            TruthCsvErrorKind::TimeBackwards { t_s, previous_t_s } => write!(
+                f,
+                "column t_s: time goes backwards: {t_s} s after {previous_t_s} s on the previous row"
+            ),
+            TruthCsvErrorKind::Syntax(msg) => write!(f, "malformed CSV: {msg}"),
+            TruthCsvErrorKind::Io(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for TruthCsvError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &self.kind {
+            TruthCsvErrorKind::Io(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+/// Writes trajectory rows one at a time (the header first).
+#[derive(Debug)]
+pub struct TruthWriter<W: Write> {
+    out: W,
+}
+
+impl<W: Write> TruthWriter<W> {
+    /// Writes the header row to `out`. Wrap files in a `BufWriter`: rows are written line by line.
+    pub fn new(mut out: W) -> io::Result<Self> {
+        writeln!(out, "{CSV_HEADER}")?;
+        Ok(Self { out })
+    }
+
+    /// Writes one row: `truth` in the file's units (degrees for angles).
+    pub fn write(&mut self, truth: &Truth) -> io::Result<()> {
+        let (roll, pitch, yaw) = euler(&truth.q_b_ned);
+        let v = &truth.v_eb_ned;
+        writeln!(
+            self.out,
+            "{},{},{},{},{},{},{},{},{},{}",
+            truth.t_s,
+            truth.lat.to_degrees(),
+            truth.lon.to_degrees(),
+            truth.h,
+            v.x,
+            v.y,
+            v.z,
+            roll.to_degrees(),
+            pitch.to_degrees(),
+            yaw.to_degrees()
+        )
+    }
+
+    /// Flushes and returns the writer.
+    pub fn finish(mut self) -> io::Result<W> {
+        self.out.flush()?;
+        Ok(self.out)
+    }
+}
+
+/// Writes `rows` to `path` (created or truncated).
+pub fn write(path: &Path, rows: &[Truth]) -> Result<(), TruthCsvError> {
+    let io_error = |e| error(path, None, TruthCsvErrorKind::Io(e));
+    let file = File::create(path).map_err(io_error)?;
+    let mut w = TruthWriter::new(BufWriter::new(file)).map_err(io_error)?;
+    for row in rows {
+        w.write(row).map_err(io_error)?;
+    }
+    w.finish().map_err(io_error)?;
+    Ok(())
+}
+
+/// Reads a trajectory (truth file or solution log) from `path`.
+pub fn read(path: &Path) -> Result<Vec<Truth>, TruthCsvError> {
+    let file = File::open(path).map_err(|e| error(path, None, TruthCsvErrorKind::Io(e)))?;
+    read_from(BufReader::new(file), path)
+}
+
+/// Reads a trajectory from `reader`; `path` names it in errors.
+pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<Vec<Truth>, TruthCsvError> {
+    let mut csv = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(reader);
+    let mut records = csv.records();
+
+    let header = match records.next() {
+        None => return Err(error(path, None, TruthCsvErrorKind::MissingHeader)),
+        Some(r) => r.map_err(|e| csv_error(path, e))?,
+    };
+    let header_line = header.position().map(|p| p.line());
+    // Field index of each required column.
+    let mut index = [0_usize; COLUMNS.len()];
+    for (slot, &name) in index.iter_mut().zip(&COLUMNS) {
+        *slot = header
+            .iter()
+            .position(|h| h.trim_start_matches('\u{feff}') == name)
+            .ok_or_else(|| {
+                error(
+                    path,
+                    header_line,
+                    TruthCsvErrorKind::HeaderMissingColumn {
+                        column: name,
+                        found: header.iter().collect::<Vec<_>>().join(","),
+                    },
+                )
+            })?;
+    }
+
+    let mut rows: Vec<Truth> = Vec::new();
+    for record in records {
+        let record = record.map_err(|e| csv_error(path, e))?;
+        let line = record.position().map(|p| p.line());
+        let at = |kind| error(path, line, kind);
+        let mut values = [0.0_f64; COLUMNS.len()];
+        for (c, value) in values.iter_mut().enumerate() {
+            let column = COLUMNS[c];
+            let text = record.get(index[c]).ok_or_else(|| {
+                at(TruthCsvErrorKind::MissingColumn {
+                    column,
+                    found: record.len(),
+                })
+            })?;
+            let x: f64 = text.parse().map_err(|_| {
+                at(TruthCsvErrorKind::NotANumber {
+                    column,
+                    found: text.to_owned(),
+                })
+            })?;
+            if !x.is_finite() {
+                return Err(at(TruthCsvErrorKind::NotFinite {
+                    column,
+                    found: text.to_owned(),
+                }));
+            }
+            *value = x;
+        }
+        if !(-90.0..=90.0).contains(&values[LAT]) {
+            return Err(at(TruthCsvErrorKind::BadLatitude {
+                lat_deg: values[LAT],
+            }));
+        }
+        if let Some(previous) = rows.last()
+            && values[T] < previous.t_s
+        {
+            return Err(at(TruthCsvErrorKind::TimeBackwards {
+                t_s: values[T],
+                previous_t_s: previous.t_s,
+            }));
+        }
+        rows.push(truth_from_degrees(&values));
+    }
+    Ok(rows)
+}
+
+/// The [`Truth`] of one row of values in the file's units, in [`COLUMNS`] order.
+fn truth_from_degrees(v: &[f64; COLUMNS.len()]) -> Truth {
+    Truth {
+        t_s: v[T],
+        lat: v[LAT].to_radians(),
+        lon: v[LON].to_radians(),
+        h: v[H],
+        v_eb_ned: Vector3::new(v[VEL], v[VEL + 1], v[VEL + 2]),
+        q_b_ned: from_euler(
+            v[ATT].to_radians(),
+            v[ATT + 1].to_radians(),
+            v[ATT + 2].to_radians(),
+        ),
+    }
+}
+
+fn error(path: &Path, line: Option<u64>, kind: TruthCsvErrorKind) -> TruthCsvError {
+    TruthCsvError {
+        path: path.to_owned(),
+        line,
+        kind,
+    }
+}
+
+fn csv_error(path: &Path, e: csv::Error) -> TruthCsvError {
+    let line = e.position().map(|p| p.line());
+    let kind = match e.into_kind() {
+        csv::ErrorKind::Io(e) => TruthCsvErrorKind::Io(e),
+        csv::ErrorKind::Utf8 { err, .. } => {
+            TruthCsvErrorKind::Syntax(format!("invalid UTF-8: {err}"))
+        }
+        other => TruthCsvErrorKind::Syntax(format!("{other:?}")),
+    };
+    error(path, line, kind)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nav_core::UnitQuaternion;
+
+    fn parse(text: &str) -> Result<Vec<Truth>, TruthCsvError> {
+        read_from(text.as_bytes(), Path::new("mem.csv"))
+    }
+
+    fn sample(t_s: f64, k: f64) -> Truth {
+        Truth {
+            t_s,
+            lat: (45.123_456_789_012_3 + k * 1e-9).to_radians(),
+            lon: (-122.987_654_321_098_7 - k * 1e-9).to_radians(),
+            h: 150.25 + k,
+            v_eb_ned: Vector3::new(0.1 + k, -3.25e-7, 12.0),
+            q_b_ned: from_euler(
+                1.5_f64.to_radians(),
+                -2.0_f64.to_radians(),
+                (179.999 + k).to_radians(),
+            ),
+        }
+    }
+
+    #[test]
+    fn header_is_nav_cores() {
+        assert_eq!(COLUMNS.join(","), CSV_HEADER);
+    }
+
+    #[test]
+    fn write_then_read_round_trips() {
+        let rows: Vec<Truth> = (0..5)
+            .map(|k| sample(456_300.005 + 0.005 * k as f64, k as f64))
+            .collect();
+        let mut bytes = Vec::new();
+        let mut w = TruthWriter::new(&mut bytes).unwrap();
+        for r in &rows {
+            w.write(r).unwrap();
+        }
+        w.finish().unwrap();
+        let back = read_from(bytes.as_slice(), Path::new("mem.csv")).unwrap();
+        assert_eq!(back.len(), rows.len());
+        for (a, b) in rows.iter().zip(&back) {
+            // Printed and parsed directly: bit for bit.
+            assert_eq!(a.t_s.to_bits(), b.t_s.to_bits());
+            assert_eq!(a.h.to_bits(), b.h.to_bits());
+            assert_eq!(a.v_eb_ned, b.v_eb_ned);
+            // Through deg <-> rad (one rounding each way): within an ulp or two.
+            assert!((a.lat - b.lat).abs() <= 2.0 * f64::EPSILON * a.lat.abs());
+            assert!((a.lon - b.lon).abs() <= 2.0 * f64::EPSILON * a.lon.abs());
+            // Through the Euler angles: within rounding.
+            assert!(a.q_b_ned.angle_to(&b.q_b_ned) < 1e-14);
+        }
+        // A second pass stays within the same bounds (no drift).
+        let mut again = Vec::new();
+        let mut w = TruthWriter::new(&mut again).unwrap();
+        for r in &back {
+            w.write(r).unwrap();
+        }
+        w.finish().unwrap();
+        let twice = read_from(again.as_slice(), Path::new("mem.csv")).unwrap();
+        for (a, b) in back.iter().zip(&twice) {
+            assert!((a.lat - b.lat).abs() <= 2.0 * f64::EPSILON * a.lat.abs());
+            assert!(a.q_b_ned.angle_to(&b.q_b_ned) < 1e-14);
+        }
+    }
+
+    #[test]
+    fn degrees_keep_1e_11_deg() {
+        // Latitudes 1e-11 deg apart stay apart and keep their difference.
+        let a = sample(0.0, 0.0);
+        let mut b = a;
+        b.lat = (a.lat.to_degrees() + 1e-11).to_radians();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.csv");
+        write(&path, &[a, b]).unwrap();
+        let back = read(&path).unwrap();
+        let d_deg = (back[1].lat - back[0].lat).to_degrees();
+        assert!((d_deg - 1e-11).abs() < 1e-13, "{d_deg}");
+    }
+
+    #[test]
+    fn reads_exact_values_and_ignores_extra_columns() {
+        let text = format!(
+            "{CSV_HEADER},extra\n1.5,45,7.5,150,1,2,3,0,0,90,x\n\n1.5,-45,-7.5,0,0,0,0,0,0,-90,\n"
+        );
+        let rows = parse(&text).unwrap();
+        assert_eq!(rows.len(), 2);
+        let r = rows[0];
+        assert_eq!((r.t_s, r.h), (1.5, 150.0));
+        assert_eq!(r.lat, 45f64.to_radians());
+        assert_eq!(r.v_eb_ned, Vector3::new(1.0, 2.0, 3.0));
+        let yaw_90 = UnitQuaternion::from_euler_angles(0.0, 0.0, 90f64.to_radians());
+        assert!(r.q_b_ned.angle_to(&yaw_90) < 1e-15);
+
+        // Columns found by name, in any order.
+        let rows = parse(
+            "yaw_deg,pitch_deg,roll_deg,v_d_mps,v_e_mps,v_n_mps,h_m,lon_deg,lat_deg,t_s\n\
+             0,0,0,3,2,1,10,20,30,4\n",
+        )
+        .unwrap();
+        assert_eq!(rows[0].t_s, 4.0);
+        assert_eq!(rows[0].lat, 30f64.to_radians());
+        assert_eq!(rows[0].v_eb_ned, Vector3::new(1.0, 2.0, 3.0));
+    }
+
+    #[test]
+    fn errors_name_file_line_and_column() {
+        let ok = "1,45,7.5,150,0,0,0,0,0,0";
+        let msg = |text: &str| parse(text).unwrap_err().to_string();
+
+        assert_eq!(
+            msg(&format!("{CSV_HEADER}\n{ok}\n2,45,7.5,150,0,abc,0,0,0,0\n")),
+            "mem.csv: line 3: column v_e_mps: expected a number, found 'abc'"
+        );
+        assert_eq!(
+            msg(&format!("{CSV_HEADER}\n{ok}\n2,45,7.5,150,0,0,0,0,NaN,0\n")),
+            "mem.csv: line 3: column pitch_deg: expected a finite number, found 'NaN'"
+        );
+        assert_eq!(
+            msg(&format!("{CSV_HEADER}\n{ok}\n2,45,7.5,150,0,0,0,0\n")),
+            "mem.csv: line 3: column pitch_deg: missing (the line has only 8 columns)"
+        );
+        assert_eq!(
+            msg(&format!("{CSV_HEADER}\n{ok}\n0.5,45,7.5,150,0,0,0,0,0,0\n")),
+            "mem.csv: line 3: column t_s: time goes backwards: 0.5 s after 1 s on the previous row"
+        );
+        assert_eq!(
+            msg(&format!("{CSV_HEADER}\n1,95,7.5,150,0,0,0,0,0,0\n")),
+            "mem.csv: line 2: column lat_deg: latitude 95 deg is outside [-90, 90]"
+        );
+        let m = msg("t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,pitch_deg\n");
+        assert!(
+            m.starts_with("mem.csv: line 1: the header has no column yaw_deg"),
+            "{m}"
+        );
+        assert!(msg("").contains("empty file"));
+        // Equal times are allowed.
+        parse(&format!("{CSV_HEADER}\n{ok}\n{ok}\n")).unwrap();
+    }
+}
