@@ -32,6 +32,11 @@ pub struct Param<'a> {
     pub doc: &'static str,
 }
 
+/// A [`Param`].
+fn param<'a>(key: &'static str, value: &'a mut f64, doc: &'static str) -> Param<'a> {
+    Param { key, value, doc }
+}
+
 /// Parameter access shared by the scenarios.
 pub trait Params {
     /// Every parameter, for setting and listing.
@@ -210,41 +215,13 @@ impl Default for Static {
 impl Params for Static {
     fn params(&mut self) -> Vec<Param<'_>> {
         vec![
-            Param {
-                key: "lat_deg",
-                value: &mut self.lat_deg,
-                doc: "latitude [deg]",
-            },
-            Param {
-                key: "lon_deg",
-                value: &mut self.lon_deg,
-                doc: "longitude [deg]",
-            },
-            Param {
-                key: "h_m",
-                value: &mut self.h_m,
-                doc: "ellipsoidal height [m]",
-            },
-            Param {
-                key: "roll_deg",
-                value: &mut self.roll_deg,
-                doc: "roll [deg]",
-            },
-            Param {
-                key: "pitch_deg",
-                value: &mut self.pitch_deg,
-                doc: "pitch [deg]",
-            },
-            Param {
-                key: "yaw_deg",
-                value: &mut self.yaw_deg,
-                doc: "yaw (true heading) [deg]",
-            },
-            Param {
-                key: "seconds",
-                value: &mut self.seconds,
-                doc: "default length [s]",
-            },
+            param("lat_deg", &mut self.lat_deg, "latitude [deg]"),
+            param("lon_deg", &mut self.lon_deg, "longitude [deg]"),
+            param("h_m", &mut self.h_m, "ellipsoidal height [m]"),
+            param("roll_deg", &mut self.roll_deg, "roll [deg]"),
+            param("pitch_deg", &mut self.pitch_deg, "pitch [deg]"),
+            param("yaw_deg", &mut self.yaw_deg, "yaw (true heading) [deg]"),
+            param("seconds", &mut self.seconds, "default length [s]"),
         ]
     }
 }
@@ -452,101 +429,61 @@ impl Params for Rocking {
     fn params(&mut self) -> Vec<Param<'_>> {
         let [lx, ly, lz] = &mut self.lever_arm_m;
         vec![
-            Param {
-                key: "lat_deg",
-                value: &mut self.lat_deg,
-                doc: "latitude of the centre [deg]",
-            },
-            Param {
-                key: "lon_deg",
-                value: &mut self.lon_deg,
-                doc: "longitude of the centre [deg]",
-            },
-            Param {
-                key: "h_m",
-                value: &mut self.h_m,
-                doc: "height of the centre [m]",
-            },
-            Param {
-                key: "heading_deg",
-                value: &mut self.heading_deg,
-                doc: "mean heading [deg]",
-            },
-            Param {
-                key: "roll_amp_deg",
-                value: &mut self.roll.amp_deg,
-                doc: "roll amplitude [deg]",
-            },
-            Param {
-                key: "roll_period_s",
-                value: &mut self.roll.period_s,
-                doc: "roll period [s]",
-            },
-            Param {
-                key: "roll_phase_deg",
-                value: &mut self.roll.phase_deg,
-                doc: "roll phase [deg]",
-            },
-            Param {
-                key: "pitch_amp_deg",
-                value: &mut self.pitch.amp_deg,
-                doc: "pitch amplitude [deg]",
-            },
-            Param {
-                key: "pitch_period_s",
-                value: &mut self.pitch.period_s,
-                doc: "pitch period [s]",
-            },
-            Param {
-                key: "pitch_phase_deg",
-                value: &mut self.pitch.phase_deg,
-                doc: "pitch phase [deg]",
-            },
-            Param {
-                key: "yaw_amp_deg",
-                value: &mut self.yaw.amp_deg,
-                doc: "yaw amplitude about the mean heading [deg]",
-            },
-            Param {
-                key: "yaw_period_s",
-                value: &mut self.yaw.period_s,
-                doc: "yaw period [s]",
-            },
-            Param {
-                key: "yaw_phase_deg",
-                value: &mut self.yaw.phase_deg,
-                doc: "yaw phase [deg]",
-            },
-            Param {
-                key: "lever_x_m",
-                value: lx,
-                doc: "IMU lever arm, forward [m]",
-            },
-            Param {
-                key: "lever_y_m",
-                value: ly,
-                doc: "IMU lever arm, right [m]",
-            },
-            Param {
-                key: "lever_z_m",
-                value: lz,
-                doc: "IMU lever arm, down [m]",
-            },
-            Param {
-                key: "speed_mps",
-                value: &mut self.speed_mps,
-                doc: "speed of the centre along the mean heading [m/s]",
-            },
-            Param {
-                key: "rock_until_s",
-                value: &mut self.rock_until_s,
-                doc: "end of the rocking, tapered over one roll period [s] (inf: never)",
-            },
-            Param {
-                key: "seconds",
-                value: &mut self.seconds,
-                doc: "default length [s]",
-            },
+            param("lat_deg", &mut self.lat_deg, "latitude of the centre [deg]"),
+            param(
+                "lon_deg",
+                &mut self.lon_deg,
+                "longitude of the centre [deg]",
+            ),
+            param("h_m", &mut self.h_m, "height of the centre [m]"),
+            param("heading_deg", &mut self.heading_deg, "mean heading [deg]"),
+            param(
+                "roll_amp_deg",
+                &mut self.roll.amp_deg,
+                "roll amplitude [deg]",
+            ),
+            param("roll_period_s", &mut self.roll.period_s, "roll period [s]"),
+            param(
+                "roll_phase_deg",
+                &mut self.roll.phase_deg,
+                "roll phase [deg]",
+            ),
+            param(
+                "pitch_amp_deg",
+                &mut self.pitch.amp_deg,
+                "pitch amplitude [deg]",
+            ),
+            param(
+                "pitch_period_s",
+                &mut self.pitch.period_s,
+                "pitch period [s]",
+            ),
+            param(
+                "pitch_phase_deg",
+                &mut self.pitch.phase_deg,
+                "pitch phase [deg]",
+            ),
+            param(
+                "yaw_amp_deg",
+                &mut self.yaw.amp_deg,
+                "yaw amplitude about the mean heading [deg]",
+            ),
+            param("yaw_period_s", &mut self.yaw.period_s, "yaw period [s]"),
+            param("yaw_phase_deg", &mut self.yaw.phase_deg, "yaw phase [deg]"),
+            param("lever_x_m", lx, "IMU lever arm, forward [m]"),
+            param("lever_y_m", ly, "IMU lever arm, right [m]"),
+            param("lever_z_m", lz, "IMU lever arm, down [m]"),
+            param(
+                "speed_mps",
+                &mut self.speed_mps,
+                "speed of the centre along the mean heading [m/s]",
+            ),
+            param(
+                "rock_until_s",
+                &mut self.rock_until_s,
+                "end of the rocking, tapered over one roll period [s] (inf: never)",
+            ),
+            param("seconds", &mut self.seconds, "default length [s]"),
         ]
     }
 }
@@ -720,56 +657,44 @@ impl Default for FlightPlan {
 impl Params for FlightPlan {
     fn params(&mut self) -> Vec<Param<'_>> {
         vec![
-            Param {
-                key: "from_lat_deg",
-                value: &mut self.from_lat_deg,
-                doc: "departure latitude [deg]",
-            },
-            Param {
-                key: "from_lon_deg",
-                value: &mut self.from_lon_deg,
-                doc: "departure longitude [deg]",
-            },
-            Param {
-                key: "from_h_m",
-                value: &mut self.from_h_m,
-                doc: "departure height [m]",
-            },
-            Param {
-                key: "to_lat_deg",
-                value: &mut self.to_lat_deg,
-                doc: "destination latitude [deg]",
-            },
-            Param {
-                key: "to_lon_deg",
-                value: &mut self.to_lon_deg,
-                doc: "destination longitude [deg]",
-            },
-            Param {
-                key: "to_h_m",
-                value: &mut self.to_h_m,
-                doc: "destination height [m]",
-            },
-            Param {
-                key: "cruise_mps",
-                value: &mut self.cruise_mps,
-                doc: "cruise ground speed [m/s]",
-            },
-            Param {
-                key: "cruise_h_m",
-                value: &mut self.cruise_h_m,
-                doc: "cruise height [m]",
-            },
-            Param {
-                key: "climb_s",
-                value: &mut self.climb_s,
-                doc: "climb and descent durations [s]",
-            },
-            Param {
-                key: "still_s",
-                value: &mut self.still_s,
-                doc: "time at rest before take-off [s]",
-            },
+            param(
+                "from_lat_deg",
+                &mut self.from_lat_deg,
+                "departure latitude [deg]",
+            ),
+            param(
+                "from_lon_deg",
+                &mut self.from_lon_deg,
+                "departure longitude [deg]",
+            ),
+            param("from_h_m", &mut self.from_h_m, "departure height [m]"),
+            param(
+                "to_lat_deg",
+                &mut self.to_lat_deg,
+                "destination latitude [deg]",
+            ),
+            param(
+                "to_lon_deg",
+                &mut self.to_lon_deg,
+                "destination longitude [deg]",
+            ),
+            param("to_h_m", &mut self.to_h_m, "destination height [m]"),
+            param(
+                "cruise_mps",
+                &mut self.cruise_mps,
+                "cruise ground speed [m/s]",
+            ),
+            param("cruise_h_m", &mut self.cruise_h_m, "cruise height [m]"),
+            param(
+                "climb_s",
+                &mut self.climb_s,
+                "climb and descent durations [s]",
+            ),
+            param(
+                "still_s",
+                &mut self.still_s,
+                "time at rest before take-off [s]",
+            ),
         ]
     }
 }
@@ -941,41 +866,25 @@ impl Default for LandVehicle {
 impl Params for LandVehicle {
     fn params(&mut self) -> Vec<Param<'_>> {
         vec![
-            Param {
-                key: "lat_deg",
-                value: &mut self.lat_deg,
-                doc: "latitude [deg]",
-            },
-            Param {
-                key: "lon_deg",
-                value: &mut self.lon_deg,
-                doc: "longitude [deg]",
-            },
-            Param {
-                key: "h_m",
-                value: &mut self.h_m,
-                doc: "height of the road [m]",
-            },
-            Param {
-                key: "heading_deg",
-                value: &mut self.heading_deg,
-                doc: "initial heading [deg]",
-            },
-            Param {
-                key: "speed_mps",
-                value: &mut self.speed_mps,
-                doc: "cruise speed of the first leg [m/s]",
-            },
-            Param {
-                key: "tilt_rad_per_mps2",
-                value: &mut self.tilt_rad_per_mps2,
-                doc: "body roll/pitch per lateral/longitudinal acceleration [rad per m/s^2]",
-            },
-            Param {
-                key: "seconds",
-                value: &mut self.seconds,
-                doc: "length [s]",
-            },
+            param("lat_deg", &mut self.lat_deg, "latitude [deg]"),
+            param("lon_deg", &mut self.lon_deg, "longitude [deg]"),
+            param("h_m", &mut self.h_m, "height of the road [m]"),
+            param(
+                "heading_deg",
+                &mut self.heading_deg,
+                "initial heading [deg]",
+            ),
+            param(
+                "speed_mps",
+                &mut self.speed_mps,
+                "cruise speed of the first leg [m/s]",
+            ),
+            param(
+                "tilt_rad_per_mps2",
+                &mut self.tilt_rad_per_mps2,
+                "body roll/pitch per lateral/longitudinal acceleration [rad per m/s^2]",
+            ),
+            param("seconds", &mut self.seconds, "length [s]"),
         ]
     }
 }
