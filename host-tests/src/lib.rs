@@ -23,6 +23,7 @@
 #![allow(rustdoc::broken_intra_doc_links)]
 #![warn(missing_docs)]
 
+pub mod align_bench;
 pub mod bench;
 pub mod emulate;
 pub mod generate;

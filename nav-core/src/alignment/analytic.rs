@@ -5,8 +5,9 @@
 //! The accumulator sums increments with Kahan compensation, so a minute of 400 Hz `f32` samples
 //! averages without losing the small horizontal components that carry the tilt and heading.
 
+use super::kahan::{Kahan, Kahan3};
 use crate::{ImuIncrement, Scalar, attitude, earth};
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::UnitQuaternion;
 
 /// Accumulates increments over a still period and solves for roll, pitch and heading.
 #[derive(Clone, Debug)]
@@ -173,54 +174,11 @@ pub fn samples_for(seconds: f64, rate_hz: f64) -> u32 {
     }
 }
 
-/// Kahan-compensated running sum.
-#[derive(Clone, Copy, Debug)]
-struct Kahan<T: Scalar> {
-    sum: T,
-    carry: T,
-}
-
-impl<T: Scalar> Kahan<T> {
-    fn new() -> Self {
-        Self {
-            sum: T::zero(),
-            carry: T::zero(),
-        }
-    }
-
-    #[inline]
-    fn add(&mut self, x: T) {
-        let y = x - self.carry;
-        let t = self.sum + y;
-        self.carry = (t - self.sum) - y;
-        self.sum = t;
-    }
-}
-
-#[derive(Clone, Copy, Debug)]
-struct Kahan3<T: Scalar>([Kahan<T>; 3]);
-
-impl<T: Scalar> Kahan3<T> {
-    fn new() -> Self {
-        Self([Kahan::new(); 3])
-    }
-
-    #[inline]
-    fn add(&mut self, v: &Vector3<T>) {
-        for (k, x) in self.0.iter_mut().zip(v.iter()) {
-            k.add(*x);
-        }
-    }
-
-    fn sum(&self) -> Vector3<T> {
-        Vector3::new(self.0[0].sum, self.0[1].sum, self.0[2].sum)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::attitude::from_euler;
+    use nalgebra::Vector3;
 
     fn feed<T: Scalar>(roll: f64, pitch: f64, yaw: f64, lat: f64, n: u32) -> StaticAlignment<T> {
         let q_n_b = from_euler(roll, pitch, yaw).inverse();
