@@ -40,6 +40,16 @@ impl Device {
 
     /// The ADIS model the board carries.
     pub const ADIS_MODEL: Model = Model::BOARD;
+
+    /// The part's datasheet noise, which the alignment assumes.
+    pub fn noise(self) -> hal_adapters::drivers::NoiseSpec {
+        use hal_adapters::drivers::noise;
+        match self {
+            Self::Adis16505 => noise::ADIS16505,
+            Self::Icm42688 => noise::ICM42688,
+            Self::Bmi088 => noise::BMI088,
+        }
+    }
 }
 
 /// The IMU driver over a simulated device fed by `S`.

@@ -38,11 +38,13 @@ mod app {
     use hal_adapters::recording::Replay;
     use hal_adapters::sim::{SimBmi088, SimError};
     use hal_adapters::{ImuSample, SampleFlags};
-    use nav_core::alignment::{AlignError, AlignmentResult, StaticAlignment, samples_for};
+    use nav_core::alignment::{
+        AlignFailure, AlignMethod, AlignSettings, Aligner, Progress, SensorNoise, samples_for,
+    };
     use nav_core::output::CSV_HEADER;
     use nav_core::{
-        ImuCalibration, ImuIncrement, InputLimits, MechanizationConfig, NavState, Position,
-        Solution, Strapdown,
+        ImuCalibration, ImuIncrement, InputLimits, MechanizationConfig, Position, Solution,
+        Strapdown,
     };
     use rtic_monotonics::systick::prelude::*;
     use rtic_sync::channel::{Receiver, Sender};
@@ -70,7 +72,12 @@ mod app {
 
     /// The recording the simulated IMU answers from.
     type Recording = Replay<Buffered<SemihostingFile, READ_CHUNK>>;
-    type AlignOutcome = Result<AlignmentResult<f32>, AlignError>;
+    type AlignOutcome = Result<nav_core::alignment::AlignOutcome<f32>, AlignFailure>;
+
+    /// What `align` needs besides its channels.
+    pub struct AlignSetup {
+        settings: AlignSettings<f32>,
+    }
 
     /// What the data-ready interrupt hands to navigation.
     pub enum DataReady {
@@ -97,7 +104,6 @@ mod app {
 
     /// What `navigate` needs besides its channels.
     pub struct NavSetup {
-        position: Position,
         n_align: u32,
         log_every: u32,
         out: SemihostingFile,
@@ -119,7 +125,7 @@ mod app {
         // The qemu board has no RCC model: clock set-up would hang, so it is skipped and the
         // core runs at QEMU's fixed 168 MHz.
         Mono::start(cx.core.SYST, SYSCLK_HZ);
-        let (device, config) = read_config();
+        let (device, method, config) = read_config();
         defmt::info!(
             "config: lat {=f64} deg, lon {=f64} deg, h {=f64} m, align {=f64} s, log every {=u32}",
             config.lat_deg,
@@ -173,13 +179,26 @@ mod app {
         let position = Position::from_degrees(config.lat_deg, config.lon_deg, config.h_m);
         let n_align = samples_for(config.align_s, header.rate_hz);
         let setup = NavSetup {
-            position,
             n_align,
             log_every: config.log_every,
             out,
         };
+        let noise = device.noise();
+        let align_setup = AlignSetup {
+            settings: AlignSettings {
+                method,
+                position,
+                samples: n_align,
+                noise: SensorNoise {
+                    arw_rad_per_sqrt_s: noise.gyro_arw_rad_per_sqrt_s as f32,
+                    vrw_mps_per_sqrt_s: noise.accel_vrw_mps_per_sqrt_s as f32,
+                    gyro_bias_rad_s: noise.gyro_bias_rad_s as f32,
+                    accel_bias_mps2: noise.accel_bias_mps2 as f32,
+                },
+            },
+        };
         if navigate::spawn(samples_rx, align_tx, result_rx, setup).is_err()
-            || align::spawn(align_rx, result_tx, n_align, position).is_err()
+            || align::spawn(align_rx, result_tx, align_setup).is_err()
             || pace::spawn().is_err()
         {
             defmt::panic!("task spawn failed");
@@ -204,7 +223,7 @@ mod app {
 
     /// Parses the semihosting command line (`[--device adis16505|icm42688|bmi088] ARGS...`); exits with
     /// [`ExitCode::Config`] on error.
-    fn read_config() -> (Device, Config) {
+    fn read_config() -> (Device, AlignMethod, Config) {
         let args = semihosting::experimental::env::args::<512>().unwrap_or_else(|_| {
             defmt::error!("no semihosting command line: run through firmware/qemu-run.sh");
             exit(ExitCode::Config)
@@ -219,22 +238,35 @@ mod app {
             }
         }
         let mut device = Device::Adis16505;
-        if words.peek() == Some(&"--device") {
-            let name = words.nth(1).unwrap_or("");
-            device = Device::parse(name).unwrap_or_else(|| {
-                defmt::error!("unknown device {=str}: adis16505, icm42688 or bmi088", name);
-                exit(ExitCode::Config)
-            });
+        let mut method = AlignMethod::Static;
+        loop {
+            match words.peek() {
+                Some(&"--device") => {
+                    let name = words.nth(1).unwrap_or("");
+                    device = Device::parse(name).unwrap_or_else(|| {
+                        defmt::error!("unknown device {=str}: adis16505, icm42688 or bmi088", name);
+                        exit(ExitCode::Config)
+                    });
+                }
+                Some(&"--align-method") => {
+                    let name = words.nth(1).unwrap_or("");
+                    method = AlignMethod::from_name(name).unwrap_or_else(|| {
+                        defmt::error!("unknown alignment method {=str}", name);
+                        exit(ExitCode::Config)
+                    });
+                }
+                _ => break,
+            }
         }
         let config = Config::parse(words).unwrap_or_else(|e| {
             defmt::error!(
-                "bad arguments ({}); usage: [--device adis16505|icm42688|bmi088] {=str}",
+                "bad arguments ({}); usage: [--device adis16505|icm42688|bmi088] [--align-method static|inertial] {=str}",
                 e,
                 USAGE
             );
             exit(ExitCode::Config)
         });
-        (device, config)
+        (device, method, config)
     }
 
     /// Loads the sensor calibration (identity without a file); exits with
@@ -412,14 +444,13 @@ mod app {
     ) {
         let mechanization = *cx.local.mechanization;
         let NavSetup {
-            position,
             n_align,
             log_every,
             mut out,
         } = setup;
         let limits = InputLimits::default();
         let mut nav: Option<Strapdown<f32>> = None;
-        let mut aligned: Option<AlignmentResult<f32>> = None;
+        let mut aligned: Option<nav_core::alignment::AlignOutcome<f32>> = None;
         let (mut counters, mut cost) = (Counters::default(), StepCost::default());
         let mut imu = ImuStats::default();
         let (mut forwarded, mut last_t_us, mut last_ready_us) = (0_u32, 0_u64, 0_u64);
@@ -507,8 +538,7 @@ mod app {
                     Err(_) => defmt::panic!("alignment result channel closed"),
                 };
                 log_alignment(&result);
-                let start = NavState::at_rest(position, result.q_b_n());
-                let n = Strapdown::new(start, mechanization);
+                let n = Strapdown::new(result.state, mechanization);
                 write_line(&mut out, Solution::from_state(sample.t_us, n.state()));
                 nav = Some(n);
                 aligned = Some(result);
@@ -539,26 +569,43 @@ mod app {
         exit(ExitCode::Success)
     }
 
-    /// Static alignment, below navigation: accumulates `n_align` increments and solves.
+    /// Alignment, below navigation: runs nav-core's alignment state machine on the forwarded
+    /// increments, logs its stage changes, and answers with the aligned state or the failure.
     #[task(priority = 1)]
     async fn align(
         _: align::Context,
         mut align_rx: Receiver<'static, ImuIncrement<f32>, ALIGN_CAP>,
         mut result_tx: Sender<'static, AlignOutcome, 1>,
-        n_align: u32,
-        position: Position,
+        setup: AlignSetup,
     ) {
-        let mut acc = StaticAlignment::<f32>::new();
-        defmt::info!("aligning: static analytic, {=u32} samples", n_align);
+        let settings = setup.settings;
+        defmt::info!(
+            "aligning: {=str}, {=u32} samples; stage COARSE",
+            settings.method.name(),
+            settings.samples
+        );
+        let mut aligner = Aligner::new(settings);
+        let mut fine = false;
         while let Ok(inc) = align_rx.recv().await {
-            acc.add(&inc);
-            if acc.samples() == n_align {
-                let outcome = acc.solve(position.lat::<f32>(), position.h::<f32>());
-                if result_tx.send(outcome).await.is_err() {
-                    defmt::panic!("alignment result channel closed");
+            let answer = match aligner.add(&inc) {
+                Progress::Coarse => continue,
+                Progress::Fine => {
+                    if !fine {
+                        fine = true;
+                        defmt::info!(
+                            "alignment stage FINE after {=u32} samples",
+                            aligner.samples()
+                        );
+                    }
+                    continue;
                 }
-                return;
+                Progress::Aligned(outcome) => Ok(outcome),
+                Progress::Failed(failure) => Err(failure),
+            };
+            if result_tx.send(answer).await.is_err() {
+                defmt::panic!("alignment result channel closed");
             }
+            return;
         }
     }
 
@@ -570,16 +617,20 @@ mod app {
         }
     }
 
-    fn log_alignment(r: &AlignmentResult<f32>) {
+    fn log_alignment(r: &nav_core::alignment::AlignOutcome<f32>) {
+        let (roll, pitch, yaw) = nav_core::attitude::euler(&r.estimate.q_b_n);
+        let sigma = r.estimate.sigma_rad.map(|x| x.to_degrees());
         defmt::info!(
-            "aligned after {=u32} samples ({=f32} s): roll {=f32} deg, pitch {=f32} deg, yaw {=f32} deg; |f| {=f32} m/s^2, |omega| {=f32} deg/h",
-            r.samples,
-            r.duration,
-            r.roll.to_degrees(),
-            r.pitch.to_degrees(),
-            r.yaw.to_degrees(),
-            r.f_mean,
-            r.omega_mean.to_degrees() * 3600.0
+            "alignment stage ALIGNED after {=u32} samples (coarse {=f64} s, fine {=f64} s): roll {=f32} deg, pitch {=f32} deg, yaw {=f32} deg; 1-sigma {=f32} {=f32} {=f32} deg",
+            r.times.coarse_samples + r.times.fine_samples,
+            r.times.coarse_s,
+            r.times.fine_s,
+            roll.to_degrees(),
+            pitch.to_degrees(),
+            yaw.to_degrees(),
+            sigma.x,
+            sigma.y,
+            sigma.z
         );
     }
 
@@ -597,7 +648,7 @@ mod app {
         c: &Counters,
         cost: &StepCost,
         imu: &ImuStats,
-        aligned: Option<&AlignmentResult<f32>>,
+        aligned: Option<&nav_core::alignment::AlignOutcome<f32>>,
         last: &Solution,
         last_ready_us: u64,
     ) {
@@ -632,11 +683,12 @@ mod app {
         );
         log_imu_costs(imu);
         if let Some(r) = aligned {
+            let (roll, pitch, yaw) = nav_core::attitude::euler(&r.estimate.q_b_n);
             defmt::info!(
                 "alignment: roll {=f32} deg, pitch {=f32} deg, yaw {=f32} deg",
-                r.roll.to_degrees(),
-                r.pitch.to_degrees(),
-                r.yaw.to_degrees()
+                roll.to_degrees(),
+                pitch.to_degrees(),
+                yaw.to_degrees()
             );
         }
         defmt::info!(

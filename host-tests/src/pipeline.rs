@@ -1,5 +1,6 @@
-//! The replay pipeline: static alignment on the first samples, then strapdown navigation, with a
-//! solution row every `log_every` navigation steps.
+//! The replay pipeline: alignment on the first samples (nav-core's [`Aligner`] running the
+//! chosen method), then strapdown navigation, with a solution row every `log_every` navigation
+//! steps.
 //!
 //! The firmware implements exactly these semantics (split across its RTIC tasks) and an
 //! end-to-end test compares the two logs line by line, so every rule below is part of the
@@ -10,22 +11,25 @@
 //! - the increments are converted `f32 -> f64 -> T` (exact for `T = f64`, identity for `f32`),
 //!   with the sample's measured `dt_s`;
 //! - aligning: an increment failing [`ImuIncrement::check`] against the default
-//!   [`InputLimits`] counts in `rejected`; otherwise it is accumulated; once `n_align =
-//!   max(1, ceil(align_seconds * rate_hz - 1e-9))` are accumulated the alignment is solved at the
-//!   configured position, navigation starts at rest with the aligned attitude, and that state is
-//!   logged at the time of the last alignment sample;
+//!   [`InputLimits`] counts in `rejected`; otherwise it goes to the [`Aligner`]; once `n_align =
+//!   max(1, ceil(align_seconds * rate_hz - 1e-9))` are accepted the alignment ends at the
+//!   configured position, navigation starts from its state, and that state is logged at the time
+//!   of the last alignment sample;
 //! - navigating: an increment refused by [`Strapdown::step`] counts in `rejected`; every
 //!   `log_every`-th accepted step is logged; at the end, the last accepted step is logged unless it
 //!   already was.
 //!
 //! The log is [`CSV_HEADER`] then one [`Solution`] row (its `Display`) per line.
 
+use hal_adapters::drivers::NoiseSpec;
 use hal_adapters::{Imu, SampleFlags};
+use nav_core::alignment::{
+    AlignFailure, AlignMethod, AlignOutcome, AlignSettings, Aligner, Progress, SensorNoise,
+};
 use nav_core::output::CSV_HEADER;
 use nav_core::{
-    AlignError, AlignmentResult, AttitudeMethod, ImuCalibration, ImuIncrement, InputLimits,
-    MechanizationConfig, NavFrame, NavState, Position, Scalar, Solution, StaticAlignment,
-    Strapdown, VerticalChannel,
+    AttitudeMethod, ImuCalibration, ImuIncrement, InputLimits, MechanizationConfig, NavFrame,
+    Position, Scalar, Solution, Strapdown, VerticalChannel,
 };
 use std::fmt;
 use std::io::{self, Write};
@@ -52,6 +56,20 @@ pub struct PipelineConfig {
     pub calibration: ImuCalibration,
     /// Frame, attitude integrator and vertical channel of the mechanization.
     pub choices: MechanizationChoices,
+    /// Alignment method.
+    pub align_method: AlignMethod,
+    /// The IMU's noise, assumed by the alignment (its 1-sigma and filter tuning).
+    pub noise: NoiseSpec,
+}
+
+/// nav-core's noise model of a part's figures.
+pub fn sensor_noise<T: Scalar>(n: &NoiseSpec) -> SensorNoise<T> {
+    SensorNoise {
+        arw_rad_per_sqrt_s: T::c(n.gyro_arw_rad_per_sqrt_s),
+        vrw_mps_per_sqrt_s: T::c(n.accel_vrw_mps_per_sqrt_s),
+        gyro_bias_rad_s: T::c(n.gyro_bias_rad_s),
+        accel_bias_mps2: T::c(n.accel_bias_mps2),
+    }
 }
 
 /// The selectable parts of the mechanization (nav-core's defaults: wander azimuth, rotation
@@ -120,32 +138,42 @@ impl PipelineConfig {
 /// The alignment result in output units.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AlignmentDeg {
+    /// The method.
+    pub method: AlignMethod,
     /// Roll [deg].
     pub roll_deg: f64,
     /// Pitch [deg].
     pub pitch_deg: f64,
     /// Yaw (true heading) [deg].
     pub yaw_deg: f64,
-    /// Samples averaged.
+    /// 1-sigma of roll, pitch, yaw [deg] (the method's own error model).
+    pub sigma_deg: [f64; 3],
+    /// Samples used.
     pub samples: u32,
-    /// Time averaged [s].
+    /// Time used [s].
     pub duration_s: f64,
-    /// Mean specific force magnitude [m/s^2].
-    pub f_mean_mps2: f64,
-    /// Mean angular rate magnitude [deg/h].
-    pub omega_mean_dph: f64,
+    /// Time in the coarse stage [s].
+    pub coarse_s: f64,
+    /// Time in the fine stage [s].
+    pub fine_s: f64,
 }
 
-impl<T: Scalar> From<&AlignmentResult<T>> for AlignmentDeg {
-    fn from(r: &AlignmentResult<T>) -> Self {
+impl AlignmentDeg {
+    /// The outcome of `method` in output units.
+    pub fn new<T: Scalar>(method: AlignMethod, o: &AlignOutcome<T>) -> Self {
+        let q = nav_core::attitude::quat_to_f64(&o.estimate.q_b_n);
+        let (roll, pitch, yaw) = nav_core::attitude::euler(&q);
+        let sigma = o.estimate.sigma_rad.map(|x| x.to_f64().to_degrees());
         Self {
-            roll_deg: r.roll.to_f64().to_degrees(),
-            pitch_deg: r.pitch.to_f64().to_degrees(),
-            yaw_deg: r.yaw.to_f64().to_degrees(),
-            samples: r.samples,
-            duration_s: r.duration.to_f64(),
-            f_mean_mps2: r.f_mean.to_f64(),
-            omega_mean_dph: r.omega_mean.to_f64().to_degrees() * 3600.0,
+            method,
+            roll_deg: roll.to_degrees(),
+            pitch_deg: pitch.to_degrees(),
+            yaw_deg: yaw.to_degrees(),
+            sigma_deg: [sigma.x, sigma.y, sigma.z],
+            samples: o.times.coarse_samples + o.times.fine_samples,
+            duration_s: o.times.coarse_s + o.times.fine_s,
+            coarse_s: o.times.coarse_s,
+            fine_s: o.times.fine_s,
         }
     }
 }
@@ -191,12 +219,12 @@ pub enum PipelineError<E> {
     Config(String),
     /// The sample source failed (I/O, corrupt recording).
     Source(E),
-    /// The alignment could not be solved.
+    /// The alignment failed.
     Alignment {
         /// Samples accumulated.
         samples: u32,
         /// Why.
-        error: AlignError,
+        error: AlignFailure,
     },
     /// The source ended before `n_align` samples were accumulated.
     EndedDuringAlignment {
@@ -231,7 +259,7 @@ impl<E: fmt::Display> fmt::Display for PipelineError<E> {
 impl<E: fmt::Debug + fmt::Display> std::error::Error for PipelineError<E> {}
 
 enum Phase<T: Scalar> {
-    Aligning(StaticAlignment<T>),
+    Aligning(Box<Aligner<T>>),
     Navigating {
         nav: Strapdown<T>,
         alignment: AlignmentDeg,
@@ -261,7 +289,12 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
     let row = |out: &mut W, s: &Solution| writeln!(out, "{s}").map_err(PipelineError::Output);
 
     writeln!(out, "{CSV_HEADER}").map_err(PipelineError::Output)?;
-    let mut phase = Phase::Aligning(StaticAlignment::<T>::new());
+    let mut phase = Phase::Aligning(Box::new(Aligner::new(AlignSettings {
+        method: config.align_method,
+        position,
+        samples: n_align,
+        noise: sensor_noise(&config.noise),
+    })));
     let (mut samples, mut flagged, mut rejected, mut nav_steps, mut rows) =
         (0_u32, 0_u32, 0_u32, 0_u32, 0_u32);
     let mut last_t_us = 0_u64;
@@ -283,30 +316,31 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
         let widen = |v: [f32; 3]| v.map(|x| T::c(f64::from(x)));
         let inc = ImuIncrement::<T>::new(widen(dtheta), widen(dv), T::c(f64::from(s.dt_s)));
         match &mut phase {
-            Phase::Aligning(acc) => {
+            Phase::Aligning(aligner) => {
                 if inc.check(&limits).is_err() {
                     rejected = rejected.saturating_add(1);
                     continue;
                 }
-                acc.add(&inc);
-                if acc.samples() == n_align {
-                    let res =
-                        acc.solve(position.lat::<T>(), position.h::<T>())
-                            .map_err(|error| PipelineError::Alignment {
-                                samples: acc.samples(),
-                                error,
-                            })?;
-                    let nav =
-                        Strapdown::new(NavState::at_rest(position, res.q_b_n()), mechanization);
-                    // The aligned attitude at rest, at the time of the last alignment sample.
-                    let sol = Solution::from_state(s.t_us, nav.state());
-                    row(&mut out, &sol)?;
-                    rows += 1;
-                    last_logged = Some(sol);
-                    phase = Phase::Navigating {
-                        nav,
-                        alignment: AlignmentDeg::from(&res),
-                    };
+                match aligner.add(&inc) {
+                    Progress::Coarse | Progress::Fine => {}
+                    Progress::Failed(error) => {
+                        return Err(PipelineError::Alignment {
+                            samples: aligner.samples(),
+                            error,
+                        });
+                    }
+                    Progress::Aligned(outcome) => {
+                        let nav = Strapdown::new(outcome.state, mechanization);
+                        // The aligned state, at the time of the last alignment sample.
+                        let sol = Solution::from_state(s.t_us, nav.state());
+                        row(&mut out, &sol)?;
+                        rows += 1;
+                        last_logged = Some(sol);
+                        phase = Phase::Navigating {
+                            nav,
+                            alignment: AlignmentDeg::new(config.align_method, &outcome),
+                        };
+                    }
                 }
             }
             Phase::Navigating { nav, .. } => {
@@ -327,8 +361,8 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
     }
 
     match phase {
-        Phase::Aligning(acc) => Err(PipelineError::EndedDuringAlignment {
-            samples: acc.samples(),
+        Phase::Aligning(aligner) => Err(PipelineError::EndedDuringAlignment {
+            samples: aligner.samples(),
             n_align,
         }),
         Phase::Navigating { nav, alignment } => {
@@ -410,6 +444,8 @@ mod tests {
             rate_hz: 100.0,
             calibration: ImuCalibration::default(),
             choices: MechanizationChoices::default(),
+            align_method: AlignMethod::Static,
+            noise: hal_adapters::drivers::noise::ADIS16505,
         }
     }
 

@@ -7,11 +7,23 @@ use anyhow::{Result, anyhow};
 use hal_adapters::Imu;
 use hal_adapters::drivers::Mounting;
 use hal_adapters::drivers::adis16505::{self, Model};
-use hal_adapters::drivers::{bmi088, icm42688};
+use hal_adapters::drivers::{NoiseSpec, bmi088, icm42688, noise};
 use hal_adapters::sim::{SimBmi088, SimulatedImu};
+use nav_core::alignment::AlignMethod;
 use nav_core::{ImuCalibration, Scalar};
 use std::io::Write;
 use std::path::Path;
+
+impl ImuDevice {
+    /// The part's datasheet noise (the board's ADIS16505 for a plain recording).
+    pub fn noise(self) -> NoiseSpec {
+        match self {
+            Self::Recording | Self::Adis16505 => noise::ADIS16505,
+            Self::Icm42688 => noise::ICM42688,
+            Self::Bmi088 => noise::BMI088,
+        }
+    }
+}
 
 /// What produces the samples: the recording itself, or a simulated IMU answering from it on an
 /// SPI bus, read by the real driver (the firmware's path on the `qemu` board).
@@ -47,6 +59,11 @@ pub struct ReplayOptions {
     pub choices: MechanizationChoices,
     /// The sample path (default: the recording as it is).
     pub device: ImuDevice,
+    /// Alignment method.
+    pub align_method: AlignMethod,
+    /// The IMU noise the alignment assumes (`None`: the device's datasheet figures, the board's
+    /// ADIS16505 for a plain recording, as the firmware assumes).
+    pub noise: Option<NoiseSpec>,
 }
 
 impl ReplayOptions {
@@ -61,6 +78,8 @@ impl ReplayOptions {
             rate_hz,
             calibration: self.calibration,
             choices: self.choices,
+            align_method: self.align_method,
+            noise: self.noise.unwrap_or(self.device.noise()),
         }
     }
 }

@@ -27,6 +27,8 @@ fn options() -> ReplayOptions {
         log_every: 40,
         calibration: Default::default(),
         device: Default::default(),
+        align_method: Default::default(),
+        noise: None,
         choices: Default::default(),
     }
 }

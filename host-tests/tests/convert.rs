@@ -18,6 +18,8 @@ fn options(s: &Stationary) -> ReplayOptions {
         log_every: 25,
         calibration: Default::default(),
         device: Default::default(),
+        align_method: Default::default(),
+        noise: None,
         choices: Default::default(),
     }
 }

@@ -79,6 +79,8 @@ fn lasergyro_replays() {
         log_every: 100,
         calibration: Default::default(),
         device: Default::default(),
+        align_method: Default::default(),
+        noise: None,
         choices: Default::default(),
     };
     let (fr, log) = common::replay::<f64>(&path, &options);

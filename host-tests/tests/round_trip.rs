@@ -72,6 +72,8 @@ fn options(s: &Stationary) -> ReplayOptions {
         log_every: 40,
         calibration: Default::default(),
         device: Default::default(),
+        align_method: Default::default(),
+        noise: None,
         choices: Default::default(),
     }
 }
@@ -250,7 +252,10 @@ fn cli_generate_and_replay() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(stdout.contains("samples 8000: flagged 0"), "{stdout}");
-    assert!(stdout.contains("alignment over 2000 samples"), "{stdout}");
+    assert!(
+        stdout.contains("alignment (static) over 2000 samples"),
+        "{stdout}"
+    );
 
     // 8000 samples, 2000 aligned, 6000 steps: the alignment row, 181 periodic rows (5973 steps)
     // and the last step.

@@ -150,10 +150,12 @@ mod error;
 mod health;
 pub mod icm42688;
 mod mounting;
+pub mod noise;
 
 pub use error::Error;
 pub use health::Health;
 pub use mounting::{Mounting, SignedAxis};
+pub use noise::NoiseSpec;
 
 use embedded_hal::delay::DelayNs;
 

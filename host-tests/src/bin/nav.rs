@@ -26,6 +26,7 @@ use host_tests::pipeline::DEFAULT_LOG_EVERY;
 use host_tests::pipeline::MechanizationChoices;
 use host_tests::recording_io;
 use host_tests::replay::{FileReport, ImuDevice, ReplayOptions, replay_file};
+use nav_core::alignment::AlignMethod;
 use nav_core::{AttitudeMethod, DcmIntegrator, ImuCalibration, NavFrame, VerticalChannel};
 use std::fs::File;
 use std::io::BufWriter;
@@ -199,6 +200,15 @@ enum Command {
         /// Vertical channel: integrated freely, or held at the start height.
         #[arg(long, value_enum, default_value_t = Vertical::Free)]
         vertical: Vertical,
+        /// Alignment method: static (analytic, still base), inertial (inertial-frame coarse:
+        /// rocking base, no initial heading).
+        #[arg(long, default_value = "static", value_parser = parse_align_method)]
+        align_method: AlignMethod,
+        /// IMU noise assumed by the alignment, as a simulator grade (fog, rlg, mems-tactical,
+        /// mems-consumer); default: the device's datasheet (the board's ADIS16505 for a plain
+        /// recording).
+        #[arg(long, value_name = "GRADE")]
+        imu_noise: Option<host_tests::sensor_model::Grade>,
     },
     /// Compare a solution log with a truth trajectory: RMS, max and chosen-time errors of
     /// position, velocity and attitude, and optional SVG plots.
@@ -376,6 +386,14 @@ fn progress_bar() -> Option<indicatif::ProgressBar> {
     })
 }
 
+/// `--align-method` values: nav-core's method names.
+fn parse_align_method(s: &str) -> Result<AlignMethod, String> {
+    AlignMethod::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = AlignMethod::ALL.iter().map(|m| m.name()).collect();
+        format!("expected one of {}", names.join(", "))
+    })
+}
+
 fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
@@ -518,6 +536,8 @@ fn run(cli: Cli) -> Result<()> {
             frame,
             attitude,
             vertical,
+            align_method,
+            imu_noise,
         } => {
             let calibration = match calibration {
                 None => ImuCalibration::default(),
@@ -537,6 +557,8 @@ fn run(cli: Cli) -> Result<()> {
                 calibration,
                 device,
                 choices: choices(frame, attitude, vertical),
+                align_method,
+                noise: imu_noise.map(|g| g.noise_spec()),
             };
             let file = File::create(&out).with_context(|| format!("creating {}", out.display()))?;
             let writer = BufWriter::new(file);
@@ -578,14 +600,18 @@ fn print_summary(imu: &Path, out: &Path, precision: Precision, fr: &FileReport) 
     );
     let a = &r.alignment;
     println!(
-        "alignment over {} samples ({:.3} s): roll {:.6} deg, pitch {:.6} deg, yaw {:.6} deg (|f| {:.5} m/s^2, |omega| {:.3} deg/h)",
+        "alignment ({}) over {} samples ({:.3} s: coarse {:.3} s, fine {:.3} s): roll {:.6} deg, pitch {:.6} deg, yaw {:.6} deg; 1-sigma {:.4} {:.4} {:.4} deg",
+        a.method.name(),
         a.samples,
         a.duration_s,
+        a.coarse_s,
+        a.fine_s,
         a.roll_deg,
         a.pitch_deg,
         a.yaw_deg,
-        a.f_mean_mps2,
-        a.omega_mean_dph
+        a.sigma_deg[0],
+        a.sigma_deg[1],
+        a.sigma_deg[2]
     );
     let s = &r.final_solution;
     println!(

@@ -65,6 +65,24 @@ impl Grade {
         }
     }
 
+    /// The figures an alignment filter assumes for this grade: white noise densities, and per
+    /// axis the largest of the fixed bias, the turn-on 1-sigma and the Gauss–Markov 1-sigma.
+    pub fn noise_spec(self) -> hal_adapters::drivers::NoiseSpec {
+        let m = self.model();
+        let bias = |t: &super::TriadErrors| {
+            t.bias
+                .amax()
+                .max(t.turn_on_bias_sigma.amax())
+                .max(t.bias_instability.sigma)
+        };
+        hal_adapters::drivers::NoiseSpec {
+            gyro_arw_rad_per_sqrt_s: m.gyro.white_noise.density(),
+            accel_vrw_mps_per_sqrt_s: m.accel.white_noise.density(),
+            gyro_bias_rad_s: bias(&m.gyro),
+            accel_bias_mps2: bias(&m.accel),
+        }
+    }
+
     /// The error model of this grade.
     pub fn model(self) -> ImuErrorModel {
         match self {

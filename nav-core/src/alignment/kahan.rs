@@ -47,4 +47,3 @@ impl<T: Scalar> Kahan3<T> {
         Vector3::new(self.0[0].sum, self.0[1].sum, self.0[2].sum)
     }
 }
-

@@ -2,14 +2,33 @@
 //!
 //! - [`analytic`]: static analytic (coarse) alignment — levelling from the mean specific force,
 //!   heading by gyrocompassing the mean angular rate.
+//! - [`fine`]: position-aided closed-loop fine alignment (seed 003) — an error-state Kalman
+//!   filter (position, velocity, attitude, sensor biases) around the strapdown, fed the known
+//!   position and zero velocity, its estimates fed back.
+//! - [`inertial`]: inertial-frame coarse alignment — gravity observed in a frame frozen in
+//!   inertial space; rocking base, no initial heading.
+//! - [`level`]: level alignment on a rocking ship (seed 002) — a Kalman or constant-gain filter
+//!   of the horizontal tilt from the lever-arm-compensated level-frame velocity.
+//!
+//! - [`machine`]: the state machine `COARSE -> FINE -> ALIGNED` (or `FAILED`) that runs one of
+//!   them as the firmware's alignment task and the harness's replay do.
 //!
 //! Every method takes increments one at a time (`add`) and solves when asked, so the firmware
 //! can run it in a task below sampling and navigation.
 
 pub mod analytic;
+pub mod fine;
+pub mod inertial;
 mod kahan;
+pub mod level;
+pub mod machine;
 
 pub use analytic::{AlignError, AlignmentResult, StaticAlignment, samples_for};
+pub use inertial::{InertialAlignError, InertialAlignment, SensorNoise};
+pub use level::{GainMode, LevelConfig, LevelConfigError, LevelFilter, LevelStatus};
+pub use machine::{
+    AlignFailure, AlignMethod, AlignOutcome, AlignSettings, Aligner, Progress, Stage, StageTimes,
+};
 
 use crate::Scalar;
 use nalgebra::{UnitQuaternion, Vector3};

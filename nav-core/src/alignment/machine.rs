@@ -1,0 +1,300 @@
+//! The alignment state machine: `COARSE -> FINE -> ALIGNED`, or `FAILED` with a reason.
+//!
+//! One [`Aligner`] runs the method chosen in [`AlignSettings`] on the increments it is given,
+//! sample by sample, and changes stage on sample counts (never on clock time), so the firmware
+//! and the host harness fed the same samples reach the same result.
+//!
+//! | method | coarse stage | fine stage |
+//! |---|---|---|
+//! | [`AlignMethod::Static`] | [`StaticAlignment`] over the whole period | — |
+//! | [`AlignMethod::Inertial`] | [`InertialAlignment`] over the whole period | — |
+//!
+//! The result is the navigation state at the end of the last alignment sample, with the 1-sigma
+//! roll, pitch and yaw of the method's own error model, and the number of samples (and
+//! seconds) each stage took.
+
+use super::AttitudeEstimate;
+use super::analytic::{AlignError, StaticAlignment};
+use super::inertial::{InertialAlignError, InertialAlignment, SensorNoise};
+use crate::{ImuIncrement, InputLimits, NavState, Position, Scalar, earth};
+use nalgebra::Vector3;
+
+/// Which alignment to run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AlignMethod {
+    /// Static analytic: levelling and gyrocompassing of the mean increments (still base only).
+    #[default]
+    Static,
+    /// Inertial-frame coarse alignment: rocking or disturbed base, no initial heading.
+    Inertial,
+}
+
+impl AlignMethod {
+    /// Every method, in the order of [`Self::name`]s.
+    pub const ALL: [AlignMethod; 2] = [AlignMethod::Static, AlignMethod::Inertial];
+
+    /// The name on command lines and in logs.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Static => "static",
+            Self::Inertial => "inertial",
+        }
+    }
+
+    /// The method called `name`, if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
+/// Where an [`Aligner`] is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Accumulating the coarse solution.
+    Coarse,
+    /// Refining it.
+    Fine,
+    /// Done: [`Aligner::outcome`] has the result.
+    Aligned,
+    /// Given up: [`Aligner::failure`] says why.
+    Failed,
+}
+
+impl Stage {
+    /// Upper-case name for logs.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Coarse => "COARSE",
+            Self::Fine => "FINE",
+            Self::Aligned => "ALIGNED",
+            Self::Failed => "FAILED",
+        }
+    }
+}
+
+/// What [`Aligner::add`] reports.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Progress<T: Scalar> {
+    /// Still in [`Stage::Coarse`].
+    Coarse,
+    /// Still in [`Stage::Fine`].
+    Fine,
+    /// Done (reported again for every later sample).
+    Aligned(AlignOutcome<T>),
+    /// Given up.
+    Failed(AlignFailure),
+}
+
+/// Why an alignment failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AlignFailure {
+    /// The static analytic solution was refused (base moving, gyros blind to the Earth rate,
+    /// ...).
+    Static(AlignError),
+    /// The inertial-frame solution was refused.
+    Inertial(InertialAlignError),
+}
+
+impl core::fmt::Display for AlignFailure {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Static(e) => write!(f, "static alignment: {e}"),
+            Self::Inertial(e) => write!(f, "inertial-frame alignment: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for AlignFailure {}
+
+/// What to run, where.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AlignSettings<T: Scalar> {
+    /// The method.
+    pub method: AlignMethod,
+    /// The known position (the base does not travel).
+    pub position: Position,
+    /// Samples of the whole alignment (see [`super::samples_for`]).
+    pub samples: u32,
+    /// The IMU's noise, for the 1-sigma of the result (and the filters' tuning).
+    pub noise: SensorNoise<T>,
+}
+
+/// Samples (and seconds) each stage took.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StageTimes {
+    /// Samples in the coarse stage.
+    pub coarse_samples: u32,
+    /// Samples in the fine stage.
+    pub fine_samples: u32,
+    /// Seconds in the coarse stage [s].
+    pub coarse_s: f64,
+    /// Seconds in the fine stage [s].
+    pub fine_s: f64,
+}
+
+/// The result of an alignment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AlignOutcome<T: Scalar> {
+    /// The navigation state to start from (at rest at the known position for the coarse
+    /// methods).
+    pub state: NavState<T>,
+    /// Attitude and its 1-sigma.
+    pub estimate: AttitudeEstimate<T>,
+    /// Where the time went.
+    pub times: StageTimes,
+}
+
+enum Coarse<T: Scalar> {
+    Static(StaticAlignment<T>),
+    Inertial(InertialAlignment<T>),
+}
+
+/// The alignment state machine (module docs).
+pub struct Aligner<T: Scalar> {
+    settings: AlignSettings<T>,
+    limits: InputLimits<T>,
+    coarse: Coarse<T>,
+    stage: Stage,
+    times: StageTimes,
+    failure: Option<AlignFailure>,
+    outcome: Option<AlignOutcome<T>>,
+    refused: u32,
+}
+
+impl<T: Scalar> Aligner<T> {
+    /// A machine at the start of the coarse stage.
+    pub fn new(settings: AlignSettings<T>) -> Self {
+        let lat = settings.position.lat::<T>();
+        let h = settings.position.h::<T>();
+        let coarse = match settings.method {
+            AlignMethod::Static => Coarse::Static(StaticAlignment::new()),
+            AlignMethod::Inertial => {
+                Coarse::Inertial(InertialAlignment::new(lat, h).with_noise(settings.noise))
+            }
+        };
+        Self {
+            settings,
+            limits: InputLimits::default(),
+            coarse,
+            stage: Stage::Coarse,
+            times: StageTimes::default(),
+            failure: None,
+            outcome: None,
+            refused: 0,
+        }
+    }
+
+    /// The stage now.
+    pub fn stage(&self) -> Stage {
+        self.stage
+    }
+
+    /// Why it failed, once [`Stage::Failed`].
+    pub fn failure(&self) -> Option<AlignFailure> {
+        self.failure
+    }
+
+    /// The result, once [`Stage::Aligned`].
+    pub fn outcome(&self) -> Option<&AlignOutcome<T>> {
+        self.outcome.as_ref()
+    }
+
+    /// Increments refused by the input limits (not counted as alignment samples).
+    pub fn refused(&self) -> u32 {
+        self.refused
+    }
+
+    /// Samples used so far.
+    pub fn samples(&self) -> u32 {
+        self.times.coarse_samples + self.times.fine_samples
+    }
+
+    /// Feeds one increment (ignored once aligned or failed); returns where the machine is
+    /// after it.
+    pub fn add(&mut self, inc: &ImuIncrement<T>) -> Progress<T> {
+        if matches!(self.stage, Stage::Coarse | Stage::Fine) {
+            if inc.check(&self.limits).is_err() {
+                self.refused = self.refused.saturating_add(1);
+            } else {
+                self.step(inc);
+            }
+        }
+        self.progress()
+    }
+
+    /// Where the machine is.
+    pub fn progress(&self) -> Progress<T> {
+        match (self.stage, self.outcome, self.failure) {
+            (Stage::Aligned, Some(o), _) => Progress::Aligned(o),
+            (Stage::Failed, _, Some(f)) => Progress::Failed(f),
+            (Stage::Fine, ..) => Progress::Fine,
+            _ => Progress::Coarse,
+        }
+    }
+
+    fn step(&mut self, inc: &ImuIncrement<T>) {
+        let dt = inc.dt.to_f64();
+        match &mut self.coarse {
+            Coarse::Static(a) => a.add(inc),
+            Coarse::Inertial(a) => {
+                // Checked above with the same limits: cannot be refused.
+                let _ = a.add(inc);
+            }
+        }
+        self.times.coarse_samples += 1;
+        self.times.coarse_s += dt;
+        if self.samples() >= self.settings.samples {
+            self.finish_coarse();
+        }
+    }
+
+    /// Solves the coarse stage and ends the alignment with its result.
+    fn finish_coarse(&mut self) {
+        let position = self.settings.position;
+        let estimate = match &self.coarse {
+            Coarse::Static(a) => a
+                .solve(position.lat::<T>(), position.h::<T>())
+                .map(|r| AttitudeEstimate {
+                    q_b_n: r.q_b_n(),
+                    sigma_rad: static_sigma(&self.settings, r.duration),
+                    elapsed_s: r.duration,
+                })
+                .map_err(AlignFailure::Static),
+            Coarse::Inertial(a) => a.estimate().map_err(AlignFailure::Inertial),
+        };
+        match estimate {
+            Ok(estimate) => {
+                self.outcome = Some(AlignOutcome {
+                    state: NavState::at_rest(position, estimate.q_b_n),
+                    estimate,
+                    times: self.times,
+                });
+                self.stage = Stage::Aligned;
+            }
+            Err(e) => {
+                self.failure = Some(e);
+                self.stage = Stage::Failed;
+            }
+        }
+    }
+}
+
+/// Roll, pitch, yaw 1-sigma [rad] of a static analytic alignment over `t_s` [s]: levelling
+/// from the mean specific force (`VRW / (g sqrt(T))` and `b_a / g`), gyrocompassing from the
+/// mean rate (`ARW / (w sqrt(T))` and `b_g / w`, `w = Omega cos(lat)`; Groves §14.2.1 with the
+/// east gyro error over the horizontal Earth rate), the tilt's share of the heading
+/// (`tan(lat)` times the tilt, Titterton & Weston §10.2.1).
+fn static_sigma<T: Scalar>(settings: &AlignSettings<T>, t_s: T) -> Vector3<T> {
+    let n = &settings.noise;
+    let lat = settings.position.lat::<T>();
+    let g = earth::normal_gravity(lat, settings.position.h::<T>());
+    let w = T::c(earth::OMEGA_IE) * lat.pcos();
+    let tilt2 = n.vrw_mps_per_sqrt_s * n.vrw_mps_per_sqrt_s / (g * g * t_s)
+        + n.accel_bias_mps2 * n.accel_bias_mps2 / (g * g);
+    let tan_lat = lat.psin() / lat.pcos();
+    let yaw2 = (n.arw_rad_per_sqrt_s * n.arw_rad_per_sqrt_s / t_s
+        + n.gyro_bias_rad_s * n.gyro_bias_rad_s)
+        / (w * w)
+        + tilt2 * tan_lat * tan_lat;
+    Vector3::new(tilt2.sqrt(), tilt2.sqrt(), yaw2.sqrt())
+}
