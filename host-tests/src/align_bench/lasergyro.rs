@@ -14,23 +14,28 @@
 //!   rotation of the body over the window (a 0.01 deg sway) shows up in the mean rate next to
 //!   the Earth rate's 12.4 deg/h horizontal component here.
 //! - `inertial`: [`InertialAlignment`], heading at the window's end; the body's rotations are
-//!   integrated exactly, only the base's velocity disturbs it (module docs, eq. 9).
+//!   integrated exactly, only the base's velocity disturbs it ([`nav_core::alignment::inertial`],
+//!   eq. 9).
 //! - The fine alignment is the next method to add: a [`Method`] variant, its name and its arm in
 //!   [`heading_deg`]; the table then gets its rows automatically.
+//!
+//! Adjacent windows overlap (a 300 s window shares 270 s with the next), so the spread of the
+//! long windows understates that of independent ones.
 //!
 //! Beside each window length, the Cramér–Rao floor of the heading for rlg-grade white noise
 //! ([`Grade::Rlg`]: assumed, the recording's own noise is not documented),
 //! `sqrt((ARW / (w sqrt(T)))^2 + (sqrt(12) VRW / (g w T^1.5))^2)`, `w = Omega cos(lat)`, shows
-//! what a quiet base would allow.
+//! what a quiet base would allow (a spread below it means the recording's sensors are quieter
+//! than the preset).
 
 use crate::psins::{self, PsinsRecording};
 use crate::sensor_model::Grade;
 use crate::trajectory::wrap_pi;
 use anyhow::{Context, Result, ensure};
+use nav_core::ImuIncrement;
 use nav_core::alignment::{InertialAlignment, StaticAlignment};
 use nav_core::attitude::euler;
 use nav_core::earth::{OMEGA_IE, normal_gravity};
-use nav_core::ImuIncrement;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -41,7 +46,8 @@ pub const STEP_S: f64 = 30.0;
 
 /// The recording's place in the shared data folder, relative to this crate.
 pub fn default_path() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/psins-lasergyro/lasergyro.imu")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../shared/data/psins-lasergyro/lasergyro.imu")
 }
 
 /// An alignment method of the table.
@@ -76,14 +82,20 @@ pub struct Site {
 }
 
 /// The heading [deg] that `method` gives on `window` (increments in FRD, SI), or why it gave none.
-pub fn heading_deg(method: Method, window: &[ImuIncrement<f64>], site: &Site) -> Result<f64, String> {
+pub fn heading_deg(
+    method: Method,
+    window: &[ImuIncrement<f64>],
+    site: &Site,
+) -> Result<f64, String> {
     let yaw = match method {
         Method::Static => {
             let mut a = StaticAlignment::new();
             for inc in window {
                 a.add(inc);
             }
-            a.solve(site.lat_rad, site.h_m).map_err(|e| e.to_string())?.yaw
+            a.solve(site.lat_rad, site.h_m)
+                .map_err(|e| e.to_string())?
+                .yaw
         }
         Method::Inertial => {
             let mut a = InertialAlignment::new(site.lat_rad, site.h_m);
@@ -218,7 +230,10 @@ pub fn run(path: &Path) -> Result<String> {
     );
     let rows = evaluate(&incs, &site, rate_hz);
     let rlg = Grade::Rlg.model();
-    let (arw, vrw) = (rlg.gyro.white_noise.density(), rlg.accel.white_noise.density());
+    let (arw, vrw) = (
+        rlg.gyro.white_noise.density(),
+        rlg.accel.white_noise.density(),
+    );
     let mut out = String::new();
     let h = rec.header;
     writeln!(

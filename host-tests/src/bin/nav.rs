@@ -6,6 +6,7 @@
 //! nav sim      SCENARIO --out DIR [--grade ideal|fog|rlg|mems-tactical|mems-consumer]
 //!              [--seconds N] [--rate 400] [--seed 1] [--set KEY=VALUE]... [--truth-rate 50]
 //!              [--format both|bin|csv] [--list-params]
+//! nav align-bench seed002|seed003|lasergyro [--runs 50] [--grade fog] [--threads 2] [--data FILE]
 //! nav convert  --in FILE --out FILE
 //! nav bench    [--passes 10]
 //! nav replay   --imu FILE --lat DEG --lon DEG --h M --align-seconds S --out FILE
@@ -106,6 +107,25 @@ enum Command {
         /// Print the scenario's parameters with their defaults and exit.
         #[arg(long)]
         list_params: bool,
+    },
+    /// Alignment benchmarks with their physical floors: seed 002's level filter on a rocking ship
+    /// (sea states 3-6), seed 003's fine alignment on the AUV bench, and heading repeatability
+    /// on the real laser-gyro recording.
+    AlignBench {
+        /// seed002, seed003 or lasergyro.
+        which: AlignBenchKind,
+        /// Monte Carlo runs per cell (seed002, seed003).
+        #[arg(long, default_value_t = 50)]
+        runs: usize,
+        /// Sensor grade of the seed 002 runs.
+        #[arg(long, default_value = "fog")]
+        grade: host_tests::sensor_model::Grade,
+        /// Threads (seed003).
+        #[arg(long, default_value_t = 2)]
+        threads: usize,
+        /// The laser-gyro recording (lasergyro).
+        #[arg(long, value_name = "FILE")]
+        data: Option<PathBuf>,
     },
     /// Benchmark the mechanization alone (no I/O): steps per second on one thread, f32 and f64,
     /// over 10 min of exact 400 Hz increments of a 900 km/h flight.
@@ -277,6 +297,17 @@ enum Precision {
     F64,
 }
 
+/// `nav align-bench` tables.
+#[derive(Clone, Copy, ValueEnum)]
+enum AlignBenchKind {
+    /// Seed 002: level alignment on a rocking ship.
+    Seed002,
+    /// Seed 003: fine alignment on the AUV bench.
+    Seed003,
+    /// The real laser-gyro recording.
+    Lasergyro,
+}
+
 /// Recording files of `nav sim`.
 #[derive(Clone, Copy, ValueEnum)]
 enum SimFormat {
@@ -406,6 +437,24 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::AlignBench {
+            which,
+            runs,
+            grade,
+            threads,
+            data,
+        } => {
+            use host_tests::align_bench::{lasergyro, seed002, seed003};
+            let text = match which {
+                AlignBenchKind::Seed002 => seed002::run(runs, grade)?,
+                AlignBenchKind::Seed003 => seed003::run(runs, threads)?,
+                AlignBenchKind::Lasergyro => {
+                    lasergyro::run(&data.unwrap_or_else(lasergyro::default_path))?
+                }
+            };
+            print!("{text}");
+            Ok(())
+        }
         Command::Sim {
             scenario,
             out,

@@ -47,11 +47,27 @@
 //! heading error is the least-squares slope of its north component divided by `g Omega cos L`
 //! (`M` is the ordinary least-squares slope window `2t - T`). That is the maximum-likelihood
 //! estimate for white accelerometer noise, and `1.095x` the bound for gyro white noise (see
-//! [`SensorNoise`]). A disturbance velocity `v_d` (lever arm, waves) enters `M` only as
-//! `T (v_d(T) + v_d(0)) - 2 (r_d(T) - r_d(0))`, `r_d` its displacement, so (eq. 9)
-//! `|heading error| <= [6 (|v_N(0)| + |v_N(T)|) / T^2 + 12 |r_N(T) - r_N(0)| / T^3] / (g Omega cos L)`
-//! with `v_N`, `r_N` the north components: the disturbance tilt `v/(gT)` over the Earth-rate
-//! geometry `Omega cos(L) T`. The level error is `|v_d(T) - v_d(0)| / (g T)`.
+//! [`SensorNoise`]). A disturbance velocity `v_d` (lever arm, waves, people walking on the base;
+//! in `i0`) enters `M` only as (eq. 9)
+//! `dM = T (v_d(T) + v_d(0)) - 2 (r_d(T) - r_d(0))`, `r_d` its displacement. TRIAD turns the
+//! horizontal `M_E e + dM_h` onto east (`M_E = g Omega cos(L) T^3 / 6`), so the heading error is
+//! `atan2(dM_N, M_E + dM_E)`, at most `asin(|dM_h| / M_E)`; to first order
+//! `[6 (v_N(0) + v_N(T)) / T^2 - 12 (r_N(T) - r_N(0)) / T^3] / (g Omega cos L)`: the disturbance
+//! tilt `v / (g T)` over the Earth-rate geometry `Omega cos(L) T`. The level error is
+//! `|v_d(T) - v_d(0)| / (g T)`, plus `2 sin(|psi| / 2) Omega cos(L) T / 2` from a heading error
+//! `psi` (a turn about the window's mean vertical, not today's). Where `|M_E e + dM_h|` is off
+//! by more than [`HEADING_SIGNAL_TOLERANCE`], the estimate is refused. A known lever arm removes
+//! its part of `v_d` (eq. 10).
+//!
+//! # Known lever arm
+//! With [`InertialAlignment::with_lever_arm`] the IMU's offset `R` (body axes) from a centre of
+//! rotation at rest at the known position is compensated exactly: the IMU's inertial velocity
+//! relative to the centre is `v_l = C_b_i (omega_ib_b x R)`, so (eq. 10)
+//! `V_c = V - v_l(T) + v_l(0)`, `M_c = M - T (v_l(T) + v_l(0)) + 2 int v_l dt`, with `v_l` in
+//! `b0` from the gyro rate: interior samples by the central mean `(w_{k-1} + w_k) / 2` of the
+//! interval rates `w_k = dtheta_k / dt_k`, the two ends by linear extrapolation
+//! `(3 w_k - w_{k-1}) / 2` (errors `O(dt^2 d2omega/dt2)`). The gyro white noise enters only
+//! through the end rates (see [`SensorNoise`]).
 //!
 //! The attitude is for the time of the last increment ([`InertialAlignment::estimate`]), so a
 //! later stage (fine alignment) can continue from it while this one keeps accumulating.
@@ -64,7 +80,7 @@ use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
 
 /// Shortest accumulation [s] before an estimate is given. The heading signal `|M_i0|` grows as
 /// `T^3`: at 10 s even a navigation-grade IMU (0.002 deg/sqrt(h), 5 ug/sqrt(Hz)) has a heading
-/// 1-sigma of about 1 deg.
+/// 1-sigma of 0.65 deg at 45 deg latitude ([`SensorNoise`]).
 pub const MIN_DURATION_S: f64 = 10.0;
 
 /// Smallest `cos(latitude)` accepted (about 88.85 deg): the heading signal is proportional to
@@ -128,7 +144,8 @@ impl core::error::Error for InertialAlignError {}
 /// With `w = Omega cos(L)`, `T` the time accumulated (eqs. S1, S2):
 /// ```text
 /// sigma_yaw^2  = [12 VRW^2 / (g^2 T^3) + (6/5) ARW^2 / T + b_g^2] / w^2 + ARW^2 T + b_g^2 T^2
-/// sigma_tilt^2 = VRW^2 / (g^2 T) + ARW^2 T / 3 + (b_a / g)^2 + (b_g T / 2)^2
+///                + 72 s_v^2 / (g^2 w^2 T^4)
+/// sigma_tilt^2 = VRW^2 / (g^2 T) + ARW^2 T / 3 + (b_a / g)^2 + (b_g T / 2)^2 + 2 s_v^2 / (g T)^2
 /// ```
 /// The first two yaw terms are the least-squares slope of the north specific force: white
 /// accelerometer noise (variance `12 VRW^2 / T^3`, the Cramér–Rao bound itself) and the
@@ -136,7 +153,9 @@ impl core::error::Error for InertialAlignError {}
 /// `(6/5) ARW^2 / T`: 1.095x the bound `ARW^2 / T`); `b_g / w` is the east gyro bias' heading
 /// error; `ARW^2 T + b_g^2 T^2` the vertical gyro's drift from `b0` to the current time. The
 /// tilt is the mean specific force direction (accelerometer noise and bias) propagated from the
-/// window's centre to its end (gyro random walk `T/3`, bias `T/2`).
+/// window's centre to its end (gyro random walk `T/3`, bias `T/2`). With a known lever arm `R`
+/// the two end rates' noise adds `s_v^2 = (5/3) ARW^2 |R|^2 / dt` per axis (extrapolation
+/// weights `(3, -1)/2`, averaged over axes) to `v_l(0)` and `v_l(T)`: eq. 9 with white `v`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SensorNoise<T: Scalar> {
     /// Gyro angle random walk `ARW` (white rate noise density) [rad/sqrt(s)].
@@ -195,14 +214,80 @@ impl<T: Scalar> CompensatedQuat<T> {
         let n2 = self.hi.norm_squared();
         if (n2 - T::one()).abs() > T::c(64.0) * T::default_epsilon() {
             let inv = T::one() / n2.sqrt();
-            self.hi = self.hi * inv;
-            self.lo = self.lo * inv;
+            self.hi *= inv;
+            self.lo *= inv;
         }
     }
 
     /// The attitude rounded to the working precision (normalised).
     fn unit(&self) -> UnitQuaternion<T> {
         UnitQuaternion::new_normalize(self.hi + self.lo)
+    }
+}
+
+/// The known lever arm and its velocity terms (eq. 10), in `b0`.
+#[derive(Clone, Debug)]
+struct LeverArm<T: Scalar> {
+    /// IMU position relative to the centre of rotation, body axes [m].
+    r_b_m: Vector3<T>,
+    /// Body rate over the last interval `w_k` [rad/s].
+    omega_last: Option<Vector3<T>>,
+    /// Body rate over the interval before `w_{k-1}` [rad/s].
+    omega_prev: Option<Vector3<T>>,
+    /// Length of the last interval [s].
+    dt_last: T,
+    /// `v_l(0)` [m/s], once two intervals are known.
+    v_l0_b0: Option<Vector3<T>>,
+    /// `v_l(t_{k-1})` [m/s], the latest interior value.
+    v_l_b0: Vector3<T>,
+    /// Trapezoidal `int_0^{t_{k-1}} v_l dt` [m].
+    int_v_l_b0: Kahan3<T>,
+}
+
+impl<T: Scalar> LeverArm<T> {
+    fn new(r_b_m: Vector3<T>) -> Self {
+        Self {
+            r_b_m,
+            omega_last: None,
+            omega_prev: None,
+            dt_last: T::zero(),
+            v_l0_b0: None,
+            v_l_b0: Vector3::zeros(),
+            int_v_l_b0: Kahan3::new(),
+        }
+    }
+
+    /// Takes the rate of the interval just ended; `q_b_b0` is the attitude at its start.
+    fn add(&mut self, omega_ib_b: Vector3<T>, dt: T, q_b_b0: &UnitQuaternion<T>) {
+        if let Some(w_prev) = self.omega_last {
+            // v_l at the start of this interval, from the central mean of the rates.
+            let v = q_b_b0 * ((w_prev + omega_ib_b) * T::c(0.5)).cross(&self.r_b_m);
+            match self.v_l0_b0 {
+                None => {
+                    // Second interval: v_l(0) by extrapolating back (C_b_b0(0) = I).
+                    let v0 = (w_prev * T::c(1.5) - omega_ib_b * T::c(0.5)).cross(&self.r_b_m);
+                    self.v_l0_b0 = Some(v0);
+                    self.int_v_l_b0
+                        .add(&((v0 + v) * (self.dt_last * T::c(0.5))));
+                }
+                Some(_) => self
+                    .int_v_l_b0
+                    .add(&((self.v_l_b0 + v) * (self.dt_last * T::c(0.5)))),
+            }
+            self.v_l_b0 = v;
+        }
+        self.omega_prev = self.omega_last;
+        self.omega_last = Some(omega_ib_b);
+        self.dt_last = dt;
+    }
+
+    /// `(v_l(T) - v_l(0), T (v_l(T) + v_l(0)) - 2 int_0^T v_l dt)` [m/s], [m]: what eq. 10
+    /// takes off `V` and `M`; `q_b_b0` is the attitude now.
+    fn corrections(&self, t_s: T, q_b_b0: &UnitQuaternion<T>) -> Option<(Vector3<T>, Vector3<T>)> {
+        let (w, w_prev, v0) = (self.omega_last?, self.omega_prev?, self.v_l0_b0?);
+        let v_t = q_b_b0 * (w * T::c(1.5) - w_prev * T::c(0.5)).cross(&self.r_b_m);
+        let int_v = self.int_v_l_b0.sum() + (self.v_l_b0 + v_t) * (self.dt_last * T::c(0.5));
+        Some((v_t - v0, (v_t + v0) * t_s - int_v * T::c(2.0)))
     }
 }
 
@@ -216,6 +301,7 @@ pub struct InertialAlignment<T: Scalar> {
     h_m: T,
     noise: Option<SensorNoise<T>>,
     limits: InputLimits<T>,
+    lever: Option<LeverArm<T>>,
     coning: ConingSculling<T>,
     q_b_b0: CompensatedQuat<T>,
     /// `V_b0 = int f_b0 dt` [m/s] (eq. 4).
@@ -236,6 +322,7 @@ impl<T: Scalar> InertialAlignment<T> {
             h_m,
             noise: None,
             limits: InputLimits::default(),
+            lever: None,
             coning: ConingSculling::new(),
             q_b_b0: CompensatedQuat::identity(),
             v_b0: Kahan3::new(),
@@ -258,11 +345,19 @@ impl<T: Scalar> InertialAlignment<T> {
         self
     }
 
-    /// Starts again from the next increment (same position, noise model and limits).
+    /// The same with the IMU at `r_b_m` [m] (body axes) from a centre of rotation at rest at the
+    /// known position, compensated exactly (module docs, eq. 10; seed 002's ship lever arm).
+    pub fn with_lever_arm(mut self, r_b_m: Vector3<T>) -> Self {
+        self.lever = Some(LeverArm::new(r_b_m));
+        self
+    }
+
+    /// Starts again from the next increment (same position, noise model, limits and lever arm).
     pub fn reset(&mut self) {
         *self = Self {
             noise: self.noise,
             limits: self.limits,
+            lever: self.lever.as_ref().map(|l| LeverArm::new(l.r_b_m)),
             ..Self::new(self.lat_rad, self.h_m)
         };
     }
@@ -280,7 +375,11 @@ impl<T: Scalar> InertialAlignment<T> {
             .compensate(&inc.delta_theta_ib_b, &inc.delta_v_ib_b, inc.dt, true);
         // Eq. 3 with the attitude at the start of the interval (`hi` is unit to the working
         // precision; its rounding is not accumulated).
-        let dv_b0 = UnitQuaternion::new_unchecked(self.q_b_b0.hi).transform_vector(&c.delta_v_b);
+        let q_b_b0 = UnitQuaternion::new_unchecked(self.q_b_b0.hi);
+        let dv_b0 = q_b_b0.transform_vector(&c.delta_v_b);
+        if let Some(l) = &mut self.lever {
+            l.add(inc.delta_theta_ib_b / inc.dt, inc.dt, &q_b_b0);
+        }
         // Eq. 6, before V and T advance.
         self.m_b0
             .add(&(dv_b0 * self.t_s.sum - self.v_b0.sum() * inc.dt));
@@ -328,27 +427,36 @@ impl<T: Scalar> InertialAlignment<T> {
             return Err(InertialAlignError::InputRefused(e));
         }
         let t_s = self.t_s.sum;
-        if self.samples == 0 || !(t_s >= T::c(MIN_DURATION_S)) {
+        if self.samples == 0 || !t_s.finite() || t_s < T::c(MIN_DURATION_S) {
             return Err(InertialAlignError::TooShort);
         }
         let cos_lat = self.lat_rad.pcos();
-        if !(cos_lat >= T::c(MIN_COS_LAT)) || !self.h_m.finite() {
+        if !cos_lat.finite() || cos_lat < T::c(MIN_COS_LAT) || !self.h_m.finite() {
             return Err(InertialAlignError::NearPole);
         }
-        let (v_b0, m_b0) = (self.v_b0.sum(), self.m_b0.sum());
+        let (mut v_b0, mut m_b0) = (self.v_b0.sum(), self.m_b0.sum());
+        let q_b_b0 = self.q_b_b0.unit();
+        if let Some(l) = &self.lever {
+            // Eq. 10 (at least two intervals: MIN_DURATION_S has passed).
+            let (dv, dm) = l
+                .corrections(t_s, &q_b_b0)
+                .ok_or(InertialAlignError::TooShort)?;
+            v_b0 -= dv;
+            m_b0 -= dm;
+        }
         let (v_i0, m_i0) = self.reference(t_s);
         if !(v_b0.iter().chain(m_b0.iter()).all(|x| x.finite())) {
             return Err(InertialAlignError::NonFinite);
         }
         let (nv_b0, nv_i0) = (v_b0.norm(), v_i0.norm());
-        if !((nv_b0 - nv_i0).abs() <= T::c(GRAVITY_TOLERANCE) * nv_i0) {
+        if (nv_b0 - nv_i0).abs() > T::c(GRAVITY_TOLERANCE) * nv_i0 {
             return Err(InertialAlignError::SpecificForceNotGravity);
         }
         // Eq. 8: TRIAD frames; the heading signal is the part of M normal to V.
         let (a1_b0, a1_i0) = (v_b0 / nv_b0, v_i0 / nv_i0);
         let (c_b0, c_i0) = (a1_b0.cross(&m_b0), a1_i0.cross(&m_i0));
         let (nc_b0, nc_i0) = (c_b0.norm(), c_i0.norm());
-        if !((nc_b0 - nc_i0).abs() <= T::c(HEADING_SIGNAL_TOLERANCE) * nc_i0) {
+        if (nc_b0 - nc_i0).abs() > T::c(HEADING_SIGNAL_TOLERANCE) * nc_i0 {
             return Err(InertialAlignError::HeadingUnobservable);
         }
         let triad =
@@ -367,7 +475,7 @@ impl<T: Scalar> InertialAlignment<T> {
             -sin_lat * sh,
         ));
         // Eq. 1.
-        let q_b_n = q_n_i0.inverse() * q_b0_i0 * self.q_b_b0.unit();
+        let q_b_n = q_n_i0.inverse() * q_b0_i0 * q_b_b0;
         if !q_b_n.coords.iter().all(|x| x.finite()) {
             return Err(InertialAlignError::NonFinite);
         }
@@ -395,10 +503,19 @@ impl<T: Scalar> InertialAlignment<T> {
             n.accel_bias_mps2 * n.accel_bias_mps2,
         );
         let (g2, t2) = (g * g, t_s * t_s);
+        // Lever-arm end-rate noise s_v^2 [m^2/s^2].
+        let sv2 = self.lever.as_ref().map_or(T::zero(), |l| {
+            T::c(5.0 / 3.0) * arw2 * l.r_b_m.norm_squared() / l.dt_last
+        });
         let yaw2 = (T::c(12.0) * vrw2 / (g2 * t2 * t_s) + T::c(1.2) * arw2 / t_s + bg2) / (w * w)
             + arw2 * t_s
-            + bg2 * t2;
-        let tilt2 = vrw2 / (g2 * t_s) + arw2 * t_s / T::c(3.0) + ba2 / g2 + bg2 * t2 / T::c(4.0);
+            + bg2 * t2
+            + T::c(72.0) * sv2 / (g2 * w * w * t2 * t2);
+        let tilt2 = vrw2 / (g2 * t_s)
+            + arw2 * t_s / T::c(3.0)
+            + ba2 / g2
+            + bg2 * t2 / T::c(4.0)
+            + T::c(2.0) * sv2 / (g2 * t2);
         Vector3::new(tilt2.sqrt(), tilt2.sqrt(), yaw2.sqrt())
     }
 }

@@ -12,6 +12,9 @@
 //!
 //! - [`machine`]: the state machine `COARSE -> FINE -> ALIGNED` (or `FAILED`) that runs one of
 //!   them as the firmware's alignment task and the harness's replay do.
+//! - [`sway`]: base-motion-model fine alignment — a base still or swaying about a fixed mean
+//!   attitude (identified roll and pitch oscillators): the heading from the gyro-integrated
+//!   drift alone, below the general filter's floor.
 //!
 //! Every method takes increments one at a time (`add`) and solves when asked, so the firmware
 //! can run it in a task below sampling and navigation.
@@ -21,6 +24,7 @@ pub mod fine;
 pub mod inertial;
 mod kahan;
 pub mod level;
+pub mod sway;
 pub mod machine;
 
 pub use analytic::{AlignError, AlignmentResult, StaticAlignment, samples_for};

@@ -20,8 +20,8 @@
 //! - Closed loop (seed 003: "estimates fed back into the navigation algorithm, the state
 //!   zeroed"): after every update the attitude (`q_b_n <- q(phi) q_b_n`), velocity and position
 //!   estimates are applied to the strapdown through [`Strapdown::set_state`] (which restarts
-//!   its Kahan carries: harmless at 10 Hz), the bias estimates are added to the compensation,
-//!   and the error state is zeroed.
+//!   its Kahan carries: harmless at 10 Hz), the bias estimates are added to the compensation
+//!   (gyro in body axes, accelerometer in NED axes: [`model`]), and the error state is zeroed.
 //!
 //! **Large heading error.** No initial heading is assumed: the filter starts from a coarse
 //! result with a large heading sigma (10 deg by default when the coarse stage gives none). The
@@ -184,9 +184,10 @@ pub struct FineAlignment<T: Scalar> {
     p: Matrix<T>,
     p0: Matrix<T>,
     q_c: State<T>,
-    /// Bias estimates subtracted from the increments: gyro [rad/s], accelerometer [m/s^2].
+    /// Bias estimates subtracted from the increments: gyro (body axes) [rad/s],
+    /// accelerometer (NED axes) [m/s^2].
     gyro_bias: Vector3<T>,
-    accel_bias: Vector3<T>,
+    accel_bias_n: Vector3<T>,
     /// Accumulated over the current filter interval: time [s] and `int C_b_n dt` [s].
     interval_s: f64,
     sum_c_b_n: Matrix3<T>,
@@ -249,7 +250,7 @@ impl<T: Scalar> FineAlignment<T> {
             p0,
             q_c,
             gyro_bias: Vector3::zeros(),
-            accel_bias: Vector3::zeros(),
+            accel_bias_n: Vector3::zeros(),
             interval_s: 0.0,
             sum_c_b_n: Matrix3::zeros(),
             c_b_n,
@@ -279,9 +280,11 @@ impl<T: Scalar> FineAlignment<T> {
             return Err(e);
         }
         let dt = inc.dt;
+        // Gyro bias in body axes; accelerometer bias in NED axes, turned into the body with the
+        // attitude at the start of the increment (the mechanization's own projection).
         let compensated = ImuIncrement {
             delta_theta_ib_b: inc.delta_theta_ib_b - self.gyro_bias * dt,
-            delta_v_ib_b: inc.delta_v_ib_b - self.accel_bias * dt,
+            delta_v_ib_b: inc.delta_v_ib_b - self.c_b_n.transpose() * self.accel_bias_n * dt,
             dt,
         };
         if let Err(e) = self.nav.step(&compensated) {
@@ -406,7 +409,7 @@ impl<T: Scalar> FineAlignment<T> {
         });
         self.c_b_n = q_b_n.to_rotation_matrix().into_inner();
         self.gyro_bias += Vector3::new(x[GYRO_BIAS], x[GYRO_BIAS + 1], x[GYRO_BIAS + 2]);
-        self.accel_bias += Vector3::new(x[ACCEL_BIAS], x[ACCEL_BIAS + 1], x[ACCEL_BIAS + 2]);
+        self.accel_bias_n += Vector3::new(x[ACCEL_BIAS], x[ACCEL_BIAS + 1], x[ACCEL_BIAS + 2]);
     }
 
     /// The current attitude (body to NED) with the filter's 1-sigma roll, pitch and yaw (from
@@ -426,9 +429,10 @@ impl<T: Scalar> FineAlignment<T> {
         (self.gyro_bias, self.sigmas(GYRO_BIAS))
     }
 
-    /// Accelerometer bias estimate (body axes) [m/s^2] and its 1-sigma [m/s^2].
-    pub fn accel_bias(&self) -> (Vector3<T>, Vector3<T>) {
-        (self.accel_bias, self.sigmas(ACCEL_BIAS))
+    /// Accelerometer bias estimate in NED axes [m/s^2] ([`model`] says why not body axes) and
+    /// its 1-sigma [m/s^2]. Its horizontal part is as unobservable as the tilt it mimics.
+    pub fn accel_bias_n(&self) -> (Vector3<T>, Vector3<T>) {
+        (self.accel_bias_n, self.sigmas(ACCEL_BIAS))
     }
 
     fn sigmas(&self, offset: usize) -> Vector3<T> {
