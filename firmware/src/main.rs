@@ -195,6 +195,7 @@ mod app {
                     gyro_bias_rad_s: noise.gyro_bias_rad_s as f32,
                     accel_bias_mps2: noise.accel_bias_mps2 as f32,
                 },
+                lever_arm_b_m: None,
             },
         };
         if navigate::spawn(samples_rx, align_tx, result_rx, setup).is_err()

@@ -60,6 +60,8 @@ pub struct PipelineConfig {
     pub align_method: AlignMethod,
     /// The IMU's noise, assumed by the alignment (its 1-sigma and filter tuning).
     pub noise: NoiseSpec,
+    /// The IMU's lever arm from the base's centre of rotation, body FRD [m], if known.
+    pub lever_arm_m: Option<[f64; 3]>,
 }
 
 /// nav-core's noise model of a part's figures.
@@ -294,6 +296,9 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
         position,
         samples: n_align,
         noise: sensor_noise(&config.noise),
+        lever_arm_b_m: config
+            .lever_arm_m
+            .map(|r| nav_core::Vector3::from(r.map(T::c))),
     })));
     let (mut samples, mut flagged, mut rejected, mut nav_steps, mut rows) =
         (0_u32, 0_u32, 0_u32, 0_u32, 0_u32);
@@ -446,6 +451,7 @@ mod tests {
             choices: MechanizationChoices::default(),
             align_method: AlignMethod::Static,
             noise: hal_adapters::drivers::noise::ADIS16505,
+            lever_arm_m: None,
         }
     }
 

@@ -64,6 +64,8 @@ pub struct ReplayOptions {
     /// The IMU noise the alignment assumes (`None`: the device's datasheet figures, the board's
     /// ADIS16505 for a plain recording, as the firmware assumes).
     pub noise: Option<NoiseSpec>,
+    /// The IMU's lever arm from the base's centre of rotation, body FRD [m], if known.
+    pub lever_arm_m: Option<[f64; 3]>,
 }
 
 impl ReplayOptions {
@@ -80,6 +82,7 @@ impl ReplayOptions {
             choices: self.choices,
             align_method: self.align_method,
             noise: self.noise.unwrap_or(self.device.noise()),
+            lever_arm_m: self.lever_arm_m,
         }
     }
 }

@@ -29,6 +29,7 @@ fn options() -> ReplayOptions {
         device: Default::default(),
         align_method: Default::default(),
         noise: None,
+        lever_arm_m: None,
         choices: Default::default(),
     }
 }

@@ -20,6 +20,7 @@ fn options(s: &Stationary) -> ReplayOptions {
         device: Default::default(),
         align_method: Default::default(),
         noise: None,
+        lever_arm_m: None,
         choices: Default::default(),
     }
 }

@@ -81,6 +81,7 @@ fn lasergyro_replays() {
         device: Default::default(),
         align_method: Default::default(),
         noise: None,
+        lever_arm_m: None,
         choices: Default::default(),
     };
     let (fr, log) = common::replay::<f64>(&path, &options);

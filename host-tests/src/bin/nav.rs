@@ -229,6 +229,10 @@ enum Command {
         /// recording).
         #[arg(long, value_name = "GRADE")]
         imu_noise: Option<host_tests::sensor_model::Grade>,
+        /// The IMU's lever arm from the base's centre of rotation, body forward,right,down [m]
+        /// (a ship's deck; used by the inertial alignment).
+        #[arg(long, value_name = "X,Y,Z", value_delimiter = ',')]
+        lever_arm: Option<Vec<f64>>,
     },
     /// Compare a solution log with a truth trajectory: RMS, max and chosen-time errors of
     /// position, velocity and attitude, and optional SVG plots.
@@ -587,6 +591,7 @@ fn run(cli: Cli) -> Result<()> {
             vertical,
             align_method,
             imu_noise,
+            lever_arm,
         } => {
             let calibration = match calibration {
                 None => ImuCalibration::default(),
@@ -608,6 +613,13 @@ fn run(cli: Cli) -> Result<()> {
                 choices: choices(frame, attitude, vertical),
                 align_method,
                 noise: imu_noise.map(|g| g.noise_spec()),
+                lever_arm_m: match lever_arm.as_deref() {
+                    None => None,
+                    Some(&[x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) => Some([x, y, z]),
+                    Some(v) => {
+                        anyhow::bail!("--lever-arm needs three finite numbers X,Y,Z, not {v:?}")
+                    }
+                },
             };
             let file = File::create(&out).with_context(|| format!("creating {}", out.display()))?;
             let writer = BufWriter::new(file);

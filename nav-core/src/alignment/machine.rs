@@ -117,6 +117,9 @@ pub struct AlignSettings<T: Scalar> {
     pub samples: u32,
     /// The IMU's noise, for the 1-sigma of the result (and the filters' tuning).
     pub noise: SensorNoise<T>,
+    /// The IMU's position relative to the base's centre of rotation, body axes [m], when known
+    /// (a ship's deck): the inertial-frame method then removes the lever-arm velocity.
+    pub lever_arm_b_m: Option<Vector3<T>>,
 }
 
 /// Samples (and seconds) each stage took.
@@ -169,7 +172,11 @@ impl<T: Scalar> Aligner<T> {
         let coarse = match settings.method {
             AlignMethod::Static => Coarse::Static(StaticAlignment::new()),
             AlignMethod::Inertial => {
-                Coarse::Inertial(InertialAlignment::new(lat, h).with_noise(settings.noise))
+                let a = InertialAlignment::new(lat, h).with_noise(settings.noise);
+                Coarse::Inertial(match settings.lever_arm_b_m {
+                    Some(r) => a.with_lever_arm(r),
+                    None => a,
+                })
             }
         };
         Self {

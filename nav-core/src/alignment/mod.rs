@@ -24,8 +24,8 @@ pub mod fine;
 pub mod inertial;
 mod kahan;
 pub mod level;
-pub mod sway;
 pub mod machine;
+pub mod sway;
 
 pub use analytic::{AlignError, AlignmentResult, StaticAlignment, samples_for};
 pub use inertial::{InertialAlignError, InertialAlignment, SensorNoise};

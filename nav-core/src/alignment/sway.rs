@@ -20,35 +20,58 @@
 //! Euler-angle Jacobian, computed from the integrated attitude. States ([`SWAY_STATES`]):
 //! `phi` (3, NED), gyro bias in NED axes (3), horizontal accelerometer bias in NED axes (2),
 //! mean roll and pitch (2), two phasors (4), two frequency errors (2). Measurements every
-//! [`SwayConfig::update_period_s`]:
-//! - the integrated roll and pitch, predicted exactly for any `phi` as the Euler angles of
-//!   `exp(-[phi x]) C(mean + s, yaw)` (the linear Jacobian only in the gain), noise
-//!   [`SwayConfig::euler_sigma_rad`] (what the oscillators do not describe);
-//! - the horizontal specific force averaged over the interval, `exp(-[phi x]) (0, 0, -g) + b`
-//!   (a base swaying about the IMU: no lever-arm acceleration), noise `N_a^2 / dt`: the level.
+//! [`SwayConfig::update_period_s`] (0.2 s):
+//! - the integrated roll and pitch, `mean + s - A phi` (`A` the Euler-angle Jacobian of the
+//!   attitude, [`euler_jacobian`]), noise [`SwayConfig::euler_sigma_rad`] (what the oscillators
+//!   do not describe); the filter runs closed loop, `phi` is zero before every update, so this
+//!   linear model is exact to first order in one update's correction;
+//! - the horizontal specific force averaged over the interval, `f x phi + b` with
+//!   `f = (0, 0, -g)` (a base swaying about the IMU: no lever-arm acceleration), noise
+//!   `N_a^2 / dt`: the level.
+//!
+//! The process model: `phi` turns at `-omega_ie_n x phi` (exact for the rotation vector, any
+//! size: [`super::fine::model`]) and collects the gyro noise and bias; the phasors rotate at
+//! their frequencies (exactly), the frequency errors entering through their EKF Jacobian and
+//! folded into the frequencies after every update.
 //!
 //! Gyro and accelerometer biases are modelled in NED axes: a sway of a few degrees changes
 //! their projections by `1 - cos(sway)` (0.4 % at 5 deg), and they are as unobservable as in the
 //! general filter (east gyro bias with heading, horizontal accelerometer bias with level).
 //!
-//! **Identification and start.** For the first [`SwayConfig::identify_s`] the measurements are
-//! kept (decimated, [`BUFFER_LEN`] at most) while the integrator runs open loop; then each
-//! axis's sway frequency is found by least squares (mean, trend, one sinusoid: the frequency
-//! maximising the explained variance, grid then golden section, between
+//! **Identification and start.** For the first [`SwayConfig::identify_s`] (25 s) the
+//! measurements are kept (decimated, [`BUFFER_LEN`] at most) while the integrator runs open
+//! loop; then each axis's sway frequency is found by least squares (mean, trend, one sinusoid:
+//! the frequency leaving the least residual, grid then golden section, between
 //! [`SwayConfig::min_period_s`] and [`SwayConfig::max_period_s`]); an axis whose sinusoid is
 //! below [`SwayConfig::min_amplitude_rad`] is still (its oscillator switched off: a still base
-//! is the special case). The filter then runs over the kept measurements (open loop: the
-//! measurement prediction is exact for any `phi`, so a 10-deg heading error is no problem) and
-//! continues online, closed loop: after every update `phi` is applied to the integrator and the
-//! biases to its compensation, those states zeroed. Until then [`SwayAlignment::estimate`]
-//! returns the coarse attitude propagated by the gyros, with the coarse sigmas.
+//! is the special case). The kept attitudes are first levelled exactly (nonlinear, from the
+//! mean specific force over [`LEVEL_S`]): the roll and pitch measurements are so precise that
+//! the second-order terms of a large tilt correction made by a linear update (`tilt^2/2`,
+//! 4e-5 rad at 0.5 deg) would read as a drift, i.e. as heading. The filter then runs over the
+//! kept measurements closed loop all the same: each correction is applied to the kept
+//! attitudes that follow, propagated as the integrator would have carried it (a correction
+//! `R` made at `t_j` is `N R N^-1` at `t`, `N = exp(-[omega_ie (t - t_j)])`), and at the end
+//! to the integrator; online, every update's `phi` goes to the integrator and the biases to
+//! its compensation, those states zeroed. Until then [`SwayAlignment::estimate`] returns the
+//! coarse attitude propagated by the gyros, with the coarse sigmas.
+//!
+//! **Large heading error.** As in the general filter the attitude-error dynamics are exact for
+//! any heading error and a heading correction does not change roll or pitch; on exact data a
+//! start 10 to 90 deg off converges to a few hundredths of a degree in 30 s. With noise the
+//! Monte Carlo RMS at 120 s grows by about 15 % (30 deg) and 25 % (60 deg) over a 10 deg start:
+//! give it the coarse stage's heading to 10–20 deg.
 //!
 //! **Limits.** A lever arm between the IMU and the centre of the sway adds periodic specific
 //! force that the level measurement does not model; non-sinusoidal roll or pitch (several
 //! periods) leaves what one oscillator per axis cannot follow to the Euler-angle noise and to
-//! the covariance inflation of the oscillators (an innovation beyond 3 sigma inflates that
-//! axis's phasor covariance so the model can follow a changing amplitude, e.g. the end of the
-//! rocking; counted in [`SwayStatus::relocks`]).
+//! the covariance inflation of the oscillators: an innovation beyond 3 sigma inflates that
+//! axis's phasor covariance so the model can follow a changing amplitude (counted in
+//! [`SwayStatus::relocks`]). The end of `auv-bench`'s rocking (the amplitude falls to zero in
+//! one period) goes through this way and leaks 0.007 deg into the heading on exact data (4 % of
+//! its sigma then). Memory: 13.7 KB in `f32` (23 KB in `f64`), mostly the kept measurements,
+//! and 6 KB of stack for the identification, done once in `f64` (about 300 least-squares fits
+//! of 125 samples: 1e6 multiply-adds and 8e4 sine/cosine pairs, well under a second of a
+//! Cortex-M4F's low-priority task).
 
 use super::AttitudeEstimate;
 use super::fine::kalman::{ScalarUpdate, discrete_noise, propagate, update_scalar};
@@ -793,7 +816,8 @@ pub fn identify(t: &[f64], y: &[f64], t0: f64, w_min: f64, w_max: f64) -> Sinuso
         residual_rms: f64::INFINITY,
     };
     let window = t.last().copied().unwrap_or(t0) - t0;
-    if t.len() < 8 || !(window > 0.0) || !(w_max > w_min) {
+    let usable = window > 0.0 && w_max > w_min; // false for NaN too
+    if t.len() < 8 || !usable {
         return none;
     }
     let step = core::f64::consts::PI / (4.0 * window);

@@ -42,16 +42,15 @@
 //! navigation-frame rate known (position known), the attitude error obeys
 //! `E(t) = exp(-[omega t]) E(0) exp([omega t])` for `E = C_b_n(computed) C_b_n^T`, so its
 //! rotation vector obeys `d(phi)/dt = -omega_ie_n x phi` *exactly*, whatever the size of the
-//! heading error. The only small-angle step is the specific-force term `f_ib_n x phi`: the
-//! computed specific force is `exp(-[phi x]) f_ib_n`; at rest its horizontal part depends on
-//! the tilt part `e` of `phi` only, as `g (R_z(-psi/2) e) 2 sin(psi/2) / psi` for a heading
-//! error `psi` (first order in `e`, exact in `psi`): the model's `f x phi` is turned by
-//! `psi / 2` and scaled by `1 - psi^2/24`. The tilt drift `Omega cos(L) psi t` (exact) is
-//! therefore read as a heading `psi (1 - psi^2/6)`: the heading correction is short by a
-//! relative `psi^2/6` (0.5 % at 10 deg, 4.6 % at 30 deg) and a cross-track drift
-//! `~psi^2/2 Omega cos(L)` appears; with the feedback of every update the heading error shrinks
-//! and the model becomes exact again (see the module docs of
-//! [`super`] for the validity limit).
+//! heading error. The only small-angle
+//! step is the specific-force term `f_ib_n x phi`: the computed specific force is
+//! `exp(-[phi x]) f_ib_n`, which at rest depends on the tilt part `e` of `phi` only, as
+//! `f_ib_n x e'` with `e' = R_z(-psi/2) e * 2 sin(psi/2) / psi` for a heading error `psi`
+//! (first order in `e`, exact in `psi`): the model's `f x phi` is turned by `psi / 2` and
+//! scaled by `1 - psi^2/24`. The tilt drift `Omega cos(L) psi t` (exact) is therefore read as
+//! a heading `psi (1 - psi^2/6)` (0.5 % short at 10 deg, 4.6 % at 30 deg) plus a cross drift
+//! `~psi^2/2 Omega cos(L)`; the feedback of every update shrinks the heading error and the
+//! model becomes exact again (validity in the module docs of [`super`]).
 
 use crate::Scalar;
 use crate::earth::{LocalEarth, OMEGA_IE};
