@@ -189,6 +189,10 @@ mod app {
                 method,
                 position,
                 samples: n_align,
+                coarse_samples: nav_core::alignment::machine::coarse_samples_for(
+                    n_align,
+                    header.rate_hz,
+                ),
                 noise: SensorNoise {
                     arw_rad_per_sqrt_s: noise.gyro_arw_rad_per_sqrt_s as f32,
                     vrw_mps_per_sqrt_s: noise.accel_vrw_mps_per_sqrt_s as f32,
@@ -251,17 +255,28 @@ mod app {
                 }
                 Some(&"--align-method") => {
                     let name = words.nth(1).unwrap_or("");
-                    method = AlignMethod::from_name(name).unwrap_or_else(|| {
-                        defmt::error!("unknown alignment method {=str}", name);
-                        exit(ExitCode::Config)
-                    });
+                    method = match AlignMethod::from_name(name) {
+                        // The sway method identifies its periods in one go (~1e8 soft-float
+                        // instructions): the alignment queue would overflow and drop samples.
+                        Some(AlignMethod::Sway) => {
+                            defmt::error!(
+                                "alignment method sway runs on the host only (its one-off period identification would stall the MCU's alignment task)"
+                            );
+                            exit(ExitCode::Config)
+                        }
+                        Some(m) => m,
+                        None => {
+                            defmt::error!("unknown alignment method {=str}", name);
+                            exit(ExitCode::Config)
+                        }
+                    };
                 }
                 _ => break,
             }
         }
         let config = Config::parse(words).unwrap_or_else(|e| {
             defmt::error!(
-                "bad arguments ({}); usage: [--device adis16505|icm42688|bmi088] [--align-method static|inertial] {=str}",
+                "bad arguments ({}); usage: [--device adis16505|icm42688|bmi088] [--align-method static|inertial|fine] {=str}",
                 e,
                 USAGE
             );

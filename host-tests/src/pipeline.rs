@@ -295,6 +295,7 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
         method: config.align_method,
         position,
         samples: n_align,
+        coarse_samples: nav_core::alignment::machine::coarse_samples_for(n_align, config.rate_hz),
         noise: sensor_noise(&config.noise),
         lever_arm_b_m: config
             .lever_arm_m

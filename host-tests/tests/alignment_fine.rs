@@ -356,9 +356,3 @@ fn refuses_bad_input() {
         "{err:?}"
     );
 }
-#[test]
-fn zz_table() {
-    let t0 = std::time::Instant::now();
-    println!("{}", run(256, 2).unwrap());
-    println!("TIME {:?}", t0.elapsed());
-}

@@ -304,6 +304,21 @@ fn firmware_runs_the_mems_drivers_and_refuses_a_blind_gyrocompass() {
         ],
     );
     assert_eq!(code, 3, "unknown device: {log}");
+    let (code, log) = run_firmware(
+        d,
+        &[
+            "--align-method",
+            "magic",
+            "rec.bin",
+            "out.csv",
+            "45",
+            "7.5",
+            "150",
+            "2",
+        ],
+    );
+    assert_eq!(code, 3, "unknown alignment method: {log}");
+    assert!(log.contains("unknown alignment method magic"), "{log}");
 }
 
 /// A panic and a HardFault end the run with their own exit codes (1, 2) and a logged message.
@@ -323,8 +338,10 @@ fn firmware_panic_and_hardfault_exit_nonzero() {
 
 /// Issue 6, requirements 3 and 6: on a rocking recording (`auv-bench`, seed 003's 5 deg / 11 s
 /// roll and pitch, FOG-grade sensors) the firmware's low-priority alignment task runs the
-/// inertial-frame alignment, logs its stages, attitude and 1-sigma, misses no sample, and ends
-/// in the same state as the host harness (identical solution logs, alignment row included).
+/// inertial-frame alignment, and the inertial coarse + position-aided Kalman fine alignment,
+/// logs the stages, attitude and 1-sigma, misses no sample, and ends in the same state as the
+/// host harness (identical solution logs, alignment row included). The sway method is refused
+/// on the MCU.
 #[test]
 fn firmware_aligns_on_a_rocking_base_like_the_harness() {
     let dir = tempfile::tempdir().unwrap();
@@ -340,75 +357,101 @@ fn firmware_aligns_on_a_rocking_base_like_the_harness() {
         start.lon.to_degrees().to_string(),
         start.h.to_string(),
     );
+    for method in ["inertial", "fine"] {
+        let (code, log) = run_firmware(
+            d,
+            &[
+                "--align-method",
+                method,
+                "rock.bin",
+                "fw.csv",
+                &lat,
+                &lon,
+                &h,
+                "40",
+                "40",
+            ],
+        );
+        println!("{log}");
+        assert_eq!(code, 0, "{method}: firmware exit code {code}; log:\n{log}");
+        assert!(
+            log.contains(&format!("aligning: {method}, 16000 samples; stage COARSE")),
+            "{log}"
+        );
+        if method == "fine" {
+            // The coarse stage is a quarter of the period, at least 10 s.
+            assert!(
+                log.contains("alignment stage FINE after 4000 samples"),
+                "{log}"
+            );
+        }
+        assert!(
+            log.contains("alignment stage ALIGNED after 16000 samples"),
+            "{log}"
+        );
+        assert!(log.contains("1-sigma"), "{log}");
+        assert_eq!(field(&log, "missed"), 0, "missed data-ready interrupts");
+        assert_eq!(field(&log, "channel overruns"), 0, "channel overruns");
+
+        let args = [
+            "replay",
+            "--imu",
+            "rock.bin",
+            "--align-seconds",
+            "40",
+            "--align-method",
+            method,
+            "--out",
+            "host.csv",
+            "--device",
+            "adis16505",
+            "--precision",
+            "f32",
+            "--lat",
+            &lat,
+            "--lon",
+            &lon,
+            "--h",
+            &h,
+        ];
+        let out = nav(d, &args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
+        let host = std::fs::read_to_string(d.join("host.csv")).unwrap();
+        assert_eq!(fw, host, "{method}: firmware and harness logs differ");
+        // The aligned heading against the truth: within 4 sigma of the FOG floor at 40 s (the
+        // accelerometer term of 2.46 deg at 30 s scales as T^-1.5: ~1.6 deg at 40 s).
+        let row: Vec<f64> = host
+            .lines()
+            .nth(1)
+            .unwrap()
+            .split(',')
+            .map(|x| x.parse().unwrap())
+            .collect();
+        let truth_yaw = nav_core::attitude::euler(&sim.truth[40 * 50].q_b_ned)
+            .2
+            .to_degrees();
+        let err = (row[9] - truth_yaw + 540.0).rem_euclid(360.0) - 180.0;
+        println!("{method} alignment on the rocking bench, 40 s: yaw error {err:.3} deg");
+        assert!(err.abs() < 4.0 * 1.6, "{method}: {err} deg");
+    }
     let (code, log) = run_firmware(
         d,
         &[
             "--align-method",
-            "inertial",
+            "sway",
             "rock.bin",
             "fw.csv",
             &lat,
             &lon,
             &h,
             "40",
-            "40",
         ],
     );
-    println!("{log}");
-    assert_eq!(code, 0, "firmware exit code {code}; log:\n{log}");
-    assert!(
-        log.contains("aligning: inertial, 16000 samples; stage COARSE"),
-        "{log}"
-    );
-    assert!(
-        log.contains("alignment stage ALIGNED after 16000 samples"),
-        "{log}"
-    );
-    assert!(log.contains("1-sigma"), "{log}");
-    assert_eq!(field(&log, "missed"), 0, "missed data-ready interrupts");
-    assert_eq!(field(&log, "channel overruns"), 0, "channel overruns");
-
-    let args = [
-        "replay",
-        "--imu",
-        "rock.bin",
-        "--align-seconds",
-        "40",
-        "--align-method",
-        "inertial",
-        "--out",
-        "host.csv",
-        "--device",
-        "adis16505",
-        "--lat",
-        &lat,
-        "--lon",
-        &lon,
-        "--h",
-        &h,
-    ];
-    let out = nav(d, &args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
-    let host = std::fs::read_to_string(d.join("host.csv")).unwrap();
-    assert_eq!(fw, host, "firmware and harness logs differ");
-    // The aligned heading against the truth: within 4 sigma of the FOG floor at 40 s
-    // (2.46 deg at 30 s scales as T^-1.5 for the accelerometer term: ~1.6 deg at 40 s).
-    let row: Vec<f64> = host
-        .lines()
-        .nth(1)
-        .unwrap()
-        .split(',')
-        .map(|x| x.parse().unwrap())
-        .collect();
-    let truth_yaw = nav_core::attitude::euler(&sim.truth[40 * 50].q_b_ned)
-        .2
-        .to_degrees();
-    let err = (row[9] - truth_yaw + 540.0).rem_euclid(360.0) - 180.0;
-    println!("inertial alignment on the rocking bench, 40 s: yaw error {err:.3} deg");
-    assert!(err.abs() < 4.0 * 1.6, "{err} deg");
+    assert_eq!(code, 3, "sway on the MCU: {log}");
+    assert!(log.contains("runs on the host only"), "{log}");
 }

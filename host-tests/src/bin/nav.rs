@@ -221,7 +221,8 @@ enum Command {
         #[arg(long, value_enum, default_value_t = Vertical::Free)]
         vertical: Vertical,
         /// Alignment method: static (analytic, still base), inertial (inertial-frame coarse:
-        /// rocking base, no initial heading).
+        /// rocking base, no initial heading), fine (inertial coarse, then seed 003's
+        /// position-aided Kalman filter), sway (inertial coarse, then the swaying-base model).
         #[arg(long, default_value = "static", value_parser = parse_align_method)]
         align_method: AlignMethod,
         /// IMU noise assumed by the alignment, as a simulator grade (fog, rlg, mems-tactical,

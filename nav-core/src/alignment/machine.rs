@@ -8,6 +8,11 @@
 //! |---|---|---|
 //! | [`AlignMethod::Static`] | [`StaticAlignment`] over the whole period | — |
 //! | [`AlignMethod::Inertial`] | [`InertialAlignment`] over the whole period | — |
+//! | [`AlignMethod::Fine`] | [`InertialAlignment`] for [`AlignSettings::coarse_samples`] | [`FineAlignment`] (seed 003: position and zero velocity, closed loop) |
+//! | [`AlignMethod::Sway`] | [`InertialAlignment`] for [`AlignSettings::coarse_samples`] | [`SwayAlignment`] (the base sways about a mean attitude) |
+//!
+//! The fine stages start from the coarse attitude and its 1-sigma and use the same IMU noise
+//! model; the fine filter's corrected navigation state is the result.
 //!
 //! The result is the navigation state at the end of the last alignment sample, with the 1-sigma
 //! roll, pitch and yaw of the method's own error model, and the number of samples (and
@@ -15,7 +20,9 @@
 
 use super::AttitudeEstimate;
 use super::analytic::{AlignError, StaticAlignment};
+use super::fine::{FineAlignment, FineConfig};
 use super::inertial::{InertialAlignError, InertialAlignment, SensorNoise};
+use super::sway::{SwayAlignment, SwayConfig};
 use crate::{ImuIncrement, InputLimits, NavState, Position, Scalar, earth};
 use nalgebra::Vector3;
 
@@ -27,17 +34,28 @@ pub enum AlignMethod {
     Static,
     /// Inertial-frame coarse alignment: rocking or disturbed base, no initial heading.
     Inertial,
+    /// Inertial-frame coarse, then seed 003's position-aided closed-loop Kalman filter.
+    Fine,
+    /// Inertial-frame coarse, then the base-motion-model filter (still or swaying base).
+    Sway,
 }
 
 impl AlignMethod {
     /// Every method, in the order of [`Self::name`]s.
-    pub const ALL: [AlignMethod; 2] = [AlignMethod::Static, AlignMethod::Inertial];
+    pub const ALL: [AlignMethod; 4] = [
+        AlignMethod::Static,
+        AlignMethod::Inertial,
+        AlignMethod::Fine,
+        AlignMethod::Sway,
+    ];
 
     /// The name on command lines and in logs.
     pub fn name(self) -> &'static str {
         match self {
             Self::Static => "static",
             Self::Inertial => "inertial",
+            Self::Fine => "fine",
+            Self::Sway => "sway",
         }
     }
 
@@ -115,6 +133,8 @@ pub struct AlignSettings<T: Scalar> {
     pub position: Position,
     /// Samples of the whole alignment (see [`super::samples_for`]).
     pub samples: u32,
+    /// Samples of the coarse stage of the two-stage methods ([`coarse_samples_for`]).
+    pub coarse_samples: u32,
     /// The IMU's noise, for the 1-sigma of the result (and the filters' tuning).
     pub noise: SensorNoise<T>,
     /// The IMU's position relative to the base's centre of rotation, body axes [m], when known
@@ -147,9 +167,25 @@ pub struct AlignOutcome<T: Scalar> {
     pub times: StageTimes,
 }
 
+/// Samples of the coarse stage for an alignment of `samples` at `rate_hz` [Hz]: a quarter of
+/// it, within [10 s, 30 s] (the inertial method's shortest solution is 10 s; by 30 s it has
+/// the heading to a few degrees with tactical sensors), and never more than `samples`.
+pub fn coarse_samples_for(samples: u32, rate_hz: f64) -> u32 {
+    let min = super::samples_for(super::inertial::MIN_DURATION_S, rate_hz);
+    let max = super::samples_for(30.0, rate_hz);
+    (samples / 4).clamp(min, max.max(min)).min(samples)
+}
+
 enum Coarse<T: Scalar> {
     Static(StaticAlignment<T>),
     Inertial(InertialAlignment<T>),
+}
+
+// One of each lives in the firmware's alignment task: boxing would need an allocator.
+#[allow(clippy::large_enum_variant)]
+enum Fine<T: Scalar> {
+    Kalman(FineAlignment<T>),
+    Sway(SwayAlignment<T>),
 }
 
 /// The alignment state machine (module docs).
@@ -157,6 +193,7 @@ pub struct Aligner<T: Scalar> {
     settings: AlignSettings<T>,
     limits: InputLimits<T>,
     coarse: Coarse<T>,
+    fine: Option<Fine<T>>,
     stage: Stage,
     times: StageTimes,
     failure: Option<AlignFailure>,
@@ -171,7 +208,7 @@ impl<T: Scalar> Aligner<T> {
         let h = settings.position.h::<T>();
         let coarse = match settings.method {
             AlignMethod::Static => Coarse::Static(StaticAlignment::new()),
-            AlignMethod::Inertial => {
+            AlignMethod::Inertial | AlignMethod::Fine | AlignMethod::Sway => {
                 let a = InertialAlignment::new(lat, h).with_noise(settings.noise);
                 Coarse::Inertial(match settings.lever_arm_b_m {
                     Some(r) => a.with_lever_arm(r),
@@ -183,6 +220,7 @@ impl<T: Scalar> Aligner<T> {
             settings,
             limits: InputLimits::default(),
             coarse,
+            fine: None,
             stage: Stage::Coarse,
             times: StageTimes::default(),
             failure: None,
@@ -241,6 +279,19 @@ impl<T: Scalar> Aligner<T> {
 
     fn step(&mut self, inc: &ImuIncrement<T>) {
         let dt = inc.dt.to_f64();
+        if let Some(fine) = &mut self.fine {
+            // Checked above with the filters' default limits: cannot be refused.
+            let _ = match fine {
+                Fine::Kalman(f) => f.add(inc),
+                Fine::Sway(f) => f.add(inc),
+            };
+            self.times.fine_samples += 1;
+            self.times.fine_s += dt;
+            if self.samples() >= self.settings.samples {
+                self.finish_fine();
+            }
+            return;
+        }
         match &mut self.coarse {
             Coarse::Static(a) => a.add(inc),
             Coarse::Inertial(a) => {
@@ -250,9 +301,73 @@ impl<T: Scalar> Aligner<T> {
         }
         self.times.coarse_samples += 1;
         self.times.coarse_s += dt;
+        let two_stage = matches!(self.settings.method, AlignMethod::Fine | AlignMethod::Sway);
         if self.samples() >= self.settings.samples {
             self.finish_coarse();
+        } else if two_stage && self.times.coarse_samples >= self.settings.coarse_samples {
+            self.start_fine();
         }
+    }
+
+    /// Hands the coarse attitude and its 1-sigma to the fine stage.
+    fn start_fine(&mut self) {
+        let Coarse::Inertial(a) = &self.coarse else {
+            return;
+        };
+        let initial = match a.estimate() {
+            Ok(e) => e,
+            Err(e) => {
+                self.failure = Some(AlignFailure::Inertial(e));
+                self.stage = Stage::Failed;
+                return;
+            }
+        };
+        let n = &self.settings.noise;
+        let position = self.settings.position;
+        self.fine = Some(match self.settings.method {
+            AlignMethod::Sway => Fine::Sway(SwayAlignment::new(
+                initial,
+                position,
+                SwayConfig {
+                    gyro_noise: n.arw_rad_per_sqrt_s,
+                    accel_noise: n.vrw_mps_per_sqrt_s,
+                    gyro_bias_sigma: n.gyro_bias_rad_s,
+                    accel_bias_sigma: n.accel_bias_mps2,
+                    ..SwayConfig::default()
+                },
+            )),
+            _ => Fine::Kalman(FineAlignment::new(
+                initial,
+                position,
+                FineConfig {
+                    gyro_noise: n.arw_rad_per_sqrt_s,
+                    accel_noise: n.vrw_mps_per_sqrt_s,
+                    gyro_bias_sigma: n.gyro_bias_rad_s,
+                    accel_bias_sigma: n.accel_bias_mps2,
+                    ..FineConfig::default()
+                },
+            )),
+        });
+        self.stage = Stage::Fine;
+    }
+
+    /// Ends the alignment with the fine stage's result.
+    fn finish_fine(&mut self) {
+        let position = self.settings.position;
+        let (state, estimate) = match &self.fine {
+            Some(Fine::Kalman(f)) => (*f.state(), f.estimate()),
+            Some(Fine::Sway(f)) => {
+                let e = f.estimate();
+                (NavState::at_rest(position, e.q_b_n), e)
+            }
+            None => return,
+        };
+        self.outcome = Some(AlignOutcome {
+            state,
+            estimate,
+            times: self.times,
+        });
+        self.stage = Stage::Aligned;
     }
 
     /// Solves the coarse stage and ends the alignment with its result.

@@ -28,11 +28,13 @@ pub mod machine;
 pub mod sway;
 
 pub use analytic::{AlignError, AlignmentResult, StaticAlignment, samples_for};
+pub use fine::{FineAlignment, FineConfig, FineStatus};
 pub use inertial::{InertialAlignError, InertialAlignment, SensorNoise};
 pub use level::{GainMode, LevelConfig, LevelConfigError, LevelFilter, LevelStatus};
 pub use machine::{
     AlignFailure, AlignMethod, AlignOutcome, AlignSettings, Aligner, Progress, Stage, StageTimes,
 };
+pub use sway::{SwayAlignment, SwayConfig, SwayStatus};
 
 use crate::Scalar;
 use nalgebra::{UnitQuaternion, Vector3};
