@@ -420,3 +420,128 @@ fn static_sigma<T: Scalar>(settings: &AlignSettings<T>, t_s: T) -> Vector3<T> {
         + tilt2 * tan_lat * tan_lat;
     Vector3::new(tilt2.sqrt(), tilt2.sqrt(), yaw2.sqrt())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::attitude::from_euler;
+    use nalgebra::UnitQuaternion;
+
+    const DT: f64 = 0.0025;
+
+    fn settings(method: AlignMethod, seconds: f64) -> AlignSettings<f64> {
+        let samples = super::super::samples_for(seconds, 1.0 / DT);
+        AlignSettings {
+            method,
+            position: Position::from_degrees(45.0, 7.5, 100.0),
+            samples,
+            coarse_samples: coarse_samples_for(samples, 1.0 / DT),
+            noise: SensorNoise {
+                arw_rad_per_sqrt_s: 2.6e-6,
+                vrw_mps_per_sqrt_s: 1e-3,
+                gyro_bias_rad_s: 1e-6,
+                accel_bias_mps2: 5e-3,
+            },
+            lever_arm_b_m: None,
+        }
+    }
+
+    /// The exact increment of a body at rest at the settings' position.
+    fn at_rest(s: &AlignSettings<f64>, q_b_n: &UnitQuaternion<f64>) -> ImuIncrement<f64> {
+        let lat = s.position.lat::<f64>();
+        let q_n_b = q_b_n.inverse();
+        let g = earth::normal_gravity(lat, s.position.h::<f64>());
+        ImuIncrement {
+            delta_theta_ib_b: q_n_b * earth::omega_ie_n(lat) * DT,
+            delta_v_ib_b: q_n_b * Vector3::new(0.0, 0.0, -g) * DT,
+            dt: DT,
+        }
+    }
+
+    #[test]
+    fn every_method_aligns_on_exact_data_through_its_stages() {
+        let q = from_euler(0.02, -0.01, 1.0);
+        for method in AlignMethod::ALL {
+            let s = settings(method, 40.0);
+            let inc = at_rest(&s, &q);
+            let mut a = Aligner::new(s);
+            let mut fine_at = None;
+            let mut outcome = None;
+            for k in 1..=s.samples {
+                match a.add(&inc) {
+                    Progress::Coarse => assert!(fine_at.is_none(), "{method:?}: back to coarse"),
+                    Progress::Fine => {
+                        fine_at.get_or_insert(k);
+                    }
+                    Progress::Aligned(o) => {
+                        assert_eq!(k, s.samples, "{method:?}: aligned early");
+                        outcome = Some(o);
+                    }
+                    Progress::Failed(f) => panic!("{method:?}: {f}"),
+                }
+            }
+            let o = outcome.unwrap_or_else(|| panic!("{method:?}: not aligned"));
+            let two_stage = matches!(method, AlignMethod::Fine | AlignMethod::Sway);
+            // Fine once the coarse stage's last sample is in.
+            assert_eq!(fine_at, two_stage.then_some(s.coarse_samples), "{method:?}");
+            assert_eq!(o.times.coarse_samples + o.times.fine_samples, s.samples);
+            let err = o.estimate.q_b_n.angle_to(&q).to_degrees();
+            assert!(err < 1e-4, "{method:?}: {err} deg");
+            assert!(
+                o.estimate
+                    .sigma_rad
+                    .iter()
+                    .all(|x| x.is_finite() && *x > 0.0)
+            );
+            assert_eq!(a.stage(), Stage::Aligned);
+            // Later samples change nothing.
+            assert_eq!(a.add(&inc), Progress::Aligned(o));
+        }
+    }
+
+    #[test]
+    fn refuses_with_a_reason_and_skips_bad_increments() {
+        let q = UnitQuaternion::identity();
+        // A base turning at 1 deg/s: static alignment refuses it.
+        let s = settings(AlignMethod::Static, 5.0);
+        let mut inc = at_rest(&s, &q);
+        inc.delta_theta_ib_b.z += 1f64.to_radians() * DT;
+        let mut a = Aligner::new(s);
+        let mut last = Progress::Coarse;
+        for _ in 0..s.samples {
+            last = a.add(&inc);
+        }
+        assert_eq!(
+            last,
+            Progress::Failed(AlignFailure::Static(AlignError::BaseRotating))
+        );
+        assert_eq!(a.stage(), Stage::Failed);
+        // The inertial method needs 10 s.
+        let s = settings(AlignMethod::Inertial, 5.0);
+        let inc = at_rest(&s, &q);
+        let mut a = Aligner::new(s);
+        for _ in 0..s.samples {
+            last = a.add(&inc);
+        }
+        assert_eq!(
+            last,
+            Progress::Failed(AlignFailure::Inertial(InertialAlignError::TooShort))
+        );
+        // A NaN increment is refused and not counted.
+        let s = settings(AlignMethod::Fine, 40.0);
+        let mut a = Aligner::new(s);
+        let mut bad = at_rest(&s, &q);
+        bad.delta_v_ib_b.x = f64::NAN;
+        assert_eq!(a.add(&bad), Progress::Coarse);
+        assert_eq!((a.samples(), a.refused()), (0, 1));
+    }
+
+    #[test]
+    fn coarse_stage_is_a_quarter_within_ten_to_thirty_seconds() {
+        assert_eq!(coarse_samples_for(400 * 120, 400.0), 400 * 30);
+        assert_eq!(coarse_samples_for(400 * 60, 400.0), 400 * 15);
+        assert_eq!(coarse_samples_for(400 * 20, 400.0), 400 * 10);
+        assert_eq!(coarse_samples_for(400 * 5, 400.0), 400 * 5);
+        assert_eq!(coarse_samples_for(400 * 600, 400.0), 400 * 30);
+    }
+}
