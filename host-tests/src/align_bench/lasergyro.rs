@@ -57,17 +57,20 @@ pub enum Method {
     Static,
     /// Inertial-frame coarse alignment ([`InertialAlignment`]).
     Inertial,
+    /// Inertial coarse, then the position-aided Kalman filter (nav-core's alignment machine).
+    Fine,
 }
 
 impl Method {
-    /// The methods, in table order (the fine alignment goes after these).
-    pub const ALL: [Method; 2] = [Method::Static, Method::Inertial];
+    /// The methods, in table order.
+    pub const ALL: [Method; 3] = [Method::Static, Method::Inertial, Method::Fine];
 
     /// The name in the table.
     pub fn name(self) -> &'static str {
         match self {
             Method::Static => "static",
             Method::Inertial => "inertial",
+            Method::Fine => "fine",
         }
     }
 }
@@ -96,6 +99,30 @@ pub fn heading_deg(
             a.solve(site.lat_rad, site.h_m)
                 .map_err(|e| e.to_string())?
                 .yaw
+        }
+        Method::Fine => {
+            // nav-core's state machine: inertial coarse for a quarter of the window (10-30 s),
+            // then the position-aided Kalman filter, assuming laser-gyro noise.
+            use nav_core::alignment::{AlignSettings, Aligner, Progress, machine};
+            let rate_hz = window.len() as f64 / window.iter().map(|i| i.dt).sum::<f64>();
+            let samples = window.len() as u32;
+            let mut a = Aligner::new(AlignSettings {
+                method: nav_core::alignment::AlignMethod::Fine,
+                position: nav_core::Position::from_radians(site.lat_rad, 0.0, site.h_m),
+                samples,
+                coarse_samples: machine::coarse_samples_for(samples, rate_hz),
+                noise: crate::pipeline::sensor_noise(&Grade::Rlg.noise_spec()),
+                lever_arm_b_m: None,
+            });
+            let mut last = Progress::Coarse;
+            for inc in window {
+                last = a.add(inc);
+            }
+            match last {
+                Progress::Aligned(o) => euler(&o.estimate.q_b_n).2,
+                Progress::Failed(f) => return Err(f.to_string()),
+                Progress::Coarse | Progress::Fine => return Err("not finished".into()),
+            }
         }
         Method::Inertial => {
             let mut a = InertialAlignment::new(site.lat_rad, site.h_m);
