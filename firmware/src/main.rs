@@ -602,8 +602,12 @@ mod app {
         );
         let mut aligner = Aligner::new(settings);
         let mut fine = false;
+        let mut cost = StepCost::default();
         while let Ok(inc) = align_rx.recv().await {
-            let answer = match aligner.add(&inc) {
+            let start = systick_counts();
+            let progress = aligner.add(&inc);
+            cost.add(counts_to_instructions(systick_counts() - start));
+            let answer = match progress {
                 Progress::Coarse => continue,
                 Progress::Fine => {
                     if !fine {
@@ -618,6 +622,13 @@ mod app {
                 Progress::Aligned(outcome) => Ok(outcome),
                 Progress::Failed(failure) => Err(failure),
             };
+            // Preemption by sampling and navigation counts in too: an upper bound.
+            defmt::info!(
+                "instructions per alignment sample ({=str}): max {=u64}, mean {=u64}",
+                settings.method.name(),
+                cost.max,
+                cost.mean()
+            );
             if result_tx.send(answer).await.is_err() {
                 defmt::panic!("alignment result channel closed");
             }

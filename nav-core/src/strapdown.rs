@@ -324,7 +324,7 @@ fn rotation_vector_delta<T: Scalar>(
 
 /// `C_b_n` of a quaternion of any norm: `C = M(q) / |q|^2` (Savage (3.2.4.1-3)).
 #[inline]
-fn dcm_of<T: Scalar>(q: &Quaternion<T>) -> Matrix3<T> {
+pub(crate) fn dcm_of<T: Scalar>(q: &Quaternion<T>) -> Matrix3<T> {
     let (w, x, y, z) = (q.w, q.i, q.j, q.k);
     let k = T::one() / q.norm_squared();
     let two = T::c(2.0);
@@ -344,7 +344,7 @@ fn dcm_of<T: Scalar>(q: &Quaternion<T>) -> Matrix3<T> {
 /// Compensated summation `sum += add` per element, the rounding remainder kept in `carry`
 /// (Kahan 1965; Higham, *Accuracy and Stability of Numerical Algorithms*, §4.3).
 #[inline]
-fn kahan_add<T: Scalar>(sum: &mut [T], carry: &mut [T], add: &[T]) {
+pub(crate) fn kahan_add<T: Scalar>(sum: &mut [T], carry: &mut [T], add: &[T]) {
     for ((s, c), a) in sum.iter_mut().zip(carry.iter_mut()).zip(add) {
         let y = *a + *c;
         let t = *s + y;

@@ -327,6 +327,7 @@ fn bench(root: &Path) -> Result<()> {
         &output(&mut host_replay(&nav, "f64", "out/bench-f64.csv"))?,
         "speed:",
     )?;
+    let align = align_costs(&nav, &elf)?;
     let mech = output(Command::new(&nav).arg("bench"))?;
     let mech_f32 = number_after(&mech, "mechanization f32:")?;
     let mech_f64 = number_after(&mech, "mechanization f64:")?;
@@ -346,6 +347,11 @@ fn bench(root: &Path) -> Result<()> {
         "| guest instructions per IMU sample, decode + conversion, BMI088, gyro + accel frames (max / mean) | {:.0} / {:.0} |",
         bmi.0, bmi.1
     );
+    for (method, (max, mean)) in &align {
+        println!(
+            "| guest instructions per alignment sample, {method}, rocking bench (max / mean) | {max:.0} / {mean:.0} |"
+        );
+    }
     println!("| host mechanization, f32, steps/s (one thread, no I/O) | {mech_f32:.0} |");
     println!("| host mechanization, f64, steps/s (one thread, no I/O) | {mech_f64:.0} |");
     println!("| host replay, f32, samples/s (one thread, I/O included) | {f32_speed:.0} |");
@@ -353,6 +359,44 @@ fn bench(root: &Path) -> Result<()> {
     println!("| flash (text + data) [B] | {} |", text + data);
     println!("| static RAM (data + bss) [B] | {} |", data + bss);
     Ok(())
+}
+
+/// `(method, (max, mean))` guest instructions per alignment sample of the firmware's alignment
+/// task for the MCU's methods, on 40 s of the simulator's rocking `auv-bench` (FOG grade).
+fn align_costs(nav: &Path, elf: &Path) -> Result<Vec<(&'static str, (f64, f64))>> {
+    run(Command::new(nav).args([
+        "sim",
+        "auv-bench",
+        "--grade",
+        "fog",
+        "--seconds",
+        "42",
+        "--format",
+        "bin",
+        "--out",
+        "out/bench-rock",
+    ]))?;
+    let mut costs = Vec::new();
+    for method in ["static", "inertial", "fine"] {
+        let mut c = Command::new("bash");
+        c.arg("firmware/qemu-run.sh")
+            .arg(elf)
+            .args(["--align-method", method])
+            .args(["out/bench-rock/imu.bin", "out/bench-rock/fw.csv"])
+            .args(["45", "30", "0", "40"]);
+        eprintln!("$ {}", show(&c));
+        let out = c.output().context("run QEMU")?;
+        let log = String::from_utf8_lossy(&out.stdout);
+        let at = log
+            .find("instructions per alignment sample")
+            .with_context(|| format!("no alignment costs in:\n{log}"))?;
+        let part = &log[at..];
+        costs.push((
+            method,
+            (number_after(part, "max")?, number_after(part, "mean")?),
+        ));
+    }
+    Ok(costs)
 }
 
 /// Every test of the workspace, the QEMU end-to-end test included.

@@ -81,6 +81,7 @@ use super::AttitudeEstimate;
 use super::kahan::Kahan;
 use crate::coning::ConingSculling;
 use crate::earth::{LocalEarth, OMEGA_IE};
+use crate::strapdown::{dcm_of, kahan_add};
 use crate::{ImuIncrement, InputError, InputLimits, Scalar, attitude};
 use nalgebra::{
     Matrix2, Matrix2x4, Matrix3, Matrix4, Matrix4x2, Quaternion, UnitQuaternion, Vector2, Vector3,
@@ -810,36 +811,6 @@ fn small_rotation<T: Scalar>(phi: &Vector3<T>) -> Quaternion<T> {
 fn yaw_of<T: Scalar>(q: &Quaternion<T>) -> T {
     let two = T::c(2.0);
     (two * (q.w * q.k + q.i * q.j)).patan2(q.w * q.w + q.i * q.i - q.j * q.j - q.k * q.k)
-}
-
-/// `C_b_n` of a quaternion of any norm: `M(q) / |q|^2` (Savage (3.2.4.1-3)).
-#[inline]
-fn dcm_of<T: Scalar>(q: &Quaternion<T>) -> Matrix3<T> {
-    let (w, x, y, z) = (q.w, q.i, q.j, q.k);
-    let k = T::one() / q.norm_squared();
-    let two = T::c(2.0);
-    Matrix3::new(
-        (w * w + x * x - y * y - z * z) * k,
-        two * (x * y - w * z) * k,
-        two * (x * z + w * y) * k,
-        two * (x * y + w * z) * k,
-        (w * w - x * x + y * y - z * z) * k,
-        two * (y * z - w * x) * k,
-        two * (x * z - w * y) * k,
-        two * (y * z + w * x) * k,
-        (w * w - x * x - y * y + z * z) * k,
-    )
-}
-
-/// Compensated summation `sum += add` per element, the remainder kept in `carry` (Higham §4.3).
-#[inline]
-fn kahan_add<T: Scalar>(sum: &mut [T], carry: &mut [T], add: &[T]) {
-    for ((s, c), a) in sum.iter_mut().zip(carry.iter_mut()).zip(add) {
-        let y = *a + *c;
-        let t = *s + y;
-        *c = y - (t - *s);
-        *s = t;
-    }
 }
 
 #[cfg(test)]
