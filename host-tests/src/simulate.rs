@@ -222,11 +222,25 @@ pub fn describe(opts: &SimOptions, sim: &Simulated, imu: &Path) -> Result<String
     writeln!(s, "start_yaw_deg = {}", yaw.to_degrees())?;
     writeln!(
         s,
-        "# replay: nav replay --imu {} --lat {} --lon {} --h {} --align-seconds 60 --out solution.csv",
+        "# replay: nav replay --imu {} --lat {} --lon {} --h {} --align-seconds 60{} --out solution.csv",
         imu.display(),
         start.lat.to_degrees(),
         start.lon.to_degrees(),
-        start.h
+        start.h,
+        replay_alignment(&opts.scenario)
     )?;
     Ok(s)
+}
+
+/// The `nav replay` alignment options that suit `scenario`: a rocking base needs the
+/// inertial-frame method, and on a ship its lever arm.
+fn replay_alignment(scenario: &Scenario) -> String {
+    match scenario {
+        Scenario::ShipRocking(r) => {
+            let [x, y, z] = r.lever_arm_m;
+            format!(" --align-method inertial --lever-arm {x},{y},{z}")
+        }
+        Scenario::AuvBench(_) => " --align-method fine".to_owned(),
+        _ => String::new(),
+    }
 }
