@@ -9,7 +9,6 @@
 //!   inertial space; rocking base, no initial heading.
 //! - [`level`]: level alignment on a rocking ship (seed 002) — a Kalman or constant-gain filter
 //!   of the horizontal tilt from the lever-arm-compensated level-frame velocity.
-//!
 //! - [`machine`]: the state machine `COARSE -> FINE -> ALIGNED` (or `FAILED`) that runs one of
 //!   them as the firmware's alignment task and the harness's replay do.
 //! - [`sway`]: base-motion-model fine alignment — a base still or swaying about a fixed mean
