@@ -96,6 +96,17 @@ pub const GRAVITY_TOLERANCE: f64 = 0.02;
 /// disturbance or a gyro that cannot see the Earth rate.
 pub const HEADING_SIGNAL_TOLERANCE: f64 = 0.5;
 
+/// Spacing of the snapshots kept for the disturbance check [s].
+pub const SNAPSHOT_EVERY_S: f64 = 2.0;
+
+/// Snapshots kept: with [`SNAPSHOT_EVERY_S`] they span the last 14–16 s, longer than a wave or
+/// sway period.
+pub const SNAPSHOTS: usize = 8;
+
+/// A snapshot's solution may differ from the current one by this many of its own 1-sigma
+/// before the base counts as disturbed ([`InertialAlignError::BaseDisturbed`]).
+pub const DISTURBANCE_SIGMAS: f64 = 6.0;
+
 /// Why the inertial-frame alignment gave no attitude.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum InertialAlignError {
@@ -117,6 +128,12 @@ pub enum InertialAlignError {
     HeadingUnobservable,
     /// The solution is not finite (inputs so large that a sum overflowed).
     NonFinite,
+    /// The solutions of the last seconds disagree by more than [`DISTURBANCE_SIGMAS`] of their
+    /// noise: a translational disturbance (an unknown lever arm on a rocking ship, waves)
+    /// turns the heading by `[6 (|v(0)| + |v(T)|) / T^2 + 12 |dr| / T^3] / (g Omega cos L)`
+    /// (module docs, eq. 9), which the 1-sigma does not model. Give the lever arm, or align
+    /// longer.
+    BaseDisturbed,
 }
 
 impl core::fmt::Display for InertialAlignError {
@@ -132,6 +149,9 @@ impl core::fmt::Display for InertialAlignError {
                 "Earth-rate heading signal not resolved (noise, disturbance or coarse gyros)",
             ),
             Self::NonFinite => f.write_str("alignment solution not finite"),
+            Self::BaseDisturbed => f.write_str(
+                "heading unstable over the last seconds: base disturbed (unknown lever arm?)",
+            ),
         }
     }
 }
@@ -311,6 +331,9 @@ pub struct InertialAlignment<T: Scalar> {
     t_s: Kahan<T>,
     samples: u32,
     refused: Option<InputError>,
+    /// `(t, V_b0, M_b0)` every [`SNAPSHOT_EVERY_S`] (lever arm removed), oldest overwritten.
+    snapshots: [Option<(T, Vector3<T>, Vector3<T>)>; SNAPSHOTS],
+    next_snapshot: usize,
 }
 
 impl<T: Scalar> InertialAlignment<T> {
@@ -330,6 +353,8 @@ impl<T: Scalar> InertialAlignment<T> {
             t_s: Kahan::new(),
             samples: 0,
             refused: None,
+            snapshots: [None; SNAPSHOTS],
+            next_snapshot: 0,
         }
     }
 
@@ -384,10 +409,32 @@ impl<T: Scalar> InertialAlignment<T> {
         self.m_b0
             .add(&(dv_b0 * self.t_s.sum - self.v_b0.sum() * inc.dt));
         self.v_b0.add(&dv_b0);
+        let t_before = self.t_s.sum;
         self.t_s.add(inc.dt);
         self.q_b_b0.rotate(&c.phi_b);
         self.samples = self.samples.saturating_add(1);
+        // A snapshot whenever t crosses a multiple of SNAPSHOT_EVERY_S.
+        let every = T::c(SNAPSHOT_EVERY_S);
+        if (self.t_s.sum / every).floor() > (t_before / every).floor() {
+            if let Some((v, m)) = self.corrected(self.t_s.sum, &self.q_b_b0.unit()) {
+                let k = self.next_snapshot % SNAPSHOTS;
+                self.snapshots[k] = Some((self.t_s.sum, v, m));
+                self.next_snapshot = (k + 1) % SNAPSHOTS;
+            }
+        }
         Ok(())
+    }
+
+    /// `(V_b0, M_b0)` at `t_s` with the known lever arm's share removed (eq. 10); `None` while
+    /// the lever arm has fewer than two intervals.
+    fn corrected(&self, t_s: T, q_b_b0: &UnitQuaternion<T>) -> Option<(Vector3<T>, Vector3<T>)> {
+        let (mut v_b0, mut m_b0) = (self.v_b0.sum(), self.m_b0.sum());
+        if let Some(l) = &self.lever {
+            let (dv, dm) = l.corrections(t_s, q_b_b0)?;
+            v_b0 -= dv;
+            m_b0 -= dm;
+        }
+        Some((v_b0, m_b0))
     }
 
     /// Time accumulated [s].
@@ -434,34 +481,13 @@ impl<T: Scalar> InertialAlignment<T> {
         if !cos_lat.finite() || cos_lat < T::c(MIN_COS_LAT) || !self.h_m.finite() {
             return Err(InertialAlignError::NearPole);
         }
-        let (mut v_b0, mut m_b0) = (self.v_b0.sum(), self.m_b0.sum());
         let q_b_b0 = self.q_b_b0.unit();
-        if let Some(l) = &self.lever {
-            // Eq. 10 (at least two intervals: MIN_DURATION_S has passed).
-            let (dv, dm) = l
-                .corrections(t_s, &q_b_b0)
-                .ok_or(InertialAlignError::TooShort)?;
-            v_b0 -= dv;
-            m_b0 -= dm;
-        }
-        let (v_i0, m_i0) = self.reference(t_s);
-        if !(v_b0.iter().chain(m_b0.iter()).all(|x| x.finite())) {
-            return Err(InertialAlignError::NonFinite);
-        }
-        let (nv_b0, nv_i0) = (v_b0.norm(), v_i0.norm());
-        if (nv_b0 - nv_i0).abs() > T::c(GRAVITY_TOLERANCE) * nv_i0 {
-            return Err(InertialAlignError::SpecificForceNotGravity);
-        }
-        // Eq. 8: TRIAD frames; the heading signal is the part of M normal to V.
-        let (a1_b0, a1_i0) = (v_b0 / nv_b0, v_i0 / nv_i0);
-        let (c_b0, c_i0) = (a1_b0.cross(&m_b0), a1_i0.cross(&m_i0));
-        let (nc_b0, nc_i0) = (c_b0.norm(), c_i0.norm());
-        if (nc_b0 - nc_i0).abs() > T::c(HEADING_SIGNAL_TOLERANCE) * nc_i0 {
-            return Err(InertialAlignError::HeadingUnobservable);
-        }
-        let triad =
-            |a1: Vector3<T>, a2: Vector3<T>| Matrix3::from_columns(&[a1, a2, a1.cross(&a2)]);
-        let c_b0_i0 = triad(a1_i0, c_i0 / nc_i0) * triad(a1_b0, c_b0 / nc_b0).transpose();
+        // Eq. 10 (at least two intervals: MIN_DURATION_S has passed).
+        let (v_b0, m_b0) = self
+            .corrected(t_s, &q_b_b0)
+            .ok_or(InertialAlignError::TooShort)?;
+        let c_b0_i0 = self.solve(&v_b0, &m_b0, t_s)?;
+        self.check_disturbance(&c_b0_i0, t_s, cos_lat)?;
         let q_b0_i0 =
             UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(c_b0_i0));
         // C_n_i0(T): the NED frame turned by Omega T about the polar axis since the start.
@@ -484,6 +510,66 @@ impl<T: Scalar> InertialAlignment<T> {
             sigma_rad: self.sigma(t_s, cos_lat),
             elapsed_s: t_s,
         })
+    }
+
+    /// `C_b0_i0` from `V_b0`, `M_b0` after `t_s` [s] (eqs. 7, 8), or why not.
+    fn solve(
+        &self,
+        v_b0: &Vector3<T>,
+        m_b0: &Vector3<T>,
+        t_s: T,
+    ) -> Result<Matrix3<T>, InertialAlignError> {
+        let (v_i0, m_i0) = self.reference(t_s);
+        if !(v_b0.iter().chain(m_b0.iter()).all(|x| x.finite())) {
+            return Err(InertialAlignError::NonFinite);
+        }
+        let (nv_b0, nv_i0) = (v_b0.norm(), v_i0.norm());
+        if (nv_b0 - nv_i0).abs() > T::c(GRAVITY_TOLERANCE) * nv_i0 {
+            return Err(InertialAlignError::SpecificForceNotGravity);
+        }
+        // Eq. 8: TRIAD frames; the heading signal is the part of M normal to V.
+        let (a1_b0, a1_i0) = (v_b0 / nv_b0, v_i0 / nv_i0);
+        let (c_b0, c_i0) = (a1_b0.cross(m_b0), a1_i0.cross(&m_i0));
+        let (nc_b0, nc_i0) = (c_b0.norm(), c_i0.norm());
+        if (nc_b0 - nc_i0).abs() > T::c(HEADING_SIGNAL_TOLERANCE) * nc_i0 {
+            return Err(InertialAlignError::HeadingUnobservable);
+        }
+        let triad =
+            |a1: Vector3<T>, a2: Vector3<T>| Matrix3::from_columns(&[a1, a2, a1.cross(&a2)]);
+        Ok(triad(a1_i0, c_i0 / nc_i0) * triad(a1_b0, c_b0 / nc_b0).transpose())
+    }
+
+    /// The disturbance check: the constant `C_b0_i0` solved from each snapshot of the last
+    /// [`SNAPSHOTS`] x [`SNAPSHOT_EVERY_S`] seconds must agree about the vertical with the
+    /// current one within [`DISTURBANCE_SIGMAS`] of the snapshot's own heading 1-sigma. With
+    /// noise only, the solutions share most of their data and differ by about one sigma; an
+    /// endpoint disturbance velocity (eq. 9) swings the heading as it oscillates. Needs a noise
+    /// model (without one there is no scale: no check).
+    fn check_disturbance(
+        &self,
+        c_b0_i0: &Matrix3<T>,
+        t_s: T,
+        cos_lat: T,
+    ) -> Result<(), InertialAlignError> {
+        if self.noise.is_none() {
+            return Ok(());
+        }
+        for (t_k, v_k, m_k) in self.snapshots.iter().flatten() {
+            if *t_k < T::c(MIN_DURATION_S) || *t_k > t_s - T::c(0.5 * SNAPSHOT_EVERY_S) {
+                continue;
+            }
+            let Ok(c_k) = self.solve(v_k, m_k, *t_k) else {
+                return Err(InertialAlignError::BaseDisturbed);
+            };
+            // The rotation from the current solution to the snapshot's, about the i0 vertical.
+            let r = Rotation3::from_matrix_unchecked(c_k * c_b0_i0.transpose());
+            let d_yaw = r.scaled_axis().z.abs();
+            let sigma_k = self.sigma(*t_k, cos_lat).z;
+            if d_yaw > T::c(DISTURBANCE_SIGMAS) * sigma_k {
+                return Err(InertialAlignError::BaseDisturbed);
+            }
+        }
+        Ok(())
     }
 
     /// Roll, pitch, yaw 1-sigma [rad] after `t_s` [s] (eqs. S1, S2 of [`SensorNoise`]); NaN
