@@ -623,7 +623,7 @@ fn an_unknown_lever_arm_is_refused_not_answered() {
     let (model, noise) = fog_white();
     let ks = [index_at(60.0), index_at(120.0)];
     for lever in [None, Some(Vector3::new(30.0, 10.0, 15.0))] {
-        let mut inj = ErrorInjector::new(model.clone(), 7).unwrap();
+        let mut inj = ErrorInjector::new(model, 7).unwrap();
         let sensed: Vec<_> = d.incs.iter().map(|i| inj.apply(i)).collect();
         align_or_refuse::<f64>(
             sensed.into_iter(),
@@ -668,7 +668,7 @@ fn an_unknown_lever_arm_is_refused_not_answered() {
     let bench = auv_bench();
     let ks = [index_at(30.0), index_at(60.0), index_at(120.0)];
     for seed in 0..20 {
-        let mut inj = ErrorInjector::new(model.clone(), 100 + seed).unwrap();
+        let mut inj = ErrorInjector::new(model, 100 + seed).unwrap();
         let sensed: Vec<_> = bench.incs.iter().map(|i| inj.apply(i)).collect();
         align_or_refuse::<f64>(
             sensed.into_iter(),

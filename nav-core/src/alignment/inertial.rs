@@ -311,6 +311,9 @@ impl<T: Scalar> LeverArm<T> {
     }
 }
 
+/// `(t [s], V_b0 [m/s], M_b0 [m])` at one instant, the lever arm removed.
+type Snapshot<T> = (T, Vector3<T>, Vector3<T>);
+
 /// Inertial-frame coarse alignment at a known position (module docs).
 ///
 /// Feed every increment from the start with [`InertialAlignment::add`]; ask for the attitude
@@ -332,7 +335,7 @@ pub struct InertialAlignment<T: Scalar> {
     samples: u32,
     refused: Option<InputError>,
     /// `(t, V_b0, M_b0)` every [`SNAPSHOT_EVERY_S`] (lever arm removed), oldest overwritten.
-    snapshots: [Option<(T, Vector3<T>, Vector3<T>)>; SNAPSHOTS],
+    snapshots: [Option<Snapshot<T>>; SNAPSHOTS],
     next_snapshot: usize,
 }
 
@@ -415,12 +418,12 @@ impl<T: Scalar> InertialAlignment<T> {
         self.samples = self.samples.saturating_add(1);
         // A snapshot whenever t crosses a multiple of SNAPSHOT_EVERY_S.
         let every = T::c(SNAPSHOT_EVERY_S);
-        if (self.t_s.sum / every).floor() > (t_before / every).floor() {
-            if let Some((v, m)) = self.corrected(self.t_s.sum, &self.q_b_b0.unit()) {
-                let k = self.next_snapshot % SNAPSHOTS;
-                self.snapshots[k] = Some((self.t_s.sum, v, m));
-                self.next_snapshot = (k + 1) % SNAPSHOTS;
-            }
+        if (self.t_s.sum / every).floor() > (t_before / every).floor()
+            && let Some((v, m)) = self.corrected(self.t_s.sum, &self.q_b_b0.unit())
+        {
+            let k = self.next_snapshot % SNAPSHOTS;
+            self.snapshots[k] = Some((self.t_s.sum, v, m));
+            self.next_snapshot = (k + 1) % SNAPSHOTS;
         }
         Ok(())
     }
