@@ -311,7 +311,7 @@ fn transport_rate<T: Scalar>(
 /// (`p = q(phi) - 1`, `z = q(-zeta) - 1`, Savage (7.1.2-14)), small and free of the
 /// cancellation of two nearly opposite rotations (a body at rest follows the Earth).
 #[inline]
-fn rotation_vector_delta<T: Scalar>(
+pub(crate) fn rotation_vector_delta<T: Scalar>(
     q: &Quaternion<T>,
     phi_b: &Vector3<T>,
     zeta: &Vector3<T>,
@@ -355,7 +355,7 @@ pub(crate) fn kahan_add<T: Scalar>(sum: &mut [T], carry: &mut [T], add: &[T]) {
 
 /// `q(phi) - 1` [-] without cancellation in the scalar part.
 #[inline]
-fn small_rotation<T: Scalar>(phi: &Vector3<T>) -> Quaternion<T> {
+pub(crate) fn small_rotation<T: Scalar>(phi: &Vector3<T>) -> Quaternion<T> {
     let (w, s) = crate::attitude::rotation_vector_terms(phi.norm_squared());
     Quaternion::from_parts(w, phi * s)
 }

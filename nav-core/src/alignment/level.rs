@@ -81,7 +81,7 @@ use super::AttitudeEstimate;
 use super::kahan::Kahan;
 use crate::coning::ConingSculling;
 use crate::earth::{LocalEarth, OMEGA_IE};
-use crate::strapdown::{dcm_of, kahan_add};
+use crate::strapdown::{dcm_of, kahan_add, rotation_vector_delta, small_rotation};
 use crate::{ImuIncrement, InputError, InputLimits, Scalar, attitude};
 use nalgebra::{
     Matrix2, Matrix2x4, Matrix3, Matrix4, Matrix4x2, Quaternion, UnitQuaternion, Vector2, Vector3,
@@ -467,7 +467,7 @@ impl<T: Scalar> LevelFilter<T> {
             );
         }
         // Attitude: q(k) = q(-zeta) q(k-1) q(phi) (Savage (7.1.2-14)), summed with a carry.
-        let delta = rotation_delta(&self.q, &c.phi_b, &zeta);
+        let delta = rotation_vector_delta(&self.q, &c.phi_b, &zeta);
         self.add_to_q(&delta);
 
         self.dv_f_n += dv_n;
@@ -783,27 +783,6 @@ fn kalman_update<T: Scalar>(
     }
     *p = p_new;
     Some((x, k))
-}
-
-/// `delta = q p + z q + z q p` with `p = q(phi) - 1`, `z = q(-zeta) - 1`: the change of
-/// `q(-zeta) q q(phi)` without cancellation (Savage (7.1.2-14)).
-#[inline]
-fn rotation_delta<T: Scalar>(
-    q: &Quaternion<T>,
-    phi_b: &Vector3<T>,
-    zeta: &Vector3<T>,
-) -> Quaternion<T> {
-    let p = small_rotation(phi_b);
-    let z = small_rotation(&(-zeta));
-    let qp = q * p;
-    qp + z * q + z * qp
-}
-
-/// `q(phi) - 1` [-] without cancellation in the scalar part.
-#[inline]
-fn small_rotation<T: Scalar>(phi: &Vector3<T>) -> Quaternion<T> {
-    let (w, s) = attitude::rotation_vector_terms(phi.norm_squared());
-    Quaternion::from_parts(w, phi * s)
 }
 
 /// Euler yaw [rad] of `q_b_n` of any norm (Titterton & Weston eq. 3.66).

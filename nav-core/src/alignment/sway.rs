@@ -78,6 +78,7 @@ use super::fine::kalman::{ScalarUpdate, discrete_noise, propagate, update_scalar
 use super::fine::{euler_jacobian, phi_covariance};
 use crate::coning::ConingSculling;
 use crate::earth::LocalEarth;
+use crate::strapdown::{dcm_of, kahan_add, small_rotation};
 use crate::{ImuIncrement, InputError, InputLimits, Position, Scalar, attitude};
 use nalgebra::{Matrix3, Matrix4, Quaternion, SMatrix, SVector, UnitQuaternion, Vector3, Vector4};
 
@@ -368,7 +369,11 @@ impl<T: Scalar> SwayAlignment<T> {
         let z = small_rotation(&(-zeta));
         let qp = self.q * p;
         let delta = qp + z * self.q + z * qp;
-        kahan_add(&mut self.q, &mut self.q_carry, &delta);
+        kahan_add(
+            self.q.coords.as_mut_slice(),
+            self.q_carry.coords.as_mut_slice(),
+            delta.coords.as_slice(),
+        );
         let n2 = self.q.norm_squared();
         if (n2 - T::one()).abs() > T::c(1e-4) {
             self.q /= n2.sqrt();
@@ -866,34 +871,6 @@ fn wrap_pi<T: Scalar>(a: T) -> T {
         a + pi + pi
     } else {
         a
-    }
-}
-
-/// `C_b_n` of a quaternion of any norm (Savage (3.2.4.1-3)).
-fn dcm_of<T: Scalar>(q: &Quaternion<T>) -> Matrix3<T> {
-    UnitQuaternion::new_normalize(*q)
-        .to_rotation_matrix()
-        .into_inner()
-}
-
-/// `q(phi) - 1` [-] without cancellation in the scalar part.
-fn small_rotation<T: Scalar>(phi: &Vector3<T>) -> Quaternion<T> {
-    let (w, s) = attitude::rotation_vector_terms(phi.norm_squared());
-    Quaternion::from_parts(w, phi * s)
-}
-
-/// Compensated summation `q += d`, the rounding remainder kept in `carry` (Higham §4.3).
-fn kahan_add<T: Scalar>(q: &mut Quaternion<T>, carry: &mut Quaternion<T>, d: &Quaternion<T>) {
-    for ((s, c), a) in q
-        .coords
-        .iter_mut()
-        .zip(carry.coords.iter_mut())
-        .zip(d.coords.iter())
-    {
-        let y = *a + *c;
-        let t = *s + y;
-        *c = y - (t - *s);
-        *s = t;
     }
 }
 
