@@ -77,37 +77,7 @@ enum Command {
     /// Simulate a scenario: exact increments through a sensor grade's error model, written as
     /// DIR/imu.bin and DIR/imu.csv (recordings), DIR/truth.csv and DIR/scenario.txt.
     #[command(allow_negative_numbers = true)]
-    Sim {
-        /// static, ship-rocking, auv-bench, flight or land-vehicle.
-        scenario: String,
-        /// Output directory (created if missing).
-        #[arg(long, value_name = "DIR", required_unless_present = "list_params")]
-        out: Option<PathBuf>,
-        /// Sensor grade: ideal, fog, rlg, mems-tactical, mems-consumer.
-        #[arg(long, default_value = "ideal")]
-        grade: host_tests::sensor_model::Grade,
-        /// Length [s] (default: the scenario's own).
-        #[arg(long)]
-        seconds: Option<f64>,
-        /// IMU rate [Hz].
-        #[arg(long, default_value_t = 400.0)]
-        rate: f64,
-        /// Seed of every random draw (same seed, same files).
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Scenario parameter `KEY=VALUE` (repeatable; see --list-params).
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
-        /// Truth rate [Hz] (must divide the IMU rate).
-        #[arg(long, default_value_t = 50.0)]
-        truth_rate: f64,
-        /// Recording files to write.
-        #[arg(long, value_enum, default_value_t = SimFormat::Both)]
-        format: SimFormat,
-        /// Print the scenario's parameters with their defaults and exit.
-        #[arg(long)]
-        list_params: bool,
-    },
+    Sim(SimArgs),
     /// Alignment benchmarks with their physical floors: seed 002's level filter on a rocking ship
     /// (sea states 3-6), seed 003's fine alignment on the AUV bench, and heading repeatability
     /// on the real laser-gyro recording.
@@ -325,16 +295,36 @@ enum SimFormat {
 }
 
 /// `nav sim`'s arguments.
+#[derive(clap::Args)]
 struct SimArgs {
+    /// static, ship-rocking, auv-bench, flight or land-vehicle.
     scenario: String,
+    /// Output directory (created if missing).
+    #[arg(long, value_name = "DIR", required_unless_present = "list_params")]
     out: Option<PathBuf>,
+    /// Sensor grade: ideal, fog, rlg, mems-tactical, mems-consumer.
+    #[arg(long, default_value = "ideal")]
     grade: host_tests::sensor_model::Grade,
+    /// Length [s] (default: the scenario's own).
+    #[arg(long)]
     seconds: Option<f64>,
+    /// IMU rate [Hz].
+    #[arg(long, default_value_t = 400.0)]
     rate: f64,
+    /// Seed of every random draw (same seed, same files).
+    #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Scenario parameter `KEY=VALUE` (repeatable; see --list-params).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
+    /// Truth rate [Hz] (must divide the IMU rate).
+    #[arg(long, default_value_t = 50.0)]
     truth_rate: f64,
+    /// Recording files to write.
+    #[arg(long, value_enum, default_value_t = SimFormat::Both)]
     format: SimFormat,
+    /// Print the scenario's parameters with their defaults and exit.
+    #[arg(long)]
     list_params: bool,
 }
 
@@ -460,29 +450,7 @@ fn run(cli: Cli) -> Result<()> {
             print!("{text}");
             Ok(())
         }
-        Command::Sim {
-            scenario,
-            out,
-            grade,
-            seconds,
-            rate,
-            seed,
-            set,
-            truth_rate,
-            format,
-            list_params,
-        } => sim(SimArgs {
-            scenario,
-            out,
-            grade,
-            seconds,
-            rate,
-            seed,
-            set,
-            truth_rate,
-            format,
-            list_params,
-        }),
+        Command::Sim(args) => sim(args),
         Command::Emulate {
             truth,
             out,
