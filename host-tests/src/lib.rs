@@ -16,6 +16,8 @@
 //! - [`replay`]: a file replayed end to end (open, run, attach the replay counters).
 //! - [`bench`]: the mechanization's host benchmark (`nav bench`).
 //! - [`truth`]: exactly known trajectories and their exact increments (physics tests).
+//! - [`oscillator`]: the isotropic-oscillator sensor simulator (seed 001) and its `osc.csv`
+//!   readout file.
 //!
 //! The `nav` binary (`src/bin/nav.rs`) is the command-line front end.
 #![deny(unsafe_code)]
@@ -29,6 +31,7 @@ pub mod emulate;
 pub mod generate;
 pub mod imu_csv;
 pub mod kf_gins;
+pub mod oscillator;
 pub mod pipeline;
 pub mod psins;
 pub mod recording_io;

@@ -43,6 +43,25 @@ pub fn rotation_vector_terms<T: Scalar>(a2: T) -> (T, T) {
     }
 }
 
+/// The rotation vector [rad] of `q` (the inverse of [`rotation_vector_quat`]): angle
+/// `2 atan2(|v|, w)` about `v/|v|`, with `q` taken in the hemisphere `w >= 0` (angle <= pi).
+#[inline]
+pub fn rotation_vector_of<T: Scalar>(q: &UnitQuaternion<T>) -> Vector3<T> {
+    let (w, v) = if q.w < T::zero() {
+        (-q.w, -q.imag())
+    } else {
+        (q.w, q.imag())
+    };
+    let s = v.norm();
+    if s < T::c(1e-3) {
+        // 2 atan2(s, w)/s = (2/w)(1 - s^2/(3 w^2) + ...): no division by a tiny `s`.
+        let x2 = s * s / (w * w);
+        v * (T::c(2.0) / w * (T::one() - x2 * (T::c(1.0 / 3.0) - x2 * T::c(0.2))))
+    } else {
+        v * (T::c(2.0) * s.patan2(w) / s)
+    }
+}
+
 /// `q` rounded to the working scalar.
 pub fn quat_from_f64<T: Scalar>(q: &UnitQuaternion<f64>) -> UnitQuaternion<T> {
     UnitQuaternion::new_unchecked(Quaternion::from(q.quaternion().coords.map(T::c)))

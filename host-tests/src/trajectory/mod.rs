@@ -17,6 +17,10 @@
 //! integrating IMU outputs — so the sampling adds no coning or sculling error of its own; their
 //! error is RK4's (`O(h^5)` per step), below 1e-12 rad and 1e-10 m/s per increment for the
 //! scenarios here (the convergence test checks it against 4x finer steps).
+//!
+//! A [`Rider`] is an extra ODE driven by the body's motion (e.g. the isotropic oscillator of
+//! [`crate::oscillator`]): [`Generator::advance_with`] integrates it with the same RK4 stages,
+//! seeing at each stage the same `omega_ib_b` and `f_ib_b` as the increments.
 
 pub mod jet;
 pub mod scenarios;
@@ -110,6 +114,13 @@ fn rates(traj: &dyn Trajectory, t: f64, p: &Point) -> (Point, Vector3<f64>, Vect
     (d_point, omega_ib_b, f_ib_b)
 }
 
+/// What ideal sensors sense at time `t` [s] at point `p`: `(omega_ib_b [rad/s], f_ib_b [m/s^2])`,
+/// body axes (the integrands of the increments).
+pub fn sensed_at(traj: &dyn Trajectory, t: f64, p: &Point) -> (Vector3<f64>, Vector3<f64>) {
+    let (_, omega_ib_b, f_ib_b) = rates(traj, t, p);
+    (omega_ib_b, f_ib_b)
+}
+
 /// The truth of `traj` at `t` [s] and point `p`.
 pub fn truth_at(traj: &dyn Trajectory, t: f64, p: &Point) -> Truth {
     let m = traj.motion(t, p);
@@ -168,6 +179,17 @@ impl<'a> Generator<'a> {
     /// Advances to `t_end` [s], returning the exact increment over `[t, t_end]` and the truth at
     /// `t_end`.
     pub fn advance_to(&mut self, t_end: f64) -> (ImuIncrement<f64>, Truth) {
+        self.advance_with(t_end, &mut NoRider)
+    }
+
+    /// The same, integrating `rider` along: each RK4 stage evaluates the rider's derivative at
+    /// the stage's time with the stage's `omega_ib_b` and `f_ib_b`, and the rider's stage states
+    /// are `y + k h/2`, `y + k h/2`, `y + k h` as for the position (classic RK4).
+    pub fn advance_with<R: Rider>(
+        &mut self,
+        t_end: f64,
+        rider: &mut R,
+    ) -> (ImuIncrement<f64>, Truth) {
         let dt = t_end - self.t;
         let h = dt / self.substeps as f64;
         let mut d_theta = Vector3::zeros();
@@ -181,10 +203,15 @@ impl<'a> Generator<'a> {
         for i in 0..self.substeps {
             let t0 = self.t + h * i as f64;
             let p = self.point;
+            let y = *rider;
             let (k1, w1, f1) = rates(self.traj, t0, &p);
+            let r1 = y.deriv(t0, &w1, &f1);
             let (k2, w2, f2) = rates(self.traj, t0 + 0.5 * h, &add(&p, &k1, 0.5 * h));
+            let r2 = y.axpy(&r1, 0.5 * h).deriv(t0 + 0.5 * h, &w2, &f2);
             let (k3, w3, f3) = rates(self.traj, t0 + 0.5 * h, &add(&p, &k2, 0.5 * h));
+            let r3 = y.axpy(&r2, 0.5 * h).deriv(t0 + 0.5 * h, &w3, &f3);
             let (k4, w4, f4) = rates(self.traj, t0 + h, &add(&p, &k3, h));
+            let r4 = y.axpy(&r3, h).deriv(t0 + h, &w4, &f4);
             let k = Point {
                 lat: k1.lat + 2.0 * k2.lat + 2.0 * k3.lat + k4.lat,
                 lon: k1.lon + 2.0 * k2.lon + 2.0 * k3.lon + k4.lon,
@@ -192,6 +219,11 @@ impl<'a> Generator<'a> {
                 aux: k1.aux + 2.0 * k2.aux + 2.0 * k3.aux + k4.aux,
             };
             self.point = add(&p, &k, h / 6.0);
+            *rider = y
+                .axpy(&r1, h / 6.0)
+                .axpy(&r2, h / 3.0)
+                .axpy(&r3, h / 3.0)
+                .axpy(&r4, h / 6.0);
             d_theta += (w1 + (w2 + w3) * 2.0 + w4) * (h / 6.0);
             d_v += (f1 + (f2 + f3) * 2.0 + f4) * (h / 6.0);
         }
@@ -204,6 +236,33 @@ impl<'a> Generator<'a> {
             },
             self.truth(),
         )
+    }
+}
+
+/// An ODE integrated along a trajectory ([`Generator::advance_with`]): its state is `Self`, and
+/// its derivative depends on time and on the body's `omega_ib_b` and `f_ib_b` only. The
+/// derivative has the type of the state; constants a rider carries are taken from the state in
+/// [`Rider::axpy`] and are ignored in the derivative.
+pub trait Rider: Copy {
+    /// `dy/dt` at time `t` [s] for state `self`, with the body's angular rate `omega_ib_b`
+    /// [rad/s] and specific force `f_ib_b` [m/s^2] (body axes) at that instant.
+    fn deriv(&self, t: f64, omega_ib_b: &Vector3<f64>, f_ib_b: &Vector3<f64>) -> Self;
+    /// `self + k s` (`k` a derivative, `s` a time step [s]).
+    fn axpy(&self, k: &Self, s: f64) -> Self;
+}
+
+/// The rider of [`Generator::advance_to`]: nothing.
+#[derive(Clone, Copy, Debug)]
+struct NoRider;
+
+impl Rider for NoRider {
+    #[inline]
+    fn deriv(&self, _: f64, _: &Vector3<f64>, _: &Vector3<f64>) -> Self {
+        NoRider
+    }
+    #[inline]
+    fn axpy(&self, _: &Self, _: f64) -> Self {
+        NoRider
     }
 }
 

@@ -1,0 +1,361 @@
+//! The isotropic-oscillator sensor simulator (seed 001; issue 7, requirement 1): the
+//! displacement of a spring-suspended proof mass, observed in body axes, for a body that rotates
+//! and accelerates along a [`Trajectory`](crate::trajectory::Trajectory).
+//!
+//! # Frames
+//!
+//! `i` is the inertial frame: ECEF frozen at `t = 0` (a vector fixed in ECEF turns in it with the
+//! Earth, `C_e_i(t) = R_z(OMEGA_IE t)`), so `C_b_i(t) = R_z(OMEGA_IE t) C_n_e(lat, lon) C_b_n(t)`
+//! ([`sim::q_b_i`]). `b` is the body (FRD) frame of the trajectory, `n` its NED frame.
+//!
+//! # Equations
+//!
+//! The mass sits at `rho_i = C_b_i r_b` [m] from its suspension point (the case). Mass and case
+//! feel the same gravitation (the gradient over 20 um, ~6e-11 m/s^2, is neglected), so relative
+//! to the case, in inertial axes,
+//!
+//! ```text
+//! rho_i'' = -w0^2 rho_i - f_ib_i + F_i/m,        w0 = 2 pi f0,
+//! ```
+//!
+//! with `f_ib` the case's specific force (what an accelerometer senses, `a - g`) and `F` the
+//! damping and drive forces. The state is integrated in body axes: `r_b` and
+//! `v_b = C_i_b rho_i'` (the inertial rate of the displacement, resolved in body axes; transport
+//! theorem `v_b = dr_b/dt + omega_ib_b x r_b`):
+//!
+//! ```text
+//! dr_b/dt = v_b - omega_ib_b x r_b                                   (= rdot_rel)
+//! dv_b/dt = -omega_ib_b x v_b - w0^2 r_b - f_ib_b + (F_damp + F_drive)/m
+//! F_damp/m  = -2 zeta w0 rdot_rel                                    (relative to the case)
+//! F_drive/m = g(t) rdot_rel,   g = max(0, 2 zeta w0 (1 + k_a (1 - A2/A2_ref)))   (drive on)
+//! dA2/dt    = (|rdot_rel|^2 - A2) / tau
+//! ```
+//!
+//! Expanding `v_b` gives the classic relative-motion form
+//! `r'' = -w0^2 r - 2 zeta w0 r' - f - omega_dot x r - omega x (omega x r) - 2 omega x r'` (+ the
+//! drive); the `(r_b, v_b)` form is used because it needs no angular acceleration, only the
+//! `omega_ib_b` and `f_ib_b` that the trajectory generator already evaluates at each RK4 stage
+//! ([`Rider`](crate::trajectory::Rider)).
+//!
+//! **Drive** (amplitude keeping, like the energy loop of a hemispherical resonator gyro): `A2`, a
+//! first-order low pass (time constant `tau` = [`OscillatorParams::drive_time_constant_s`]) of
+//! `|rdot_rel|^2`, is held at `A2_ref = w0^2 (P^2 + Q^2)/2`, the mean squared speed of the
+//! nominal ellipse; loop gain `k_a` = [`sim::AMPLITUDE_GAIN`]. `A2` is part of the integrated
+//! state and starts at `A2_ref`. With the drive off, `g = 0` and the oscillation decays as
+//! `exp(-zeta w0 t)`; with `zeta = 0` there is neither damping nor drive force. A force along
+//! the velocity keeps the ellipse's shape and orientation: with `F = gamma rho'`, the angular
+//! momentum `L = rho x rho'` obeys `dL/dt = gamma L`, and the Fradkin tensor
+//! `T = rho' rho'^T + w0^2 rho rho^T` (whose eigenvectors are the ellipse axes and eigenvalues
+//! `w0^2 P^2`, `w0^2 Q^2`) obeys `dT/dt = 2 gamma rho' rho'^T`, on average over a period
+//! `gamma T`: energy, angular momentum and `T` are scaled alike.
+//!
+//! **Initial state** (`t = 0`): the nominal ellipse, semi-major axis `P` along `e1`, semi-minor
+//! `Q` along `e2` (`e_k = ellipse_b unit_k`, body axes at `t = 0`), travelled from `e1` towards
+//! `e2` (angular momentum along `e3 = e1 x e2`), about the quasi-static centre: the forced
+//! response of `rho'' + w0^2 rho = -f_ib_i` to the slowly varying specific force,
+//! `rho_p = -f_ib_i/w0^2 + f_ib_i''/w0^4 - ...` ([`sim::quasi_static_centre`]):
+//!
+//! ```text
+//! r_b(0) = C_i_b rho_p(0) + P e1        (rho_p(0) ~ -f_ib_i/w0^2: c0 = -f_ib_b(0)/w0^2)
+//! v_b(0) = w0 Q e2 + C_i_b rho_p'(0)    (rho_p'(0) = -f_ib_i'/w0^2)
+//! ```
+//!
+//! so that the free oscillation, `rho_i - rho_p`, is exactly the nominal ellipse. The two
+//! correction terms (refinements of `c0 = -f_ib_b/w0^2`, `v_b(0) = w0 Q e2`) matter at the
+//! 1e-4 level: at the start of `ship-rocking` (`|f_ib_i'|` = 0.39 m/s^3, `|f_ib_i''|` = 0.58
+//! m/s^4 at the 30 m lever arm) they are `|f'|/w0^3` = 1.6e-9 m and `|f''|/w0^4` = 3.7e-12 m,
+//! which would tilt a 10 um semi-minor axis by up to 1.6e-4 and 3.7e-7 rad (at rest, the
+//! Earth's rotation gives `|f'|` = 5e-4 m/s^3: 2e-7 rad). The derivatives are finite
+//! differences over 3 ms at the start. [`OscillatorParams::start_scale`] scales `P` and `Q` of
+//! the start (not `A2_ref`) to test the loop.
+//!
+//! # Effects on the ellipse (what a gyro-free estimator sees)
+//!
+//! - **Case-relative damping drags the ellipse**: its `2 zeta w0 omega x rho` term (`omega` the
+//!   case's inertial rate) gives, averaged over a period, `dT/dt = -zeta w0^2 P Q (e3 omega^T +
+//!   omega e3^T - 2 (omega . e3) I)`: `P^2` and `Q^2` both change by `2 zeta P Q omega_3` per
+//!   second, the plane does not turn in itself, and it tilts at `zeta omega_1 Q/P` about `e2`
+//!   and `-zeta omega_2 P/Q` about `e1` (a resonant out-of-plane push, 90 deg behind the
+//!   motion). With the drive on and balanced, the drive (also along `rdot_rel`) cancels it: the
+//!   net force is `(g - 2 zeta w0) rdot_rel`, zero on average.
+//! - **The drive precesses the ellipse in its plane.** `|rdot_rel|^2` ripples at `2 w0`
+//!   (`-w0^2 (P^2 - Q^2)/2 cos 2 w0 t`); the low pass turns it into
+//!   `-w0 (P^2 - Q^2) sin(2 w0 t)/(4 tau)` (90 deg lag for `2 w0 tau >> 1`), so the drive's net
+//!   gain carries `gamma~ = zeta k_a eps sin(2 w0 t)/tau`, `eps = (P^2 - Q^2)/(P^2 + Q^2)`. Its
+//!   correlation with the off-diagonal `rho'_1 rho'_2 = -w0^2 P Q sin(2 w0 t)/2` turns `T` about
+//!   `e3` at ([`OscillatorParams::drive_precession_rate_radps`])
+//!
+//!   ```text
+//!   dtheta_3/dt = -zeta k_a P Q / (2 tau (P^2 + Q^2))     (against the sense of travel)
+//!   ```
+//!
+//!   -2e-4 rad/s (41 deg/h) for `zeta` 1e-3, `tau` 1 s, `P = 2 Q`. It is an artefact of this
+//!   ripple-carrying amplitude measure (a quadrature-demodulated or energy-based amplitude
+//!   would not ripple); it is zero with the default `zeta = 0`, and falls as `1/tau`.
+//! - **Numerics**: RK4 with `h = 1/(sample_rate substeps)` lags the phase by `(w0 h)^5/120` per
+//!   step (an isotropic phase error: orientation and shape unaffected) and damps the amplitude
+//!   by `(w0 h)^6/144`: at 5 kHz x 4, 5e-5 rad and 1.3e-6 after 10 s.
+
+pub mod file;
+pub mod sim;
+
+pub use sim::{
+    OscRider, OscSample, OscState, OscTruth, OscillatorModel, OscillatorRun, q_b_i,
+    quasi_static_centre, simulate_oscillator,
+};
+
+use anyhow::{Result, bail};
+use nav_core::{UnitQuaternion, attitude};
+use std::f64::consts::TAU;
+use std::fmt::Write as _;
+
+/// The oscillator sensor's parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OscillatorParams {
+    /// Natural frequency `f0` [Hz].
+    pub f0_hz: f64,
+    /// Damping ratio `zeta` [-] (relative to the case); 0: none (and no drive force).
+    pub damping_ratio: f64,
+    /// Semi-major axis `P` of the nominal ellipse [m].
+    pub major_m: f64,
+    /// Semi-minor axis `Q` of the nominal ellipse [m] (`0 <= Q <= P`).
+    pub minor_m: f64,
+    /// Orientation of the nominal ellipse in body axes at `t = 0`: its columns are `e1` (major
+    /// axis), `e2` (minor axis), `e3 = e1 x e2` (normal; the sense of travel is from `e1` to
+    /// `e2`).
+    pub ellipse_b: UnitQuaternion<f64>,
+    /// Amplitude-keeping drive on.
+    pub drive: bool,
+    /// Time constant `tau` of the drive's amplitude low pass [s].
+    pub drive_time_constant_s: f64,
+    /// Readout sample rate [Hz].
+    pub sample_rate_hz: f64,
+    /// Readout noise, 1 sigma per axis per sample [m].
+    pub readout_noise_m: f64,
+    /// Seed of the readout noise.
+    pub seed: u64,
+    /// RK4 steps per sample interval.
+    pub substeps: usize,
+    /// Scale of the start ellipse relative to `P`, `Q` [-] (the drive's reference stays at
+    /// `P`, `Q`): 1.1 starts 10 % large.
+    pub start_scale: f64,
+}
+
+impl Default for OscillatorParams {
+    fn default() -> Self {
+        Self {
+            f0_hz: 100.0,
+            damping_ratio: 0.0,
+            major_m: 20e-6,
+            minor_m: 10e-6,
+            ellipse_b: attitude::from_euler(0.3, -0.5, 0.9),
+            drive: true,
+            drive_time_constant_s: 1.0,
+            sample_rate_hz: 5000.0,
+            readout_noise_m: 1e-9,
+            seed: 1,
+            substeps: crate::trajectory::SUBSTEPS,
+            start_scale: 1.0,
+        }
+    }
+}
+
+/// Fewest RK4 steps per oscillator period that [`OscillatorParams::validate`] accepts (phase
+/// lag `(2 pi/32)^5/120` = 2.4e-6 rad per step).
+pub const MIN_STEPS_PER_PERIOD: f64 = 32.0;
+
+impl OscillatorParams {
+    /// `w0 = 2 pi f0` [rad/s].
+    pub fn w0(&self) -> f64 {
+        TAU * self.f0_hz
+    }
+
+    /// `A2_ref = w0^2 (P^2 + Q^2)/2` [m^2/s^2]: the nominal ellipse's mean squared speed.
+    pub fn a2_ref(&self) -> f64 {
+        let w0 = self.w0();
+        w0 * w0 * (self.major_m.powi(2) + self.minor_m.powi(2)) / 2.0
+    }
+
+    /// The drive's in-plane precession rate of the ellipse about `e3` [rad/s] (module doc):
+    /// `-zeta k_a P Q/(2 tau (P^2 + Q^2))` with the drive on, 0 with it off.
+    pub fn drive_precession_rate_radps(&self) -> f64 {
+        if !self.drive {
+            return 0.0;
+        }
+        let (p, q) = (self.major_m, self.minor_m);
+        -self.damping_ratio * sim::AMPLITUDE_GAIN * p * q
+            / (2.0 * self.drive_time_constant_s * (p * p + q * q))
+    }
+
+    /// Checks the parameters: finite, positive where they must be, `P >= Q >= 0`, a damping
+    /// ratio in `[0, 1)`, a drive time constant of at least a period, a sample rate of at least
+    /// `8 f0` and at least [`MIN_STEPS_PER_PERIOD`] RK4 steps per period.
+    pub fn validate(&self) -> Result<()> {
+        let positive = |key: &str, v: f64| -> Result<()> {
+            if !(v.is_finite() && v > 0.0) {
+                bail!("{key} must be a positive finite number, not {v}");
+            }
+            Ok(())
+        };
+        positive("f0_hz", self.f0_hz)?;
+        if !(self.damping_ratio.is_finite() && (0.0..1.0).contains(&self.damping_ratio)) {
+            bail!(
+                "damping_ratio must be within [0, 1), not {}",
+                self.damping_ratio
+            );
+        }
+        positive("major_m", self.major_m)?;
+        if !(self.minor_m.is_finite() && (0.0..=self.major_m).contains(&self.minor_m)) {
+            bail!(
+                "minor_m must be within [0, major_m = {}], not {}",
+                self.major_m,
+                self.minor_m
+            );
+        }
+        let q = self.ellipse_b.quaternion();
+        if !(q.coords.iter().all(|c| c.is_finite()) && (q.norm() - 1.0).abs() < 1e-9) {
+            bail!("ellipse_b must be a unit quaternion, not {q:?}");
+        }
+        positive("drive_time_constant_s", self.drive_time_constant_s)?;
+        if self.drive_time_constant_s * self.f0_hz < 1.0 {
+            bail!(
+                "drive_time_constant_s must be at least one period (1/f0 = {} s) to average the amplitude, not {}",
+                1.0 / self.f0_hz,
+                self.drive_time_constant_s
+            );
+        }
+        positive("sample_rate_hz", self.sample_rate_hz)?;
+        if self.sample_rate_hz < 8.0 * self.f0_hz {
+            bail!(
+                "sample_rate_hz must be at least 8 f0 = {} Hz, not {}",
+                8.0 * self.f0_hz,
+                self.sample_rate_hz
+            );
+        }
+        if !(self.readout_noise_m.is_finite() && self.readout_noise_m >= 0.0) {
+            bail!(
+                "readout_noise_m must be a finite number >= 0, not {}",
+                self.readout_noise_m
+            );
+        }
+        let steps = self.sample_rate_hz * self.substeps as f64 / self.f0_hz;
+        if self.substeps == 0 || steps < MIN_STEPS_PER_PERIOD {
+            bail!(
+                "substeps = {} gives {steps} RK4 steps per oscillator period; at least {MIN_STEPS_PER_PERIOD} are needed",
+                self.substeps
+            );
+        }
+        positive("start_scale", self.start_scale)?;
+        Ok(())
+    }
+
+    /// The parameters as `key = value` lines (SI units as the keys say; the ellipse
+    /// orientation as roll, pitch, yaw of `ellipse_b` [deg]).
+    pub fn describe(&self) -> String {
+        let (r, p, y) = attitude::euler(&self.ellipse_b);
+        let mut s = String::new();
+        let mut line = |k: &str, v: String| {
+            // Writing to a String cannot fail.
+            let _ = writeln!(s, "{k} = {v}");
+        };
+        line("f0_hz", self.f0_hz.to_string());
+        line("damping_ratio", self.damping_ratio.to_string());
+        line("major_m", self.major_m.to_string());
+        line("minor_m", self.minor_m.to_string());
+        line(
+            "ellipse_b_euler_deg",
+            format!("{}, {}, {}", r.to_degrees(), p.to_degrees(), y.to_degrees()),
+        );
+        line("drive", self.drive.to_string());
+        line(
+            "drive_time_constant_s",
+            self.drive_time_constant_s.to_string(),
+        );
+        line("sample_rate_hz", self.sample_rate_hz.to_string());
+        line("readout_noise_m", self.readout_noise_m.to_string());
+        line("seed", self.seed.to_string());
+        line("substeps", self.substeps.to_string());
+        line("start_scale", self.start_scale.to_string());
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_described() {
+        let p = OscillatorParams::default();
+        p.validate().unwrap();
+        let d = p.describe();
+        assert!(d.contains("f0_hz = 100\n"), "{d}");
+        assert!(d.contains("ellipse_b_euler_deg = "), "{d}");
+        assert_eq!(d.lines().count(), 12);
+        // w0^2 (P^2 + Q^2)/2 with w0 = 200 pi.
+        let w0 = 200.0 * std::f64::consts::PI;
+        assert!((p.a2_ref() - w0 * w0 * 5e-10 / 2.0).abs() < 1e-18);
+    }
+
+    #[test]
+    fn bad_parameters_are_refused() {
+        let ok = OscillatorParams::default();
+        let cases: [(&str, OscillatorParams); 9] = [
+            ("f0_hz", OscillatorParams { f0_hz: 0.0, ..ok }),
+            (
+                "damping_ratio",
+                OscillatorParams {
+                    damping_ratio: 1.0,
+                    ..ok
+                },
+            ),
+            (
+                "major_m",
+                OscillatorParams {
+                    major_m: f64::NAN,
+                    ..ok
+                },
+            ),
+            (
+                "minor_m",
+                OscillatorParams {
+                    minor_m: 30e-6,
+                    ..ok
+                },
+            ),
+            (
+                "sample_rate_hz",
+                OscillatorParams {
+                    sample_rate_hz: 700.0,
+                    ..ok
+                },
+            ),
+            (
+                "readout_noise_m",
+                OscillatorParams {
+                    readout_noise_m: -1.0,
+                    ..ok
+                },
+            ),
+            ("substeps", OscillatorParams { substeps: 0, ..ok }),
+            (
+                "drive_time_constant_s",
+                OscillatorParams {
+                    drive_time_constant_s: 0.001,
+                    ..ok
+                },
+            ),
+            (
+                "start_scale",
+                OscillatorParams {
+                    start_scale: 0.0,
+                    ..ok
+                },
+            ),
+        ];
+        for (key, p) in cases {
+            let msg = p.validate().unwrap_err().to_string();
+            assert!(msg.starts_with(key), "{key}: {msg}");
+        }
+    }
+}
