@@ -97,6 +97,40 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         data: Option<PathBuf>,
     },
+    /// Gyro-free attitude from an isotropic oscillator (seed 001): the estimator's accuracy
+    /// against the ratio of the oscillator frequency to the body rate and against readout noise,
+    /// for the seed's method as written and with the rotation compensation.
+    OscBench {
+        /// Seconds of coning per row (after 1 s of lock).
+        #[arg(long, default_value_t = 4.0)]
+        seconds: f64,
+        /// The ratio w0/|omega| of the noise table.
+        #[arg(long, default_value_t = 500.0)]
+        noise_ratio: f64,
+    },
+    /// Navigate a scenario on the gyro-free oscillator (seed 001) and on a gyro IMU of the same
+    /// motion: the oscillator's attitude and specific force feed the same mechanization; prints
+    /// both runs' errors against the truth.
+    #[command(allow_negative_numbers = true)]
+    Oscillator {
+        /// Scenario (static, ship-rocking, auv-bench, flight, land-vehicle).
+        scenario: String,
+        /// Length [s].
+        #[arg(long, default_value_t = 60.0)]
+        seconds: f64,
+        /// Grade of the gyro IMU it is compared with.
+        #[arg(long, default_value = "fog")]
+        grade: host_tests::sensor_model::Grade,
+        /// Oscillator readout noise, 1 sigma per axis per sample [m].
+        #[arg(long, default_value_t = 1e-9)]
+        noise_m: f64,
+        /// Natural frequency [Hz] (readout at 50 samples per period).
+        #[arg(long, default_value_t = 100.0)]
+        f0_hz: f64,
+        /// The seed's method as written (no rotation compensation).
+        #[arg(long)]
+        seed_method: bool,
+    },
     /// Benchmark the mechanization alone (no I/O): steps per second on one thread, f32 and f64,
     /// over 10 min of exact 400 Hz increments of a 900 km/h flight.
     Bench {
@@ -451,6 +485,37 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Sim(args) => sim(args),
+        Command::Oscillator {
+            scenario,
+            seconds,
+            grade,
+            noise_m,
+            f0_hz,
+            seed_method,
+        } => {
+            use host_tests::oscillator::navigate::{NavCompareOptions, compare};
+            let mut opts = NavCompareOptions::new(
+                host_tests::trajectory::scenarios::Scenario::by_name(&scenario)?,
+                seconds,
+            );
+            opts.grade = grade;
+            opts.compensate = !seed_method;
+            opts.params.readout_noise_m = noise_m;
+            opts.params.f0_hz = f0_hz;
+            opts.params.sample_rate_hz = 50.0 * f0_hz;
+            print!("{}", compare(&opts)?);
+            Ok(())
+        }
+        Command::OscBench {
+            seconds,
+            noise_ratio,
+        } => {
+            use host_tests::oscillator::{OscillatorParams, bench};
+            let (by_ratio, by_noise) =
+                bench::tables(&OscillatorParams::default(), seconds, noise_ratio)?;
+            print!("{}", bench::render(&by_ratio, &by_noise));
+            Ok(())
+        }
         Command::Emulate {
             truth,
             out,

@@ -96,7 +96,9 @@
 //!   step (an isotropic phase error: orientation and shape unaffected) and damps the amplitude
 //!   by `(w0 h)^6/144`: at 5 kHz x 4, 5e-5 rad and 1.3e-6 after 10 s.
 
+pub mod bench;
 pub mod file;
+pub mod navigate;
 pub mod sim;
 
 pub use sim::{

@@ -44,8 +44,11 @@ pub struct Window<T: Scalar> {
     moments: [[Vector3<T>; BASIS]; ORDERS],
     /// `sum B B^T`.
     normal: Matrix4<T>,
-    /// `sum |r|^2` [m^2].
-    sum_r2: T,
+    /// `second[m] = sum u^m r r^T` [m^2], `m = 0..6`: the squared norm of the rotated-back
+    /// readouts, `sum |D r|^2 = sum_jl tr(D_j^T D_l second[j + l])`, which the residual needs (the
+    /// truncated series is not exactly a rotation, and its `|D r|^2 - |r|^2` would swamp the
+    /// noise's share).
+    second: [Matrix3<T>; 2 * ORDERS - 1],
     /// Samples in the window.
     samples: u32,
     /// `false` once a sample was missing or not finite: the period is discarded.
@@ -76,7 +79,7 @@ impl<T: Scalar> Default for Window<T> {
         Self {
             moments: [[Vector3::zeros(); BASIS]; ORDERS],
             normal: Matrix4::zeros(),
-            sum_r2: T::zero(),
+            second: [Matrix3::zeros(); 2 * ORDERS - 1],
             samples: 0,
             intact: true,
         }
@@ -97,7 +100,12 @@ impl<T: Scalar> Window<T> {
             }
             w *= u;
         }
-        self.sum_r2 += r_b.norm_squared();
+        let rr = r_b * r_b.transpose();
+        let mut w = T::one();
+        for m in self.second.iter_mut() {
+            *m += rr * w;
+            w *= u;
+        }
         self.samples += 1;
     }
 
@@ -156,7 +164,14 @@ impl<T: Scalar> Window<T> {
             y[TREND] = Vector3::zeros();
         }
         let mut coef = [Vector3::<T>::zeros(); BASIS];
-        let mut ssr = self.sum_r2;
+        let mut ssr = T::zero();
+        for (j, dj) in d.iter().enumerate() {
+            for (l, dl) in d.iter().enumerate() {
+                ssr += (dj.transpose() * dl)
+                    .component_mul(&self.second[j + l])
+                    .sum();
+            }
+        }
         for axis in 0..3 {
             let rhs = Vector4::new(y[0][axis], y[1][axis], y[2][axis], y[3][axis]);
             let x = chol.solve(&rhs);
