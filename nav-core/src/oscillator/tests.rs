@@ -194,27 +194,26 @@ fn seed_method_error_is_first_order_as_predicted() {
     let w0 = 2.0 * PI * s.f0;
     let w = Vector3::new(0.3, -0.4, 0.5_f64); // constant axis: the same in body and inertial axes
     let exact = ellipse::Ellipse::from_components(&s.p, &s.q).c_e_b();
-    let predict = |mut th: f64| {
-        for _ in 0..50 {
-            let (a, b) = (
-                s.p * th.cos() + s.q * th.sin(),
-                s.q * th.cos() - s.p * th.sin(),
-            );
-            let a1 = a + w.cross(&b) / (2.0 * w0);
-            let b1 = b + w.cross(&a) / (2.0 * w0) - w.cross(&s.c) * (2.0 / w0);
-            let e = ellipse::Ellipse::from_components(&a1, &b1);
-            th -= e.delta;
-            if e.delta.abs() < 1e-14 {
-                break;
-            }
-        }
+    // The components at phase `th`, perturbed to first order.
+    let perturbed = |th: f64| {
         let (a, b) = (
             s.p * th.cos() + s.q * th.sin(),
             s.q * th.cos() - s.p * th.sin(),
         );
         let a1 = a + w.cross(&b) / (2.0 * w0);
         let b1 = b + w.cross(&a) / (2.0 * w0) - w.cross(&s.c) * (2.0 / w0);
-        let e = ellipse::Ellipse::from_components(&a1, &b1);
+        ellipse::Ellipse::from_components(&a1, &b1)
+    };
+    let predict = |mut th: f64| {
+        // Where the loop settles: the perturbed components' phase error is 0.
+        for _ in 0..50 {
+            let delta = perturbed(th).delta;
+            th -= delta;
+            if delta.abs() < 1e-14 {
+                break;
+            }
+        }
+        let e = perturbed(th);
         let e = if e.p.dot(&s.p) < 0.0 { e.flipped() } else { e };
         nalgebra::Rotation3::from_matrix_unchecked(e.c_e_b().transpose() * exact).angle()
     };
