@@ -331,6 +331,7 @@ fn bench(root: &Path) -> Result<()> {
     let mech = output(Command::new(&nav).arg("bench"))?;
     let mech_f32 = number_after(&mech, "mechanization f32:")?;
     let mech_f64 = number_after(&mech, "mechanization f64:")?;
+    let osc = osc_speed(&nav)?;
     let (text, data, bss) = size(root)?;
     println!("\n| figure | value |\n|---|---|");
     println!("| guest instructions per navigation step (f32, QEMU icount), max | {max:.0} |");
@@ -356,9 +357,34 @@ fn bench(root: &Path) -> Result<()> {
     println!("| host mechanization, f64, steps/s (one thread, no I/O) | {mech_f64:.0} |");
     println!("| host replay, f32, samples/s (one thread, I/O included) | {f32_speed:.0} |");
     println!("| host replay, f64, samples/s (one thread, I/O included) | {f64_speed:.0} |");
+    println!(
+        "| host oscillator estimator (seed 001), f32 / f64, readouts/s (one thread, no I/O) | {:.0} / {:.0} |",
+        osc.0, osc.1
+    );
     println!("| flash (text + data) [B] | {} |", text + data);
     println!("| static RAM (data + bss) [B] | {} |", data + bss);
     Ok(())
+}
+
+/// Host readouts per second of the oscillator estimator, `(f32, f64)`, over 20 s of a ship's
+/// rocking recorded by `nav oscillator --readouts`.
+fn osc_speed(nav: &Path) -> Result<(f64, f64)> {
+    let file = "out/bench-osc.csv";
+    run(Command::new(nav).args([
+        "oscillator",
+        "ship-rocking",
+        "--seconds",
+        "20",
+        "--readouts",
+        file,
+    ]))?;
+    let speed = |p: &str| -> Result<f64> {
+        number_after(
+            &output(Command::new(nav).args(["osc-replay", file, "--precision", p]))?,
+            "estimator speed:",
+        )
+    };
+    Ok((speed("f32")?, speed("f64")?))
 }
 
 /// `(method, (max, mean))` guest instructions per alignment sample of the firmware's alignment

@@ -130,6 +130,28 @@ enum Command {
         /// The seed's method as written (no rotation compensation).
         #[arg(long)]
         seed_method: bool,
+        /// Also write the oscillator's readouts (the `osc.csv` format) to this file.
+        #[arg(long, value_name = "FILE")]
+        readouts: Option<PathBuf>,
+    },
+    /// Run the oscillator estimator (seed 001) over a readout file (`t_s,x_m,y_m,z_m`, e.g. from
+    /// `nav oscillator --readouts`): counts, faults and, with --out, one CSV row per epoch
+    /// (attitude C_b_e as a quaternion, specific force, 1-sigma, frequency).
+    OscReplay {
+        /// The readout file.
+        file: PathBuf,
+        /// The oscillator's nominal natural frequency [Hz].
+        #[arg(long, default_value_t = 100.0)]
+        f0_hz: f64,
+        /// Epoch rows to write.
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
+        /// The seed's method as written (no rotation compensation).
+        #[arg(long)]
+        seed_method: bool,
+        /// Precision of the estimator.
+        #[arg(long, default_value = "f64")]
+        precision: Precision,
     },
     /// Benchmark the mechanization alone (no I/O): steps per second on one thread, f32 and f64,
     /// over 10 min of exact 400 Hz increments of a 900 km/h flight.
@@ -454,6 +476,29 @@ fn parse_align_method(s: &str) -> Result<AlignMethod, String> {
     })
 }
 
+/// Writes the oscillator's readouts of `opts` to `path` (the `osc.csv` format).
+fn write_readouts(
+    opts: &host_tests::oscillator::navigate::NavCompareOptions,
+    path: &std::path::Path,
+) -> Result<()> {
+    use host_tests::oscillator::{file::OscCsvWriter, simulate_oscillator};
+    let traj = opts.scenario.build()?;
+    let file =
+        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut w = OscCsvWriter::new(std::io::BufWriter::new(file))?;
+    let mut failed = None;
+    simulate_oscillator(traj.as_ref(), &opts.params, opts.seconds, |_, s, _| {
+        if failed.is_none() {
+            failed = w.write_sample(s).err();
+        }
+    })?;
+    if let Some(e) = failed {
+        return Err(e).with_context(|| format!("writing {}", path.display()));
+    }
+    w.finish()?;
+    Ok(())
+}
+
 fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
@@ -492,6 +537,7 @@ fn run(cli: Cli) -> Result<()> {
             noise_m,
             f0_hz,
             seed_method,
+            readouts,
         } => {
             use host_tests::oscillator::navigate::{NavCompareOptions, compare};
             let mut opts = NavCompareOptions::new(
@@ -503,7 +549,37 @@ fn run(cli: Cli) -> Result<()> {
             opts.params.readout_noise_m = noise_m;
             opts.params.f0_hz = f0_hz;
             opts.params.sample_rate_hz = 50.0 * f0_hz;
+            if let Some(path) = readouts {
+                write_readouts(&opts, &path)?;
+            }
             print!("{}", compare(&opts)?);
+            Ok(())
+        }
+        Command::OscReplay {
+            file,
+            f0_hz,
+            out,
+            seed_method,
+            precision,
+        } => {
+            use host_tests::oscillator::{file as osc_file, replay};
+            let rows = osc_file::read(&file)?;
+            let mut sink = match &out {
+                Some(p) => Some(std::io::BufWriter::new(
+                    std::fs::File::create(p)
+                        .with_context(|| format!("creating {}", p.display()))?,
+                )),
+                None => None,
+            };
+            let w = sink.as_mut().map(|w| w as &mut dyn std::io::Write);
+            let summary = match precision {
+                Precision::F32 => replay::replay::<f32>(&rows, f0_hz, !seed_method, w)?,
+                Precision::F64 => replay::replay::<f64>(&rows, f0_hz, !seed_method, w)?,
+            };
+            if let Some(mut w) = sink {
+                std::io::Write::flush(&mut w)?;
+            }
+            print!("{summary}");
             Ok(())
         }
         Command::OscBench {

@@ -27,8 +27,8 @@
 //! dr_b/dt = v_b - omega_ib_b x r_b                                   (= rdot_rel)
 //! dv_b/dt = -omega_ib_b x v_b - w0^2 r_b - f_ib_b + (F_damp + F_drive)/m
 //! F_damp/m  = -2 zeta w0 rdot_rel                                    (relative to the case)
-//! F_drive/m = g(t) rdot_rel,   g = max(0, 2 zeta w0 (1 + k_a (1 - A2/A2_ref)))   (drive on)
-//! dA2/dt    = (|rdot_rel|^2 - A2) / tau
+//! F_drive/m = g(t) rdot_rel,   g = max(0, 2 zeta w0 (1 + k_a (1 - E_lp/E_ref)))   (drive on)
+//! dE_lp/dt  = (E - E_lp) / tau,   E = |v_b|^2/2 + w0^2 |r_b - c_b|^2/2,   c_b = -f_ib_b/w0^2
 //! ```
 //!
 //! Expanding `v_b` gives the classic relative-motion form
@@ -37,17 +37,41 @@
 //! `omega_ib_b` and `f_ib_b` that the trajectory generator already evaluates at each RK4 stage
 //! ([`Rider`](crate::trajectory::Rider)).
 //!
-//! **Drive** (amplitude keeping, like the energy loop of a hemispherical resonator gyro): `A2`, a
-//! first-order low pass (time constant `tau` = [`OscillatorParams::drive_time_constant_s`]) of
-//! `|rdot_rel|^2`, is held at `A2_ref = w0^2 (P^2 + Q^2)/2`, the mean squared speed of the
-//! nominal ellipse; loop gain `k_a` = [`sim::AMPLITUDE_GAIN`]. `A2` is part of the integrated
-//! state and starts at `A2_ref`. With the drive off, `g = 0` and the oscillation decays as
+//! **Drive** (amplitude keeping, like the energy loop of a hemispherical resonator gyro): `E` is
+//! the oscillation energy per unit mass about the quasi-static centre `c_b = -f_ib_b/w0^2`
+//! ([`sim::OscillatorModel::energy`]); `E_lp`, its first-order low pass (time constant `tau` =
+//! [`OscillatorParams::drive_time_constant_s`]), is held at `E_ref = w0^2 (P^2 + Q^2)/2`
+//! ([`OscillatorParams::energy_ref`]), the nominal ellipse's energy; loop gain `k_a` =
+//! [`sim::AMPLITUDE_GAIN`]. `E_lp` is part of the integrated state and starts at `E_ref`. The
+//! drive electronics know the centre from the readout's non-periodic part (its mean over a
+//! period, or `-f_ib_b/w0^2` from the specific force); the simulator takes `c_b` from the
+//! specific force of each RK4 stage. With the drive off, `g = 0` and the oscillation decays as
 //! `exp(-zeta w0 t)`; with `zeta = 0` there is neither damping nor drive force. A force along
 //! the velocity keeps the ellipse's shape and orientation: with `F = gamma rho'`, the angular
 //! momentum `L = rho x rho'` obeys `dL/dt = gamma L`, and the Fradkin tensor
 //! `T = rho' rho'^T + w0^2 rho rho^T` (whose eigenvectors are the ellipse axes and eigenvalues
 //! `w0^2 P^2`, `w0^2 Q^2`) obeys `dT/dt = 2 gamma rho' rho'^T`, on average over a period
-//! `gamma T`: energy, angular momentum and `T` are scaled alike.
+//! `gamma T`: energy, angular momentum and `T` are scaled alike, as long as `gamma` does not
+//! ripple at `2 w0` (below).
+//!
+//! **The energy measure.** With `u = rho_i - c_i` (`c_i = -f_ib_i/w0^2`) the free oscillation
+//! obeys `u'' + w0^2 u = -c_i'' + F/m`, so `E* = |u'|^2/2 + w0^2 |u|^2/2` is constant up to the
+//! work of `F` and of the centre's acceleration, `dE*/dt = u'.(F/m - c_i'')`. Both terms are
+//! rotation invariant; in body axes `u_b = r_b - c_b` and `C_i_b u' = v_b - v_c`, with
+//! `v_c = C_i_b c_i' = -(f_ib_b' + omega_ib_b x f_ib_b)/w0^2` the centre's inertial rate. `v_c`
+//! needs the derivative of the specific force, which a [`Rider`](crate::trajectory::Rider) stage
+//! does not get, and is left out: `E = E* + u'.v_c + |v_c|^2/2`. With `|v_c| = |f_ib_i'|/w0^2`
+//! against the oscillation speed `w0 Q..w0 P` (on `ship-rocking` `|f_ib_i'|` reaches
+//! 0.88 m/s^3: `|v_c|` = 2.2e-6 m/s against `w0 Q` = 6.3e-3 m/s, 3.5e-4), the cross term is a
+//! ripple at `w0` (plus and minus the body's motion frequencies) of at most
+//! `2 P |f_ib_i'|/(w0^3 (P^2 + Q^2))` = 2.8e-4 of `E_ref`, 4.5e-7 after the low pass
+//! (`/(w0 tau)`), and the square a set-point bias of `(|f_ib_i'|/w0^3)^2/(P^2 + Q^2)` =
+//! 2.5e-8; the centre's acceleration (`|f_ib_i''|/w0^2` = 2.2e-6 m/s^2 at the ship's 0.86
+//! m/s^4) adds a `w0` ripple of `P |f_ib_i''|/(w0^2 E_ref)` = 4.4e-7 (7e-10 after the low
+//! pass). None of them has a `2 w0` component, which is what would turn the ellipse (below).
+//! Taking `v_c` from a finite difference of `f_ib_b` would need the previous stage's specific
+//! force in the state, which RK4's stages (evaluated out of order, combined linearly) cannot
+//! carry cleanly, for a gain that the residual below shows to be second order.
 //!
 //! **Initial state** (`t = 0`): the nominal ellipse, semi-major axis `P` along `e1`, semi-minor
 //! `Q` along `e2` (`e_k = ellipse_b unit_k`, body axes at `t = 0`), travelled from `e1` towards
@@ -67,7 +91,7 @@
 //! which would tilt a 10 um semi-minor axis by up to 1.6e-4 and 3.7e-7 rad (at rest, the
 //! Earth's rotation gives `|f'|` = 5e-4 m/s^3: 2e-7 rad). The derivatives are finite
 //! differences over 3 ms at the start. [`OscillatorParams::start_scale`] scales `P` and `Q` of
-//! the start (not `A2_ref`) to test the loop.
+//! the start (not `E_ref`) to test the loop.
 //!
 //! # Effects on the ellipse (what a gyro-free estimator sees)
 //!
@@ -78,20 +102,42 @@
 //!   and `-zeta omega_2 P/Q` about `e1` (a resonant out-of-plane push, 90 deg behind the
 //!   motion). With the drive on and balanced, the drive (also along `rdot_rel`) cancels it: the
 //!   net force is `(g - 2 zeta w0) rdot_rel`, zero on average.
-//! - **The drive precesses the ellipse in its plane.** `|rdot_rel|^2` ripples at `2 w0`
-//!   (`-w0^2 (P^2 - Q^2)/2 cos 2 w0 t`); the low pass turns it into
-//!   `-w0 (P^2 - Q^2) sin(2 w0 t)/(4 tau)` (90 deg lag for `2 w0 tau >> 1`), so the drive's net
-//!   gain carries `gamma~ = zeta k_a eps sin(2 w0 t)/tau`, `eps = (P^2 - Q^2)/(P^2 + Q^2)`. Its
-//!   correlation with the off-diagonal `rho'_1 rho'_2 = -w0^2 P Q sin(2 w0 t)/2` turns `T` about
-//!   `e3` at ([`OscillatorParams::drive_precession_rate_radps`])
+//! - **Why the drive measures the energy: a `2 w0` gain ripple turns the ellipse in its plane.**
+//!   With a net gain `gamma~ = G sin(2 w0 t)` (`t` from the passage through `e1`),
+//!   `dT/dt = 2 gamma~ rho' rho'^T` has the mean off-diagonal
+//!   `<2 G sin(2 w0 t) (-w0^2 P Q sin(2 w0 t)/2)> = -G w0^2 P Q/2`, and `T` turned by `theta_3`
+//!   about `e3` has `T_12 = theta_3 w0^2 (P^2 - Q^2)`: `dtheta_3/dt = -G P Q/(2 (P^2 - Q^2))`.
+//!   The obvious amplitude measure, a low pass of `|rdot_rel|^2`, has that ripple:
+//!   `|rdot_rel|^2` swings by `-w0^2 (P^2 - Q^2)/2 cos(2 w0 t)`, the low pass lags it by 90 deg
+//!   (`2 w0 tau >> 1`) into `-w0 (P^2 - Q^2) sin(2 w0 t)/(4 tau)`, so `G = zeta k_a eps/tau`,
+//!   `eps = (P^2 - Q^2)/(P^2 + Q^2)`, and
 //!
 //!   ```text
 //!   dtheta_3/dt = -zeta k_a P Q / (2 tau (P^2 + Q^2))     (against the sense of travel)
 //!   ```
 //!
-//!   -2e-4 rad/s (41 deg/h) for `zeta` 1e-3, `tau` 1 s, `P = 2 Q`. It is an artefact of this
-//!   ripple-carrying amplitude measure (a quadrature-demodulated or energy-based amplitude
-//!   would not ripple); it is zero with the default `zeta = 0`, and falls as `1/tau`.
+//!   -2e-4 rad/s (41 deg/h) for `zeta` 1e-3, `tau` 1 s, `P = 2 Q`: a turn a gyro-free estimator
+//!   would read as a rotation of the body. A real amplitude loop (HRG) demodulates at the
+//!   resonance and has no such ripple; the energy `E` has none either, being an invariant of
+//!   the free motion. What is left of the in-plane drift:
+//!   - `E`'s `w0` ripples (above): a `w0` gain ripple times `rho' rho'^T` (`0` and `2 w0`)
+//!     averages to zero, so the first-order turn is zero on average. Times the slow part of
+//!     `rdot_rel` (`~|f_ib_i'|/w0^2`) it is a resonant force, which turns `T` at most at
+//!     `4 zeta k_a |f_ib_i'|^2/(w0^6 tau (P^2 + Q^2))` = 1e-10 rad/s on the ship: second
+//!     order.
+//!   - `E`'s `2 w0` ripple: `dE/dt = gamma u'.rdot_rel` with `gamma = g - 2 zeta w0` the net
+//!     gain and `u'.rdot_rel = |u'|^2 - omega.L + (slow) . u'` (`omega.L` constant over a
+//!     period), so `E` swings by `-gamma w0 (P^2 - Q^2) sin(2 w0 t)/4`; the low pass lags that by
+//!     a further 90 deg into a `cos(2 w0 t)` gain, which trades `P` against `Q` but does not turn
+//!     the axes, except for its in-phase leak `1/(2 w0 tau)^2`:
+//!     `|dtheta_3/dt| = zeta k_a |gamma| P Q/(8 w0^2 tau^2 (P^2 + Q^2))`, second order again
+//!     (`gamma` vanishes once the drive balances the damping; in the 10 % recovery
+//!     `|gamma| < 2 zeta w0 k_a 0.21` = 0.26/s: 3e-11 rad/s).
+//!
+//!   So the in-plane drift is zero on average to first order in the drive's ripple, and what
+//!   is left is of order `zeta k_a/tau (|f_ib_i'|^2/(w0^6 (P^2 + Q^2)) + |gamma|/(8 w0^2 tau))`,
+//!   ~1e-10 rad/s (1e-9 rad in 10 s of ship rocking), at RK4's floor (the test measures
+//!   1.5e-10 rad against the undamped run).
 //! - **Numerics**: RK4 with `h = 1/(sample_rate substeps)` lags the phase by `(w0 h)^5/120` per
 //!   step (an isotropic phase error: orientation and shape unaffected) and damps the amplitude
 //!   by `(w0 h)^6/144`: at 5 kHz x 4, 5e-5 rad and 1.3e-6 after 10 s.
@@ -99,6 +145,7 @@
 pub mod bench;
 pub mod file;
 pub mod navigate;
+pub mod replay;
 pub mod sim;
 
 pub use sim::{
@@ -128,7 +175,7 @@ pub struct OscillatorParams {
     pub ellipse_b: UnitQuaternion<f64>,
     /// Amplitude-keeping drive on.
     pub drive: bool,
-    /// Time constant `tau` of the drive's amplitude low pass [s].
+    /// Time constant `tau` of the low pass of the drive's energy measure [s].
     pub drive_time_constant_s: f64,
     /// Readout sample rate [Hz].
     pub sample_rate_hz: f64,
@@ -172,21 +219,11 @@ impl OscillatorParams {
         TAU * self.f0_hz
     }
 
-    /// `A2_ref = w0^2 (P^2 + Q^2)/2` [m^2/s^2]: the nominal ellipse's mean squared speed.
-    pub fn a2_ref(&self) -> f64 {
+    /// `E_ref = w0^2 (P^2 + Q^2)/2` [m^2/s^2]: the nominal ellipse's oscillation energy per
+    /// unit mass (and its mean squared speed), the drive's set point.
+    pub fn energy_ref(&self) -> f64 {
         let w0 = self.w0();
         w0 * w0 * (self.major_m.powi(2) + self.minor_m.powi(2)) / 2.0
-    }
-
-    /// The drive's in-plane precession rate of the ellipse about `e3` [rad/s] (module doc):
-    /// `-zeta k_a P Q/(2 tau (P^2 + Q^2))` with the drive on, 0 with it off.
-    pub fn drive_precession_rate_radps(&self) -> f64 {
-        if !self.drive {
-            return 0.0;
-        }
-        let (p, q) = (self.major_m, self.minor_m);
-        -self.damping_ratio * sim::AMPLITUDE_GAIN * p * q
-            / (2.0 * self.drive_time_constant_s * (p * p + q * q))
     }
 
     /// Checks the parameters: finite, positive where they must be, `P >= Q >= 0`, a damping
@@ -296,7 +333,7 @@ mod tests {
         assert_eq!(d.lines().count(), 12);
         // w0^2 (P^2 + Q^2)/2 with w0 = 200 pi.
         let w0 = 200.0 * std::f64::consts::PI;
-        assert!((p.a2_ref() - w0 * w0 * 5e-10 / 2.0).abs() < 1e-18);
+        assert!((p.energy_ref() - w0 * w0 * 5e-10 / 2.0).abs() < 1e-18);
     }
 
     #[test]

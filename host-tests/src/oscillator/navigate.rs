@@ -22,9 +22,7 @@ use crate::trajectory::scenarios::Scenario;
 use crate::trajectory::{Generator, Sampling, generate};
 use crate::truth::{Truth, horizontal_distance_m};
 use anyhow::{Result, anyhow, bail};
-use nav_core::oscillator::{
-    OscillatorConfig, OscillatorEstimator, OscillatorFault, OscillatorIncrements,
-};
+use nav_core::oscillator::{OscillatorConfig, OscillatorEstimator, OscillatorIncrements};
 use nav_core::{ImuIncrement, MechanizationConfig, NavState, Position, Strapdown, Vector3};
 use std::collections::BTreeMap;
 use std::fmt;
@@ -200,18 +198,6 @@ fn finish(nav: &Strapdown<f64>, truth: &Truth, e: &mut NavErrors) {
     e.rejected = nav.rejected();
 }
 
-fn fault_kind(f: &OscillatorFault) -> &'static str {
-    match f {
-        OscillatorFault::Acquiring { .. } => "acquiring",
-        OscillatorFault::LostLock { .. } => "lost lock",
-        OscillatorFault::NearLine { .. } => "near-line",
-        OscillatorFault::NearCircle { .. } => "near-circle",
-        OscillatorFault::Noisy { .. } => "noisy",
-        OscillatorFault::Broken => "broken",
-        OscillatorFault::Singular => "singular",
-    }
-}
-
 /// The oscillator run: its errors, the estimator's counts and the motion's rates.
 fn oscillator_run(opts: &NavCompareOptions) -> Result<(NavErrors, OscillatorStats, RateStats)> {
     let p = &opts.params;
@@ -266,7 +252,7 @@ fn oscillator_run(opts: &NavCompareOptions) -> Result<(NavErrors, OscillatorStat
             None => return,
             Some(Err(f)) => {
                 stats.faults += 1;
-                *kinds.entry(fault_kind(&f)).or_default() += 1;
+                *kinds.entry(f.kind()).or_default() += 1;
                 if nav.is_some() {
                     stats.gaps += 1;
                     incs.reset();

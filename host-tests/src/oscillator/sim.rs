@@ -31,8 +31,8 @@ pub struct OscillatorModel {
     pub amplitude_gain: f64,
     /// Time constant `tau` of the amplitude low pass [s].
     pub drive_time_constant_s: f64,
-    /// `A2_ref`, the low pass's set point [m^2/s^2].
-    pub a2_ref: f64,
+    /// `E_ref`, the set point of the low-passed oscillation energy [m^2/s^2].
+    pub energy_ref: f64,
 }
 
 /// The integrated state.
@@ -42,8 +42,9 @@ pub struct OscState {
     pub r_b_m: Vector3<f64>,
     /// `v_b`: inertial rate of the displacement, body axes [m/s] (`dr_b/dt + omega_ib_b x r_b`).
     pub v_b_mps: Vector3<f64>,
-    /// `A2`: low-passed squared speed relative to the case [m^2/s^2].
-    pub a2_m2ps2: f64,
+    /// `E_lp`: the drive's low-passed oscillation energy per unit mass [m^2/s^2]
+    /// ([`OscillatorModel::energy`]).
+    pub energy_m2ps2: f64,
 }
 
 impl OscState {
@@ -57,7 +58,7 @@ impl OscState {
         Self {
             r_b_m: self.r_b_m + k.r_b_m * s,
             v_b_mps: self.v_b_mps + k.v_b_mps * s,
-            a2_m2ps2: self.a2_m2ps2 + k.a2_m2ps2 * s,
+            energy_m2ps2: self.energy_m2ps2 + k.energy_m2ps2 * s,
         }
     }
 }
@@ -71,18 +72,28 @@ impl OscillatorModel {
             drive: p.drive,
             amplitude_gain: AMPLITUDE_GAIN,
             drive_time_constant_s: p.drive_time_constant_s,
-            a2_ref: p.a2_ref(),
+            energy_ref: p.energy_ref(),
         }
     }
 
-    /// The drive's gain `g = max(0, 2 zeta w0 (1 + k_a (1 - A2/A2_ref)))` [1/s]; 0 with the
-    /// drive off.
-    pub fn drive_gain(&self, a2: f64) -> f64 {
+    /// The drive's gain `g = max(0, 2 zeta w0 (1 + k_a (1 - E_lp/E_ref)))` [1/s] for the
+    /// low-passed energy `energy_lp` [m^2/s^2]; 0 with the drive off.
+    pub fn drive_gain(&self, energy_lp: f64) -> f64 {
         if !self.drive {
             return 0.0;
         }
         let c = 2.0 * self.zeta * self.w0;
-        (c * (1.0 + self.amplitude_gain * (1.0 - a2 / self.a2_ref))).max(0.0)
+        (c * (1.0 + self.amplitude_gain * (1.0 - energy_lp / self.energy_ref))).max(0.0)
+    }
+
+    /// The drive's measure of the oscillation energy per unit mass [m^2/s^2] about the
+    /// quasi-static centre `c_b = -f_ib_b/w0^2` of the specific force `f_ib_b` [m/s^2]:
+    /// `E = |v_b|^2/2 + w0^2 |r_b - c_b|^2/2`, the free oscillation's invariant with the
+    /// centre's rate `v_c` (~`|f_ib'|/w0^2`) left out (module doc).
+    pub fn energy(&self, s: &OscState, f_ib_b: &Vector3<f64>) -> f64 {
+        let w2 = self.w0 * self.w0;
+        let u = s.r_b_m + f_ib_b / w2;
+        0.5 * (s.v_b_mps.norm_squared() + w2 * u.norm_squared())
     }
 
     /// `d(state)/dt` with the body's `omega_ib_b` [rad/s] and `f_ib_b` [m/s^2] (module doc).
@@ -94,18 +105,18 @@ impl OscillatorModel {
     ) -> OscState {
         let rdot = s.rdot_rel(omega_ib_b);
         // Net force along the relative velocity per unit mass and speed: drive - damping.
-        let gamma = self.drive_gain(s.a2_m2ps2) - 2.0 * self.zeta * self.w0;
+        let gamma = self.drive_gain(s.energy_m2ps2) - 2.0 * self.zeta * self.w0;
         OscState {
             r_b_m: rdot,
             v_b_mps: -omega_ib_b.cross(&s.v_b_mps) - s.r_b_m * (self.w0 * self.w0) - f_ib_b
                 + rdot * gamma,
-            a2_m2ps2: (rdot.norm_squared() - s.a2_m2ps2) / self.drive_time_constant_s,
+            energy_m2ps2: (self.energy(s, f_ib_b) - s.energy_m2ps2) / self.drive_time_constant_s,
         }
     }
 
     /// The state on the nominal ellipse of `p` (scaled by `p.start_scale`) about the centre
     /// `centre_b` [m] moving at `centre_rate_b` [m/s] (its inertial rate; both body axes):
-    /// `r_b = centre_b + P e1`, `v_b = w0 Q e2 + centre_rate_b`, `A2 = A2_ref`.
+    /// `r_b = centre_b + P e1`, `v_b = w0 Q e2 + centre_rate_b`, `E_lp = E_ref`.
     pub fn start(
         &self,
         p: &OscillatorParams,
@@ -118,7 +129,7 @@ impl OscillatorModel {
         OscState {
             r_b_m: centre_b + e1 * (s * p.major_m),
             v_b_mps: e2 * (s * self.w0 * p.minor_m) + centre_rate_b,
-            a2_m2ps2: self.a2_ref,
+            energy_m2ps2: self.energy_ref,
         }
     }
 }
@@ -203,8 +214,8 @@ pub struct OscTruth {
     pub r_b_m: Vector3<f64>,
     /// Inertial rate of the displacement, body axes [m/s].
     pub v_b_mps: Vector3<f64>,
-    /// The drive's low-passed squared relative speed `A2` [m^2/s^2].
-    pub a2_m2ps2: f64,
+    /// The drive's low-passed oscillation energy per unit mass `E_lp` [m^2/s^2].
+    pub energy_m2ps2: f64,
     /// The trajectory's truth (position, NED velocity, `q_b_ned`).
     pub nav: Truth,
     /// The exact IMU increment over the interval.
@@ -269,7 +280,7 @@ pub fn simulate_oscillator(
             f_ib_b: inc.delta_v_ib_b / inc.dt,
             r_b_m: s.r_b_m,
             v_b_mps: s.v_b_mps,
-            a2_m2ps2: s.a2_m2ps2,
+            energy_m2ps2: s.energy_m2ps2,
             nav,
             inc,
         };
@@ -295,8 +306,36 @@ mod tests {
         let e2 = p.ellipse_b * Vector3::y();
         assert!((s.r_b_m - c - e1 * p.major_m).norm() < 1e-18);
         assert!((s.v_b_mps - e2 * m.w0 * p.minor_m).norm() < 1e-15);
-        // Mean squared speed of the ellipse: w0^2 (P^2 + Q^2)/2.
-        assert_eq!(s.a2_m2ps2, p.a2_ref());
+        // The low pass starts at the set point; the ellipse's energy about the centre
+        // (c_b = -f_ib_b/w0^2) is w0^2 (P^2 + Q^2)/2 (rounding of the 1e-5 m terms: 1e-16).
+        assert_eq!(s.energy_m2ps2, p.energy_ref());
+        let e = m.energy(&s, &(c * -(m.w0 * m.w0)));
+        assert!((e / p.energy_ref() - 1.0).abs() < 1e-12, "{e}");
+    }
+
+    #[test]
+    fn energy_does_not_ripple_around_the_ellipse() {
+        // Around the nominal ellipse (about a centre at rest) the squared speed swings between
+        // w0^2 Q^2 and w0^2 P^2; the energy about the centre stays at w0^2 (P^2 + Q^2)/2.
+        let p = OscillatorParams::default();
+        let m = OscillatorModel::new(&p);
+        let f = Vector3::new(0.3, -0.1, -9.8);
+        let c = f / -(m.w0 * m.w0);
+        let (e1, e2) = (p.ellipse_b * Vector3::x(), p.ellipse_b * Vector3::y());
+        let (mut lo, mut hi) = (f64::MAX, f64::MIN);
+        for k in 0..16 {
+            let psi = f64::from(k) * std::f64::consts::TAU / 16.0;
+            let s = OscState {
+                r_b_m: c + e1 * (p.major_m * psi.cos()) + e2 * (p.minor_m * psi.sin()),
+                v_b_mps: (e2 * (p.minor_m * psi.cos()) - e1 * (p.major_m * psi.sin())) * m.w0,
+                energy_m2ps2: 0.0,
+            };
+            let speed2 = s.v_b_mps.norm_squared();
+            (lo, hi) = (lo.min(speed2), hi.max(speed2));
+            let e = m.energy(&s, &f);
+            assert!((e / m.energy_ref - 1.0).abs() < 1e-12, "{k}: {e}");
+        }
+        assert!((hi - lo) / m.energy_ref > 1.19, "{lo} {hi}");
     }
 
     #[test]
@@ -307,9 +346,9 @@ mod tests {
         };
         let m = OscillatorModel::new(&p);
         let c = 2.0 * p.damping_ratio * m.w0;
-        assert!((m.drive_gain(m.a2_ref) - c).abs() < 1e-15);
-        assert!(m.drive_gain(m.a2_ref * 1.5) < c);
-        assert_eq!(m.drive_gain(m.a2_ref * 3.0), 0.0);
+        assert!((m.drive_gain(m.energy_ref) - c).abs() < 1e-15);
+        assert!(m.drive_gain(m.energy_ref * 1.5) < c);
+        assert_eq!(m.drive_gain(m.energy_ref * 3.0), 0.0);
         let off = OscillatorModel { drive: false, ..m };
         assert_eq!(off.drive_gain(0.0), 0.0);
     }

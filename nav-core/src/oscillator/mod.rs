@@ -206,6 +206,21 @@ pub enum OscillatorFault {
     Singular,
 }
 
+impl OscillatorFault {
+    /// A short name of the kind (for counts and logs).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Acquiring { .. } => "acquiring",
+            Self::LostLock { .. } => "lost lock",
+            Self::NearLine { .. } => "near-line",
+            Self::NearCircle { .. } => "near-circle",
+            Self::Noisy { .. } => "noisy",
+            Self::Broken => "broken",
+            Self::Singular => "singular",
+        }
+    }
+}
+
 impl core::fmt::Display for OscillatorFault {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {

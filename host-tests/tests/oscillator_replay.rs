@@ -1,0 +1,55 @@
+//! `nav osc-replay`'s library: the estimator over a readout file with holes and NaN rows, and a
+//! corrupt file refused with its line.
+
+use host_tests::oscillator::file::{self, OscRow};
+use host_tests::oscillator::{OscillatorParams, replay, simulate_oscillator};
+use host_tests::trajectory::scenarios::Scenario;
+use std::path::Path;
+
+fn readouts(seconds: f64) -> Vec<OscRow> {
+    let traj = Scenario::by_name("static").unwrap().build().unwrap();
+    let mut rows = Vec::new();
+    simulate_oscillator(
+        traj.as_ref(),
+        &OscillatorParams::default(),
+        seconds,
+        |_, s, _| {
+            rows.push(OscRow {
+                t_s: s.t_s,
+                r_b_m: Some(s.r_b_m),
+            })
+        },
+    )
+    .unwrap();
+    rows
+}
+
+#[test]
+fn holes_and_nan_rows_cost_only_their_periods() {
+    let mut rows = readouts(3.0);
+    let clean = replay::replay::<f64>(&rows, 100.0, true, None).unwrap();
+    rows[5000].r_b_m = None; // a NaN row at 1 s
+    rows.drain(10_000..10_003); // three readouts lost at 2 s
+    let holed = replay::replay::<f64>(&rows, 100.0, true, None).unwrap();
+    println!("clean: {clean}holed: {holed}");
+    assert_eq!(holed.missing, 4);
+    assert_eq!(holed.faults.get("broken"), Some(&2));
+    // Each broken period also restarts nothing else: the rest give epochs as before.
+    assert_eq!(holed.epochs + 2, clean.epochs);
+    let f32s = replay::replay::<f32>(&rows, 100.0, true, None).unwrap();
+    assert_eq!(f32s.epochs, holed.epochs);
+}
+
+#[test]
+fn a_corrupt_file_is_refused_with_its_line() {
+    let text = "t_s,x_m,y_m,z_m\n0.0002,1e-5,2e-5,3e-5\n0.0004,1e-5,zz,3e-5\n";
+    let err = file::read_from(text.as_bytes(), Path::new("osc.csv")).unwrap_err();
+    let msg = err.to_string();
+    println!("{msg}");
+    assert!(msg.contains("osc.csv") && msg.contains('3'), "{msg}");
+    let short = [OscRow {
+        t_s: 0.0,
+        r_b_m: None,
+    }];
+    assert!(replay::replay::<f64>(&short, 100.0, true, None).is_err());
+}
