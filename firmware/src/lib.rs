@@ -11,6 +11,7 @@ use defmt_semihosting as _; // global defmt logger over semihosting stdout
 
 pub mod config;
 pub mod imu;
+pub mod osc_bench;
 
 /// Process exit codes: every failure has its own, so CI and scripts can tell them apart.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]

@@ -242,6 +242,11 @@ mod app {
                 _ => {}
             }
         }
+        // Benchmark: the gyro-free oscillator estimator (seed 001) on synthetic readouts.
+        if words.peek() == Some(&"--osc-bench") {
+            firmware::osc_bench::run();
+            exit(ExitCode::Success)
+        }
         let mut device = Device::Adis16505;
         let mut method = AlignMethod::Static;
         loop {

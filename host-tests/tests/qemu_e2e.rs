@@ -321,6 +321,43 @@ fn firmware_runs_the_mems_drivers_and_refuses_a_blind_gyrocompass() {
     assert!(log.contains("unknown alignment method magic"), "{log}");
 }
 
+/// Issue 7: the gyro-free oscillator estimator runs on the MCU in f32 (`--osc-bench`, synthetic
+/// readouts of a body spinning at 0.5 rad/s): it locks, gives an epoch every period after that,
+/// and its worst attitude error is within f32 rounding of the exact answer. The rotation
+/// compensation makes a constant spin exact, so what is left is rounding: readouts of
+/// `|c| + P` = 45 um rounded to 6e-8 relative, amplified by `(|c| + P)/Q` = 4.5 and by the
+/// chain of about 50-readout sums, the fit and the rate from attitude differences (a factor of
+/// some 50): ~1.4e-5 rad; the bound is twice that.
+#[test]
+fn firmware_runs_the_oscillator_estimator_in_f32() {
+    let dir = tempfile::tempdir().unwrap();
+    let (code, log) = run_firmware(dir.path(), &["--osc-bench"]);
+    assert_eq!(code, 0, "{log}");
+    println!("{log}");
+    let after = |key: &str| -> f64 {
+        let at = log
+            .find(key)
+            .unwrap_or_else(|| panic!("'{key}' not in:\n{log}"))
+            + key.len();
+        log[at..]
+            .trim_start()
+            .split(|c: char| !(c.is_ascii_digit() || ".e-+".contains(c)))
+            .next()
+            .and_then(|w| w.parse().ok())
+            .unwrap_or_else(|| panic!("no number after '{key}'"))
+    };
+    let epochs = after("readouts at 5 kHz, 100 Hz oscillator, 0.5 rad/s spin):");
+    let faults = after("epochs,");
+    let worst = after("worst attitude error after lock");
+    // 2 s at 100 Hz: 200 periods, of which acquisition takes fewer than 20.
+    assert!(
+        epochs + faults >= 198.0 && faults < 20.0,
+        "{epochs} {faults}"
+    );
+    assert!(worst < 3e-5, "{worst}");
+    assert!(after("instructions per oscillator readout: max") > 0.0);
+}
+
 /// A panic and a HardFault end the run with their own exit codes (1, 2) and a logged message.
 #[test]
 fn firmware_panic_and_hardfault_exit_nonzero() {

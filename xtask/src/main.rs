@@ -332,6 +332,18 @@ fn bench(root: &Path) -> Result<()> {
     let mech_f32 = number_after(&mech, "mechanization f32:")?;
     let mech_f64 = number_after(&mech, "mechanization f64:")?;
     let osc = osc_speed(&nav)?;
+    let osc_log = output(
+        Command::new("bash")
+            .arg("firmware/qemu-run.sh")
+            .arg(&elf)
+            .arg("--osc-bench"),
+    )?;
+    let line = &osc_log[osc_log
+        .find("instructions per oscillator readout")
+        .unwrap_or(0)..];
+    let osc_readout = (number_after(line, "max")?, number_after(line, "mean")?);
+    let end = &line[line.find("at a period's end").unwrap_or(0)..];
+    let osc_period = (number_after(end, "max")?, number_after(end, "mean")?);
     let (text, data, bss) = size(root)?;
     println!("\n| figure | value |\n|---|---|");
     println!("| guest instructions per navigation step (f32, QEMU icount), max | {max:.0} |");
@@ -357,6 +369,14 @@ fn bench(root: &Path) -> Result<()> {
     println!("| host mechanization, f64, steps/s (one thread, no I/O) | {mech_f64:.0} |");
     println!("| host replay, f32, samples/s (one thread, I/O included) | {f32_speed:.0} |");
     println!("| host replay, f64, samples/s (one thread, I/O included) | {f64_speed:.0} |");
+    println!(
+        "| guest instructions per oscillator readout (seed 001, f32, 5 kHz; max / mean) | {:.0} / {:.0} |",
+        osc_readout.0, osc_readout.1
+    );
+    println!(
+        "| the same, a readout that ends a period (fit, frame, loop; 100 Hz; max / mean) | {:.0} / {:.0} |",
+        osc_period.0, osc_period.1
+    );
     println!(
         "| host oscillator estimator (seed 001), f32 / f64, readouts/s (one thread, no I/O) | {:.0} / {:.0} |",
         osc.0, osc.1

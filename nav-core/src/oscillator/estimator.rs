@@ -28,6 +28,43 @@ struct Past<T: Scalar> {
     omega_dot: Vector3<T>,
 }
 
+/// The reference generator within a period: `cos`, `sin` of its phase and the time `u` in
+/// periods from the reference instant, advanced by recurrence (a rotation by the phase step per
+/// readout: no trigonometry and no `f64` on the readout path; the error grows by about one
+/// rounding per readout, 50 per period, and each period restarts exactly).
+#[derive(Clone, Copy, Debug)]
+struct Generator<T: Scalar> {
+    cos: T,
+    sin: T,
+    u: T,
+    step_cos: T,
+    step_sin: T,
+    du: T,
+}
+
+impl<T: Scalar> Generator<T> {
+    /// Starting at phase `phi` [rad] with `step` [rad] per readout.
+    fn new(phi: f64, step: f64) -> Self {
+        Self {
+            cos: T::c(phi).pcos(),
+            sin: T::c(phi).psin(),
+            u: T::c(phi / (2.0 * PI)),
+            step_cos: T::c(step).pcos(),
+            step_sin: T::c(step).psin(),
+            du: T::c(step / (2.0 * PI)),
+        }
+    }
+
+    /// The next readout's values.
+    #[inline]
+    fn step(&mut self) {
+        let (c, s) = (self.cos, self.sin);
+        self.cos = c * self.step_cos - s * self.step_sin;
+        self.sin = s * self.step_cos + c * self.step_sin;
+        self.u += self.du;
+    }
+}
+
 /// Counts of what the estimator met.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct OscillatorCounters {
@@ -55,8 +92,12 @@ pub struct OscillatorEstimator<T: Scalar> {
     omega_int: f64,
     /// The generator's frequency this period (integrator plus the phase correction) [rad/s].
     omega_run: f64,
-    /// Generator phase [rad], in `[-pi, pi)` within a period.
+    /// Generator phase of the period's first readout [rad], in `[-pi, pi)`.
     phi: f64,
+    /// Readouts left in the running period.
+    left: u32,
+    /// The generator's cosine, sine and time within the period, by recurrence.
+    reference: Generator<T>,
     /// Reference instant of the running period (generator phase 0) [s].
     t_ref: f64,
     window: Window<T>,
@@ -83,6 +124,8 @@ impl<T: Scalar> OscillatorEstimator<T> {
             omega_int: omega,
             omega_run: omega,
             phi: -PI,
+            left: 0,
+            reference: Generator::new(-PI, 0.0),
             t_ref: 0.0,
             window: Window::default(),
             started: false,
@@ -133,36 +176,40 @@ impl<T: Scalar> OscillatorEstimator<T> {
         &mut self,
         r_b: Option<&Vector3<T>>,
     ) -> Option<Result<OscillatorEpoch<T>, OscillatorFault>> {
-        let t = self.cfg.start_s + self.counters.readouts as f64 * self.dt_s;
+        let index = self.counters.readouts;
         self.counters.readouts += 1;
         let mut out = None;
         if !self.started {
             self.started = true;
-            self.start_period(t);
-        } else {
-            self.phi += self.omega_run * self.dt_s;
-            if self.phi >= PI {
-                out = Some(self.finish());
-                self.phi -= 2.0 * PI;
-                self.start_period(t);
-            }
+            self.start_period(index);
+        } else if self.left == 0 {
+            // This readout's phase, carried on from the period's first one.
+            let n = self.window.samples_seen();
+            self.phi += f64::from(n) * self.omega_run * self.dt_s - 2.0 * PI;
+            out = Some(self.finish());
+            self.start_period(index);
         }
         match r_b {
-            Some(r) => {
-                let period = 2.0 * PI / self.omega_run;
-                let u = T::c((t - self.t_ref) / period);
-                let phi = T::c(self.phi);
-                self.window.add(u, phi.pcos(), phi.psin(), r);
-            }
+            Some(r) => self
+                .window
+                .add(self.reference.u, self.reference.cos, self.reference.sin, r),
             None => self.window.break_off(),
         }
+        self.reference.step();
+        self.left -= 1;
         out
     }
 
-    /// A new period starts with the readout at `t` [s] and the current phase.
-    fn start_period(&mut self, t: f64) {
+    /// A new period starts with readout `index` at the current phase: the reference instant,
+    /// the readouts it holds (those with phase below `pi`), and the generator's recurrence.
+    fn start_period(&mut self, index: u64) {
+        let t = self.cfg.start_s + index as f64 * self.dt_s;
         self.window = Window::default();
         self.t_ref = t - self.phi / self.omega_run;
+        let step = self.omega_run * self.dt_s;
+        // phi + k step < pi for k = 0 .. left - 1.
+        self.left = libm::ceil((PI - self.phi) / step).max(1.0) as u32;
+        self.reference = Generator::new(self.phi, step);
     }
 
     /// Rate and its derivative at `t` from the kept epochs, `q_now` being the attitude just

@@ -106,14 +106,6 @@ fn run<T: Scalar>(scene: &Scene, cfg: OscillatorConfig<T>, seconds: f64, noise: 
                 out.sigma_vec.push(e.sigma_rad.map(|x| x.to_f64()));
                 out.err_vec.push((q * truth.inverse()).scaled_axis());
                 out.q_b_e.push(q);
-                if out.t.len() == 101 {
-                    println!(
-                        "epoch 100: freq {:.9} delta {:e} t {}",
-                        e.frequency_hz,
-                        e.delta_rad.to_f64(),
-                        e.t_s
-                    );
-                }
             }
             Some(Err(f)) => out.faults.push(f),
             None => {}

@@ -51,6 +51,8 @@ pub struct Window<T: Scalar> {
     second: [Matrix3<T>; 2 * ORDERS - 1],
     /// Samples in the window.
     samples: u32,
+    /// Readouts of the period, missing ones included.
+    seen: u32,
     /// `false` once a sample was missing or not finite: the period is discarded.
     intact: bool,
 }
@@ -81,6 +83,7 @@ impl<T: Scalar> Default for Window<T> {
             normal: Matrix4::zeros(),
             second: [Matrix3::zeros(); 2 * ORDERS - 1],
             samples: 0,
+            seen: 0,
             intact: true,
         }
     }
@@ -107,11 +110,13 @@ impl<T: Scalar> Window<T> {
             w *= u;
         }
         self.samples += 1;
+        self.seen += 1;
     }
 
     /// Marks the period as broken (a missing or non-finite readout).
     pub fn break_off(&mut self) {
         self.intact = false;
+        self.seen += 1;
     }
 
     /// `true` while no readout was missing.
@@ -119,9 +124,14 @@ impl<T: Scalar> Window<T> {
         self.intact
     }
 
-    /// Readouts in the period.
+    /// Readouts fitted in the period.
     pub fn samples(&self) -> u32 {
         self.samples
+    }
+
+    /// Readouts of the period, missing ones included.
+    pub fn samples_seen(&self) -> u32 {
+        self.seen
     }
 
     /// The least-squares fit after rotating every readout back by the body's rotation with rate
