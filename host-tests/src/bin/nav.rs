@@ -587,9 +587,21 @@ fn run(cli: Cli) -> Result<()> {
             noise_ratio,
         } => {
             use host_tests::oscillator::{OscillatorParams, bench};
-            let (by_ratio, by_noise) =
-                bench::tables(&OscillatorParams::default(), seconds, noise_ratio)?;
+            let params = OscillatorParams::default();
+            let (by_ratio, by_noise) = bench::tables(&params, seconds, noise_ratio)?;
             print!("{}", bench::render(&by_ratio, &by_noise));
+            // The same with damping and the amplitude-keeping drive (1e-9 m noise).
+            let damped = OscillatorParams {
+                damping_ratio: 1e-3,
+                readout_noise_m: 1e-9,
+                ..params
+            };
+            let traj = bench::coning_for(noise_ratio, params.f0_hz, seconds + 1.0);
+            let d = bench::measure(&traj, &damped, seconds)?.compensated;
+            println!(
+                "\nWith damping ratio 1e-3 and the drive (noise 1e-9 m, w0/|omega| = {noise_ratio:.0}): compensated rms / max {:.2e} / {:.2e} deg, 1-sigma {:.2e} deg, f rms {:.1e} m/s^2",
+                d.attitude_rms_deg, d.attitude_max_deg, d.sigma_deg, d.f_rms_mps2
+            );
             Ok(())
         }
         Command::Emulate {
