@@ -58,6 +58,31 @@ unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
     exit(ExitCode::HardFault)
 }
 
+/// Instruction statistics of a repeated piece of work.
+#[derive(Default)]
+pub struct StepCost {
+    /// Largest [instructions].
+    pub max: u64,
+    /// Sum [instructions].
+    pub sum: u64,
+    /// Count.
+    pub n: u64,
+}
+
+impl StepCost {
+    /// Adds one piece of work's `instructions`.
+    pub fn add(&mut self, instructions: u64) {
+        self.max = self.max.max(instructions);
+        self.sum += instructions;
+        self.n += 1;
+    }
+
+    /// Mean [instructions] (0 before any).
+    pub fn mean(&self) -> u64 {
+        self.sum.checked_div(self.n).unwrap_or(0)
+    }
+}
+
 /// A line of text formatted into a fixed buffer (no allocation).
 pub type Line = heapless::String<320>;
 

@@ -29,7 +29,7 @@ mod app {
     use embedded_io::Write as _;
     use firmware::imu::{BoardImu, Device};
     use firmware::{
-        ExitCode,
+        ExitCode, StepCost,
         config::{Config, USAGE},
         exit, line,
     };
@@ -413,26 +413,6 @@ mod app {
             Err(_) => {
                 OVERRUNS.fetch_add(1, Ordering::Relaxed);
             }
-        }
-    }
-
-    /// Instruction statistics of a repeated piece of work.
-    #[derive(Default)]
-    struct StepCost {
-        max: u64,
-        sum: u64,
-        n: u64,
-    }
-
-    impl StepCost {
-        fn add(&mut self, instructions: u64) {
-            self.max = self.max.max(instructions);
-            self.sum += instructions;
-            self.n += 1;
-        }
-
-        fn mean(&self) -> u64 {
-            self.sum.checked_div(self.n).unwrap_or(0)
         }
     }
 

@@ -10,6 +10,7 @@
 //! (where the fit, the frame and the loop run). The worst attitude error after lock is printed
 //! against the closed form, a check that the f32 build is the estimator the host tests cover.
 
+use crate::StepCost;
 use cortex_m::peripheral::SYST;
 use nav_core::Scalar;
 use nav_core::nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
@@ -23,25 +24,6 @@ const F0_HZ: f64 = 100.0;
 const READOUTS: u32 = 10_000;
 /// Core clock [Hz] (SysTick counts at this rate).
 const SYSCLK_HZ: u64 = 168_000_000;
-
-/// Max and sum of a cost series.
-#[derive(Default)]
-struct Cost {
-    max: u64,
-    sum: u64,
-    n: u64,
-}
-
-impl Cost {
-    fn add(&mut self, x: u64) {
-        self.max = self.max.max(x);
-        self.sum += x;
-        self.n += 1;
-    }
-    fn mean(&self) -> u64 {
-        self.sum / self.n.max(1)
-    }
-}
 
 /// Guest instructions in `counts` SysTick counts.
 fn instructions(counts: u64) -> u64 {
@@ -71,7 +53,7 @@ pub fn run() {
             Matrix3::from_columns(&[e1, e3.cross(&e1), e3]),
         ))
     };
-    let (mut plain, mut period_end) = (Cost::default(), Cost::default());
+    let (mut plain, mut period_end) = (StepCost::default(), StepCost::default());
     let (mut epochs, mut faults, mut worst) = (0_u32, 0_u32, 0.0_f64);
     let mut flip: Option<bool> = None;
     for k in 0..READOUTS {
