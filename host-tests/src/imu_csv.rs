@@ -13,11 +13,11 @@
 //! that does not increase (the replay flags the interval); a time that is negative or not a
 //! number cannot be placed on the recording's clock and is an error.
 
+use crate::text_error::{TextError, TextErrorKind, csv_header};
 use serde::Serialize;
-use std::fmt;
 use std::fs::File;
 use std::io::{self, BufReader, BufWriter, Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Column names without the optional temperature.
 pub const COLUMNS: [&str; 7] = [
@@ -55,110 +55,10 @@ pub struct ImuCsv {
 }
 
 /// A CSV reading or writing error, naming the file and (for content errors) the line.
-#[derive(Debug)]
-pub struct CsvError {
-    /// The file.
-    pub path: PathBuf,
-    /// 1-based line number, when the error is about a line.
-    pub line: Option<u64>,
-    /// What went wrong.
-    pub kind: CsvErrorKind,
-}
+pub type CsvError = TextError;
 
 /// What went wrong in a CSV file.
-#[derive(Debug)]
-pub enum CsvErrorKind {
-    /// The file is empty: no header row.
-    MissingHeader,
-    /// The first row is not the expected header.
-    WrongHeader {
-        /// The header row found.
-        found: String,
-    },
-    /// A row has fewer columns than the header: the first missing one.
-    MissingColumn {
-        /// Name of the first missing column.
-        column: &'static str,
-        /// Number of fields found on the line.
-        found: usize,
-    },
-    /// A row has more columns than the header.
-    ExtraColumns {
-        /// Number of columns expected.
-        expected: usize,
-        /// Number of fields found.
-        found: usize,
-    },
-    /// A field is not a number.
-    NotANumber {
-        /// Column name.
-        column: &'static str,
-        /// The field's text.
-        found: String,
-    },
-    /// The time is negative, NaN or infinite.
-    BadTime {
-        /// The field's text.
-        found: String,
-    },
-    /// Malformed CSV (quoting, invalid UTF-8).
-    Syntax(String),
-    /// The file could not be opened, read or written.
-    Io(io::Error),
-}
-
-impl fmt::Display for CsvError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: ", self.path.display())?;
-        if let Some(line) = self.line {
-            write!(f, "line {line}: ")?;
-        }
-        match &self.kind {
-            CsvErrorKind::MissingHeader => {
-                write!(
-                    f,
-                    "empty file: expected the header row '{}'",
-                    header_line(false)
-                )
-            }
-            CsvErrorKind::WrongHeader { found } => write!(
-                f,
-                "expected the header row '{}' (optionally followed by ',{TEMPERATURE_COLUMN}'), found '{found}'",
-                header_line(false)
-            ),
-            CsvErrorKind::MissingColumn { column, found } => {
-                write!(
-                    f,
-                    "column {column}: missing (the line has only {found} columns)"
-                )
-            }
-            CsvErrorKind::ExtraColumns { expected, found } => {
-                write!(
-                    f,
-                    "expected {expected} columns as in the header, found {found}"
-                )
-            }
-            CsvErrorKind::NotANumber { column, found } => {
-                write!(f, "column {column}: expected a number, found '{found}'")
-            }
-            CsvErrorKind::BadTime { found } => write!(
-                f,
-                "column t_s: expected a finite, non-negative time in seconds, found '{found}'"
-            ),
-            CsvErrorKind::Syntax(msg) => write!(f, "malformed CSV: {msg}"),
-            CsvErrorKind::Io(e) => write!(f, "{e}"),
-        }
-    }
-}
-
-impl std::error::Error for CsvError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match &self.kind {
-            CsvErrorKind::Io(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+pub type CsvErrorKind = TextErrorKind;
 
 /// The header row, with or without the temperature column.
 pub fn header_line(with_temperature: bool) -> String {
@@ -172,23 +72,13 @@ pub fn header_line(with_temperature: bool) -> String {
 
 /// Reads a CSV recording from `path`.
 pub fn read(path: &Path) -> Result<ImuCsv, CsvError> {
-    let file = File::open(path).map_err(|e| error(path, None, CsvErrorKind::Io(e)))?;
+    let file = File::open(path).map_err(|e| TextError::io(path, e))?;
     read_from(BufReader::new(file), path)
 }
 
 /// Reads a CSV recording from `reader`; `path` names it in errors.
 pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<ImuCsv, CsvError> {
-    let mut csv = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .from_reader(reader);
-    let mut records = csv.records();
-
-    let header = match records.next() {
-        None => return Err(error(path, None, CsvErrorKind::MissingHeader)),
-        Some(r) => r.map_err(|e| csv_error(path, e))?,
-    };
+    let (header, records) = csv_header(reader, path, &header_line(false))?;
     let header_line_no = header.position().map(|p| p.line());
     let names: Vec<&str> = header.iter().collect();
     let has_temperature = if names == COLUMNS {
@@ -200,19 +90,23 @@ pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<ImuCsv, CsvError> {
         true
     } else {
         let found = names.join(",");
-        return Err(error(
+        return Err(TextError::new(
             path,
             header_line_no,
-            CsvErrorKind::WrongHeader { found },
+            CsvErrorKind::WrongHeader {
+                expected: header_line(false),
+                optional: Some(TEMPERATURE_COLUMN),
+                found,
+            },
         ));
     };
     let width = COLUMNS.len() + usize::from(has_temperature);
 
     let mut rows = Vec::new();
     for record in records {
-        let record = record.map_err(|e| csv_error(path, e))?;
+        let record = record.map_err(|e| TextError::from_csv(path, e))?;
         let line = record.position().map(|p| p.line());
-        let at = |kind| error(path, line, kind);
+        let at = |kind| TextError::new(path, line, kind);
         if record.len() < width {
             let column = if record.len() < COLUMNS.len() {
                 COLUMNS[record.len()]
@@ -278,11 +172,10 @@ pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<ImuCsv, CsvError> {
 
 /// Writes `csv` to `path` (created or truncated).
 pub fn write(path: &Path, csv: &ImuCsv) -> Result<(), CsvError> {
-    let file = File::create(path).map_err(|e| error(path, None, CsvErrorKind::Io(e)))?;
+    let file = File::create(path).map_err(|e| TextError::io(path, e))?;
     let mut out = BufWriter::new(file);
-    write_to(&mut out, csv).map_err(|e| error(path, None, CsvErrorKind::Io(e)))?;
-    out.flush()
-        .map_err(|e| error(path, None, CsvErrorKind::Io(e)))
+    write_to(&mut out, csv).map_err(|e| TextError::io(path, e))?;
+    out.flush().map_err(|e| TextError::io(path, e))
 }
 
 /// One row as written: the field names are the column names. Floats are printed in their
@@ -321,24 +214,6 @@ pub fn write_to<W: Write>(out: W, csv: &ImuCsv) -> io::Result<()> {
         })?;
     }
     w.flush()
-}
-
-fn error(path: &Path, line: Option<u64>, kind: CsvErrorKind) -> CsvError {
-    CsvError {
-        path: path.to_owned(),
-        line,
-        kind,
-    }
-}
-
-fn csv_error(path: &Path, e: csv::Error) -> CsvError {
-    let line = e.position().map(|p| p.line());
-    let kind = match e.into_kind() {
-        csv::ErrorKind::Io(e) => CsvErrorKind::Io(e),
-        csv::ErrorKind::Utf8 { err, .. } => CsvErrorKind::Syntax(format!("invalid UTF-8: {err}")),
-        other => CsvErrorKind::Syntax(format!("{other:?}")),
-    };
-    error(path, line, kind)
 }
 
 #[cfg(test)]

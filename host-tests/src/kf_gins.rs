@@ -18,13 +18,13 @@
 //! time must not go backwards. Times are returned as seconds of week: the IMU file has no week.
 
 use crate::imu_csv::{CsvRow, ImuCsv};
+use crate::text_error::{Record, TextError, TextErrorKind};
 use crate::truth::Truth;
 use nav_core::Vector3;
 use nav_core::attitude::from_euler;
-use std::fmt;
 use std::fs::File;
-use std::io::{self, BufRead, BufReader};
-use std::path::{Path, PathBuf};
+use std::io::{BufRead, BufReader};
+use std::path::Path;
 
 /// IMU file columns, as named in errors.
 pub const IMU_COLUMNS: [&str; 7] = [
@@ -101,15 +101,10 @@ impl KfGinsImu {
 }
 
 /// A KF-GINS reading error, naming the file and (for content errors) the line.
-#[derive(Debug)]
-pub struct KfGinsError {
-    /// The file.
-    pub path: PathBuf,
-    /// 1-based line number, when the error is about a line.
-    pub line: Option<u64>,
-    /// What went wrong.
-    pub kind: KfGinsErrorKind,
-}
+pub type KfGinsError = TextError;
+
+/// What went wrong in a KF-GINS file.
+pub type KfGinsErrorKind = TextErrorKind;
 
 /// Which KF-GINS file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -127,151 +122,26 @@ impl FileKind {
             Self::Nav => &NAV_COLUMNS,
         }
     }
-}
 
-/// What went wrong in a KF-GINS file.
-#[derive(Debug)]
-pub enum KfGinsErrorKind {
-    /// The file holds no data line.
-    Empty(FileKind),
-    /// A line has the wrong number of fields.
-    ColumnCount {
-        /// The file's kind.
-        file: FileKind,
-        /// Number of fields found.
-        found: usize,
-    },
-    /// A field is not a number.
-    NotANumber {
-        /// Column name.
-        column: &'static str,
-        /// The field's text.
-        found: String,
-    },
-    /// A field is NaN or infinite where a finite number is needed.
-    NotFinite {
-        /// Column name.
-        column: &'static str,
-        /// The field's text.
-        found: String,
-    },
-    /// The time is negative.
-    NegativeTime {
-        /// The time found [s].
-        t_s: f64,
-    },
-    /// The GNSS week is not a non-negative whole number.
-    BadWeek {
-        /// The week found.
-        week: f64,
-    },
-    /// The GNSS week changes within the file.
-    WeekChange {
-        /// The previous row's week.
-        from: f64,
-        /// This row's week.
-        to: f64,
-    },
-    /// The latitude is outside [-90, 90] deg.
-    BadLatitude {
-        /// The latitude found [deg].
-        lat_deg: f64,
-    },
-    /// An IMU time is not later than the previous line's.
-    TimeNotIncreasing {
-        /// This line's time [s].
-        t_s: f64,
-        /// The previous line's time [s].
-        previous_t_s: f64,
-    },
-    /// A trajectory time is earlier than the previous line's.
-    TimeBackwards {
-        /// This line's time [s].
-        t_s: f64,
-        /// The previous line's time [s].
-        previous_t_s: f64,
-    },
-    /// The file could not be opened or read.
-    Io(io::Error),
-}
-
-impl fmt::Display for KfGinsError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: ", self.path.display())?;
-        if let Some(line) = self.line {
-            write!(f, "line {line}: ")?;
-        }
-        match &self.kind {
-            KfGinsErrorKind::Empty(file) => write!(
-                f,
-                "no data: expected lines of {} numbers ({})",
-                file.columns().len(),
-                file.columns().join(", ")
-            ),
-            KfGinsErrorKind::ColumnCount { file, found } => {
-                match file {
-                    FileKind::Imu => write!(
-                        f,
-                        "expected 7 numbers (seconds of week, dtheta x y z [rad], dv x y z [m/s]; \
-                         an 8th, odometer, column is allowed), found {found}"
-                    )?,
-                    FileKind::Nav => write!(
-                        f,
-                        "expected 11 numbers (week, seconds of week, latitude, longitude \
-                         [deg], height [m], v north east down [m/s], roll, pitch, yaw [deg]), \
-                         found {found}"
-                    )?,
-                }
-                match (file, found) {
-                    (FileKind::Imu, 11) => f.write_str(" (is this a KF-GINS .nav trajectory?)"),
-                    (FileKind::Nav, 7 | 8) => f.write_str(" (is this a KF-GINS IMU file?)"),
-                    _ => Ok(()),
-                }
+    /// What a line holds, for the message of a line with the wrong number of fields.
+    fn expected(self) -> &'static str {
+        match self {
+            Self::Imu => {
+                "7 numbers (seconds of week, dtheta x y z [rad], dv x y z [m/s]; an 8th, \
+                 odometer, column is allowed)"
             }
-            KfGinsErrorKind::NotANumber { column, found } => {
-                write!(f, "column {column}: expected a number, found '{found}'")
+            Self::Nav => {
+                "11 numbers (week, seconds of week, latitude, longitude [deg], height [m], \
+                 v north east down [m/s], roll, pitch, yaw [deg])"
             }
-            KfGinsErrorKind::NotFinite { column, found } => {
-                write!(
-                    f,
-                    "column {column}: expected a finite number, found '{found}'"
-                )
-            }
-            KfGinsErrorKind::NegativeTime { t_s } => write!(
-                f,
-                "column seconds of week: expected a non-negative time, found {t_s} s"
-            ),
-            KfGinsErrorKind::BadWeek { week } => write!(
-                f,
-                "column week: expected a non-negative whole GNSS week, found {week}"
-            ),
-            KfGinsErrorKind::WeekChange { from, to } => write!(
-                f,
-                "column week: the GNSS week changes from {from} to {to}; times are seconds of \
-                 week, so a file must stay within one week"
-            ),
-            KfGinsErrorKind::BadLatitude { lat_deg } => {
-                write!(f, "column latitude: {lat_deg} deg is outside [-90, 90]")
-            }
-            KfGinsErrorKind::TimeNotIncreasing { t_s, previous_t_s } => write!(
-                f,
-                "column seconds of week: time does not increase: {t_s} s after {previous_t_s} s \
-                 on the previous line"
-            ),
-            KfGinsErrorKind::TimeBackwards { t_s, previous_t_s } => write!(
-                f,
-                "column seconds of week: time goes backwards: {t_s} s after {previous_t_s} s on \
-                 the previous line"
-            ),
-            KfGinsErrorKind::Io(e) => write!(f, "{e}"),
         }
     }
-}
 
-impl std::error::Error for KfGinsError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match &self.kind {
-            KfGinsErrorKind::Io(e) => Some(e),
+    /// A guess at what a line of `found` fields is from, when it is the other kind of file.
+    fn hint(self, found: usize) -> Option<&'static str> {
+        match (self, found) {
+            (Self::Imu, 11) => Some("is this a KF-GINS .nav trajectory?"),
+            (Self::Nav, 7 | 8) => Some("is this a KF-GINS IMU file?"),
             _ => None,
         }
     }
@@ -308,7 +178,7 @@ pub fn looks_like_imu(head: &str) -> bool {
 
 /// Reads a KF-GINS IMU file.
 pub fn read_imu(path: &Path) -> Result<KfGinsImu, KfGinsError> {
-    let file = File::open(path).map_err(|e| error(path, None, KfGinsErrorKind::Io(e)))?;
+    let file = File::open(path).map_err(|e| TextError::io(path, e))?;
     read_imu_from(BufReader::new(file), path)
 }
 
@@ -323,8 +193,10 @@ pub fn read_imu_from<R: BufRead>(reader: R, path: &Path) -> Result<KfGinsImu, Kf
             && t_s <= previous.t_s
         {
             return Err(at(KfGinsErrorKind::TimeNotIncreasing {
+                column: IMU_COLUMNS[0],
                 t_s,
                 previous_t_s: previous.t_s,
+                record: Record::Line,
             }));
         }
         rows.push(KfGinsImuRow {
@@ -339,7 +211,7 @@ pub fn read_imu_from<R: BufRead>(reader: R, path: &Path) -> Result<KfGinsImu, Kf
 
 /// Reads a KF-GINS trajectory (`.nav`) file; times are seconds of week.
 pub fn read_truth(path: &Path) -> Result<Vec<Truth>, KfGinsError> {
-    let file = File::open(path).map_err(|e| error(path, None, KfGinsErrorKind::Io(e)))?;
+    let file = File::open(path).map_err(|e| TextError::io(path, e))?;
     read_truth_from(BufReader::new(file), path)
 }
 
@@ -374,12 +246,17 @@ pub fn read_truth_from<R: BufRead>(reader: R, path: &Path) -> Result<Vec<Truth>,
             && v[SOW] < previous.t_s
         {
             return Err(at(KfGinsErrorKind::TimeBackwards {
+                column: NAV_COLUMNS[SOW],
                 t_s: v[SOW],
                 previous_t_s: previous.t_s,
+                record: Record::Line,
             }));
         }
         if !(-90.0..=90.0).contains(&v[LAT]) {
-            return Err(at(KfGinsErrorKind::BadLatitude { lat_deg: v[LAT] }));
+            return Err(at(KfGinsErrorKind::BadLatitude {
+                column: NAV_COLUMNS[LAT],
+                lat_deg: v[LAT],
+            }));
         }
         rows.push(Truth {
             t_s: v[SOW],
@@ -413,7 +290,7 @@ fn for_each_line<R: BufRead>(
     let mut any = false;
     for (index, line) in reader.lines().enumerate() {
         let line_no = index as u64 + 1;
-        let at = |kind| error(path, Some(line_no), kind);
+        let at = |kind| TextError::new(path, Some(line_no), kind);
         let line = line.map_err(|e| at(KfGinsErrorKind::Io(e)))?;
         let text = line.trim().trim_start_matches('\u{feff}');
         if skipped(text) {
@@ -426,8 +303,9 @@ fn for_each_line<R: BufRead>(
         };
         if !allowed {
             return Err(at(KfGinsErrorKind::ColumnCount {
-                file,
+                expected: file.expected().to_owned(),
                 found: values.len(),
+                hint: file.hint(values.len()),
             }));
         }
         row(&values, &at)?;
@@ -436,7 +314,13 @@ fn for_each_line<R: BufRead>(
     if any {
         Ok(())
     } else {
-        Err(error(path, None, KfGinsErrorKind::Empty(file)))
+        Err(TextError::new(
+            path,
+            None,
+            KfGinsErrorKind::NoData {
+                columns: file.columns(),
+            },
+        ))
     }
 }
 
@@ -458,14 +342,6 @@ fn check_time(t_s: f64, text: &str) -> Result<(), KfGinsErrorKind> {
         Err(KfGinsErrorKind::NegativeTime { t_s })
     } else {
         Ok(())
-    }
-}
-
-fn error(path: &Path, line: Option<u64>, kind: KfGinsErrorKind) -> KfGinsError {
-    KfGinsError {
-        path: path.to_owned(),
-        line,
-        kind,
     }
 }
 

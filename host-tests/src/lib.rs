@@ -18,6 +18,8 @@
 //! - [`truth`]: exactly known trajectories and their exact increments (physics tests).
 //! - [`oscillator`]: the isotropic-oscillator sensor simulator (seed 001) and its `osc.csv`
 //!   readout file.
+//! - [`text_error`]: the error of the text-format readers and writers (file, line, what went
+//!   wrong).
 //!
 //! The `nav` binary (`src/bin/nav.rs`) is the command-line front end.
 #![deny(unsafe_code)]
@@ -39,6 +41,7 @@ pub mod replay;
 pub mod report;
 pub mod sensor_model;
 pub mod simulate;
+pub mod text_error;
 pub mod trajectory;
 pub mod truth;
 pub mod truth_csv;

@@ -18,14 +18,14 @@
 //! and velocity; latitude, longitude and attitude pass through the deg <-> rad conversion and the
 //! Euler angles, which round to within a few ulp (below 1e-12 deg).
 
+use crate::text_error::{Record, TextError, TextErrorKind, csv_header};
 use crate::truth::Truth;
 use nav_core::Vector3;
 use nav_core::attitude::{euler, from_euler};
 use nav_core::output::CSV_HEADER;
-use std::fmt;
 use std::fs::File;
 use std::io::{self, BufReader, BufWriter, Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The column names, in the order the writer uses (nav-core's [`CSV_HEADER`]).
 pub const COLUMNS: [&str; 10] = [
@@ -50,118 +50,10 @@ const VEL: usize = 4;
 const ATT: usize = 7;
 
 /// A trajectory CSV reading or writing error, naming the file and (for content errors) the line.
-#[derive(Debug)]
-pub struct TruthCsvError {
-    /// The file.
-    pub path: PathBuf,
-    /// 1-based line number, when the error is about a line.
-    pub line: Option<u64>,
-    /// What went wrong.
-    pub kind: TruthCsvErrorKind,
-}
+pub type TruthCsvError = TextError;
 
 /// What went wrong in a trajectory CSV file.
-#[derive(Debug)]
-pub enum TruthCsvErrorKind {
-    /// The file is empty: no header row.
-    MissingHeader,
-    /// The header lacks a required column.
-    HeaderMissingColumn {
-        /// The missing column's name.
-        column: &'static str,
-        /// The header row found.
-        found: String,
-    },
-    /// A row is shorter than the header: a required column is missing.
-    MissingColumn {
-        /// Name of the missing column.
-        column: &'static str,
-        /// Number of fields found on the line.
-        found: usize,
-    },
-    /// A field is not a number.
-    NotANumber {
-        /// Column name.
-        column: &'static str,
-        /// The field's text.
-        found: String,
-    },
-    /// A field is NaN or infinite.
-    NotFinite {
-        /// Column name.
-        column: &'static str,
-        /// The field's text.
-        found: String,
-    },
-    /// The latitude is outside [-90, 90] deg.
-    BadLatitude {
-        /// The latitude found [deg].
-        lat_deg: f64,
-    },
-    /// The time is earlier than the previous row's.
-    TimeBackwards {
-        /// This row's time [s].
-        t_s: f64,
-        /// The previous row's time [s].
-        previous_t_s: f64,
-    },
-    /// Malformed CSV (quoting, invalid UTF-8).
-    Syntax(String),
-    /// The file could not be opened, read or written.
-    Io(io::Error),
-}
-
-impl fmt::Display for TruthCsvError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: ", self.path.display())?;
-        if let Some(line) = self.line {
-            write!(f, "line {line}: ")?;
-        }
-        match &self.kind {
-            TruthCsvErrorKind::MissingHeader => {
-                write!(f, "empty file: expected the header row '{CSV_HEADER}'")
-            }
-            TruthCsvErrorKind::HeaderMissingColumn { column, found } => write!(
-                f,
-                "the header has no column {column}: expected the columns '{CSV_HEADER}', found '{found}'"
-            ),
-            TruthCsvErrorKind::MissingColumn { column, found } => {
-                write!(
-                    f,
-                    "column {column}: missing (the line has only {found} columns)"
-                )
-            }
-            TruthCsvErrorKind::NotANumber { column, found } => {
-                write!(f, "column {column}: expected a number, found '{found}'")
-            }
-            TruthCsvErrorKind::NotFinite { column, found } => {
-                write!(
-                    f,
-                    "column {column}: expected a finite number, found '{found}'"
-                )
-            }
-            TruthCsvErrorKind::BadLatitude { lat_deg } => write!(
-                f,
-                "column lat_deg: latitude {lat_deg} deg is outside [-90, 90]"
-            ),
-            TruthCsvErrorKind::TimeBackwards { t_s, previous_t_s } => write!(
-                f,
-                "column t_s: time goes backwards: {t_s} s after {previous_t_s} s on the previous row"
-            ),
-            TruthCsvErrorKind::Syntax(msg) => write!(f, "malformed CSV: {msg}"),
-            TruthCsvErrorKind::Io(e) => write!(f, "{e}"),
-        }
-    }
-}
-
-impl std::error::Error for TruthCsvError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match &self.kind {
-            TruthCsvErrorKind::Io(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+pub type TruthCsvErrorKind = TextErrorKind;
 
 /// Writes trajectory rows one at a time (the header first).
 #[derive(Debug)]
@@ -205,7 +97,7 @@ impl<W: Write> TruthWriter<W> {
 
 /// Writes `rows` to `path` (created or truncated).
 pub fn write(path: &Path, rows: &[Truth]) -> Result<(), TruthCsvError> {
-    let io_error = |e| error(path, None, TruthCsvErrorKind::Io(e));
+    let io_error = |e| TextError::io(path, e);
     let file = File::create(path).map_err(io_error)?;
     let mut w = TruthWriter::new(BufWriter::new(file)).map_err(io_error)?;
     for row in rows {
@@ -217,23 +109,13 @@ pub fn write(path: &Path, rows: &[Truth]) -> Result<(), TruthCsvError> {
 
 /// Reads a trajectory (truth file or solution log) from `path`.
 pub fn read(path: &Path) -> Result<Vec<Truth>, TruthCsvError> {
-    let file = File::open(path).map_err(|e| error(path, None, TruthCsvErrorKind::Io(e)))?;
+    let file = File::open(path).map_err(|e| TextError::io(path, e))?;
     read_from(BufReader::new(file), path)
 }
 
 /// Reads a trajectory from `reader`; `path` names it in errors.
 pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<Vec<Truth>, TruthCsvError> {
-    let mut csv = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .from_reader(reader);
-    let mut records = csv.records();
-
-    let header = match records.next() {
-        None => return Err(error(path, None, TruthCsvErrorKind::MissingHeader)),
-        Some(r) => r.map_err(|e| csv_error(path, e))?,
-    };
+    let (header, records) = csv_header(reader, path, CSV_HEADER)?;
     let header_line = header.position().map(|p| p.line());
     // Field index of each required column.
     let mut index = [0_usize; COLUMNS.len()];
@@ -242,11 +124,12 @@ pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<Vec<Truth>, TruthCsv
             .iter()
             .position(|h| h.trim_start_matches('\u{feff}') == name)
             .ok_or_else(|| {
-                error(
+                TextError::new(
                     path,
                     header_line,
                     TruthCsvErrorKind::HeaderMissingColumn {
                         column: name,
+                        expected: CSV_HEADER.to_owned(),
                         found: header.iter().collect::<Vec<_>>().join(","),
                     },
                 )
@@ -255,9 +138,9 @@ pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<Vec<Truth>, TruthCsv
 
     let mut rows: Vec<Truth> = Vec::new();
     for record in records {
-        let record = record.map_err(|e| csv_error(path, e))?;
+        let record = record.map_err(|e| TextError::from_csv(path, e))?;
         let line = record.position().map(|p| p.line());
-        let at = |kind| error(path, line, kind);
+        let at = |kind| TextError::new(path, line, kind);
         let mut values = [0.0_f64; COLUMNS.len()];
         for (c, value) in values.iter_mut().enumerate() {
             let column = COLUMNS[c];
@@ -283,6 +166,7 @@ pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<Vec<Truth>, TruthCsv
         }
         if !(-90.0..=90.0).contains(&values[LAT]) {
             return Err(at(TruthCsvErrorKind::BadLatitude {
+                column: COLUMNS[LAT],
                 lat_deg: values[LAT],
             }));
         }
@@ -290,8 +174,10 @@ pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<Vec<Truth>, TruthCsv
             && values[T] < previous.t_s
         {
             return Err(at(TruthCsvErrorKind::TimeBackwards {
+                column: COLUMNS[T],
                 t_s: values[T],
                 previous_t_s: previous.t_s,
+                record: Record::Row,
             }));
         }
         rows.push(truth_from_degrees(&values));
@@ -313,26 +199,6 @@ fn truth_from_degrees(v: &[f64; COLUMNS.len()]) -> Truth {
             v[ATT + 2].to_radians(),
         ),
     }
-}
-
-fn error(path: &Path, line: Option<u64>, kind: TruthCsvErrorKind) -> TruthCsvError {
-    TruthCsvError {
-        path: path.to_owned(),
-        line,
-        kind,
-    }
-}
-
-fn csv_error(path: &Path, e: csv::Error) -> TruthCsvError {
-    let line = e.position().map(|p| p.line());
-    let kind = match e.into_kind() {
-        csv::ErrorKind::Io(e) => TruthCsvErrorKind::Io(e),
-        csv::ErrorKind::Utf8 { err, .. } => {
-            TruthCsvErrorKind::Syntax(format!("invalid UTF-8: {err}"))
-        }
-        other => TruthCsvErrorKind::Syntax(format!("{other:?}")),
-    };
-    error(path, line, kind)
 }
 
 #[cfg(test)]

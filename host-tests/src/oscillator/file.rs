@@ -13,11 +13,11 @@
 //! an infinite value, or text that is not a number is an error naming the line and the column.
 
 use super::OscSample;
+use crate::text_error::{TextError, TextErrorKind, csv_header};
 use nav_core::Vector3;
-use std::fmt;
 use std::fs::File;
 use std::io::{self, BufReader, BufWriter, Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The columns.
 pub const COLUMNS: [&str; 4] = ["t_s", "x_m", "y_m", "z_m"];
@@ -32,118 +32,10 @@ pub struct OscRow {
 }
 
 /// A reading or writing error, naming the file and (for content errors) the line.
-#[derive(Debug)]
-pub struct OscCsvError {
-    /// The file.
-    pub path: PathBuf,
-    /// 1-based line number, when the error is about a line.
-    pub line: Option<u64>,
-    /// What went wrong.
-    pub kind: OscCsvErrorKind,
-}
+pub type OscCsvError = TextError;
 
 /// What went wrong in an `osc.csv` file.
-#[derive(Debug)]
-pub enum OscCsvErrorKind {
-    /// No header row.
-    MissingHeader,
-    /// The first row is not `t_s,x_m,y_m,z_m`.
-    WrongHeader {
-        /// The row found.
-        found: String,
-    },
-    /// A row does not have 4 fields.
-    ColumnCount {
-        /// Number of fields found.
-        found: usize,
-    },
-    /// A field is not a number.
-    NotANumber {
-        /// Column name.
-        column: &'static str,
-        /// The field's text.
-        found: String,
-    },
-    /// A displacement is infinite.
-    Infinite {
-        /// Column name.
-        column: &'static str,
-        /// The field's text.
-        found: String,
-    },
-    /// Some but not all of `x_m, y_m, z_m` are NaN.
-    PartlyMissing {
-        /// The first NaN column.
-        column: &'static str,
-    },
-    /// The time is negative, NaN or infinite.
-    BadTime {
-        /// The field's text.
-        found: String,
-    },
-    /// The time does not increase.
-    TimeNotIncreasing {
-        /// The previous row's time [s].
-        previous: f64,
-        /// This row's time [s].
-        found: f64,
-    },
-    /// Malformed CSV (quoting, invalid UTF-8).
-    Syntax(String),
-    /// The file could not be opened, read or written.
-    Io(io::Error),
-}
-
-impl fmt::Display for OscCsvError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: ", self.path.display())?;
-        if let Some(line) = self.line {
-            write!(f, "line {line}: ")?;
-        }
-        let header = COLUMNS.join(",");
-        match &self.kind {
-            OscCsvErrorKind::MissingHeader => {
-                write!(f, "empty file: expected the header row '{header}'")
-            }
-            OscCsvErrorKind::WrongHeader { found } => {
-                write!(f, "expected the header row '{header}', found '{found}'")
-            }
-            OscCsvErrorKind::ColumnCount { found } => {
-                write!(f, "expected 4 columns ({header}), found {found}")
-            }
-            OscCsvErrorKind::NotANumber { column, found } => {
-                write!(f, "column {column}: expected a number, found '{found}'")
-            }
-            OscCsvErrorKind::Infinite { column, found } => write!(
-                f,
-                "column {column}: expected a finite displacement or NaN, found '{found}'"
-            ),
-            OscCsvErrorKind::PartlyMissing { column } => write!(
-                f,
-                "column {column}: NaN, but not all of x_m, y_m, z_m are (a missing sample has all three NaN)"
-            ),
-            OscCsvErrorKind::BadTime { found } => write!(
-                f,
-                "column t_s: expected a finite, non-negative time in seconds, found '{found}'"
-            ),
-            OscCsvErrorKind::TimeNotIncreasing { previous, found } => write!(
-                f,
-                "column t_s: time {found} s does not increase (previous row {previous} s)"
-            ),
-            OscCsvErrorKind::Syntax(msg) => write!(f, "malformed CSV: {msg}"),
-            OscCsvErrorKind::Io(e) => write!(f, "{e}"),
-        }
-    }
-}
-
-impl std::error::Error for OscCsvError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match &self.kind {
-            OscCsvErrorKind::Io(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+pub type OscCsvErrorKind = TextErrorKind;
 
 /// Writes rows to `osc.csv` (the header first).
 pub struct OscCsvWriter<W: Write> {
@@ -185,7 +77,7 @@ impl<W: Write> OscCsvWriter<W> {
 
 /// Writes `samples` to `path` (created or truncated).
 pub fn write(path: &Path, samples: &[OscSample]) -> Result<(), OscCsvError> {
-    let io_err = |e| error(path, None, OscCsvErrorKind::Io(e));
+    let io_err = |e| TextError::io(path, e);
     let file = File::create(path).map_err(io_err)?;
     let mut w = OscCsvWriter::new(BufWriter::new(file)).map_err(io_err)?;
     for s in samples {
@@ -196,36 +88,37 @@ pub fn write(path: &Path, samples: &[OscSample]) -> Result<(), OscCsvError> {
 
 /// Reads `path`.
 pub fn read(path: &Path) -> Result<Vec<OscRow>, OscCsvError> {
-    let file = File::open(path).map_err(|e| error(path, None, OscCsvErrorKind::Io(e)))?;
+    let file = File::open(path).map_err(|e| TextError::io(path, e))?;
     read_from(BufReader::new(file), path)
 }
 
 /// Reads from `reader`; `path` names it in errors.
 pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<Vec<OscRow>, OscCsvError> {
-    let mut csv = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .from_reader(reader);
-    let mut records = csv.records();
-    let header = match records.next() {
-        None => return Err(error(path, None, OscCsvErrorKind::MissingHeader)),
-        Some(r) => r.map_err(|e| csv_error(path, e))?,
-    };
+    let (header, records) = csv_header(reader, path, &COLUMNS.join(","))?;
     if header.iter().ne(COLUMNS) {
         let found = header.iter().collect::<Vec<_>>().join(",");
         let line = header.position().map(|p| p.line());
-        return Err(error(path, line, OscCsvErrorKind::WrongHeader { found }));
+        return Err(TextError::new(
+            path,
+            line,
+            OscCsvErrorKind::WrongHeader {
+                expected: COLUMNS.join(","),
+                optional: None,
+                found,
+            },
+        ));
     }
 
     let mut rows: Vec<OscRow> = Vec::new();
     for record in records {
-        let record = record.map_err(|e| csv_error(path, e))?;
+        let record = record.map_err(|e| TextError::from_csv(path, e))?;
         let line = record.position().map(|p| p.line());
-        let at = |kind| error(path, line, kind);
+        let at = |kind| TextError::new(path, line, kind);
         if record.len() != COLUMNS.len() {
             return Err(at(OscCsvErrorKind::ColumnCount {
+                expected: format!("{} columns ({})", COLUMNS.len(), COLUMNS.join(",")),
                 found: record.len(),
+                hint: None,
             }));
         }
         let number = |i: usize| -> Result<f64, OscCsvError> {
@@ -245,7 +138,7 @@ pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<Vec<OscRow>, OscCsvE
         if let Some(prev) = rows.last()
             && t_s <= prev.t_s
         {
-            return Err(at(OscCsvErrorKind::TimeNotIncreasing {
+            return Err(at(OscCsvErrorKind::SampleTimeNotIncreasing {
                 previous: prev.t_s,
                 found: t_s,
             }));
@@ -271,26 +164,6 @@ pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<Vec<OscRow>, OscCsvE
         rows.push(OscRow { t_s, r_b_m });
     }
     Ok(rows)
-}
-
-fn error(path: &Path, line: Option<u64>, kind: OscCsvErrorKind) -> OscCsvError {
-    OscCsvError {
-        path: path.to_owned(),
-        line,
-        kind,
-    }
-}
-
-fn csv_error(path: &Path, e: csv::Error) -> OscCsvError {
-    let line = e.position().map(|p| p.line());
-    let kind = match e.into_kind() {
-        csv::ErrorKind::Io(e) => OscCsvErrorKind::Io(e),
-        csv::ErrorKind::Utf8 { err, .. } => {
-            OscCsvErrorKind::Syntax(format!("invalid UTF-8: {err}"))
-        }
-        other => OscCsvErrorKind::Syntax(format!("{other:?}")),
-    };
-    error(path, line, kind)
 }
 
 #[cfg(test)]

@@ -1,0 +1,418 @@
+//! The error of the text-format readers and writers ([`crate::imu_csv`], [`crate::truth_csv`],
+//! [`crate::kf_gins`], [`crate::oscillator::file`]): the file, the line (for content errors) and
+//! what went wrong.
+//!
+//! Messages read `<path>: line <n>: <what>` (no line for errors about the whole file). Where two
+//! formats word the same case differently, the kind carries what differs (the column's name, the
+//! expected header, whether records are rows or lines).
+
+use std::fmt;
+use std::io::{self, Read};
+use std::path::{Path, PathBuf};
+
+/// A reading or writing error, naming the file and (for content errors) the line.
+#[derive(Debug)]
+pub struct TextError {
+    /// The file.
+    pub path: PathBuf,
+    /// 1-based line number, when the error is about a line.
+    pub line: Option<u64>,
+    /// What went wrong.
+    pub kind: TextErrorKind,
+}
+
+/// What a file's records are called in messages.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Record {
+    /// A CSV row.
+    Row,
+    /// A line of a whitespace-separated text file.
+    Line,
+}
+
+impl fmt::Display for Record {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Row => "row",
+            Self::Line => "line",
+        })
+    }
+}
+
+/// What went wrong in a text file.
+#[derive(Debug)]
+pub enum TextErrorKind {
+    /// The file is empty: no header row.
+    MissingHeader {
+        /// The expected header row.
+        expected: String,
+    },
+    /// The first row is not the expected header.
+    WrongHeader {
+        /// The expected header row.
+        expected: String,
+        /// A column that may follow the expected ones.
+        optional: Option<&'static str>,
+        /// The header row found.
+        found: String,
+    },
+    /// The header lacks a required column.
+    HeaderMissingColumn {
+        /// The missing column's name.
+        column: &'static str,
+        /// The expected columns, as a header row.
+        expected: String,
+        /// The header row found.
+        found: String,
+    },
+    /// The file holds no data line (headerless formats).
+    NoData {
+        /// The columns of a line.
+        columns: &'static [&'static str],
+    },
+    /// A line has the wrong number of fields.
+    ColumnCount {
+        /// What was expected, e.g. `4 columns (t_s,x_m,y_m,z_m)`.
+        expected: String,
+        /// Number of fields found.
+        found: usize,
+        /// A guess at what the file is instead, e.g. `is this a KF-GINS IMU file?`.
+        hint: Option<&'static str>,
+    },
+    /// A row is shorter than the header: the first missing column.
+    MissingColumn {
+        /// Name of the missing column.
+        column: &'static str,
+        /// Number of fields found on the line.
+        found: usize,
+    },
+    /// A row has more columns than the header.
+    ExtraColumns {
+        /// Number of columns expected.
+        expected: usize,
+        /// Number of fields found.
+        found: usize,
+    },
+    /// A field is not a number.
+    NotANumber {
+        /// Column name.
+        column: &'static str,
+        /// The field's text.
+        found: String,
+    },
+    /// A field is NaN or infinite where a finite number is needed.
+    NotFinite {
+        /// Column name.
+        column: &'static str,
+        /// The field's text.
+        found: String,
+    },
+    /// A displacement is infinite (NaN marks a missing sample).
+    Infinite {
+        /// Column name.
+        column: &'static str,
+        /// The field's text.
+        found: String,
+    },
+    /// Some but not all of `x_m, y_m, z_m` are NaN.
+    PartlyMissing {
+        /// The first NaN column.
+        column: &'static str,
+    },
+    /// The time (column `t_s`) is negative, NaN or infinite.
+    BadTime {
+        /// The field's text.
+        found: String,
+    },
+    /// The time (GNSS seconds of week) is negative.
+    NegativeTime {
+        /// The time found [s].
+        t_s: f64,
+    },
+    /// The GNSS week is not a non-negative whole number.
+    BadWeek {
+        /// The week found.
+        week: f64,
+    },
+    /// The GNSS week changes within the file.
+    WeekChange {
+        /// The previous line's week.
+        from: f64,
+        /// This line's week.
+        to: f64,
+    },
+    /// The latitude is outside [-90, 90] deg.
+    BadLatitude {
+        /// Column name; the message names the latitude unless the column is called `latitude`.
+        column: &'static str,
+        /// The latitude found [deg].
+        lat_deg: f64,
+    },
+    /// A sample's time (column `t_s`) is not later than the previous row's.
+    SampleTimeNotIncreasing {
+        /// The previous row's time [s].
+        previous: f64,
+        /// This row's time [s].
+        found: f64,
+    },
+    /// A time is not later than the previous record's.
+    TimeNotIncreasing {
+        /// Column name.
+        column: &'static str,
+        /// This record's time [s].
+        t_s: f64,
+        /// The previous record's time [s].
+        previous_t_s: f64,
+        /// What a record is called.
+        record: Record,
+    },
+    /// A time is earlier than the previous record's.
+    TimeBackwards {
+        /// Column name.
+        column: &'static str,
+        /// This record's time [s].
+        t_s: f64,
+        /// The previous record's time [s].
+        previous_t_s: f64,
+        /// What a record is called.
+        record: Record,
+    },
+    /// Malformed CSV (quoting, invalid UTF-8).
+    Syntax(String),
+    /// The file could not be opened, read or written.
+    Io(io::Error),
+}
+
+impl TextError {
+    /// An error in `path`, at `line` when the error is about a line.
+    pub fn new(path: &Path, line: Option<u64>, kind: TextErrorKind) -> Self {
+        Self {
+            path: path.to_owned(),
+            line,
+            kind,
+        }
+    }
+
+    /// `path` could not be opened, read or written.
+    pub fn io(path: &Path, e: io::Error) -> Self {
+        Self::new(path, None, TextErrorKind::Io(e))
+    }
+
+    /// A CSV reader's error in `path`: I/O or syntax, at the line the reader reports.
+    pub fn from_csv(path: &Path, e: csv::Error) -> Self {
+        let line = e.position().map(|p| p.line());
+        let kind = match e.into_kind() {
+            csv::ErrorKind::Io(e) => TextErrorKind::Io(e),
+            csv::ErrorKind::Utf8 { err, .. } => {
+                TextErrorKind::Syntax(format!("invalid UTF-8: {err}"))
+            }
+            other => TextErrorKind::Syntax(format!("{other:?}")),
+        };
+        Self::new(path, line, kind)
+    }
+}
+
+/// Starts reading CSV from `reader` as the project's CSV formats do (the header is the caller's
+/// to check, rows may have any length, fields are trimmed): the first row (the header) and the
+/// rows after it. A file without a row is [`TextErrorKind::MissingHeader`], `expected` naming the
+/// header row; `path` names the file in errors.
+pub fn csv_header<R: Read>(
+    reader: R,
+    path: &Path,
+    expected: &str,
+) -> Result<(csv::StringRecord, csv::StringRecordsIntoIter<R>), TextError> {
+    let mut records = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(reader)
+        .into_records();
+    match records.next() {
+        None => Err(TextError::new(
+            path,
+            None,
+            TextErrorKind::MissingHeader {
+                expected: expected.to_owned(),
+            },
+        )),
+        Some(header) => Ok((header.map_err(|e| TextError::from_csv(path, e))?, records)),
+    }
+}
+
+impl fmt::Display for TextError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: ", self.path.display())?;
+        if let Some(line) = self.line {
+            write!(f, "line {line}: ")?;
+        }
+        fmt::Display::fmt(&self.kind, f)
+    }
+}
+
+impl fmt::Display for TextErrorKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::MissingHeader { expected } => {
+                write!(f, "empty file: expected the header row '{expected}'")
+            }
+            Self::WrongHeader {
+                expected,
+                optional,
+                found,
+            } => {
+                write!(f, "expected the header row '{expected}'")?;
+                if let Some(column) = optional {
+                    write!(f, " (optionally followed by ',{column}')")?;
+                }
+                write!(f, ", found '{found}'")
+            }
+            Self::HeaderMissingColumn {
+                column,
+                expected,
+                found,
+            } => write!(
+                f,
+                "the header has no column {column}: expected the columns '{expected}', found '{found}'"
+            ),
+            Self::NoData { columns } => write!(
+                f,
+                "no data: expected lines of {} numbers ({})",
+                columns.len(),
+                columns.join(", ")
+            ),
+            Self::ColumnCount {
+                expected,
+                found,
+                hint,
+            } => {
+                write!(f, "expected {expected}, found {found}")?;
+                match hint {
+                    Some(hint) => write!(f, " ({hint})"),
+                    None => Ok(()),
+                }
+            }
+            Self::MissingColumn { column, found } => write!(
+                f,
+                "column {column}: missing (the line has only {found} columns)"
+            ),
+            Self::ExtraColumns { expected, found } => write!(
+                f,
+                "expected {expected} columns as in the header, found {found}"
+            ),
+            Self::NotANumber { column, found } => {
+                write!(f, "column {column}: expected a number, found '{found}'")
+            }
+            Self::NotFinite { column, found } => write!(
+                f,
+                "column {column}: expected a finite number, found '{found}'"
+            ),
+            Self::Infinite { column, found } => write!(
+                f,
+                "column {column}: expected a finite displacement or NaN, found '{found}'"
+            ),
+            Self::PartlyMissing { column } => write!(
+                f,
+                "column {column}: NaN, but not all of x_m, y_m, z_m are (a missing sample has all three NaN)"
+            ),
+            Self::BadTime { found } => write!(
+                f,
+                "column t_s: expected a finite, non-negative time in seconds, found '{found}'"
+            ),
+            Self::NegativeTime { t_s } => write!(
+                f,
+                "column seconds of week: expected a non-negative time, found {t_s} s"
+            ),
+            Self::BadWeek { week } => write!(
+                f,
+                "column week: expected a non-negative whole GNSS week, found {week}"
+            ),
+            Self::WeekChange { from, to } => write!(
+                f,
+                "column week: the GNSS week changes from {from} to {to}; times are seconds of \
+                 week, so a file must stay within one week"
+            ),
+            Self::BadLatitude { column, lat_deg } => {
+                let what = if *column == "latitude" {
+                    ""
+                } else {
+                    "latitude "
+                };
+                write!(
+                    f,
+                    "column {column}: {what}{lat_deg} deg is outside [-90, 90]"
+                )
+            }
+            Self::SampleTimeNotIncreasing { previous, found } => write!(
+                f,
+                "column t_s: time {found} s does not increase (previous row {previous} s)"
+            ),
+            Self::TimeNotIncreasing {
+                column,
+                t_s,
+                previous_t_s,
+                record,
+            } => write!(
+                f,
+                "column {column}: time does not increase: {t_s} s after {previous_t_s} s on the \
+                 previous {record}"
+            ),
+            Self::TimeBackwards {
+                column,
+                t_s,
+                previous_t_s,
+                record,
+            } => write!(
+                f,
+                "column {column}: time goes backwards: {t_s} s after {previous_t_s} s on the \
+                 previous {record}"
+            ),
+            Self::Syntax(msg) => write!(f, "malformed CSV: {msg}"),
+            Self::Io(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for TextError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &self.kind {
+            TextErrorKind::Io(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::error::Error;
+
+    #[test]
+    fn names_the_file_and_the_line_when_there_is_one() {
+        let path = Path::new("f.csv");
+        let e = TextError::new(
+            path,
+            Some(3),
+            TextErrorKind::TimeBackwards {
+                column: "t_s",
+                t_s: 0.5,
+                previous_t_s: 1.0,
+                record: Record::Row,
+            },
+        );
+        assert_eq!(
+            e.to_string(),
+            "f.csv: line 3: column t_s: time goes backwards: 0.5 s after 1 s on the previous row"
+        );
+        assert!(e.source().is_none());
+        let e = TextError::io(path, io::Error::other("disk full"));
+        assert_eq!(e.to_string(), "f.csv: disk full");
+        assert!(e.source().is_some());
+        let Err(e) = csv_header(&b""[..], path, "a,b") else {
+            panic!("an empty file has no header");
+        };
+        assert_eq!(
+            e.to_string(),
+            "f.csv: empty file: expected the header row 'a,b'"
+        );
+    }
+}
