@@ -6,6 +6,7 @@
 
 use host_tests::align_bench::seed003::*;
 use host_tests::sensor_model::ImuErrorModel;
+use nav_core::alignment::SensorNoise;
 use nav_core::alignment::fine::{FineAlignment, FineConfig};
 use nav_core::alignment::sway::{SwayAlignment, SwayConfig, SwayPhase};
 use nav_core::earth::OMEGA_IE;
@@ -275,7 +276,7 @@ fn f32_agrees_with_f64() {
             let n_r = per_update * rate_hz.sqrt();
             for (p, q) in x64.iter().zip(x32) {
                 let diff = (q.euler_error_rad.z - p.euler_error_rad.z).abs();
-                let bound = 4.0 * n_r / config.gyro_noise * p.sigma_rad.z;
+                let bound = 4.0 * n_r / config.noise.arw_rad_per_sqrt_s * p.sigma_rad.z;
                 println!(
                     "{name} seed {seed} {:.0} s: |f32 - f64| {:.5} deg, bound {:.5} deg",
                     p.t_s,
@@ -296,7 +297,10 @@ fn refuses_bad_input() {
     let rec = rocking();
     let initial = coarse::<f32>(&rec.q_start, &initial_error(0), &Vector3::repeat(f64::NAN));
     let bad_config = FineConfig::<f32> {
-        gyro_noise: f32::NAN,
+        noise: SensorNoise {
+            arw_rad_per_sqrt_s: f32::NAN,
+            ..SensorNoise::seed003()
+        },
         update_period_s: -1.0,
         gate_sigma: f32::INFINITY,
         velocity_sigma_m_s: 0.0,

@@ -46,9 +46,9 @@ use crate::sensor_model::{ErrorInjector, Grade, ImuErrorModel};
 use crate::trajectory::scenarios::Scenario;
 use crate::trajectory::{Generator, Sampling, generate};
 use anyhow::{Result, ensure};
-use nav_core::alignment::AttitudeEstimate;
 use nav_core::alignment::fine::{FineAlignment, FineConfig};
 use nav_core::alignment::sway::{SwayAlignment, SwayConfig};
+use nav_core::alignment::{AttitudeEstimate, SensorNoise};
 use nav_core::attitude::{self, quat_from_f64, quat_to_f64};
 use nav_core::earth::{OMEGA_IE, normal_gravity};
 use nav_core::{ImuIncrement, InputError, Position, Scalar, UnitQuaternion, Vector3};
@@ -326,10 +326,7 @@ pub fn run_sway<T: Scalar>(
     );
     let f = &setup.fine;
     let config = SwayConfig {
-        gyro_noise: T::c(f.gyro_noise),
-        accel_noise: T::c(f.accel_noise),
-        gyro_bias_sigma: T::c(f.gyro_bias_sigma),
-        accel_bias_sigma: T::c(f.accel_bias_sigma),
+        noise: noise_in(&f.noise),
         euler_sigma_rad: T::c(sway.euler_sigma_rad),
         amplitude_walk: T::c(sway.amplitude_walk),
         frequency_walk: T::c(sway.frequency_walk),
@@ -348,13 +345,20 @@ pub fn run_sway<T: Scalar>(
     Ok((out, filter))
 }
 
+/// `n` (f64) in precision `T`.
+fn noise_in<T: Scalar>(n: &SensorNoise<f64>) -> SensorNoise<T> {
+    SensorNoise {
+        arw_rad_per_sqrt_s: T::c(n.arw_rad_per_sqrt_s),
+        vrw_mps_per_sqrt_s: T::c(n.vrw_mps_per_sqrt_s),
+        gyro_bias_rad_s: T::c(n.gyro_bias_rad_s),
+        accel_bias_mps2: T::c(n.accel_bias_mps2),
+    }
+}
+
 /// `c` (f64) in precision `T`.
 pub fn fine_config_in<T: Scalar>(c: &FineConfig<f64>) -> FineConfig<T> {
     FineConfig {
-        gyro_noise: T::c(c.gyro_noise),
-        accel_noise: T::c(c.accel_noise),
-        gyro_bias_sigma: T::c(c.gyro_bias_sigma),
-        accel_bias_sigma: T::c(c.accel_bias_sigma),
+        noise: noise_in(&c.noise),
         gyro_bias_walk: T::c(c.gyro_bias_walk),
         accel_bias_walk: T::c(c.accel_bias_walk),
         position_sigma_m: T::c(c.position_sigma_m),
@@ -376,10 +380,12 @@ pub fn matched_config(
     accel_bias_sigma: f64,
 ) -> FineConfig<f64> {
     FineConfig {
-        gyro_noise: model.gyro.white_noise.density(),
-        accel_noise: model.accel.white_noise.density(),
-        gyro_bias_sigma,
-        accel_bias_sigma,
+        noise: SensorNoise {
+            arw_rad_per_sqrt_s: model.gyro.white_noise.density(),
+            vrw_mps_per_sqrt_s: model.accel.white_noise.density(),
+            gyro_bias_rad_s: gyro_bias_sigma,
+            accel_bias_mps2: accel_bias_sigma,
+        },
         ..FineConfig::default()
     }
 }
@@ -603,7 +609,10 @@ pub fn summarize(runs: usize, bias_runs: usize, threads: usize) -> Result<Summar
         )
         .map(|r| r.0)
     })?;
-    let (n_g, n_a) = (config.gyro_noise, config.accel_noise);
+    let (n_g, n_a) = (
+        config.noise.arw_rad_per_sqrt_s,
+        config.noise.vrw_mps_per_sqrt_s,
+    );
     let crb = crb_general(&CHECKPOINTS_S, n_g, n_a, rec.lat_rad);
     let rows = CHECKPOINTS_S
         .iter()

@@ -159,7 +159,8 @@ impl core::fmt::Display for InertialAlignError {
 impl core::error::Error for InertialAlignError {}
 
 /// White noise and bias levels of the IMU, from which [`InertialAlignment::estimate`] derives
-/// its 1-sigma.
+/// its 1-sigma (and with which the fine filters, [`FineConfig`](super::fine::FineConfig) and
+/// [`SwayConfig`](super::sway::SwayConfig), are tuned).
 ///
 /// With `w = Omega cos(L)`, `T` the time accumulated (eqs. S1, S2):
 /// ```text
@@ -186,6 +187,22 @@ pub struct SensorNoise<T: Scalar> {
     pub gyro_bias_rad_s: T,
     /// Accelerometer bias 1-sigma per axis `b_a` [m/s^2].
     pub accel_bias_mps2: T,
+}
+
+impl<T: Scalar> SensorNoise<T> {
+    /// Seed 003's FOG IMU, the fine filters' defaults: gyro white noise 0.003 deg/s RMS at
+    /// 400 Hz = 2.618e-6 rad/sqrt(s), accelerometer white noise 0.02 m/s^2 RMS at 400 Hz =
+    /// 1e-3 m/s/sqrt(s), gyro bias 0.2 deg/h, accelerometer bias 0.005 m/s^2 (1-sigma per
+    /// axis).
+    pub fn seed003() -> Self {
+        let deg = core::f64::consts::PI / 180.0;
+        Self {
+            arw_rad_per_sqrt_s: T::c(0.003 * deg / 20.0),
+            vrw_mps_per_sqrt_s: T::c(0.02 / 20.0),
+            gyro_bias_rad_s: T::c(0.2 * deg / 3600.0),
+            accel_bias_mps2: T::c(0.005),
+        }
+    }
 }
 
 /// A quaternion summed with a compensated carry per component (Neumaier's two-sum, the carry

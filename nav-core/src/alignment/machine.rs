@@ -322,17 +322,14 @@ impl<T: Scalar> Aligner<T> {
                 return;
             }
         };
-        let n = &self.settings.noise;
+        let noise = self.settings.noise;
         let position = self.settings.position;
         self.fine = Some(match self.settings.method {
             AlignMethod::Sway => Fine::Sway(SwayAlignment::new(
                 initial,
                 position,
                 SwayConfig {
-                    gyro_noise: n.arw_rad_per_sqrt_s,
-                    accel_noise: n.vrw_mps_per_sqrt_s,
-                    gyro_bias_sigma: n.gyro_bias_rad_s,
-                    accel_bias_sigma: n.accel_bias_mps2,
+                    noise,
                     ..SwayConfig::default()
                 },
             )),
@@ -340,10 +337,7 @@ impl<T: Scalar> Aligner<T> {
                 initial,
                 position,
                 FineConfig {
-                    gyro_noise: n.arw_rad_per_sqrt_s,
-                    accel_noise: n.vrw_mps_per_sqrt_s,
-                    gyro_bias_sigma: n.gyro_bias_rad_s,
-                    accel_bias_sigma: n.accel_bias_mps2,
+                    noise,
                     ..FineConfig::default()
                 },
             )),

@@ -73,9 +73,9 @@
 //! of 125 samples: 1e6 multiply-adds and 8e4 sine/cosine pairs, well under a second of a
 //! Cortex-M4F's low-priority task).
 
-use super::AttitudeEstimate;
 use super::fine::kalman::{ScalarUpdate, discrete_noise, propagate, update_scalar};
 use super::fine::{euler_jacobian, phi_covariance};
+use super::{AttitudeEstimate, SensorNoise};
 use crate::coning::ConingSculling;
 use crate::earth::LocalEarth;
 use crate::strapdown::{dcm_of, kahan_add, small_rotation};
@@ -107,14 +107,12 @@ type Cov<T> = SMatrix<T, SWAY_STATES, SWAY_STATES>;
 /// Settings of [`SwayAlignment`]. `Default` is seed 003's FOG IMU.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SwayConfig<T: Scalar> {
-    /// Gyro white-noise density [rad/sqrt(s)] (default 2.618e-6: 0.003 deg/s RMS at 400 Hz).
-    pub gyro_noise: T,
-    /// Accelerometer white-noise density [m/s/sqrt(s)] (default 1e-3: 0.02 m/s^2 at 400 Hz).
-    pub accel_noise: T,
-    /// Initial 1-sigma of each gyro bias [rad/s] (default 0.2 deg/h).
-    pub gyro_bias_sigma: T,
-    /// Initial 1-sigma of each accelerometer bias [m/s^2] (default 0.005).
-    pub accel_bias_sigma: T,
+    /// The IMU's noise: gyro white-noise density [rad/sqrt(s)], accelerometer white-noise
+    /// density [m/s/sqrt(s)] (positive: it weights the level measurement), initial 1-sigma of
+    /// each gyro bias [rad/s] and accelerometer bias [m/s^2]. Default
+    /// [`SensorNoise::seed003`]: 2.618e-6 (0.003 deg/s RMS at 400 Hz), 1e-3 (0.02 m/s^2 at
+    /// 400 Hz), 0.2 deg/h, 0.005.
+    pub noise: SensorNoise<T>,
     /// 1-sigma of what the sway model leaves in the integrated roll and pitch [rad] (default
     /// 1e-5; it must stay well below the gyro noise's walk over a sway period,
     /// `N_g sqrt(P)`, or the drift is lost in it).
@@ -147,10 +145,7 @@ impl<T: Scalar> Default for SwayConfig<T> {
     fn default() -> Self {
         let deg = core::f64::consts::PI / 180.0;
         Self {
-            gyro_noise: T::c(0.003 * deg / 20.0),
-            accel_noise: T::c(0.02 / 20.0),
-            gyro_bias_sigma: T::c(0.2 * deg / 3600.0),
-            accel_bias_sigma: T::c(0.005),
+            noise: SensorNoise::seed003(),
             euler_sigma_rad: T::c(1e-5),
             amplitude_walk: T::c(1e-6),
             frequency_walk: T::c(1e-6),
@@ -174,10 +169,15 @@ impl<T: Scalar> SwayConfig<T> {
         let nonneg = |v: T, dv: T| if v.finite() && v >= T::zero() { v } else { dv };
         let pos = |v: T, dv: T| if v.finite() && v > T::zero() { v } else { dv };
         let mut c = Self {
-            gyro_noise: nonneg(self.gyro_noise, d.gyro_noise),
-            accel_noise: pos(self.accel_noise, d.accel_noise),
-            gyro_bias_sigma: nonneg(self.gyro_bias_sigma, d.gyro_bias_sigma),
-            accel_bias_sigma: nonneg(self.accel_bias_sigma, d.accel_bias_sigma),
+            noise: SensorNoise {
+                arw_rad_per_sqrt_s: nonneg(
+                    self.noise.arw_rad_per_sqrt_s,
+                    d.noise.arw_rad_per_sqrt_s,
+                ),
+                vrw_mps_per_sqrt_s: pos(self.noise.vrw_mps_per_sqrt_s, d.noise.vrw_mps_per_sqrt_s),
+                gyro_bias_rad_s: nonneg(self.noise.gyro_bias_rad_s, d.noise.gyro_bias_rad_s),
+                accel_bias_mps2: nonneg(self.noise.accel_bias_mps2, d.noise.accel_bias_mps2),
+            },
             euler_sigma_rad: pos(self.euler_sigma_rad, d.euler_sigma_rad),
             amplitude_walk: nonneg(self.amplitude_walk, d.amplitude_walk),
             frequency_walk: nonneg(self.frequency_walk, d.frequency_walk),
@@ -494,9 +494,10 @@ impl<T: Scalar> SwayAlignment<T> {
         // Level: the averaging's noise, plus the accelerometer bias it cannot tell from tilt
         // (f_N = g phi_E + b_N, f_E = -g phi_N + b_E).
         let g = self.g;
-        let level_var =
-            var(c.accel_noise / g) / level_s.max(c.update_period_s) * T::c(4.0) + T::c(1e-10);
-        let bias_var = var(c.accel_bias_sigma);
+        let level_var = var(c.noise.vrw_mps_per_sqrt_s / g) / level_s.max(c.update_period_s)
+            * T::c(4.0)
+            + T::c(1e-10);
+        let bias_var = var(c.noise.accel_bias_mps2);
         p[(ATT, ATT)] = level_var + bias_var / (g * g);
         p[(ATT + 1, ATT + 1)] = level_var + bias_var / (g * g);
         p[(ATT, ACCEL_BIAS + 1)] = bias_var / g;
@@ -505,7 +506,7 @@ impl<T: Scalar> SwayAlignment<T> {
         p[(ACCEL_BIAS, ATT + 1)] = -bias_var / g;
         p[(ATT + 2, ATT + 2)] = phi_covariance(&first_q, &self.initial_sigma)[(2, 2)];
         for i in 0..3 {
-            p[(GYRO_BIAS + i, GYRO_BIAS + i)] = var(c.gyro_bias_sigma);
+            p[(GYRO_BIAS + i, GYRO_BIAS + i)] = var(c.noise.gyro_bias_rad_s);
         }
         for i in 0..2 {
             p[(ACCEL_BIAS + i, ACCEL_BIAS + i)] = bias_var;
@@ -585,7 +586,7 @@ impl<T: Scalar> SwayAlignment<T> {
         x.fixed_rows_mut::<3>(ATT).copy_from(&att);
         let mut q_c = State::<T>::zeros();
         for i in 0..3 {
-            q_c[ATT + i] = c.gyro_noise * c.gyro_noise;
+            q_c[ATT + i] = c.noise.arw_rad_per_sqrt_s * c.noise.arw_rad_per_sqrt_s;
         }
         for axis in 0..2 {
             if self.omega[axis].is_some() {
@@ -654,7 +655,8 @@ impl<T: Scalar> SwayAlignment<T> {
     /// Horizontal specific force: the level of the attitude, `f_N = g phi_E + b_N`,
     /// `f_E = -g phi_N + b_E` (`f x phi` with `f = (0, 0, -g)`).
     fn update_level(&mut self, sample: &Sample<T>) {
-        let r = self.config.accel_noise * self.config.accel_noise / sample.dt_s;
+        let n_a = self.config.noise.vrw_mps_per_sqrt_s;
+        let r = n_a * n_a / sample.dt_s;
         for axis in 0..2 {
             let mut h = State::<T>::zeros();
             if axis == 0 {

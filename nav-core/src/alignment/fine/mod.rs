@@ -59,7 +59,7 @@
 pub mod kalman;
 pub mod model;
 
-use super::AttitudeEstimate;
+use super::{AttitudeEstimate, SensorNoise};
 use crate::earth::LocalEarth;
 use crate::{
     ImuIncrement, InputError, MechanizationConfig, NavFrame, NavState, Position, Scalar, Strapdown,
@@ -73,17 +73,13 @@ use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 /// or rocking bench with the position known.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FineConfig<T: Scalar> {
-    /// Gyro white-noise density (angle random walk) [rad/s/sqrt(Hz)] = [rad/sqrt(s)]. Default
-    /// seed 003: 0.003 deg/s RMS at 400 Hz = 2.618e-6 rad/sqrt(s).
-    pub gyro_noise: T,
-    /// Accelerometer white-noise density (velocity random walk) [m/s^2/sqrt(Hz)] =
-    /// [m/s/sqrt(s)]. Default seed 003: 0.02 m/s^2 RMS at 400 Hz = 1e-3 m/s/sqrt(s).
-    pub accel_noise: T,
-    /// Initial 1-sigma of each gyro bias [rad/s] (default 0.2 deg/h, seed 003; 0: biases known
-    /// to be compensated).
-    pub gyro_bias_sigma: T,
-    /// Initial 1-sigma of each accelerometer bias [m/s^2] (default 0.005, seed 003).
-    pub accel_bias_sigma: T,
+    /// The IMU's noise: gyro white-noise density (angle random walk) [rad/s/sqrt(Hz)] =
+    /// [rad/sqrt(s)] on the attitude, accelerometer white-noise density (velocity random walk)
+    /// [m/s^2/sqrt(Hz)] = [m/s/sqrt(s)] on the velocity, and the initial 1-sigma of each gyro
+    /// bias [rad/s] and accelerometer bias [m/s^2] (0: biases known to be compensated).
+    /// Default [`SensorNoise::seed003`]: seed 003's 0.003 deg/s and 0.02 m/s^2 RMS at 400 Hz
+    /// (2.618e-6 rad/sqrt(s), 1e-3 m/s/sqrt(s)), 0.2 deg/h, 0.005 m/s^2.
+    pub noise: SensorNoise<T>,
     /// Gyro bias random walk [rad/s/sqrt(s)] (default 0: constant biases).
     pub gyro_bias_walk: T,
     /// Accelerometer bias random walk [m/s^2/sqrt(s)] (default 0).
@@ -114,10 +110,7 @@ impl<T: Scalar> Default for FineConfig<T> {
     fn default() -> Self {
         let deg = core::f64::consts::PI / 180.0;
         Self {
-            gyro_noise: T::c(0.003 * deg / 20.0),
-            accel_noise: T::c(0.02 / 20.0),
-            gyro_bias_sigma: T::c(0.2 * deg / 3600.0),
-            accel_bias_sigma: T::c(0.005),
+            noise: SensorNoise::seed003(),
             gyro_bias_walk: T::zero(),
             accel_bias_walk: T::zero(),
             position_sigma_m: T::c(0.1),
@@ -140,10 +133,18 @@ impl<T: Scalar> FineConfig<T> {
         let nonneg = |v: T, dv: T| if v.finite() && v >= T::zero() { v } else { dv };
         let pos = |v: T, dv: T| if v.finite() && v > T::zero() { v } else { dv };
         Self {
-            gyro_noise: nonneg(self.gyro_noise, d.gyro_noise),
-            accel_noise: nonneg(self.accel_noise, d.accel_noise),
-            gyro_bias_sigma: nonneg(self.gyro_bias_sigma, d.gyro_bias_sigma),
-            accel_bias_sigma: nonneg(self.accel_bias_sigma, d.accel_bias_sigma),
+            noise: SensorNoise {
+                arw_rad_per_sqrt_s: nonneg(
+                    self.noise.arw_rad_per_sqrt_s,
+                    d.noise.arw_rad_per_sqrt_s,
+                ),
+                vrw_mps_per_sqrt_s: nonneg(
+                    self.noise.vrw_mps_per_sqrt_s,
+                    d.noise.vrw_mps_per_sqrt_s,
+                ),
+                gyro_bias_rad_s: nonneg(self.noise.gyro_bias_rad_s, d.noise.gyro_bias_rad_s),
+                accel_bias_mps2: nonneg(self.noise.accel_bias_mps2, d.noise.accel_bias_mps2),
+            },
             gyro_bias_walk: nonneg(self.gyro_bias_walk, d.gyro_bias_walk),
             accel_bias_walk: nonneg(self.accel_bias_walk, d.accel_bias_walk),
             position_sigma_m: pos(self.position_sigma_m, d.position_sigma_m),
@@ -239,14 +240,14 @@ impl<T: Scalar> FineAlignment<T> {
         for i in 0..3 {
             p0[(POS + i, POS + i)] = var(config.position_sigma_m);
             p0[(VEL + i, VEL + i)] = var(config.initial_velocity_sigma_m_s);
-            p0[(GYRO_BIAS + i, GYRO_BIAS + i)] = var(config.gyro_bias_sigma);
-            p0[(ACCEL_BIAS + i, ACCEL_BIAS + i)] = var(config.accel_bias_sigma);
+            p0[(GYRO_BIAS + i, GYRO_BIAS + i)] = var(config.noise.gyro_bias_rad_s);
+            p0[(ACCEL_BIAS + i, ACCEL_BIAS + i)] = var(config.noise.accel_bias_mps2);
         }
         p0.fixed_view_mut::<3, 3>(ATT, ATT)
             .copy_from(&phi_covariance(&q, &euler_sigma));
         let q_c = model::noise_densities(
-            config.gyro_noise,
-            config.accel_noise,
+            config.noise.arw_rad_per_sqrt_s,
+            config.noise.vrw_mps_per_sqrt_s,
             config.gyro_bias_walk,
             config.accel_bias_walk,
         );
