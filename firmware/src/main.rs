@@ -39,7 +39,8 @@ mod app {
     use hal_adapters::sim::{SimBmi088, SimError};
     use hal_adapters::{ImuSample, SampleFlags};
     use nav_core::alignment::{
-        AlignFailure, AlignMethod, AlignSettings, Aligner, Progress, SensorNoise, samples_for,
+        AlignFailure, AlignMethod, AlignSettings, Aligner, BaseMotion, LeverArm, Progress,
+        SensorNoise, samples_for,
     };
     use nav_core::output::CSV_HEADER;
     use nav_core::{
@@ -193,13 +194,15 @@ mod app {
                     n_align,
                     header.rate_hz,
                 ),
+                rate_hz: header.rate_hz,
                 noise: SensorNoise {
                     arw_rad_per_sqrt_s: noise.gyro_arw_rad_per_sqrt_s as f32,
                     vrw_mps_per_sqrt_s: noise.accel_vrw_mps_per_sqrt_s as f32,
                     gyro_bias_rad_s: noise.gyro_bias_rad_s as f32,
                     accel_bias_mps2: noise.accel_bias_mps2 as f32,
                 },
-                lever_arm_b_m: None,
+                lever_arm: LeverArm::default(),
+                base: BaseMotion::default(),
             },
         };
         if navigate::spawn(samples_rx, align_tx, result_rx, setup).is_err()

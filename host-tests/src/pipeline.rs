@@ -24,7 +24,8 @@
 use hal_adapters::drivers::NoiseSpec;
 use hal_adapters::{Imu, SampleFlags};
 use nav_core::alignment::{
-    AlignFailure, AlignMethod, AlignOutcome, AlignSettings, Aligner, Progress, SensorNoise,
+    AlignFailure, AlignMethod, AlignOutcome, AlignSettings, Aligner, BaseMotion, LeverArm,
+    Progress, SensorNoise,
 };
 use nav_core::output::CSV_HEADER;
 use nav_core::{
@@ -296,10 +297,13 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
         position,
         samples: n_align,
         coarse_samples: nav_core::alignment::machine::coarse_samples_for(n_align, config.rate_hz),
+        rate_hz: config.rate_hz,
         noise: sensor_noise(&config.noise),
-        lever_arm_b_m: config
-            .lever_arm_m
-            .map(|r| nav_core::Vector3::from(r.map(T::c))),
+        lever_arm: match config.lever_arm_m {
+            Some(r) => LeverArm::Known(nav_core::Vector3::from(r.map(T::c))),
+            None => LeverArm::default(),
+        },
+        base: BaseMotion::default(),
     })));
     let (mut samples, mut flagged, mut rejected, mut nav_steps, mut rows) =
         (0_u32, 0_u32, 0_u32, 0_u32, 0_u32);

@@ -111,8 +111,10 @@ pub fn heading_deg(
                 position: nav_core::Position::from_radians(site.lat_rad, 0.0, site.h_m),
                 samples,
                 coarse_samples: machine::coarse_samples_for(samples, rate_hz),
+                rate_hz,
                 noise: crate::pipeline::sensor_noise(&Grade::Rlg.noise_spec()),
-                lever_arm_b_m: None,
+                lever_arm: nav_core::alignment::LeverArm::Known(nav_core::Vector3::zeros()),
+                base: nav_core::alignment::BaseMotion::default(),
             });
             let mut last = Progress::Coarse;
             for inc in window {

@@ -63,7 +63,24 @@ impl AlignMethod {
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|m| m.name() == name)
     }
+
+    /// The shortest window the method accepts [s].
+    pub fn min_seconds(self) -> f64 {
+        match self {
+            Self::Static | Self::Inertial => super::inertial::MIN_DURATION_S,
+            Self::Fine => MIN_FINE_S,
+            Self::Sway => MIN_SWAY_S,
+        }
+    }
 }
+
+/// Shortest window of [`AlignMethod::Fine`] [s]: the coarse stage's 10 s and as much again for
+/// the filter.
+pub const MIN_FINE_S: f64 = 20.0;
+
+/// Shortest window of [`AlignMethod::Sway`] [s]: the coarse stage, the identification of the
+/// sway periods, and time for the filter.
+pub const MIN_SWAY_S: f64 = 40.0;
 
 /// Where an [`Aligner`] is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -124,22 +141,212 @@ impl core::fmt::Display for AlignFailure {
 
 impl core::error::Error for AlignFailure {}
 
+/// Where the IMU sits relative to the given position (the base's centre of rotation, or its
+/// reference point).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LeverArm<T: Scalar> {
+    /// Measured: the IMU's offset from the centre of rotation, body axes (FRD) [m].
+    Known(Vector3<T>),
+    /// Not measured: each body component is taken as `N(0, sigma_m^2)` [m] (0: the IMU is at
+    /// the given position).
+    Unknown {
+        /// 1-sigma per body axis [m].
+        sigma_m: T,
+    },
+}
+
+/// 1-sigma per axis assumed for an unknown lever arm [m] ([`LeverArm::Unknown`]): an IMU
+/// within about 10 m of the given point.
+pub const DEFAULT_LEVER_ARM_SIGMA_M: f64 = 5.0;
+
+impl<T: Scalar> Default for LeverArm<T> {
+    fn default() -> Self {
+        Self::Unknown {
+            sigma_m: T::c(DEFAULT_LEVER_ARM_SIGMA_M),
+        }
+    }
+}
+
+impl<T: Scalar> LeverArm<T> {
+    /// The measured offset, if known [m].
+    pub fn known(&self) -> Option<Vector3<T>> {
+        match self {
+            Self::Known(r) => Some(*r),
+            Self::Unknown { .. } => None,
+        }
+    }
+}
+
+/// What is assumed about the base's own motion and the given position.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BaseMotion<T: Scalar> {
+    /// 1-sigma of the given position itself (survey, GNSS), per north, east, down axis [m].
+    pub position_sigma_m: T,
+    /// 1-sigma of the translation of the base's centre about its mean position (heave, surge,
+    /// sway in waves), per axis [m]; 0: the centre does not move.
+    pub translation_sigma_m: T,
+}
+
+impl<T: Scalar> Default for BaseMotion<T> {
+    /// A surveyed point (0.1 m) on a base whose centre may move by waves (0.5 m).
+    fn default() -> Self {
+        Self {
+            position_sigma_m: T::c(0.1),
+            translation_sigma_m: T::c(0.5),
+        }
+    }
+}
+
+/// Why alignment settings were refused before any sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SettingsError {
+    /// The window is shorter than the method's minimum ([`AlignMethod::min_seconds`]).
+    WindowTooShort {
+        /// The method.
+        method: AlignMethod,
+        /// The window asked for [s].
+        seconds: f64,
+        /// The method's minimum [s].
+        min_s: f64,
+    },
+    /// The sampling rate is not a positive finite number [Hz].
+    BadRate(f64),
+    /// The latitude is not finite or within ~1 deg of a pole (gyrocompassing needs the
+    /// horizontal Earth rate).
+    NearPole,
+    /// A noise, lever-arm or base-motion value is negative or not finite.
+    BadValue(&'static str),
+}
+
+impl core::fmt::Display for SettingsError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::WindowTooShort {
+                method,
+                seconds,
+                min_s,
+            } => write!(
+                f,
+                "alignment window {seconds} s is shorter than the {} method's minimum of {min_s} s",
+                method.name()
+            ),
+            Self::BadRate(r) => write!(f, "sampling rate {r} Hz is not a positive number"),
+            Self::NearPole => f.write_str("latitude not finite or too close to a pole to align"),
+            Self::BadValue(what) => write!(f, "{what} must be finite and not negative"),
+        }
+    }
+}
+
+impl core::error::Error for SettingsError {}
+
 /// What to run, where.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AlignSettings<T: Scalar> {
     /// The method.
     pub method: AlignMethod,
-    /// The known position (the base does not travel).
+    /// The known position (of the base's centre of rotation; the base does not travel).
     pub position: Position,
     /// Samples of the whole alignment (see [`super::samples_for`]).
     pub samples: u32,
     /// Samples of the coarse stage of the two-stage methods ([`coarse_samples_for`]).
     pub coarse_samples: u32,
+    /// The recording's nominal rate [Hz] (the window's length in seconds is `samples /
+    /// rate_hz`; the elapsed time is checked again from the increments' own intervals).
+    pub rate_hz: f64,
     /// The IMU's noise, for the 1-sigma of the result (and the filters' tuning).
     pub noise: SensorNoise<T>,
-    /// The IMU's position relative to the base's centre of rotation, body axes [m], when known
-    /// (a ship's deck): the inertial-frame method then removes the lever-arm velocity.
-    pub lever_arm_b_m: Option<Vector3<T>>,
+    /// Where the IMU sits relative to [`Self::position`].
+    pub lever_arm: LeverArm<T>,
+    /// What the base itself does.
+    pub base: BaseMotion<T>,
+}
+
+impl<T: Scalar> AlignSettings<T> {
+    /// Settings for `method` over `seconds` [s] of data at `rate_hz` [Hz] at `position`, with
+    /// the IMU's `noise`, an unknown lever arm ([`LeverArm::default`]) and the default
+    /// [`BaseMotion`]; refused when the window is shorter than the method's minimum or a value
+    /// is not usable.
+    pub fn new(
+        method: AlignMethod,
+        position: Position,
+        seconds: f64,
+        rate_hz: f64,
+        noise: SensorNoise<T>,
+    ) -> Result<Self, SettingsError> {
+        if !(rate_hz.is_finite() && rate_hz > 0.0) {
+            return Err(SettingsError::BadRate(rate_hz));
+        }
+        let samples = super::samples_for(seconds, rate_hz);
+        let settings = Self {
+            method,
+            position,
+            samples,
+            coarse_samples: coarse_samples_for(samples, rate_hz),
+            rate_hz,
+            noise,
+            lever_arm: LeverArm::default(),
+            base: BaseMotion::default(),
+        };
+        settings.validate()?;
+        Ok(settings)
+    }
+
+    /// The same with `lever_arm`.
+    pub fn with_lever_arm(mut self, lever_arm: LeverArm<T>) -> Self {
+        self.lever_arm = lever_arm;
+        self
+    }
+
+    /// The same with `base`.
+    pub fn with_base(mut self, base: BaseMotion<T>) -> Self {
+        self.base = base;
+        self
+    }
+
+    /// The window's nominal length [s].
+    pub fn seconds(&self) -> f64 {
+        f64::from(self.samples) / self.rate_hz
+    }
+
+    /// Checks the window against the method's minimum and every value for sanity.
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        if !(self.rate_hz.is_finite() && self.rate_hz > 0.0) {
+            return Err(SettingsError::BadRate(self.rate_hz));
+        }
+        let min_s = self.method.min_seconds();
+        // Rounding of the sample count (a window of exactly the minimum is accepted).
+        if self.seconds() + 0.5 / self.rate_hz < min_s {
+            return Err(SettingsError::WindowTooShort {
+                method: self.method,
+                seconds: self.seconds(),
+                min_s,
+            });
+        }
+        let lat = self.position.lat_f64();
+        if !(lat.is_finite() && libm::cos(lat) >= super::inertial::MIN_COS_LAT) {
+            return Err(SettingsError::NearPole);
+        }
+        let ok = |v: T| v.finite() && v >= T::zero();
+        let n = &self.noise;
+        if !(ok(n.arw_rad_per_sqrt_s)
+            && ok(n.vrw_mps_per_sqrt_s)
+            && ok(n.gyro_bias_rad_s)
+            && ok(n.accel_bias_mps2))
+        {
+            return Err(SettingsError::BadValue("the IMU noise"));
+        }
+        let lever_ok = match self.lever_arm {
+            LeverArm::Known(r) => r.iter().all(|v| v.finite()),
+            LeverArm::Unknown { sigma_m } => ok(sigma_m),
+        };
+        if !lever_ok {
+            return Err(SettingsError::BadValue("the lever arm"));
+        }
+        if !(ok(self.base.position_sigma_m) && ok(self.base.translation_sigma_m)) {
+            return Err(SettingsError::BadValue("the base motion"));
+        }
+        Ok(())
+    }
 }
 
 /// Samples (and seconds) each stage took.
@@ -163,6 +370,10 @@ pub struct AlignOutcome<T: Scalar> {
     pub state: NavState<T>,
     /// Attitude and its 1-sigma.
     pub estimate: AttitudeEstimate<T>,
+    /// 1-sigma of the velocity handed over, north, east, down [m/s].
+    pub velocity_sigma_m_s: Vector3<T>,
+    /// 1-sigma of the position handed over, north, east, down [m].
+    pub position_sigma_m: Vector3<T>,
     /// Where the time went.
     pub times: StageTimes,
 }
@@ -210,7 +421,7 @@ impl<T: Scalar> Aligner<T> {
             AlignMethod::Static => Coarse::Static(StaticAlignment::new()),
             AlignMethod::Inertial | AlignMethod::Fine | AlignMethod::Sway => {
                 let a = InertialAlignment::new(lat, h).with_noise(settings.noise);
-                Coarse::Inertial(match settings.lever_arm_b_m {
+                Coarse::Inertial(match settings.lever_arm.known() {
                     Some(r) => a.with_lever_arm(r),
                     None => a,
                 })
@@ -356,9 +567,12 @@ impl<T: Scalar> Aligner<T> {
             }
             None => return,
         };
+        let (velocity_sigma_m_s, position_sigma_m) = handover_sigma(&self.settings);
         self.outcome = Some(AlignOutcome {
             state,
             estimate,
+            velocity_sigma_m_s,
+            position_sigma_m,
             times: self.times,
         });
         self.stage = Stage::Aligned;
@@ -380,9 +594,12 @@ impl<T: Scalar> Aligner<T> {
         };
         match estimate {
             Ok(estimate) => {
+                let (velocity_sigma_m_s, position_sigma_m) = handover_sigma(&self.settings);
                 self.outcome = Some(AlignOutcome {
                     state: NavState::at_rest(position, estimate.q_b_n),
                     estimate,
+                    velocity_sigma_m_s,
+                    position_sigma_m,
                     times: self.times,
                 });
                 self.stage = Stage::Aligned;
@@ -393,6 +610,18 @@ impl<T: Scalar> Aligner<T> {
             }
         }
     }
+}
+
+/// Provisional hand-over 1-sigma (velocity [m/s], position [m]) from the settings' priors alone.
+fn handover_sigma<T: Scalar>(s: &AlignSettings<T>) -> (Vector3<T>, Vector3<T>) {
+    let lever = match s.lever_arm {
+        LeverArm::Known(_) => T::zero(),
+        LeverArm::Unknown { sigma_m } => sigma_m,
+    };
+    let d = s.base.translation_sigma_m;
+    let p = s.base.position_sigma_m;
+    let pos = (p * p + d * d + lever * lever).sqrt();
+    (Vector3::repeat(d), Vector3::repeat(pos))
 }
 
 /// Roll, pitch, yaw 1-sigma [rad] of a static analytic alignment over `t_s` [s]: levelling
@@ -424,19 +653,23 @@ mod tests {
     const DT: f64 = 0.0025;
 
     fn settings(method: AlignMethod, seconds: f64) -> AlignSettings<f64> {
+        let noise = SensorNoise {
+            arw_rad_per_sqrt_s: 2.6e-6,
+            vrw_mps_per_sqrt_s: 1e-3,
+            gyro_bias_rad_s: 1e-6,
+            accel_bias_mps2: 5e-3,
+        };
+        let position = Position::from_degrees(45.0, 7.5, 100.0);
         let samples = super::super::samples_for(seconds, 1.0 / DT);
         AlignSettings {
             method,
-            position: Position::from_degrees(45.0, 7.5, 100.0),
+            position,
             samples,
             coarse_samples: coarse_samples_for(samples, 1.0 / DT),
-            noise: SensorNoise {
-                arw_rad_per_sqrt_s: 2.6e-6,
-                vrw_mps_per_sqrt_s: 1e-3,
-                gyro_bias_rad_s: 1e-6,
-                accel_bias_mps2: 5e-3,
-            },
-            lever_arm_b_m: None,
+            rate_hz: 1.0 / DT,
+            noise,
+            lever_arm: LeverArm::Known(Vector3::zeros()),
+            base: BaseMotion::default(),
         }
     }
 
