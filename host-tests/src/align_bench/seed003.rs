@@ -46,6 +46,8 @@ use crate::sensor_model::{ErrorInjector, Grade, ImuErrorModel};
 use crate::trajectory::scenarios::Scenario;
 use crate::trajectory::{Generator, Sampling, generate};
 use anyhow::{Result, ensure};
+use nav_core::alignment::LeverArm;
+use nav_core::alignment::fine::base::Translation;
 use nav_core::alignment::fine::{FineAlignment, FineConfig};
 use nav_core::alignment::sway::{SwayAlignment, SwayConfig};
 use nav_core::alignment::{AttitudeEstimate, SensorNoise};
@@ -306,7 +308,13 @@ pub fn run_fine<T: Scalar>(
         &setup.initial_error_rad,
         &setup.initial_sigma_rad,
     );
-    let mut filter = FineAlignment::new(initial, rec.position, fine_config_in(&setup.fine));
+    // The filter needs no heading: the initial yaw error only turns its level frame.
+    let mut filter = FineAlignment::new(
+        initial.q_b_n,
+        Vector3::zeros(),
+        rec.position,
+        fine_config_in(&setup.fine),
+    );
     let out = drive(rec, setup.model, setup.seed, &mut filter, checkpoints)?;
     Ok((out, filter))
 }
@@ -357,23 +365,36 @@ fn noise_in<T: Scalar>(n: &SensorNoise<f64>) -> SensorNoise<T> {
 
 /// `c` (f64) in precision `T`.
 pub fn fine_config_in<T: Scalar>(c: &FineConfig<f64>) -> FineConfig<T> {
+    let t = &c.translation;
     FineConfig {
         noise: noise_in(&c.noise),
         gyro_bias_walk: T::c(c.gyro_bias_walk),
         accel_bias_walk: T::c(c.accel_bias_walk),
-        position_sigma_m: T::c(c.position_sigma_m),
-        velocity_sigma_m_s: T::c(c.velocity_sigma_m_s),
-        initial_velocity_sigma_m_s: T::c(c.initial_velocity_sigma_m_s),
-        fallback_level_sigma: T::c(c.fallback_level_sigma),
-        fallback_yaw_sigma: T::c(c.fallback_yaw_sigma),
+        lever_arm: match c.lever_arm {
+            LeverArm::Known(r) => LeverArm::Known(r.map(T::c)),
+            LeverArm::Unknown { sigma_m } => LeverArm::Unknown {
+                sigma_m: T::c(sigma_m),
+            },
+        },
+        translation: Translation {
+            horizontal_sigma_m: T::c(t.horizontal_sigma_m),
+            vertical_sigma_m: T::c(t.vertical_sigma_m),
+            omega0_rad_s: T::c(t.omega0_rad_s),
+            damping: T::c(t.damping),
+            corner_rad_s: T::c(t.corner_rad_s),
+        },
+        position_noise_m: T::c(c.position_noise_m),
+        tilt_sigma_rad: T::c(c.tilt_sigma_rad),
         update_period_s: T::c(c.update_period_s),
         gate_sigma: T::c(c.gate_sigma),
-        mechanization: FineConfig::<T>::default().mechanization,
+        max_heading_sigma_rad: T::c(c.max_heading_sigma_rad),
+        limits: FineConfig::<T>::default().limits,
     }
 }
 
 /// The filter configuration matched to a sensor model: its white-noise densities, and bias
-/// sigmas `gyro_bias_sigma` [rad/s], `accel_bias_sigma` [m/s^2] (0 for the noise-only runs).
+/// sigmas `gyro_bias_sigma` [rad/s], `accel_bias_sigma` [m/s^2] (0 for the noise-only runs);
+/// the bench's IMU sits on the rotation centre, which does not move.
 pub fn matched_config(
     model: &ImuErrorModel,
     gyro_bias_sigma: f64,
@@ -386,6 +407,13 @@ pub fn matched_config(
             gyro_bias_rad_s: gyro_bias_sigma,
             accel_bias_mps2: accel_bias_sigma,
         },
+        lever_arm: LeverArm::Known(Vector3::zeros()),
+        translation: Translation {
+            horizontal_sigma_m: 0.0,
+            vertical_sigma_m: 0.0,
+            ..Translation::default()
+        },
+        tilt_sigma_rad: INITIAL_LEVEL_ERROR_DEG.to_radians(),
         ..FineConfig::default()
     }
 }
@@ -656,7 +684,7 @@ pub fn bias_table(rec: &Recorded, runs: usize, threads: usize) -> Result<BiasRow
         let setup = RunSetup { model, ..setup };
         let (cp, filter) = run_fine::<f64>(rec, &setup, &[t_s])?;
         let phi = cp[0].phi_n_rad;
-        let residual = q_end * accel_b - filter.accel_bias_n().0;
+        let residual = q_end * (accel_b - filter.accel_bias().0);
         let predicted = Vector3::new(
             residual.y / g,
             -residual.x / g,

@@ -457,6 +457,25 @@ impl<T: Scalar> InertialAlignment<T> {
         Some((v_b0, m_b0))
     }
 
+    /// The attitude at the end of the last increment levelled on the mean specific force
+    /// (`V_b0`, the known lever arm's share removed), with an arbitrary azimuth: `q_b_c` for a
+    /// level frame `c` (the fine filters' start, [`super::fine`]). The vertical is the window's
+    /// mean one, so it is off by up to `Omega T` (the Earth's turn) plus what the base's
+    /// translation leaves in `V`; `None` before two intervals or without a specific force.
+    pub fn level(&self) -> Option<UnitQuaternion<T>> {
+        let q_b_b0 = self.q_b_b0.unit();
+        let (v_b0, _) = self.corrected(self.t_s.sum, &q_b_b0)?;
+        let n = v_b0.norm();
+        if !(n.finite() && n > T::zero()) {
+            return None;
+        }
+        // The integrated specific force points up: down is -V.
+        let down_b0 = -v_b0 / n;
+        let e_d = Vector3::new(T::zero(), T::zero(), T::one());
+        let q_b0_c = UnitQuaternion::rotation_between(&down_b0, &e_d)?;
+        Some(q_b0_c * q_b_b0)
+    }
+
     /// Time accumulated [s].
     pub fn elapsed_s(&self) -> T {
         self.t_s.sum

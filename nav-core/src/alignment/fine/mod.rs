@@ -1,109 +1,103 @@
-//! Position-aided closed-loop fine alignment (seed 003; issue 6, requirement 2b): an
-//! error-state Kalman filter around a [`Strapdown`] mechanization.
+//! Position-aided closed-loop fine alignment [Vavilova et al., §3]: an error-state Kalman
+//! filter around a strapdown integrated at the site, that needs no initial heading and models
+//! what a swaying base does to the IMU's position.
 //!
 //! **Design.**
-//! - Mechanization: the project's [`Strapdown`] in the NED frame, every increment (400 Hz),
-//!   the increments first compensated with the filter's bias estimates.
-//! - Filter: 15 error states ([`model`]: position, velocity, attitude `phi`, gyro bias,
-//!   accelerometer bias; named offsets), process model the linearised INS error equations
-//!   (Titterton & Weston ch. 12, Groves §14.2, seed 000 eq. (22)), discretised over the filter
-//!   interval ([`FineConfig::update_period_s`], 0.1 s by default): `Phi = I + F dt + (F dt)^2 / 2`,
-//!   `Q_d = (Phi Q_c Phi^T + Q_c) dt / 2`, `F` linearised about the *reference* motion (the
-//!   known position and velocity, so the specific force of a base at rest is `-g_n`: the
-//!   computed one carries the tilt error, whose horizontal part would couple the heading error
-//!   into the velocity and fake a heading observation before the levelling settles) with the
-//!   interval's mean `C_b_n` for the gyro bias. At 10 Hz a 15-state propagation and six scalar
-//!   Joseph updates cost about 2e4 multiply-adds, 2e5 per second: a few per cent of a
-//!   Cortex-M4F, while the mechanization runs at the full rate.
-//! - Measurements, every filter interval: the known position (computed minus known latitude,
-//!   longitude and height, as north, east, down metres, noise [`FineConfig::position_sigma_m`])
-//!   and the known velocity (zero by default, noise [`FineConfig::velocity_sigma_m_s`]): six
-//!   scalar updates in Joseph form, symmetrised, each gated at
-//!   [`FineConfig::gate_sigma`]. The height measurement aids the (free) vertical channel.
-//! - Closed loop (seed 003: "estimates fed back into the navigation algorithm, the state
-//!   zeroed"): after every update the attitude (`q_b_n <- q(phi) q_b_n`), velocity and position
-//!   estimates are applied to the strapdown through [`Strapdown::set_state`] (which restarts
-//!   its Kahan carries: harmless at 10 Hz), the bias estimates are added to the compensation
-//!   (gyro in body axes, accelerometer in NED axes: [`model`]), and the error state is zeroed.
+//! - Mechanization: [`integrator::SiteStrapdown`], every increment (400 Hz), in a level frame
+//!   `c` of unknown azimuth: started from the coarse stage's roll and pitch with any heading,
+//!   the heading error is a constant rotation of `c` about down, seen only as the horizontal
+//!   Earth rate in `c`, which the filter estimates (two states, [`model`]). So the filter is
+//!   linear for any heading error; the heading is `atan2(-e_E, e_N)` of that rate at the end,
+//!   its 1-sigma the tangential error over `Omega cos(lat)`.
+//! - States ([`model`]): displacement, velocity and attitude errors, the horizontal Earth rate,
+//!   gyro and accelerometer biases (body axes), the lever-arm error (body axes: known to
+//!   [`LEVER_ARM_KNOWN_SIGMA_M`], or unknown with a prior), and the translation of the base's
+//!   centre as a shaping process with no power at zero frequency ([`base`]): 29 states.
+//! - Measurement, every filter interval ([`FineConfig::update_period_s`], 0.1 s): the IMU's
+//!   displacement from the centre's mean position minus its lever-arm offset, three scalar
+//!   Joseph updates (noise [`FineConfig::position_noise_m`]). With the lever arm unknown the
+//!   same measurement estimates it from the sway (`C_b_c l` turns with the body): the
+//!   measurement never needs the IMU's velocity.
+//! - Process model: [`model`] over the interval, `Phi = I + F dt + (F dt)^2/2 + (F dt)^3/6` for
+//!   the INS part (linearised about the interval's mean specific force and attitude), the
+//!   translation block exactly ([`base::ShapingBlock::discrete`]); `Q_d` by the trapezoid rule
+//!   [Groves, eq. 3.46] from the noise densities.
+//! - Closed loop [Vavilova et al., §3]: after every update the INS error estimates go into
+//!   the integrator ([`integrator::SiteStrapdown::correct`]), the lever arm into its estimate,
+//!   and those states are zeroed; the translation states are the process itself and stay.
 //!
-//! **Large heading error.** No initial heading is assumed: the filter starts from a coarse
-//! result with a large heading sigma (10 deg by default when the coarse stage gives none). The
-//! attitude-error dynamics are exact in rotation-vector form for any heading error
-//! ([`model`]), and at rest a heading error does not reach the velocity at all (the specific
-//! force is vertical); the one small-angle step is the tilt's velocity signature `f x phi`,
-//! which a heading error `psi` turns by `psi / 2` (heading read as `psi (1 - psi^2/6)`). Every
-//! feedback removes what was estimated and the tilt is held at the noise level from the first
-//! seconds, so the filter is an EKF re-linearised at 10 Hz whose only large error, the
-//! heading, is the one it models exactly. Checked (`host-tests/tests/alignment_fine.rs` and
-//! by hand): on exact data the residual of a 10 deg start is the linear filter's
-//! `e0 P_T / P_0` to 5 %, still to 20 % from 60 deg and within 2x from 90 deg (all below
-//! 0.15 deg at 30 s); with the noise, 32-run RMS from 10, 30 and 60 deg starts agree within
-//! their 12 % spread. The validity limit is therefore the tilt, not the heading: the coarse
-//! stage's roll and pitch must be within a few degrees (`f x phi` linear; seed 003's coarse
-//! levelling gives tenths).
+//! **Honesty.** The result is refused ([`FineRefusal`]) when the heading's 1-sigma exceeds
+//! [`FineConfig::max_heading_sigma_rad`] (the Earth rate not resolved: coarse gyros, too short,
+//! too near a pole), when the estimated horizontal Earth rate's magnitude disagrees with
+//! `Omega cos(lat)` beyond [`EARTH_RATE_SIGMAS`] of its own 1-sigma (the gyros see something
+//! else: a bias beyond the prior, a turning base), or when the position innovations' mean
+//! normalised square exceeds [`MAX_MEAN_NIS`] (the base moves in a way the model does not
+//! describe).
 //!
-//! **Observability on a still or rocking base.** Heading is seen through the east tilt drift
-//! `Omega cos(L) psi` (gyrocompassing); the east gyro bias makes the same drift, so it leaves a
-//! heading error `eps_E / (Omega cos L)`; a horizontal accelerometer bias leaves a tilt
-//! `b / g`. Rocking by a few degrees does not separate them (the bias projections change by
-//! `1 - cos(5 deg) = 0.4 %`; the accelerometer bias is modelled in NED axes, see [`model`]).
-//! The filter's sigmas include these limits through the bias priors; the vertical
-//! accelerometer bias and the north gyro bias are observed.
-//!
-//! Memory: 2.7 KB in `f32` (5.2 KB in `f64`), the covariance included; no allocation.
-//!
-//! No input panics: increments that fail [`ImuIncrement::check`] are refused and counted,
-//! non-finite configuration values fall back to the defaults, and a covariance that became
-//! non-finite is re-initialised (counted in [`FineStatus::resets`]).
+//! Memory: about 10 KB in `f32` (the 29x29 covariance and the interval's transition); no
+//! allocation. No input panics: increments that fail [`ImuIncrement::check`] are refused and
+//! counted, a covariance that became non-finite is re-initialised (counted).
 
+pub mod bank;
+pub mod base;
+pub mod euler;
+pub mod integrator;
 pub mod kalman;
 pub mod model;
 
-use super::{AttitudeEstimate, SensorNoise};
-use crate::earth::LocalEarth;
-use crate::{
-    ImuIncrement, InputError, MechanizationConfig, NavFrame, NavState, Position, Scalar, Strapdown,
-    attitude,
-};
-use kalman::{ScalarUpdate, discrete_noise, propagate, update_scalar};
-use model::{ACCEL_BIAS, ATT, GYRO_BIAS, Linearisation, Matrix, POS, State, VEL};
-use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+pub use euler::{euler_jacobian, euler_sigma, phi_covariance};
 
-/// Noise model and settings of [`FineAlignment`]. `Default` is seed 003's FOG IMU on a still
-/// or rocking bench with the position known.
+use super::machine::LeverArm;
+use super::{AttitudeEstimate, SensorNoise};
+use crate::earth::{LocalEarth, OMEGA_IE};
+use crate::{ImuIncrement, InputError, InputLimits, NavState, Position, Scalar, attitude};
+use base::{ShapingBlock, Translation};
+use integrator::{Correction, SiteStrapdown};
+use kalman::{ScalarUpdate, symmetrize, update_scalar};
+use model::{
+    ACCEL_BIAS, ATT, BASE, EARTH, FINE_STATES, GYRO_BIAS, INS_STATES, LEVER, Linearisation, POS,
+    VEL,
+};
+use nalgebra::{Matrix3, SMatrix, SVector, UnitQuaternion, Vector2, Vector3};
+
+/// 1-sigma of a measured lever arm per axis [m] ([`LeverArm::Known`]).
+pub const LEVER_ARM_KNOWN_SIGMA_M: f64 = 0.01;
+
+/// The estimated horizontal Earth rate's magnitude may differ from `Omega cos(lat)` by this
+/// many of its own 1-sigma before the result is refused.
+pub const EARTH_RATE_SIGMAS: f64 = 4.0;
+
+/// Largest mean normalised innovation square of the position measurements accepted (about 1
+/// when the model holds).
+pub const MAX_MEAN_NIS: f64 = 3.0;
+
+/// Settings of the filter. `Default` is seed 003's FOG IMU [Vavilova et al., §4] on a base that
+/// may sway and heave, the lever arm unknown (5 m per axis).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FineConfig<T: Scalar> {
-    /// The IMU's noise: gyro white-noise density (angle random walk) [rad/s/sqrt(Hz)] =
-    /// [rad/sqrt(s)] on the attitude, accelerometer white-noise density (velocity random walk)
-    /// [m/s^2/sqrt(Hz)] = [m/s/sqrt(s)] on the velocity, and the initial 1-sigma of each gyro
-    /// bias [rad/s] and accelerometer bias [m/s^2] (0: biases known to be compensated).
-    /// Default [`SensorNoise::seed003`]: seed 003's 0.003 deg/s and 0.02 m/s^2 RMS at 400 Hz
-    /// (2.618e-6 rad/sqrt(s), 1e-3 m/s/sqrt(s)), 0.2 deg/h, 0.005 m/s^2.
+    /// The IMU's white noise and bias 1-sigma ([`SensorNoise::seed003`] by default).
     pub noise: SensorNoise<T>,
     /// Gyro bias random walk [rad/s/sqrt(s)] (default 0: constant biases).
     pub gyro_bias_walk: T,
     /// Accelerometer bias random walk [m/s^2/sqrt(s)] (default 0).
     pub accel_bias_walk: T,
-    /// 1-sigma noise of the position measurement, per NED axis [m] (default 0.1: a surveyed
-    /// bench or an RTK fix; a stand-alone GNSS receiver: 2–5).
-    pub position_sigma_m: T,
-    /// 1-sigma noise of the known-velocity measurement, per NED axis [m/s] (default 1e-3:
-    /// the bench is still at the centre of its rotation; a surfaced vehicle in waves should
-    /// give its wave-induced velocity here).
-    pub velocity_sigma_m_s: T,
-    /// Initial 1-sigma of the velocity error [m/s] (default 0.1).
-    pub initial_velocity_sigma_m_s: T,
-    /// Roll and pitch 1-sigma used when the coarse estimate gives none (NaN) [rad] (default
-    /// 1 deg).
-    pub fallback_level_sigma: T,
-    /// Heading 1-sigma used when the coarse estimate gives none (NaN) [rad] (default 10 deg).
-    pub fallback_yaw_sigma: T,
-    /// Filter interval: covariance propagation and measurement updates [s] (default 0.1).
+    /// Where the IMU sits relative to the centre.
+    pub lever_arm: LeverArm<T>,
+    /// The centre's translation model ([`base`]).
+    pub translation: Translation<T>,
+    /// 1-sigma of what the model leaves in the displacement measurement, per axis [m]
+    /// (default 0.001).
+    pub position_noise_m: T,
+    /// Roll and pitch 1-sigma of the starting attitude [rad] (default 2 deg).
+    pub tilt_sigma_rad: T,
+    /// Filter interval [s] (default 0.1).
     pub update_period_s: T,
     /// Innovation gate [sigma] (default 8: only gross outliers are refused).
     pub gate_sigma: T,
-    /// Mechanization (its frame is forced to [`NavFrame::Ned`], the filter's frame).
-    pub mechanization: MechanizationConfig<T>,
+    /// Largest heading 1-sigma answered [rad] (default 10 deg).
+    pub max_heading_sigma_rad: T,
+    /// Increment limits.
+    pub limits: InputLimits<T>,
 }
 
 impl<T: Scalar> Default for FineConfig<T> {
@@ -113,67 +107,67 @@ impl<T: Scalar> Default for FineConfig<T> {
             noise: SensorNoise::seed003(),
             gyro_bias_walk: T::zero(),
             accel_bias_walk: T::zero(),
-            position_sigma_m: T::c(0.1),
-            velocity_sigma_m_s: T::c(1e-3),
-            initial_velocity_sigma_m_s: T::c(0.1),
-            fallback_level_sigma: T::c(deg),
-            fallback_yaw_sigma: T::c(10.0 * deg),
+            lever_arm: LeverArm::default(),
+            translation: Translation::default(),
+            position_noise_m: T::c(0.001),
+            tilt_sigma_rad: T::c(2.0 * deg),
             update_period_s: T::c(0.1),
             gate_sigma: T::c(8.0),
-            mechanization: MechanizationConfig::default(),
+            max_heading_sigma_rad: T::c(10.0 * deg),
+            limits: InputLimits::default(),
         }
     }
 }
 
 impl<T: Scalar> FineConfig<T> {
-    /// The configuration with every non-finite or negative value replaced by its default
-    /// (a zero or negative filter interval or gate too).
+    /// The configuration with every non-finite or out-of-range value replaced by its default.
     pub fn sanitized(&self) -> Self {
         let d = Self::default();
         let nonneg = |v: T, dv: T| if v.finite() && v >= T::zero() { v } else { dv };
         let pos = |v: T, dv: T| if v.finite() && v > T::zero() { v } else { dv };
+        let n = &self.noise;
+        let t = &self.translation;
         Self {
             noise: SensorNoise {
-                arw_rad_per_sqrt_s: nonneg(
-                    self.noise.arw_rad_per_sqrt_s,
-                    d.noise.arw_rad_per_sqrt_s,
-                ),
-                vrw_mps_per_sqrt_s: nonneg(
-                    self.noise.vrw_mps_per_sqrt_s,
-                    d.noise.vrw_mps_per_sqrt_s,
-                ),
-                gyro_bias_rad_s: nonneg(self.noise.gyro_bias_rad_s, d.noise.gyro_bias_rad_s),
-                accel_bias_mps2: nonneg(self.noise.accel_bias_mps2, d.noise.accel_bias_mps2),
+                arw_rad_per_sqrt_s: nonneg(n.arw_rad_per_sqrt_s, d.noise.arw_rad_per_sqrt_s),
+                vrw_mps_per_sqrt_s: nonneg(n.vrw_mps_per_sqrt_s, d.noise.vrw_mps_per_sqrt_s),
+                gyro_bias_rad_s: nonneg(n.gyro_bias_rad_s, d.noise.gyro_bias_rad_s),
+                accel_bias_mps2: nonneg(n.accel_bias_mps2, d.noise.accel_bias_mps2),
             },
             gyro_bias_walk: nonneg(self.gyro_bias_walk, d.gyro_bias_walk),
             accel_bias_walk: nonneg(self.accel_bias_walk, d.accel_bias_walk),
-            position_sigma_m: pos(self.position_sigma_m, d.position_sigma_m),
-            velocity_sigma_m_s: pos(self.velocity_sigma_m_s, d.velocity_sigma_m_s),
-            initial_velocity_sigma_m_s: pos(
-                self.initial_velocity_sigma_m_s,
-                d.initial_velocity_sigma_m_s,
-            ),
-            fallback_level_sigma: pos(self.fallback_level_sigma, d.fallback_level_sigma),
-            fallback_yaw_sigma: pos(self.fallback_yaw_sigma, d.fallback_yaw_sigma),
-            // The mechanization's interval limit keeps the filter interval sane too.
-            update_period_s: pos(self.update_period_s, d.update_period_s).min(T::c(10.0)),
-            gate_sigma: pos(self.gate_sigma, d.gate_sigma),
-            mechanization: MechanizationConfig {
-                frame: NavFrame::Ned,
-                ..self.mechanization
+            lever_arm: match self.lever_arm {
+                LeverArm::Known(r) if r.iter().all(|v| v.finite()) => LeverArm::Known(r),
+                LeverArm::Unknown { sigma_m } if sigma_m.finite() && sigma_m >= T::zero() => {
+                    LeverArm::Unknown { sigma_m }
+                }
+                _ => d.lever_arm,
             },
+            translation: Translation {
+                horizontal_sigma_m: nonneg(t.horizontal_sigma_m, d.translation.horizontal_sigma_m),
+                vertical_sigma_m: nonneg(t.vertical_sigma_m, d.translation.vertical_sigma_m),
+                omega0_rad_s: pos(t.omega0_rad_s, d.translation.omega0_rad_s),
+                damping: pos(t.damping, d.translation.damping),
+                corner_rad_s: pos(t.corner_rad_s, d.translation.corner_rad_s),
+            },
+            position_noise_m: pos(self.position_noise_m, d.position_noise_m),
+            tilt_sigma_rad: pos(self.tilt_sigma_rad, d.tilt_sigma_rad),
+            update_period_s: pos(self.update_period_s, d.update_period_s).min(T::c(1.0)),
+            gate_sigma: pos(self.gate_sigma, d.gate_sigma),
+            max_heading_sigma_rad: pos(self.max_heading_sigma_rad, d.max_heading_sigma_rad),
+            limits: self.limits,
         }
     }
 }
 
 /// Counters of what the filter did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FineStatus {
     /// Increments integrated.
     pub increments: u32,
     /// Increments refused (non-finite, bad interval, out of range).
     pub rejected_increments: u32,
-    /// Filter intervals completed (propagation, updates and feedback).
+    /// Filter intervals completed.
     pub updates: u32,
     /// Scalar measurements accepted.
     pub accepted_measurements: u32,
@@ -181,257 +175,519 @@ pub struct FineStatus {
     pub rejected_measurements: u32,
     /// Covariance re-initialisations after a non-finite value.
     pub resets: u32,
+    /// Mean normalised innovation square of the accepted position measurements (1 when the
+    /// model holds; 0 before any).
+    pub mean_nis: f64,
 }
 
-/// The position-aided closed-loop fine-alignment filter (module docs).
+/// Why the filter gives no answer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FineRefusal {
+    /// The heading 1-sigma [rad] exceeds [`FineConfig::max_heading_sigma_rad`].
+    HeadingUnresolved {
+        /// The heading 1-sigma [rad].
+        sigma_rad: f64,
+    },
+    /// The horizontal Earth rate estimated [rad/s] disagrees with `Omega cos(lat)` by more
+    /// than [`EARTH_RATE_SIGMAS`] of its 1-sigma: the gyros see something else.
+    EarthRateMismatch {
+        /// Estimated magnitude over `Omega cos(lat)` [-].
+        ratio: f64,
+    },
+    /// The position innovations' mean normalised square exceeds [`MAX_MEAN_NIS`].
+    MotionNotModelled {
+        /// The mean normalised innovation square.
+        mean_nis: f64,
+    },
+    /// No filter interval has completed yet.
+    NotStarted,
+}
+
+impl core::fmt::Display for FineRefusal {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::HeadingUnresolved { sigma_rad } => write!(
+                f,
+                "heading not resolved: 1-sigma {:.1} deg (Earth rate below the gyro noise or bias)",
+                sigma_rad.to_degrees()
+            ),
+            Self::EarthRateMismatch { ratio } => write!(
+                f,
+                "gyros disagree with the Earth rate ({ratio:.2} of Omega cos(lat)): bias beyond its prior or base turning"
+            ),
+            Self::MotionNotModelled { mean_nis } => write!(
+                f,
+                "base motion not modelled: position innovations {mean_nis:.1} times their variance"
+            ),
+            Self::NotStarted => f.write_str("fine filter has not run yet"),
+        }
+    }
+}
+
+/// The filter's result: the navigation state to hand over (NED, at the IMU) with its 1-sigma.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FineOutcome<T: Scalar> {
+    /// Attitude, velocity and position of the IMU (NED frame).
+    pub state: NavState<T>,
+    /// Attitude and its roll, pitch, yaw 1-sigma.
+    pub estimate: AttitudeEstimate<T>,
+    /// Velocity 1-sigma, north, east, down [m/s].
+    pub velocity_sigma_m_s: Vector3<T>,
+    /// Position 1-sigma, north, east, down [m] (the given position's own 1-sigma not included).
+    pub position_sigma_m: Vector3<T>,
+}
+
+/// What a filter variant adds to the general filter: extra states past [`FINE_STATES`], their
+/// transition and their measurements (the sway model, [`super::sway`]).
+pub trait Extension<T: Scalar, const N: usize> {
+    /// Fills the extra states' block of the transition `phi` and of the continuous noise
+    /// `q_c` (both in the filter's units) over `dt` [s]; may also propagate `x`'s extra part
+    /// nonlinearly (it is then not multiplied by `phi` again: return `true`).
+    fn transition(
+        &mut self,
+        x: &mut SVector<T, N>,
+        phi: &mut SMatrix<T, N, N>,
+        q_c: &mut SVector<T, N>,
+        dt: T,
+    ) -> bool;
+    /// Applies the extra measurements after the position update.
+    fn update(&mut self, core: &mut FineCore<T, N>, elapsed_s: f64);
+}
+
+/// The general filter's extension: nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoExtension;
+
+impl<T: Scalar, const N: usize> Extension<T, N> for NoExtension {
+    fn transition(
+        &mut self,
+        _: &mut SVector<T, N>,
+        _: &mut SMatrix<T, N, N>,
+        _: &mut SVector<T, N>,
+        _: T,
+    ) -> bool {
+        false
+    }
+    fn update(&mut self, _: &mut FineCore<T, N>, _: f64) {}
+}
+
+/// The filter of `N >= FINE_STATES` states (module docs); the extra states belong to an
+/// [`Extension`].
 #[derive(Clone, Debug)]
-pub struct FineAlignment<T: Scalar> {
+pub struct FineCore<T: Scalar, const N: usize> {
     config: FineConfig<T>,
-    nav: Strapdown<T>,
-    /// Known position and velocity `v_eb_n` [m/s] (NED).
-    reference: (Position, Vector3<T>),
-    /// The known velocity at the previous filter interval [m/s].
-    reference_v_prev: Vector3<T>,
-    p: Matrix<T>,
-    p0: Matrix<T>,
-    q_c: State<T>,
-    /// Bias estimates subtracted from the increments: gyro (body axes) [rad/s],
-    /// accelerometer (NED axes) [m/s^2].
-    gyro_bias: Vector3<T>,
-    accel_bias_n: Vector3<T>,
-    /// Accumulated over the current filter interval: time [s] and `int C_b_n dt` [s].
+    nav: SiteStrapdown<T>,
+    /// The centre's position.
+    centre: Position,
+    lat: f64,
+    /// `Omega cos(lat)` [rad/s].
+    w_h: T,
+    /// Lever-arm estimate, body axes [m].
+    lever_b: Vector3<T>,
+    /// The translation blocks of the north, east, down axes.
+    blocks: [ShapingBlock<T>; 3],
+    /// State (filter units, [`model::UNITS`]) and covariance.
+    x: SVector<T, N>,
+    p: SMatrix<T, N, N>,
+    p0: SMatrix<T, N, N>,
+    q_ins: SVector<T, INS_STATES>,
+    /// Interval sums: time [s], `sum C_b_c dt` [s], `sum dv_c` [m/s].
     interval_s: f64,
-    sum_c_b_n: Matrix3<T>,
-    /// `C_b_n` at the end of the last increment.
-    c_b_n: Matrix3<T>,
+    sum_c: Matrix3<T>,
+    sum_dv_c: Vector3<T>,
     elapsed_s: f64,
+    nis_sum: f64,
+    nis_n: u32,
+    /// `sum -(ln S + nu^2 / S) / 2` over the accepted position updates.
+    log_likelihood: f64,
     status: FineStatus,
 }
 
-impl<T: Scalar> FineAlignment<T> {
-    /// Starts fine alignment at the known `position` (NED frame; the vehicle at rest or
-    /// rocking in place) from a coarse `initial` attitude and its 1-sigma roll, pitch and yaw
-    /// (NaN sigmas: [`FineConfig::fallback_level_sigma`], [`FineConfig::fallback_yaw_sigma`]).
-    pub fn new(initial: AttitudeEstimate<T>, position: Position, config: FineConfig<T>) -> Self {
+/// The general position-aided filter.
+pub type FineAlignment<T> = FineCore<T, FINE_STATES>;
+
+impl<T: Scalar, const N: usize> FineCore<T, N> {
+    /// Starts at the centre `position` (the base in place) from the attitude `q_b_c` (roll and
+    /// pitch from the coarse stage, any heading: it defines `c`) with the body rate relative
+    /// to the Earth `omega_eb_b` [rad/s] at that instant (for the lever arm's velocity).
+    pub fn new(
+        q_b_c: UnitQuaternion<T>,
+        omega_eb_b: Vector3<T>,
+        position: Position,
+        config: FineConfig<T>,
+    ) -> Self {
         let config = config.sanitized();
-        let position = position.to_ned_frame();
-        let q = initial.q_b_n;
-        let q = if q.coords.iter().all(|v| v.finite()) {
-            q
+        let q_b_c = if q_b_c.coords.iter().all(|v| v.finite()) {
+            q_b_c
         } else {
             UnitQuaternion::identity()
         };
-        let start = NavState::at_rest(position, q);
-        let nav = Strapdown::new(start, config.mechanization);
-        let sigma = |s: T, fallback: T| {
-            if s.finite() && s > T::zero() {
-                s
-            } else {
-                fallback
-            }
+        let omega_eb_b = if omega_eb_b.iter().all(|v| v.finite()) {
+            omega_eb_b
+        } else {
+            Vector3::zeros()
         };
-        let euler_sigma = Vector3::new(
-            sigma(initial.sigma_rad.x, config.fallback_level_sigma),
-            sigma(initial.sigma_rad.y, config.fallback_level_sigma),
-            sigma(initial.sigma_rad.z, config.fallback_yaw_sigma),
-        );
-        let mut p0 = Matrix::<T>::zeros();
+        let centre = position.to_ned_frame();
+        let lat = centre.lat_f64();
+        let h = centre.h_f64();
+        let w_h = T::c(OMEGA_IE * libm::cos(lat));
+        let (lever_b, lever_sigma) = match config.lever_arm {
+            LeverArm::Known(r) => (r, T::c(LEVER_ARM_KNOWN_SIGMA_M)),
+            LeverArm::Unknown { sigma_m } => (Vector3::zeros(), sigma_m),
+        };
+        let c0 = q_b_c.to_rotation_matrix().into_inner();
+        let r0 = c0 * lever_b;
+        let v0 = c0 * omega_eb_b.cross(&lever_b);
+        let nav = SiteStrapdown::new(T::c(lat), T::c(h), q_b_c, v0, r0, [T::zero(); 2]);
+        let t = &config.translation;
+        let blocks = [
+            ShapingBlock::new(t, t.horizontal_sigma_m),
+            ShapingBlock::new(t, t.horizontal_sigma_m),
+            ShapingBlock::new(t, t.vertical_sigma_m),
+        ];
         let var = |s: T| s * s;
+        let mut p0 = SMatrix::<T, N, N>::zeros();
+        let sd = t.horizontal_sigma_m.max(t.vertical_sigma_m);
+        let w_rate = omega_eb_b.norm();
+        let tilt = config.tilt_sigma_rad;
         for i in 0..3 {
-            p0[(POS + i, POS + i)] = var(config.position_sigma_m);
-            p0[(VEL + i, VEL + i)] = var(config.initial_velocity_sigma_m_s);
+            let base_p = blocks[i].stationary();
+            p0[(POS + i, POS + i)] =
+                var(sd) + var(lever_sigma) + var(tilt * lever_b.norm()) + var(T::c(0.01));
+            p0[(VEL + i, VEL + i)] =
+                base_p[(base::D_RATE, base::D_RATE)] + var(w_rate * lever_sigma) + var(T::c(0.02));
             p0[(GYRO_BIAS + i, GYRO_BIAS + i)] = var(config.noise.gyro_bias_rad_s);
             p0[(ACCEL_BIAS + i, ACCEL_BIAS + i)] = var(config.noise.accel_bias_mps2);
+            p0[(LEVER + i, LEVER + i)] = var(lever_sigma);
+            for a in 0..3 {
+                for b in 0..3 {
+                    p0[(BASE + 3 * i + a, BASE + 3 * i + b)] = base_p[(a, b)];
+                }
+            }
         }
-        p0.fixed_view_mut::<3, 3>(ATT, ATT)
-            .copy_from(&phi_covariance(&q, &euler_sigma));
-        let q_c = model::noise_densities(
-            config.noise.arw_rad_per_sqrt_s,
-            config.noise.vrw_mps_per_sqrt_s,
+        p0[(ATT, ATT)] = var(tilt);
+        p0[(ATT + 1, ATT + 1)] = var(tilt);
+        // `c` is defined by the starting heading: no azimuth error about it at the start.
+        p0[(ATT + 2, ATT + 2)] = var(T::c(1e-6));
+        // The horizontal Earth rate in `c`: any direction, magnitude W (mean 0, isotropic).
+        p0[(EARTH, EARTH)] = w_h * w_h * T::c(0.5);
+        p0[(EARTH + 1, EARTH + 1)] = w_h * w_h * T::c(0.5);
+        let p0 = scale_cov(&p0);
+        let n = &config.noise;
+        let q_ins = model::ins_noise(
+            n.arw_rad_per_sqrt_s,
+            n.vrw_mps_per_sqrt_s,
             config.gyro_bias_walk,
             config.accel_bias_walk,
         );
-        let c_b_n = q.to_rotation_matrix().into_inner();
         Self {
             config,
             nav,
-            reference: (position, Vector3::zeros()),
-            reference_v_prev: Vector3::zeros(),
+            centre,
+            lat,
+            w_h,
+            lever_b,
+            blocks,
+            x: SVector::zeros(),
             p: p0,
             p0,
-            q_c,
-            gyro_bias: Vector3::zeros(),
-            accel_bias_n: Vector3::zeros(),
+            q_ins,
             interval_s: 0.0,
-            sum_c_b_n: Matrix3::zeros(),
-            c_b_n,
+            sum_c: Matrix3::zeros(),
+            sum_dv_c: Vector3::zeros(),
             elapsed_s: 0.0,
+            nis_sum: 0.0,
+            nis_n: 0,
+            log_likelihood: 0.0,
             status: FineStatus::default(),
         }
     }
 
-    /// Replaces the known position and velocity `v_eb_n` [m/s] (NED) the measurements compare
-    /// against (e.g. a new GNSS fix). Non-finite velocities are refused (returns `false`).
-    pub fn set_reference(&mut self, position: Position, v_eb_n: Vector3<T>) -> bool {
-        if !v_eb_n.iter().all(|v| v.finite()) {
-            return false;
-        }
-        self.reference = (position.to_ned_frame(), v_eb_n);
-        if self.status.updates == 0 {
-            // No previous reference to difference against yet.
-            self.reference_v_prev = v_eb_n;
-        }
-        true
-    }
-
-    /// Adds one increment: compensates it with the bias estimates, integrates it, and at the
-    /// end of every filter interval propagates the covariance, applies the position and
-    /// velocity measurements and feeds the estimates back. A refused increment changes nothing
-    /// but the counters.
-    pub fn add(&mut self, inc: &ImuIncrement<T>) -> Result<(), InputError> {
-        if let Err(e) = inc.check(&self.config.mechanization.limits) {
+    /// Adds one increment: integrates it and at the end of every filter interval propagates,
+    /// updates and feeds back (with `ext`'s states and measurements). A refused increment
+    /// changes nothing but the counters (and restarts the two-sample terms).
+    pub fn add_with(
+        &mut self,
+        inc: &ImuIncrement<T>,
+        ext: &mut impl Extension<T, N>,
+    ) -> Result<(), InputError> {
+        if let Err(e) = inc.check(&self.config.limits) {
             self.status.rejected_increments = self.status.rejected_increments.saturating_add(1);
             self.nav.restart_increments();
             return Err(e);
         }
+        let sums = self.nav.step(inc);
         let dt = inc.dt;
-        // Gyro bias in body axes; accelerometer bias in NED axes, turned into the body with the
-        // attitude at the start of the increment (the mechanization's own projection).
-        let compensated = ImuIncrement {
-            delta_theta_ib_b: inc.delta_theta_ib_b - self.gyro_bias * dt,
-            delta_v_ib_b: inc.delta_v_ib_b - self.c_b_n.transpose() * self.accel_bias_n * dt,
-            dt,
-        };
-        if let Err(e) = self.nav.step(&compensated) {
-            self.status.rejected_increments = self.status.rejected_increments.saturating_add(1);
-            return Err(e);
-        }
-        self.status.increments = self.status.increments.saturating_add(1);
-        // Trapezoidal mean of C_b_n over the increment, for the bias coupling.
-        let c_end = self.nav.state().q_b_n.to_rotation_matrix().into_inner();
-        let c_mid = (self.c_b_n + c_end) * T::c(0.5);
-        self.c_b_n = c_end;
-        self.sum_c_b_n += c_mid * dt;
+        self.sum_c += sums.c_b_c * dt;
+        self.sum_dv_c += sums.dv_c;
         self.interval_s += dt.to_f64();
         self.elapsed_s += dt.to_f64();
-        // At the sample boundary nearest the period, whatever the rounding of `dt` and of the
-        // period in `T` (f32 and f64 filters update on the same samples).
+        self.status.increments = self.status.increments.saturating_add(1);
+        // At the sample boundary nearest the period (f32 and f64 filters update on the same
+        // samples).
         if self.interval_s + 0.5 * dt.to_f64() >= self.config.update_period_s.to_f64() {
-            self.filter_step();
+            self.filter_step(ext);
         }
         Ok(())
     }
 
-    /// One filter interval: propagation, six scalar updates, feedback.
-    fn filter_step(&mut self) {
-        let dt = T::c(self.interval_s);
-        let s = *self.nav.state();
-        let (lat, h) = (s.position.lat_f64(), s.position.h_f64());
-        let earth = LocalEarth::new(T::c(lat), T::c(h));
-        // Linearised about the reference (known) motion, not the computed one: the true
-        // specific force of a base at rest is -g_n exactly, while the computed one carries the
-        // tilt error (`g e` horizontally), which would couple the heading error into the
-        // velocity (`f_h x phi_D`) and fake a heading observation before the levelling settles.
-        let (_, ref_v) = self.reference;
-        let f_ib_n = (ref_v - self.reference_v_prev) / dt
-            + (earth.omega_ie_n() * T::c(2.0)).cross(&ref_v)
-            - Vector3::new(T::zero(), T::zero(), earth.g);
-        self.reference_v_prev = ref_v;
-        let lin = Linearisation {
-            earth,
-            v_eb_n: ref_v,
-            f_ib_n,
-            c_b_n: self.sum_c_b_n / dt,
-        };
-        let phi = model::transition(&lin, dt);
-        let q_d = discrete_noise(&phi, &self.q_c, dt);
-        propagate(&mut self.p, &phi, &q_d);
-        self.interval_s = 0.0;
-        self.sum_c_b_n = Matrix3::zeros();
+    /// A gap in the data (the two-sample terms must not span it).
+    pub fn restart_increments(&mut self) {
+        self.nav.restart_increments();
+    }
 
-        // Innovations: computed minus known position (north, east, down metres) and velocity.
-        let (ref_pos, ref_v) = self.reference;
-        let e64 = LocalEarth::<f64>::new(lat, h);
-        let d_lat = lat - ref_pos.lat_f64();
-        let d_lon = wrap_pi(s.position.lon_f64() - ref_pos.lon_f64());
-        let dr_n = [
-            d_lat * (e64.r_meridian + h),
-            d_lon * (e64.r_transverse + h) * libm::cos(lat),
-            -(h - ref_pos.h_f64()),
-        ];
-        let mut x = State::<T>::zeros();
-        let r_pos = self.config.position_sigma_m * self.config.position_sigma_m;
-        let r_vel = self.config.velocity_sigma_m_s * self.config.velocity_sigma_m_s;
-        for i in 0..6 {
-            let (index, z, r) = if i < 3 {
-                (POS + i, T::c(dr_n[i]), r_pos)
-            } else {
-                (VEL + i - 3, s.v_eb_n[i - 3] - ref_v[i - 3], r_vel)
-            };
-            let mut h_row = State::<T>::zeros();
-            h_row[index] = T::one();
-            let innovation = z - x[index];
+    fn filter_step(&mut self, ext: &mut impl Extension<T, N>) {
+        let dt = T::c(self.interval_s);
+        let lin = Linearisation {
+            omega_ie_c: self.nav.omega_ie_c(),
+            f_c: self.sum_dv_c / dt,
+            c_b_c: self.sum_c / dt,
+            dg_dd: T::c(2.0) * self.nav.gravity() / T::c(6.371e6),
+        };
+        self.interval_s = 0.0;
+        self.sum_c = Matrix3::zeros();
+        self.sum_dv_c = Vector3::zeros();
+
+        // Transition and noise, in the filter's units.
+        let mut phi = SMatrix::<T, N, N>::identity();
+        let phi_ins = model::ins_transition(&lin, dt);
+        for i in 0..INS_STATES {
+            for j in 0..INS_STATES {
+                phi[(i, j)] = phi_ins[(i, j)] * T::c(model::unit(j) / model::unit(i));
+            }
+        }
+        let mut q_d = SMatrix::<T, N, N>::zeros();
+        for k in 0..3 {
+            let (phi_b, q_b) = self.blocks[k].discrete(dt);
+            for a in 0..3 {
+                for b in 0..3 {
+                    let (i, j) = (BASE + 3 * k + a, BASE + 3 * k + b);
+                    phi[(i, j)] = phi_b[(a, b)] * T::c(model::unit(j) / model::unit(i));
+                    q_d[(i, j)] = q_b[(a, b)] * T::c(1.0 / (model::unit(i) * model::unit(j)));
+                }
+            }
+        }
+        let mut q_c = SVector::<T, N>::zeros();
+        for i in 0..INS_STATES {
+            q_c[i] = self.q_ins[i] * T::c(1.0 / (model::unit(i) * model::unit(i)));
+        }
+        let ext_propagated = ext.transition(&mut self.x, &mut phi, &mut q_c, dt);
+        // Q_d = (Phi Q_c Phi^T + Q_c) dt / 2 for the parts driven by white noise (INS and
+        // extension); the translation block's exact Q_d is already in.
+        let mut q_w = SMatrix::<T, N, N>::zeros();
+        for i in 0..N {
+            for j in 0..N {
+                let mut s = T::zero();
+                for k in 0..N {
+                    if q_c[k] != T::zero() {
+                        s += phi[(i, k)] * q_c[k] * phi[(j, k)];
+                    }
+                }
+                q_w[(i, j)] = s;
+            }
+            q_w[(i, i)] += q_c[i];
+        }
+        q_d += q_w * (dt * T::c(0.5));
+        let propagated = phi * self.x;
+        for i in 0..N {
+            if !(ext_propagated && i >= FINE_STATES) {
+                self.x[i] = propagated[i];
+            }
+        }
+        self.p = phi * self.p * phi.transpose() + q_d;
+        symmetrize(&mut self.p);
+
+        self.update_position();
+        ext.update(self, self.elapsed_s);
+        self.status.updates = self.status.updates.saturating_add(1);
+        if !(kalman::all_finite(&self.p) && kalman::all_finite(&self.x)) {
+            // Cannot happen with finite inputs; start the covariance afresh rather than panic.
+            self.p = self.p0;
+            self.x = SVector::zeros();
+            self.status.resets = self.status.resets.saturating_add(1);
+            return;
+        }
+        self.feed_back();
+    }
+
+    /// The displacement measurement (module docs, [`model`]), one scalar update per axis.
+    fn update_position(&mut self) {
+        let c = self.nav.c_b_c();
+        let offset = c * self.lever_b;
+        let z = self.nav.r_c() - offset;
+        let h_att = -offset.cross_matrix();
+        // The model is linear in phi and dl; their product `phi x (C dl)` is not, and while
+        // both are large (an unknown lever arm, the first seconds' tilt) it exceeds the
+        // measurement noise: its variance, `tr(P_phi) tr(P_dl)` at most, is added to it.
+        let tr = |o: usize| {
+            (0..3)
+                .map(|i| self.cov_si(o + i, o + i))
+                .fold(T::zero(), |a, b| a + b)
+        };
+        let r = self.config.position_noise_m * self.config.position_noise_m + tr(ATT) * tr(LEVER);
+        for k in 0..3 {
+            let mut h = SVector::<T, N>::zeros();
+            h[POS + k] = T::one();
+            h[BASE + 3 * k + base::D] = T::one();
+            for j in 0..3 {
+                h[ATT + j] = h_att[(k, j)];
+                h[LEVER + j] = -c[(k, j)];
+            }
+            for i in 0..N {
+                h[i] *= T::c(model::unit(i));
+            }
+            let innovation = z[k] - h.dot(&self.x);
+            let s = h.dot(&(self.p * h)) + r;
             match update_scalar(
-                &mut x,
+                &mut self.x,
                 &mut self.p,
-                &h_row,
+                &h,
                 innovation,
                 r,
                 self.config.gate_sigma,
             ) {
                 ScalarUpdate::Accepted => {
                     self.status.accepted_measurements =
-                        self.status.accepted_measurements.saturating_add(1)
+                        self.status.accepted_measurements.saturating_add(1);
+                    let nis = (innovation * innovation / s).to_f64();
+                    self.nis_sum += nis;
+                    self.nis_n += 1;
+                    self.log_likelihood -= 0.5 * (libm::log(s.to_f64()) + nis);
                 }
                 ScalarUpdate::Gated | ScalarUpdate::Degenerate => {
                     self.status.rejected_measurements =
-                        self.status.rejected_measurements.saturating_add(1)
+                        self.status.rejected_measurements.saturating_add(1);
                 }
             }
         }
-        self.status.updates = self.status.updates.saturating_add(1);
-        if !(kalman::all_finite(&self.p) && kalman::all_finite(&x)) {
-            // Cannot happen with finite inputs; start the covariance afresh rather than panic.
-            self.p = self.p0;
-            self.status.resets = self.status.resets.saturating_add(1);
-            return;
+        self.status.mean_nis = self.nis_sum / f64::from(self.nis_n.max(1));
+    }
+
+    /// A scalar measurement `z = h^T x + v`, `v ~ N(0, r)`, `h` in SI per state (scaled here),
+    /// `innovation = z - h^T x` formed by the caller with [`Self::predict`]; for extensions.
+    pub fn update(&mut self, h_si: &SVector<T, N>, innovation: T, r: T, gate: T) -> ScalarUpdate {
+        let mut h = *h_si;
+        for i in 0..N {
+            h[i] *= T::c(model::unit(i));
         }
-        self.feed_back(&s, &x, &e64);
+        update_scalar(&mut self.x, &mut self.p, &h, innovation, r, gate)
     }
 
-    /// Applies the error estimate `x` to the strapdown and the bias compensation (seed 003:
-    /// re-initialise with corrected values; the error state is then zero).
-    fn feed_back(&mut self, s: &NavState<T>, x: &State<T>, e64: &LocalEarth<f64>) {
-        let phi = Vector3::new(x[ATT], x[ATT + 1], x[ATT + 2]);
-        // Computed = exp(-[phi x]) true, so true = q(phi) computed.
-        let q_b_n = attitude::rotation_vector_quat(&phi) * s.q_b_n;
-        let v_eb_n = s.v_eb_n - Vector3::new(x[VEL], x[VEL + 1], x[VEL + 2]);
-        let (lat, lon, h) = (
-            s.position.lat_f64(),
-            s.position.lon_f64(),
-            s.position.h_f64(),
-        );
-        let d_n = x[POS].to_f64();
-        let d_e = x[POS + 1].to_f64();
-        let d_d = x[POS + 2].to_f64();
-        let lat_new = lat - d_n / (e64.r_meridian + h);
-        let lon_new = lon - d_e / ((e64.r_transverse + h) * libm::cos(lat).max(1e-9));
-        let position = Position::from_radians(lat_new, lon_new, h + d_d);
-        self.nav.set_state(NavState {
-            q_b_n,
-            v_eb_n,
-            position,
-        });
-        self.c_b_n = q_b_n.to_rotation_matrix().into_inner();
-        self.gyro_bias += Vector3::new(x[GYRO_BIAS], x[GYRO_BIAS + 1], x[GYRO_BIAS + 2]);
-        self.accel_bias_n += Vector3::new(x[ACCEL_BIAS], x[ACCEL_BIAS + 1], x[ACCEL_BIAS + 2]);
+    /// `h^T x` for `h` in SI per state.
+    pub fn predict(&self, h_si: &SVector<T, N>) -> T {
+        let mut s = T::zero();
+        for i in 0..N {
+            s += h_si[i] * self.x[i] * T::c(model::unit(i));
+        }
+        s
     }
 
-    /// The current attitude (body to NED) with the filter's 1-sigma roll, pitch and yaw (from
-    /// the covariance at the last filter interval) and the time aligned so far.
+    /// `h^T P h + r` for `h` in SI per state.
+    pub fn innovation_variance(&self, h_si: &SVector<T, N>, r: T) -> T {
+        let mut h = *h_si;
+        for i in 0..N {
+            h[i] *= T::c(model::unit(i));
+        }
+        h.dot(&(self.p * h)) + r
+    }
+
+    /// State `i` in SI.
+    pub fn state_si(&self, i: usize) -> T {
+        self.x[i] * T::c(model::unit(i))
+    }
+
+    /// Sets state `i` [SI].
+    pub fn set_state_si(&mut self, i: usize, v: T) {
+        self.x[i] = v / T::c(model::unit(i));
+    }
+
+    /// Covariance entry `(i, j)` in SI.
+    pub fn cov_si(&self, i: usize, j: usize) -> T {
+        self.p[(i, j)] * T::c(model::unit(i) * model::unit(j))
+    }
+
+    /// Adds `v` [SI] to the variance of state `i` (an extension's re-lock).
+    pub fn inflate_si(&mut self, i: usize, v: T) {
+        self.p[(i, i)] += v / T::c(model::unit(i) * model::unit(i));
+    }
+
+    /// Initialises an extension's states `offset..offset + k` [SI] with covariance `p`
+    /// (uncorrelated with the rest).
+    pub fn init_states_si<const K: usize>(
+        &mut self,
+        offset: usize,
+        x: &SVector<T, K>,
+        p: &SMatrix<T, K, K>,
+    ) {
+        for i in 0..N {
+            for k in 0..K {
+                self.p[(i, offset + k)] = T::zero();
+                self.p[(offset + k, i)] = T::zero();
+            }
+        }
+        for a in 0..K {
+            self.x[offset + a] = x[a] / T::c(model::unit(offset + a));
+            for b in 0..K {
+                self.p[(offset + a, offset + b)] =
+                    p[(a, b)] / T::c(model::unit(offset + a) * model::unit(offset + b));
+            }
+        }
+    }
+
+    /// Feeds the INS error estimates back (closed loop) and zeroes them.
+    fn feed_back(&mut self) {
+        let v3 =
+            |o: usize| Vector3::new(self.state_si(o), self.state_si(o + 1), self.state_si(o + 2));
+        let c = Correction {
+            dr: v3(POS),
+            dv: v3(VEL),
+            phi: v3(ATT),
+            de: [self.state_si(EARTH), self.state_si(EARTH + 1)],
+            gyro_bias: v3(GYRO_BIAS),
+            accel_bias: v3(ACCEL_BIAS),
+        };
+        let dl = v3(LEVER);
+        self.nav.correct(&c);
+        self.lever_b -= dl;
+        for i in 0..INS_STATES {
+            self.x[i] = T::zero();
+        }
+    }
+
+    /// The integrator (attitude in `c`, velocity, displacement, the Earth rate in use).
+    pub fn strapdown(&self) -> &SiteStrapdown<T> {
+        &self.nav
+    }
+
+    /// The heading of `c` [rad]: `alpha = atan2(-e_E, e_N)` of the estimated horizontal Earth
+    /// rate (`c` is NED turned by `alpha` about down).
+    pub fn frame_azimuth(&self) -> T {
+        let [e_n, e_e] = self.nav.e_h();
+        (-e_e).patan2(e_n)
+    }
+
+    /// `d alpha / d(e_N, e_E)` [s]: `(e_E, -e_N) / W^2`, with the known magnitude
+    /// `W = Omega cos(lat)` (the estimate's own magnitude is shrunk towards 0 by the prior).
+    fn azimuth_gradient(&self) -> Vector2<T> {
+        let [e_n, e_e] = self.nav.e_h();
+        let n = (e_n * e_n + e_e * e_e).sqrt().max(T::c(1e-30));
+        let w = self.w_h;
+        Vector2::new(e_e / n, -e_n / n) / w
+    }
+
+    /// The covariance [SI] of `(dr, dv, phi, de)` (11 states).
+    fn ins_cov(&self) -> SMatrix<T, 11, 11> {
+        SMatrix::<T, 11, 11>::from_fn(|i, j| self.cov_si(i, j))
+    }
+
+    /// The attitude (body to NED) with its roll, pitch, yaw 1-sigma.
     pub fn estimate(&self) -> AttitudeEstimate<T> {
-        let q_b_n = self.nav.state().ned().0;
-        let p_att = self.p.fixed_view::<3, 3>(ATT, ATT).into_owned();
+        let alpha = self.frame_azimuth();
+        let r = attitude::about_z(alpha);
+        let q_b_n = r * self.nav.q_b_c();
+        let j = self.attitude_jacobian();
+        let p = self.ins_cov();
+        let p_att = j * p * j.transpose();
         AttitudeEstimate {
             q_b_n,
             sigma_rad: euler_sigma(&q_b_n, &p_att),
@@ -439,29 +695,110 @@ impl<T: Scalar> FineAlignment<T> {
         }
     }
 
-    /// Gyro bias estimate (body axes) [rad/s] and its 1-sigma [rad/s].
-    pub fn gyro_bias(&self) -> (Vector3<T>, Vector3<T>) {
-        (self.gyro_bias, self.sigmas(GYRO_BIAS))
+    /// NED attitude error `Phi = R_z(alpha) phi - e_D d_alpha` as a function of
+    /// `(dr, dv, phi, de)`: `C_hat_b_n = exp(-[Phi x]) C_b_n`.
+    fn attitude_jacobian(&self) -> SMatrix<T, 3, 11> {
+        let r = attitude::about_z(self.frame_azimuth())
+            .to_rotation_matrix()
+            .into_inner();
+        let g = self.azimuth_gradient();
+        let mut j = SMatrix::<T, 3, 11>::zeros();
+        j.fixed_view_mut::<3, 3>(0, ATT).copy_from(&r);
+        j[(2, EARTH)] = -g.x;
+        j[(2, EARTH + 1)] = -g.y;
+        j
     }
 
-    /// Accelerometer bias estimate in NED axes [m/s^2] ([`model`] says why not body axes) and
-    /// its 1-sigma [m/s^2]. Its horizontal part is as unobservable as the tilt it mimics.
-    pub fn accel_bias_n(&self) -> (Vector3<T>, Vector3<T>) {
-        (self.accel_bias_n, self.sigmas(ACCEL_BIAS))
+    /// The result, or why there is none (module docs, **Honesty**).
+    pub fn outcome(&self) -> Result<FineOutcome<T>, FineRefusal> {
+        if self.status.updates == 0 {
+            return Err(FineRefusal::NotStarted);
+        }
+        let p = self.ins_cov();
+        // Heading: the tangential error of the horizontal Earth rate.
+        let g = self.azimuth_gradient();
+        let p_e = p.fixed_view::<2, 2>(EARTH, EARTH).into_owned();
+        let var_alpha = (g.transpose() * p_e * g)[0];
+        let sigma_alpha = var_alpha.max(T::zero()).sqrt().to_f64();
+        if !(sigma_alpha <= self.config.max_heading_sigma_rad.to_f64()) {
+            return Err(FineRefusal::HeadingUnresolved {
+                sigma_rad: sigma_alpha,
+            });
+        }
+        let [e_n, e_e] = self.nav.e_h();
+        let mag = (e_n * e_n + e_e * e_e).sqrt();
+        let u = Vector2::new(e_n, e_e) / mag.max(T::c(1e-30));
+        let sigma_r = (u.transpose() * p_e * u)[0].max(T::zero()).sqrt();
+        let ratio = (mag / self.w_h).to_f64();
+        if (mag - self.w_h).abs() > T::c(EARTH_RATE_SIGMAS) * sigma_r + T::c(1e-3) * self.w_h {
+            return Err(FineRefusal::EarthRateMismatch { ratio });
+        }
+        if self.status.mean_nis > MAX_MEAN_NIS {
+            return Err(FineRefusal::MotionNotModelled {
+                mean_nis: self.status.mean_nis,
+            });
+        }
+        let estimate = self.estimate();
+        let alpha = self.frame_azimuth();
+        let rz = attitude::about_z(alpha).to_rotation_matrix().into_inner();
+        let v_n = rz * self.nav.v_c();
+        let r_n = rz * self.nav.r_c();
+        // Velocity and displacement in NED: R dv + d_alpha (e_D x value).
+        let down = Vector3::new(T::zero(), T::zero(), T::one());
+        let cov_of = |offset: usize, value: &Vector3<T>| {
+            let mut j = SMatrix::<T, 3, 11>::zeros();
+            j.fixed_view_mut::<3, 3>(0, offset).copy_from(&rz);
+            let turn = down.cross(value);
+            for k in 0..3 {
+                j[(k, EARTH)] = turn[k] * g.x;
+                j[(k, EARTH + 1)] = turn[k] * g.y;
+            }
+            let c = j * p * j.transpose();
+            Vector3::new(c[(0, 0)], c[(1, 1)], c[(2, 2)]).map(|v| v.max(T::zero()).sqrt())
+        };
+        let velocity_sigma_m_s = cov_of(VEL, &v_n);
+        let position_sigma_m = cov_of(POS, &r_n);
+        let e = LocalEarth::<f64>::new(self.lat, self.centre.h_f64());
+        let (h0, lat0, lon0) = (self.centre.h_f64(), self.lat, self.centre.lon_f64());
+        let position = Position::from_radians(
+            lat0 + r_n.x.to_f64() / (e.r_meridian + h0),
+            lon0 + r_n.y.to_f64() / ((e.r_transverse + h0) * libm::cos(lat0)),
+            h0 - r_n.z.to_f64(),
+        );
+        Ok(FineOutcome {
+            state: NavState {
+                q_b_n: estimate.q_b_n,
+                v_eb_n: v_n,
+                position,
+            },
+            estimate,
+            velocity_sigma_m_s,
+            position_sigma_m,
+        })
+    }
+
+    /// Gyro bias estimate (body axes) [rad/s] and its 1-sigma.
+    pub fn gyro_bias(&self) -> (Vector3<T>, Vector3<T>) {
+        (self.nav.biases().0, self.sigmas(GYRO_BIAS))
+    }
+
+    /// Accelerometer bias estimate (body axes) [m/s^2] and its 1-sigma.
+    pub fn accel_bias(&self) -> (Vector3<T>, Vector3<T>) {
+        (self.nav.biases().1, self.sigmas(ACCEL_BIAS))
+    }
+
+    /// Lever-arm estimate (body axes) [m] and its 1-sigma.
+    pub fn lever_arm(&self) -> (Vector3<T>, Vector3<T>) {
+        (self.lever_b, self.sigmas(LEVER))
+    }
+
+    /// The centre's translation estimate (`d` per axis of `c`) [m].
+    pub fn translation(&self) -> Vector3<T> {
+        Vector3::from_fn(|k, _| self.state_si(BASE + 3 * k + base::D))
     }
 
     fn sigmas(&self, offset: usize) -> Vector3<T> {
-        Vector3::from_fn(|i, _| self.p[(offset + i, offset + i)].max(T::zero()).sqrt())
-    }
-
-    /// The error-state covariance after the last filter interval (offsets in [`model`]).
-    pub fn covariance(&self) -> &Matrix<T> {
-        &self.p
-    }
-
-    /// The navigation state (NED frame) of the strapdown the filter corrects.
-    pub fn state(&self) -> &NavState<T> {
-        self.nav.state()
+        Vector3::from_fn(|i, _| self.cov_si(offset + i, offset + i).max(T::zero()).sqrt())
     }
 
     /// Counters.
@@ -473,116 +810,27 @@ impl<T: Scalar> FineAlignment<T> {
     pub fn config(&self) -> &FineConfig<T> {
         &self.config
     }
-}
 
-/// `a` [rad] wrapped to (-pi, pi].
-fn wrap_pi(a: f64) -> f64 {
-    let pi = core::f64::consts::PI;
-    if a > pi {
-        a - 2.0 * pi
-    } else if a <= -pi {
-        a + 2.0 * pi
-    } else {
-        a
+    /// Time integrated [s].
+    pub fn elapsed_s(&self) -> f64 {
+        self.elapsed_s
+    }
+
+    /// Log likelihood of the position innovations so far, `sum -(ln S + nu^2 / S) / 2`
+    /// (the constant `ln 2 pi` left out): how well this model explains the data.
+    pub fn log_likelihood(&self) -> f64 {
+        self.log_likelihood
     }
 }
 
-/// The map `A` from a navigation-frame small rotation `rho` [rad] (`C' = exp([rho x]) C`) to the
-/// changes of roll, pitch and yaw [rad] of `C = q_b_n` (z-y-x Euler angles):
-/// `rho' = R_z(-yaw) rho`, `d_roll = rho'_x / cos(pitch)`, `d_pitch = rho'_y`,
-/// `d_yaw = rho'_z + tan(pitch) rho'_x` (Titterton & Weston eq. 3.52 inverted).
-pub fn euler_jacobian<T: Scalar>(q_b_n: &UnitQuaternion<T>) -> Matrix3<T> {
-    let (_, pitch, yaw) = attitude::euler(q_b_n);
-    let (sy, cy) = (yaw.psin(), yaw.pcos());
-    let cp = pitch.pcos().max(T::c(1e-6));
-    let tp = pitch.psin() / cp;
-    let rz = Matrix3::new(
-        cy,
-        sy,
-        T::zero(),
-        -sy,
-        cy,
-        T::zero(),
-        T::zero(),
-        T::zero(),
-        T::one(),
-    );
-    let b = Matrix3::new(
-        T::one() / cp,
-        T::zero(),
-        T::zero(),
-        T::zero(),
-        T::one(),
-        T::zero(),
-        tp,
-        T::zero(),
-        T::one(),
-    );
-    b * rz
-}
-
-/// 1-sigma roll, pitch, yaw [rad] of an attitude whose navigation-frame error covariance is
-/// `p_att` [rad^2] ([`euler_jacobian`]).
-pub fn euler_sigma<T: Scalar>(q_b_n: &UnitQuaternion<T>, p_att: &Matrix3<T>) -> Vector3<T> {
-    let a = euler_jacobian(q_b_n);
-    let s = a * p_att * a.transpose();
-    Vector3::new(s[(0, 0)], s[(1, 1)], s[(2, 2)]).map(|v| v.max(T::zero()).sqrt())
-}
-
-/// Navigation-frame error covariance [rad^2] of independent roll, pitch and yaw errors of
-/// 1-sigma `sigma_rad` at attitude `q_b_n`: `M diag(sigma^2) M^T`, `M` the inverse of
-/// [`euler_jacobian`], `M = R_z(yaw) [[cos(pitch), 0, 0], [0, 1, 0], [-sin(pitch), 0, 1]]`.
-pub fn phi_covariance<T: Scalar>(q_b_n: &UnitQuaternion<T>, sigma_rad: &Vector3<T>) -> Matrix3<T> {
-    let (_, pitch, yaw) = attitude::euler(q_b_n);
-    let (sy, cy) = (yaw.psin(), yaw.pcos());
-    let (sp, cp) = (pitch.psin(), pitch.pcos());
-    let rz = Matrix3::new(
-        cy,
-        -sy,
-        T::zero(),
-        sy,
-        cy,
-        T::zero(),
-        T::zero(),
-        T::zero(),
-        T::one(),
-    );
-    let b_inv = Matrix3::new(
-        cp,
-        T::zero(),
-        T::zero(),
-        T::zero(),
-        T::one(),
-        T::zero(),
-        -sp,
-        T::zero(),
-        T::one(),
-    );
-    let m = rz * b_inv;
-    let d = Matrix3::from_diagonal(&sigma_rad.component_mul(sigma_rad));
-    m * d * m.transpose()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::attitude::from_euler;
-
-    #[test]
-    fn euler_jacobian_matches_finite_differences() {
-        let q = from_euler(0.07, -0.05, 1.05_f64);
-        let a = euler_jacobian(&q);
-        let (r0, p0, y0) = attitude::euler(&q);
-        for k in 0..3 {
-            let mut rho = Vector3::zeros();
-            rho[k] = 1e-7;
-            let (r, p, y) = attitude::euler(&(attitude::rotation_vector_quat(&rho) * q));
-            let d = Vector3::new(r - r0, p - p0, y - y0) / 1e-7;
-            assert!((d - a.column(k)).norm() < 1e-6, "{k}: {d} {}", a.column(k));
-        }
-        // phi_covariance is the inverse map: A M = I.
-        let p = phi_covariance(&q, &Vector3::new(1.0, 2.0, 3.0));
-        let s = euler_sigma(&q, &p);
-        assert!((s - Vector3::new(1.0, 2.0, 3.0)).norm() < 1e-12, "{s}");
+impl<T: Scalar> FineCore<T, FINE_STATES> {
+    /// Adds one increment (the general filter: [`Self::add_with`] without extension).
+    pub fn add(&mut self, inc: &ImuIncrement<T>) -> Result<(), InputError> {
+        self.add_with(inc, &mut NoExtension)
     }
+}
+
+/// `P_SI` -> the filter's units.
+fn scale_cov<T: Scalar, const N: usize>(p: &SMatrix<T, N, N>) -> SMatrix<T, N, N> {
+    SMatrix::from_fn(|i, j| p[(i, j)] * T::c(1.0 / (model::unit(i) * model::unit(j))))
 }
