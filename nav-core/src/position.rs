@@ -62,6 +62,38 @@ impl Position {
         }
     }
 
+    /// The place `d_ned` [m] (north, east, down) away, on the local radii of curvature (NED
+    /// frame; for offsets of metres to kilometres: the error is `|d|^2 / R`).
+    pub fn offset_ned(&self, d_ned: [f64; 3]) -> Self {
+        let (lat, lon, h) = (self.lat_f64(), self.lon_f64(), self.h_f64());
+        let (r_n, r_e) = crate::earth::radii(lat);
+        let cos_lat = libm::cos(lat).max(1e-9);
+        Self::from_radians(
+            lat + d_ned[0] / (r_n + h),
+            lon + d_ned[1] / ((r_e + h) * cos_lat),
+            h - d_ned[2],
+        )
+    }
+
+    /// The north, east, down offset [m] of `other` from `self` (the inverse of
+    /// [`Self::offset_ned`] for nearby places).
+    pub fn ned_to(&self, other: &Self) -> [f64; 3] {
+        let (lat, h) = (self.lat_f64(), self.h_f64());
+        let (r_n, r_e) = crate::earth::radii(lat);
+        let mut d_lon = other.lon_f64() - self.lon_f64();
+        let pi = core::f64::consts::PI;
+        if d_lon > pi {
+            d_lon -= 2.0 * pi;
+        } else if d_lon < -pi {
+            d_lon += 2.0 * pi;
+        }
+        [
+            (other.lat_f64() - lat) * (r_n + h),
+            d_lon * (r_e + h) * libm::cos(lat),
+            -(other.h_f64() - h),
+        ]
+    }
+
     /// The same place with the frame turned to north (wander angle 0).
     pub fn to_ned_frame(&self) -> Self {
         Self::from_radians(self.lat_f64(), self.lon_f64(), self.h_f64())

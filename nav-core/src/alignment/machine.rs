@@ -25,6 +25,7 @@ use super::fine::base::Translation;
 use super::fine::model::FINE_STATES;
 use super::fine::{FineConfig, FineRefusal, NoExtension};
 use super::inertial::{InertialAlignError, InertialAlignment, SensorNoise};
+use super::stillness::{Scatter, Stillness};
 use super::sway::{SwayAlignment, SwayConfig};
 use crate::{ImuIncrement, InputLimits, NavState, Position, Scalar, earth};
 use nalgebra::Vector3;
@@ -136,6 +137,15 @@ pub enum AlignFailure {
     Inertial(InertialAlignError),
     /// The fine filter's result was refused.
     Fine(FineRefusal),
+    /// The base moved: the increments scatter beyond the IMU's noise ([`Stillness`]).
+    BaseMoving(Scatter),
+    /// The window the increments cover is shorter than the method's minimum.
+    WindowTooShort {
+        /// Time covered [s].
+        seconds: f64,
+        /// The method's minimum [s].
+        min_s: f64,
+    },
 }
 
 impl core::fmt::Display for AlignFailure {
@@ -144,6 +154,15 @@ impl core::fmt::Display for AlignFailure {
             Self::Static(e) => write!(f, "static alignment: {e}"),
             Self::Inertial(e) => write!(f, "inertial-frame alignment: {e}"),
             Self::Fine(e) => write!(f, "fine alignment: {e}"),
+            Self::BaseMoving(sc) => write!(
+                f,
+                "base not still: gyro and accelerometer outputs scatter {:.1}x and {:.1}x their noise (sway, heave or vibration; or an IMU noisier than its model)",
+                sc.gyro_ratio, sc.accel_ratio
+            ),
+            Self::WindowTooShort { seconds, min_s } => write!(
+                f,
+                "the data cover {seconds:.3} s, less than the method's minimum of {min_s} s"
+            ),
         }
     }
 }
@@ -423,8 +442,10 @@ pub struct Aligner<T: Scalar> {
     failure: Option<AlignFailure>,
     outcome: Option<AlignOutcome<T>>,
     refused: u32,
-    /// Body rate of the last increment [rad/s] (the lever arm's velocity at the fine start).
+    /// Body rate of the last increment [rad/s] (the lever arm's velocity at the hand-over).
     last_rate: Vector3<T>,
+    /// Block scatter of the coarse stage's increments (is the base still?).
+    still: Stillness,
 }
 
 impl<T: Scalar> Aligner<T> {
@@ -453,6 +474,7 @@ impl<T: Scalar> Aligner<T> {
             outcome: None,
             refused: 0,
             last_rate: Vector3::zeros(),
+            still: Stillness::new(),
         }
     }
 
@@ -520,6 +542,7 @@ impl<T: Scalar> Aligner<T> {
             }
             return;
         }
+        self.still.add(inc);
         match &mut self.coarse {
             Coarse::Static(a) => a.add(inc),
             Coarse::Inertial(a) => {
@@ -595,7 +618,6 @@ impl<T: Scalar> Aligner<T> {
 
     /// Ends the alignment with the fine stage's result.
     fn finish_fine(&mut self) {
-        let position = self.settings.position;
         let (state, estimate, velocity_sigma_m_s, position_sigma_m) = match &self.fine {
             Some(Fine::Kalman(f)) => match f.outcome() {
                 Ok(o) => {
@@ -610,9 +632,9 @@ impl<T: Scalar> Aligner<T> {
                 }
             },
             Some(Fine::Sway(f)) => {
-                let e = f.estimate();
-                let (v, p) = handover_sigma(&self.settings);
-                (NavState::at_rest(position, e.q_b_n), e, v, p)
+                let o =
+                    coarse_handover(&self.settings, f.estimate(), &self.last_rate, None, self.times);
+                (o.state, o.estimate, o.velocity_sigma_m_s, o.position_sigma_m)
             }
             None => return,
         };
@@ -629,27 +651,45 @@ impl<T: Scalar> Aligner<T> {
     /// Solves the coarse stage and ends the alignment with its result.
     fn finish_coarse(&mut self) {
         let position = self.settings.position;
-        let estimate = match &self.coarse {
-            Coarse::Static(a) => a
-                .solve(position.lat::<T>(), position.h::<T>())
-                .map(|r| AttitudeEstimate {
-                    q_b_n: r.q_b_n(),
-                    sigma_rad: static_sigma(&self.settings, r.duration),
-                    elapsed_s: r.duration,
-                })
-                .map_err(AlignFailure::Static),
-            Coarse::Inertial(a) => a.estimate().map_err(AlignFailure::Inertial),
+        let n = &self.settings.noise;
+        let scatter = self.still.check(
+            n.arw_rad_per_sqrt_s.to_f64(),
+            n.vrw_mps_per_sqrt_s.to_f64(),
+        );
+        let min_s = self.settings.method.min_seconds();
+        let estimate = if self.times.coarse_s + 1e-9 < min_s {
+            // The header's rate said enough samples; their own intervals say otherwise.
+            Err(AlignFailure::WindowTooShort {
+                seconds: self.times.coarse_s,
+                min_s,
+            })
+        } else {
+            match &self.coarse {
+                Coarse::Static(a) => match scatter {
+                    Some((false, sc)) => Err(AlignFailure::BaseMoving(sc)),
+                    _ => a
+                        .solve(position.lat::<T>(), position.h::<T>())
+                        .map(|r| AttitudeEstimate {
+                            q_b_n: r.q_b_n(),
+                            sigma_rad: static_sigma(&self.settings, r.duration),
+                            elapsed_s: r.duration,
+                        })
+                        .map_err(AlignFailure::Static),
+                },
+                Coarse::Inertial(a) => a.estimate().map_err(AlignFailure::Inertial),
+            }
         };
         match estimate {
             Ok(estimate) => {
-                let (velocity_sigma_m_s, position_sigma_m) = handover_sigma(&self.settings);
-                self.outcome = Some(AlignOutcome {
-                    state: NavState::at_rest(position, estimate.q_b_n),
+                let still = matches!(scatter, Some((true, _)));
+                let accel_excess = scatter.map_or(f64::INFINITY, |(_, sc)| sc.accel_excess);
+                self.outcome = Some(coarse_handover(
+                    &self.settings,
                     estimate,
-                    velocity_sigma_m_s,
-                    position_sigma_m,
-                    times: self.times,
-                });
+                    &self.last_rate,
+                    still.then_some(accel_excess),
+                    self.times,
+                ));
                 self.stage = Stage::Aligned;
             }
             Err(e) => {
@@ -660,16 +700,65 @@ impl<T: Scalar> Aligner<T> {
     }
 }
 
-/// Provisional hand-over 1-sigma (velocity [m/s], position [m]) from the settings' priors alone.
-fn handover_sigma<T: Scalar>(s: &AlignSettings<T>) -> (Vector3<T>, Vector3<T>) {
-    let lever = match s.lever_arm {
-        LeverArm::Known(_) => T::zero(),
-        LeverArm::Unknown { sigma_m } => sigma_m,
+/// Longest period of base motion the still-base velocity bound assumes [s].
+const STILL_LONGEST_PERIOD_S: f64 = 20.0;
+
+/// The hand-over of a coarse method: the IMU at the centre plus its lever-arm offset, moving
+/// with the lever arm's velocity `C_b_n (omega x l)` (`omega` the last increment's rate; the
+/// Earth rate's share, below 1e-3 m/s at 10 m, left in the 1-sigma), with 1-sigma from what
+/// is known: the given position's, the unknown lever arm's prior, the attitude's 1-sigma turning
+/// the lever arm, and the base's translation — on a base the stillness test found still
+/// (`still_accel_excess` [m^2/s^4]: the accelerometers' block variance above their noise), the
+/// velocity an oscillation of that acceleration could have at periods up to
+/// [`STILL_LONGEST_PERIOD_S`] (at least 1 mm/s); otherwise the translation prior's
+/// ([`BaseMotion::translation_sigma_m`] at [`Translation::default`]'s wave frequency).
+fn coarse_handover<T: Scalar>(
+    s: &AlignSettings<T>,
+    estimate: AttitudeEstimate<T>,
+    omega_ib_b: &Vector3<T>,
+    still_accel_excess: Option<f64>,
+    times: StageTimes,
+) -> AlignOutcome<T> {
+    let c_b_n = estimate.q_b_n.to_rotation_matrix().into_inner();
+    let (lever, lever_sigma) = match s.lever_arm {
+        LeverArm::Known(r) => (r, T::c(super::fine::LEVER_ARM_KNOWN_SIGMA_M)),
+        LeverArm::Unknown { sigma_m } => (Vector3::zeros(), sigma_m),
     };
-    let d = s.base.translation_sigma_m;
-    let p = s.base.position_sigma_m;
-    let pos = (p * p + d * d + lever * lever).sqrt();
-    (Vector3::repeat(d), Vector3::repeat(pos))
+    let offset = c_b_n * lever;
+    let v_eb_n = c_b_n * omega_ib_b.cross(&lever);
+    let att = estimate
+        .sigma_rad
+        .iter()
+        .map(|v| if v.finite() { *v * *v } else { T::zero() })
+        .fold(T::zero(), |a, b| a + b);
+    let site = s.base.position_sigma_m;
+    let (trans_p, trans_v) = match still_accel_excess {
+        Some(excess) => {
+            let w = core::f64::consts::TAU / STILL_LONGEST_PERIOD_S;
+            let v = (libm::sqrt(excess.max(0.0)) / w).max(1e-3);
+            (T::c(v / w), T::c(v))
+        }
+        None => {
+            let d = s.base.translation_sigma_m;
+            (d, d * Translation::<T>::default().omega0_rad_s)
+        }
+    };
+    let rate = omega_ib_b.norm();
+    let l2 = lever.norm_squared();
+    let p2 = site * site + trans_p * trans_p + lever_sigma * lever_sigma + att * l2;
+    let v2 = trans_v * trans_v + rate * rate * (lever_sigma * lever_sigma + att * l2);
+    let position = s.position.offset_ned(offset.map(T::to_f64).into());
+    AlignOutcome {
+        state: NavState {
+            q_b_n: estimate.q_b_n,
+            v_eb_n,
+            position,
+        },
+        estimate,
+        velocity_sigma_m_s: Vector3::repeat(v2.sqrt()),
+        position_sigma_m: Vector3::repeat(p2.sqrt()),
+        times,
+    }
 }
 
 /// Roll, pitch, yaw 1-sigma [rad] of a static analytic alignment over `t_s` [s]: levelling
@@ -694,6 +783,7 @@ fn static_sigma<T: Scalar>(settings: &AlignSettings<T>, t_s: T) -> Vector3<T> {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
     use super::*;
     use crate::attitude::from_euler;
     use nalgebra::UnitQuaternion;
@@ -785,7 +875,7 @@ mod tests {
     fn refuses_with_a_reason_and_skips_bad_increments() {
         let q = UnitQuaternion::identity();
         // A base turning at 1 deg/s: static alignment refuses it.
-        let s = settings(AlignMethod::Static, 5.0);
+        let s = settings(AlignMethod::Static, 12.0);
         let mut inc = at_rest(&s, &q);
         inc.delta_theta_ib_b.z += 1f64.to_radians() * DT;
         let mut a = Aligner::new(s);
@@ -798,16 +888,33 @@ mod tests {
             Progress::Failed(AlignFailure::Static(AlignError::BaseRotating))
         );
         assert_eq!(a.stage(), Stage::Failed);
-        // The inertial method needs 10 s.
+        // A window shorter than the method's minimum: refused by the settings, and by the
+        // machine from the increments' own intervals when the settings were built by hand.
+        for method in AlignMethod::ALL {
+            let e = AlignSettings::new(
+                method,
+                Position::from_degrees(45.0, 7.5, 100.0),
+                0.0,
+                400.0,
+                settings(method, 60.0).noise,
+            )
+            .unwrap_err();
+            assert!(
+                matches!(e, SettingsError::WindowTooShort { min_s, .. } if min_s == method.min_seconds()),
+                "{method:?}: {e}"
+            );
+            let text = std::format!("{e}");
+            assert!(text.contains("minimum"), "{text}");
+        }
         let s = settings(AlignMethod::Inertial, 5.0);
         let inc = at_rest(&s, &q);
         let mut a = Aligner::new(s);
         for _ in 0..s.samples {
             last = a.add(&inc);
         }
-        assert_eq!(
-            last,
-            Progress::Failed(AlignFailure::Inertial(InertialAlignError::TooShort))
+        assert!(
+            matches!(last, Progress::Failed(AlignFailure::WindowTooShort { min_s: 10.0, .. })),
+            "{last:?}"
         );
         // A NaN increment is refused and not counted.
         let s = settings(AlignMethod::Fine, 40.0);
@@ -816,6 +923,29 @@ mod tests {
         bad.delta_v_ib_b.x = f64::NAN;
         assert_eq!(a.add(&bad), Progress::Coarse);
         assert_eq!((a.samples(), a.refused()), (0, 1));
+    }
+
+    /// A sway over a whole number of periods averages out of the mean rate and specific force,
+    /// but not out of their block scatter: static alignment refuses it whatever the window.
+    #[test]
+    fn static_refuses_a_sway_of_whole_periods() {
+        for seconds in [20.0, 40.0, 96.0] {
+            let s = settings(AlignMethod::Static, seconds);
+            let mut a = Aligner::new(s);
+            let mut last = Progress::Coarse;
+            let (amp, w) = (1f64.to_radians(), core::f64::consts::TAU / 4.0);
+            for k in 0..s.samples {
+                let t = f64::from(k) * DT;
+                let q = from_euler(amp * (w * t).sin(), 0.0, 0.3);
+                let mut inc = at_rest(&s, &q);
+                inc.delta_theta_ib_b.x += amp * w * (w * (t + DT / 2.0)).cos() * DT;
+                last = a.add(&inc);
+            }
+            assert!(
+                matches!(last, Progress::Failed(AlignFailure::BaseMoving(_))),
+                "{seconds} s: {last:?}"
+            );
+        }
     }
 
     #[test]

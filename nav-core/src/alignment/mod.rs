@@ -24,6 +24,7 @@ pub mod inertial;
 mod kahan;
 pub mod level;
 pub mod machine;
+pub mod stillness;
 pub mod sway;
 
 pub use analytic::{AlignError, AlignmentResult, StaticAlignment, samples_for};

@@ -151,22 +151,9 @@ fn mix<T: Scalar>(a: &FineOutcome<T>, wa: f64, b: &FineOutcome<T>, wb: f64) -> F
     let v = va * wa_t + vb * wb_t;
     let velocity_sigma_m_s = sig(&a.velocity_sigma_m_s, &b.velocity_sigma_m_s, &va, &vb);
     // Positions as north, east, down offsets of b from a.
-    let e = crate::earth::LocalEarth::<f64>::new(a.state.position.lat_f64(), 0.0);
-    let h = a.state.position.h_f64();
-    let dn = (b.state.position.lat_f64() - a.state.position.lat_f64()) * (e.r_meridian + h);
-    let de = (b.state.position.lon_f64() - a.state.position.lon_f64())
-        * (e.r_transverse + h)
-        * libm::cos(a.state.position.lat_f64());
-    let dd = -(b.state.position.h_f64() - h);
-    let dp = Vector3::new(T::c(dn), T::c(de), T::c(dd));
+    let dp = Vector3::from(a.state.position.ned_to(&b.state.position)).map(T::c);
     let position_sigma_m = sig(&a.position_sigma_m, &b.position_sigma_m, &zero, &dp);
-    let m = dp * wb_t;
-    let position = Position::from_radians(
-        a.state.position.lat_f64() + m.x.to_f64() / (e.r_meridian + h),
-        a.state.position.lon_f64()
-            + m.y.to_f64() / ((e.r_transverse + h) * libm::cos(a.state.position.lat_f64())),
-        h - m.z.to_f64(),
-    );
+    let position = a.state.position.offset_ned((dp * wb_t).map(T::to_f64).into());
     let estimate = AttitudeEstimate {
         q_b_n,
         sigma_rad,

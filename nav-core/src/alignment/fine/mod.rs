@@ -49,7 +49,7 @@ pub use euler::{euler_jacobian, euler_sigma, phi_covariance};
 
 use super::machine::LeverArm;
 use super::{AttitudeEstimate, SensorNoise};
-use crate::earth::{LocalEarth, OMEGA_IE};
+use crate::earth::OMEGA_IE;
 use crate::{ImuIncrement, InputError, InputLimits, NavState, Position, Scalar, attitude};
 use base::{ShapingBlock, Translation};
 use integrator::{Correction, SiteStrapdown};
@@ -279,7 +279,6 @@ pub struct FineCore<T: Scalar, const N: usize> {
     nav: SiteStrapdown<T>,
     /// The centre's position.
     centre: Position,
-    lat: f64,
     /// `Omega cos(lat)` [rad/s].
     w_h: T,
     /// Lever-arm estimate, body axes [m].
@@ -384,7 +383,6 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
             config,
             nav,
             centre,
-            lat,
             w_h,
             lever_b,
             blocks,
@@ -758,13 +756,7 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
         };
         let velocity_sigma_m_s = cov_of(VEL, &v_n);
         let position_sigma_m = cov_of(POS, &r_n);
-        let e = LocalEarth::<f64>::new(self.lat, self.centre.h_f64());
-        let (h0, lat0, lon0) = (self.centre.h_f64(), self.lat, self.centre.lon_f64());
-        let position = Position::from_radians(
-            lat0 + r_n.x.to_f64() / (e.r_meridian + h0),
-            lon0 + r_n.y.to_f64() / ((e.r_transverse + h0) * libm::cos(lat0)),
-            h0 - r_n.z.to_f64(),
-        );
+        let position = self.centre.offset_ned(r_n.map(T::to_f64).into());
         Ok(FineOutcome {
             state: NavState {
                 q_b_n: estimate.q_b_n,
