@@ -127,7 +127,8 @@ pub fn heading_deg(
             }
         }
         Method::Inertial => {
-            let mut a = InertialAlignment::new(site.lat_rad, site.h_m);
+            let window_s: f64 = window.iter().map(|i| i.dt).sum();
+            let mut a = InertialAlignment::new(site.lat_rad, site.h_m, window_s);
             for inc in window {
                 a.add(inc).map_err(|e| e.to_string())?;
             }

@@ -332,23 +332,20 @@ pub fn run_sway<T: Scalar>(
         &setup.initial_error_rad,
         &setup.initial_sigma_rad,
     );
-    let f = &setup.fine;
     let config = SwayConfig {
-        noise: noise_in(&f.noise),
+        fine: fine_config_in(&setup.fine),
         euler_sigma_rad: T::c(sway.euler_sigma_rad),
         amplitude_walk: T::c(sway.amplitude_walk),
         frequency_walk: T::c(sway.frequency_walk),
+        first_identify_s: T::c(sway.first_identify_s),
         identify_s: T::c(sway.identify_s),
-        update_period_s: T::c(sway.update_period_s),
+        sample_period_s: T::c(sway.sample_period_s),
         min_period_s: T::c(sway.min_period_s),
         max_period_s: T::c(sway.max_period_s),
         min_amplitude_rad: T::c(sway.min_amplitude_rad),
-        fallback_level_sigma: T::c(sway.fallback_level_sigma),
-        fallback_yaw_sigma: T::c(sway.fallback_yaw_sigma),
-        gate_sigma: T::c(sway.gate_sigma),
-        ..SwayConfig::default()
+        fits_per_step: sway.fits_per_step,
     };
-    let mut filter = SwayAlignment::new(initial, rec.position, config);
+    let mut filter = SwayAlignment::new(initial.q_b_n, Vector3::zeros(), rec.position, config);
     let out = drive(rec, setup.model, setup.seed, &mut filter, checkpoints)?;
     Ok((out, filter))
 }

@@ -78,7 +78,8 @@ impl AlignMethod {
     }
 }
 
-/// Coarse stage of [`AlignMethod::Fine`] [s]: levelling only (the filter needs no heading).
+/// Coarse stage of [`AlignMethod::Fine`] and [`AlignMethod::Sway`] [s]: levelling only (the
+/// filters need no heading).
 pub const FINE_COARSE_S: f64 = 5.0;
 
 /// Shortest window of [`AlignMethod::Fine`] [s]: the coarse stage's 10 s and as much again for
@@ -306,7 +307,9 @@ impl<T: Scalar> AlignSettings<T> {
         }
         let samples = super::samples_for(seconds, rate_hz);
         let coarse_samples = match method {
-            AlignMethod::Fine => super::samples_for(FINE_COARSE_S, rate_hz).min(samples),
+            AlignMethod::Fine | AlignMethod::Sway => {
+                super::samples_for(FINE_COARSE_S, rate_hz).min(samples)
+            }
             _ => coarse_samples_for(samples, rate_hz),
         };
         let settings = Self {
@@ -456,7 +459,15 @@ impl<T: Scalar> Aligner<T> {
         let coarse = match settings.method {
             AlignMethod::Static => Coarse::Static(StaticAlignment::new()),
             AlignMethod::Inertial | AlignMethod::Fine | AlignMethod::Sway => {
-                let a = InertialAlignment::new(lat, h).with_noise(settings.noise);
+                // The window: the whole alignment for the inertial method, the coarse stage
+                // (levelling only) for the two-stage ones.
+                let samples = if settings.method == AlignMethod::Inertial {
+                    settings.samples
+                } else {
+                    settings.coarse_samples
+                };
+                let window_s = f64::from(samples) / settings.rate_hz;
+                let a = InertialAlignment::new(lat, h, window_s).with_noise(settings.noise);
                 Coarse::Inertial(match settings.lever_arm.known() {
                     Some(r) => a.with_lever_arm(r),
                     None => a,
@@ -565,79 +576,61 @@ impl<T: Scalar> Aligner<T> {
         let Coarse::Inertial(a) = &self.coarse else {
             return;
         };
-        let initial = match (self.settings.method, a.estimate()) {
-            (AlignMethod::Fine, _) => AttitudeEstimate {
-                q_b_n: nalgebra::UnitQuaternion::identity(),
-                sigma_rad: Vector3::zeros(),
-                elapsed_s: T::zero(),
-            },
-            (_, Ok(e)) => e,
-            (_, Err(e)) => {
-                self.failure = Some(AlignFailure::Inertial(e));
-                self.stage = Stage::Failed;
-                return;
-            }
-        };
-        let noise = self.settings.noise;
         let position = self.settings.position;
+        let Some(q_b_c) = a.level() else {
+            self.failure = Some(AlignFailure::Inertial(InertialAlignError::NonFinite));
+            self.stage = Stage::Failed;
+            return;
+        };
+        let fine = FineConfig {
+            noise: self.settings.noise,
+            lever_arm: self.settings.lever_arm,
+            translation: Translation {
+                horizontal_sigma_m: self.settings.base.translation_sigma_m,
+                vertical_sigma_m: self.settings.base.translation_sigma_m,
+                ..Translation::default()
+            },
+            ..FineConfig::default()
+        };
         self.fine = Some(match self.settings.method {
             AlignMethod::Sway => Fine::Sway(SwayAlignment::new(
-                initial,
+                q_b_c,
+                self.last_rate,
                 position,
                 SwayConfig {
-                    noise,
+                    fine,
                     ..SwayConfig::default()
                 },
             )),
-            _ => {
-                let Some(q_b_c) = a.level() else {
-                    self.failure = Some(AlignFailure::Inertial(InertialAlignError::NonFinite));
-                    self.stage = Stage::Failed;
-                    return;
-                };
-                Fine::Kalman(Bank::new(
-                    q_b_c,
-                    self.last_rate,
-                    position,
-                    FineConfig {
-                        noise,
-                        lever_arm: self.settings.lever_arm,
-                        translation: Translation {
-                            horizontal_sigma_m: self.settings.base.translation_sigma_m,
-                            vertical_sigma_m: self.settings.base.translation_sigma_m,
-                            ..Translation::default()
-                        },
-                        ..FineConfig::default()
-                    },
-                    NoExtension,
-                ))
-            }
+            _ => Fine::Kalman(Bank::new(
+                q_b_c,
+                self.last_rate,
+                position,
+                fine,
+                NoExtension,
+            )),
         });
         self.stage = Stage::Fine;
     }
 
     /// Ends the alignment with the fine stage's result.
     fn finish_fine(&mut self) {
-        let (state, estimate, velocity_sigma_m_s, position_sigma_m) = match &self.fine {
-            Some(Fine::Kalman(f)) => match f.outcome() {
-                Ok(o) => {
-                    let site = self.settings.base.position_sigma_m;
-                    let pos = o.position_sigma_m.map(|s| (s * s + site * site).sqrt());
-                    (o.state, o.estimate, o.velocity_sigma_m_s, pos)
-                }
-                Err(r) => {
-                    self.failure = Some(AlignFailure::Fine(r));
-                    self.stage = Stage::Failed;
-                    return;
-                }
-            },
-            Some(Fine::Sway(f)) => {
-                let o =
-                    coarse_handover(&self.settings, f.estimate(), &self.last_rate, None, self.times);
-                (o.state, o.estimate, o.velocity_sigma_m_s, o.position_sigma_m)
-            }
+        let result = match &self.fine {
+            Some(Fine::Kalman(f)) => f.outcome(),
+            Some(Fine::Sway(f)) => f.outcome(),
             None => return,
         };
+        let o = match result {
+            Ok(o) => o,
+            Err(r) => {
+                self.failure = Some(AlignFailure::Fine(r));
+                self.stage = Stage::Failed;
+                return;
+            }
+        };
+        let site = self.settings.base.position_sigma_m;
+        let (state, estimate, velocity_sigma_m_s) = (o.state, o.estimate, o.velocity_sigma_m_s);
+        let position_sigma_m = o.position_sigma_m.map(|s| (s * s + site * site).sqrt());
         self.outcome = Some(AlignOutcome {
             state,
             estimate,
@@ -652,10 +645,9 @@ impl<T: Scalar> Aligner<T> {
     fn finish_coarse(&mut self) {
         let position = self.settings.position;
         let n = &self.settings.noise;
-        let scatter = self.still.check(
-            n.arw_rad_per_sqrt_s.to_f64(),
-            n.vrw_mps_per_sqrt_s.to_f64(),
-        );
+        let scatter = self
+            .still
+            .check(n.arw_rad_per_sqrt_s.to_f64(), n.vrw_mps_per_sqrt_s.to_f64());
         let min_s = self.settings.method.min_seconds();
         let estimate = if self.times.coarse_s + 1e-9 < min_s {
             // The header's rate said enough samples; their own intervals say otherwise.
@@ -913,7 +905,10 @@ mod tests {
             last = a.add(&inc);
         }
         assert!(
-            matches!(last, Progress::Failed(AlignFailure::WindowTooShort { min_s: 10.0, .. })),
+            matches!(
+                last,
+                Progress::Failed(AlignFailure::WindowTooShort { min_s: 10.0, .. })
+            ),
             "{last:?}"
         );
         // A NaN increment is refused and not counted.

@@ -86,7 +86,10 @@ impl Stillness {
         let var = |s: &Vector3<f64>, s2: &Vector3<f64>| {
             Vector3::from_fn(|i, _| ((s2[i] - s[i] * s[i] / n) / (n - 1.0)).max(0.0))
         };
-        Some((var(&self.sum_w, &self.sum_w2), var(&self.sum_f, &self.sum_f2)))
+        Some((
+            var(&self.sum_w, &self.sum_w2),
+            var(&self.sum_f, &self.sum_f2),
+        ))
     }
 
     /// The scatter against white noise of densities `arw` [rad/sqrt(s)] and `vrw`

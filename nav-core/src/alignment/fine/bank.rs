@@ -153,7 +153,10 @@ fn mix<T: Scalar>(a: &FineOutcome<T>, wa: f64, b: &FineOutcome<T>, wb: f64) -> F
     // Positions as north, east, down offsets of b from a.
     let dp = Vector3::from(a.state.position.ned_to(&b.state.position)).map(T::c);
     let position_sigma_m = sig(&a.position_sigma_m, &b.position_sigma_m, &zero, &dp);
-    let position = a.state.position.offset_ned((dp * wb_t).map(T::to_f64).into());
+    let position = a
+        .state
+        .position
+        .offset_ned((dp * wb_t).map(T::to_f64).into());
     let estimate = AttitudeEstimate {
         q_b_n,
         sigma_rad,

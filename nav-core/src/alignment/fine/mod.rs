@@ -109,7 +109,7 @@ impl<T: Scalar> Default for FineConfig<T> {
             accel_bias_walk: T::zero(),
             lever_arm: LeverArm::default(),
             translation: Translation::default(),
-            position_noise_m: T::c(0.001),
+            position_noise_m: T::c(1e-4),
             tilt_sigma_rad: T::c(2.0 * deg),
             update_period_s: T::c(0.1),
             gate_sigma: T::c(8.0),

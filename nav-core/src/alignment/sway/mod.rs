@@ -1,0 +1,501 @@
+//! Base-motion-model fine alignment (`--align-method sway`): the general filter
+//! ([`super::fine`]) and, as an [`Extension`] of it, a model of how the base turns — still, or
+//! swaying about a fixed mean attitude.
+//!
+//! **Why it beats the general floor.** The general filter knows nothing of how the body turns:
+//! the heading shows only as the east tilt drift `W psi` (`W = Omega cos(lat)`), found from the
+//! accelerometers' noisy view of the tilt, so its floor has the term
+//! `sqrt(12) N_a / (g W T^1.5)`. If the body is known to sway about a *fixed* mean attitude,
+//! the gyro-integrated attitude itself shows the drift: its roll and pitch, once the modelled
+//! sway is removed, should be constant, and every change is the attitude error drifting with
+//! the Earth-rate error. Only the gyro noise limits the estimate then: the motion-known floor
+//! `N_g / (W sqrt(T))` [Titterton & Weston, §10.3.2].
+//!
+//! **Model.** The integrated roll and pitch (of the general filter's strapdown, in its level
+//! frame `c`) are measured against `mean + s(t) - A phi` (`A` the Euler-angle Jacobian,
+//! [`euler_jacobian`]), every [`SwayConfig::sample_period_s`], noise
+//! [`SwayConfig::euler_sigma_rad`] (what the oscillators do not describe). States past the
+//! general filter's ([`MEAN`], [`OSC`], [`FREQ`]): mean roll and pitch, a phasor `(s, c)` per
+//! axis (`ds/dt = w c`, `dc/dt = -w s`, amplitude random walk), and a frequency error per axis
+//! (EKF Jacobian `(c dt, -s dt)`, folded into the frequency after every update). Yaw sway
+//! needs no model: it only enters through `A`. A lever arm and the centre's heave and
+//! translation are the general filter's: the level comes from the IMU's position there.
+//!
+//! **Identification.** For [`SwayConfig::identify_s`] the roll and pitch are kept; then each
+//! axis's period is found by least squares (line plus one sinusoid, [`search`]), a few fits
+//! per filter step so the firmware's alignment task never stalls; an axis whose sinusoid is
+//! below [`SwayConfig::min_amplitude_rad`] is still (its oscillator stays off: a still base
+//! is the special case). The states start from the fit at the current time; the general
+//! filter runs throughout.
+//!
+//! **Honesty.** The roll/pitch innovations' mean normalised square must stay below
+//! [`MAX_EULER_NIS`]: roll or pitch that is not one sinusoid (irregular waves, several
+//! periods) is refused, not answered with a gyro-noise sigma it does not have.
+
+pub mod search;
+
+use super::AttitudeEstimate;
+use super::fine::bank::Bank;
+use super::fine::model::FINE_STATES;
+use super::fine::{Extension, FineConfig, FineCore, FineOutcome, FineRefusal, euler_jacobian};
+use crate::{ImuIncrement, InputError, Position, Scalar, attitude};
+use nalgebra::{SMatrix, SVector, UnitQuaternion, Vector3};
+use search::Search;
+pub use search::{SinusoidFit, identify};
+
+/// Offset of the mean roll and pitch [rad].
+pub const MEAN: usize = FINE_STATES;
+/// Offset of the roll phasor `(s, c)` [rad]; the pitch phasor follows at `OSC + 2`.
+pub const OSC: usize = FINE_STATES + 2;
+/// Offset of the roll and pitch sway frequency errors [rad/s].
+pub const FREQ: usize = FINE_STATES + 6;
+/// Number of states.
+pub const SWAY_STATES: usize = FINE_STATES + 8;
+
+/// Largest mean normalised square of the roll and pitch innovations accepted.
+pub const MAX_EULER_NIS: f64 = 3.0;
+
+/// A fitted period is accepted once the window holds this many of it.
+pub const IDENTIFY_PERIODS: f64 = 1.25;
+
+/// Interval between identification attempts [s].
+pub const IDENTIFY_RETRY_S: f64 = 4.0;
+
+/// A roll or pitch innovation beyond this many sigma inflates that axis's phasor covariance
+/// by what it exceeds (the sway's amplitude changed: the end of a rocking), counted in
+/// [`SwayStatus::relocks`].
+pub const RELOCK_SIGMAS: f64 = 3.0;
+
+/// Settings of [`SwayAlignment`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SwayConfig<T: Scalar> {
+    /// The general filter's settings.
+    pub fine: FineConfig<T>,
+    /// 1-sigma of what the sway model leaves in the integrated roll and pitch [rad] (default
+    /// 1e-5; it must stay well below the gyro noise's walk over a sway period, `N_g sqrt(P)`,
+    /// or the drift is lost in it).
+    pub euler_sigma_rad: T,
+    /// Random walk of each phasor component [rad/sqrt(s)] (default 1e-6).
+    pub amplitude_walk: T,
+    /// Random walk of each sway frequency [rad/s/sqrt(s)] (default 1e-6).
+    pub frequency_walk: T,
+    /// First identification attempt after this much sway data [s] (default 14); while an
+    /// axis's fitted period is not held [`IDENTIFY_PERIODS`] times by the window, another
+    /// attempt follows every [`IDENTIFY_RETRY_S`], the last at [`Self::identify_s`].
+    pub first_identify_s: T,
+    /// Longest identification window [s] (default 25).
+    pub identify_s: T,
+    /// Roll/pitch measurement interval [s] (default 0.2; at most [`search::BUFFER_LEN`] kept).
+    pub sample_period_s: T,
+    /// Shortest sway period searched [s] (default 2).
+    pub min_period_s: T,
+    /// Longest sway period searched [s] (default 20).
+    pub max_period_s: T,
+    /// Smallest sinusoid amplitude taken as sway [rad] (default 1e-4).
+    pub min_amplitude_rad: T,
+    /// Least-squares fits per filter step during the identification (default 16: a search of
+    /// about 300 fits takes 2 s).
+    pub fits_per_step: u32,
+}
+
+impl<T: Scalar> Default for SwayConfig<T> {
+    fn default() -> Self {
+        Self {
+            fine: FineConfig::default(),
+            euler_sigma_rad: T::c(1e-5),
+            amplitude_walk: T::c(1e-6),
+            frequency_walk: T::c(1e-6),
+            first_identify_s: T::c(14.0),
+            identify_s: T::c(25.0),
+            sample_period_s: T::c(0.2),
+            min_period_s: T::c(2.0),
+            max_period_s: T::c(20.0),
+            min_amplitude_rad: T::c(1e-4),
+            fits_per_step: 16,
+        }
+    }
+}
+
+impl<T: Scalar> SwayConfig<T> {
+    /// Every non-finite or out-of-range value replaced by its default.
+    pub fn sanitized(&self) -> Self {
+        let d = Self::default();
+        let pos = |v: T, dv: T| if v.finite() && v > T::zero() { v } else { dv };
+        let nonneg = |v: T, dv: T| if v.finite() && v >= T::zero() { v } else { dv };
+        let mut c = Self {
+            fine: self.fine.sanitized(),
+            euler_sigma_rad: pos(self.euler_sigma_rad, d.euler_sigma_rad),
+            amplitude_walk: nonneg(self.amplitude_walk, d.amplitude_walk),
+            frequency_walk: nonneg(self.frequency_walk, d.frequency_walk),
+            first_identify_s: pos(self.first_identify_s, d.first_identify_s),
+            identify_s: pos(self.identify_s, d.identify_s),
+            sample_period_s: pos(self.sample_period_s, d.sample_period_s),
+            min_period_s: pos(self.min_period_s, d.min_period_s),
+            max_period_s: pos(self.max_period_s, d.max_period_s),
+            min_amplitude_rad: pos(self.min_amplitude_rad, d.min_amplitude_rad),
+            fits_per_step: self.fits_per_step.max(1),
+        };
+        if c.max_period_s <= c.min_period_s {
+            c.min_period_s = d.min_period_s;
+            c.max_period_s = d.max_period_s;
+        }
+        let longest = c.sample_period_s * T::c(search::BUFFER_LEN as f64 - 1.0);
+        c.identify_s = c.identify_s.min(longest);
+        c.first_identify_s = c.first_identify_s.min(c.identify_s);
+        c
+    }
+}
+
+/// Where the sway model is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SwayPhase {
+    /// Keeping roll and pitch for the identification.
+    Identifying,
+    /// Fitting the periods.
+    Searching,
+    /// Sway identified, measurements running.
+    Running,
+}
+
+/// The identified sway of one axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SwayAxis<T: Scalar> {
+    /// Period [s] (NaN: no sway found on this axis).
+    pub period_s: T,
+    /// Amplitude [rad].
+    pub amplitude_rad: T,
+}
+
+/// Counters and the identification result.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SwayStatus<T: Scalar> {
+    /// Phase.
+    pub phase: SwayPhase,
+    /// Roll and pitch measurements applied.
+    pub euler_updates: u32,
+    /// Mean normalised square of their innovations (1 when the model holds).
+    pub euler_mean_nis: f64,
+    /// Innovations beyond [`RELOCK_SIGMAS`] that inflated a phasor covariance.
+    pub relocks: u32,
+    /// Identification attempts.
+    pub attempts: u32,
+    /// Roll sway.
+    pub roll: SwayAxis<T>,
+    /// Pitch sway.
+    pub pitch: SwayAxis<T>,
+}
+
+/// The sway model: the [`Extension`] of the general filter (module docs).
+#[derive(Clone, Debug)]
+pub struct SwayModel<T: Scalar> {
+    config: SwayConfig<T>,
+    search: Search<2>,
+    /// Sway frequencies [rad/s]; `None`: no sway on that axis (or not identified yet).
+    omega: [Option<T>; 2],
+    /// Time of the last roll/pitch sample [s].
+    last_sample_s: f64,
+    nis_sum: f64,
+    status: SwayStatus<T>,
+}
+
+impl<T: Scalar> SwayModel<T> {
+    /// A model before its identification.
+    pub fn new(config: &SwayConfig<T>) -> Self {
+        let c = config.sanitized();
+        let tau = core::f64::consts::TAU;
+        let axis = SwayAxis {
+            period_s: T::c(f64::NAN),
+            amplitude_rad: T::zero(),
+        };
+        Self {
+            config: c,
+            search: Search::new(tau / c.max_period_s.to_f64(), tau / c.min_period_s.to_f64()),
+            omega: [None; 2],
+            last_sample_s: f64::NEG_INFINITY,
+            nis_sum: 0.0,
+            status: SwayStatus {
+                phase: SwayPhase::Identifying,
+                euler_updates: 0,
+                euler_mean_nis: 0.0,
+                relocks: 0,
+                attempts: 0,
+                roll: axis,
+                pitch: axis,
+            },
+        }
+    }
+
+    /// Counters and the identified sway.
+    pub fn status(&self) -> SwayStatus<T> {
+        self.status
+    }
+
+    /// Every axis's fit is a still axis or holds [`IDENTIFY_PERIODS`] periods in the window.
+    fn resolved(&self) -> bool {
+        let window = self.search.window();
+        (0..2).all(|axis| {
+            self.search.result(axis).is_none_or(|f| {
+                !(f.omega.is_finite() && f.amplitude() >= self.config.min_amplitude_rad.to_f64())
+                    || window >= IDENTIFY_PERIODS * core::f64::consts::TAU / f.omega
+            })
+        })
+    }
+
+    /// The roll and pitch measurement rows [SI] of axis `axis` at attitude `q_b_c`.
+    fn euler_row(q_b_c: &UnitQuaternion<T>, axis: usize) -> SVector<T, SWAY_STATES> {
+        let jac = euler_jacobian(q_b_c);
+        let mut h = SVector::<T, SWAY_STATES>::zeros();
+        for k in 0..3 {
+            h[super::fine::model::ATT + k] = -jac[(axis, k)];
+        }
+        h[MEAN + axis] = T::one();
+        h[OSC + 2 * axis] = T::one();
+        h
+    }
+
+    /// Starts the states from the fits, at time `now_s` [s] and attitude `q_b_c`.
+    fn start(
+        &mut self,
+        core: &mut FineCore<T, SWAY_STATES>,
+        q_b_c: &UnitQuaternion<T>,
+        now_s: f64,
+    ) {
+        let (roll, pitch, _) = attitude::euler(q_b_c);
+        let var = |s: f64| s * s;
+        for axis in 0..2 {
+            let fit = self.search.result(axis);
+            let z = if axis == 0 { roll } else { pitch };
+            let sway = fit.filter(|f| {
+                f.omega.is_finite() && f.amplitude() >= self.config.min_amplitude_rad.to_f64()
+            });
+            // Mean: what the measurement says now, less the sway; its prior covers the tilt.
+            let (s, c, r) = match sway {
+                Some(f) => {
+                    let a = f.omega * (now_s - self.search.t0());
+                    let (sn, cs) = (libm::sin(a), libm::cos(a));
+                    // y = cos_coef cos(a) + sin_coef sin(a): s = y, c = dy/da.
+                    let s = f.cos * cs + f.sin * sn;
+                    let c = -f.cos * sn + f.sin * cs;
+                    (s, c, var(f.residual_rms.max(1e-5)) * 4.0)
+                }
+                None => (0.0, 0.0, 0.0),
+            };
+            core.init_states_si::<1>(
+                MEAN + axis,
+                &SVector::from([z - T::c(s)]),
+                &SMatrix::from([[T::c(var(0.01) + r)]]),
+            );
+            let info = if axis == 0 {
+                &mut self.status.roll
+            } else {
+                &mut self.status.pitch
+            };
+            match sway {
+                Some(f) => {
+                    self.omega[axis] = Some(T::c(f.omega));
+                    info.period_s = T::c(core::f64::consts::TAU / f.omega);
+                    info.amplitude_rad = T::c(f.amplitude());
+                    let xs = SVector::<T, 2>::new(T::c(s), T::c(c));
+                    let ps = SMatrix::<T, 2, 2>::from_diagonal_element(T::c(r));
+                    core.init_states_si::<2>(OSC + 2 * axis, &xs, &ps);
+                    core.init_states_si::<1>(
+                        FREQ + axis,
+                        &SVector::from([T::zero()]),
+                        &SMatrix::from([[T::c(var(1e-3 * f.omega))]]),
+                    );
+                }
+                None => self.omega[axis] = None,
+            }
+        }
+        self.status.phase = SwayPhase::Running;
+    }
+}
+
+impl<T: Scalar> Extension<T, SWAY_STATES> for SwayModel<T> {
+    fn transition(
+        &mut self,
+        x: &mut SVector<T, SWAY_STATES>,
+        phi: &mut SMatrix<T, SWAY_STATES, SWAY_STATES>,
+        q_c: &mut SVector<T, SWAY_STATES>,
+        dt: T,
+    ) -> bool {
+        for axis in 0..2 {
+            let Some(w) = self.omega[axis] else { continue };
+            let (s, c, f) = (OSC + 2 * axis, OSC + 2 * axis + 1, FREQ + axis);
+            let (sn, cs) = ((w * dt).psin(), (w * dt).pcos());
+            let (s1, c1) = (cs * x[s] + sn * x[c], -sn * x[s] + cs * x[c]);
+            phi[(s, s)] = cs;
+            phi[(s, c)] = sn;
+            phi[(c, s)] = -sn;
+            phi[(c, c)] = cs;
+            phi[(s, f)] = c1 * dt;
+            phi[(c, f)] = -s1 * dt;
+            x[s] = s1;
+            x[c] = c1;
+            let a = self.config.amplitude_walk * self.config.amplitude_walk;
+            q_c[s] = a;
+            q_c[c] = a;
+            q_c[f] = self.config.frequency_walk * self.config.frequency_walk;
+        }
+        true
+    }
+
+    fn update(&mut self, core: &mut FineCore<T, SWAY_STATES>, elapsed_s: f64) {
+        // At the filter step nearest each sample period.
+        let half_step = 0.5 * core.config().update_period_s.to_f64();
+        if elapsed_s + half_step < self.last_sample_s + self.config.sample_period_s.to_f64() {
+            return;
+        }
+        self.last_sample_s = elapsed_s;
+        let q = core.strapdown().q_b_c();
+        match self.status.phase {
+            SwayPhase::Identifying => {
+                let (roll, pitch, _) = attitude::euler(&q);
+                let full = !self.search.push(elapsed_s, [roll.to_f64(), pitch.to_f64()]);
+                let first = if self.search.is_empty() {
+                    elapsed_s
+                } else {
+                    self.search.t0()
+                };
+                let window = elapsed_s - first + 1e-9;
+                let next_try = self.config.first_identify_s.to_f64()
+                    + IDENTIFY_RETRY_S * f64::from(self.status.attempts);
+                let last = self.config.identify_s.to_f64();
+                if full || window >= next_try.min(last) {
+                    self.search.start();
+                    self.status.attempts += 1;
+                    self.status.phase = SwayPhase::Searching;
+                }
+            }
+            SwayPhase::Searching => {
+                if self.search.run(self.config.fits_per_step) {
+                    let window = self.search.window();
+                    let last = window + 1e-9 >= self.config.identify_s.to_f64();
+                    if self.resolved() || last || self.search.len() >= search::BUFFER_LEN {
+                        self.start(core, &q, elapsed_s);
+                    } else {
+                        // A period too long for the window: keep buffering.
+                        self.status.phase = SwayPhase::Identifying;
+                        let (roll, pitch, _) = attitude::euler(&q);
+                        let _ = self.search.push(elapsed_s, [roll.to_f64(), pitch.to_f64()]);
+                    }
+                }
+            }
+            SwayPhase::Running => {
+                let (roll, pitch, _) = attitude::euler(&q);
+                let r = self.config.euler_sigma_rad * self.config.euler_sigma_rad;
+                for axis in 0..2 {
+                    let h = Self::euler_row(&q, axis);
+                    let z = if axis == 0 { roll } else { pitch };
+                    let innovation = wrap_pi(z - core.predict(&h));
+                    let mut s = core.innovation_variance(&h, r);
+                    if self.omega[axis].is_some()
+                        && innovation * innovation > T::c(RELOCK_SIGMAS * RELOCK_SIGMAS) * s
+                    {
+                        let extra = innovation * innovation - s;
+                        core.inflate_si(OSC + 2 * axis, extra);
+                        core.inflate_si(OSC + 2 * axis + 1, extra);
+                        s += extra;
+                        self.status.relocks += 1;
+                    }
+                    // Never gated: a gap would lose the drift; judged by the mean NIS.
+                    core.update(&h, innovation, r, T::c(1e6));
+                    self.nis_sum += (innovation * innovation / s).to_f64();
+                    self.status.euler_updates += 1;
+                }
+                self.status.euler_mean_nis =
+                    self.nis_sum / f64::from(self.status.euler_updates.max(1));
+                // Frequency errors folded into the frequencies.
+                for axis in 0..2 {
+                    if let Some(w) = &mut self.omega[axis] {
+                        *w += core.state_si(FREQ + axis);
+                        core.set_state_si(FREQ + axis, T::zero());
+                        let info = if axis == 0 {
+                            &mut self.status.roll
+                        } else {
+                            &mut self.status.pitch
+                        };
+                        info.period_s = T::c(core::f64::consts::TAU) / *w;
+                        let (s, c) = (
+                            core.state_si(OSC + 2 * axis),
+                            core.state_si(OSC + 2 * axis + 1),
+                        );
+                        info.amplitude_rad = (s * s + c * c).sqrt();
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The base-motion-model fine alignment (module docs): the general filter's two-model bank
+/// with the sway model in each.
+#[derive(Clone, Debug)]
+pub struct SwayAlignment<T: Scalar> {
+    bank: Bank<T, SWAY_STATES, SwayModel<T>>,
+}
+
+impl<T: Scalar> SwayAlignment<T> {
+    /// Starts as [`FineCore::new`] with the sway model.
+    pub fn new(
+        q_b_c: UnitQuaternion<T>,
+        omega_eb_b: Vector3<T>,
+        position: Position,
+        config: SwayConfig<T>,
+    ) -> Self {
+        let config = config.sanitized();
+        Self {
+            bank: Bank::new(
+                q_b_c,
+                omega_eb_b,
+                position,
+                config.fine,
+                SwayModel::new(&config),
+            ),
+        }
+    }
+
+    /// Adds one increment.
+    pub fn add(&mut self, inc: &ImuIncrement<T>) -> Result<(), InputError> {
+        self.bank.add(inc)
+    }
+
+    /// The current attitude estimate.
+    pub fn estimate(&self) -> AttitudeEstimate<T> {
+        self.bank.estimate()
+    }
+
+    /// The best filter's sway status.
+    pub fn status(&self) -> SwayStatus<T> {
+        self.bank.best().1.status()
+    }
+
+    /// The filters (for inspection).
+    pub fn bank(&self) -> &Bank<T, SWAY_STATES, SwayModel<T>> {
+        &self.bank
+    }
+
+    /// The result, or why there is none: the general filter's refusals, and a sway model that
+    /// does not hold (roll/pitch innovations beyond [`MAX_EULER_NIS`]).
+    pub fn outcome(&self) -> Result<FineOutcome<T>, FineRefusal> {
+        let status = self.status();
+        if status.euler_mean_nis > MAX_EULER_NIS {
+            return Err(FineRefusal::MotionNotModelled {
+                mean_nis: status.euler_mean_nis,
+            });
+        }
+        self.bank.outcome()
+    }
+}
+
+/// `a` [rad] wrapped to (-pi, pi].
+fn wrap_pi<T: Scalar>(a: T) -> T {
+    let pi = T::c(core::f64::consts::PI);
+    if a > pi {
+        a - pi - pi
+    } else if a <= -pi {
+        a + pi + pi
+    } else {
+        a
+    }
+}
