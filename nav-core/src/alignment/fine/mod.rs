@@ -29,7 +29,7 @@
 //! **Honesty.** The result is refused ([`FineRefusal`]) when the heading's 1-sigma exceeds
 //! [`FineConfig::max_heading_sigma_rad`] (the Earth rate not resolved: coarse gyros, too short,
 //! too near a pole), when the estimated horizontal Earth rate's magnitude disagrees with
-//! `Omega cos(lat)` beyond [`EARTH_RATE_SIGMAS`] of its own 1-sigma (the gyros see something
+//! `Omega cos(lat)` (the gyros see something
 //! else: a bias beyond the prior, a turning base), or when the position innovations' mean
 //! normalised square exceeds [`MAX_MEAN_NIS`] (the base moves in a way the model does not
 //! describe).
@@ -63,13 +63,22 @@ use nalgebra::{Matrix3, SMatrix, SVector, UnitQuaternion, Vector2, Vector3};
 /// 1-sigma of a measured lever arm per axis [m] ([`LeverArm::Known`]).
 pub const LEVER_ARM_KNOWN_SIGMA_M: f64 = 0.01;
 
-/// The estimated horizontal Earth rate's magnitude may differ from `Omega cos(lat)` by this
-/// many of its own 1-sigma before the result is refused.
-pub const EARTH_RATE_SIGMAS: f64 = 4.0;
-
 /// Largest mean normalised innovation square of the position measurements accepted (about 1
 /// when the model holds).
 pub const MAX_MEAN_NIS: f64 = 3.0;
+
+/// The Earth rate's magnitude is enforced once the heading 1-sigma is below this [rad]
+/// (5 deg: linearised about a direction that far off, the magnitude is read `1 - cos(5 deg)`
+/// = 0.4 % short).
+pub const MAGNITUDE_FROM_RAD: f64 = 5.0 * core::f64::consts::PI / 180.0;
+
+/// 1-sigma of the magnitude measurement, relative to `Omega cos(lat)` (0.5 %: the
+/// linearisation's error at [`MAGNITUDE_FROM_RAD`]).
+pub const MAGNITUDE_SIGMA: f64 = 5e-3;
+
+/// The magnitude measurement's innovation may be this many of its sigma before the result is
+/// refused.
+pub const EARTH_RATE_SIGMAS: f64 = 4.0;
 
 /// Settings of the filter. `Default` is seed 003's FOG IMU [Vavilova et al., §4] on a base that
 /// may sway and heave, the lever arm unknown (5 m per axis).
@@ -188,8 +197,8 @@ pub enum FineRefusal {
         /// The heading 1-sigma [rad].
         sigma_rad: f64,
     },
-    /// The horizontal Earth rate estimated [rad/s] disagrees with `Omega cos(lat)` by more
-    /// than [`EARTH_RATE_SIGMAS`] of its 1-sigma: the gyros see something else.
+    /// The horizontal Earth rate estimated disagrees with `Omega cos(lat)` (module docs): the
+    /// gyros see something else.
     EarthRateMismatch {
         /// Estimated magnitude over `Omega cos(lat)` [-].
         ratio: f64,
@@ -252,6 +261,9 @@ pub trait Extension<T: Scalar, const N: usize> {
     ) -> bool;
     /// Applies the extra measurements after the position update.
     fn update(&mut self, core: &mut FineCore<T, N>, elapsed_s: f64);
+    /// Sees every accepted increment (raw, before the filter's compensation) and the attitude
+    /// `C_b_c` at its start (default: nothing).
+    fn increment(&mut self, _inc: &ImuIncrement<T>, _c_b_c: &Matrix3<T>) {}
 }
 
 /// The general filter's extension: nothing.
@@ -299,6 +311,8 @@ pub struct FineCore<T: Scalar, const N: usize> {
     nis_n: u32,
     /// `sum -(ln S + nu^2 / S) / 2` over the accepted position updates.
     log_likelihood: f64,
+    /// The magnitude measurement's normalised innovation, once applied.
+    magnitude_z: Option<f64>,
     status: FineStatus,
 }
 
@@ -397,6 +411,7 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
             nis_sum: 0.0,
             nis_n: 0,
             log_likelihood: 0.0,
+            magnitude_z: None,
             status: FineStatus::default(),
         }
     }
@@ -415,6 +430,7 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
             return Err(e);
         }
         let sums = self.nav.step(inc);
+        ext.increment(inc, &sums.c_b_c);
         let dt = inc.dt;
         self.sum_c += sums.c_b_c * dt;
         self.sum_dv_c += sums.dv_c;
@@ -497,6 +513,7 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
 
         self.update_position();
         ext.update(self, self.elapsed_s);
+        self.constrain_earth_rate();
         self.status.updates = self.status.updates.saturating_add(1);
         if !(kalman::all_finite(&self.p) && kalman::all_finite(&self.x)) {
             // Cannot happen with finite inputs; start the covariance afresh rather than panic.
@@ -559,6 +576,46 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
             }
         }
         self.status.mean_nis = self.nis_sum / f64::from(self.nis_n.max(1));
+    }
+
+    /// The horizontal Earth rate's magnitude is `W = Omega cos(lat)`, exactly: once its
+    /// direction is resolved (heading 1-sigma below [`MAGNITUDE_FROM_RAD`]) that is one
+    /// measurement, `W = |e| = |e_hat| - u . de` (`u = e_hat / |e_hat|`), noise
+    /// [`MAGNITUDE_SIGMA`] of `W`, applied once: it removes the radial component from the
+    /// state's uncertainty (the states have no process noise, so it stays removed), and
+    /// repeating it along a slowly turning `u` would pin the tangential one too. Without it the
+    /// zero-mean prior of the two states shrinks the estimate towards zero by each direction's
+    /// information ratio, which turns into a heading error wherever the information is not the
+    /// same in every direction (the sway model's roll and pitch measurements). Its normalised
+    /// innovation is kept: gyros that disagree with `W` beyond [`EARTH_RATE_SIGMAS`] (a bias
+    /// beyond its prior, a turning base) are refused ([`FineRefusal::EarthRateMismatch`]).
+    fn constrain_earth_rate(&mut self) {
+        if self.magnitude_z.is_some() {
+            return;
+        }
+        let [e_n, e_e] = self.nav.e_h();
+        let de = Vector2::new(self.state_si(EARTH), self.state_si(EARTH + 1));
+        let e = Vector2::new(e_n, e_e) - de;
+        let mag = e.norm();
+        if !(mag > T::zero() && mag.finite()) {
+            return;
+        }
+        let u = e / mag;
+        let tangent = Vector2::new(u.y, -u.x);
+        let p_e = SMatrix::<T, 2, 2>::from_fn(|i, j| self.cov_si(EARTH + i, EARTH + j));
+        let var_alpha = (tangent.transpose() * p_e * tangent)[0] / (self.w_h * self.w_h);
+        if !(var_alpha.to_f64() < MAGNITUDE_FROM_RAD * MAGNITUDE_FROM_RAD) {
+            return;
+        }
+        let mut h = SVector::<T, N>::zeros();
+        h[EARTH] = -u.x;
+        h[EARTH + 1] = -u.y;
+        let r = T::c(MAGNITUDE_SIGMA * MAGNITUDE_SIGMA) * self.w_h * self.w_h;
+        // W = |e_hat - de| against -u . de, linearised at the current estimate.
+        let innovation = self.w_h - mag;
+        let s = self.innovation_variance(&h, r);
+        self.magnitude_z = Some((innovation / s.sqrt()).to_f64());
+        self.update(&h, innovation, r, T::c(1e6));
     }
 
     /// A scalar measurement `z = h^T x + v`, `v ~ N(0, r)`, `h` in SI per state (scaled here),
@@ -724,11 +781,11 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
             });
         }
         let [e_n, e_e] = self.nav.e_h();
-        let mag = (e_n * e_n + e_e * e_e).sqrt();
-        let u = Vector2::new(e_n, e_e) / mag.max(T::c(1e-30));
-        let sigma_r = (u.transpose() * p_e * u)[0].max(T::zero()).sqrt();
-        let ratio = (mag / self.w_h).to_f64();
-        if (mag - self.w_h).abs() > T::c(EARTH_RATE_SIGMAS) * sigma_r + T::c(1e-3) * self.w_h {
+        let ratio = ((e_n * e_n + e_e * e_e).sqrt() / self.w_h).to_f64();
+        if self
+            .magnitude_z
+            .is_some_and(|z| !(z.abs() <= EARTH_RATE_SIGMAS))
+        {
             return Err(FineRefusal::EarthRateMismatch { ratio });
         }
         if self.status.mean_nis > MAX_MEAN_NIS {

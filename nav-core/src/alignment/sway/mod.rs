@@ -36,10 +36,12 @@ pub mod search;
 
 use super::AttitudeEstimate;
 use super::fine::bank::Bank;
-use super::fine::model::FINE_STATES;
+use super::fine::model::{self, FINE_STATES};
 use super::fine::{Extension, FineConfig, FineCore, FineOutcome, FineRefusal, euler_jacobian};
+use crate::coning::ConingSculling;
+use crate::strapdown::{kahan_add, small_rotation};
 use crate::{ImuIncrement, InputError, Position, Scalar, attitude};
-use nalgebra::{SMatrix, SVector, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Quaternion, SMatrix, SVector, UnitQuaternion, Vector3};
 use search::Search;
 pub use search::{SinusoidFit, identify};
 
@@ -60,6 +62,12 @@ pub const IDENTIFY_PERIODS: f64 = 1.25;
 
 /// Interval between identification attempts [s].
 pub const IDENTIFY_RETRY_S: f64 = 4.0;
+
+/// The open-loop attitude starts from the general filter's this long after its start [s]:
+/// by then the tilt has converged from the coarse levelling's degree to a few 1e-5 rad, so the
+/// second-order terms of the open-loop error (`2 phi phi'`, 1.3e-6 rad/s at 0.7 deg) stay
+/// below the drift's noise.
+pub const OPEN_LOOP_START_S: f64 = 2.0;
 
 /// A roll or pitch innovation beyond this many sigma inflates that axis's phasor covariance
 /// by what it exceeds (the sway's amplitude changed: the end of a rocking), counted in
@@ -102,8 +110,8 @@ impl<T: Scalar> Default for SwayConfig<T> {
     fn default() -> Self {
         Self {
             fine: FineConfig::default(),
-            euler_sigma_rad: T::c(1e-5),
-            amplitude_walk: T::c(1e-6),
+            euler_sigma_rad: T::c(3e-6),
+            amplitude_walk: T::c(3e-7),
             frequency_walk: T::c(1e-6),
             first_identify_s: T::c(14.0),
             identify_s: T::c(25.0),
@@ -190,6 +198,18 @@ pub struct SwayStatus<T: Scalar> {
 pub struct SwayModel<T: Scalar> {
     config: SwayConfig<T>,
     search: Search<2>,
+    /// The open-loop attitude (gyros and the vertical Earth rate only, no correction) whose
+    /// roll and pitch are kept for the identification, and its summation carry; `None` before
+    /// [`OPEN_LOOP_START_S`].
+    open: bool,
+    q_open: Quaternion<T>,
+    q_open_carry: Quaternion<T>,
+    coning: ConingSculling<T>,
+    /// Vertical Earth rate in `c` [rad/s].
+    omega_down: T,
+    /// `sum C_b_c dt` [s] and time [s] over the identification window.
+    sum_c: Matrix3<T>,
+    sum_t: f64,
     /// Sway frequencies [rad/s]; `None`: no sway on that axis (or not identified yet).
     omega: [Option<T>; 2],
     /// Time of the last roll/pitch sample [s].
@@ -199,8 +219,9 @@ pub struct SwayModel<T: Scalar> {
 }
 
 impl<T: Scalar> SwayModel<T> {
-    /// A model before its identification.
-    pub fn new(config: &SwayConfig<T>) -> Self {
+    /// A model before its identification, the body at `q_b_c` at latitude `lat` [rad] (the
+    /// attitude is replaced by the filter's at [`OPEN_LOOP_START_S`]).
+    pub fn new(config: &SwayConfig<T>, q_b_c: &UnitQuaternion<T>, lat: T) -> Self {
         let c = config.sanitized();
         let tau = core::f64::consts::TAU;
         let axis = SwayAxis {
@@ -210,6 +231,13 @@ impl<T: Scalar> SwayModel<T> {
         Self {
             config: c,
             search: Search::new(tau / c.max_period_s.to_f64(), tau / c.min_period_s.to_f64()),
+            open: false,
+            q_open: *q_b_c.quaternion(),
+            q_open_carry: Quaternion::new(T::zero(), T::zero(), T::zero(), T::zero()),
+            coning: ConingSculling::new(),
+            omega_down: -T::c(crate::earth::OMEGA_IE) * lat.psin(),
+            sum_c: Matrix3::zeros(),
+            sum_t: 0.0,
             omega: [None; 2],
             last_sample_s: f64::NEG_INFINITY,
             nis_sum: 0.0,
@@ -228,6 +256,11 @@ impl<T: Scalar> SwayModel<T> {
     /// Counters and the identified sway.
     pub fn status(&self) -> SwayStatus<T> {
         self.status
+    }
+
+    /// The open-loop attitude.
+    fn open_loop(&self) -> UnitQuaternion<T> {
+        UnitQuaternion::new_normalize(self.q_open)
     }
 
     /// Every axis's fit is a still axis or holds [`IDENTIFY_PERIODS`] periods in the window.
@@ -253,6 +286,66 @@ impl<T: Scalar> SwayModel<T> {
         h
     }
 
+    /// The fits' trends as one measurement of the horizontal Earth rate and the gyro bias
+    /// (module docs, **Identification**): the open-loop attitude (no horizontal Earth rate, no
+    /// bias compensation) drifts at `phi' = -(e_N, e_E, 0) - C b_g` ([`model`] with
+    /// `omega_hat - omega = -e`), so its roll and pitch trends are `A (e + C_mean b_g)` (`A` the
+    /// roll and pitch rows of [`euler_jacobian`]), plus the Earth rate turning the open-loop
+    /// attitude's own error, `A (omega_ie x phi_open)` (a 0.5 deg start error drifts at 6e-7
+    /// rad/s: as much as the trend's noise). With the filter's `e = e_hat - de`,
+    /// `b_g = b_hat + b_res` and `phi_open = phi + delta` (`delta` the known rotation between the
+    /// open-loop and the filter's attitudes, at the window's middle), what is left is
+    /// `-A de + A C b_res + A [omega x] phi`. Noise: the
+    /// least-squares slope of the gyros' attitude random walk, `(6/5) N_g^2 / T` per axis over
+    /// the window `T` (as the inertial-frame heading's, [`super::inertial`]), times the fit's
+    /// [`SinusoidFit::trend_inflation`] (the trend shares the window with a sinusoid of about
+    /// its length).
+    fn apply_drift(&mut self, core: &mut FineCore<T, SWAY_STATES>, now_s: f64) {
+        let window = self.search.window();
+        if !(window > 0.0 && self.sum_t > 0.0) {
+            return;
+        }
+        let q_open = self.open_loop();
+        let jac = euler_jacobian(&q_open);
+        let c_mean = self.sum_c / T::c(self.sum_t);
+        let [e_n, e_e] = core.strapdown().e_h();
+        let e_hat = Vector3::new(e_n, e_e, T::zero());
+        let (b_hat, _) = core.strapdown().biases();
+        let omega = core.strapdown().omega_ie_c();
+        // The open-loop attitude error over the window, `phi_open = phi_core + delta`: `delta`
+        // the known rotation from the filter's attitude to the open-loop one now, carried back
+        // to the window's middle by the drift (`phi' = -(e + C b)`).
+        let delta = -attitude::rotation_vector_of(&(q_open * core.strapdown().q_b_c().inverse()));
+        let drift = e_hat + c_mean * b_hat;
+        let back_s = now_s - (self.search.t0() + 0.5 * window);
+        let phi_mid = delta + drift * T::c(back_s);
+        let known = drift + omega.cross(&phi_mid);
+        let n_g = self.config.fine.noise.arw_rad_per_sqrt_s;
+        for axis in 0..2 {
+            let Some(fit) = self
+                .search
+                .result(axis)
+                .filter(|f| f.trend.is_finite() && f.trend_inflation.is_finite())
+            else {
+                continue;
+            };
+            let r = T::c(1.2 * fit.trend_inflation.max(1.0) / window) * n_g * n_g;
+            let a_row = jac.row(axis).into_owned();
+            let ac = a_row * c_mean;
+            let aw = a_row * omega.cross_matrix();
+            let mut h = SVector::<T, SWAY_STATES>::zeros();
+            h[model::EARTH] = -a_row[0];
+            h[model::EARTH + 1] = -a_row[1];
+            for k in 0..3 {
+                h[model::GYRO_BIAS + k] = ac[k];
+                h[model::ATT + k] = aw[k];
+            }
+            let z = T::c(fit.trend) - (a_row * known)[0];
+            let innovation = z - core.predict(&h);
+            core.update(&h, innovation, r, T::c(1e6));
+        }
+    }
+
     /// Starts the states from the fits, at time `now_s` [s] and attitude `q_b_c`.
     fn start(
         &mut self,
@@ -260,6 +353,7 @@ impl<T: Scalar> SwayModel<T> {
         q_b_c: &UnitQuaternion<T>,
         now_s: f64,
     ) {
+        self.apply_drift(core, now_s);
         let (roll, pitch, _) = attitude::euler(q_b_c);
         let var = |s: f64| s * s;
         for axis in 0..2 {
@@ -340,6 +434,36 @@ impl<T: Scalar> Extension<T, SWAY_STATES> for SwayModel<T> {
         true
     }
 
+    fn increment(&mut self, inc: &ImuIncrement<T>, c_b_c: &Matrix3<T>) {
+        if self.status.phase == SwayPhase::Running || !self.open {
+            return;
+        }
+        // The open-loop attitude: q <- q(-zeta) q q(phi_b), zeta the vertical Earth rate only
+        // [Savage, 7.1.2-14].
+        let c = self
+            .coning
+            .compensate(&inc.delta_theta_ib_b, &inc.delta_v_ib_b, inc.dt, true);
+        let zeta = Vector3::new(T::zero(), T::zero(), self.omega_down * inc.dt);
+        let p = small_rotation(&c.phi_b);
+        let z = small_rotation(&(-zeta));
+        let qp = self.q_open * p;
+        let delta = qp + z * self.q_open + z * qp;
+        kahan_add(
+            self.q_open.coords.as_mut_slice(),
+            self.q_open_carry.coords.as_mut_slice(),
+            delta.coords.as_slice(),
+        );
+        let n2 = self.q_open.norm_squared();
+        if (n2 - T::one()).abs() > T::c(1e-4) {
+            self.q_open /= n2.sqrt();
+            self.q_open_carry = Quaternion::new(T::zero(), T::zero(), T::zero(), T::zero());
+        }
+        if self.status.phase == SwayPhase::Identifying {
+            self.sum_c += c_b_c * inc.dt;
+            self.sum_t += inc.dt.to_f64();
+        }
+    }
+
     fn update(&mut self, core: &mut FineCore<T, SWAY_STATES>, elapsed_s: f64) {
         // At the filter step nearest each sample period.
         let half_step = 0.5 * core.config().update_period_s.to_f64();
@@ -348,9 +472,19 @@ impl<T: Scalar> Extension<T, SWAY_STATES> for SwayModel<T> {
         }
         self.last_sample_s = elapsed_s;
         let q = core.strapdown().q_b_c();
+        if !self.open {
+            if elapsed_s + half_step < OPEN_LOOP_START_S {
+                return;
+            }
+            // The open-loop attitude from the filter's, now that its tilt has converged.
+            self.open = true;
+            self.q_open = *q.quaternion();
+            self.q_open_carry = Quaternion::new(T::zero(), T::zero(), T::zero(), T::zero());
+            self.coning.reset();
+        }
         match self.status.phase {
             SwayPhase::Identifying => {
-                let (roll, pitch, _) = attitude::euler(&q);
+                let (roll, pitch, _) = attitude::euler(&self.open_loop());
                 let full = !self.search.push(elapsed_s, [roll.to_f64(), pitch.to_f64()]);
                 let first = if self.search.is_empty() {
                     elapsed_s
@@ -376,7 +510,7 @@ impl<T: Scalar> Extension<T, SWAY_STATES> for SwayModel<T> {
                     } else {
                         // A period too long for the window: keep buffering.
                         self.status.phase = SwayPhase::Identifying;
-                        let (roll, pitch, _) = attitude::euler(&q);
+                        let (roll, pitch, _) = attitude::euler(&self.open_loop());
                         let _ = self.search.push(elapsed_s, [roll.to_f64(), pitch.to_f64()]);
                     }
                 }
@@ -450,7 +584,7 @@ impl<T: Scalar> SwayAlignment<T> {
                 omega_eb_b,
                 position,
                 config.fine,
-                SwayModel::new(&config),
+                SwayModel::new(&config, &q_b_c, position.lat::<T>()),
             ),
         }
     }

@@ -24,6 +24,9 @@ pub struct SinusoidFit {
     pub sin: f64,
     /// RMS of the residual [rad].
     pub residual_rms: f64,
+    /// How much the sinusoid's columns inflate the trend's variance over a line fit alone:
+    /// `[(X^T X)^-1]_tt` with them over without them [-] (1 for a window of many periods).
+    pub trend_inflation: f64,
 }
 
 impl SinusoidFit {
@@ -44,7 +47,17 @@ fn fit_at(t: &[f64], y: &[f64], t0: f64, omega: f64) -> Option<SinusoidFit> {
         a += row * row.transpose();
         b += row * yi;
     }
-    let sol = a.cholesky()?.solve(&b);
+    let chol = a.cholesky()?;
+    let sol = chol.solve(&b);
+    // The trend's variance factor with and without the sinusoid (the 2x2 line block).
+    let with = chol.inverse()[(1, 1)];
+    let (n, st, stt) = (a[(0, 0)], a[(0, 1)], a[(1, 1)]);
+    let without = n / (n * stt - st * st);
+    let trend_inflation = if without > 0.0 {
+        with / without
+    } else {
+        f64::INFINITY
+    };
     let mut sse = 0.0;
     for (&ti, &yi) in t.iter().zip(y) {
         let tau = ti - t0;
@@ -62,6 +75,7 @@ fn fit_at(t: &[f64], y: &[f64], t0: f64, omega: f64) -> Option<SinusoidFit> {
         cos: sol[2],
         sin: sol[3],
         residual_rms: libm::sqrt(sse / t.len().max(1) as f64),
+        trend_inflation,
     })
 }
 
@@ -76,6 +90,7 @@ pub fn identify(t: &[f64], y: &[f64], t0: f64, w_min: f64, w_max: f64) -> Sinuso
         cos: 0.0,
         sin: 0.0,
         residual_rms: f64::INFINITY,
+        trend_inflation: f64::INFINITY,
     };
     let window = t.last().copied().unwrap_or(t0) - t0;
     let usable = window > 0.0 && w_max > w_min; // false for NaN too
@@ -242,6 +257,7 @@ impl<const AXES: usize> Search<AXES> {
             cos: 0.0,
             sin: 0.0,
             residual_rms: f64::INFINITY,
+            trend_inflation: f64::INFINITY,
         }
     }
 
