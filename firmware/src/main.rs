@@ -96,12 +96,6 @@ mod app {
     /// Set once the end of the recording has been delivered: the pacer stops.
     static STOP: AtomicBool = AtomicBool::new(false);
 
-    /// What `navigate` needs besides its channels.
-    pub struct NavSetup {
-        navigator: Navigator<f32>,
-        out: SemihostingFile,
-    }
-
     #[shared]
     struct Shared {}
 
@@ -109,6 +103,12 @@ mod app {
     struct Local {
         imu: BoardImu<Recording>,
         samples_tx: Sender<'static, DataReady, SAMPLE_CAP>,
+        /// The navigator's foreground, for `navigate`.
+        navigator: Navigator<f32>,
+        /// The solution log, for `navigate`.
+        out: SemihostingFile,
+        /// The run's settings, for `align` (which builds the background from them).
+        setup: Setup<f32>,
     }
 
     #[init(local = [bmi_sim: Option<SimBmi088<Recording>> = None])]
@@ -188,17 +188,23 @@ mod app {
         let (samples_tx, samples_rx) = make_channel!(DataReady, SAMPLE_CAP);
         let (to_background, from_navigate) = make_channel!(ToBackground<f32>, ALIGN_CAP);
         let (to_navigate, from_background) = make_channel!(FromBackground<f32>, 1);
-        let nav_setup = NavSetup {
-            navigator: Navigator::new(&setup),
-            out,
-        };
-        if navigate::spawn(samples_rx, to_background, from_background, nav_setup).is_err()
-            || align::spawn(from_navigate, to_navigate, setup).is_err()
+        if navigate::spawn(samples_rx, to_background, from_background).is_err()
+            || align::spawn(from_navigate, to_navigate).is_err()
             || pace::spawn().is_err()
         {
             defmt::panic!("task spawn failed");
         }
-        (Shared {}, Local { imu, samples_tx })
+        let navigator = Navigator::new(&setup);
+        (
+            Shared {},
+            Local {
+                imu,
+                samples_tx,
+                navigator,
+                out,
+                setup,
+            },
+        )
     }
 
     /// Sleeps between interrupts (under QEMU's `sleep=off` the idle time then costs no host time).
@@ -383,18 +389,15 @@ mod app {
 
     /// Navigation: carries every sample through nav-core's navigator, forwards what it asks to
     /// the background (`align`), hands it the answers, and writes the rows it produces.
-    #[task(priority = 2)]
+    #[task(priority = 2, local = [navigator, out])]
     async fn navigate(
-        _: navigate::Context,
+        cx: navigate::Context,
         mut samples_rx: Receiver<'static, DataReady, SAMPLE_CAP>,
         mut to_background: Sender<'static, ToBackground<f32>, ALIGN_CAP>,
         mut from_background: Receiver<'static, FromBackground<f32>, 1>,
-        setup: NavSetup,
     ) {
-        let NavSetup {
-            mut navigator,
-            mut out,
-        } = setup;
+        let navigator = cx.local.navigator;
+        let out = cx.local.out;
         let mut cost = StepCost::default();
         let mut imu = ImuStats::default();
         let mut last_ready_us = 0_u64;
@@ -424,7 +427,7 @@ mod app {
             if navigator.is_aligning()
                 && let Ok(answer) = from_background.try_recv()
             {
-                answer_from_background(&mut navigator, answer, &mut out, &imu);
+                answer_from_background(navigator, answer, out, &imu);
             }
             let start = systick_counts();
             let step = navigator.push(&input_of(&sample));
@@ -433,7 +436,7 @@ mod app {
                 Step::Navigated(row) => {
                     cost.add(spent);
                     if let Some(row) = row {
-                        write_line(&mut out, row);
+                        write_line(out, row);
                     }
                 }
                 Step::Forward {
@@ -447,13 +450,13 @@ mod app {
                         let Ok(answer) = from_background.recv().await else {
                             defmt::panic!("alignment result channel closed");
                         };
-                        answer_from_background(&mut navigator, answer, &mut out, &imu);
+                        answer_from_background(navigator, answer, out, &imu);
                     }
                 }
                 Step::Flagged => {
                     let n = navigator.counters().flagged;
                     // The first ten, then every thousandth: a failing sensor must not flood the log.
-                    if n <= 10 || n % 1000 == 0 {
+                    if n <= 10 || n.is_multiple_of(1000) {
                         defmt::warn!(
                             "sample {=u32} flagged {}: not navigated ({=u32} so far)",
                             sample.seq,
@@ -471,7 +474,7 @@ mod app {
         // End of the recording.
         let summary = navigator.finish().unwrap_or_else(|e| failed(&e, &imu));
         if let Some(row) = summary.final_row {
-            write_line(&mut out, row);
+            write_line(out, row);
         }
         let c = summary.counters;
         defmt::info!(
@@ -531,14 +534,13 @@ mod app {
 
     /// Alignment, below navigation: the navigator's background on the forwarded increments;
     /// logs its stage changes and cost, and answers.
-    #[task(priority = 1)]
+    #[task(priority = 1, local = [setup])]
     async fn align(
-        _: align::Context,
+        cx: align::Context,
         mut from_navigate: Receiver<'static, ToBackground<f32>, ALIGN_CAP>,
         mut to_navigate: Sender<'static, FromBackground<f32>, 1>,
-        setup: Setup<f32>,
     ) {
-        let mut background = Background::new(&setup);
+        let mut background = Background::new(cx.local.setup);
         let settings = *background.settings();
         defmt::info!(
             "aligning: {=str}, {=u32} samples; stage COARSE",

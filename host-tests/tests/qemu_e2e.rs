@@ -481,7 +481,9 @@ fn firmware_aligns_on_a_rocking_base_like_the_harness() {
         opts.seed = 11;
         (simulate(&opts, |_, _| {}).unwrap(), centre)
     };
-    let cases: [(&str, Option<[f64; 3]>, &[&str]); 2] = [
+    // (method, the IMU's lever arm [m], the options of both runs)
+    type Case<'a> = (&'a str, Option<[f64; 3]>, &'a [&'a str]);
+    let cases: [Case; 2] = [
         ("fine", None, &[]),
         (
             "inertial",

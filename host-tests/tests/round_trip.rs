@@ -445,3 +445,67 @@ fn every_mechanization_choice_stays_within_the_bounds() {
         }
     }
 }
+
+/// The calibration reaches the alignment: a simulated recording (`static` scenario, FOG grade)
+/// with known extra sensor errors, aligned with its true calibration, is levelled and
+/// gyrocompassed better than without it (the errors tilt the levelling by ~b_a / g and turn the
+/// heading by the east gyro bias over the horizontal Earth rate), in f32 and f64.
+#[test]
+fn the_true_calibration_improves_the_alignment() {
+    use host_tests::sensor_model::Grade;
+    use host_tests::simulate::{SimOptions, simulate};
+    use host_tests::trajectory::scenarios::{Scenario, Static};
+    let mut opts = SimOptions::new(Scenario::by_name("static").unwrap(), Grade::Fog);
+    opts.seconds = Some(12.0);
+    opts.seed = 5;
+    let sim = simulate(&opts, |_, _| {}).unwrap();
+    let mut rec = sim.recording;
+    let text = "gyro_bias_rad_s = 5e-6 8e-6 2e-6\n\
+                gyro_misalignment = 2e-4 0 0 -1e-4 0 0\n\
+                accel_bias_m_s2 = -0.03 0.05 -0.02\n\
+                accel_scale = 3e-4 0 -2e-4\n";
+    let calibration = nav_core::ImuCalibration::parse(text).unwrap();
+    let comp = calibration.compensation::<f64>().unwrap();
+    let dt = 1.0 / rec.rate_hz;
+    let inject = |v: &mut [f32; 3], t: &nav_core::calibration::TriadCompensation<f64>| {
+        let m =
+            t.k.try_inverse().unwrap() * nav_core::Vector3::from(v.map(f64::from)) + t.bias * dt;
+        *v = [m.x, m.y, m.z].map(|x| x as f32);
+    };
+    for r in &mut rec.records {
+        inject(&mut r.gyro, &comp.gyro);
+        inject(&mut r.accel, &comp.accel);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("biased.bin");
+    recording_io::write(&path, &rec).unwrap();
+    let (roll, pitch, yaw) = nav_core::attitude::euler(&sim.truth[0].q_b_ned);
+    let s = Static::default();
+    let errors = |cal: Option<nav_core::ImuCalibration>, f64_precision: bool| {
+        let mut options = ReplayOptions::new(s.lat_deg, s.lon_deg, s.h_m, 10.0);
+        options.run.calibration = cal.unwrap_or_default();
+        let (fr, _) = if f64_precision {
+            replay::<f64>(&path, &options)
+        } else {
+            replay::<f32>(&path, &options)
+        };
+        let a = fr.report.alignment;
+        let wrap = |d: f64| (d + 540.0).rem_euclid(360.0) - 180.0;
+        let tilt = wrap(a.roll_deg - roll.to_degrees())
+            .abs()
+            .max(wrap(a.pitch_deg - pitch.to_degrees()).abs());
+        (tilt, wrap(a.yaw_deg - yaw.to_degrees()).abs())
+    };
+    for f64_precision in [false, true] {
+        let (tilt, heading) = errors(Some(calibration), f64_precision);
+        let (tilt_raw, heading_raw) = errors(None, f64_precision);
+        println!(
+            "f64 {f64_precision}: with the calibration tilt {tilt:.4} deg, heading {heading:.3} deg; without {tilt_raw:.4} deg, {heading_raw:.3} deg"
+        );
+        assert!(tilt < tilt_raw / 2.0, "tilt {tilt} vs {tilt_raw} deg");
+        assert!(
+            heading < heading_raw / 2.0,
+            "heading {heading} vs {heading_raw} deg"
+        );
+    }
+}

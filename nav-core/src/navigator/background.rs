@@ -2,9 +2,9 @@
 //! firmware's `align` task), driven by messages from the foreground.
 
 use super::setup::Setup;
+use crate::Scalar;
 use crate::alignment::{AlignFailure, AlignOutcome, AlignSettings, Aligner, Progress, Stage};
 use crate::increment::ImuIncrement;
-use crate::Scalar;
 
 /// What the foreground hands to the background.
 ///

@@ -207,10 +207,8 @@ impl RunConfig {
                     by_name(&FRAMES, value).ok_or(bad("frame", "wander or ned"))?;
             }
             "attitude" => {
-                self.mechanization.attitude = by_name(&ATTITUDES, value).ok_or(bad(
-                    "attitude",
-                    "rotation-vector, euler, heun, rk4 or abm4",
-                ))?;
+                self.mechanization.attitude = by_name(&ATTITUDES, value)
+                    .ok_or(bad("attitude", "rotation-vector, euler, heun, rk4 or abm4"))?;
             }
             "vertical" => {
                 self.mechanization.vertical =
@@ -359,7 +357,10 @@ mod tests {
             ("vertical", "aided"),
         ] {
             let e = c.set(name, value).unwrap_err();
-            assert!(e.to_string().starts_with(&format!("--{name} takes ")), "{e}");
+            assert!(
+                e.to_string().starts_with(&format!("--{name} takes ")),
+                "{e}"
+            );
         }
     }
 

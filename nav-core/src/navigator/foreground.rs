@@ -4,12 +4,12 @@
 
 use super::background::{Background, FromBackground, ToBackground};
 use super::setup::Setup;
+use crate::Scalar;
 use crate::alignment::{AlignFailure, AlignOutcome};
 use crate::calibration::ImuCompensation;
 use crate::increment::{ImuIncrement, InputError, InputLimits};
 use crate::output::Solution;
 use crate::strapdown::{MechanizationConfig, Strapdown};
-use crate::Scalar;
 use core::fmt;
 
 /// One IMU sample as the navigator takes it (sources convert theirs to this).
@@ -161,6 +161,8 @@ pub struct Navigator<T: Scalar> {
     last_step_us: u64,
     last_row: Option<Solution>,
     alignment: Option<AlignOutcome<T>>,
+    /// [`Self::finish`] was called.
+    finished: bool,
 }
 
 impl<T: Scalar> Navigator<T> {
@@ -179,6 +181,7 @@ impl<T: Scalar> Navigator<T> {
             last_step_us: 0,
             last_row: None,
             alignment: None,
+            finished: false,
         }
     }
 
@@ -281,9 +284,9 @@ impl<T: Scalar> Navigator<T> {
         }
     }
 
-    /// Ends the run: the final row (the last step, unless already logged) and the summary; an
-    /// error when the alignment failed or never finished.
-    pub fn finish(mut self) -> Result<Summary<T>, NavError> {
+    /// Ends the run: the final row (the last step, unless already logged, or already given by
+    /// an earlier call) and the summary; an error when the alignment failed or never finished.
+    pub fn finish(&mut self) -> Result<Summary<T>, NavError> {
         let nav = match &self.phase {
             Phase::Navigating(nav) => nav,
             Phase::Failed(e) => return Err(*e),
@@ -295,8 +298,9 @@ impl<T: Scalar> Navigator<T> {
             }
         };
         let steps = self.counters.nav_steps;
-        let final_row = (steps > 0 && !steps.is_multiple_of(self.log_every))
+        let final_row = (steps > 0 && !steps.is_multiple_of(self.log_every) && !self.finished)
             .then(|| Solution::from_state(self.last_step_us, nav.state()));
+        self.finished = true;
         if let Some(row) = final_row {
             self.logged(row);
         }

@@ -2,12 +2,12 @@
 //! navigator are built from.
 
 use super::config::{ConfigError, RunConfig};
+use crate::Scalar;
 use crate::alignment::{AlignSettings, BaseMotion, LeverArm, SensorNoise};
 use crate::calibration::ImuCompensation;
 use crate::increment::InputLimits;
 use crate::position::Position;
 use crate::strapdown::MechanizationConfig;
-use crate::Scalar;
 
 /// The settings of one run in precision `T`, validated (small and `Copy`: the firmware hands
 /// it to both of its tasks).

@@ -5,6 +5,7 @@
 extern crate std;
 
 use super::*;
+use crate::Scalar;
 use crate::alignment::{AlignMethod, SensorNoise};
 use crate::attitude::from_euler;
 use crate::output::Solution;
@@ -13,7 +14,6 @@ use nalgebra::{UnitQuaternion, Vector3};
 use std::collections::VecDeque;
 use std::string::ToString;
 use std::vec::Vec;
-use crate::Scalar;
 
 const RATE_HZ: f64 = 100.0;
 const DT: f64 = 1.0 / RATE_HZ;
@@ -120,6 +120,16 @@ fn no_final_row_when_the_last_step_was_logged() {
     assert_eq!((s.counters.nav_steps, s.counters.rows), (40, 2));
     assert_eq!(s.final_row, None);
     assert_eq!(rows.len(), 2);
+    // A second finish gives the same summary and no row again.
+    let setup = Setup::<f32>::new(&config(10.0, 7), RATE_HZ).unwrap();
+    let (mut nav, mut bg) = (Navigator::new(&setup), Background::new(&setup));
+    for i in still(1040) {
+        nav.push_inline(&mut bg, &i).unwrap();
+    }
+    let first = nav.finish().unwrap();
+    assert_eq!(first.final_row.map(|r| r.t_us), Some(10_400_000));
+    let again = nav.finish().unwrap();
+    assert_eq!((again.final_row, again.counters), (None, first.counters));
     assert_eq!(s.last_solution.t_us, 10_400_000);
 }
 
@@ -230,7 +240,11 @@ fn navigation_starts_from_the_aligned_state_at_the_last_alignment_sample() {
     assert!(nav.awaits_background());
     let next = it.next().unwrap();
     assert_eq!(nav.push(&next), Step::NotReady);
-    assert_eq!(nav.counters().samples, 1000, "a refused push is not counted");
+    assert_eq!(
+        nav.counters().samples,
+        1000,
+        "a refused push is not counted"
+    );
     let answer = bg.handle(message).unwrap();
     let FromBackground::Aligned(outcome) = answer else {
         panic!("{answer:?}")
@@ -317,7 +331,10 @@ fn failures_end_the_run_with_a_reason() {
         ..config(15.0, 40)
     };
     let e = Setup::<f32>::new(&fine, RATE_HZ).unwrap_err();
-    assert!(e.to_string().contains("fine method's minimum of 20 s"), "{e}");
+    assert!(
+        e.to_string().contains("fine method's minimum of 20 s"),
+        "{e}"
+    );
     let polar = RunConfig {
         lat_deg: 89.9,
         ..config(10.0, 40)
@@ -398,10 +415,7 @@ fn setup_keeps_the_configured_values() {
     );
     assert_eq!(s.align.noise.gyro_bias_rad_s, 0.0);
     assert_eq!(s.mechanization.compensation, Default::default());
-    assert_eq!(
-        s.align.position,
-        Position::from_degrees(LAT_DEG, 0.0, 0.0)
-    );
+    assert_eq!(s.align.position, Position::from_degrees(LAT_DEG, 0.0, 0.0));
     // 10.1 + 0.2 s at 10 Hz: 103 samples despite the rounding of the sum.
     assert_eq!(
         Setup::<f64>::new(&config(10.1 + 0.2, 40), 10.0)
