@@ -29,21 +29,21 @@ mod app {
     use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
     use cortex_m::peripheral::{NVIC, SYST};
     use embedded_io::Write as _;
-    use firmware::imu::BoardImu;
+    use firmware::imu::{BoardImu, nav_input};
     use firmware::{
         ExitCode, StepCost,
         config::{Args, USAGE},
-        exit, line,
+        exit, line, log,
     };
+    use hal_adapters::ImuSample;
     use hal_adapters::drivers::{Error as ImuError, Health};
     use hal_adapters::io::{Buffered, SemihostingFile};
     use hal_adapters::recording::Replay;
     use hal_adapters::sim::{SimBmi088, SimError};
-    use hal_adapters::{ImuSample, SampleFlags};
-    use nav_core::alignment::{AlignOutcome, LeverArm, Stage};
+    use nav_core::alignment::{AlignOutcome, Stage};
     use nav_core::calibration::ImuCalibration;
     use nav_core::navigator::{
-        Background, FromBackground, ImuInput, NavError, Navigator, Setup, Step, ToBackground,
+        Background, FromBackground, NavError, Navigator, Setup, Step, ToBackground,
     };
     use nav_core::output::{CSV_HEADER, Solution};
     use rtic_monotonics::systick::prelude::*;
@@ -122,32 +122,7 @@ mod app {
         }
         args.run.calibration = read_calibration(&args);
         let run = args.run;
-        defmt::info!(
-            "config: lat {=f64} deg, lon {=f64} deg, h {=f64} m, align {=f64} s ({=str}), log every {=u32}",
-            run.lat_deg,
-            run.lon_deg,
-            run.h_m,
-            run.align_seconds,
-            run.align_method.name(),
-            run.log_every
-        );
-        let n = run.align_noise();
-        defmt::info!(
-            "alignment assumes ARW {=f64} rad/sqrt(s), VRW {=f64} m/s/sqrt(s), bias 1-sigma {=f64} rad/s, {=f64} m/s^2 (bias prior {=f64})",
-            n.arw_rad_per_sqrt_s,
-            n.vrw_mps_per_sqrt_s,
-            n.gyro_bias_rad_s,
-            n.accel_bias_mps2,
-            run.bias_prior
-        );
-        match run.lever_arm {
-            LeverArm::Known(r) => {
-                defmt::info!("lever arm known: {=f64} {=f64} {=f64} m", r.x, r.y, r.z)
-            }
-            LeverArm::Unknown { sigma_m } => {
-                defmt::info!("lever arm unknown: 1-sigma {=f64} m per axis", sigma_m)
-            }
-        }
+        log::config(&run);
         let file = SemihostingFile::open(args.imu_cstr()).unwrap_or_else(|_| {
             defmt::error!(
                 "cannot open the recording {=[u8]:a}",
@@ -430,7 +405,7 @@ mod app {
                 answer_from_background(navigator, answer, out, &imu);
             }
             let start = systick_counts();
-            let step = navigator.push(&input_of(&sample));
+            let step = navigator.push(&nav_input(&sample));
             let spent = counts_to_instructions(systick_counts() - start);
             match step {
                 Step::Navigated(row) => {
@@ -491,20 +466,6 @@ mod app {
         exit(ExitCode::Success)
     }
 
-    /// The navigator's input of a driver's sample: its increments, and usable / after a gap
-    /// from its flags (as the host harness converts them).
-    fn input_of(s: &ImuSample) -> ImuInput {
-        let (delta_theta_ib_b, delta_v_ib_b) = s.increments();
-        ImuInput::new(
-            s.t_us,
-            delta_theta_ib_b,
-            delta_v_ib_b,
-            s.dt_s,
-            s.flags.usable(),
-            s.flags.contains(SampleFlags::GAP),
-        )
-    }
-
     /// Hands the background's `answer` to the navigator: the aligned row is logged; a failure
     /// ends the run.
     fn answer_from_background(
@@ -516,7 +477,7 @@ mod app {
         match navigator.on_background(answer) {
             Ok(Some(row)) => {
                 if let Some(outcome) = navigator.alignment() {
-                    log_alignment(outcome);
+                    log::aligned(outcome);
                 }
                 write_line(out, row);
             }
@@ -584,30 +545,6 @@ mod app {
         }
     }
 
-    fn log_alignment(r: &AlignOutcome<f32>) {
-        let (roll, pitch, yaw) = nav_core::attitude::euler(&r.estimate.q_b_n);
-        let sigma = r.estimate.sigma_rad.map(|x| x.to_degrees());
-        let (v, p) = (r.velocity_sigma_m_s, r.position_sigma_m);
-        defmt::info!(
-            "alignment stage ALIGNED after {=u32} samples (coarse {=f64} s, fine {=f64} s): roll {=f32} deg, pitch {=f32} deg, yaw {=f32} deg; 1-sigma {=f32} {=f32} {=f32} deg, v {=f32} {=f32} {=f32} m/s, p {=f32} {=f32} {=f32} m",
-            r.times.coarse_samples + r.times.fine_samples,
-            r.times.coarse_s,
-            r.times.fine_s,
-            roll.to_degrees(),
-            pitch.to_degrees(),
-            yaw.to_degrees(),
-            sigma.x,
-            sigma.y,
-            sigma.z,
-            v.x,
-            v.y,
-            v.z,
-            p.x,
-            p.y,
-            p.z
-        );
-    }
-
     fn log_imu_costs(imu: &ImuStats) {
         defmt::info!(
             "instructions per IMU read: decode + conversion max {=u64}, mean {=u64}; bus transaction (simulated device included) max {=u64}, mean {=u64}",
@@ -624,40 +561,8 @@ mod app {
             cost.max,
             cost.mean()
         );
-        let h = &imu.health;
-        defmt::info!(
-            "IMU driver: samples {=u32}, checksum errors {=u32}, stale {=u32}, device missed {=u32}, bus errors {=u32}, faults {=u32}, FIFO overflows {=u32}, invalid {=u32}, gyro clips {}, accel clips {}",
-            h.samples,
-            h.checksum_errors,
-            h.stale,
-            h.missed,
-            h.bus_errors,
-            h.device_faults,
-            h.fifo_overflows,
-            h.invalid,
-            h.gyro_clips,
-            h.accel_clips
-        );
+        log::health(&imu.health);
         log_imu_costs(imu);
-        let (roll, pitch, yaw) = nav_core::attitude::euler(&aligned.estimate.q_b_n);
-        defmt::info!(
-            "alignment: roll {=f32} deg, pitch {=f32} deg, yaw {=f32} deg",
-            roll.to_degrees(),
-            pitch.to_degrees(),
-            yaw.to_degrees()
-        );
-        defmt::info!(
-            "solution at t={=u64} us: lat {=i64} ndeg, lon {=i64} ndeg, h {=f64} m, v_n {=f64} v_e {=f64} v_d {=f64} m/s, roll {=f64} pitch {=f64} yaw {=f64} deg",
-            last.t_us,
-            last.lat_ndeg,
-            last.lon_ndeg,
-            last.h_m,
-            last.v_eb_n[0],
-            last.v_eb_n[1],
-            last.v_eb_n[2],
-            last.roll_deg,
-            last.pitch_deg,
-            last.yaw_deg
-        );
+        log::end(aligned, last);
     }
 }
