@@ -1,39 +1,89 @@
-//! The run configuration, given as semihosting arguments by the QEMU runner:
-//! `firmware IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]`.
+//! The firmware's arguments, given as semihosting arguments by the QEMU runner:
+//! `firmware [OPTIONS] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]`.
+//!
+//! They parse into nav-core's [`RunConfig`] (the host's `nav replay` fills the same type), with
+//! its option names and value syntax ([`RunConfig::set`]); only the files, the device and the
+//! noise grade are the firmware's own.
 
+use crate::imu::Device;
 use core::ffi::CStr;
+use core::fmt;
+use hal_adapters::drivers::NoiseSpec;
+use hal_adapters::drivers::noise::grade;
+use nav_core::alignment::{AlignMethod, SensorNoise};
+use nav_core::navigator::{OptionError, RunConfig};
 
 /// Longest accepted path, including the terminating NUL.
 pub const MAX_PATH: usize = 96;
 
-/// What to replay and where to start.
+/// What to replay, where to write, and the run configuration.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Config {
+pub struct Args {
     /// Recording to replay (binary recording format), NUL-terminated.
     pub imu_path: heapless::Vec<u8, MAX_PATH>,
     /// Solution log to write (CSV), NUL-terminated.
     pub out_path: heapless::Vec<u8, MAX_PATH>,
-    /// Initial latitude [deg].
-    pub lat_deg: f64,
-    /// Initial longitude [deg].
-    pub lon_deg: f64,
-    /// Initial ellipsoidal height [m].
-    pub h_m: f64,
-    /// Static alignment time [s].
-    pub align_s: f64,
-    /// Write a solution row every this many navigation steps.
-    pub log_every: u32,
     /// Sensor calibration (nav-core's text form), NUL-terminated; none: identity.
     pub cal_path: Option<heapless::Vec<u8, MAX_PATH>>,
+    /// The IMU on the bus.
+    pub device: Device,
+    /// The run configuration (the calibration is loaded into it from [`Self::cal_path`]).
+    pub run: RunConfig,
 }
 
-/// What is wrong with the arguments.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
-pub enum ConfigError {
-    /// Fewer than the six required arguments.
+/// What is wrong with the arguments (borrowing the words it names).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ArgError<'a> {
+    /// Fewer than the six required arguments (name of the first missing one).
     Missing(&'static str),
-    /// An argument is not valid (name of the argument).
+    /// A positional argument is not valid (its name).
     Invalid(&'static str),
+    /// `--device NAME` names no supported device.
+    UnknownDevice(&'a str),
+    /// `--imu-noise GRADE` names no grade.
+    UnknownGrade(&'a str),
+    /// `--align-method NAME` names no method.
+    UnknownMethod(&'a str),
+    /// `--NAME` is not an option.
+    UnknownOption(&'a str),
+    /// `--lever-arm` and `--lever-arm-sigma` together.
+    LeverArmTwice,
+    /// `--align-method sway`: host only.
+    SwayOnMcu,
+    /// A run-configuration option was refused (its message).
+    Option(OptionError),
+    /// An option without its value.
+    NoValue(&'a str),
+}
+
+impl fmt::Display for ArgError<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Missing(name) => write!(f, "{name} is missing"),
+            Self::Invalid(name) => write!(f, "{name} is not valid"),
+            Self::UnknownDevice(name) => {
+                write!(f, "unknown device {name}: adis16505, icm42688 or bmi088")
+            }
+            Self::UnknownGrade(name) => write!(
+                f,
+                "unknown IMU noise grade {name}: fog, rlg, mems-tactical or mems-consumer"
+            ),
+            Self::UnknownMethod(name) => {
+                write!(f, "unknown alignment method {name}: static, inertial or fine")
+            }
+            Self::UnknownOption(name) => write!(f, "unknown option --{name}"),
+            Self::LeverArmTwice => {
+                f.write_str("--lever-arm (known) and --lever-arm-sigma (unknown) exclude each other")
+            }
+            // The sway method identifies its periods in one go (~1e8 soft-float instructions):
+            // the alignment queue would overflow and drop samples.
+            Self::SwayOnMcu => f.write_str(
+                "alignment method sway runs on the host only (its one-off period identification would stall the MCU's alignment task)",
+            ),
+            Self::Option(e) => write!(f, "{e}"),
+            Self::NoValue(name) => write!(f, "--{name} has no value"),
+        }
+    }
 }
 
 const NAMES: [&str; 8] = [
@@ -48,52 +98,86 @@ const NAMES: [&str; 8] = [
 ];
 
 /// The usage line for error messages.
-pub const USAGE: &str =
-    "firmware IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
+pub const USAGE: &str = "firmware [--device adis16505|icm42688|bmi088] [--align-method static|inertial|fine] [--imu-noise fog|rlg|mems-tactical|mems-consumer] [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S] [--frame wander|ned] [--attitude NAME] [--vertical free|hold] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
 
-impl Config {
-    /// Parses the arguments after the program name.
-    pub fn parse<'a>(mut args: impl Iterator<Item = &'a str>) -> Result<Self, ConfigError> {
-        let mut next = |i: usize| args.next().ok_or(ConfigError::Missing(NAMES[i]));
-        let imu_path = c_path(next(0)?).ok_or(ConfigError::Invalid(NAMES[0]))?;
-        let out_path = c_path(next(1)?).ok_or(ConfigError::Invalid(NAMES[1]))?;
+/// nav-core's noise model of a part's or grade's figures.
+pub fn sensor_noise(n: &NoiseSpec) -> SensorNoise<f64> {
+    SensorNoise {
+        arw_rad_per_sqrt_s: n.gyro_arw_rad_per_sqrt_s,
+        vrw_mps_per_sqrt_s: n.accel_vrw_mps_per_sqrt_s,
+        gyro_bias_rad_s: n.gyro_bias_rad_s,
+        accel_bias_mps2: n.accel_bias_mps2,
+    }
+}
+
+impl Args {
+    /// Parses the arguments after the program name: options (`--name value`, in any order),
+    /// then the positional arguments. Values are checked for syntax here; the run
+    /// configuration's values by [`RunConfig::validate`] and `Setup::new`.
+    pub fn parse<'a>(args: impl Iterator<Item = &'a str>) -> Result<Self, ArgError<'a>> {
+        let mut args = args.peekable();
+        let mut device = Device::Adis16505;
+        let mut noise: Option<NoiseSpec> = None;
+        let mut lever_arm_given = (false, false);
+        // The run configuration's values wait for the positional site and window.
+        let mut run = RunConfig::new(0.0, 0.0, 0.0, 0.0, SensorNoise::seed003());
+        while let Some(name) = args.peek().and_then(|w| w.strip_prefix("--")) {
+            args.next();
+            let value = args.next().ok_or(ArgError::NoValue(name))?;
+            match name {
+                "device" => device = Device::parse(value).ok_or(ArgError::UnknownDevice(value))?,
+                "imu-noise" => {
+                    noise = Some(grade::by_name(value).ok_or(ArgError::UnknownGrade(value))?);
+                }
+                "align-method" => match AlignMethod::from_name(value) {
+                    Some(AlignMethod::Sway) => return Err(ArgError::SwayOnMcu),
+                    Some(method) => run.align_method = method,
+                    None => return Err(ArgError::UnknownMethod(value)),
+                },
+                _ => {
+                    match name {
+                        "lever-arm" => lever_arm_given.0 = true,
+                        "lever-arm-sigma" => lever_arm_given.1 = true,
+                        _ => {}
+                    }
+                    run.set(name, value).map_err(|e| match e {
+                        OptionError::Unknown => ArgError::UnknownOption(name),
+                        e => ArgError::Option(e),
+                    })?;
+                }
+            }
+        }
+        if lever_arm_given == (true, true) {
+            return Err(ArgError::LeverArmTwice);
+        }
+        let mut next = |i: usize| args.next().ok_or(ArgError::Missing(NAMES[i]));
+        let imu_path = c_path(next(0)?).ok_or(ArgError::Invalid(NAMES[0]))?;
+        let out_path = c_path(next(1)?).ok_or(ArgError::Invalid(NAMES[1]))?;
         let num = |i: usize, s: &str| {
             s.parse::<f64>()
                 .ok()
                 .filter(|x| x.is_finite())
-                .ok_or(ConfigError::Invalid(NAMES[i]))
+                .ok_or(ArgError::Invalid(NAMES[i]))
         };
-        let lat_deg = num(2, next(2)?)?;
-        let lon_deg = num(3, next(3)?)?;
-        let h_m = num(4, next(4)?)?;
-        let align_s = num(5, next(5)?)?;
-        let log_every = match next(6) {
-            Ok(s) => s
-                .parse::<u32>()
-                .ok()
-                .filter(|&n| n > 0)
-                .ok_or(ConfigError::Invalid(NAMES[6]))?,
-            Err(_) => 40,
-        };
+        run.lat_deg = num(2, next(2)?)?;
+        run.lon_deg = num(3, next(3)?)?;
+        run.h_m = num(4, next(4)?)?;
+        run.align_seconds = num(5, next(5)?)?;
+        if let Ok(s) = next(6) {
+            run.log_every = s.parse::<u32>().map_err(|_| ArgError::Invalid(NAMES[6]))?;
+        }
         let cal_path = match next(7) {
-            Ok(s) => Some(c_path(s).ok_or(ConfigError::Invalid(NAMES[7]))?),
+            Ok(s) => Some(c_path(s).ok_or(ArgError::Invalid(NAMES[7]))?),
             Err(_) => None,
         };
-        if !(-90.0..=90.0).contains(&lat_deg) {
-            return Err(ConfigError::Invalid(NAMES[2]));
-        }
-        if !(align_s > 0.0 && align_s < 3600.0) {
-            return Err(ConfigError::Invalid(NAMES[5]));
-        }
+        // The device's datasheet figures unless a grade is given.
+        run.noise = sensor_noise(&noise.unwrap_or(device.noise()));
         Ok(Self {
             imu_path,
             out_path,
-            lat_deg,
-            lon_deg,
-            h_m,
-            align_s,
-            log_every,
             cal_path,
+            device,
+            run,
         })
     }
 

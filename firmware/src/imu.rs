@@ -13,7 +13,8 @@ use hal_adapters::sim::{
     NoDelay, SimAdis16505, SimBmi088, SimBmi088Accel, SimBmi088Gyro, SimError, SimIcm42688,
     SimulatedBus,
 };
-use hal_adapters::{Imu, ImuSample};
+use hal_adapters::{Imu, ImuSample, SampleFlags};
+use nav_core::navigator::ImuInput;
 
 /// Which device sits on the bus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
@@ -169,4 +170,18 @@ impl<S: Imu + 'static> BoardImu<S> {
             Self::Bmi(d) => SimulatedBus::last_source_sample(d.bus()),
         }
     }
+}
+
+/// The navigator's input of a driver's sample: its increments, and usable / after a gap
+/// from its flags (as the host harness converts them).
+pub fn nav_input(s: &ImuSample) -> ImuInput {
+    let (delta_theta_ib_b, delta_v_ib_b) = s.increments();
+    ImuInput::new(
+        s.t_us,
+        delta_theta_ib_b,
+        delta_v_ib_b,
+        s.dt_s,
+        s.flags.usable(),
+        s.flags.contains(SampleFlags::GAP),
+    )
 }

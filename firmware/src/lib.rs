@@ -1,5 +1,6 @@
 //! Board-independent support for the navigation firmware: exit codes, the panic and HardFault
-//! handlers (knurling app-template style), the run configuration, and small output helpers.
+//! handlers (knurling app-template style), the arguments, the IMU, the defmt summaries, and small
+//! output helpers.
 //!
 //! Navigation math lives in `nav-core`; sensor sources in `hal-adapters`; the RTIC app in
 //! `main.rs` only wires them together.
@@ -11,6 +12,7 @@ use defmt_semihosting as _; // global defmt logger over semihosting stdout
 
 pub mod config;
 pub mod imu;
+pub mod log;
 pub mod osc_bench;
 
 /// Process exit codes: every failure has its own, so CI and scripts can tell them apart.

@@ -1,8 +1,10 @@
 //! The navigation firmware: an RTIC 2 app for an STM32F405 IMU board (QEMU netduinoplus2 for now).
 //!
 //! A sample's way: data-ready interrupt (`data_ready`, highest priority) -> `rtic_sync` channel ->
-//! `navigate` (steps `nav-core`, writes the solution log) -> `align` (lowest priority: static
-//! alignment) -> back to `navigate`, which starts navigating from the aligned attitude.
+//! `navigate` (nav-core's navigator: gate, calibration, strapdown; writes the solution log) ->
+//! what it forwards to `align` (lowest priority: the navigator's background, the alignment) ->
+//! the answer back to `navigate`, which starts navigating from the aligned state. The rules are
+//! all in `nav_core::navigator`; these tasks only carry samples, messages and rows.
 //!
 //! On the `qemu` board the IMU's data-ready line is emulated: the `pace` task pends `EXTI0` (the
 //! line a real data-ready pin uses) every 2.5 ms of SysTick time, and `data_ready` reads the next
@@ -27,26 +29,23 @@ mod app {
     use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
     use cortex_m::peripheral::{NVIC, SYST};
     use embedded_io::Write as _;
-    use firmware::imu::{BoardImu, Device};
+    use firmware::imu::{BoardImu, nav_input};
     use firmware::{
         ExitCode, StepCost,
-        config::{Config, USAGE},
-        exit, line,
+        config::{Args, USAGE},
+        exit, line, log,
     };
+    use hal_adapters::ImuSample;
     use hal_adapters::drivers::{Error as ImuError, Health};
     use hal_adapters::io::{Buffered, SemihostingFile};
     use hal_adapters::recording::Replay;
     use hal_adapters::sim::{SimBmi088, SimError};
-    use hal_adapters::{ImuSample, SampleFlags};
-    use nav_core::alignment::{
-        AlignFailure, AlignMethod, AlignSettings, Aligner, BaseMotion, LeverArm, Progress,
-        SensorNoise, samples_for,
+    use nav_core::alignment::{AlignOutcome, Stage};
+    use nav_core::calibration::ImuCalibration;
+    use nav_core::navigator::{
+        Background, FromBackground, NavError, Navigator, Setup, Step, ToBackground,
     };
-    use nav_core::output::CSV_HEADER;
-    use nav_core::{
-        ImuCalibration, ImuIncrement, InputLimits, MechanizationConfig, Position, Solution,
-        Strapdown,
-    };
+    use nav_core::output::{CSV_HEADER, Solution};
     use rtic_monotonics::systick::prelude::*;
     use rtic_sync::channel::{Receiver, Sender};
     use rtic_sync::make_channel;
@@ -73,12 +72,6 @@ mod app {
 
     /// The recording the simulated IMU answers from.
     type Recording = Replay<Buffered<SemihostingFile, READ_CHUNK>>;
-    type AlignOutcome = Result<nav_core::alignment::AlignOutcome<f32>, AlignFailure>;
-
-    /// What `align` needs besides its channels.
-    pub struct AlignSetup {
-        settings: AlignSettings<f32>,
-    }
 
     /// What the data-ready interrupt hands to navigation.
     pub enum DataReady {
@@ -103,13 +96,6 @@ mod app {
     /// Set once the end of the recording has been delivered: the pacer stops.
     static STOP: AtomicBool = AtomicBool::new(false);
 
-    /// What `navigate` needs besides its channels.
-    pub struct NavSetup {
-        n_align: u32,
-        log_every: u32,
-        out: SemihostingFile,
-    }
-
     #[shared]
     struct Shared {}
 
@@ -117,8 +103,12 @@ mod app {
     struct Local {
         imu: BoardImu<Recording>,
         samples_tx: Sender<'static, DataReady, SAMPLE_CAP>,
-        /// Mechanization settings (with the loaded calibration) for `navigate`.
-        mechanization: MechanizationConfig<f32>,
+        /// The navigator's foreground, for `navigate`.
+        navigator: Navigator<f32>,
+        /// The solution log, for `navigate`.
+        out: SemihostingFile,
+        /// The run's settings, for `align` (which builds the background from them).
+        setup: Setup<f32>,
     }
 
     #[init(local = [bmi_sim: Option<SimBmi088<Recording>> = None])]
@@ -126,30 +116,24 @@ mod app {
         // The qemu board has no RCC model: clock set-up would hang, so it is skipped and the
         // core runs at QEMU's fixed 168 MHz.
         Mono::start(cx.core.SYST, SYSCLK_HZ);
-        let (device, method, config) = read_config();
-        defmt::info!(
-            "config: lat {=f64} deg, lon {=f64} deg, h {=f64} m, align {=f64} s, log every {=u32}",
-            config.lat_deg,
-            config.lon_deg,
-            config.h_m,
-            config.align_s,
-            config.log_every
-        );
-        let mechanization = MechanizationConfig {
-            compensation: read_calibration(&config),
-            ..MechanizationConfig::default()
-        };
-        let file = SemihostingFile::open(config.imu_cstr()).unwrap_or_else(|_| {
+        let mut args = read_args();
+        if let Err(e) = args.run.validate() {
+            bad_config(&e)
+        }
+        args.run.calibration = read_calibration(&args);
+        let run = args.run;
+        log::config(&run);
+        let file = SemihostingFile::open(args.imu_cstr()).unwrap_or_else(|_| {
             defmt::error!(
                 "cannot open the recording {=[u8]:a}",
-                config.imu_path.as_slice()
+                args.imu_path.as_slice()
             );
             exit(ExitCode::Recording)
         });
         let source = Replay::new(Buffered::new(file)).unwrap_or_else(|e| {
             defmt::error!(
                 "recording {=[u8]:a}: {}",
-                config.imu_path.as_slice(),
+                args.imu_path.as_slice(),
                 defmt::Display2Format(&e)
             );
             exit(ExitCode::Recording)
@@ -160,63 +144,40 @@ mod app {
             header.sample_count,
             header.rate_hz
         );
+        let setup = Setup::<f32>::new(&run, header.rate_hz).unwrap_or_else(|e| bad_config(&e));
+        let device = args.device;
         let imu = BoardImu::new(device, source, cx.local.bmi_sim).unwrap_or_else(|e| {
             defmt::error!("IMU {} init failed: {}", device, e);
             exit(ExitCode::Recording)
         });
         defmt::info!("IMU: {} over a simulated SPI device", device);
-        let mut out = SemihostingFile::create(config.out_cstr()).unwrap_or_else(|_| {
+        let mut out = SemihostingFile::create(args.out_cstr()).unwrap_or_else(|_| {
             defmt::error!(
                 "cannot create the solution log {=[u8]:a}",
-                config.out_path.as_slice()
+                args.out_path.as_slice()
             );
             exit(ExitCode::Output)
         });
         write_line(&mut out, CSV_HEADER);
 
         let (samples_tx, samples_rx) = make_channel!(DataReady, SAMPLE_CAP);
-        let (align_tx, align_rx) = make_channel!(ImuIncrement<f32>, ALIGN_CAP);
-        let (result_tx, result_rx) = make_channel!(AlignOutcome, 1);
-        let position = Position::from_degrees(config.lat_deg, config.lon_deg, config.h_m);
-        let n_align = samples_for(config.align_s, header.rate_hz);
-        let setup = NavSetup {
-            n_align,
-            log_every: config.log_every,
-            out,
-        };
-        let noise = device.noise();
-        let align_setup = AlignSetup {
-            settings: AlignSettings {
-                method,
-                position,
-                samples: n_align,
-                coarse_samples: nav_core::alignment::machine::coarse_samples_for(
-                    n_align,
-                    header.rate_hz,
-                ),
-                rate_hz: header.rate_hz,
-                noise: SensorNoise {
-                    arw_rad_per_sqrt_s: noise.gyro_arw_rad_per_sqrt_s as f32,
-                    vrw_mps_per_sqrt_s: noise.accel_vrw_mps_per_sqrt_s as f32,
-                    gyro_bias_rad_s: noise.gyro_bias_rad_s as f32,
-                    accel_bias_mps2: noise.accel_bias_mps2 as f32,
-                },
-                lever_arm: LeverArm::default(),
-                base: BaseMotion::default(),
-            },
-        };
-        if navigate::spawn(samples_rx, align_tx, result_rx, setup).is_err()
-            || align::spawn(align_rx, result_tx, align_setup).is_err()
+        let (to_background, from_navigate) = make_channel!(ToBackground<f32>, ALIGN_CAP);
+        let (to_navigate, from_background) = make_channel!(FromBackground<f32>, 1);
+        if navigate::spawn(samples_rx, to_background, from_background).is_err()
+            || align::spawn(from_navigate, to_navigate).is_err()
             || pace::spawn().is_err()
         {
             defmt::panic!("task spawn failed");
         }
+        let navigator = Navigator::new(&setup);
         (
             Shared {},
             Local {
                 imu,
                 samples_tx,
-                mechanization,
+                navigator,
+                out,
+                setup,
             },
         )
     }
@@ -229,9 +190,9 @@ mod app {
         }
     }
 
-    /// Parses the semihosting command line (`[--device adis16505|icm42688|bmi088] ARGS...`); exits with
+    /// Parses the semihosting command line into the firmware's [`Args`]; exits with
     /// [`ExitCode::Config`] on error.
-    fn read_config() -> (Device, AlignMethod, Config) {
+    fn read_args() -> Args {
         let args = semihosting::experimental::env::args::<512>().unwrap_or_else(|_| {
             defmt::error!("no semihosting command line: run through firmware/qemu-run.sh");
             exit(ExitCode::Config)
@@ -250,59 +211,32 @@ mod app {
             firmware::osc_bench::run();
             exit(ExitCode::Success)
         }
-        let mut device = Device::Adis16505;
-        let mut method = AlignMethod::Static;
-        loop {
-            match words.peek() {
-                Some(&"--device") => {
-                    let name = words.nth(1).unwrap_or("");
-                    device = Device::parse(name).unwrap_or_else(|| {
-                        defmt::error!("unknown device {=str}: adis16505, icm42688 or bmi088", name);
-                        exit(ExitCode::Config)
-                    });
-                }
-                Some(&"--align-method") => {
-                    let name = words.nth(1).unwrap_or("");
-                    method = match AlignMethod::from_name(name) {
-                        // The sway method identifies its periods in one go (~1e8 soft-float
-                        // instructions): the alignment queue would overflow and drop samples.
-                        Some(AlignMethod::Sway) => {
-                            defmt::error!(
-                                "alignment method sway runs on the host only (its one-off period identification would stall the MCU's alignment task)"
-                            );
-                            exit(ExitCode::Config)
-                        }
-                        Some(m) => m,
-                        None => {
-                            defmt::error!("unknown alignment method {=str}", name);
-                            exit(ExitCode::Config)
-                        }
-                    };
-                }
-                _ => break,
-            }
-        }
-        let config = Config::parse(words).unwrap_or_else(|e| {
+        Args::parse(words).unwrap_or_else(|e| {
             defmt::error!(
-                "bad arguments ({}); usage: [--device adis16505|icm42688|bmi088] [--align-method static|inertial|fine] {=str}",
-                e,
+                "bad arguments ({}); usage: {=str}",
+                defmt::Display2Format(&e),
                 USAGE
             );
             exit(ExitCode::Config)
-        });
-        (device, method, config)
+        })
+    }
+
+    /// Logs a refused run configuration and exits with [`ExitCode::Config`].
+    fn bad_config(e: &dyn core::fmt::Display) -> ! {
+        defmt::error!("invalid configuration: {}", defmt::Display2Format(e));
+        exit(ExitCode::Config)
     }
 
     /// Loads the sensor calibration (identity without a file); exits with
     /// [`ExitCode::Config`] when it cannot be read or parsed.
-    fn read_calibration(config: &Config) -> nav_core::ImuCompensation<f32> {
-        let Some(path) = config.cal_cstr() else {
-            return nav_core::ImuCompensation::default();
+    fn read_calibration(args: &Args) -> ImuCalibration {
+        let Some(path) = args.cal_cstr() else {
+            return ImuCalibration::default();
         };
         let fail = |what: &dyn core::fmt::Display| -> ! {
             defmt::error!(
                 "calibration {=[u8]:a}: {}",
-                config.cal_path.as_deref().unwrap_or_default(),
+                args.cal_path.as_deref().unwrap_or_default(),
                 defmt::Display2Format(what)
             );
             exit(ExitCode::Config)
@@ -321,11 +255,12 @@ mod app {
             }
         }
         let text = core::str::from_utf8(&text[..len]).unwrap_or_else(|_| fail(&"not UTF-8 text"));
-        let compensation = ImuCalibration::parse(text)
-            .and_then(|c| c.compensation::<f32>())
-            .unwrap_or_else(|e| fail(&e));
+        let calibration = ImuCalibration::parse(text).unwrap_or_else(|e| fail(&e));
+        if let Err(e) = calibration.compensation::<f32>() {
+            fail(&e)
+        }
         defmt::info!("calibration loaded: {=usize} bytes", len);
-        compensation
+        calibration
     }
 
     /// SysTick counts since start (monotonic ticks plus the counter's progress in this tick).
@@ -427,37 +362,21 @@ mod app {
         health: Health,
     }
 
-    /// Counters reported at the end.
-    #[derive(Default)]
-    struct Counters {
-        samples: u32,
-        flagged: u32,
-        rejected: u32,
-        nav_steps: u32,
-    }
-
-    /// Navigation: aligns (through `align`), then steps the strapdown mechanization on every
-    /// sample and logs the solution. Same semantics as the host harness's `pipeline`.
-    #[task(priority = 2, local = [mechanization])]
+    /// Navigation: carries every sample through nav-core's navigator, forwards what it asks to
+    /// the background (`align`), hands it the answers, and writes the rows it produces.
+    #[task(priority = 2, local = [navigator, out])]
     async fn navigate(
         cx: navigate::Context,
         mut samples_rx: Receiver<'static, DataReady, SAMPLE_CAP>,
-        mut align_tx: Sender<'static, ImuIncrement<f32>, ALIGN_CAP>,
-        mut result_rx: Receiver<'static, AlignOutcome, 1>,
-        setup: NavSetup,
+        mut to_background: Sender<'static, ToBackground<f32>, ALIGN_CAP>,
+        mut from_background: Receiver<'static, FromBackground<f32>, 1>,
     ) {
-        let mechanization = *cx.local.mechanization;
-        let NavSetup {
-            n_align,
-            log_every,
-            mut out,
-        } = setup;
-        let limits = InputLimits::default();
-        let mut nav: Option<Strapdown<f32>> = None;
-        let mut aligned: Option<nav_core::alignment::AlignOutcome<f32>> = None;
-        let (mut counters, mut cost) = (Counters::default(), StepCost::default());
+        let navigator = cx.local.navigator;
+        let out = cx.local.out;
+        // Steps without a row, and steps with one (the row's f64 output conversion included).
+        let (mut cost, mut row_cost) = (StepCost::default(), StepCost::default());
         let mut imu = ImuStats::default();
-        let (mut forwarded, mut last_t_us, mut last_ready_us) = (0_u32, 0_u64, 0_u64);
+        let mut last_ready_us = 0_u64;
         loop {
             let Ok(msg) = samples_rx.recv().await else {
                 defmt::panic!("sample channel closed");
@@ -479,137 +398,138 @@ mod app {
                     break;
                 }
             };
-            counters.samples += 1;
             last_ready_us = t_ready_us;
-            if !sample.flags.usable() || sample.flags.contains(SampleFlags::GAP) {
-                // The two-sample coning/sculling terms must not span a hole in the data.
-                if let Some(nav) = nav.as_mut() {
-                    nav.restart_increments();
+            // An early failure of the alignment (its success comes when awaited, below).
+            if navigator.is_aligning()
+                && let Ok(answer) = from_background.try_recv()
+            {
+                answer_from_background(navigator, answer, out, &imu);
+            }
+            let start = systick_counts();
+            let step = navigator.push(&nav_input(&sample));
+            let spent = counts_to_instructions(systick_counts() - start);
+            match step {
+                Step::Navigated(None) => cost.add(spent),
+                Step::Navigated(Some(row)) => {
+                    row_cost.add(spent);
+                    write_line(out, row);
                 }
-            }
-            if !sample.flags.usable() {
-                counters.flagged += 1;
-                // The first ten, then every thousandth: a failing sensor must not flood the log.
-                if counters.flagged <= 10 || counters.flagged % 1000 == 0 {
-                    defmt::warn!(
-                        "sample {=u32} flagged {}: not navigated ({=u32} so far)",
-                        sample.seq,
-                        sample.flags,
-                        counters.flagged
-                    );
-                }
-                continue;
-            }
-            let (delta_theta_ib_b, delta_v_ib_b) = sample.increments();
-            let inc = ImuIncrement::new(delta_theta_ib_b, delta_v_ib_b, sample.dt_s);
-            if let Some(nav) = nav.as_mut() {
-                let start = systick_counts();
-                let stepped = nav.step(&inc);
-                let spent = counts_to_instructions(systick_counts() - start);
-                if stepped.is_err() {
-                    counters.rejected += 1;
-                    continue;
-                }
-                cost.add(spent);
-                counters.nav_steps += 1;
-                last_t_us = sample.t_us;
-                if counters.nav_steps % log_every == 0 {
-                    write_line(&mut out, Solution::from_state(sample.t_us, nav.state()));
-                }
-                continue;
-            }
-            // Aligning: the alignment task averages; navigation waits for its answer.
-            if inc.check(&limits).is_err() {
-                counters.rejected += 1;
-                continue;
-            }
-            if align_tx.send(inc).await.is_err() {
-                defmt::panic!("alignment channel closed");
-            }
-            forwarded += 1;
-            if forwarded == n_align {
-                let result = match result_rx.recv().await {
-                    Ok(Ok(result)) => result,
-                    Ok(Err(e)) => {
-                        defmt::error!(
-                            "alignment failed after {=u32} samples: {}",
-                            n_align,
-                            defmt::Display2Format(&e)
-                        );
-                        log_imu_costs(&imu);
-                        exit(ExitCode::Alignment)
+                Step::Forward {
+                    message,
+                    await_reply,
+                } => {
+                    if to_background.send(message).await.is_err() {
+                        defmt::panic!("alignment channel closed");
                     }
-                    Err(_) => defmt::panic!("alignment result channel closed"),
-                };
-                log_alignment(&result);
-                let n = Strapdown::new(result.state, mechanization);
-                write_line(&mut out, Solution::from_state(sample.t_us, n.state()));
-                nav = Some(n);
-                aligned = Some(result);
+                    if await_reply {
+                        let Ok(answer) = from_background.recv().await else {
+                            defmt::panic!("alignment result channel closed");
+                        };
+                        answer_from_background(navigator, answer, out, &imu);
+                    }
+                }
+                Step::Flagged => {
+                    let n = navigator.counters().flagged;
+                    // The first ten, then every thousandth: a failing sensor must not flood the log.
+                    if n <= 10 || n.is_multiple_of(1000) {
+                        defmt::warn!(
+                            "sample {=u32} flagged {}: not navigated ({=u32} so far)",
+                            sample.seq,
+                            sample.flags,
+                            n
+                        );
+                    }
+                }
+                Step::Rejected(_) => {}
+                // Not reached: every answer is awaited before the next sample.
+                Step::NotReady => defmt::panic!("navigator not ready"),
             }
         }
 
         // End of the recording.
-        let Some(nav) = nav else {
-            defmt::error!(
-                "recording ended during alignment: {=u32} of {=u32} samples",
-                forwarded,
-                n_align
-            );
-            exit(ExitCode::Alignment)
-        };
-        let last = Solution::from_state(last_t_us, nav.state());
-        if counters.nav_steps % log_every != 0 {
-            write_line(&mut out, last);
+        let summary = navigator.finish().unwrap_or_else(|e| failed(&e, &imu));
+        if let Some(row) = summary.final_row {
+            write_line(out, row);
         }
+        let c = summary.counters;
+        defmt::info!(
+            "summary: samples {=u32}, flagged {=u32}, rejected {=u32}, navigated {=u32}, missed {=u32}, channel overruns {=u32}, last data-ready at {=u64} us",
+            c.samples,
+            c.flagged,
+            c.rejected,
+            c.nav_steps,
+            MISSED.load(Ordering::Relaxed),
+            OVERRUNS.load(Ordering::Relaxed),
+            last_ready_us
+        );
         report(
-            &counters,
             &cost,
+            &row_cost,
             &imu,
-            aligned.as_ref(),
-            &last,
-            last_ready_us,
+            &summary.alignment,
+            &summary.last_solution,
         );
         exit(ExitCode::Success)
     }
 
-    /// Alignment, below navigation: runs nav-core's alignment state machine on the forwarded
-    /// increments, logs its stage changes, and answers with the aligned state or the failure.
-    #[task(priority = 1)]
-    async fn align(
-        _: align::Context,
-        mut align_rx: Receiver<'static, ImuIncrement<f32>, ALIGN_CAP>,
-        mut result_tx: Sender<'static, AlignOutcome, 1>,
-        setup: AlignSetup,
+    /// Hands the background's `answer` to the navigator: the aligned row is logged; a failure
+    /// ends the run.
+    fn answer_from_background(
+        navigator: &mut Navigator<f32>,
+        answer: FromBackground<f32>,
+        out: &mut SemihostingFile,
+        imu: &ImuStats,
     ) {
-        let settings = setup.settings;
+        match navigator.on_background(answer) {
+            Ok(Some(row)) => {
+                if let Some(outcome) = navigator.alignment() {
+                    log::aligned(outcome);
+                }
+                write_line(out, row);
+            }
+            Ok(None) => {}
+            Err(e) => failed(&e, imu),
+        }
+    }
+
+    /// Logs why the run could not navigate and exits with [`ExitCode::Alignment`].
+    fn failed(e: &NavError, imu: &ImuStats) -> ! {
+        defmt::error!("{}", defmt::Display2Format(e));
+        log_imu_costs(imu);
+        exit(ExitCode::Alignment)
+    }
+
+    /// Alignment, below navigation: the navigator's background on the forwarded increments;
+    /// logs its stage changes and cost, and answers.
+    #[task(priority = 1, local = [setup])]
+    async fn align(
+        cx: align::Context,
+        mut from_navigate: Receiver<'static, ToBackground<f32>, ALIGN_CAP>,
+        mut to_navigate: Sender<'static, FromBackground<f32>, 1>,
+    ) {
+        let mut background = Background::new(cx.local.setup);
+        let settings = *background.settings();
         defmt::info!(
             "aligning: {=str}, {=u32} samples; stage COARSE",
             settings.method.name(),
             settings.samples
         );
-        let mut aligner = Aligner::new(settings);
-        let mut fine = false;
+        let mut stage = background.stage();
         let mut cost = StepCost::default();
-        while let Ok(inc) = align_rx.recv().await {
+        while let Ok(message) = from_navigate.recv().await {
             let start = systick_counts();
-            let progress = aligner.add(&inc);
+            let answer = background.handle(message);
             cost.add(counts_to_instructions(systick_counts() - start));
-            let answer = match progress {
-                Progress::Coarse => continue,
-                Progress::Fine => {
-                    if !fine {
-                        fine = true;
-                        defmt::info!(
-                            "alignment stage FINE after {=u32} samples",
-                            aligner.samples()
-                        );
-                    }
-                    continue;
+            if background.stage() != stage {
+                stage = background.stage();
+                if stage == Stage::Fine {
+                    defmt::info!(
+                        "alignment stage FINE after {=u32} samples",
+                        background.samples()
+                    );
                 }
-                Progress::Aligned(outcome) => Ok(outcome),
-                Progress::Failed(failure) => Err(failure),
-            };
+            }
+            let Some(answer) = answer else { continue };
             // Preemption by sampling and navigation counts in too: an upper bound.
             defmt::info!(
                 "instructions per alignment sample ({=str}): max {=u64}, mean {=u64}",
@@ -617,10 +537,9 @@ mod app {
                 cost.max,
                 cost.mean()
             );
-            if result_tx.send(answer).await.is_err() {
+            if to_navigate.send(answer).await.is_err() {
                 defmt::panic!("alignment result channel closed");
             }
-            return;
         }
     }
 
@@ -630,23 +549,6 @@ mod app {
             defmt::error!("cannot write the solution log");
             exit(ExitCode::Output);
         }
-    }
-
-    fn log_alignment(r: &nav_core::alignment::AlignOutcome<f32>) {
-        let (roll, pitch, yaw) = nav_core::attitude::euler(&r.estimate.q_b_n);
-        let sigma = r.estimate.sigma_rad.map(|x| x.to_degrees());
-        defmt::info!(
-            "alignment stage ALIGNED after {=u32} samples (coarse {=f64} s, fine {=f64} s): roll {=f32} deg, pitch {=f32} deg, yaw {=f32} deg; 1-sigma {=f32} {=f32} {=f32} deg",
-            r.times.coarse_samples + r.times.fine_samples,
-            r.times.coarse_s,
-            r.times.fine_s,
-            roll.to_degrees(),
-            pitch.to_degrees(),
-            yaw.to_degrees(),
-            sigma.x,
-            sigma.y,
-            sigma.z
-        );
     }
 
     fn log_imu_costs(imu: &ImuStats) {
@@ -660,64 +562,23 @@ mod app {
     }
 
     fn report(
-        c: &Counters,
         cost: &StepCost,
+        row_cost: &StepCost,
         imu: &ImuStats,
-        aligned: Option<&nav_core::alignment::AlignOutcome<f32>>,
+        aligned: &AlignOutcome<f32>,
         last: &Solution,
-        last_ready_us: u64,
     ) {
+        // The gate, the calibration and the mechanization; a logged step adds its row's
+        // conversion to output units.
         defmt::info!(
-            "summary: samples {=u32}, flagged {=u32}, rejected {=u32}, navigated {=u32}, missed {=u32}, channel overruns {=u32}, last data-ready at {=u64} us",
-            c.samples,
-            c.flagged,
-            c.rejected,
-            c.nav_steps,
-            MISSED.load(Ordering::Relaxed),
-            OVERRUNS.load(Ordering::Relaxed),
-            last_ready_us
-        );
-        defmt::info!(
-            "instructions per navigation step: max {=u64}, mean {=u64}",
+            "instructions per navigation step: max {=u64}, mean {=u64}; with a solution row: max {=u64}, mean {=u64}",
             cost.max,
-            cost.mean()
+            cost.mean(),
+            row_cost.max,
+            row_cost.mean()
         );
-        let h = &imu.health;
-        defmt::info!(
-            "IMU driver: samples {=u32}, checksum errors {=u32}, stale {=u32}, device missed {=u32}, bus errors {=u32}, faults {=u32}, FIFO overflows {=u32}, invalid {=u32}, gyro clips {}, accel clips {}",
-            h.samples,
-            h.checksum_errors,
-            h.stale,
-            h.missed,
-            h.bus_errors,
-            h.device_faults,
-            h.fifo_overflows,
-            h.invalid,
-            h.gyro_clips,
-            h.accel_clips
-        );
+        log::health(&imu.health);
         log_imu_costs(imu);
-        if let Some(r) = aligned {
-            let (roll, pitch, yaw) = nav_core::attitude::euler(&r.estimate.q_b_n);
-            defmt::info!(
-                "alignment: roll {=f32} deg, pitch {=f32} deg, yaw {=f32} deg",
-                roll.to_degrees(),
-                pitch.to_degrees(),
-                yaw.to_degrees()
-            );
-        }
-        defmt::info!(
-            "solution at t={=u64} us: lat {=i64} ndeg, lon {=i64} ndeg, h {=f64} m, v_n {=f64} v_e {=f64} v_d {=f64} m/s, roll {=f64} pitch {=f64} yaw {=f64} deg",
-            last.t_us,
-            last.lat_ndeg,
-            last.lon_ndeg,
-            last.h_m,
-            last.v_eb_n[0],
-            last.v_eb_n[1],
-            last.v_eb_n[2],
-            last.roll_deg,
-            last.pitch_deg,
-            last.yaw_deg
-        );
+        log::end(aligned, last);
     }
 }

@@ -1,7 +1,7 @@
 //! A recording file replayed end to end: open (any format), run the [`pipeline`] in the chosen
 //! precision, attach the replay's counters, and name the file in every error.
 
-use crate::pipeline::{self, MechanizationChoices, PipelineConfig, Report, SourceCounters};
+use crate::pipeline::{self, Report, RunConfig, SourceCounters, sensor_noise};
 use crate::recording_io::{Format, ReplaySource, in_file};
 use anyhow::{Result, anyhow};
 use hal_adapters::Imu;
@@ -9,8 +9,7 @@ use hal_adapters::drivers::Mounting;
 use hal_adapters::drivers::adis16505::{self, Model};
 use hal_adapters::drivers::{NoiseSpec, bmi088, icm42688, noise};
 use hal_adapters::sim::{SimBmi088, SimulatedImu};
-use nav_core::alignment::AlignMethod;
-use nav_core::{ImuCalibration, Scalar};
+use nav_core::Scalar;
 use std::io::Write;
 use std::path::Path;
 
@@ -40,49 +39,31 @@ pub enum ImuDevice {
     Bmi088,
 }
 
-/// The pipeline settings that do not come from the recording.
+/// What to replay: the run configuration (nav-core's, shared with the firmware) and the sample
+/// path.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReplayOptions {
-    /// Latitude of the site [deg].
-    pub lat_deg: f64,
-    /// Longitude of the site [deg].
-    pub lon_deg: f64,
-    /// Ellipsoidal height of the site [m].
-    pub h_m: f64,
-    /// Length of the still period averaged by the alignment [s].
-    pub align_seconds: f64,
-    /// Navigation steps between logged solutions (>= 1).
-    pub log_every: u32,
-    /// Sensor calibration (default identity).
-    pub calibration: ImuCalibration,
-    /// Frame, attitude integrator and vertical channel.
-    pub choices: MechanizationChoices,
+    /// The run configuration.
+    pub run: RunConfig,
     /// The sample path (default: the recording as it is).
     pub device: ImuDevice,
-    /// Alignment method.
-    pub align_method: AlignMethod,
-    /// The IMU noise the alignment assumes (`None`: the device's datasheet figures, the board's
-    /// ADIS16505 for a plain recording, as the firmware assumes).
-    pub noise: Option<NoiseSpec>,
-    /// The IMU's lever arm from the base's centre of rotation, body FRD [m], if known.
-    pub lever_arm_m: Option<[f64; 3]>,
 }
 
 impl ReplayOptions {
-    /// The pipeline configuration for a recording sampled at `rate_hz` [Hz].
-    pub fn with_rate(&self, rate_hz: f64) -> PipelineConfig {
-        PipelineConfig {
-            lat_deg: self.lat_deg,
-            lon_deg: self.lon_deg,
-            h_m: self.h_m,
-            align_seconds: self.align_seconds,
-            log_every: self.log_every,
-            rate_hz,
-            calibration: self.calibration,
-            choices: self.choices,
-            align_method: self.align_method,
-            noise: self.noise.unwrap_or(self.device.noise()),
-            lever_arm_m: self.lever_arm_m,
+    /// A replay of the recording's own samples with a `align_seconds` [s] static alignment at
+    /// (`lat_deg`, `lon_deg` [deg], `h_m` [m]), assuming the board's ADIS16505 noise (as the
+    /// firmware does), and the run configuration's defaults for the rest.
+    pub fn new(lat_deg: f64, lon_deg: f64, h_m: f64, align_seconds: f64) -> Self {
+        let device = ImuDevice::Recording;
+        Self {
+            run: RunConfig::new(
+                lat_deg,
+                lon_deg,
+                h_m,
+                align_seconds,
+                sensor_noise(&device.noise()),
+            ),
+            device,
         }
     }
 }
@@ -105,17 +86,18 @@ pub fn replay_file<T: Scalar, W: Write>(
     out: W,
 ) -> Result<FileReport> {
     let (mut source, format) = ReplaySource::open(path)?;
-    let config = options.with_rate(source.header().rate_hz);
+    let rate_hz = source.header().rate_hz;
+    let config = (&options.run, rate_hz);
     let stats = match options.device {
         ImuDevice::Recording => {
-            let report = run_source::<T, _, _>(path, &config, &mut source, out)?;
+            let report = run_source::<T, _, _>(path, config, &mut source, out)?;
             (report, source.stats())
         }
         ImuDevice::Adis16505 => {
             let driver_config = adis16505::Config::new(Model::BOARD);
             let mut imu = SimulatedImu::adis16505(source, driver_config)
                 .map_err(|e| anyhow!("simulated ADIS16505: {e}"))?;
-            let report = run_source::<T, _, _>(path, &config, &mut imu, out)?;
+            let report = run_source::<T, _, _>(path, config, &mut imu, out)?;
             (report, imu.driver().bus().source().stats())
         }
         ImuDevice::Icm42688 => {
@@ -124,14 +106,14 @@ pub fn replay_file<T: Scalar, W: Write>(
             };
             let mut imu = SimulatedImu::icm42688(source, driver_config)
                 .map_err(|e| anyhow!("simulated ICM-42688-P: {e}"))?;
-            let report = run_source::<T, _, _>(path, &config, &mut imu, out)?;
+            let report = run_source::<T, _, _>(path, config, &mut imu, out)?;
             (report, imu.driver().bus().source().stats())
         }
         ImuDevice::Bmi088 => {
             let device = SimBmi088::new(source);
             let mut imu = SimulatedImu::bmi088(&device, bmi088::Config::default())
                 .map_err(|e| anyhow!("simulated BMI088: {e}"))?;
-            let report = run_source::<T, _, _>(path, &config, &mut imu, out)?;
+            let report = run_source::<T, _, _>(path, config, &mut imu, out)?;
             (report, device.into_source().stats())
         }
     };
@@ -143,7 +125,7 @@ pub fn replay_file<T: Scalar, W: Write>(
     });
     Ok(FileReport {
         format,
-        rate_hz: config.rate_hz,
+        rate_hz,
         report,
     })
 }
@@ -151,14 +133,14 @@ pub fn replay_file<T: Scalar, W: Write>(
 /// Runs the pipeline over `source`, naming `path` in its errors.
 fn run_source<T: Scalar, I: Imu, W: Write>(
     path: &Path,
-    config: &PipelineConfig,
+    (config, rate_hz): (&RunConfig, f64),
     source: &mut I,
     out: W,
 ) -> Result<Report>
 where
     I::Error: std::error::Error + Send + Sync + 'static,
 {
-    match pipeline::run::<T, _, _>(config, source, out) {
+    match pipeline::run::<T, _, _>(config, rate_hz, source, out) {
         Ok(report) => Ok(report),
         Err(pipeline::PipelineError::Output(e)) => Err(anyhow!(e).context("writing the log")),
         Err(e) => Err(in_file(path, e)),

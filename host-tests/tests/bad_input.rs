@@ -19,19 +19,7 @@ fn scenario() -> Stationary {
 
 fn options() -> ReplayOptions {
     let s = scenario();
-    ReplayOptions {
-        lat_deg: s.lat_deg,
-        lon_deg: s.lon_deg,
-        h_m: s.h_m,
-        align_seconds: 5.0,
-        log_every: 40,
-        calibration: Default::default(),
-        device: Default::default(),
-        align_method: Default::default(),
-        noise: None,
-        lever_arm_m: None,
-        choices: Default::default(),
-    }
+    ReplayOptions::new(s.lat_deg, s.lon_deg, s.h_m, 10.0)
 }
 
 fn clean() -> Recording {
@@ -199,7 +187,7 @@ fn recording_ending_during_alignment() {
     recording_io::write(&path, &short).unwrap();
     let msg = replay_error(&path, &options());
     assert!(
-        msg.contains("two-seconds.bin: recording ended during alignment: 800 of 2000 samples"),
+        msg.contains("two-seconds.bin: recording ended during alignment: 800 of 4000 samples"),
         "{msg}"
     );
 }
@@ -254,9 +242,9 @@ fn nan_and_backwards_time_are_flagged_and_skipped() {
     let stats = r.source.unwrap();
     assert_eq!((r.samples, r.flagged, r.rejected), (n + 1, 3, 0));
     assert_eq!((stats.non_finite, stats.bad_interval), (2, 1));
-    // 2000 samples aligned (the NaN one does not count), the rest navigated but for 3 skipped.
-    assert_eq!(r.n_align, 2000);
-    assert_eq!(r.nav_steps, n + 1 - 3 - 2000);
+    // 4000 samples aligned (the NaN one does not count), the rest navigated but for 3 skipped.
+    assert_eq!(r.n_align, 4000);
+    assert_eq!(r.nav_steps, n + 1 - 3 - 4000);
     // The output is finite and the body still at rest: skipping a 2.5 ms rest interval loses
     // nothing, and the record after the backward step has a 1 us longer dt than its increments,
     // a velocity error of g * 1 us = 1e-5 m/s.

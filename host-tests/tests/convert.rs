@@ -10,19 +10,9 @@ use host_tests::replay::ReplayOptions;
 use std::process::Command;
 
 fn options(s: &Stationary) -> ReplayOptions {
-    ReplayOptions {
-        lat_deg: s.lat_deg,
-        lon_deg: s.lon_deg,
-        h_m: s.h_m,
-        align_seconds: 3.0,
-        log_every: 25,
-        calibration: Default::default(),
-        device: Default::default(),
-        align_method: Default::default(),
-        noise: None,
-        lever_arm_m: None,
-        choices: Default::default(),
-    }
+    let mut o = ReplayOptions::new(s.lat_deg, s.lon_deg, s.h_m, 10.0);
+    o.run.log_every = 25;
+    o
 }
 
 #[test]

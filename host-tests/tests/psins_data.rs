@@ -71,19 +71,8 @@ fn lasergyro_parses_and_converts_to_frd() {
 #[test]
 fn lasergyro_replays() {
     let Some(path) = data_file() else { return };
-    let options = ReplayOptions {
-        lat_deg: 34.246048,
-        lon_deg: 108.909664,
-        h_m: 380.0,
-        align_seconds: 60.0,
-        log_every: 100,
-        calibration: Default::default(),
-        device: Default::default(),
-        align_method: Default::default(),
-        noise: None,
-        lever_arm_m: None,
-        choices: Default::default(),
-    };
+    let mut options = ReplayOptions::new(34.246048, 108.909664, 380.0, 60.0);
+    options.run.log_every = 100;
     let (fr, log) = common::replay::<f64>(&path, &options);
     let r = fr.report;
     assert_eq!(

@@ -98,28 +98,76 @@ fn field(log: &str, key: &str) -> u64 {
 }
 
 /// `seconds` of the simulator's `static` scenario (45 deg N, 7.5 deg E, 150 m, attitude (1.5,
-/// -2, 30) deg) sensed by `grade` (seed 3).
-fn static_recording(seconds: f64, grade: Grade) -> Recording {
+/// -2, 30) deg) sensed by `grade` (seed 3), with its truth.
+fn static_sim(seconds: f64, grade: Grade) -> host_tests::simulate::Simulated {
     let mut opts = SimOptions::new(Scenario::by_name("static").unwrap(), grade);
     opts.seconds = Some(seconds);
     opts.seed = 3;
-    simulate(&opts, |_, _| {}).unwrap().recording
+    simulate(&opts, |_, _| {}).unwrap()
 }
 
-/// 20 s of the `static` scenario with FOG-grade sensor errors, plus two bad samples in the
-/// navigation phase: a NaN gyro value (sample 5000) and a repeated timestamp (sample 6000).
-fn recording_with_bad_samples(path: &Path) {
-    let mut rec = static_recording(20.0, Grade::Fog);
+fn static_recording(seconds: f64, grade: Grade) -> Recording {
+    static_sim(seconds, grade).recording
+}
+
+/// The calibration of [`recording_with_bad_samples`]'s injected sensor errors: biases well
+/// above the FOG grade's own (1 deg/h and 3-5 mg against 0.2 deg/h and 0.5 mg), scale factors
+/// and misalignments.
+const CALIBRATION: &str = "# the injected errors\n\
+     gyro_bias_rad_s = 5e-6 4e-6 3e-6\n\
+     gyro_scale = 1e-4 -2e-4 0\n\
+     accel_bias_m_s2 = 0.05, -0.04, 0.03\n\
+     accel_misalignment = 1e-4 0 0 -1e-4 0 2e-4\n";
+
+/// 20 s of the `static` scenario with FOG-grade sensor errors and the errors of
+/// [`CALIBRATION`] on top (`measured = (I + S + N) sensed + bias dt`), plus two bad samples in
+/// the navigation phase: a NaN gyro value (sample 5000) and a repeated timestamp (sample
+/// 6000). Returns the true body-to-NED attitude.
+fn recording_with_bad_samples(path: &Path) -> nav_core::UnitQuaternion<f64> {
+    let sim = static_sim(20.0, Grade::Fog);
+    let mut rec = sim.recording;
+    let comp = nav_core::ImuCalibration::parse(CALIBRATION)
+        .unwrap()
+        .compensation::<f64>()
+        .unwrap();
+    let dt = 1.0 / rec.rate_hz;
+    let inject = |v: &mut [f32; 3], t: &nav_core::calibration::TriadCompensation<f64>| {
+        let sensed = nav_core::Vector3::from(v.map(f64::from));
+        let m = t.k.try_inverse().unwrap() * sensed + t.bias * dt;
+        *v = [m.x, m.y, m.z].map(|x| x as f32);
+    };
+    for r in &mut rec.records {
+        inject(&mut r.gyro, &comp.gyro);
+        inject(&mut r.accel, &comp.accel);
+    }
     rec.records[5000].gyro[1] = f32::NAN;
     rec.records[6000].t_ns = rec.records[5999].t_ns;
     recording_io::write(path, &rec).unwrap();
+    sim.truth[0].q_b_ned
+}
+
+/// Tilt and heading errors [deg] of a log's aligned row (its first) against `truth`.
+fn alignment_errors(log: &str, truth: &nav_core::UnitQuaternion<f64>) -> (f64, f64) {
+    let row: Vec<f64> = log
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let (roll, pitch, yaw) = nav_core::attitude::euler(truth);
+    let wrap = |d: f64| (d + 540.0).rem_euclid(360.0) - 180.0;
+    let tilt = wrap(row[7] - roll.to_degrees())
+        .abs()
+        .max(wrap(row[8] - pitch.to_degrees()).abs());
+    (tilt, wrap(row[9] - yaw.to_degrees()).abs())
 }
 
 #[test]
 fn firmware_in_qemu_matches_host_replay() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    recording_with_bad_samples(&d.join("rec.bin"));
+    let truth = recording_with_bad_samples(&d.join("rec.bin"));
     let s = Static::default();
     let (lat, lon, h) = (
         s.lat_deg.to_string(),
@@ -127,16 +175,9 @@ fn firmware_in_qemu_matches_host_replay() {
         s.h_m.to_string(),
     );
 
-    // A non-trivial calibration both sides must load and apply identically.
-    std::fs::write(
-        d.join("imu.cal"),
-        "# test calibration\n\
-         gyro_bias_rad_s = 2e-6 -1e-6 5e-7\n\
-         gyro_scale = 1e-4 -2e-4 0\n\
-         accel_bias_m_s2 = 0.002, -0.001, 0.003\n\
-         accel_misalignment = 1e-4 0 0 -1e-4 0 2e-4\n",
-    )
-    .unwrap();
+    // The recording's true calibration: both sides must load it and apply it identically,
+    // to the alignment as to the navigation.
+    std::fs::write(d.join("imu.cal"), CALIBRATION).unwrap();
 
     let started = std::time::Instant::now();
     let (code, log) = run_firmware(
@@ -168,31 +209,29 @@ fn firmware_in_qemu_matches_host_replay() {
     println!("max guest instructions per navigation step: {max}");
 
     let site = ["--lat", &lat, "--lon", &lon, "--h", &h];
-    let args = [
-        &[
+    let replay = |out: &str, calibration: Option<&str>| {
+        let mut args = vec![
             "replay",
             "--imu",
             "rec.bin",
             "--align-seconds",
             "10",
             "--out",
-            "host.csv",
+            out,
             "--log-every",
             "40",
-            "--calibration",
-            "imu.cal",
             "--device",
             "adis16505",
-        ][..],
-        &site,
-    ]
-    .concat();
-    let out = nav(d, &args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+        ];
+        args.extend_from_slice(&site);
+        if let Some(c) = calibration {
+            args.extend_from_slice(&["--calibration", c]);
+        }
+        let o = nav(d, &args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    replay("host.csv", Some("imu.cal"));
+    replay("uncalibrated.csv", None);
 
     let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
     let host = std::fs::read_to_string(d.join("host.csv")).unwrap();
@@ -214,6 +253,16 @@ fn firmware_in_qemu_matches_host_replay() {
             i + 1
         );
     }
+    // The calibration reaches the alignment: without it the biases tilt the levelling
+    // (b_a / g ~ 0.3 deg) and turn the gyrocompass (east gyro bias over the horizontal Earth
+    // rate ~ 6 deg); with it what is left is the FOG grade's own errors.
+    let uncalibrated = std::fs::read_to_string(d.join("uncalibrated.csv")).unwrap();
+    let (tilt, heading) = alignment_errors(&fw, &truth);
+    let (tilt_raw, heading_raw) = alignment_errors(&uncalibrated, &truth);
+    println!(
+        "alignment errors with the calibration: tilt {tilt:.4} deg, heading {heading:.3} deg; without: {tilt_raw:.4} deg, {heading_raw:.3} deg"
+    );
+    assert!(tilt < tilt_raw / 2.0 && heading < heading_raw / 2.0);
 }
 
 /// A truncated and a corrupt recording stop the firmware with the recording exit code (4) and a
@@ -239,17 +288,48 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
         ("corrupt.bin", "record 300"),
         ("garbage.bin", "byte offset 0"),
     ] {
-        let (code, log) = run_firmware(d, &[file, "out.csv", "45", "7.5", "150", "1"]);
+        let (code, log) = run_firmware(d, &[file, "out.csv", "45", "7.5", "150", "10"]);
         assert_eq!(code, 4, "{file}: exit code {code}; log:\n{log}");
         assert!(
             log.contains("ERROR") && log.contains(expect),
             "{file}: expected an error with '{expect}':\n{log}"
         );
     }
-    let (code, log) = run_firmware(d, &["missing.bin", "out.csv", "45", "7.5", "150", "1"]);
+    let (code, log) = run_firmware(d, &["missing.bin", "out.csv", "45", "7.5", "150", "10"]);
     assert_eq!(code, 4, "missing file: {log}");
-    let (code, log) = run_firmware(d, &["truncated.bin", "out.csv", "95", "7.5", "150", "1"]);
+    let (code, log) = run_firmware(d, &["truncated.bin", "out.csv", "95", "7.5", "150", "10"]);
     assert_eq!(code, 3, "latitude 95 must be refused: {log}");
+    // A window shorter than the method's minimum, refused naming it (as `nav replay` does).
+    std::fs::write(d.join("good.bin"), &bytes).unwrap();
+    let (code, log) = run_firmware(d, &["good.bin", "out.csv", "45", "7.5", "150", "0"]);
+    assert_eq!(code, 3, "a window of 0 s: {log}");
+    assert!(
+        log.contains(
+            "alignment window 0.0025 s is shorter than the static method's minimum of 10 s"
+        ),
+        "{log}"
+    );
+    for (options, expect) in [
+        (
+            &["--imu-noise", "navigation"][..],
+            "unknown IMU noise grade navigation",
+        ),
+        (
+            &["--lever-arm", "1,2,3", "--lever-arm-sigma", "1"],
+            "exclude each other",
+        ),
+        (&["--lever-arm", "1,2"], "--lever-arm takes X,Y,Z"),
+        (&["--bias-prior", "-1"], "bias prior scale -1"),
+    ] {
+        let mut args = options.to_vec();
+        args.extend_from_slice(&["good.bin", "out.csv", "45", "7.5", "150", "10"]);
+        let (code, log) = run_firmware(d, &args);
+        assert_eq!(code, 3, "{options:?}: {log}");
+        assert!(
+            log.contains(expect),
+            "{options:?}: expected '{expect}' in:\n{log}"
+        );
+    }
     // A calibration with a typo is refused with its line number, before any navigation.
     std::fs::write(
         d.join("bad.cal"),
@@ -264,7 +344,7 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
             "45",
             "7.5",
             "150",
-            "1",
+            "10",
             "40",
             "bad.cal",
         ],
@@ -280,13 +360,13 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
 fn firmware_runs_the_mems_drivers_and_refuses_a_blind_gyrocompass() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let rec = static_recording(3.0, Grade::Ideal);
+    let rec = static_recording(10.5, Grade::Ideal);
     recording_io::write(&d.join("rec.bin"), &rec).unwrap();
     for (device, name) in [("icm42688", "Icm42688"), ("bmi088", "Bmi088")] {
         let (code, log) = run_firmware(
             d,
             &[
-                "--device", device, "rec.bin", "out.csv", "45", "7.5", "150", "2",
+                "--device", device, "rec.bin", "out.csv", "45", "7.5", "150", "10",
             ],
         );
         assert_eq!(code, 5, "{device}: exit code; log:\n{log}");
@@ -300,7 +380,7 @@ fn firmware_runs_the_mems_drivers_and_refuses_a_blind_gyrocompass() {
     let (code, log) = run_firmware(
         d,
         &[
-            "--device", "mpu6050", "rec.bin", "out.csv", "45", "7.5", "150", "2",
+            "--device", "mpu6050", "rec.bin", "out.csv", "45", "7.5", "150", "10",
         ],
     );
     assert_eq!(code, 3, "unknown device: {log}");
@@ -314,7 +394,7 @@ fn firmware_runs_the_mems_drivers_and_refuses_a_blind_gyrocompass() {
             "45",
             "7.5",
             "150",
-            "2",
+            "10",
         ],
     );
     assert_eq!(code, 3, "unknown alignment method: {log}");
@@ -373,42 +453,53 @@ fn firmware_panic_and_hardfault_exit_nonzero() {
     assert!(log.contains("HardFault at pc="), "{log}");
 }
 
-/// Issue 6, requirements 3 and 6: on a rocking recording (`auv-bench`, seed 003's 5 deg / 11 s
-/// roll and pitch, FOG-grade sensors) the firmware's low-priority alignment task runs the
-/// inertial-frame alignment, and the inertial coarse + position-aided Kalman fine alignment,
-/// logs the stages, attitude and 1-sigma, misses no sample, and ends in the same state as the
-/// host harness (identical solution logs, alignment row included). The sway method is refused
-/// on the MCU.
+/// On rocking recordings (`auv-bench`: 5 deg / 11 s roll and pitch, FOG-grade sensors) the
+/// firmware's low-priority alignment task runs the inertial coarse + position-aided Kalman fine
+/// alignment (assuming the board's ADIS16505 noise), and the inertial-frame alignment of an IMU
+/// swaying at a known lever arm (-5.9, 0.6, -7.5) m from the centre of rotation (assuming the
+/// FOG grade: `--imu-noise fog --lever-arm -5.9,0.6,-7.5`); each logs its stages, attitude and
+/// 1-sigma, misses no sample, overruns no channel, and ends in the same state as the host
+/// harness given the same options (identical solution logs, alignment row included). The sway
+/// method is refused on the MCU.
 #[test]
 fn firmware_aligns_on_a_rocking_base_like_the_harness() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let mut opts = SimOptions::new(Scenario::by_name("auv-bench").unwrap(), Grade::Fog);
-    opts.seconds = Some(45.0);
-    opts.seed = 11;
-    let sim = simulate(&opts, |_, _| {}).unwrap();
-    recording_io::write(&d.join("rock.bin"), &sim.recording).unwrap();
-    let start = sim.truth[0];
-    let (lat, lon, h) = (
-        start.lat.to_degrees().to_string(),
-        start.lon.to_degrees().to_string(),
-        start.h.to_string(),
-    );
-    for method in ["inertial", "fine"] {
-        let (code, log) = run_firmware(
-            d,
-            &[
-                "--align-method",
-                method,
-                "rock.bin",
-                "fw.csv",
-                &lat,
-                &lon,
-                &h,
-                "40",
-                "40",
-            ],
-        );
+    let rocking = |lever_arm_m: Option<[f64; 3]>| {
+        let mut scenario = Scenario::by_name("auv-bench").unwrap();
+        for (key, v) in ["lever_x_m", "lever_y_m", "lever_z_m"]
+            .into_iter()
+            .zip(lever_arm_m.unwrap_or_default())
+        {
+            scenario.set(key, v).unwrap();
+        }
+        let params = scenario.describe();
+        let param = |key: &str| params.iter().find(|p| p.0 == key).map(|p| p.1).unwrap();
+        let centre = [param("lat_deg"), param("lon_deg"), param("h_m")];
+        let mut opts = SimOptions::new(scenario, Grade::Fog);
+        opts.seconds = Some(45.0);
+        opts.seed = 11;
+        (simulate(&opts, |_, _| {}).unwrap(), centre)
+    };
+    // (method, the IMU's lever arm [m], the options of both runs)
+    type Case<'a> = (&'a str, Option<[f64; 3]>, &'a [&'a str]);
+    let cases: [Case; 2] = [
+        ("fine", None, &[]),
+        (
+            "inertial",
+            Some([-5.9, 0.6, -7.5]),
+            &["--imu-noise", "fog", "--lever-arm", "-5.9,0.6,-7.5"],
+        ),
+    ];
+    for (method, lever_arm_m, options) in cases {
+        let (sim, centre) = rocking(lever_arm_m);
+        recording_io::write(&d.join("rock.bin"), &sim.recording).unwrap();
+        // The site is the centre of rotation (the IMU starts at the centre plus its lever arm).
+        let [lat, lon, h] = centre.map(|x| x.to_string());
+        let mut args = vec!["--align-method", method];
+        args.extend_from_slice(options);
+        args.extend_from_slice(&["rock.bin", "fw.csv", &lat, &lon, &h, "40", "40"]);
+        let (code, log) = run_firmware(d, &args);
         println!("{log}");
         assert_eq!(code, 0, "{method}: firmware exit code {code}; log:\n{log}");
         assert!(
@@ -421,6 +512,8 @@ fn firmware_aligns_on_a_rocking_base_like_the_harness() {
                 log.contains("alignment stage FINE after 4000 samples"),
                 "{log}"
             );
+        } else {
+            assert!(log.contains("lever arm known: -5.9 0.6 -7.5 m"), "{log}");
         }
         assert!(
             log.contains("alignment stage ALIGNED after 16000 samples"),
@@ -430,7 +523,7 @@ fn firmware_aligns_on_a_rocking_base_like_the_harness() {
         assert_eq!(field(&log, "missed"), 0, "missed data-ready interrupts");
         assert_eq!(field(&log, "channel overruns"), 0, "channel overruns");
 
-        let args = [
+        let mut args = vec![
             "replay",
             "--imu",
             "rock.bin",
@@ -451,6 +544,7 @@ fn firmware_aligns_on_a_rocking_base_like_the_harness() {
             "--h",
             &h,
         ];
+        args.extend_from_slice(options);
         let out = nav(d, &args);
         assert!(
             out.status.success(),
@@ -462,19 +556,9 @@ fn firmware_aligns_on_a_rocking_base_like_the_harness() {
         assert_eq!(fw, host, "{method}: firmware and harness logs differ");
         // The aligned heading against the truth: within 4 sigma of the FOG floor at 40 s (the
         // accelerometer term of 2.46 deg at 30 s scales as T^-1.5: ~1.6 deg at 40 s).
-        let row: Vec<f64> = host
-            .lines()
-            .nth(1)
-            .unwrap()
-            .split(',')
-            .map(|x| x.parse().unwrap())
-            .collect();
-        let truth_yaw = nav_core::attitude::euler(&sim.truth[40 * 50].q_b_ned)
-            .2
-            .to_degrees();
-        let err = (row[9] - truth_yaw + 540.0).rem_euclid(360.0) - 180.0;
+        let (_, err) = alignment_errors(&host, &sim.truth[40 * 50].q_b_ned);
         println!("{method} alignment on the rocking bench, 40 s: yaw error {err:.3} deg");
-        assert!(err.abs() < 4.0 * 1.6, "{method}: {err} deg");
+        assert!(err < 4.0 * 1.6, "{method}: {err} deg");
     }
     let (code, log) = run_firmware(
         d,
@@ -483,9 +567,9 @@ fn firmware_aligns_on_a_rocking_base_like_the_harness() {
             "sway",
             "rock.bin",
             "fw.csv",
-            &lat,
-            &lon,
-            &h,
+            "45",
+            "7.5",
+            "0",
             "40",
         ],
     );

@@ -64,19 +64,7 @@ fn scenario() -> Stationary {
 }
 
 fn options(s: &Stationary) -> ReplayOptions {
-    ReplayOptions {
-        lat_deg: s.lat_deg,
-        lon_deg: s.lon_deg,
-        h_m: s.h_m,
-        align_seconds: ALIGN_SECONDS,
-        log_every: 40,
-        calibration: Default::default(),
-        device: Default::default(),
-        align_method: Default::default(),
-        noise: None,
-        lever_arm_m: None,
-        choices: Default::default(),
-    }
+    ReplayOptions::new(s.lat_deg, s.lon_deg, s.h_m, ALIGN_SECONDS)
 }
 
 fn angle_error_deg(a: f64, b: f64) -> f64 {
@@ -240,7 +228,7 @@ fn cli_generate_and_replay() {
         "--h",
         "10",
         "--align-seconds",
-        "5",
+        "10",
         "--out",
         log_s,
         "--log-every",
@@ -254,19 +242,19 @@ fn cli_generate_and_replay() {
     );
     assert!(stdout.contains("samples 8000: flagged 0"), "{stdout}");
     assert!(
-        stdout.contains("alignment (static) over 2000 samples"),
+        stdout.contains("alignment (static) over 4000 samples"),
         "{stdout}"
     );
 
-    // 8000 samples, 2000 aligned, 6000 steps: the alignment row, 181 periodic rows (5973 steps)
+    // 8000 samples, 4000 aligned, 4000 steps: the alignment row, 121 periodic rows (3993 steps)
     // and the last step.
     let text = std::fs::read_to_string(&log).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some(nav_core::output::CSV_HEADER));
-    assert_eq!(lines.count(), 1 + 181 + 1);
+    assert_eq!(lines.count(), 1 + 121 + 1);
     let rows = parse_log(&text);
-    assert_eq!(rows[0].t_s, 5.0);
-    assert_eq!(rows[1].t_s, 5.0 + 33.0 / 400.0);
+    assert_eq!(rows[0].t_s, 10.0);
+    assert_eq!(rows[1].t_s, 10.0 + 33.0 / 400.0);
     assert_eq!(rows.last().unwrap().t_s, 20.0);
     // The default precision is f32; the roll is the generator's default, 1.5 deg.
     let [roll, pitch, yaw] = rows[0].rpy_deg;
@@ -276,6 +264,71 @@ fn cli_generate_and_replay() {
         "{roll} {pitch}"
     );
     assert!((yaw + 100.0).abs() < b.heading_deg, "{yaw}");
+}
+
+/// The alignment options through the real command line: a lever arm with negative components
+/// as written (known: no lever-arm term in the hand-over position 1-sigma), an unknown one's
+/// prior, both at once refused, and a window shorter than the method's minimum refused with a
+/// message naming it.
+#[test]
+fn cli_takes_negative_lever_arms_and_refuses_short_windows() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("rest.bin");
+    recording_io::write(&rec, &scenario().recording().unwrap()).unwrap();
+    let log = dir.path().join("log.csv");
+    let replay = |extra: &[&str]| {
+        let mut args = vec![
+            "replay",
+            "--imu",
+            rec.to_str().unwrap(),
+            "--lat",
+            "45",
+            "--lon",
+            "7.5",
+            "--h",
+            "150",
+            "--out",
+            log.to_str().unwrap(),
+            "--align-method",
+            "inertial",
+        ];
+        args.extend_from_slice(extra);
+        let out = nav(&args);
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        (out.status.code(), text)
+    };
+    // Hand-over position 1-sigma: sqrt(0.1^2 + 0.5^2 + lever^2) m (survey, waves, lever arm).
+    let (code, text) = replay(&["--align-seconds", "10", "--lever-arm", "-5.9,0.6,-7.5"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(text.contains("position 0.51 0.51 0.51 m"), "{text}");
+    let (code, text) = replay(&["--align-seconds", "10", "--lever-arm-sigma", "2"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(text.contains("position 2.06 2.06 2.06 m"), "{text}");
+    let (code, text) = replay(&[
+        "--align-seconds",
+        "10",
+        "--lever-arm",
+        "-1,0,0",
+        "--lever-arm-sigma",
+        "2",
+    ]);
+    assert_eq!(code, Some(2), "both lever-arm options: {text}");
+    let (code, text) = replay(&["--align-seconds", "10", "--lever-arm", "-1,0"]);
+    assert_eq!(code, Some(2), "{text}");
+    assert!(text.contains("three finite numbers"), "{text}");
+    let (code, text) = replay(&["--align-seconds", "0"]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.contains(
+            "alignment window 0.0025 s is shorter than the inertial method's minimum of 10 s"
+        ),
+        "{text}"
+    );
+    assert!(!text.contains("panicked"), "{text}");
 }
 
 #[test]
@@ -296,7 +349,7 @@ fn cli_reports_errors_without_panicking() {
         "--h",
         "150",
         "--align-seconds",
-        "1",
+        "10",
         "--out",
         log.to_str().unwrap(),
     ]);
@@ -364,13 +417,11 @@ fn every_mechanization_choice_stays_within_the_bounds() {
             VerticalChannel::Hold,
         ),
     ] {
-        let options = ReplayOptions {
-            choices: MechanizationChoices {
-                frame,
-                attitude,
-                vertical,
-            },
-            ..options(&s)
+        let mut options = options(&s);
+        options.run.mechanization = MechanizationChoices {
+            frame,
+            attitude,
+            vertical,
         };
         let (_, log) = replay::<f64>(&path, &options);
         let last = *parse_log(&log).last().unwrap();
@@ -392,5 +443,69 @@ fn every_mechanization_choice_stays_within_the_bounds() {
                 "{what}: {got}"
             );
         }
+    }
+}
+
+/// The calibration reaches the alignment: a simulated recording (`static` scenario, FOG grade)
+/// with known extra sensor errors, aligned with its true calibration, is levelled and
+/// gyrocompassed better than without it (the errors tilt the levelling by ~b_a / g and turn the
+/// heading by the east gyro bias over the horizontal Earth rate), in f32 and f64.
+#[test]
+fn the_true_calibration_improves_the_alignment() {
+    use host_tests::sensor_model::Grade;
+    use host_tests::simulate::{SimOptions, simulate};
+    use host_tests::trajectory::scenarios::{Scenario, Static};
+    let mut opts = SimOptions::new(Scenario::by_name("static").unwrap(), Grade::Fog);
+    opts.seconds = Some(12.0);
+    opts.seed = 5;
+    let sim = simulate(&opts, |_, _| {}).unwrap();
+    let mut rec = sim.recording;
+    let text = "gyro_bias_rad_s = 5e-6 8e-6 2e-6\n\
+                gyro_misalignment = 2e-4 0 0 -1e-4 0 0\n\
+                accel_bias_m_s2 = -0.03 0.05 -0.02\n\
+                accel_scale = 3e-4 0 -2e-4\n";
+    let calibration = nav_core::ImuCalibration::parse(text).unwrap();
+    let comp = calibration.compensation::<f64>().unwrap();
+    let dt = 1.0 / rec.rate_hz;
+    let inject = |v: &mut [f32; 3], t: &nav_core::calibration::TriadCompensation<f64>| {
+        let m =
+            t.k.try_inverse().unwrap() * nav_core::Vector3::from(v.map(f64::from)) + t.bias * dt;
+        *v = [m.x, m.y, m.z].map(|x| x as f32);
+    };
+    for r in &mut rec.records {
+        inject(&mut r.gyro, &comp.gyro);
+        inject(&mut r.accel, &comp.accel);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("biased.bin");
+    recording_io::write(&path, &rec).unwrap();
+    let (roll, pitch, yaw) = nav_core::attitude::euler(&sim.truth[0].q_b_ned);
+    let s = Static::default();
+    let errors = |cal: Option<nav_core::ImuCalibration>, f64_precision: bool| {
+        let mut options = ReplayOptions::new(s.lat_deg, s.lon_deg, s.h_m, 10.0);
+        options.run.calibration = cal.unwrap_or_default();
+        let (fr, _) = if f64_precision {
+            replay::<f64>(&path, &options)
+        } else {
+            replay::<f32>(&path, &options)
+        };
+        let a = fr.report.alignment;
+        let wrap = |d: f64| (d + 540.0).rem_euclid(360.0) - 180.0;
+        let tilt = wrap(a.roll_deg - roll.to_degrees())
+            .abs()
+            .max(wrap(a.pitch_deg - pitch.to_degrees()).abs());
+        (tilt, wrap(a.yaw_deg - yaw.to_degrees()).abs())
+    };
+    for f64_precision in [false, true] {
+        let (tilt, heading) = errors(Some(calibration), f64_precision);
+        let (tilt_raw, heading_raw) = errors(None, f64_precision);
+        println!(
+            "f64 {f64_precision}: with the calibration tilt {tilt:.4} deg, heading {heading:.3} deg; without {tilt_raw:.4} deg, {heading_raw:.3} deg"
+        );
+        assert!(tilt < tilt_raw / 2.0, "tilt {tilt} vs {tilt_raw} deg");
+        assert!(
+            heading < heading_raw / 2.0,
+            "heading {heading} vs {heading_raw} deg"
+        );
     }
 }

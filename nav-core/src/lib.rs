@@ -18,6 +18,7 @@ pub mod calibration;
 pub mod coning;
 pub mod earth;
 pub mod increment;
+pub mod navigator;
 pub mod oscillator;
 pub mod output;
 pub mod poisson;

@@ -17,6 +17,8 @@ pub trait Scalar: RealField + Copy + ToFixed + FromFixed {
     fn c(x: f64) -> Self;
     /// Widens (or keeps) this value as `f64`, exactly.
     fn to_f64(self) -> f64;
+    /// Takes a sensor's `f32` value, exactly (the same bits in `f32`, widened in `f64`).
+    fn of_f32(x: f32) -> Self;
     /// `true` when the value is neither NaN nor infinite.
     fn finite(self) -> bool;
     /// `sin` from the `libm` crate: the same bits on every target (see the module docs).
@@ -61,6 +63,10 @@ impl Scalar for f32 {
         f64::from(self)
     }
     #[inline]
+    fn of_f32(x: f32) -> Self {
+        x
+    }
+    #[inline]
     fn finite(self) -> bool {
         self.is_finite()
     }
@@ -92,6 +98,10 @@ impl Scalar for f64 {
     #[inline]
     fn to_f64(self) -> f64 {
         self
+    }
+    #[inline]
+    fn of_f32(x: f32) -> Self {
+        f64::from(x)
     }
     #[inline]
     fn finite(self) -> bool {

@@ -44,3 +44,61 @@ pub const BMI088: NoiseSpec = NoiseSpec {
     gyro_bias_rad_s: DEG,
     accel_bias_mps2: 20e-3 * G,
 };
+
+/// The simulator's sensor grades (`nav sim --grade`, the host's `sensor_model::Grade`): the
+/// figures an alignment assumes for each, so the firmware can be told a recording's grade
+/// (`--imu-noise GRADE`). White-noise densities, and per axis the largest of the grade's fixed
+/// bias, turn-on 1-sigma and Gauss–Markov 1-sigma; the host's `Grade::noise_spec` derives the
+/// same numbers from its error models (a test compares them).
+pub mod grade {
+    use super::{DEG, G, NoiseSpec};
+
+    /// `fog`: 0.003 deg/s RMS at 400 Hz (1.5e-4 deg/s/sqrt(Hz)), 0.02 m/s^2 RMS at 400 Hz
+    /// (1e-3 m/s^2/sqrt(Hz)), gyro bias 0.2 deg/h, accelerometer bias 0.005 m/s^2.
+    pub const FOG: NoiseSpec = NoiseSpec {
+        gyro_arw_rad_per_sqrt_s: 0.003 * DEG / 20.0,
+        accel_vrw_mps_per_sqrt_s: 0.02 / 20.0,
+        gyro_bias_rad_s: 0.2 * DEG / 3600.0,
+        accel_bias_mps2: 0.005,
+    };
+
+    /// `rlg`: ARW 0.002 deg/sqrt(h), VRW 0.005 m/s/sqrt(h), gyro bias 0.01 deg/h,
+    /// accelerometer bias 0.1 mg.
+    pub const RLG: NoiseSpec = NoiseSpec {
+        gyro_arw_rad_per_sqrt_s: 0.002 * DEG / 60.0,
+        accel_vrw_mps_per_sqrt_s: 0.005 / 60.0,
+        gyro_bias_rad_s: 0.01 * DEG / 3600.0,
+        accel_bias_mps2: 0.1e-3 * G,
+    };
+
+    /// `mems-tactical` (ADIS16505 class): ARW 0.13 deg/sqrt(h), VRW 0.04 m/s/sqrt(h), turn-on
+    /// biases 0.05 deg/s and 1 mg (above the in-run instabilities' 1-sigma).
+    pub const MEMS_TACTICAL: NoiseSpec = NoiseSpec {
+        gyro_arw_rad_per_sqrt_s: 0.13 * DEG / 60.0,
+        accel_vrw_mps_per_sqrt_s: 0.04 / 60.0,
+        gyro_bias_rad_s: 0.05 * DEG,
+        accel_bias_mps2: 1e-3 * G,
+    };
+
+    /// `mems-consumer` (ICM-42688-P class): 2.8 mdps/sqrt(Hz), 70 ug/sqrt(Hz), turn-on biases
+    /// 0.5 deg/s and 20 mg.
+    pub const MEMS_CONSUMER: NoiseSpec = NoiseSpec {
+        gyro_arw_rad_per_sqrt_s: 2.8e-3 * DEG,
+        accel_vrw_mps_per_sqrt_s: 70e-6 * G,
+        gyro_bias_rad_s: 0.5 * DEG,
+        accel_bias_mps2: 20e-3 * G,
+    };
+
+    /// Every grade with a noise model, by its command-line name.
+    pub const ALL: [(&str, NoiseSpec); 4] = [
+        ("fog", FOG),
+        ("rlg", RLG),
+        ("mems-tactical", MEMS_TACTICAL),
+        ("mems-consumer", MEMS_CONSUMER),
+    ];
+
+    /// The grade called `name`, if any.
+    pub fn by_name(name: &str) -> Option<NoiseSpec> {
+        ALL.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
+    }
+}

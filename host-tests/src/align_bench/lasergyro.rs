@@ -103,19 +103,20 @@ pub fn heading_deg(
         Method::Fine => {
             // nav-core's state machine: inertial coarse for a quarter of the window (10-30 s),
             // then the position-aided Kalman filter, assuming laser-gyro noise.
-            use nav_core::alignment::{AlignSettings, Aligner, Progress, machine};
+            use nav_core::alignment::{AlignMethod, AlignSettings, Aligner, LeverArm, Progress};
             let rate_hz = window.len() as f64 / window.iter().map(|i| i.dt).sum::<f64>();
-            let samples = window.len() as u32;
-            let mut a = Aligner::new(AlignSettings {
-                method: nav_core::alignment::AlignMethod::Fine,
-                position: nav_core::Position::from_radians(site.lat_rad, 0.0, site.h_m),
-                samples,
-                coarse_samples: machine::coarse_samples_for(samples, rate_hz),
+            let seconds = window.len() as f64 / rate_hz;
+            let settings = AlignSettings::new(
+                AlignMethod::Fine,
+                nav_core::Position::from_radians(site.lat_rad, 0.0, site.h_m),
+                seconds,
                 rate_hz,
-                noise: crate::pipeline::sensor_noise(&Grade::Rlg.noise_spec()),
-                lever_arm: nav_core::alignment::LeverArm::Known(nav_core::Vector3::zeros()),
-                base: nav_core::alignment::BaseMotion::default(),
-            });
+                crate::pipeline::sensor_noise(&Grade::Rlg.noise_spec()),
+            )
+            .map_err(|e| e.to_string())?
+            .with_lever_arm(LeverArm::Known(nav_core::Vector3::zeros()));
+            debug_assert_eq!(settings.samples as usize, window.len());
+            let mut a = Aligner::new(settings);
             let mut last = Progress::Coarse;
             for inc in window {
                 last = a.add(inc);

@@ -13,6 +13,8 @@
 //!              [--log-every 40] [--precision f32|f64] [--calibration FILE]
 //!              [--device recording|adis16505|icm42688|bmi088] [--frame wander|ned]
 //!              [--attitude rotation-vector|euler|heun|rk4|abm4] [--vertical free|hold]
+//!              [--align-method static|inertial|fine|sway] [--imu-noise GRADE]
+//!              [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S]
 //! nav report   --solution FILE --truth FILE [--at 60,300] [--plots DIR]
 //! nav emulate  --truth FILE --out FILE [--preset none|seed004-rlg] [--errors FILE]
 //!              [--set 'KEY = V1 V2 V3']... [--vertical aided|free] [--errors-out FILE]
@@ -23,12 +25,12 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use host_tests::generate::Stationary;
-use host_tests::pipeline::DEFAULT_LOG_EVERY;
-use host_tests::pipeline::MechanizationChoices;
+use host_tests::pipeline::{DEFAULT_LOG_EVERY, MechanizationChoices, RunConfig, sensor_noise};
 use host_tests::recording_io;
 use host_tests::replay::{FileReport, ImuDevice, ReplayOptions, replay_file};
-use nav_core::alignment::AlignMethod;
-use nav_core::{AttitudeMethod, DcmIntegrator, ImuCalibration, NavFrame, VerticalChannel};
+use nav_core::alignment::{AlignMethod, LeverArm};
+use nav_core::navigator::config;
+use nav_core::{AttitudeMethod, ImuCalibration, NavFrame, VerticalChannel};
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
@@ -203,64 +205,7 @@ enum Command {
     },
     /// Align and navigate over a recording (any format), writing the solution log as CSV.
     #[command(allow_negative_numbers = true)]
-    Replay {
-        /// Input recording (binary, CSV, PSINS or KF-GINS; auto-detected).
-        #[arg(long, value_name = "FILE")]
-        imu: PathBuf,
-        /// Latitude of the site [deg].
-        #[arg(long)]
-        lat: f64,
-        /// Longitude of the site [deg].
-        #[arg(long)]
-        lon: f64,
-        /// Ellipsoidal height of the site [m].
-        #[arg(long)]
-        h: f64,
-        /// Length of the still period at the start used for the alignment [s].
-        #[arg(long)]
-        align_seconds: f64,
-        /// Solution log (CSV).
-        #[arg(long, value_name = "FILE")]
-        out: PathBuf,
-        /// Navigation steps between logged solutions.
-        #[arg(long, default_value_t = DEFAULT_LOG_EVERY, value_parser = clap::value_parser!(u32).range(1..))]
-        log_every: u32,
-        /// Arithmetic precision of the navigation (the firmware uses f32).
-        #[arg(long, value_enum, default_value_t = Precision::F32)]
-        precision: Precision,
-        /// Sensor calibration file (nav-core's text form: biases, scale factors,
-        /// misalignments); identity without it.
-        #[arg(long, value_name = "FILE")]
-        calibration: Option<PathBuf>,
-        /// The sample path: the recording as it is, or a simulated IMU on an SPI bus read by its
-        /// real driver (the firmware's path on the `qemu` board is `adis16505`).
-        #[arg(long, value_enum, default_value_t = ImuDevice::Recording)]
-        device: ImuDevice,
-        /// Navigation frame of the mechanization (outputs are NED either way).
-        #[arg(long, value_enum, default_value_t = Frame::Wander)]
-        frame: Frame,
-        /// Attitude integration: rotation-vector quaternion, or Poisson's DCM equation with an
-        /// integrator.
-        #[arg(long, value_enum, default_value_t = Attitude::RotationVector)]
-        attitude: Attitude,
-        /// Vertical channel: integrated freely, or held at the start height.
-        #[arg(long, value_enum, default_value_t = Vertical::Free)]
-        vertical: Vertical,
-        /// Alignment method: static (analytic, still base), inertial (inertial-frame coarse:
-        /// rocking base, no initial heading), fine (inertial coarse, then seed 003's
-        /// position-aided Kalman filter), sway (inertial coarse, then the swaying-base model).
-        #[arg(long, default_value = "static", value_parser = parse_align_method)]
-        align_method: AlignMethod,
-        /// IMU noise assumed by the alignment, as a simulator grade (fog, rlg, mems-tactical,
-        /// mems-consumer); default: the device's datasheet (the board's ADIS16505 for a plain
-        /// recording).
-        #[arg(long, value_name = "GRADE")]
-        imu_noise: Option<host_tests::sensor_model::Grade>,
-        /// The IMU's lever arm from the base's centre of rotation, body forward,right,down [m]
-        /// (a ship's deck; used by the inertial alignment).
-        #[arg(long, value_name = "X,Y,Z", value_delimiter = ',')]
-        lever_arm: Option<Vec<f64>>,
-    },
+    Replay(ReplayArgs),
     /// Compare a solution log with a truth trajectory: RMS, max and chosen-time errors of
     /// position, velocity and attitude, and optional SVG plots.
     Report {
@@ -272,54 +217,17 @@ enum Command {
         truth: PathBuf,
         /// Times [s] after the start of the truth (its first row) at which to print the errors (nearest row),
         /// comma-separated.
-        #[arg(long, value_name = "S,...", value_delimiter = ',')]
+        #[arg(
+            long,
+            value_name = "S,...",
+            value_delimiter = ',',
+            allow_hyphen_values = true
+        )]
         at: Vec<f64>,
         /// Directory for the SVG plots (created if missing).
         #[arg(long, value_name = "DIR")]
         plots: Option<PathBuf>,
     },
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum Frame {
-    Ned,
-    Wander,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum Attitude {
-    RotationVector,
-    Euler,
-    Heun,
-    Rk4,
-    Abm4,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum Vertical {
-    Free,
-    Hold,
-}
-
-/// The mechanization choices of the command line.
-fn choices(frame: Frame, attitude: Attitude, vertical: Vertical) -> MechanizationChoices {
-    MechanizationChoices {
-        frame: match frame {
-            Frame::Ned => NavFrame::Ned,
-            Frame::Wander => NavFrame::WanderAzimuth,
-        },
-        attitude: match attitude {
-            Attitude::RotationVector => AttitudeMethod::RotationVector,
-            Attitude::Euler => AttitudeMethod::Poisson(DcmIntegrator::Euler),
-            Attitude::Heun => AttitudeMethod::Poisson(DcmIntegrator::Heun),
-            Attitude::Rk4 => AttitudeMethod::Poisson(DcmIntegrator::Rk4),
-            Attitude::Abm4 => AttitudeMethod::Poisson(DcmIntegrator::Abm4),
-        },
-        vertical: match vertical {
-            Vertical::Free => VerticalChannel::Free,
-            Vertical::Hold => VerticalChannel::Hold,
-        },
-    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -348,6 +256,162 @@ enum SimFormat {
     Csv,
     /// Both.
     Both,
+}
+
+/// `nav replay`'s arguments: the run configuration ([`RunConfig`], shared with the firmware's
+/// arguments) and the files.
+#[derive(clap::Args)]
+struct ReplayArgs {
+    /// Input recording (binary, CSV, PSINS or KF-GINS; auto-detected).
+    #[arg(long, value_name = "FILE")]
+    imu: PathBuf,
+    /// Latitude of the site [deg].
+    #[arg(long)]
+    lat: f64,
+    /// Longitude of the site [deg].
+    #[arg(long)]
+    lon: f64,
+    /// Ellipsoidal height of the site [m].
+    #[arg(long)]
+    h: f64,
+    /// Length of the alignment window at the start [s] (at least the method's minimum: 10 s
+    /// for static and inertial, 20 s for fine, 40 s for sway).
+    #[arg(long)]
+    align_seconds: f64,
+    /// Solution log (CSV).
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+    /// Navigation steps between logged solutions.
+    #[arg(long, default_value_t = DEFAULT_LOG_EVERY, value_parser = clap::value_parser!(u32).range(1..))]
+    log_every: u32,
+    /// Arithmetic precision of the navigation (the firmware uses f32).
+    #[arg(long, value_enum, default_value_t = Precision::F32)]
+    precision: Precision,
+    /// Sensor calibration file (nav-core's text form: biases, scale factors,
+    /// misalignments), applied before the alignment and the navigation; identity without it.
+    #[arg(long, value_name = "FILE")]
+    calibration: Option<PathBuf>,
+    /// The sample path: the recording as it is, or a simulated IMU on an SPI bus read by its
+    /// real driver (the firmware's path on the `qemu` board is `adis16505`).
+    #[arg(long, value_enum, default_value_t = ImuDevice::Recording)]
+    device: ImuDevice,
+    /// Navigation frame of the mechanization, wander or ned (outputs are NED either way).
+    #[arg(long, default_value = "wander", value_parser = named(&config::FRAMES))]
+    frame: NavFrame,
+    /// Attitude integration: rotation-vector (quaternion), or Poisson's DCM equation with
+    /// euler, heun, rk4 or abm4.
+    #[arg(long, default_value = "rotation-vector", value_parser = named(&config::ATTITUDES))]
+    attitude: AttitudeMethod,
+    /// Vertical channel: free (integrated) or hold (held at the start height).
+    #[arg(long, default_value = "free", value_parser = named(&config::VERTICALS))]
+    vertical: VerticalChannel,
+    /// Alignment method: static (analytic, still base), inertial (inertial-frame coarse:
+    /// rocking base, no initial heading), fine (inertial coarse, then seed 003's
+    /// position-aided Kalman filter), sway (inertial coarse, then the swaying-base model).
+    #[arg(long, default_value = "static", value_parser = parse_align_method)]
+    align_method: AlignMethod,
+    /// IMU noise assumed by the alignment, as a simulator grade (fog, rlg, mems-tactical,
+    /// mems-consumer); default: the device's datasheet (the board's ADIS16505 for a plain
+    /// recording).
+    #[arg(long, value_name = "GRADE")]
+    imu_noise: Option<host_tests::sensor_model::Grade>,
+    /// Scale of the assumed noise's bias 1-sigmas (0: biases compensated).
+    #[arg(long, value_name = "K", default_value_t = 1.0)]
+    bias_prior: f64,
+    /// The IMU's lever arm from the base's centre of rotation, body forward,right,down [m]
+    /// (known: a ship's deck), e.g. -5.9,0.6,-7.5.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse_vector3)]
+    lever_arm: Option<[f64; 3]>,
+    /// Without --lever-arm: the unknown lever arm's prior, 1-sigma per body axis [m].
+    #[arg(long, value_name = "S", conflicts_with = "lever_arm",
+          default_value_t = nav_core::alignment::machine::DEFAULT_LEVER_ARM_SIGMA_M)]
+    lever_arm_sigma: f64,
+}
+
+impl ReplayArgs {
+    /// The run configuration these arguments describe (checked when the replay starts).
+    fn options(&self) -> Result<ReplayOptions> {
+        let calibration = match &self.calibration {
+            None => ImuCalibration::default(),
+            Some(path) => {
+                let text = std::fs::read_to_string(path)
+                    .with_context(|| format!("reading {}", path.display()))?;
+                ImuCalibration::parse(&text).with_context(|| format!("in {}", path.display()))?
+            }
+        };
+        let noise = self
+            .imu_noise
+            .map_or(self.device.noise(), |g| g.noise_spec());
+        let run = RunConfig {
+            align_method: self.align_method,
+            bias_prior: self.bias_prior,
+            lever_arm: match self.lever_arm {
+                Some(r) => LeverArm::Known(r.into()),
+                None => LeverArm::Unknown {
+                    sigma_m: self.lever_arm_sigma,
+                },
+            },
+            log_every: self.log_every,
+            calibration,
+            mechanization: MechanizationChoices {
+                frame: self.frame,
+                attitude: self.attitude,
+                vertical: self.vertical,
+            },
+            ..RunConfig::new(
+                self.lat,
+                self.lon,
+                self.h,
+                self.align_seconds,
+                sensor_noise(&noise),
+            )
+        };
+        Ok(ReplayOptions {
+            run,
+            device: self.device,
+        })
+    }
+}
+
+/// `nav replay`.
+fn replay(a: ReplayArgs) -> Result<()> {
+    let options = a.options()?;
+    let (imu, out) = (&a.imu, &a.out);
+    let file = File::create(out).with_context(|| format!("creating {}", out.display()))?;
+    let writer = BufWriter::new(file);
+    let started = std::time::Instant::now();
+    let report = match a.precision {
+        Precision::F32 => replay_file::<f32, _>(imu, &options, writer),
+        Precision::F64 => replay_file::<f64, _>(imu, &options, writer),
+    }
+    .with_context(|| format!("replay of {} into {}", imu.display(), out.display()))?;
+    let seconds = started.elapsed().as_secs_f64();
+    print_summary(imu, out, a.precision, &report);
+    // Benchmark figure: whole pipeline (read, check, navigate, log), one thread.
+    println!(
+        "speed: {:.0} samples/s ({:.3} s wall clock, file reading and logging included)",
+        f64::from(report.report.samples) / seconds.max(1e-9),
+        seconds
+    );
+    Ok(())
+}
+
+/// A clap value parser of a nav-core name table.
+fn named<V: Copy + Send + Sync + 'static>(
+    table: &'static [(&'static str, V)],
+) -> impl Fn(&str) -> Result<V, String> + Clone + Send + Sync + 'static {
+    move |s| {
+        config::by_name(table, s).ok_or_else(|| {
+            let names: Vec<&str> = table.iter().map(|(n, _)| *n).collect();
+            format!("expected one of {}", names.join(", "))
+        })
+    }
+}
+
+/// `X,Y,Z` values: three finite numbers (nav-core's syntax, as the firmware's).
+fn parse_vector3(s: &str) -> Result<[f64; 3], String> {
+    config::parse_vector3(s)
+        .ok_or_else(|| format!("expected X,Y,Z (three finite numbers), not {s:?}"))
 }
 
 /// `nav sim`'s arguments.
@@ -697,70 +761,7 @@ fn run(cli: Cli) -> Result<()> {
             print!("{text}");
             Ok(())
         }
-        Command::Replay {
-            imu,
-            lat,
-            lon,
-            h,
-            align_seconds,
-            out,
-            log_every,
-            precision,
-            calibration,
-            device,
-            frame,
-            attitude,
-            vertical,
-            align_method,
-            imu_noise,
-            lever_arm,
-        } => {
-            let calibration = match calibration {
-                None => ImuCalibration::default(),
-                Some(path) => {
-                    let text = std::fs::read_to_string(&path)
-                        .with_context(|| format!("reading {}", path.display()))?;
-                    ImuCalibration::parse(&text)
-                        .with_context(|| format!("in {}", path.display()))?
-                }
-            };
-            let options = ReplayOptions {
-                lat_deg: lat,
-                lon_deg: lon,
-                h_m: h,
-                align_seconds,
-                log_every,
-                calibration,
-                device,
-                choices: choices(frame, attitude, vertical),
-                align_method,
-                noise: imu_noise.map(|g| g.noise_spec()),
-                lever_arm_m: match lever_arm.as_deref() {
-                    None => None,
-                    Some(&[x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) => Some([x, y, z]),
-                    Some(v) => {
-                        anyhow::bail!("--lever-arm needs three finite numbers X,Y,Z, not {v:?}")
-                    }
-                },
-            };
-            let file = File::create(&out).with_context(|| format!("creating {}", out.display()))?;
-            let writer = BufWriter::new(file);
-            let started = std::time::Instant::now();
-            let report = match precision {
-                Precision::F32 => replay_file::<f32, _>(&imu, &options, writer),
-                Precision::F64 => replay_file::<f64, _>(&imu, &options, writer),
-            }
-            .with_context(|| format!("replay of {} into {}", imu.display(), out.display()))?;
-            let seconds = started.elapsed().as_secs_f64();
-            print_summary(&imu, &out, precision, &report);
-            // Benchmark figure: whole pipeline (read, check, navigate, log), one thread.
-            println!(
-                "speed: {:.0} samples/s ({:.3} s wall clock, file reading and logging included)",
-                f64::from(report.report.samples) / seconds.max(1e-9),
-                seconds
-            );
-            Ok(())
-        }
+        Command::Replay(args) => replay(args),
     }
 }
 
@@ -795,6 +796,11 @@ fn print_summary(imu: &Path, out: &Path, precision: Precision, fr: &FileReport) 
         a.sigma_deg[0],
         a.sigma_deg[1],
         a.sigma_deg[2]
+    );
+    let (v, p) = (a.velocity_sigma_m_s, a.position_sigma_m);
+    println!(
+        "  hand-over 1-sigma: velocity {:.2} {:.2} {:.2} m/s, position {:.2} {:.2} {:.2} m (N E D)",
+        v[0], v[1], v[2], p[0], p[1], p[2]
     );
     let s = &r.final_solution;
     println!(

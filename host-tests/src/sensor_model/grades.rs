@@ -251,6 +251,40 @@ mod tests {
         assert!("FOG".parse::<Grade>().is_err());
     }
 
+    /// The firmware's no_std table of the grades' alignment figures (`--imu-noise`) says what
+    /// the error models say.
+    #[test]
+    fn noise_specs_agree_with_the_no_std_table() {
+        use hal_adapters::drivers::noise::grade;
+        for g in Grade::ALL {
+            let Some(table) = grade::by_name(g.name()) else {
+                assert_eq!(g, Grade::Ideal, "{g} missing from the table");
+                continue;
+            };
+            let host = g.noise_spec();
+            for (what, a, b) in [
+                (
+                    "ARW",
+                    host.gyro_arw_rad_per_sqrt_s,
+                    table.gyro_arw_rad_per_sqrt_s,
+                ),
+                (
+                    "VRW",
+                    host.accel_vrw_mps_per_sqrt_s,
+                    table.accel_vrw_mps_per_sqrt_s,
+                ),
+                ("gyro bias", host.gyro_bias_rad_s, table.gyro_bias_rad_s),
+                ("accel bias", host.accel_bias_mps2, table.accel_bias_mps2),
+            ] {
+                assert!(
+                    a > 0.0 && (a / b - 1.0).abs() < 1e-12,
+                    "{g} {what}: {a} vs {b}"
+                );
+            }
+        }
+        assert_eq!(grade::ALL.len(), Grade::ALL.len() - 1);
+    }
+
     #[test]
     fn presets_carry_the_seed_and_datasheet_values() {
         let fog = Grade::Fog.model();

@@ -1,0 +1,103 @@
+//! The firmware's defmt summaries of the run: its configuration, the alignment, the driver's
+//! health and the final solution.
+
+use hal_adapters::drivers::Health;
+use nav_core::alignment::{AlignOutcome, LeverArm};
+use nav_core::navigator::RunConfig;
+use nav_core::output::Solution;
+
+/// Logs the run configuration: the site, the window, the noise and lever arm assumed.
+pub fn config(run: &RunConfig) {
+    defmt::info!(
+        "config: lat {=f64} deg, lon {=f64} deg, h {=f64} m, align {=f64} s ({=str}), log every {=u32}",
+        run.lat_deg,
+        run.lon_deg,
+        run.h_m,
+        run.align_seconds,
+        run.align_method.name(),
+        run.log_every
+    );
+    let n = run.align_noise();
+    defmt::info!(
+        "alignment assumes ARW {=f64} rad/sqrt(s), VRW {=f64} m/s/sqrt(s), bias 1-sigma {=f64} rad/s, {=f64} m/s^2 (bias prior {=f64})",
+        n.arw_rad_per_sqrt_s,
+        n.vrw_mps_per_sqrt_s,
+        n.gyro_bias_rad_s,
+        n.accel_bias_mps2,
+        run.bias_prior
+    );
+    match run.lever_arm {
+        LeverArm::Known(r) => {
+            defmt::info!("lever arm known: {=f64} {=f64} {=f64} m", r.x, r.y, r.z)
+        }
+        LeverArm::Unknown { sigma_m } => {
+            defmt::info!("lever arm unknown: 1-sigma {=f64} m per axis", sigma_m)
+        }
+    }
+}
+
+/// Logs the alignment's result: stages, attitude, attitude and hand-over 1-sigma.
+pub fn aligned(r: &AlignOutcome<f32>) {
+    let (roll, pitch, yaw) = nav_core::attitude::euler(&r.estimate.q_b_n);
+    let sigma = r.estimate.sigma_rad.map(|x| x.to_degrees());
+    let (v, p) = (r.velocity_sigma_m_s, r.position_sigma_m);
+    defmt::info!(
+        "alignment stage ALIGNED after {=u32} samples (coarse {=f64} s, fine {=f64} s): roll {=f32} deg, pitch {=f32} deg, yaw {=f32} deg; 1-sigma {=f32} {=f32} {=f32} deg, v {=f32} {=f32} {=f32} m/s, p {=f32} {=f32} {=f32} m",
+        r.times.coarse_samples + r.times.fine_samples,
+        r.times.coarse_s,
+        r.times.fine_s,
+        roll.to_degrees(),
+        pitch.to_degrees(),
+        yaw.to_degrees(),
+        sigma.x,
+        sigma.y,
+        sigma.z,
+        v.x,
+        v.y,
+        v.z,
+        p.x,
+        p.y,
+        p.z
+    );
+}
+
+/// Logs the IMU driver's counters.
+pub fn health(h: &Health) {
+    defmt::info!(
+        "IMU driver: samples {=u32}, checksum errors {=u32}, stale {=u32}, device missed {=u32}, bus errors {=u32}, faults {=u32}, FIFO overflows {=u32}, invalid {=u32}, gyro clips {}, accel clips {}",
+        h.samples,
+        h.checksum_errors,
+        h.stale,
+        h.missed,
+        h.bus_errors,
+        h.device_faults,
+        h.fifo_overflows,
+        h.invalid,
+        h.gyro_clips,
+        h.accel_clips
+    );
+}
+
+/// Logs the alignment's attitude and the last solution.
+pub fn end(aligned: &AlignOutcome<f32>, last: &Solution) {
+    let (roll, pitch, yaw) = nav_core::attitude::euler(&aligned.estimate.q_b_n);
+    defmt::info!(
+        "alignment: roll {=f32} deg, pitch {=f32} deg, yaw {=f32} deg",
+        roll.to_degrees(),
+        pitch.to_degrees(),
+        yaw.to_degrees()
+    );
+    defmt::info!(
+        "solution at t={=u64} us: lat {=i64} ndeg, lon {=i64} ndeg, h {=f64} m, v_n {=f64} v_e {=f64} v_d {=f64} m/s, roll {=f64} pitch {=f64} yaw {=f64} deg",
+        last.t_us,
+        last.lat_ndeg,
+        last.lon_ndeg,
+        last.h_m,
+        last.v_eb_n[0],
+        last.v_eb_n[1],
+        last.v_eb_n[2],
+        last.roll_deg,
+        last.pitch_deg,
+        last.yaw_deg
+    );
+}

@@ -1,0 +1,407 @@
+//! The run configuration: everything a run of the navigator is told, as plain data.
+//!
+//! The host's `nav replay` (clap) and the firmware's argument parser both fill one
+//! [`RunConfig`], and [`RunConfig::validate`] and [`Setup::new`](super::Setup::new) check it the
+//! same way for both. The options' command-line form (names and value syntax) is here too
+//! ([`RunConfig::set`], [`parse_vector3`]), so the two parsers accept the same words.
+
+use crate::alignment::machine::DEFAULT_LEVER_ARM_SIGMA_M;
+use crate::alignment::{AlignMethod, BaseMotion, LeverArm, SensorNoise, SettingsError};
+use crate::calibration::{CalibrationError, ImuCalibration};
+use crate::poisson::DcmIntegrator;
+use crate::strapdown::{AttitudeMethod, MechanizationConfig, NavFrame, VerticalChannel};
+use core::fmt;
+
+/// Default number of navigation steps between logged solutions (10 Hz at 400 Hz).
+pub const DEFAULT_LOG_EVERY: u32 = 40;
+
+/// The selectable parts of the mechanization (nav-core's defaults: wander azimuth, rotation
+/// vector, free vertical channel).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MechanizationChoices {
+    /// Navigation frame.
+    pub frame: NavFrame,
+    /// Attitude integration.
+    pub attitude: AttitudeMethod,
+    /// Vertical channel.
+    pub vertical: VerticalChannel,
+}
+
+impl Default for MechanizationChoices {
+    fn default() -> Self {
+        let d = MechanizationConfig::<f64>::default();
+        Self {
+            frame: d.frame,
+            attitude: d.attitude,
+            vertical: d.vertical,
+        }
+    }
+}
+
+/// Names of the navigation frames on command lines (`--frame`).
+pub const FRAMES: [(&str, NavFrame); 2] =
+    [("wander", NavFrame::WanderAzimuth), ("ned", NavFrame::Ned)];
+
+/// Names of the attitude integrators on command lines (`--attitude`).
+pub const ATTITUDES: [(&str, AttitudeMethod); 5] = [
+    ("rotation-vector", AttitudeMethod::RotationVector),
+    ("euler", AttitudeMethod::Poisson(DcmIntegrator::Euler)),
+    ("heun", AttitudeMethod::Poisson(DcmIntegrator::Heun)),
+    ("rk4", AttitudeMethod::Poisson(DcmIntegrator::Rk4)),
+    ("abm4", AttitudeMethod::Poisson(DcmIntegrator::Abm4)),
+];
+
+/// Names of the vertical-channel treatments on command lines (`--vertical`).
+pub const VERTICALS: [(&str, VerticalChannel); 2] = [
+    ("free", VerticalChannel::Free),
+    ("hold", VerticalChannel::Hold),
+];
+
+/// The value called `name` in a name table.
+pub fn by_name<V: Copy>(table: &[(&str, V)], name: &str) -> Option<V> {
+    table.iter().find(|(n, _)| *n == name).map(|(_, v)| *v)
+}
+
+/// What a run is told: the site, the alignment, the IMU's noise, the calibration, the
+/// mechanization and the logging cadence. Plain data; [`Self::validate`] checks it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunConfig {
+    /// Latitude of the site (the base's centre of rotation) [deg].
+    pub lat_deg: f64,
+    /// Longitude of the site [deg].
+    pub lon_deg: f64,
+    /// Ellipsoidal height of the site [m].
+    pub h_m: f64,
+    /// Alignment method.
+    pub align_method: AlignMethod,
+    /// Length of the alignment window at the start of the data [s].
+    pub align_seconds: f64,
+    /// The IMU's noise the alignment assumes (white-noise densities and bias 1-sigmas), before
+    /// [`Self::bias_prior`] scales its biases.
+    pub noise: SensorNoise<f64>,
+    /// Scale of the noise's bias 1-sigmas [-] (1: as given; 0: biases compensated).
+    pub bias_prior: f64,
+    /// Where the IMU sits relative to the site: known (body FRD [m]) or an unknown prior.
+    pub lever_arm: LeverArm<f64>,
+    /// What the base itself does (position and translation 1-sigma [m]).
+    pub base: BaseMotion<f64>,
+    /// Navigation steps between logged solutions (>= 1).
+    pub log_every: u32,
+    /// Sensor calibration, applied to every increment before alignment and navigation.
+    pub calibration: ImuCalibration,
+    /// Frame, attitude integrator and vertical channel of the mechanization.
+    pub mechanization: MechanizationChoices,
+}
+
+impl RunConfig {
+    /// A static alignment of `align_seconds` [s] at the site (`lat_deg`, `lon_deg` [deg],
+    /// `h_m` [m]) assuming `noise`, and the defaults for the rest: bias prior 1, an unknown
+    /// lever arm of [`DEFAULT_LEVER_ARM_SIGMA_M`], the default base motion, a row every
+    /// [`DEFAULT_LOG_EVERY`] steps, no calibration, the default mechanization.
+    pub fn new(
+        lat_deg: f64,
+        lon_deg: f64,
+        h_m: f64,
+        align_seconds: f64,
+        noise: SensorNoise<f64>,
+    ) -> Self {
+        Self {
+            lat_deg,
+            lon_deg,
+            h_m,
+            align_method: AlignMethod::default(),
+            align_seconds,
+            noise,
+            bias_prior: 1.0,
+            lever_arm: LeverArm::Unknown {
+                sigma_m: DEFAULT_LEVER_ARM_SIGMA_M,
+            },
+            base: BaseMotion::default(),
+            log_every: DEFAULT_LOG_EVERY,
+            calibration: ImuCalibration::default(),
+            mechanization: MechanizationChoices::default(),
+        }
+    }
+
+    /// Checks what can be checked without the data's rate: the site, the cadence, the bias
+    /// prior and the calibration ([`Setup::new`](super::Setup::new) then checks the alignment
+    /// window and values against the rate).
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        if !(-90.0..=90.0).contains(&self.lat_deg) {
+            return Err(ConfigError::Latitude(self.lat_deg));
+        }
+        if !self.lon_deg.is_finite() {
+            return Err(ConfigError::NotFinite("the longitude"));
+        }
+        if !self.h_m.is_finite() {
+            return Err(ConfigError::NotFinite("the height"));
+        }
+        if !self.align_seconds.is_finite() {
+            return Err(ConfigError::NotFinite("the alignment time"));
+        }
+        if self.log_every == 0 {
+            return Err(ConfigError::LogEvery);
+        }
+        if !(self.bias_prior.is_finite() && self.bias_prior >= 0.0) {
+            return Err(ConfigError::BiasPrior(self.bias_prior));
+        }
+        self.calibration
+            .compensation::<f64>()
+            .map_err(ConfigError::Calibration)?;
+        Ok(())
+    }
+
+    /// The noise the alignment assumes: [`Self::noise`] with its biases scaled by
+    /// [`Self::bias_prior`].
+    pub fn align_noise(&self) -> SensorNoise<f64> {
+        SensorNoise {
+            gyro_bias_rad_s: self.noise.gyro_bias_rad_s * self.bias_prior,
+            accel_bias_mps2: self.noise.accel_bias_mps2 * self.bias_prior,
+            ..self.noise
+        }
+    }
+
+    /// Sets the option `--name` from its command-line `value`: `align-method NAME`,
+    /// `bias-prior K`, `lever-arm X,Y,Z` (known, body FRD [m]), `lever-arm-sigma S` (unknown,
+    /// [m] per axis), `log-every N`, `frame NAME`, `attitude NAME`, `vertical NAME`. The
+    /// values are checked by [`Self::validate`] and [`Setup::new`](super::Setup::new), not
+    /// here, beyond their syntax.
+    pub fn set(&mut self, name: &str, value: &str) -> Result<(), OptionError> {
+        let bad = |option: &'static str, expected: &'static str| OptionError::Invalid {
+            option,
+            expected,
+        };
+        let number = |option, v: &str| {
+            v.parse::<f64>()
+                .map_err(|_| bad(option, "a number"))
+                .and_then(|x| {
+                    if x.is_finite() {
+                        Ok(x)
+                    } else {
+                        Err(bad(option, "a finite number"))
+                    }
+                })
+        };
+        match name {
+            "align-method" => {
+                self.align_method = AlignMethod::from_name(value)
+                    .ok_or(bad("align-method", "static, inertial, fine or sway"))?;
+            }
+            "bias-prior" => self.bias_prior = number("bias-prior", value)?,
+            "lever-arm" => {
+                let r = parse_vector3(value).ok_or(bad("lever-arm", "X,Y,Z (three numbers)"))?;
+                self.lever_arm = LeverArm::Known(r.into());
+            }
+            "lever-arm-sigma" => {
+                self.lever_arm = LeverArm::Unknown {
+                    sigma_m: number("lever-arm-sigma", value)?,
+                };
+            }
+            "log-every" => {
+                self.log_every = value
+                    .parse::<u32>()
+                    .map_err(|_| bad("log-every", "a whole number"))?;
+            }
+            "frame" => {
+                self.mechanization.frame =
+                    by_name(&FRAMES, value).ok_or(bad("frame", "wander or ned"))?;
+            }
+            "attitude" => {
+                self.mechanization.attitude = by_name(&ATTITUDES, value)
+                    .ok_or(bad("attitude", "rotation-vector, euler, heun, rk4 or abm4"))?;
+            }
+            "vertical" => {
+                self.mechanization.vertical =
+                    by_name(&VERTICALS, value).ok_or(bad("vertical", "free or hold"))?;
+            }
+            _ => return Err(OptionError::Unknown),
+        }
+        Ok(())
+    }
+}
+
+/// Parses `X,Y,Z`: three finite numbers separated by commas (spaces allowed around them),
+/// negative ones as written (`-5.9,0.6,-7.5`).
+pub fn parse_vector3(text: &str) -> Option<[f64; 3]> {
+    let mut out = [0.0; 3];
+    let mut parts = text.split(',');
+    for v in &mut out {
+        *v = parts.next()?.trim().parse::<f64>().ok()?;
+        if !v.is_finite() {
+            return None;
+        }
+    }
+    parts.next().is_none().then_some(out)
+}
+
+/// Why an option's words were refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OptionError {
+    /// Not an option of the run configuration.
+    Unknown,
+    /// The value does not parse.
+    Invalid {
+        /// The option's name (without `--`).
+        option: &'static str,
+        /// What it takes.
+        expected: &'static str,
+    },
+}
+
+impl fmt::Display for OptionError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Unknown => f.write_str("unknown option"),
+            Self::Invalid { option, expected } => write!(f, "--{option} takes {expected}"),
+        }
+    }
+}
+
+impl core::error::Error for OptionError {}
+
+/// Why a run configuration was refused (before any sample).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ConfigError {
+    /// The latitude is not within [-90, 90] deg.
+    Latitude(f64),
+    /// A value that must be finite is not (what).
+    NotFinite(&'static str),
+    /// `log_every` is 0.
+    LogEvery,
+    /// The bias-prior scale is negative or not finite.
+    BiasPrior(f64),
+    /// The calibration cannot be inverted.
+    Calibration(CalibrationError),
+    /// The alignment settings were refused (window shorter than the method's minimum, rate,
+    /// site near a pole, noise or lever arm values).
+    Alignment(SettingsError),
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Latitude(lat) => write!(f, "latitude {lat} deg is not within [-90, 90]"),
+            Self::NotFinite(what) => write!(f, "{what} is not a finite number"),
+            Self::LogEvery => f.write_str("log_every must be at least 1"),
+            Self::BiasPrior(k) => {
+                write!(f, "bias prior scale {k} must be finite and not negative")
+            }
+            Self::Calibration(e) => write!(f, "{e}"),
+            Self::Alignment(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl core::error::Error for ConfigError {}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::format;
+    use std::string::ToString;
+
+    fn config() -> RunConfig {
+        RunConfig::new(45.0, 7.5, 150.0, 10.0, SensorNoise::seed003())
+    }
+
+    #[test]
+    fn vectors_parse_with_negative_components_and_refuse_garbage() {
+        assert_eq!(parse_vector3("-5.9,0.6,-7.5"), Some([-5.9, 0.6, -7.5]));
+        assert_eq!(parse_vector3(" 1, 2 ,3e1"), Some([1.0, 2.0, 30.0]));
+        for bad in ["", "1,2", "1,2,3,4", "1,,3", "1,2,x", "1,2,nan", "1,inf,2"] {
+            assert_eq!(parse_vector3(bad), None, "{bad}");
+        }
+    }
+
+    #[test]
+    fn options_set_the_same_fields_as_their_names_say() {
+        let mut c = config();
+        c.set("align-method", "fine").unwrap();
+        c.set("bias-prior", "0").unwrap();
+        c.set("lever-arm", "-5.9,0.6,-7.5").unwrap();
+        c.set("log-every", "8").unwrap();
+        c.set("frame", "ned").unwrap();
+        c.set("attitude", "rk4").unwrap();
+        c.set("vertical", "hold").unwrap();
+        assert_eq!(c.align_method, AlignMethod::Fine);
+        assert_eq!(c.bias_prior, 0.0);
+        assert_eq!(c.lever_arm.known().map(|r| r.x), Some(-5.9));
+        assert_eq!(c.log_every, 8);
+        assert_eq!(
+            c.mechanization,
+            MechanizationChoices {
+                frame: NavFrame::Ned,
+                attitude: AttitudeMethod::Poisson(DcmIntegrator::Rk4),
+                vertical: VerticalChannel::Hold,
+            }
+        );
+        c.set("lever-arm-sigma", "2.5").unwrap();
+        assert_eq!(c.lever_arm, LeverArm::Unknown { sigma_m: 2.5 });
+        // The bias prior scales the biases only.
+        c.set("bias-prior", "2").unwrap();
+        let n = c.align_noise();
+        assert_eq!(n.gyro_bias_rad_s, 2.0 * c.noise.gyro_bias_rad_s);
+        assert_eq!(n.arw_rad_per_sqrt_s, c.noise.arw_rad_per_sqrt_s);
+
+        assert_eq!(c.set("magic", "1"), Err(OptionError::Unknown));
+        for (name, value) in [
+            ("align-method", "magic"),
+            ("bias-prior", "x"),
+            ("bias-prior", "inf"),
+            ("lever-arm", "1,2"),
+            ("lever-arm-sigma", ""),
+            ("log-every", "-1"),
+            ("frame", "enu"),
+            ("attitude", "rk5"),
+            ("vertical", "aided"),
+        ] {
+            let e = c.set(name, value).unwrap_err();
+            assert!(
+                e.to_string().starts_with(&format!("--{name} takes ")),
+                "{e}"
+            );
+        }
+    }
+
+    #[test]
+    fn validation_names_what_is_wrong() {
+        assert_eq!(config().validate(), Ok(()));
+        let cases = [
+            (
+                RunConfig {
+                    lat_deg: 95.0,
+                    ..config()
+                },
+                "latitude 95 deg is not within [-90, 90]",
+            ),
+            (
+                RunConfig {
+                    h_m: f64::NAN,
+                    ..config()
+                },
+                "the height is not a finite number",
+            ),
+            (
+                RunConfig {
+                    log_every: 0,
+                    ..config()
+                },
+                "log_every must be at least 1",
+            ),
+            (
+                RunConfig {
+                    bias_prior: -1.0,
+                    ..config()
+                },
+                "bias prior scale -1 must be finite and not negative",
+            ),
+        ];
+        for (c, msg) in cases {
+            assert_eq!(c.validate().unwrap_err().to_string(), msg);
+        }
+        let mut c = config();
+        c.calibration.accel.scale = [-1.0, 0.0, 0.0];
+        assert!(matches!(c.validate(), Err(ConfigError::Calibration(_))));
+    }
+}

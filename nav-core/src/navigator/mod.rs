@@ -1,0 +1,51 @@
+//! The navigator: the one implementation of a run's rules, shared by the firmware's RTIC tasks
+//! and the host harness's replay pipeline.
+//!
+//! It is split where the firmware splits its priorities:
+//! - the FOREGROUND ([`Navigator`], the firmware's `navigate` task) takes every sample: the
+//!   sample gate, the calibration, the counters, the strapdown mechanization, the logging
+//!   cadence and the align -> navigate hand-over;
+//! - the BACKGROUND ([`Background`], the firmware's low-priority `align` task) does the slow
+//!   work: the alignment ([`Aligner`](crate::alignment::Aligner)) today, a navigation filter
+//!   later. They talk by messages only: the foreground returns [`ToBackground`] messages to
+//!   forward, the background answers with [`FromBackground`] messages, which the foreground
+//!   takes in [`Navigator::on_background`].
+//!
+//! The firmware carries the messages over `rtic_sync` channels; the harness hands them over in
+//! line ([`Navigator::push_inline`]), in the same order, so both reach bit-identical results.
+//!
+//! The rules (every one is part of the contract between firmware and harness):
+//! - every sample counts in `samples`; a sample that is not usable (its source's flags) counts
+//!   in `flagged` and is skipped; an unusable sample or one after a gap restarts the
+//!   strapdown's two-sample coning/sculling history;
+//! - the increments are taken from `f32` exactly ([`Scalar::of_f32`](crate::Scalar::of_f32))
+//!   with the sample's measured interval, then the calibration ([`ImuCompensation`]) is applied
+//!   ONCE, before both the alignment and the mechanization (the strapdown itself gets an
+//!   identity compensation);
+//! - an increment failing [`ImuIncrement::check`] against the default [`InputLimits`] counts
+//!   in `rejected` (navigating, it also restarts the two-sample history);
+//! - aligning: the accepted increments go to the background; after the `n_align`-th (the
+//!   alignment's sample count, [`samples_for`](crate::alignment::samples_for)) the foreground
+//!   waits for the background's answer: aligned, navigation starts from the alignment's state,
+//!   and that state is logged at the time of the last alignment sample; failed, the run ends;
+//! - navigating: every `log_every`-th navigation step is logged; at the end, the last step is
+//!   logged unless it already was.
+//!
+//! The run's settings are one plain [`RunConfig`] (the CLI's and the firmware's arguments),
+//! checked and converted for the data's rate into a [`Setup`] from which both halves are built.
+//!
+//! [`ImuCompensation`]: crate::calibration::ImuCompensation
+//! [`ImuIncrement::check`]: crate::increment::ImuIncrement::check
+//! [`InputLimits`]: crate::increment::InputLimits
+
+mod background;
+pub mod config;
+mod foreground;
+mod setup;
+#[cfg(test)]
+mod tests;
+
+pub use background::{Background, FromBackground, ToBackground};
+pub use config::{ConfigError, MechanizationChoices, OptionError, RunConfig};
+pub use foreground::{Counters, ImuInput, NavError, Navigator, Step, Summary};
+pub use setup::Setup;
