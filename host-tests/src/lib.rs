@@ -41,6 +41,7 @@ pub mod replay;
 pub mod report;
 pub mod sensor_model;
 pub mod simulate;
+pub mod simulate_family;
 pub mod text_error;
 pub mod trajectory;
 pub mod truth;

@@ -7,6 +7,9 @@
 //!              [--seconds N] [--rate 400] [--seed 1] [--set KEY=VALUE]... [--truth-rate 50]
 //!              [--format both|bin|csv] [--list-params]
 //! nav align-bench seed002|seed003|lasergyro [--runs 50] [--grade fog] [--threads 2] [--data FILE]
+//! nav align-bench family [--runs 50] [--family-seed 1] [--seconds 60,120,300] [--threads 2]
+//!              [--member K]
+//! nav sim      family --out DIR [--seed 1] [--set member=K] [--seconds 300] ...
 //! nav convert  --in FILE --out FILE
 //! nav bench    [--passes 10]
 //! nav replay   --imu FILE --lat DEG --lon DEG --h M --align-seconds S --out FILE
@@ -81,23 +84,37 @@ enum Command {
     #[command(allow_negative_numbers = true)]
     Sim(SimArgs),
     /// Alignment benchmarks with their physical floors: seed 002's level filter on a rocking ship
-    /// (sea states 3-6), seed 003's fine alignment on the AUV bench, and heading repeatability
-    /// on the real laser-gyro recording.
+    /// (sea states 3-6), seed 003's fine alignment on the AUV bench, heading repeatability on
+    /// the real laser-gyro recording, and every method on a seeded family of still and swaying
+    /// bases (family).
     AlignBench {
-        /// seed002, seed003 or lasergyro.
+        /// seed002, seed003, lasergyro or family.
         which: AlignBenchKind,
-        /// Monte Carlo runs per cell (seed002, seed003).
+        /// Monte Carlo runs per cell (seed002, seed003); members (family).
         #[arg(long, default_value_t = 50)]
         runs: usize,
         /// Sensor grade of the seed 002 runs.
         #[arg(long, default_value = "fog")]
         grade: host_tests::sensor_model::Grade,
-        /// Threads (seed003).
+        /// Threads (seed003, family).
         #[arg(long, default_value_t = 2)]
         threads: usize,
         /// The laser-gyro recording (lasergyro).
         #[arg(long, value_name = "FILE")]
         data: Option<PathBuf>,
+        /// The family's seed (family).
+        #[arg(long, default_value_t = 1)]
+        family_seed: u64,
+        /// Alignment windows [s] (family).
+        #[arg(long, value_name = "S,...", value_delimiter = ',', default_values_t = host_tests::align_bench::family::WINDOWS_S)]
+        seconds: Vec<f64>,
+        /// Only this member, every method's numbers (family).
+        #[arg(long, value_name = "K")]
+        member: Option<u64>,
+        /// Switch parts of every member off, to find what a method trips on (family):
+        /// translation, lever-arm, biases, yaw, rotation, mean-tilt.
+        #[arg(long, value_name = "PART,...", value_delimiter = ',', value_parser = parse_ablation)]
+        ablate: Vec<host_tests::trajectory::family::Ablation>,
     },
     /// Gyro-free attitude from an isotropic oscillator (seed 001): the estimator's accuracy
     /// against the ratio of the oscillator frequency to the body rate and against readout noise,
@@ -245,6 +262,8 @@ enum AlignBenchKind {
     Seed003,
     /// The real laser-gyro recording.
     Lasergyro,
+    /// Every method on a seeded family of still and swaying bases.
+    Family,
 }
 
 /// Recording files of `nav sim`.
@@ -417,14 +436,16 @@ fn parse_vector3(s: &str) -> Result<[f64; 3], String> {
 /// `nav sim`'s arguments.
 #[derive(clap::Args)]
 struct SimArgs {
-    /// static, ship-rocking, auv-bench, flight or land-vehicle.
+    /// static, ship-rocking, auv-bench, flight, land-vehicle, or family (a member of the
+    /// alignment family: --seed is the family's seed, --set member=K the member).
     scenario: String,
     /// Output directory (created if missing).
     #[arg(long, value_name = "DIR", required_unless_present = "list_params")]
     out: Option<PathBuf>,
-    /// Sensor grade: ideal, fog, rlg, mems-tactical, mems-consumer.
-    #[arg(long, default_value = "ideal")]
-    grade: host_tests::sensor_model::Grade,
+    /// Sensor grade: ideal, fog, rlg, mems-tactical, mems-consumer [default: ideal; a family
+    /// member draws its own].
+    #[arg(long)]
+    grade: Option<host_tests::sensor_model::Grade>,
     /// Length [s] (default: the scenario's own).
     #[arg(long)]
     seconds: Option<f64>,
@@ -448,19 +469,102 @@ struct SimArgs {
     list_params: bool,
 }
 
+/// The `--set KEY=VALUE` pairs of `nav sim`.
+fn key_values(set: &[String]) -> Result<Vec<(&str, f64)>> {
+    set.iter()
+        .map(|kv| {
+            let (k, v) = kv
+                .split_once('=')
+                .with_context(|| format!("--set {kv:?}: expected KEY=VALUE"))?;
+            let v: f64 = v
+                .trim()
+                .parse()
+                .with_context(|| format!("--set {kv:?}: the value is not a number"))?;
+            Ok((k.trim(), v))
+        })
+        .collect()
+}
+
+fn sim_formats(f: SimFormat) -> host_tests::simulate::Formats {
+    use host_tests::simulate::Formats;
+    match f {
+        SimFormat::Bin => Formats::Binary,
+        SimFormat::Csv => Formats::Csv,
+        SimFormat::Both => Formats::Both,
+    }
+}
+
+/// `nav sim family`: member `--set member=K` of family `--seed`.
+fn sim_family(a: SimArgs) -> Result<()> {
+    use host_tests::simulate_family::{FamilySimOptions, simulate_member, write_member};
+    use host_tests::trajectory::family::FamilyMember;
+    let mut member = 0u64;
+    for (k, v) in key_values(&a.set)? {
+        match k {
+            "member" if v >= 0.0 && v.fract() == 0.0 && v < 9.0e15 => member = v as u64,
+            "member" => anyhow::bail!("member must be a whole number >= 0, not {v}"),
+            _ => anyhow::bail!("unknown parameter {k:?}; family has member"),
+        }
+    }
+    if a.list_params {
+        println!("family parameters:");
+        println!(
+            "  member = {member}  (the member's number; --seed is the family's seed; every other value is drawn, see host_tests::trajectory::family)"
+        );
+        return Ok(());
+    }
+    if let Some(g) = a.grade {
+        anyhow::bail!("--grade {g}: a family member draws its own grade");
+    }
+    let Some(out) = a.out else {
+        anyhow::bail!("--out DIR is required");
+    };
+    let m = FamilyMember::draw(a.seed, member);
+    let opts = FamilySimOptions {
+        seconds: a.seconds.unwrap_or(FamilySimOptions::default().seconds),
+        rate_hz: a.rate,
+        truth_rate_hz: a.truth_rate,
+        formats: sim_formats(a.format),
+    };
+    let bar = progress_bar();
+    let sim = simulate_member(&m, &opts, |done, total| {
+        if let Some(b) = &bar {
+            b.set_length(total);
+            b.set_position(done);
+        }
+    })?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let files = write_member(&out, &m, &opts, &sim)?;
+    let n = sim.recording.records.len();
+    println!(
+        "family {} member {} ({}, lever arm {:.2} m, {:.2} deg lat): {n} samples at {} Hz ({:.1} s)",
+        a.seed,
+        member,
+        m.category(),
+        m.lever_arm_b_m().norm(),
+        m.rocking.lat_deg,
+        opts.rate_hz,
+        n as f64 / opts.rate_hz
+    );
+    for p in [&files.binary, &files.csv].into_iter().flatten() {
+        println!("  recording  {}", p.display());
+    }
+    println!("  truth      {}", files.truth.display());
+    println!("  scenario   {}", files.description.display());
+    Ok(())
+}
+
 fn sim(a: SimArgs) -> Result<()> {
-    use host_tests::simulate::{Formats, SimOptions, simulate, write};
+    use host_tests::simulate::{SimOptions, simulate, write};
     use host_tests::trajectory::scenarios::Scenario;
+    if a.scenario == "family" {
+        return sim_family(a);
+    }
     let mut scenario = Scenario::by_name(&a.scenario)?;
-    for kv in &a.set {
-        let (k, v) = kv
-            .split_once('=')
-            .with_context(|| format!("--set {kv:?}: expected KEY=VALUE"))?;
-        let v: f64 = v
-            .trim()
-            .parse()
-            .with_context(|| format!("--set {kv:?}: the value is not a number"))?;
-        scenario.set(k.trim(), v)?;
+    for (k, v) in key_values(&a.set)? {
+        scenario.set(k, v)?;
     }
     if a.list_params {
         println!("{} parameters:", scenario.name());
@@ -477,12 +581,11 @@ fn sim(a: SimArgs) -> Result<()> {
         rate_hz: a.rate,
         truth_rate_hz: a.truth_rate,
         seed: a.seed,
-        formats: match a.format {
-            SimFormat::Bin => Formats::Binary,
-            SimFormat::Csv => Formats::Csv,
-            SimFormat::Both => Formats::Both,
-        },
-        ..SimOptions::new(scenario, a.grade)
+        formats: sim_formats(a.format),
+        ..SimOptions::new(
+            scenario,
+            a.grade.unwrap_or(host_tests::sensor_model::Grade::Ideal),
+        )
     };
     let bar = progress_bar();
     let sim = simulate(&opts, |done, total| {
@@ -529,6 +632,15 @@ fn progress_bar() -> Option<indicatif::ProgressBar> {
                 .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
         );
         b
+    })
+}
+
+/// `--ablate` values.
+fn parse_ablation(s: &str) -> Result<host_tests::trajectory::family::Ablation, String> {
+    use host_tests::trajectory::family::Ablation;
+    Ablation::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = Ablation::ALL.iter().map(|a| a.name()).collect();
+        format!("expected one of {}", names.join(", "))
     })
 }
 
@@ -581,13 +693,33 @@ fn run(cli: Cli) -> Result<()> {
             grade,
             threads,
             data,
+            family_seed,
+            seconds,
+            member,
+            ablate,
         } => {
-            use host_tests::align_bench::{lasergyro, seed002, seed003};
+            use host_tests::align_bench::{family, lasergyro, seed002, seed003};
             let text = match which {
                 AlignBenchKind::Seed002 => seed002::run(runs, grade)?,
                 AlignBenchKind::Seed003 => seed003::run(runs, threads)?,
                 AlignBenchKind::Lasergyro => {
                     lasergyro::run(&data.unwrap_or_else(lasergyro::default_path))?
+                }
+                AlignBenchKind::Family => {
+                    let started = std::time::Instant::now();
+                    let opts = family::FamilyOptions {
+                        windows_s: seconds,
+                        threads,
+                        ablations: ablate,
+                        ..family::FamilyOptions::new(family_seed, runs as u64)
+                    };
+                    let text = match member {
+                        Some(k) => family::run_one(&opts, k)?,
+                        None => family::run(&opts)?,
+                    };
+                    // On stderr: the tables stay deterministic.
+                    eprintln!("run time {:.1} s", started.elapsed().as_secs_f64());
+                    text
                 }
             };
             print!("{text}");

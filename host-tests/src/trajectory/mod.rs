@@ -22,6 +22,7 @@
 //! [`crate::oscillator`]): [`Generator::advance_with`] integrates it with the same RK4 stages,
 //! seeing at each stage the same `omega_ib_b` and `f_ib_b` as the increments.
 
+pub mod family;
 pub mod jet;
 pub mod scenarios;
 

@@ -277,14 +277,74 @@ impl Harmonic {
     }
 }
 
+/// One harmonic displacement of the centre of rotation: `amp_m sin(2 pi t / period_s + phase)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Displacement {
+    /// Amplitude [m].
+    pub amp_m: f64,
+    /// Period [s].
+    pub period_s: f64,
+    /// Phase [deg].
+    pub phase_deg: f64,
+}
+
+impl Displacement {
+    /// No displacement (amplitude 0; the period only keeps the parameters valid).
+    pub const NONE: Self = Self {
+        amp_m: 0.0,
+        period_s: 10.0,
+        phase_deg: 0.0,
+    };
+
+    fn at(&self, t: Jet) -> Jet {
+        (t * (TAU / self.period_s) + Jet::constant(self.phase_deg.to_radians())).sin() * self.amp_m
+    }
+}
+
+/// How the centre of rotation moves about its mean position: harmonic surge along the mean
+/// heading, sway across it (to starboard) and heave (up) [m] ([`Rocking::translation`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Translation {
+    /// Along the mean heading [m].
+    pub surge: Displacement,
+    /// Across the mean heading, positive to starboard (mean heading + 90 deg) [m].
+    pub sway: Displacement,
+    /// Up [m].
+    pub heave: Displacement,
+}
+
+impl Translation {
+    /// The centre does not move.
+    pub const NONE: Self = Self {
+        surge: Displacement::NONE,
+        sway: Displacement::NONE,
+        heave: Displacement::NONE,
+    };
+
+    /// Whether any amplitude is non-zero.
+    pub fn is_moving(&self) -> bool {
+        [self.surge, self.sway, self.heave]
+            .iter()
+            .any(|d| d.amp_m != 0.0)
+    }
+}
+
 /// Rocking about a mean attitude, with the IMU at a lever arm from the centre of rotation:
 /// `ship-rocking` (seed 002) and `auv-bench` (seed 003).
 ///
-/// The centre moves at a constant speed along the mean heading (0 by default); the IMU's NED
-/// offset from it is `C_b_n(t) R`, whose first and second time derivatives (exact, through
+/// The centre moves at a constant speed along the mean heading (0 by default) and may
+/// oscillate about that path ([`Translation`]: surge, sway, heave; none by default); the IMU's
+/// NED offset from it is `C_b_n(t) R`, whose first and second time derivatives (exact, through
 /// [`Jet`]s) add the lever-arm velocity and the acceleration `omega_dot x R + omega x (omega x
-/// R)` of seed 002. The rocking can stop at `rock_until_s`, tapered to rest over one roll
+/// R)` of seed 002. Roll and pitch oscillate about a mean roll and pitch (0 by default). The
+/// rocking (and the translation) can stop at `rock_until_s`, tapered to rest over one roll
 /// period by a smooth step.
+///
+/// With the defaults of the extensions (mean roll and pitch 0, [`Translation::NONE`]) the
+/// motion is computed by exactly the same operations as before they existed: `ship-rocking`
+/// and `auv-bench` are bit-identical. The extensions are not among their `--set` parameters
+/// (their `scenario.txt` stays as it was); the alignment family
+/// ([`super::family`]) draws them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Rocking {
     /// Latitude of the centre [deg].
@@ -305,6 +365,12 @@ pub struct Rocking {
     pub lever_arm_m: [f64; 3],
     /// Speed of the centre along the mean heading [m/s].
     pub speed_mps: f64,
+    /// Mean roll about which the roll oscillates [deg].
+    pub mean_roll_deg: f64,
+    /// Mean pitch about which the pitch oscillates [deg].
+    pub mean_pitch_deg: f64,
+    /// Harmonic translation of the centre about its mean path.
+    pub translation: Translation,
     /// End of the rocking [s] (infinite: never).
     pub rock_until_s: f64,
     /// Default length [s].
@@ -342,6 +408,9 @@ impl Rocking {
             },
             lever_arm_m: [30.0, 10.0, 15.0],
             speed_mps: 0.0,
+            mean_roll_deg: 0.0,
+            mean_pitch_deg: 0.0,
+            translation: Translation::NONE,
             rock_until_s: f64::INFINITY,
             seconds: 3600.0,
         }
@@ -372,6 +441,9 @@ impl Rocking {
             },
             lever_arm_m: [0.0; 3],
             speed_mps: 0.0,
+            mean_roll_deg: 0.0,
+            mean_pitch_deg: 0.0,
+            translation: Translation::NONE,
             rock_until_s: 300.0,
             seconds: 900.0,
         }
@@ -392,6 +464,21 @@ impl Rocking {
         if self.roll.amp_deg.abs() + self.pitch.amp_deg.abs() > 80.0 {
             bail!("roll and pitch amplitudes together must stay below 80 deg");
         }
+        for (k, m) in [
+            ("mean_roll_deg", self.mean_roll_deg),
+            ("mean_pitch_deg", self.mean_pitch_deg),
+        ] {
+            if m.is_nan() || m.abs() > 30.0 {
+                bail!("{k} must be within 30 deg, not {m}");
+            }
+        }
+        let t = &self.translation;
+        for (k, d) in [("surge", t.surge), ("sway", t.sway), ("heave", t.heave)] {
+            check_positive(&format!("{k}_period_s"), d.period_s)?;
+            if d.amp_m.is_nan() || d.amp_m.abs() > 100.0 || !d.phase_deg.is_finite() {
+                bail!("{k}_amp_m must be within 100 m, not {}", d.amp_m);
+            }
+        }
         check_positive("rock_until_s", self.rock_until_s)?;
         check_positive("seconds", self.seconds)?;
         Ok(self.clone())
@@ -400,17 +487,55 @@ impl Rocking {
     /// Roll, pitch, yaw as jets at `t`.
     fn euler(&self, t: f64) -> [Jet; 3] {
         let tj = Jet::time(t);
-        // 1 while rocking, down to 0 over one roll period before `rock_until_s`.
-        let taper = self.roll.period_s;
-        let env = Jet::constant(1.0)
-            - super::jet::smoothstep(
-                (tj - Jet::constant(self.rock_until_s - taper)) * (1.0 / taper),
-            );
+        let env = self.envelope(tj);
+        // A zero mean is not added: `0 + x` would turn a `-0.0` into `+0.0` and change the
+        // bits of the scenarios that predate the mean.
+        let about = |mean_deg: f64, x: Jet| {
+            if mean_deg == 0.0 {
+                x
+            } else {
+                Jet::constant(mean_deg.to_radians()) + x
+            }
+        };
         [
-            self.roll.at(tj) * env,
-            self.pitch.at(tj) * env,
+            about(self.mean_roll_deg, self.roll.at(tj) * env),
+            about(self.mean_pitch_deg, self.pitch.at(tj) * env),
             Jet::constant(self.heading_deg.to_radians()) + self.yaw.at(tj) * env,
         ]
+    }
+
+    /// 1 while rocking, down to 0 over one roll period before `rock_until_s`, as a jet at `t`.
+    fn envelope(&self, tj: Jet) -> Jet {
+        let taper = self.roll.period_s;
+        Jet::constant(1.0)
+            - super::jet::smoothstep(
+                (tj - Jet::constant(self.rock_until_s - taper)) * (1.0 / taper),
+            )
+    }
+
+    /// The centre's NED displacement from its mean path [m] at `t` [s], as jets; `None` when it
+    /// does not move ([`Translation::is_moving`]).
+    fn centre_offset(&self, t: f64) -> Option<[Jet; 3]> {
+        let tr = &self.translation;
+        if !tr.is_moving() {
+            return None;
+        }
+        let tj = Jet::time(t);
+        let env = self.envelope(tj);
+        let (s, c) = self.heading_deg.to_radians().sin_cos();
+        let (surge, sway) = (tr.surge.at(tj) * env, tr.sway.at(tj) * env);
+        let heave = tr.heave.at(tj) * env;
+        Some([surge * c - sway * s, surge * s + sway * c, -heave])
+    }
+
+    /// The IMU's NED offset from the centre's mean path [m]: the lever arm's, plus the centre's
+    /// own displacement when it moves.
+    fn imu_offset(&self, t: f64, e: &[Jet; 3]) -> [Jet; 3] {
+        let r = self.lever_offset(e);
+        match self.centre_offset(t) {
+            None => r,
+            Some(d) => core::array::from_fn(|i| r[i] + d[i]),
+        }
     }
 
     /// The IMU's NED offset from the centre, `C_b_n(t) R` [m], as jets.
@@ -490,9 +615,9 @@ impl Params for Rocking {
 
 impl Trajectory for Rocking {
     fn start(&self) -> Point {
-        // The IMU starts at the centre plus its lever-arm offset.
+        // The IMU starts at the centre (displaced, if it moves) plus its lever-arm offset.
         let (lat, h) = (self.lat_deg.to_radians(), self.h_m);
-        let r = self.lever_offset(&self.euler(0.0));
+        let r = self.imu_offset(0.0, &self.euler(0.0));
         let e = LocalEarth::new(lat, h);
         Point {
             lat: lat + r[0].v / (e.r_meridian + h),
@@ -508,7 +633,7 @@ impl Trajectory for Rocking {
 
     fn motion(&self, t: f64, _p: &Point) -> Motion {
         let e = self.euler(t);
-        let r = self.lever_offset(&e);
+        let r = self.imu_offset(t, &e);
         let (s, c) = self.heading_deg.to_radians().sin_cos();
         Motion {
             v_eb_n: Vector3::new(
