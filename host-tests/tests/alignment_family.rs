@@ -30,9 +30,9 @@
 //!    Earth rate: refusing its heading is right); `static` refuses every swaying member, in
 //!    every window and lever case.
 //!
-//! The current methods fail these checks (that is what the family measures); the test is
-//! ignored until they are fixed, and prints every offending case with the member's number
-//! (`nav align-bench family --member K` prints all of its numbers).
+//! The test prints every offending case with the member's number (`nav align-bench family
+//! --member K` prints all of its numbers). `sway` without the lever arm is refused by its
+//! settings check (`SettingsError::SwayNeedsLeverArm`) and so counts no results.
 
 use host_tests::align_bench::family::{FamilyOptions, LeverCase, MemberRun, Outcome, run_family};
 use host_tests::sensor_model::Grade;
@@ -377,7 +377,6 @@ fn the_statistics_helpers_match_known_values() {
 }
 
 #[test]
-#[ignore = "enabled when the alignment methods are honest"]
 fn every_method_is_honest_on_a_small_family() {
     let opts = FamilyOptions {
         windows_s: WINDOWS_S.to_vec(),

@@ -23,7 +23,7 @@
 //! | yaw amplitude / period (about the mean heading) | [`YAW_AMP_DEG`] / [`YAW_PERIOD_S`] s |
 //! | phases of every harmonic | [`PHASE_DEG`] |
 //! | heave of the centre (up) amplitude / period | [`HEAVE_AMP_M`] m / [`HEAVE_PERIOD_S`] s |
-//! | surge (along the mean heading) and sway (across) of the centre, each | [`SURGE_AMP_M`] m / [`SURGE_PERIOD_S`] s |
+//! | surge (along the mean heading) and sway (across) of the centre, each, in [`SURGE_PROBABILITY`] of the swaying members | [`SURGE_AMP_M`] m / [`SURGE_PERIOD_S`] s |
 //! | lever arm (IMU from the centre, body FRD) | length [`LEVER_ARM_M`] m, direction uniform on the sphere; still members too |
 //! | grade | `fog` [`FOG_SHARE`], `rlg` [`RLG_SHARE`], `mems-tactical` the rest |
 //! | turn-on biases | drawn by the grade's error model for half ([`BIAS_PROBABILITY`]) of the `fog` and `rlg` members, for every `mems-tactical` one |
@@ -110,9 +110,12 @@ pub const HEAVE_AMP_M: Span = Span::new(0.0, 0.6);
 /// Heave period [s].
 pub const HEAVE_PERIOD_S: Span = Span::new(5.0, 12.0);
 /// Surge and sway amplitude of the centre, each [m].
-pub const SURGE_AMP_M: Span = Span::new(0.0, 0.4);
+pub const SURGE_AMP_M: Span = Span::new(0.0, 0.2);
 /// Surge and sway period, each [s].
-pub const SURGE_PERIOD_S: Span = Span::new(5.0, 20.0);
+pub const SURGE_PERIOD_S: Span = Span::new(5.0, 14.0);
+/// Probability that a swaying member's centre surges and sways (the others only heave: a
+/// moored or large vessel; the tester's family had none).
+pub const SURGE_PROBABILITY: f64 = 0.5;
 /// Length of the lever arm [m].
 pub const LEVER_ARM_M: Span = Span::new(0.0, 10.0);
 /// Share of `fog` members.
@@ -275,6 +278,11 @@ impl FamilyMember {
             if !(near_resonance(r, p) || near_resonance(r, y) || near_resonance(p, y)) {
                 break;
             }
+        }
+        // Drawn last, so that the draws above do not depend on it.
+        if unit(rng) >= SURGE_PROBABILITY {
+            translation.surge.amp_m = 0.0;
+            translation.sway.amp_m = 0.0;
         }
         if still {
             for h in [&mut roll, &mut pitch, &mut yaw] {

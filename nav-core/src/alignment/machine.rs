@@ -82,8 +82,8 @@ impl AlignMethod {
 /// filters need no heading).
 pub const FINE_COARSE_S: f64 = 5.0;
 
-/// Shortest window of [`AlignMethod::Fine`] [s]: the coarse stage's 10 s and as much again for
-/// the filter.
+/// Shortest window of [`AlignMethod::Fine`] [s]: the coarse stage's [`FINE_COARSE_S`] and 15 s
+/// for the filter.
 pub const MIN_FINE_S: f64 = 20.0;
 
 /// Shortest window of [`AlignMethod::Sway`] [s]: the coarse stage, the identification of the
@@ -170,6 +170,41 @@ impl core::fmt::Display for AlignFailure {
 
 impl core::error::Error for AlignFailure {}
 
+impl AlignFailure {
+    /// A short, fixed name of the reason (for counting refusals by kind; the `Display` text
+    /// carries the figures).
+    pub fn reason(&self) -> &'static str {
+        use super::fine::FineRefusal as F;
+        use super::inertial::InertialAlignError as I;
+        match self {
+            Self::Static(e) => match e {
+                AlignError::NoSamples => "static: no samples",
+                AlignError::SpecificForceNotGravity => "static: specific force not gravity",
+                AlignError::BaseRotating => "static: base rotating",
+                AlignError::HeadingUnobservable => "static: Earth rate not measurable",
+            },
+            Self::Inertial(e) => match e {
+                I::TooShort => "inertial: too short",
+                I::InputRefused(_) => "inertial: increment refused",
+                I::NearPole => "inertial: near a pole",
+                I::SpecificForceNotGravity => "inertial: specific force not gravity",
+                I::HeadingUnobservable => "inertial: heading not resolved",
+                I::NonFinite => "inertial: not finite",
+                I::BaseDisturbed => "inertial: base disturbed",
+            },
+            Self::Fine(e) => match e {
+                F::HeadingUnresolved { .. } => "fine: heading not resolved",
+                F::EarthRateMismatch { .. } => "fine: gyros disagree with the Earth rate",
+                F::MotionNotModelled { .. } => "fine: base motion not modelled",
+                F::NotStarted => "fine: not started",
+                F::NonFinite => "fine: not finite",
+            },
+            Self::BaseMoving(_) => "base not still",
+            Self::WindowTooShort { .. } => "window too short",
+        }
+    }
+}
+
 /// Where the IMU sits relative to the given position (the base's centre of rotation, or its
 /// reference point).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -245,6 +280,10 @@ pub enum SettingsError {
     NearPole,
     /// A noise, lever-arm or base-motion value is negative or not finite.
     BadValue(&'static str),
+    /// [`AlignMethod::Sway`] with the lever arm not given: on the alignment family its
+    /// heading 1-sigma is not true then (an unknown lever arm's estimate and the sway model
+    /// share the roll and pitch signal), so it is not offered.
+    SwayNeedsLeverArm,
 }
 
 impl core::fmt::Display for SettingsError {
@@ -262,6 +301,9 @@ impl core::fmt::Display for SettingsError {
             Self::BadRate(r) => write!(f, "sampling rate {r} Hz is not a positive number"),
             Self::NearPole => f.write_str("latitude not finite or too close to a pole to align"),
             Self::BadValue(what) => write!(f, "{what} must be finite and not negative"),
+            Self::SwayNeedsLeverArm => f.write_str(
+                "the sway method needs the lever arm (--lever-arm X,Y,Z; 0,0,0 at the centre of rotation): with an unknown one its 1-sigma is not true; use fine",
+            ),
         }
     }
 }
@@ -322,7 +364,7 @@ impl<T: Scalar> AlignSettings<T> {
             lever_arm: LeverArm::default(),
             base: BaseMotion::default(),
         };
-        settings.validate()?;
+        settings.validate_values()?;
         Ok(settings)
     }
 
@@ -343,8 +385,18 @@ impl<T: Scalar> AlignSettings<T> {
         f64::from(self.samples) / self.rate_hz
     }
 
-    /// Checks the window against the method's minimum and every value for sanity.
+    /// Checks the window against the method's minimum, every value for sanity, and that the
+    /// method can answer with the lever arm as given.
     pub fn validate(&self) -> Result<(), SettingsError> {
+        self.validate_values()?;
+        if self.method == AlignMethod::Sway && matches!(self.lever_arm, LeverArm::Unknown { .. }) {
+            return Err(SettingsError::SwayNeedsLeverArm);
+        }
+        Ok(())
+    }
+
+    /// [`Self::validate`] without the lever-arm case (the lever arm is set after [`Self::new`]).
+    fn validate_values(&self) -> Result<(), SettingsError> {
         if !(self.rate_hz.is_finite() && self.rate_hz > 0.0) {
             return Err(SettingsError::BadRate(self.rate_hz));
         }
@@ -377,6 +429,7 @@ impl<T: Scalar> AlignSettings<T> {
         if !lever_ok {
             return Err(SettingsError::BadValue("the lever arm"));
         }
+
         if !(ok(self.base.position_sigma_m) && ok(self.base.translation_sigma_m)) {
             return Err(SettingsError::BadValue("the base motion"));
         }
@@ -427,19 +480,15 @@ enum Coarse<T: Scalar> {
     Inertial(InertialAlignment<T>),
 }
 
-// One of each lives in the firmware's alignment task: boxing would need an allocator.
-#[allow(clippy::large_enum_variant)]
-enum Fine<T: Scalar> {
-    Kalman(Bank<T, FINE_STATES, NoExtension>),
-    Sway(SwayAlignment<T>),
-}
-
 /// The alignment state machine (module docs).
 pub struct Aligner<T: Scalar> {
     settings: AlignSettings<T>,
     limits: InputLimits<T>,
     coarse: Coarse<T>,
-    fine: Option<Fine<T>>,
+    /// The fine stage, kept apart so that only the one in use is ever built (the sway model is
+    /// the larger: as one enum it was built on the stack, which the MCU's cannot afford).
+    kalman: Option<Bank<T, FINE_STATES, NoExtension>>,
+    sway: Option<SwayAlignment<T>>,
     stage: Stage,
     times: StageTimes,
     failure: Option<AlignFailure>,
@@ -478,7 +527,8 @@ impl<T: Scalar> Aligner<T> {
             settings,
             limits: InputLimits::default(),
             coarse,
-            fine: None,
+            kalman: None,
+            sway: None,
             stage: Stage::Coarse,
             times: StageTimes::default(),
             failure: None,
@@ -540,12 +590,14 @@ impl<T: Scalar> Aligner<T> {
     fn step(&mut self, inc: &ImuIncrement<T>) {
         let dt = inc.dt.to_f64();
         self.last_rate = inc.delta_theta_ib_b / inc.dt;
-        if let Some(fine) = &mut self.fine {
+        if self.stage == Stage::Fine {
             // Checked above with the filters' default limits: cannot be refused.
-            let _ = match fine {
-                Fine::Kalman(f) => f.add(inc),
-                Fine::Sway(f) => f.add(inc),
-            };
+            if let Some(f) = &mut self.kalman {
+                let _ = f.add(inc);
+            }
+            if let Some(f) = &mut self.sway {
+                let _ = f.add(inc);
+            }
             self.times.fine_samples += 1;
             self.times.fine_s += dt;
             if self.samples() >= self.settings.samples {
@@ -592,8 +644,8 @@ impl<T: Scalar> Aligner<T> {
             },
             ..FineConfig::default()
         };
-        self.fine = Some(match self.settings.method {
-            AlignMethod::Sway => Fine::Sway(SwayAlignment::new(
+        if self.settings.method == AlignMethod::Sway {
+            self.sway = Some(SwayAlignment::new(
                 q_b_c,
                 self.last_rate,
                 position,
@@ -601,24 +653,25 @@ impl<T: Scalar> Aligner<T> {
                     fine,
                     ..SwayConfig::default()
                 },
-            )),
-            _ => Fine::Kalman(Bank::new(
+            ));
+        } else {
+            self.kalman = Some(Bank::new(
                 q_b_c,
                 self.last_rate,
                 position,
                 fine,
                 NoExtension,
-            )),
-        });
+            ));
+        }
         self.stage = Stage::Fine;
     }
 
     /// Ends the alignment with the fine stage's result.
     fn finish_fine(&mut self) {
-        let result = match &self.fine {
-            Some(Fine::Kalman(f)) => f.outcome(),
-            Some(Fine::Sway(f)) => f.outcome(),
-            None => return,
+        let result = match (&self.kalman, &self.sway) {
+            (Some(f), _) => f.outcome(),
+            (_, Some(f)) => f.outcome(),
+            _ => return,
         };
         let o = match result {
             Ok(o) => o,
@@ -649,7 +702,8 @@ impl<T: Scalar> Aligner<T> {
             .still
             .check(n.arw_rad_per_sqrt_s.to_f64(), n.vrw_mps_per_sqrt_s.to_f64());
         let min_s = self.settings.method.min_seconds();
-        let estimate = if self.times.coarse_s + 1e-9 < min_s {
+        // Half a nominal interval of slack: f32 intervals of 2.5 ms sum to 9.99999977 s in 10 s.
+        let estimate = if self.times.coarse_s + 0.5 / self.settings.rate_hz < min_s {
             // The header's rate said enough samples; their own intervals say otherwise.
             Err(AlignFailure::WindowTooShort {
                 seconds: self.times.coarse_s,
@@ -898,6 +952,13 @@ mod tests {
             let text = std::format!("{e}");
             assert!(text.contains("minimum"), "{text}");
         }
+        // Sway needs the lever arm given (any value, zero at the centre).
+        let sway =
+            settings(AlignMethod::Sway, 60.0).with_lever_arm(LeverArm::Unknown { sigma_m: 5.0 });
+        assert_eq!(sway.validate(), Err(SettingsError::SwayNeedsLeverArm));
+        assert!(std::format!("{}", SettingsError::SwayNeedsLeverArm).contains("--lever-arm"));
+        let given = sway.with_lever_arm(LeverArm::Known(Vector3::zeros()));
+        assert_eq!(given.validate(), Ok(()));
         let s = settings(AlignMethod::Inertial, 5.0);
         let inc = at_rest(&s, &q);
         let mut a = Aligner::new(s);

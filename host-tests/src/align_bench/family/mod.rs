@@ -256,6 +256,9 @@ pub fn align(
             }
             Err(e) => return Outcome::Refused(format!("settings: {e}")),
         };
+    if let Err(e) = settings.validate() {
+        return Outcome::Refused(format!("settings: {e}"));
+    }
     let Some(truth) = rec.truth_after(settings.samples) else {
         return Outcome::Refused("no truth at the window's end (harness)".into());
     };
@@ -290,7 +293,7 @@ pub fn align(
                 p_sigma_m: o.position_sigma_m,
             })
         }
-        Progress::Failed(f) => Outcome::Refused(f.to_string()),
+        Progress::Failed(f) => Outcome::Refused(f.reason().to_string()),
         Progress::Coarse | Progress::Fine => Outcome::Refused(format!(
             "not finished after the window ({} increments refused)",
             aligner.refused()

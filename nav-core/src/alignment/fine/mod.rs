@@ -36,7 +36,7 @@
 //!
 //! Memory: about 10 KB in `f32` (the 29x29 covariance and the interval's transition); no
 //! allocation. No input panics: increments that fail [`ImuIncrement::check`] are refused and
-//! counted, a covariance that became non-finite is re-initialised (counted).
+//! counted; a covariance that became non-finite stops the filter, whose result is then refused.
 
 pub mod bank;
 pub mod base;
@@ -182,7 +182,7 @@ pub struct FineStatus {
     pub accepted_measurements: u32,
     /// Scalar measurements refused by the gate or as degenerate.
     pub rejected_measurements: u32,
-    /// Covariance re-initialisations after a non-finite value.
+    /// Times the covariance became non-finite (the filter then stops: at most 1).
     pub resets: u32,
     /// Mean normalised innovation square of the accepted position measurements (1 when the
     /// model holds; 0 before any).
@@ -210,6 +210,9 @@ pub enum FineRefusal {
     },
     /// No filter interval has completed yet.
     NotStarted,
+    /// The covariance became non-finite (inputs at the edge of the limits): the filter
+    /// stopped.
+    NonFinite,
 }
 
 impl core::fmt::Display for FineRefusal {
@@ -229,6 +232,7 @@ impl core::fmt::Display for FineRefusal {
                 "base motion not modelled: position innovations {mean_nis:.1} times their variance"
             ),
             Self::NotStarted => f.write_str("fine filter has not run yet"),
+            Self::NonFinite => f.write_str("fine filter's covariance became non-finite"),
         }
     }
 }
@@ -295,12 +299,15 @@ pub struct FineCore<T: Scalar, const N: usize> {
     w_h: T,
     /// Lever-arm estimate, body axes [m].
     lever_b: Vector3<T>,
+    /// `C_b_c` at the start: the displacement state is `s = dr - C0 dl` ([`model`]).
+    c0: Matrix3<T>,
     /// The translation blocks of the north, east, down axes.
     blocks: [ShapingBlock<T>; 3],
     /// State (filter units, [`model::UNITS`]) and covariance.
     x: SVector<T, N>,
     p: SMatrix<T, N, N>,
-    p0: SMatrix<T, N, N>,
+    /// Set once the covariance became non-finite: the filter stops and refuses.
+    broken: bool,
     q_ins: SVector<T, INS_STATES>,
     /// Interval sums: time [s], `sum C_b_c dt` [s], `sum dv_c` [m/s].
     interval_s: f64,
@@ -365,8 +372,9 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
         let tilt = config.tilt_sigma_rad;
         for i in 0..3 {
             let base_p = blocks[i].stationary();
-            p0[(POS + i, POS + i)] =
-                var(sd) + var(lever_sigma) + var(tilt * lever_b.norm()) + var(T::c(0.01));
+            // s(0) = dr(0) - C0 dl = (C_hat0 - C0) l_hat - d(0): the tilt turning the lever arm
+            // estimate, and the centre's translation (no lever-arm term).
+            p0[(POS + i, POS + i)] = var(sd) + var(tilt * lever_b.norm()) + var(T::c(0.01));
             p0[(VEL + i, VEL + i)] =
                 base_p[(base::D_RATE, base::D_RATE)] + var(w_rate * lever_sigma) + var(T::c(0.02));
             p0[(GYRO_BIAS + i, GYRO_BIAS + i)] = var(config.noise.gyro_bias_rad_s);
@@ -399,10 +407,11 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
             centre,
             w_h,
             lever_b,
+            c0,
             blocks,
             x: SVector::zeros(),
             p: p0,
-            p0,
+            broken: false,
             q_ins,
             interval_s: 0.0,
             sum_c: Matrix3::zeros(),
@@ -424,6 +433,9 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
         inc: &ImuIncrement<T>,
         ext: &mut impl Extension<T, N>,
     ) -> Result<(), InputError> {
+        if self.broken {
+            return Ok(());
+        }
         if let Err(e) = inc.check(&self.config.limits) {
             self.status.rejected_increments = self.status.rejected_increments.saturating_add(1);
             self.nav.restart_increments();
@@ -516,9 +528,9 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
         self.constrain_earth_rate();
         self.status.updates = self.status.updates.saturating_add(1);
         if !(kalman::all_finite(&self.p) && kalman::all_finite(&self.x)) {
-            // Cannot happen with finite inputs; start the covariance afresh rather than panic.
-            self.p = self.p0;
-            self.x = SVector::zeros();
+            // Cannot happen with finite inputs; the filter stops and its result is refused
+            // rather than restarted as if nothing had happened.
+            self.broken = true;
             self.status.resets = self.status.resets.saturating_add(1);
             return;
         }
@@ -546,7 +558,7 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
             h[BASE + 3 * k + base::D] = T::one();
             for j in 0..3 {
                 h[ATT + j] = h_att[(k, j)];
-                h[LEVER + j] = -c[(k, j)];
+                h[LEVER + j] = self.c0[(k, j)] - c[(k, j)];
             }
             for i in 0..N {
                 h[i] *= T::c(model::unit(i));
@@ -693,16 +705,29 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
     fn feed_back(&mut self) {
         let v3 =
             |o: usize| Vector3::new(self.state_si(o), self.state_si(o + 1), self.state_si(o + 2));
+        let dl = v3(LEVER);
+        let phi = v3(ATT);
+        // The displacement error is `s + C0 dl`, plus the second-order term the attitude
+        // correction turns the lever-arm correction by (`phi x C dl`): fed back too, the
+        // measured `r - C l_hat` is the same before and after (module docs of [`model`]).
+        let c_dl = self.nav.c_b_c() * dl;
         let c = Correction {
-            dr: v3(POS),
+            dr: v3(POS) + self.c0 * dl + phi.cross(&c_dl),
             dv: v3(VEL),
-            phi: v3(ATT),
+            phi,
             de: [self.state_si(EARTH), self.state_si(EARTH + 1)],
             gyro_bias: v3(GYRO_BIAS),
             accel_bias: v3(ACCEL_BIAS),
         };
-        let dl = v3(LEVER);
         self.nav.correct(&c);
+        // `C0` turns with every attitude correction: the lever arm's Jacobian `C0 - C` then
+        // holds the body's own rotation since the start, not the filter's corrections (a
+        // tilt correction is no motion of the IMU: read as one, it pins the lever arm of a
+        // still base that no data can give).
+        self.c0 = attitude::rotation_vector_quat(&phi)
+            .to_rotation_matrix()
+            .into_inner()
+            * self.c0;
         self.lever_b -= dl;
         for i in 0..INS_STATES {
             self.x[i] = T::zero();
@@ -769,6 +794,9 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
         if self.status.updates == 0 {
             return Err(FineRefusal::NotStarted);
         }
+        if self.broken {
+            return Err(FineRefusal::NonFinite);
+        }
         let p = self.ins_cov();
         // Heading: the tangential error of the horizontal Earth rate.
         let g = self.azimuth_gradient();
@@ -798,21 +826,33 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
         let rz = attitude::about_z(alpha).to_rotation_matrix().into_inner();
         let v_n = rz * self.nav.v_c();
         let r_n = rz * self.nav.r_c();
-        // Velocity and displacement in NED: R dv + d_alpha (e_D x value).
+        // Velocity and displacement in NED: R dv + d_alpha (e_D x value); the displacement's
+        // error is `s + C0 dl`.
         let down = Vector3::new(T::zero(), T::zero(), T::one());
-        let cov_of = |offset: usize, value: &Vector3<T>| {
-            let mut j = SMatrix::<T, 3, 11>::zeros();
-            j.fixed_view_mut::<3, 3>(0, offset).copy_from(&rz);
+        let sigma_of = |blocks: &[(usize, Matrix3<T>)], value: &Vector3<T>| {
+            let mut j = SMatrix::<T, 3, N>::zeros();
+            for (offset, m) in blocks {
+                j.fixed_view_mut::<3, 3>(0, *offset).copy_from(m);
+            }
             let turn = down.cross(value);
             for k in 0..3 {
                 j[(k, EARTH)] = turn[k] * g.x;
                 j[(k, EARTH + 1)] = turn[k] * g.y;
             }
-            let c = j * p * j.transpose();
-            Vector3::new(c[(0, 0)], c[(1, 1)], c[(2, 2)]).map(|v| v.max(T::zero()).sqrt())
+            Vector3::from_fn(|k, _| {
+                let mut v = T::zero();
+                for a in 0..N {
+                    for b in 0..N {
+                        if j[(k, a)] != T::zero() && j[(k, b)] != T::zero() {
+                            v += j[(k, a)] * self.cov_si(a, b) * j[(k, b)];
+                        }
+                    }
+                }
+                v.max(T::zero()).sqrt()
+            })
         };
-        let velocity_sigma_m_s = cov_of(VEL, &v_n);
-        let position_sigma_m = cov_of(POS, &r_n);
+        let velocity_sigma_m_s = sigma_of(&[(VEL, rz)], &v_n);
+        let position_sigma_m = sigma_of(&[(POS, rz), (LEVER, rz * self.c0)], &r_n);
         let position = self.centre.offset_ned(r_n.map(T::to_f64).into());
         Ok(FineOutcome {
             state: NavState {

@@ -19,7 +19,12 @@
 //!
 //! The measurement, every filter interval: the IMU's displacement minus its lever-arm offset,
 //! `z = r_hat - C_hat l_hat = dr + d - [(C_hat l_hat) x] phi - C_hat dl` (`d` the centre's
-//! translation, [`super::base`]), per axis of `c`.
+//! translation, [`super::base`]), per axis of `c`. The displacement state is not `dr` itself
+//! but `s = dr - C0 dl` (`C0` the starting attitude): with an unknown lever arm `dr` and `dl`
+//! both start metres wide and the first measurement ties them to a tenth of a millimetre, a
+//! correlation `f32` cannot hold; `s` starts small (the tilt turning the lever arm, the
+//! translation) and the measurement reads `z = s + d - [(C_hat l_hat) x] phi - (C_hat - C0)
+//! dl`: the lever arm shows only as the body turns.
 //!
 //! **Units.** The filter keeps its states in the [`UNITS`] below (centimetres, millimetres
 //! per second, milliradians, micro-radians per second, ...) so that in `f32` every variance
@@ -28,7 +33,7 @@
 use crate::Scalar;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-/// Offset of the displacement error `dr` (3) [m].
+/// Offset of the displacement error `s = dr - C0 dl` (3) [m] (module docs).
 pub const POS: usize = 0;
 /// Offset of the velocity error `dv` (3) [m/s].
 pub const VEL: usize = 3;

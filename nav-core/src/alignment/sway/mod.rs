@@ -93,7 +93,8 @@ pub struct SwayConfig<T: Scalar> {
     pub first_identify_s: T,
     /// Longest identification window [s] (default 25).
     pub identify_s: T,
-    /// Roll/pitch measurement interval [s] (default 0.2; at most [`search::BUFFER_LEN`] kept).
+    /// Roll/pitch measurement interval [s] (default 0.2: the 25 s window in
+    /// [`search::BUFFER_LEN`] samples).
     pub sample_period_s: T,
     /// Shortest sway period searched [s] (default 2).
     pub min_period_s: T,
@@ -207,6 +208,9 @@ pub struct SwayModel<T: Scalar> {
     coning: ConingSculling<T>,
     /// Vertical Earth rate in `c` [rad/s].
     omega_down: T,
+    /// Yaw [rad] and pitch-independent part of each kept sample's attitude: its yaw, for the
+    /// Euler Jacobian of the drift measurement.
+    yaw: [f64; search::BUFFER_LEN],
     /// `sum C_b_c dt` [s] and time [s] over the identification window.
     sum_c: Matrix3<T>,
     sum_t: f64,
@@ -236,6 +240,7 @@ impl<T: Scalar> SwayModel<T> {
             q_open_carry: Quaternion::new(T::zero(), T::zero(), T::zero(), T::zero()),
             coning: ConingSculling::new(),
             omega_down: -T::c(crate::earth::OMEGA_IE) * lat.psin(),
+            yaw: [0.0; search::BUFFER_LEN],
             sum_c: Matrix3::zeros(),
             sum_t: 0.0,
             omega: [None; 2],
@@ -286,61 +291,89 @@ impl<T: Scalar> SwayModel<T> {
         h
     }
 
-    /// The fits' trends as one measurement of the horizontal Earth rate and the gyro bias
-    /// (module docs, **Identification**): the open-loop attitude (no horizontal Earth rate, no
-    /// bias compensation) drifts at `phi' = -(e_N, e_E, 0) - C b_g` ([`model`] with
-    /// `omega_hat - omega = -e`), so its roll and pitch trends are `A (e + C_mean b_g)` (`A` the
-    /// roll and pitch rows of [`euler_jacobian`]), plus the Earth rate turning the open-loop
-    /// attitude's own error, `A (omega_ie x phi_open)` (a 0.5 deg start error drifts at 6e-7
-    /// rad/s: as much as the trend's noise). With the filter's `e = e_hat - de`,
-    /// `b_g = b_hat + b_res` and `phi_open = phi + delta` (`delta` the known rotation between the
-    /// open-loop and the filter's attitudes, at the window's middle), what is left is
-    /// `-A de + A C b_res + A [omega x] phi`. Noise: the
-    /// least-squares slope of the gyros' attitude random walk, `(6/5) N_g^2 / T` per axis over
-    /// the window `T` (as the inertial-frame heading's, [`super::inertial`]), times the fit's
-    /// [`SinusoidFit::trend_inflation`] (the trend shares the window with a sinusoid of about
-    /// its length).
+    /// The identification window's drift as one measurement of the horizontal Earth rate and
+    /// the gyro bias (module docs, **Identification**). The open-loop attitude (no horizontal
+    /// Earth rate, no bias compensation) drifts at `phi' = -(e + C b) - omega x phi`
+    /// ([`model`] with `omega_hat - omega = -e`); its roll and pitch, less the fitted
+    /// sinusoids, are `mean - A_h(t) (phi_0 + s (t - t_m))` per sample, `A_h(t)` the horizontal
+    /// columns of the roll and pitch rows of [`euler_jacobian`] at that sample's pitch and yaw
+    /// (the yaw sway turns them: a single Euler-space trend would read 1e-5 rad of a 1e-3 rad
+    /// tilt error through a 0.6 deg yaw sway as drift). The least-squares `s` (six unknowns:
+    /// two means, `phi_0`, `s`) is then, with the filter's `e = e_hat - de`,
+    /// `b = b_hat + b_res` and `phi = phi_core + delta` (`delta` the known rotation from the
+    /// filter's attitude to the open-loop one, carried back to the window's middle):
+    /// `s + (e_hat + C b_hat + omega x phi_known)_h = de_h - (C b_res)_h - ([omega x] phi)_h`.
+    /// Noise per axis: the least-squares slope of the gyros' attitude random walk,
+    /// `(6/5) N_g^2 / T` over the window `T` (as the inertial-frame heading's,
+    /// [`super::inertial`]), times the fits' [`SinusoidFit::trend_inflation`] (the slope shares
+    /// the window with a sinusoid of about its length).
     fn apply_drift(&mut self, core: &mut FineCore<T, SWAY_STATES>, now_s: f64) {
         let window = self.search.window();
-        if !(window > 0.0 && self.sum_t > 0.0) {
+        let n = self.search.len();
+        if !(window > 0.0 && self.sum_t > 0.0 && n >= 8) {
             return;
         }
+        let (times, t0) = (self.search.times(), self.search.t0());
+        let t_mid = t0 + 0.5 * window;
+        let min_amp = self.config.min_amplitude_rad.to_f64();
+        let fits = [self.search.result(0), self.search.result(1)];
+        let sinusoid = |axis: usize, tau: f64| {
+            fits[axis]
+                .filter(|f| f.omega.is_finite() && f.amplitude() >= min_amp)
+                .map_or(0.0, |f| {
+                    f.cos * libm::cos(f.omega * tau) + f.sin * libm::sin(f.omega * tau)
+                })
+        };
+        // Normal equations of y_k = m - A_h(t_k) (phi_0 + s tau_k), unknowns (m_r, m_p, phi_0, s).
+        let mut ata = SMatrix::<f64, 6, 6>::zeros();
+        let mut atb = SVector::<f64, 6>::zeros();
+        for (k, &t_k) in times.iter().enumerate().take(n) {
+            let (tau0, tau) = (t_k - t0, t_k - t_mid);
+            let pitch = self.search.values(1)[k];
+            let q = attitude::from_euler(0.0, pitch, self.yaw[k]);
+            let a = euler_jacobian(&q);
+            for axis in 0..2 {
+                let y = self.search.values(axis)[k] - sinusoid(axis, tau0);
+                let mut row = SVector::<f64, 6>::zeros();
+                row[axis] = 1.0;
+                for j in 0..2 {
+                    row[2 + j] = -a[(axis, j)];
+                    row[4 + j] = -a[(axis, j)] * tau;
+                }
+                ata += row * row.transpose();
+                atb += row * y;
+            }
+        }
+        let Some(sol) = ata.cholesky().map(|c| c.solve(&atb)) else {
+            return;
+        };
+        let slope = [sol[4], sol[5]];
+        let inflation = fits
+            .iter()
+            .flatten()
+            .map(|f| f.trend_inflation)
+            .filter(|v| v.is_finite())
+            .fold(1.0_f64, f64::max);
         let q_open = self.open_loop();
-        let jac = euler_jacobian(&q_open);
         let c_mean = self.sum_c / T::c(self.sum_t);
         let [e_n, e_e] = core.strapdown().e_h();
-        let e_hat = Vector3::new(e_n, e_e, T::zero());
         let (b_hat, _) = core.strapdown().biases();
         let omega = core.strapdown().omega_ie_c();
-        // The open-loop attitude error over the window, `phi_open = phi_core + delta`: `delta`
-        // the known rotation from the filter's attitude to the open-loop one now, carried back
-        // to the window's middle by the drift (`phi' = -(e + C b)`).
         let delta = -attitude::rotation_vector_of(&(q_open * core.strapdown().q_b_c().inverse()));
-        let drift = e_hat + c_mean * b_hat;
-        let back_s = now_s - (self.search.t0() + 0.5 * window);
-        let phi_mid = delta + drift * T::c(back_s);
+        let drift = Vector3::new(e_n, e_e, T::zero()) + c_mean * b_hat;
+        let phi_mid = delta + drift * T::c(now_s - t_mid);
         let known = drift + omega.cross(&phi_mid);
         let n_g = self.config.fine.noise.arw_rad_per_sqrt_s;
-        for axis in 0..2 {
-            let Some(fit) = self
-                .search
-                .result(axis)
-                .filter(|f| f.trend.is_finite() && f.trend_inflation.is_finite())
-            else {
-                continue;
-            };
-            let r = T::c(1.2 * fit.trend_inflation.max(1.0) / window) * n_g * n_g;
-            let a_row = jac.row(axis).into_owned();
-            let ac = a_row * c_mean;
-            let aw = a_row * omega.cross_matrix();
+        let r = T::c(1.2 * inflation / window) * n_g * n_g;
+        let wx = omega.cross_matrix();
+        for (k, &s_k) in slope.iter().enumerate() {
             let mut h = SVector::<T, SWAY_STATES>::zeros();
-            h[model::EARTH] = -a_row[0];
-            h[model::EARTH + 1] = -a_row[1];
-            for k in 0..3 {
-                h[model::GYRO_BIAS + k] = ac[k];
-                h[model::ATT + k] = aw[k];
+            h[model::EARTH + k] = T::one();
+            for j in 0..3 {
+                h[model::GYRO_BIAS + j] = -c_mean[(k, j)];
+                h[model::ATT + j] = -wx[(k, j)];
             }
-            let z = T::c(fit.trend) - (a_row * known)[0];
+            let z = T::c(s_k) + known[k];
             let innovation = z - core.predict(&h);
             core.update(&h, innovation, r, T::c(1e6));
         }
@@ -484,8 +517,12 @@ impl<T: Scalar> Extension<T, SWAY_STATES> for SwayModel<T> {
         }
         match self.status.phase {
             SwayPhase::Identifying => {
-                let (roll, pitch, _) = attitude::euler(&self.open_loop());
+                let (roll, pitch, yaw) = attitude::euler(&self.open_loop());
+                let k = self.search.len();
                 let full = !self.search.push(elapsed_s, [roll.to_f64(), pitch.to_f64()]);
+                if k < search::BUFFER_LEN {
+                    self.yaw[k] = yaw.to_f64();
+                }
                 let first = if self.search.is_empty() {
                     elapsed_s
                 } else {
@@ -510,8 +547,11 @@ impl<T: Scalar> Extension<T, SWAY_STATES> for SwayModel<T> {
                     } else {
                         // A period too long for the window: keep buffering.
                         self.status.phase = SwayPhase::Identifying;
-                        let (roll, pitch, _) = attitude::euler(&self.open_loop());
-                        let _ = self.search.push(elapsed_s, [roll.to_f64(), pitch.to_f64()]);
+                        let (roll, pitch, yaw) = attitude::euler(&self.open_loop());
+                        let k = self.search.len();
+                        if self.search.push(elapsed_s, [roll.to_f64(), pitch.to_f64()]) {
+                            self.yaw[k] = yaw.to_f64();
+                        }
                     }
                 }
             }

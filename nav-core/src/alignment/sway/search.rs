@@ -6,7 +6,7 @@
 use nalgebra::{Matrix4, Vector4};
 
 /// Most samples a search keeps.
-pub const BUFFER_LEN: usize = 256;
+pub const BUFFER_LEN: usize = 128;
 
 /// A least-squares fit `y = mean + trend (t - t0) + cos a(t) + sin b(t)` over `a(t) =
 /// w (t - t0)`.
@@ -203,6 +203,16 @@ impl<const AXES: usize> Search<AXES> {
         }
         self.n += 1;
         true
+    }
+
+    /// The times of the samples kept [s].
+    pub fn times(&self) -> &[f64] {
+        &self.t[..self.n]
+    }
+
+    /// The values of axis `axis` kept [rad].
+    pub fn values(&self, axis: usize) -> &[f64] {
+        &self.y[axis][..self.n]
     }
 
     /// Samples kept.
