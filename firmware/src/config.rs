@@ -54,6 +54,10 @@ pub enum ArgError<'a> {
     Option(OptionError),
     /// An option without its value.
     NoValue(&'a str),
+    /// An argument after the last positional one.
+    Extra(&'a str),
+    /// The solution log would overwrite the recording.
+    SameFile,
 }
 
 impl fmt::Display for ArgError<'_> {
@@ -82,6 +86,8 @@ impl fmt::Display for ArgError<'_> {
             ),
             Self::Option(e) => write!(f, "{e}"),
             Self::NoValue(name) => write!(f, "--{name} has no value"),
+            Self::Extra(word) => write!(f, "unexpected argument {word} after CAL_FILE"),
+            Self::SameFile => f.write_str("OUT_FILE is IMU_FILE: refusing to overwrite the recording"),
         }
     }
 }
@@ -170,6 +176,12 @@ impl Args {
             Ok(s) => Some(c_path(s).ok_or(ArgError::Invalid(NAMES[7]))?),
             Err(_) => None,
         };
+        if let Some(extra) = args.next() {
+            return Err(ArgError::Extra(extra));
+        }
+        if imu_path == out_path {
+            return Err(ArgError::SameFile);
+        }
         // The device's datasheet figures unless a grade is given.
         run.noise = sensor_noise(&noise.unwrap_or(device.noise()));
         Ok(Self {

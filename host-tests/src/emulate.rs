@@ -848,9 +848,6 @@ impl EmulateJob<'_> {
 /// Writes the error series as CSV: `t_s`, `phi_{n,e,d}_rad`, `dv_{n,e,d}_mps`,
 /// `dr_{n,e,d}_m`.
 pub fn write_errors_csv(path: &Path, errors: &[ErrorSample]) -> anyhow::Result<()> {
-    let file =
-        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-    let mut w = std::io::BufWriter::new(file);
     let write = |w: &mut std::io::BufWriter<std::fs::File>| -> std::io::Result<()> {
         writeln!(
             w,
@@ -866,5 +863,5 @@ pub fn write_errors_csv(path: &Path, errors: &[ErrorSample]) -> anyhow::Result<(
         }
         w.flush()
     };
-    write(&mut w).with_context(|| format!("writing {}", path.display()))
+    crate::atomic::write(path, write).with_context(|| format!("writing {}", path.display()))
 }

@@ -16,7 +16,7 @@
 use crate::text_error::{TextError, TextErrorKind, csv_header};
 use serde::Serialize;
 use std::fs::File;
-use std::io::{self, BufReader, BufWriter, Read, Write};
+use std::io::{self, BufReader, Read, Write};
 use std::path::Path;
 
 /// Column names without the optional temperature.
@@ -172,10 +172,7 @@ pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<ImuCsv, CsvError> {
 
 /// Writes `csv` to `path` (created or truncated).
 pub fn write(path: &Path, csv: &ImuCsv) -> Result<(), CsvError> {
-    let file = File::create(path).map_err(|e| TextError::io(path, e))?;
-    let mut out = BufWriter::new(file);
-    write_to(&mut out, csv).map_err(|e| TextError::io(path, e))?;
-    out.flush().map_err(|e| TextError::io(path, e))
+    crate::atomic::write(path, |out| write_to(out, csv)).map_err(|e| TextError::io(path, e))
 }
 
 /// One row as written: the field names are the column names. Floats are printed in their

@@ -28,6 +28,7 @@
 #![warn(missing_docs)]
 
 pub mod align_bench;
+pub mod atomic;
 pub mod bench;
 pub mod emulate;
 pub mod generate;

@@ -20,7 +20,7 @@ use hal_adapters::recording::{
 };
 use hal_adapters::{Imu, ImuSample};
 use std::fs::{self, File};
-use std::io::{BufReader, BufWriter, Read, Write};
+use std::io::{BufReader, Read, Write};
 use std::path::Path;
 
 /// A recording file's format.
@@ -309,12 +309,14 @@ pub fn write_binary(
     header
         .validate()
         .map_err(|e| anyhow!("writing {}: {e}", path.display()))?;
-    let mut out = BufWriter::new(File::create(path).with_context(context)?);
-    out.write_all(&header.encode()).with_context(context)?;
-    for r in records {
-        out.write_all(&r.encode()).with_context(context)?;
-    }
-    out.flush().with_context(context)
+    crate::atomic::write(path, |out| -> std::io::Result<()> {
+        out.write_all(&header.encode())?;
+        for r in records {
+            out.write_all(&r.encode())?;
+        }
+        Ok(())
+    })
+    .with_context(context)
 }
 
 /// Writes `recording` to `path`: CSV when the name ends in `.csv`, binary otherwise.

@@ -24,7 +24,7 @@ use nav_core::Vector3;
 use nav_core::attitude::{euler, from_euler};
 use nav_core::output::CSV_HEADER;
 use std::fs::File;
-use std::io::{self, BufReader, BufWriter, Read, Write};
+use std::io::{self, BufReader, Read, Write};
 use std::path::Path;
 
 /// The column names, in the order the writer uses (nav-core's [`CSV_HEADER`]).
@@ -97,13 +97,15 @@ impl<W: Write> TruthWriter<W> {
 
 /// Writes `rows` to `path` (created or truncated).
 pub fn write(path: &Path, rows: &[Truth]) -> Result<(), TruthCsvError> {
-    let io_error = |e| TextError::io(path, e);
-    let file = File::create(path).map_err(io_error)?;
-    let mut w = TruthWriter::new(BufWriter::new(file)).map_err(io_error)?;
-    for row in rows {
-        w.write(row).map_err(io_error)?;
-    }
-    w.finish().map_err(io_error)?;
+    crate::atomic::write(path, |out| -> std::io::Result<()> {
+        let mut w = TruthWriter::new(out)?;
+        for row in rows {
+            w.write(row)?;
+        }
+        w.finish()?;
+        Ok(())
+    })
+    .map_err(|e| TextError::io(path, e))?;
     Ok(())
 }
 

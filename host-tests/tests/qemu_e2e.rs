@@ -301,6 +301,36 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
     assert_eq!(code, 3, "latitude 95 must be refused: {log}");
     // A window shorter than the method's minimum, refused naming it (as `nav replay` does).
     std::fs::write(d.join("good.bin"), &bytes).unwrap();
+    // Implausible site values, an extra argument and the log over the recording: bad
+    // arguments (exit 3), the recording untouched.
+    for (args, expect) in [
+        (
+            &["good.bin", "out.csv", "45", "7.5", "-1e7", "10"][..],
+            "height -10000000 m is not within",
+        ),
+        (
+            &["good.bin", "out.csv", "45", "400", "150", "10"],
+            "longitude 400 deg",
+        ),
+        (
+            &[
+                "good.bin", "out.csv", "45", "7.5", "150", "10", "40", "cal.txt", "x",
+            ],
+            "unexpected argument x",
+        ),
+        (
+            &["good.bin", "good.bin", "45", "7.5", "150", "10"],
+            "refusing to overwrite the recording",
+        ),
+    ] {
+        let (code, log) = run_firmware(d, args);
+        assert_eq!(code, 3, "{args:?}: {log}");
+        assert!(
+            log.contains(expect),
+            "{args:?}: expected '{expect}' in:\n{log}"
+        );
+        assert_eq!(std::fs::read(d.join("good.bin")).unwrap(), bytes);
+    }
     let (code, log) = run_firmware(d, &["good.bin", "out.csv", "45", "7.5", "150", "0"]);
     assert_eq!(code, 3, "a window of 0 s: {log}");
     assert!(

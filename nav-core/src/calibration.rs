@@ -67,7 +67,7 @@ pub struct ImuCalibration {
 }
 
 /// Why a calibration could not be loaded.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum CalibrationError {
     /// A line is not `key = values`.
@@ -93,7 +93,24 @@ pub enum CalibrationError {
     /// `I + S + N` of a triad cannot be inverted, or a value is implausible (|scale| or
     /// |misalignment| >= 0.5).
     Singular,
+    /// A value beyond physical plausibility: a bias above [`MAX_GYRO_BIAS_RAD_S`] or
+    /// [`MAX_ACCEL_BIAS_M_S2`], a scale factor or misalignment of 50 % or more.
+    Implausible {
+        /// The key.
+        key: &'static str,
+        /// The largest magnitude accepted, in the key's unit.
+        limit: f64,
+    },
 }
+
+/// Largest gyro bias accepted [rad/s] (10 deg/s).
+pub const MAX_GYRO_BIAS_RAD_S: f64 = 10.0 * core::f64::consts::PI / 180.0;
+
+/// Largest accelerometer bias accepted [m/s^2] (1 g).
+pub const MAX_ACCEL_BIAS_M_S2: f64 = 9.806_65;
+
+/// Largest scale-factor error or misalignment accepted [-] (exclusive).
+pub const MAX_SCALE: f64 = 0.5;
 
 impl fmt::Display for CalibrationError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -109,6 +126,10 @@ impl fmt::Display for CalibrationError {
             Self::Duplicate { line } => write!(f, "calibration line {line}: key given twice"),
             Self::Singular => f.write_str(
                 "calibration: scale/misalignment matrix is not invertible or implausible",
+            ),
+            Self::Implausible { key, limit } => write!(
+                f,
+                "calibration: {key} is beyond physical plausibility (magnitude at most {limit})"
             ),
         }
     }
@@ -161,6 +182,33 @@ impl ImuCalibration {
     /// The compensation in the working scalar; fails when a triad's model cannot be inverted
     /// or is implausible.
     pub fn compensation<T: Scalar>(&self) -> Result<ImuCompensation<T>, CalibrationError> {
+        let limits = [
+            MAX_GYRO_BIAS_RAD_S,
+            MAX_SCALE,
+            MAX_SCALE,
+            MAX_ACCEL_BIAS_M_S2,
+            MAX_SCALE,
+            MAX_SCALE,
+        ];
+        for (k, (&key, &limit)) in KEYS.iter().zip(&limits).enumerate() {
+            let triad = if k < 3 { &self.gyro } else { &self.accel };
+            let values: &[f64] = match k % 3 {
+                0 => &triad.bias,
+                1 => &triad.scale,
+                _ => &triad.misalignment,
+            };
+            // Scale and misalignment: exclusive (a scale of -1 zeroes the axis).
+            let ok = |v: f64| {
+                if k % 3 == 0 {
+                    v.abs() <= limit
+                } else {
+                    v.abs() < limit
+                }
+            };
+            if !values.iter().all(|&v| ok(v)) {
+                return Err(CalibrationError::Implausible { key, limit });
+            }
+        }
         Ok(ImuCompensation {
             gyro: TriadCompensation::new(&self.gyro)?,
             accel: TriadCompensation::new(&self.accel)?,
@@ -249,6 +297,7 @@ impl<T: Scalar> Default for ImuCompensation<T> {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
     use super::*;
 
     #[test]
@@ -311,11 +360,46 @@ mod tests {
                 "gyro_scale = 0 0 0\ngyro_scale = 0 0 0",
                 Duplicate { line: 2 },
             ),
-            ("accel_scale = -1 0 0", Singular),
-            ("accel_misalignment = 0.7 0 0 0 0 0", Singular),
+            (
+                "accel_scale = -1 0 0",
+                Implausible {
+                    key: "accel_scale",
+                    limit: MAX_SCALE,
+                },
+            ),
+            (
+                "accel_misalignment = 0.7 0 0 0 0 0",
+                Implausible {
+                    key: "accel_misalignment",
+                    limit: MAX_SCALE,
+                },
+            ),
+            (
+                "accel_bias_m_s2 = 1e6 0 0",
+                Implausible {
+                    key: "accel_bias_m_s2",
+                    limit: MAX_ACCEL_BIAS_M_S2,
+                },
+            ),
+            (
+                "gyro_bias_rad_s = 0 0 -0.2",
+                Implausible {
+                    key: "gyro_bias_rad_s",
+                    limit: MAX_GYRO_BIAS_RAD_S,
+                },
+            ),
         ];
         for (text, err) in cases {
             assert_eq!(ImuCalibration::parse(text), Err(err), "{text}");
         }
+        // At the limits: accepted (a 1 g bias, a 10 deg/s one, scale 0.49).
+        let edge =
+            "accel_bias_m_s2 = 9.80665 0 0\ngyro_bias_rad_s = 0.174 0 0\ngyro_scale = 0.49 0 0";
+        assert!(ImuCalibration::parse(edge).is_ok());
+        let msg = std::format!(
+            "{}",
+            ImuCalibration::parse("accel_bias_m_s2 = 1e6 0 0").unwrap_err()
+        );
+        assert!(msg.contains("accel_bias_m_s2"), "{msg}");
     }
 }

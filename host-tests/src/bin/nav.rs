@@ -34,8 +34,6 @@ use host_tests::replay::{FileReport, ImuDevice, ReplayOptions, replay_file};
 use nav_core::alignment::{AlignMethod, LeverArm};
 use nav_core::navigator::config;
 use nav_core::{AttitudeMethod, ImuCalibration, NavFrame, VerticalChannel};
-use std::fs::File;
-use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -396,13 +394,14 @@ impl ReplayArgs {
 fn replay(a: ReplayArgs) -> Result<()> {
     let options = a.options()?;
     let (imu, out) = (&a.imu, &a.out);
-    let file = File::create(out).with_context(|| format!("creating {}", out.display()))?;
-    let writer = BufWriter::new(file);
+    host_tests::atomic::refuse_same_file(&[imu], out)?;
     let started = std::time::Instant::now();
-    let report = match a.precision {
+    // The log is renamed into place only after a successful replay (nothing is left at
+    // `--out` otherwise, and an existing file there is untouched).
+    let report = host_tests::atomic::write(out, |writer| match a.precision {
         Precision::F32 => replay_file::<f32, _>(imu, &options, writer),
         Precision::F64 => replay_file::<f64, _>(imu, &options, writer),
-    }
+    })
     .with_context(|| format!("replay of {} into {}", imu.display(), out.display()))?;
     let seconds = started.elapsed().as_secs_f64();
     print_summary(imu, out, a.precision, &report);
@@ -659,20 +658,21 @@ fn write_readouts(
 ) -> Result<()> {
     use host_tests::oscillator::{file::OscCsvWriter, simulate_oscillator};
     let traj = opts.scenario.build()?;
-    let file =
-        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-    let mut w = OscCsvWriter::new(std::io::BufWriter::new(file))?;
-    let mut failed = None;
-    simulate_oscillator(traj.as_ref(), &opts.params, opts.seconds, |_, s, _| {
-        if failed.is_none() {
-            failed = w.write_sample(s).err();
+    host_tests::atomic::write(path, |out| -> Result<()> {
+        let mut w = OscCsvWriter::new(out)?;
+        let mut failed = None;
+        simulate_oscillator(traj.as_ref(), &opts.params, opts.seconds, |_, s, _| {
+            if failed.is_none() {
+                failed = w.write_sample(s).err();
+            }
+        })?;
+        if let Some(e) = failed {
+            return Err(e.into());
         }
-    })?;
-    if let Some(e) = failed {
-        return Err(e).with_context(|| format!("writing {}", path.display()));
-    }
-    w.finish()?;
-    Ok(())
+        w.finish()?;
+        Ok(())
+    })
+    .with_context(|| format!("writing {}", path.display()))
 }
 
 fn main() -> ExitCode {
@@ -760,21 +760,18 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             use host_tests::oscillator::{file as osc_file, replay};
             let rows = osc_file::read(&file)?;
-            let mut sink = match &out {
-                Some(p) => Some(std::io::BufWriter::new(
-                    std::fs::File::create(p)
-                        .with_context(|| format!("creating {}", p.display()))?,
-                )),
-                None => None,
+            let run = |w: Option<&mut dyn std::io::Write>| match precision {
+                Precision::F32 => replay::replay::<f32>(&rows, f0_hz, !seed_method, w),
+                Precision::F64 => replay::replay::<f64>(&rows, f0_hz, !seed_method, w),
             };
-            let w = sink.as_mut().map(|w| w as &mut dyn std::io::Write);
-            let summary = match precision {
-                Precision::F32 => replay::replay::<f32>(&rows, f0_hz, !seed_method, w)?,
-                Precision::F64 => replay::replay::<f64>(&rows, f0_hz, !seed_method, w)?,
+            let summary = match &out {
+                Some(p) => {
+                    host_tests::atomic::refuse_same_file(&[&file], p)?;
+                    host_tests::atomic::write(p, |w| run(Some(w)))
+                        .with_context(|| format!("writing {}", p.display()))?
+                }
+                None => run(None)?,
             };
-            if let Some(mut w) = sink {
-                std::io::Write::flush(&mut w)?;
-            }
             print!("{summary}");
             Ok(())
         }
@@ -872,6 +869,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Convert { input, out } => {
             let format = recording_io::detect(&input)?;
+            host_tests::atomic::refuse_same_file(&[&input], &out)?;
             let recording = recording_io::read(&input)?;
             recording_io::write(&out, &recording)?;
             println!(

@@ -16,7 +16,7 @@ use super::OscSample;
 use crate::text_error::{TextError, TextErrorKind, csv_header};
 use nav_core::Vector3;
 use std::fs::File;
-use std::io::{self, BufReader, BufWriter, Read, Write};
+use std::io::{self, BufReader, Read, Write};
 use std::path::Path;
 
 /// The columns.
@@ -77,13 +77,14 @@ impl<W: Write> OscCsvWriter<W> {
 
 /// Writes `samples` to `path` (created or truncated).
 pub fn write(path: &Path, samples: &[OscSample]) -> Result<(), OscCsvError> {
-    let io_err = |e| TextError::io(path, e);
-    let file = File::create(path).map_err(io_err)?;
-    let mut w = OscCsvWriter::new(BufWriter::new(file)).map_err(io_err)?;
-    for s in samples {
-        w.write_sample(s).map_err(io_err)?;
-    }
-    w.finish().map_err(io_err)?.flush().map_err(io_err)
+    crate::atomic::write(path, |out| -> std::io::Result<()> {
+        let mut w = OscCsvWriter::new(out)?;
+        for s in samples {
+            w.write_sample(s)?;
+        }
+        w.finish()?.flush()
+    })
+    .map_err(|e| TextError::io(path, e))
 }
 
 /// Reads `path`.

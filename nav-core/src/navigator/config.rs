@@ -133,8 +133,14 @@ impl RunConfig {
         if !self.lon_deg.is_finite() {
             return Err(ConfigError::NotFinite("the longitude"));
         }
+        if !(-180.0..=180.0).contains(&self.lon_deg) {
+            return Err(ConfigError::Longitude(self.lon_deg));
+        }
         if !self.h_m.is_finite() {
             return Err(ConfigError::NotFinite("the height"));
+        }
+        if !(MIN_HEIGHT_M..=MAX_HEIGHT_M).contains(&self.h_m) {
+            return Err(ConfigError::Height(self.h_m));
         }
         if !self.align_seconds.is_finite() {
             return Err(ConfigError::NotFinite("the alignment time"));
@@ -259,11 +265,22 @@ impl fmt::Display for OptionError {
 
 impl core::error::Error for OptionError {}
 
+/// Lowest site height accepted [m] (below the deepest ocean trench).
+pub const MIN_HEIGHT_M: f64 = -12_000.0;
+
+/// Highest site height accepted [m]: the normal-gravity model's validity, far above aircraft.
+pub const MAX_HEIGHT_M: f64 = 100_000.0;
+
 /// Why a run configuration was refused (before any sample).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ConfigError {
     /// The latitude is not within [-90, 90] deg.
     Latitude(f64),
+    /// The longitude is not within [-180, 180] deg (refused, not wrapped: 400 is more likely a
+    /// typing error than 40).
+    Longitude(f64),
+    /// The height is not within [`MIN_HEIGHT_M`, `MAX_HEIGHT_M`].
+    Height(f64),
     /// A value that must be finite is not (what).
     NotFinite(&'static str),
     /// `log_every` is 0.
@@ -281,6 +298,11 @@ impl fmt::Display for ConfigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Latitude(lat) => write!(f, "latitude {lat} deg is not within [-90, 90]"),
+            Self::Longitude(lon) => write!(f, "longitude {lon} deg is not within [-180, 180]"),
+            Self::Height(h) => write!(
+                f,
+                "height {h} m is not within [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m (the Earth model's range)"
+            ),
             Self::NotFinite(what) => write!(f, "{what} is not a finite number"),
             Self::LogEvery => f.write_str("log_every must be at least 1"),
             Self::BiasPrior(k) => {
@@ -400,6 +422,30 @@ mod tests {
         for (c, msg) in cases {
             assert_eq!(c.validate().unwrap_err().to_string(), msg);
         }
+        for (c, msg) in [
+            (
+                RunConfig {
+                    lon_deg: 400.0,
+                    ..config()
+                },
+                "longitude 400 deg is not within [-180, 180]",
+            ),
+            (
+                RunConfig {
+                    h_m: -1e7,
+                    ..config()
+                },
+                "height -10000000 m is not within [-12000, 100000] m (the Earth model's range)",
+            ),
+        ] {
+            assert_eq!(c.validate().unwrap_err().to_string(), msg);
+        }
+        let edge = RunConfig {
+            lon_deg: -180.0,
+            h_m: -12_000.0,
+            ..config()
+        };
+        assert_eq!(edge.validate(), Ok(()));
         let mut c = config();
         c.calibration.accel.scale = [-1.0, 0.0, 0.0];
         assert!(matches!(c.validate(), Err(ConfigError::Calibration(_))));

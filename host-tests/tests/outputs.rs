@@ -1,0 +1,140 @@
+//! Outputs are whole or absent, inputs are never overwritten, a run that navigated nothing
+//! fails, and implausible sites are refused: through the real command line.
+
+use host_tests::generate::Stationary;
+use host_tests::recording_io;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn nav(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_nav"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+fn replay_args<'a>(imu: &'a str, out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut v = vec![
+        "replay",
+        "--imu",
+        imu,
+        "--out",
+        out,
+        "--lat",
+        "45",
+        "--lon",
+        "7.5",
+        "--h",
+        "150",
+        "--align-seconds",
+        "10",
+    ];
+    v.extend_from_slice(extra);
+    v
+}
+
+fn recording(dir: &Path, seconds: f64) -> String {
+    let s = Stationary {
+        seconds,
+        ..Stationary::default()
+    };
+    let path = dir.join("imu.bin");
+    recording_io::write(&path, &s.recording().unwrap()).unwrap();
+    path.to_str().unwrap().to_owned()
+}
+
+#[test]
+fn output_equal_to_the_input_is_refused_and_the_input_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = recording(dir.path(), 20.0);
+    let before = std::fs::read(&imu).unwrap();
+    let o = nav(&replay_args(&imu, &imu, &[]));
+    assert!(!o.status.success());
+    assert!(text(&o).contains("is the input"), "{}", text(&o));
+    assert_eq!(std::fs::read(&imu).unwrap(), before);
+    // The same for `nav convert`, under another spelling of the path.
+    let other = dir.path().join(".").join("imu.bin");
+    let o = nav(&["convert", &imu, other.to_str().unwrap()]);
+    assert!(!o.status.success(), "{}", text(&o));
+    assert_eq!(std::fs::read(&imu).unwrap(), before);
+}
+
+#[test]
+fn a_failed_replay_leaves_an_existing_output_untouched_and_no_temporary() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = recording(dir.path(), 20.0);
+    let out = dir.path().join("log.csv");
+    std::fs::write(&out, "previous run\n").unwrap();
+    let out_s = out.to_str().unwrap();
+    // Fails after the log was opened: the recording ends during the alignment.
+    let o = nav(&replay_args(&imu, out_s, &["--align-seconds", "30"]));
+    assert!(!o.status.success(), "{}", text(&o));
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "previous run\n");
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+    // A missing input: refused, nothing created.
+    let fresh = dir.path().join("fresh.csv");
+    let o = nav(&replay_args(
+        "/nonexistent.bin",
+        fresh.to_str().unwrap(),
+        &[],
+    ));
+    assert!(!o.status.success());
+    assert!(!fresh.exists());
+    // A good run replaces it.
+    let o = nav(&replay_args(&imu, out_s, &[]));
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(std::fs::read_to_string(&out).unwrap().starts_with("t_s"));
+}
+
+#[test]
+fn a_run_that_navigates_nothing_fails_with_the_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    // 10 s exactly: the alignment uses every sample, no navigation step is left.
+    let imu = recording(dir.path(), 10.0);
+    let out = dir.path().join("log.csv");
+    let o = nav(&replay_args(&imu, out.to_str().unwrap(), &[]));
+    assert!(!o.status.success(), "{}", text(&o));
+    let t = text(&o);
+    assert!(t.contains("no navigation step"), "{t}");
+    assert!(
+        t.contains("4000 samples: 4000 used by the alignment"),
+        "{t}"
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn implausible_longitude_and_height_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = recording(dir.path(), 20.0);
+    let out = dir.path().join("log.csv");
+    let out_s = out.to_str().unwrap();
+    for (key, value, msg) in [
+        (
+            "--lon",
+            "400",
+            "longitude 400 deg is not within [-180, 180]",
+        ),
+        ("--h", "-1e7", "height -10000000 m is not within"),
+    ] {
+        let mut args = replay_args(&imu, out_s, &[]);
+        let i = args.iter().position(|a| *a == key).unwrap();
+        args[i + 1] = value;
+        let o = nav(&args);
+        assert!(!o.status.success());
+        assert!(text(&o).contains(msg), "{key}: {}", text(&o));
+        assert!(!out.exists());
+    }
+}
