@@ -401,6 +401,49 @@ pub enum ReplaySource {
     Memory(Replay<MemReader>),
 }
 
+/// Most records read to check the header's rate against the timestamps.
+const RATE_CHECK_RECORDS: usize = 201;
+
+/// Largest relative difference between the header's rate and the timestamps' median rate.
+pub const RATE_TOLERANCE: f64 = 0.01;
+
+/// Refuses a binary recording whose header rate contradicts its timestamps: the median interval
+/// of the first [`RATE_CHECK_RECORDS`] records against `1 / rate_hz`, within
+/// [`RATE_TOLERANCE`]. Records that do not decode are left to the replay's own errors.
+fn check_rate(path: &Path, header: &Header) -> Result<()> {
+    let mut file = BufReader::new(File::open(path)?);
+    let mut skip = [0u8; HEADER_LEN];
+    file.read_exact(&mut skip)?;
+    let (mut prev, mut intervals) = (header.t0_ns, Vec::with_capacity(RATE_CHECK_RECORDS));
+    let mut buf = [0u8; RECORD_LEN];
+    for index in 0..RATE_CHECK_RECORDS.min(header.sample_count as usize) {
+        if file.read_exact(&mut buf).is_err() {
+            break;
+        }
+        let offset = (HEADER_LEN + RECORD_LEN * index) as u64;
+        let Ok(r) = Record::decode(&buf, offset, index as u32) else {
+            break;
+        };
+        intervals.push(r.t_ns.wrapping_sub(prev) as f64 * 1e-9);
+        prev = r.t_ns;
+    }
+    if intervals.len() < 3 {
+        return Ok(());
+    }
+    intervals.sort_by(f64::total_cmp);
+    let median = intervals[intervals.len() / 2];
+    let nominal = 1.0 / header.rate_hz;
+    ensure!(
+        (median / nominal - 1.0).abs() <= RATE_TOLERANCE,
+        "recording {}: the header's rate {} Hz contradicts the timestamps (median interval {median} s, {:.6} Hz over the first {} records)",
+        path.display(),
+        header.rate_hz,
+        1.0 / median,
+        intervals.len()
+    );
+    Ok(())
+}
+
 impl ReplaySource {
     /// Opens `path` for replay (format from [`detect`]). Errors name the file.
     pub fn open(path: &Path) -> Result<(Self, Format)> {
@@ -409,8 +452,25 @@ impl ReplaySource {
         let source = match format {
             Format::Binary => {
                 let file = File::open(path).with_context(context)?;
+                let len = file.metadata().with_context(context)?.len();
                 let reader = StdReader::new(BufReader::new(file));
-                Self::File(Replay::new(reader).map_err(|e| in_file(path, SourceError::from(e)))?)
+                let replay =
+                    Replay::new(reader).map_err(|e| in_file(path, SourceError::from(e)))?;
+                // The header's count against the file's length, before anything is navigated.
+                let count = u64::from(replay.header().sample_count);
+                let expected = HEADER_LEN as u64 + RECORD_LEN as u64 * count;
+                ensure!(
+                    len == expected,
+                    "recording {}: the header says {count} samples ({expected} bytes) but the file has {len} bytes ({})",
+                    path.display(),
+                    if len < expected {
+                        "truncated"
+                    } else {
+                        "trailing bytes after the last record"
+                    }
+                );
+                check_rate(path, replay.header())?;
+                Self::File(replay)
             }
             Format::Csv | Format::Psins | Format::KfGins => {
                 Self::from_recording(&read(path)?).with_context(context)?

@@ -58,8 +58,14 @@ fn truncated_binary() {
         msg.contains(&format!("recording {}", path.display())),
         "{msg}"
     );
-    assert!(msg.contains("byte offset 4048 (record 100)"), "{msg}");
-    assert!(msg.contains("truncated") || msg.contains("ends"), "{msg}");
+    // Refused before anything is navigated: the header's count against the file's length.
+    let expected = HEADER_LEN + RECORD_LEN * 8000;
+    assert!(
+        msg.contains(&format!(
+            "the header says 8000 samples ({expected} bytes) but the file has {cut} bytes (truncated)"
+        )),
+        "{msg}"
+    );
     // The converter reads binaries with the same checks.
     let msg = format!("{:#}", recording_io::read(&path).unwrap_err());
     assert!(
@@ -264,4 +270,36 @@ fn nan_and_backwards_time_are_flagged_and_skipped() {
         );
         assert!(row.v_ned.iter().all(|v| v.abs() < 1e-3), "{row:?}");
     }
+}
+
+/// The header's sample count against the file's length, and its rate against the timestamps:
+/// refused before anything is navigated.
+#[test]
+fn header_count_and_rate_are_checked_against_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = clean().to_bytes().unwrap();
+    bytes.push(0);
+    let path = write_bytes(dir.path(), "trailing.bin", &bytes);
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.contains("but the file has") && msg.contains("trailing bytes after the last record"),
+        "{msg}"
+    );
+    // A 100 Hz header over 400 Hz timestamps.
+    let mut rec = clean();
+    rec.rate_hz = 100.0;
+    let path = dir.path().join("rate.bin");
+    recording_io::write(&path, &rec).unwrap();
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.contains("the header's rate 100 Hz contradicts the timestamps")
+            && msg.contains("400.000000 Hz"),
+        "{msg}"
+    );
+    // Within 1 %: accepted.
+    let mut rec = clean();
+    rec.rate_hz = 400.0 * 1.005;
+    recording_io::write(&path, &rec).unwrap();
+    let (fr, _) = replay::<f64>(&path, &options());
+    assert!(fr.report.nav_steps > 0);
 }
