@@ -206,7 +206,7 @@ mod app {
                 _ => {}
             }
         }
-        // Benchmark: the gyro-free oscillator estimator (seed 001) on synthetic readouts.
+        // Benchmark: the gyro-free oscillator estimator ([Oscillator INS]) on synthetic readouts.
         if words.peek() == Some(&"--osc-bench") {
             firmware::osc_bench::run();
             exit(ExitCode::Success)

@@ -1,5 +1,5 @@
-//! `--osc-bench`: the gyro-free oscillator estimator (seed 001, `nav_core::oscillator`) in `f32`
-//! on the MCU, timed per readout.
+//! `--osc-bench`: the gyro-free oscillator estimator ([Oscillator INS], `nav_core::oscillator`) in
+//! `f32` on the MCU, timed per readout.
 //!
 //! The board has no oscillator sensor, so the readouts are made on the target: the exact
 //! solution of an undamped isotropic oscillator (a fixed ellipse under a constant specific force)

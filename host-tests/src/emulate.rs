@@ -1,11 +1,11 @@
-//! SINS emulator for test stands (seed 004; issue 4, requirement 5): what a strapdown INS with
+//! SINS emulator for test stands ([Stand model]): what a strapdown INS with
 //! given sensor and initial errors would display along a known (truth) trajectory, without IMU
 //! data.
 //!
 //! The errors are propagated with the linearised INS error model in the NED frame, in the
-//! phi-angle (true-frame) form of Titterton & Weston ch. 12 and Groves 2nd ed. §14.2 (seed 000
-//! eq. (22) in local-level axes). State: misalignment `phi_n`, velocity error `dv_eb_n`,
-//! position error `(d_lat, d_lon, d_h)`:
+//! phi-angle (true-frame) form of Titterton & Weston ch. 12 and Groves 2nd ed. §14.2
+//! ([Berdinskikh et al., eq. 22] in local-level axes). State: misalignment `phi_n`, velocity error
+//! `dv_eb_n`, position error `(d_lat, d_lon, d_h)`:
 //!
 //! ```text
 //! dphi/dt  = -omega_in_n x phi + d_omega_ie_n + d_omega_en_n - C_b_n d_omega_ib_b
@@ -18,9 +18,9 @@
 //! ```
 //! with `d_omega_ie_n = Omega (-sin lat, 0, -cos lat) dlat` (from Groves eq. 2.123),
 //! `d_omega_en_n` the linearisation of Groves eq. 5.44 in `dv`, `dlat`, `dh`, and `dg` the
-//! change of nav-core's normal gravity with latitude and height. The sensor errors are seed 000
-//! eqs. (3), (8): `d_omega_ib_b = drift + m_omega omega_ib_b`, `d_f_ib_b = bias + m_a f_ib_b`
-//! (measured minus true, body FRD axes).
+//! change of nav-core's normal gravity with latitude and height. The sensor errors are those of
+//! [Berdinskikh et al., eqs. 3, 8]: `d_omega_ib_b = drift + m_omega omega_ib_b`,
+//! `d_f_ib_b = bias + m_a f_ib_b` (measured minus true, body FRD axes).
 //!
 //! **Sign convention of the attitude error.** `phi_n` is the small rotation of the computed
 //! navigation frame from the true one: the displayed attitude is
@@ -32,7 +32,7 @@
 //! `phi_n = -(Rz(psi) (d_roll, d_pitch, 0) + (0, 0, d_heading))`.
 //!
 //! The emulator's only input is the truth trajectory: the specific force is recovered from it
-//! (seed 004's "ideal accelerometer output"), per truth interval, as the mean
+//! (the "ideal accelerometer output" of [Stand model]), per truth interval, as the mean
 //! `f_ib_n = (v(k+1) - v(k)) / dt + (2 omega_ie_n + omega_en_n) x v - g_n` (the NED velocity
 //! equation, Groves §5.4, solved for `f`), and the body rate for the gyro scale factor from the
 //! attitude change. The error ODE is integrated by RK4 over each truth interval (sub-stepped to
@@ -139,8 +139,8 @@ impl EmulatorErrors {
         }
     }
 
-    /// Seed 004's ring-laser-gyro SINS: gyro drift 0.01 deg/h and accelerometer bias 0.1e-3 g on
-    /// every body axis (all positive), roll and pitch errors +0.3 arcmin, heading error
+    /// The ring-laser-gyro SINS of [Stand model]: gyro drift 0.01 deg/h and accelerometer bias
+    /// 0.1e-3 g on every body axis (all positive), roll and pitch errors +0.3 arcmin, heading error
     /// +3 arcmin, initial velocity error 0.3 m/s north; no scale-factor or position errors.
     pub fn seed004_rlg() -> Self {
         Self {
@@ -627,7 +627,8 @@ struct Coeffs {
     /// `dg/dlat` [m/s^2/rad] and `dg/dh` [1/s^2] of the normal gravity.
     dg_dlat: f64,
     dg_dh: f64,
-    /// Sensor errors `d_omega_ib_b` [rad/s] and `d_f_ib_b` [m/s^2] (seed 000 eqs. (3), (8)).
+    /// Sensor errors `d_omega_ib_b` [rad/s] and `d_f_ib_b` [m/s^2]
+    /// ([Berdinskikh et al., eqs. 3, 8]).
     d_omega_ib_b: Vector3<f64>,
     d_f_ib_b: Vector3<f64>,
 }
@@ -638,7 +639,8 @@ impl<'a> Interval<'a> {
         let v_mid = (a.v_eb_ned + b.v_eb_ned) * 0.5;
         let e = LocalEarth::new(0.5 * (a.lat + b.lat), 0.5 * (a.h + b.h));
         let coriolis = (e.omega_ie_n() * 2.0 + e.omega_en_n(&v_mid)).cross(&v_mid);
-        // The NED velocity equation (Groves §5.4) solved for f (seed 004's ideal accelerometer output), mean over dt.
+        // The NED velocity equation (Groves §5.4) solved for f (the ideal accelerometer output of
+        // [Stand model]), mean over dt.
         let f_ib_n = (b.v_eb_ned - a.v_eb_ned) / dt + coriolis - Vector3::new(0.0, 0.0, e.g);
         Self {
             a,
@@ -752,7 +754,7 @@ pub enum Preset {
     /// No errors.
     #[default]
     None,
-    /// Seed 004's ring-laser-gyro SINS: 0.01 deg/h, 0.1 mg, 0.3'/0.3'/3', 0.3 m/s north
+    /// The ring-laser-gyro SINS of [Stand model]: 0.01 deg/h, 0.1 mg, 0.3'/0.3'/3', 0.3 m/s north
     /// (`EmulatorErrors::seed004_rlg`).
     Seed004Rlg,
 }

@@ -16,7 +16,7 @@
 //! - [`replay`]: a file replayed end to end (open, run, attach the replay counters).
 //! - [`bench`]: the mechanization's host benchmark (`nav bench`).
 //! - [`truth`]: exactly known trajectories and their exact increments (physics tests).
-//! - [`oscillator`]: the isotropic-oscillator sensor simulator (seed 001) and its `osc.csv`
+//! - [`oscillator`]: the isotropic-oscillator sensor simulator ([Oscillator INS]) and its `osc.csv`
 //!   readout file.
 //! - [`text_error`]: the error of the text-format readers and writers (file, line, what went
 //!   wrong).

@@ -6,7 +6,7 @@
 //! What an honest method must do, and the bounds (none copied from a run):
 //!
 //! 1. **Every `ALIGNED` attitude within [`ATTITUDE_SIGMAS`] of its own 1-sigma**, roll, pitch
-//!    and heading (the rule). For Gaussian errors with the stated sigma a value beyond
+//!    and heading (the acceptance rule). For Gaussian errors with the stated sigma a value beyond
 //!    4 sigma has probability 6.3e-5; this test sees at most 24 x 2 x 3 = 144 values per method
 //!    and lever case, 1152 in all, so an honest set of methods fails on this family with
 //!    probability below 7 % (less: the windows and methods of one member are correlated). The
@@ -23,7 +23,7 @@
 //!    for `RMS` (Wilson–Hilferty's cube-root normal approximation). The results of one member's
 //!    two windows are strongly correlated (biases, the same noise), so `k` is the number of
 //!    members with a result, not the number of results: a wider, conservative interval. For 24
-//!    members it is about 0.55–1.50; for 200 about 0.84–1.17, inside the 0.7–1.3 target
+//!    members it is about 0.55–1.50; for 200 about 0.84–1.17, inside the 0.7–1.3 target
 //!    for 200 members or more. Checked when `k >=` [`MIN_RMS_MEMBERS`].
 //! 4. **Coverage**: `inertial` and `fine` with the lever arm given align every swaying `fog` or
 //!    `rlg` member over 120 s (a `mems-tactical` gyro's bias of 0.05 deg/s is 12 times the

@@ -1,4 +1,4 @@
-//! Seed 003's fine alignment (issue 6, requirements 2b and 4): the position-aided closed-loop
+//! The fine alignment of [Vavilova et al.]: the position-aided closed-loop
 //! filter ([`nav_core::alignment::fine`]) and its base-motion-model variant
 //! ([`nav_core::alignment::sway`]) on the simulator's `auv-bench` (roll and pitch 5 deg, 11 s,
 //! 45 deg latitude, FOG sensors), every bound derived from physics or from the filter's own
@@ -186,7 +186,7 @@ fn bias_only_leaves_the_unobservable_errors() {
 }
 
 /// Noise only, Monte Carlo: the general filter's own sigma is within 5 % of the Cramer–Rao
-/// bound at every time and the runs agree with it; the sway variant meets the issue's targets
+/// bound at every time and the runs agree with it; the sway variant meets its targets
 /// (RMS <= 0.45 deg at 60 s, <= 0.30 deg at 120 s), its sigma deterministically and its runs
 /// within their Monte Carlo spread.
 #[test]

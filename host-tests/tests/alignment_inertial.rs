@@ -1,5 +1,5 @@
-//! Inertial-frame coarse alignment (`nav_core::alignment::inertial`, issue 6 requirements 1b and
-//! 5) on the simulator's exact increments: exact data, rocking with and without a lever arm,
+//! Inertial-frame coarse alignment (`nav_core::alignment::inertial`) on the
+//! simulator's exact increments: exact data, rocking with and without a lever arm,
 //! white noise against the Cramér–Rao floor, an east gyro bias, and f32 against f64.
 //!
 //! Every bound is derived in the test (or in the module docs, eq. 9) from physics or from the
@@ -141,9 +141,9 @@ fn rocking_without_lever_arm_is_exact() {
     }
 }
 
-/// Sea state 6 with seed 002's lever arm (30, 10, 15) m, ideal sensors, the lever arm given:
-/// its share `int w'' C_b_b0 l dt` (eq. 7) is removed exactly up to the sums' midpoint rule, so
-/// what is left is the truth's own frame: the IMU's local level is `|l| / R_earth` (the plumb
+/// Sea state 6 with the lever arm (30, 10, 15) m of [Ship alignment], ideal sensors, the lever arm
+/// given: its share `int w'' C_b_b0 l dt` (eq. 7) is removed exactly up to the sums' midpoint rule,
+/// so what is left is the truth's own frame: the IMU's local level is `|l| / R_earth` (the plumb
 /// line and the meridian convergence over the lever arm) from the centre's, which the method
 /// uses. Bound: that angle plus 1e-6 rad.
 #[test]
@@ -169,7 +169,7 @@ fn a_known_lever_arm_is_removed_exactly() {
 #[test]
 fn east_gyro_bias_gives_the_gyrocompass_heading_error() {
     let d = exact("static", &[], 300.0);
-    let eps = 0.2_f64.to_radians() / 3600.0; // seed 003's 0.2 deg/h
+    let eps = 0.2_f64.to_radians() / 3600.0; // 0.2 deg/h, [Vavilova et al., §4]
     let mut model = ImuErrorModel::IDEAL;
     model.gyro.bias = d.start.q_b_ned.inverse() * Vector3::new(0.0, eps, 0.0);
     let mut inj = ErrorInjector::new(model, 1).unwrap();
@@ -195,7 +195,7 @@ fn chi2_quantile(n: f64, z: f64) -> f64 {
     n * (1.0 - c + z * c.sqrt()).powi(3)
 }
 
-/// Seed 003's FOG with its turn-on biases zeroed: white noise only.
+/// The FOG of [Vavilova et al., §4] with its turn-on biases zeroed: white noise only.
 fn fog_white() -> (ImuErrorModel, SensorNoise<f64>) {
     let mut model = Grade::Fog.model();
     model.gyro.turn_on_bias_sigma = Vector3::zeros();
@@ -254,8 +254,8 @@ fn rms_band(n: f64) -> (f64, f64) {
     )
 }
 
-/// White noise only (seed 003's FOG, turn-on biases zeroed) on the rocking bench, many seeds:
-/// the RMS heading error against the estimator's own 1-sigma and the Cramér–Rao floor
+/// White noise only (the FOG of [Vavilova et al., §4], turn-on biases zeroed) on the rocking bench,
+/// many seeds: the RMS heading error against the estimator's own 1-sigma and the Cramér–Rao floor
 /// `sqrt((ARW / (w sqrt(T)))^2 + (sqrt(12) VRW / (g w T^1.5))^2)`, `w = Omega cos(L)`. The
 /// 1-sigma (module docs, eqs. S1–S3) must lie between the floor and 1.4 times it (the taper's
 /// cost: about 1.1 on the accelerometer term, 1.1 on the gyro one, plus the vertical drift);
@@ -414,7 +414,7 @@ fn f32_matches_f64_within_the_rounding_bound() {
 ///   90.6 deg (header yaw0 -90.6 in PSINS' north-west-positive convention; the data README's
 ///   independent inertial-frame alignment converges to the same), within 0.3 deg: three times
 ///   the heading error `eps / (Omega cos L)` = 0.046 deg of an rlg-grade gyro bias (0.01 deg/h,
-///   seed 004; unknown and uncompensated here), plus the 0.05 deg rounding of the reference.
+///   [Stand model]; unknown and uncompensated here), plus the 0.05 deg rounding of the reference.
 #[test]
 fn lasergyro_repeatability() {
     use host_tests::align_bench::lasergyro::{self, Method};

@@ -1,4 +1,4 @@
-//! Seed 002's level alignment on a rocking ship ([`nav_core::alignment::level`]) against
+//! Level alignment on a rocking ship ([Ship alignment], [`nav_core::alignment::level`]) against
 //! physics: exact data, the lever-arm compensation's residual, the noise floor and the filter's
 //! own sigma, the accelerometer-bias floor, `f32` against `f64`.
 //!
@@ -18,7 +18,7 @@ use nav_core::{ImuIncrement, Vector3};
 use std::f64::consts::TAU;
 
 const BOTH: [GainMode; 2] = [GainMode::Kalman, GainMode::Scheduled];
-/// The target at 20 s [deg].
+/// The target RMS error at 20 s [deg].
 const TARGET_DEG: f64 = 0.05;
 
 fn g_of(rec: &Recorded) -> f64 {
@@ -29,7 +29,7 @@ fn worst_deg(e: &RunErrors, j: usize) -> f64 {
     e.roll_rad[j].abs().max(e.pitch_rad[j].abs()).to_degrees()
 }
 
-/// FOG figures (seed 003) without the turn-on biases: white noise only.
+/// FOG figures ([Vavilova et al., §4]) without the turn-on biases: white noise only.
 fn noise_only() -> ImuErrorModel {
     let mut m = Grade::Fog.model();
     m.gyro.turn_on_bias_sigma = Vector3::zeros();
@@ -234,8 +234,9 @@ fn an_accelerometer_bias_leaves_bias_over_g() {
 
 #[test]
 fn fog_monte_carlo_sits_on_the_bias_floor() {
-    // The benchmark's case (seed 003's FOG with its turn-on biases): the error is the run's own
-    // b/g to within 0.01 deg, and its RMS meets the 0.05 deg target, with both filters.
+    // The benchmark's case (the FOG of [Vavilova et al., §4] with its turn-on biases): the error is
+    // the run's own b/g to within 0.01 deg, and its RMS meets the 0.05 deg target, with both
+    // filters.
     let model = Grade::Fog.model();
     let runs = 20;
     for ss in [3u8, 6] {

@@ -1,4 +1,4 @@
-//! Allan-variance recovery of the `mems-tactical` preset (issue 4, requirement 6).
+//! Allan-variance recovery of the `mems-tactical` preset.
 //!
 //! Two hours of a static ADIS16505-class IMU at 400 Hz (constant inputs: Earth rate and the
 //! reaction to gravity in level body axes) go through the error injector; the overlapping Allan
@@ -9,13 +9,13 @@
 //!
 //! Bounds, from statistics:
 //! - White-noise density: the short-tau Allan points average ~10^6 independent clusters, so the
-//!   estimate is good to well under 1 %; the issue's 10 % is asserted.
+//!   estimate is good to well under 1 %; the required 10 % is asserted.
 //! - Bias instability: with 2 h of data the information on the Gauss–Markov variance is limited
 //!   by the record itself. The Cramér–Rao bound for `sigma^2` (Whittle approximation, Gauss–Markov
 //!   in white noise, `T` known), computed below, gives the 1-sigma relative error of `B` per axis
 //!   (about 4 % here); each axis is asserted within 3.5 of those (the least-squares fit on Allan
 //!   points is somewhat less efficient than the bound), and the fit of the three axes' pooled
-//!   Allan variance (3x the information) within the issue's 10 %, which is more than 4 of its
+//!   Allan variance (3x the information) within the required 10 %, which is more than 4 of its
 //!   bound-sigmas.
 
 use host_tests::sensor_model::allan::{self, AllanFit, AllanPoint};

@@ -1,4 +1,4 @@
-//! The SINS emulator (issue 4, requirement 5; seed 004) against analytic solutions of the error
+//! The SINS emulator ([Stand model]) against analytic solutions of the error
 //! model and against full mechanization of error-laden IMU data.
 //!
 //! Bounds come from physics:
@@ -11,8 +11,8 @@
 //!   back into the east tilt: a relative effect of at most `(Omega t)^2` of the single-channel
 //!   solution by time `t` (the driver changes by `(Omega t)^2` of itself, and the Schuler loop's
 //!   response to a bounded driver is bounded by the same ratio).
-//! - Emulator against mechanization (seed 004's RLG errors): the linear model drops products of
-//!   errors (`phi^2 ~ 1e-6`, `d_lat * e^2`), far below the 10 % asked for.
+//! - Emulator against mechanization (the RLG errors of [Stand model]): the linear model drops
+//!   products of errors (`phi^2 ~ 1e-6`, `d_lat * e^2`), far below the 10 % asked for.
 
 use host_tests::emulate::{
     ARCMIN_RAD, DEG_H_RAD_S, EmulateError, Emulated, EmulatorErrors, EmulatorOptions, G0_M_S2,
@@ -29,7 +29,8 @@ use nav_core::{
     ImuIncrement, MechanizationConfig, NavState, Position, Strapdown, UnitQuaternion, Vector3,
 };
 
-/// Seed 000 eq. (16): `T = 2 pi sqrt(R / g)` with R = 6371.3 km, g = 9.81 m/s^2 (84.4 min).
+/// [Berdinskikh et al., eq. 16]: `T = 2 pi sqrt(R / g)` with R = 6371.3 km, g = 9.81
+/// m/s^2 (84.4 min).
 fn seed_schuler_period_s() -> f64 {
     2.0 * core::f64::consts::PI * (6_371_300.0_f64 / 9.81).sqrt()
 }
@@ -68,7 +69,7 @@ fn zero_crossings(samples: &[(f64, f64)]) -> Vec<f64> {
 
 /// A roll error on the equator: `phi_N = -d_roll` tilts the east channel,
 /// `dv_E = g d_roll sin(w t) / w`, `dr_E = (R_E + h) d_roll (1 - cos(w t))`,
-/// `w^2 = g / (R_E + h)`; the period is seed 000's 84.4 min.
+/// `w^2 = g / (R_E + h)`; the period is the 84.4 min of [Berdinskikh et al., eq. 16].
 #[test]
 fn tilt_error_gives_the_schuler_oscillation() {
     let truth = at_rest(0.0, 0.0, 1.0, 2.0 * 5100.0);
@@ -601,8 +602,8 @@ fn agreement(rows: &[Truth], emulated: &Emulated, mech: &[MechErrors], every: us
     [dr / max_r, dv / max_v, max_r, max_v]
 }
 
-/// Runs `source` for `seconds` with seed 004's RLG errors and compares the emulator, fed the
-/// truth at 100 Hz, 10 Hz and 1 Hz, with the mechanization at every output time.
+/// Runs `source` for `seconds` with the RLG errors of [Stand model] and compares the emulator, fed
+/// the truth at 100 Hz, 10 Hz and 1 Hz, with the mechanization at every output time.
 ///
 /// Bounds: the requirement's 10 % of the error magnitude; and a model-fidelity bound of 1 %:
 /// the linear model drops products of errors (relative size |phi| ~ 1e-3, `d_lat / lat`
@@ -632,10 +633,10 @@ fn check_against_mechanization(name: &str, source: &dyn Exact, seconds: usize) {
     }
 }
 
-/// Issue 4, requirement 5: the emulator's prediction from the truth rows against full
-/// mechanization of the error-laden exact increments (400 Hz), seed 004's RLG errors, 60 min of
-/// level flight at 900 km/h and 10 km northward from Nizhny Novgorod's latitude (seed 004's
-/// cruise): within 10 % of the error magnitude at every output time.
+/// The emulator's prediction from the truth rows against full mechanization of the error-laden
+/// exact increments (400 Hz), the RLG errors of [Stand model], 60 min of level flight at 900 km/h
+/// and 10 km northward from Nizhny Novgorod's latitude (the cruise of [Stand model]): within 10 %
+/// of the error magnitude at every output time.
 #[test]
 fn emulator_agrees_with_mechanization_flying_north() {
     let flight = MeridianFlight {
@@ -661,9 +662,9 @@ impl Exact for Flight {
     }
 }
 
-/// Seed 004's own benchmark: the `flight` scenario, Nizhny Novgorod UWGG to St Petersburg ULLI
-/// along the geodesic (60 s on the runway, take-off, climb to 10 km, 900 km/h cruise, descent,
-/// landing), seed 004's RLG errors.
+/// The benchmark of [Stand model]: the `flight` scenario, Nizhny Novgorod UWGG to St Petersburg
+/// ULLI along the geodesic (60 s on the runway, take-off, climb to 10 km, 900 km/h cruise, descent,
+/// landing), its RLG errors.
 #[test]
 fn emulator_agrees_with_mechanization_from_uwgg_to_ulli() {
     let flight = FlightPlan::default().build().unwrap();

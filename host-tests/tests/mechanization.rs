@@ -1,9 +1,8 @@
-//! Physics checks of the strapdown mechanization with exact inputs (issue: strapdown
-//! mechanization and Earth model, requirements 5 and 6).
+//! Physics checks of the strapdown mechanization with exact inputs.
 //!
 //! Bounds come from physics: exact inputs leave only the algorithm's truncation and rounding, so
 //! the f64 runs must stay within a metre; the Schuler period and amplitude are compared with
-//! their analytic values (seed 000 eq. (16)).
+//! their analytic values ([Berdinskikh et al., eq. 16]).
 
 use host_tests::truth::{MeridianFlight, Stationary, Truth, distance_m, horizontal_distance_m};
 use nav_core::attitude::{quat_from_f64, quat_to_f64};
@@ -165,7 +164,7 @@ fn precision_run(s: &Stationary, seconds: usize, vertical: VerticalChannel) -> P
     r
 }
 
-/// Requirement 5: over 1 h at rest with exact inputs the f32 run (fixed-point position,
+/// Over 1 h at rest with exact inputs the f32 run (fixed-point position,
 /// compensated attitude and velocity sums) stays within 2x of the f64 run. The comparison holds
 /// the vertical channel: free, it diverges exponentially in both precisions from the f32
 /// quantisation of the inputs alone (printed below; tens of metres after 1 h even in f64),
@@ -237,7 +236,7 @@ fn schuler(s: &Stationary, initial: NavState<f64>, axis: usize, seconds: f64) ->
     }
 }
 
-/// Requirement 6(b): seed 000 eq. (16), `T = 2 pi sqrt(R / g)` = 84.4 min with R = 6371.3 km and
+/// [Berdinskikh et al., eq. 16]: `T = 2 pi sqrt(R / g)` = 84.4 min with R = 6371.3 km and
 /// g = 9.81 m/s^2; the amplitudes follow from the local `omega_s = sqrt(g / (R + h))`.
 #[test]
 fn initial_errors_excite_the_schuler_oscillation() {
@@ -325,7 +324,7 @@ fn seed_004_flight(lat0_deg: f64) -> MeridianFlight {
     }
 }
 
-/// Requirement 6(c): 900 km/h at 10 km along a meridian (seed 004's cruise), exact inputs,
+/// 900 km/h at 10 km along a meridian (the cruise of [Stand model]), exact inputs,
 /// 10 min: under 1 m in f64, in both frames and with every attitude integrator.
 #[test]
 fn meridian_flight_ten_minutes_within_a_metre() {
@@ -381,7 +380,7 @@ fn meridian_flight_in_f32_needs_the_fixed_point_position() {
     assert!(plain > 10.0 * err32, "{plain} {err32}");
 }
 
-/// Requirement 4: the wander-azimuth frame flies over the North Pole (start 89.5 deg, 10 min):
+/// The wander-azimuth frame flies over the North Pole (start 89.5 deg, 10 min):
 /// latitude rises to 90 deg and falls, longitude jumps by 180 deg, and the error stays under 1 m.
 #[test]
 fn wander_frame_crosses_the_pole() {

@@ -1,6 +1,6 @@
-//! The oscillator estimator's accuracy table (issue 7, requirement 4) checked against physics:
-//! the seed's method is first order in `omega/w0`; the compensated one is bounded by its rate
-//! estimate's error; with noise, the error follows the estimator's own 1-sigma.
+//! The oscillator estimator's accuracy table checked against physics:
+//! the method of [Oscillator INS] is first order in `omega/w0`; the compensated one is bounded by
+//! its rate estimate's error; with noise, the error follows the estimator's own 1-sigma.
 
 use host_tests::oscillator::OscillatorParams;
 use host_tests::oscillator::bench::{coning_for, measure};

@@ -1,5 +1,5 @@
 //! The oscillator's estimator as the mechanization's attitude source, against gyro-based runs
-//! on the same motion (issue 7, requirement 5). Bounds are derived where they are used.
+//! on the same motion. Bounds are derived where they are used.
 
 use host_tests::oscillator::OscillatorParams;
 use host_tests::oscillator::navigate::{CHECK_S, NavCompareOptions, NavComparison, compare};
@@ -29,7 +29,7 @@ fn run(compensate: bool, grade: &str) -> NavComparison {
 }
 
 /// Ship rocking (sea state 6) for 30 s, readout noise 1 nm: the compensated estimator's
-/// navigation stays within its own reported noise, and the seed's method does worse.
+/// navigation stays within its own reported noise, and the method of [Oscillator INS] does worse.
 #[test]
 fn oscillator_navigates_within_its_reported_noise() {
     let comp = run(true, "fog");
@@ -112,7 +112,7 @@ fn oscillator_navigates_within_its_reported_noise() {
         o.horizontal_m
     );
 
-    // --- The seed's method (attitude constant over a period) is off at first order in
+    // --- The method of [Oscillator INS] (attitude constant over a period) is off at first order in
     // omega/w0: at the ship's |omega| ~ 0.03 rad/s that is ~|omega| (P + 2|c|)/(2 w0 Q) ~ 2e-4
     // rad, above the compensated run's noise.
     let (ws, wc) = (seed.oscillator.worst_attitude_deg, o.worst_attitude_deg);

@@ -1,5 +1,5 @@
-//! The isotropic-oscillator simulator against closed forms and derived bounds (issue 7,
-//! requirement 1). Bounds come from the physics in `host_tests::oscillator`'s module doc or from
+//! The isotropic-oscillator simulator against closed forms and derived bounds.
+//! Bounds come from the physics in `host_tests::oscillator`'s module doc or from
 //! RK4's error (`(w h)^5/120` phase lag and `(w h)^6/144` amplitude loss per step), each
 //! derived where it is used.
 
@@ -135,7 +135,7 @@ fn rk4(
     }
 }
 
-/// Requirement 1's ODE in isolation: a body tumbling (`C_b_i = R_z(alpha t) R_x(beta t)`), no
+/// The simulator's ODE in isolation: a body tumbling (`C_b_i = R_z(alpha t) R_x(beta t)`), no
 /// specific force, no damping. In inertial axes the mass must stay on
 /// `rho_i = P e1 cos(w0 t) + Q e2 sin(w0 t)`. RK4 lags each frequency component `w` by
 /// `(w h)^5/120` per step; the body-axes motion has components up to `w0 + alpha + beta`, so
@@ -359,7 +359,7 @@ fn damping_decays_and_the_drive_restores_the_amplitude() {
             .max((qr / expected - 1.0).abs());
     }
     println!("largest relative deviation from exp(-zeta w0 t): {worst:.2e}");
-    // The issue's 1 %; the damped solution itself departs from the scaled ellipse by O(zeta).
+    // The required 1 %; the damped solution itself departs from the scaled ellipse by O(zeta).
     assert!(worst < 0.01 && worst < 2.0 * zeta, "{worst}");
 
     let p = OscillatorParams {

@@ -431,9 +431,9 @@ fn firmware_runs_the_mems_drivers_and_refuses_a_blind_gyrocompass() {
     assert!(log.contains("unknown alignment method magic"), "{log}");
 }
 
-/// Issue 7: the gyro-free oscillator estimator runs on the MCU in f32 (`--osc-bench`, synthetic
-/// readouts of a body spinning at 0.5 rad/s): it locks, gives an epoch every period after that,
-/// and its worst attitude error is within f32 rounding of the exact answer. The rotation
+/// The gyro-free oscillator estimator ([Oscillator INS]) runs on the MCU in f32 (`--osc-bench`,
+/// synthetic readouts of a body spinning at 0.5 rad/s): it locks, gives an epoch every period after
+/// that, and its worst attitude error is within f32 rounding of the exact answer. The rotation
 /// compensation makes a constant spin exact, so what is left is rounding: readouts of
 /// `|c| + P` = 45 um rounded to 6e-8 relative, amplified by `(|c| + P)/Q` = 4.5 and by the
 /// chain of about 50-readout sums, the fit and the rate from attitude differences (a factor of

@@ -1,8 +1,7 @@
-//! The exact generator against the mechanization and against independent derivations (issue:
-//! trajectory and IMU simulator, requirements 1, 2 and 6).
+//! The exact generator against the mechanization and against independent derivations.
 //!
 //! With error-free sensors in f64 the mechanization's error is its own (coning/sculling
-//! truncation and rounding), so the issue's bounds — 0.5 m and 1e-4 deg after the whole flight
+//! truncation and rounding), so the bounds — 0.5 m and 1e-4 deg after the whole flight
 //! and after 1 h of ship rocking — hold only if the generator's increments are exact.
 
 use host_tests::trajectory::scenarios::{FlightPlan, Scenario, geodesic_direct, geodesic_inverse};
@@ -88,8 +87,8 @@ fn every_scenario_round_trips_for_a_while() {
     }
 }
 
-/// Richardson-style check of requirement 1: 4 RK4 steps per sample against 16; RK4's error
-/// falls 256-fold, so the difference bounds the default's error.
+/// Richardson-style check of the increments' accuracy: 4 RK4 steps per sample against 16; RK4's
+/// error falls 256-fold, so the difference bounds the default's error.
 #[test]
 fn increments_converge_below_the_required_accuracy() {
     for name in Scenario::NAMES {

@@ -1,8 +1,8 @@
-//! Sensor error compensation before the mechanization (seed 000 eqs. (3) and (8)).
+//! Sensor error compensation before the mechanization ([Berdinskikh et al., eqs. 3 and 8]).
 //!
 //! Per triad the sensor model is `measured = (I + S + N) true + bias`, with `S` the diagonal of
-//! scale-factor errors `m` (seed 000: `(1 + m) * true + bias` per axis) and `N` the off-diagonal
-//! misalignment / non-orthogonality [rad]. Compensation inverts it once, at load:
+//! scale-factor errors `m` ([Berdinskikh et al., eq. 3]: `(1 + m) * true + bias` per axis) and `N`
+//! the off-diagonal misalignment / non-orthogonality [rad]. Compensation inverts it once, at load:
 //! `true = K (measured - bias)`, `K = (I + S + N)^-1`; applied to increments the bias is
 //! multiplied by the interval. Defaults are identity (no compensation).
 //!

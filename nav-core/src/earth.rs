@@ -147,12 +147,12 @@ pub fn normal_gravity<T: Scalar>(lat: T, h: T) -> T {
     LocalEarth::new(lat, h).g
 }
 
-/// Oblateness coefficient of seed 000 eq. (14), `I = 1.6375e-3` [-] (the classical `3/2 J2`;
-/// WGS-84's `J2 = 1.08263e-3` gives 1.6239e-3).
+/// Oblateness coefficient of [Berdinskikh et al., eq. 14], `I = 1.6375e-3` [-] (the classical
+/// `3/2 J2`; WGS-84's `J2 = 1.08263e-3` gives 1.6239e-3).
 pub const OBLATENESS_I: f64 = 1.6375e-3;
 
 /// Gravitation (mass attraction only, no centrifugal term) [m/s^2] at the Earth-centred position
-/// `r` [m], seed 000 eq. (14):
+/// `r` [m], [Berdinskikh et al., eq. 14]:
 /// `g_x = -(GM/r^3) [1 + I a^2/r^2 (1 - 5 z^2/r^2)] x`, the same for `y`, and
 /// `g_z = -(GM/r^3) [1 + I a^2/r^2 (3 - 5 z^2/r^2)] z`.
 ///
@@ -193,7 +193,8 @@ pub fn geodetic_to_ecef(lat: f64, lon: f64, h: f64) -> Vector3<f64> {
 pub const J2_WGS84: f64 = 1.082_626_683_553e-3;
 
 /// Gravity (gravitation plus centrifugal) [m/s^2] in ECEF axes at ECEF position `r_e` [m], from
-/// seed 000's oblate gravitation (Groves eq. 2.133 for the centrifugal term).
+/// the oblate gravitation of [Berdinskikh et al., eq. 14] (Groves eq. 2.133 for the centrifugal
+/// term).
 pub fn gravity_ecef(r_e: &Vector3<f64>) -> Vector3<f64> {
     gravity_ecef_with(r_e, OBLATENESS_I)
 }
@@ -231,7 +232,8 @@ mod tests {
         // With WGS-84's J2 (I = 3/2 J2) the J2 field plus the centrifugal term matches
         // Somigliana up to the omitted J4 term, |J4| = 1.62e-6: its gradient is below
         // 10 |J4| g = 1.6e-4 m/s^2 and tilts gravity by less than 10 |J4| = 1.6e-5 rad.
-        // Seed 000's I = 1.6375e-3 then differs by its own (I - 3/2 J2) term on top.
+        // The I = 1.6375e-3 of [Berdinskikh et al., eq. 14] then differs by its own (I - 3/2 J2)
+        // term on top.
         let i_wgs84 = 1.5 * J2_WGS84;
         let (j4_g, j4_rad) = (10.0 * 1.62e-6 * 9.83, 10.0 * 1.62e-6);
         for lat_deg in [0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 90.0_f64] {

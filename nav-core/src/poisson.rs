@@ -1,5 +1,6 @@
-//! Direction-cosine attitude by Poisson's equation `dC/dt = C [omega x]` (seed 000 eqs. 1–2, 6)
-//! with selectable integrators, each step followed by re-orthonormalisation (seed 000 eq. 7).
+//! Direction-cosine attitude by Poisson's equation `dC/dt = C [omega x]`
+//! ([Berdinskikh et al., eqs. 1–2, 6]) with selectable integrators, each step followed by
+//! re-orthonormalisation ([Berdinskikh et al., eq. 7]).
 //!
 //! The integrators solve any matrix ODE `dC/dt = f(t, C)`; the mechanization uses
 //! `f = C [omega_ib_b(t) x] - [omega_in_n x] C` (Savage (7.1.1.1-1) for the body-to-navigation
@@ -23,8 +24,8 @@ pub enum DcmIntegrator {
 }
 
 /// Re-orthonormalises `c` in place: `C <- C - (C C^T - I) C / 2`, one step of the iteration
-/// that converges to the nearest orthonormal matrix (Savage (7.1.1.3-4); it enforces seed 000
-/// eq. (7) `sum_k C_ik C_jk = delta_ij` to second order in the deviation).
+/// that converges to the nearest orthonormal matrix (Savage (7.1.1.3-4); it enforces
+/// [Berdinskikh et al., eq. 7] `sum_k C_ik C_jk = delta_ij` to second order in the deviation).
 pub fn orthonormalize<T: Scalar>(c: &mut Matrix3<T>) {
     let e = *c * c.transpose() - Matrix3::identity();
     *c -= e * *c * T::c(0.5);

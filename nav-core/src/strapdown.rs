@@ -3,7 +3,7 @@
 //! Per increment (Savage, *Strapdown Analytics*, ch. 7; Groves §5.4–5.5; Titterton & Weston
 //! ch. 3), with the navigation-frame quantities taken at mid-interval (predicted: `c_n`
 //! turned by half the start's transport rate, the height and velocity advanced by half a step):
-//! 1. sensor error compensation ([`crate::calibration`], seed 000 eqs. 3 and 8);
+//! 1. sensor error compensation ([`crate::calibration`], [Berdinskikh et al., eqs. 3 and 8]);
 //! 2. coning and sculling ([`crate::coning`]): rotation vector `phi_b` and velocity increment
 //!    `dv_b` in body axes at the start of the interval;
 //! 3. Earth quantities from the position matrix's vertical row `c_n` (no trigonometry):
@@ -12,7 +12,8 @@
 //! 4. velocity: `v(k) = v(k-1) + dv_n + (g_n - (2 omega_ie_n + rho_n) x v_mid) dt`,
 //!    `dv_n = (I - [zeta x] / 2) C_b_n(k-1) dv_b` (Savage (7.2.2.2-21));
 //! 5. attitude: `q_b_n(k) = q(-zeta) q_b_n(k-1) q(phi_b)` (Savage (7.1.2-14)) — or Poisson's
-//!    DCM equation with a selectable integrator ([`crate::poisson`], seed 000);
+//!    DCM equation with a selectable integrator ([`crate::poisson`],
+//!    [Berdinskikh et al., eqs. 1–2]);
 //! 6. position: `C_n_e(k) = C_n_e(k-1) exp([xi x])`, `xi = rho_n(v_mid) dt` with the
 //!    trapezoidal velocity `v_mid`, and `h(k) = h(k-1) - v_D,mid dt` ([`Position`], fixed
 //!    point).
@@ -43,8 +44,8 @@ pub enum NavFrame {
 pub enum AttitudeMethod {
     /// Rotation-vector quaternion update, exact for a constant rate (the default).
     RotationVector,
-    /// Poisson's DCM equation (seed 000) with the rate modelled linear over the interval from
-    /// the current and previous increments, re-orthonormalised every step.
+    /// Poisson's DCM equation ([Berdinskikh et al., eqs. 1–2]) with the rate modelled linear over
+    /// the interval from the current and previous increments, re-orthonormalised every step.
     Poisson(DcmIntegrator),
 }
 
@@ -54,8 +55,8 @@ pub enum AttitudeMethod {
 pub enum VerticalChannel {
     /// Integrated freely from the accelerometers (default).
     Free,
-    /// Height and vertical velocity held at their current values: a ship at sea level (seed
-    /// 000), or a vehicle whose height comes from elsewhere.
+    /// Height and vertical velocity held at their current values: a ship at sea level
+    /// ([Berdinskikh et al.]), or a vehicle whose height comes from elsewhere.
     Hold,
 }
 

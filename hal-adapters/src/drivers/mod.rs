@@ -42,7 +42,7 @@
 //! | TEMP_OUT 0.1 deg C/LSB, 0 LSB = 0 deg C | Linux, PX4 | not confirmed (offset assumed 0) |
 //! | register map (DIAG_STAT 0x02 ... PROD_ID 0x72), 16-bit words, read `[addr, 0]` answered in the next word, write one byte per word with bit 7 | Linux, no-OS, PX4 | not confirmed |
 //! | SPI mode 3; 16 us stall; 1 MHz burst clock | PX4 (mode 3), Linux/no-OS (16 us, 1 MHz) | not confirmed |
-//! | 2 MHz register clock | issue 5 only | not confirmed |
+//! | 2 MHz register clock | project specification only | not confirmed |
 //! | burst command 0x6800; 16-bit order DIAG_STAT, gyro xyz, accel xyz, TEMP_OUT, DATA_CNTR, checksum; checksum = u16 sum of the 18 bytes before it | PX4, Linux, no-OS | not confirmed |
 //! | 32-bit burst: each value `_LOW` word then `_OUT` word, checksum over 30 bytes | Linux (buffer indices) | not confirmed |
 //! | `MSC_CTRL` bit 8 `BURST_SEL` (deltas), bit 9 `BURST32`; ADIS16505 only, not ADIS16465 | Linux, no-OS chip flags | not confirmed |

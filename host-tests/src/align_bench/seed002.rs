@@ -1,5 +1,6 @@
-//! Seed 002 benchmark: level alignment of an aircraft's attitude system on a rocking ship
-//! ([`nav_core::alignment::level`]), full Kalman and constant-gain filters, sea states 3–6.
+//! The `seed002` benchmark ([Ship alignment]): level alignment of an aircraft's attitude system on
+//! a rocking ship ([`nav_core::alignment::level`]), full Kalman and constant-gain filters, sea
+//! states 3–6.
 //!
 //! Each sea state's exact increments are generated once (`ship-rocking`, lever arm (30, 10, 15) m,
 //! 400 Hz, 60 s); every Monte Carlo run passes them through its own seeded [`ErrorInjector`] and
@@ -38,7 +39,7 @@ pub const SEA_STATES: [u8; 4] = [3, 4, 5, 6];
 pub const INITIAL_TILT_ERROR_DEG: f64 = 2.0;
 /// 1-sigma of the heading given by the ship [deg].
 pub const HEADING_SIGMA_DEG: f64 = 0.5;
-/// The target at 20 s [deg].
+/// The target RMS error at 20 s, every sea state [deg].
 pub const TARGET_20S_DEG: f64 = 0.05;
 
 /// A scenario's exact increments and truth, generated once.

@@ -1,7 +1,7 @@
-//! Seed 003 benchmark: fine alignment of an AUV's SINS at the surface under rocking, position
-//! known (`auv-bench`: roll and pitch 5 deg, 11 s, for 5 min, IMU on the rotation centre, 45 deg
-//! latitude), FOG sensors ([`Grade::Fog`]); the general position-aided filter
-//! ([`nav_core::alignment::fine`]) and the base-motion-model variant
+//! The `seed003` benchmark ([Vavilova et al.]): fine alignment of an AUV's SINS at the surface
+//! under rocking, position known (`auv-bench`: roll and pitch 5 deg, 11 s, for 5 min, IMU on the
+//! rotation centre, 45 deg latitude), FOG sensors ([`Grade::Fog`]); the general position-aided
+//! filter ([`nav_core::alignment::fine`]) and the base-motion-model variant
 //! ([`nav_core::alignment::sway`]).
 //!
 //! The exact increments are generated once; every Monte Carlo run passes them through its own
@@ -19,13 +19,13 @@
 //! (`N_g` gyro [rad/sqrt(s)], `N_a` accelerometer [m/s/sqrt(s)]), `W = Omega_ie cos(lat)`:
 //! - general Cramer–Rao floor. The heading shows only as the east tilt drift `u = W psi`: the
 //!   tilt `theta` obeys `d(theta)/dt = u + N_g w` (the gyro noise makes it a random walk) and
-//!   the accelerometers see `g theta` in white noise of density `N_a`. Its approximation in the
-//!   issue, `sqrt((N_g / (W sqrt(T)))^2 + (sqrt(12) N_a / (g W T^1.5))^2)` (the random walk's
+//!   the accelerometers see `g theta` in white noise of density `N_a`. Its approximation,
+//!   `sqrt((N_g / (W sqrt(T)))^2 + (sqrt(12) N_a / (g W T^1.5))^2)` (the random walk's
 //!   drift known to `N_g / sqrt(T)`, a line's slope in white noise to `sqrt(12) N_a / (g T^1.5)`,
 //!   added in quadrature), is printed as "RSS"; the bound itself ([`crb_general`]) is the
 //!   posterior sigma of `u / W` in that two-state model with flat priors, integrated
 //!   numerically. The two noises do not simply add: the bound is 0.5–6 % above the RSS (at 300 s
-//!   the random walk leaves less of the line to fit); it is what the issue quotes (2.46, 0.94,
+//!   the random walk leaves less of the line to fit); the floors are the bound's (2.46, 0.94,
 //!   0.42, 0.195 deg).
 //! - motion-known floor `N_g / (W sqrt(T))`: with the base known to sway about a fixed mean
 //!   attitude the gyro-integrated attitude itself shows the drift, up to the gyro noise's walk
@@ -36,7 +36,7 @@
 //! axis) with the noise, the general filter given the bias sigmas, on the rocking bench and on
 //! a still one; the NED attitude error `phi_n` at 300 s (mean over the runs, whose initial
 //! errors have balanced signs, and a noise-free run started at the true attitude) against the
-//! issue's unobservable-bias prediction ([`bias_prediction`]; `b_n`, `eps_n` the biases' NED
+//! unobservable-bias prediction ([`bias_prediction`]; `b_n`, `eps_n` the biases' NED
 //! projections averaged over the run): tilt `phi_E = -b_N / g`, `phi_N = b_E / g`
 //! (`f x phi + b = 0`), heading `phi_D = eps_E / W - tan(lat) b_E / g` (`d(phi_E)/dt = 0`);
 //! and against the same prediction from what the filter left of the biases
@@ -70,9 +70,9 @@ pub const INITIAL_HEADING_ERROR_DEG: f64 = 10.0;
 pub const GYRO_BIAS_DEG_H: f64 = 0.2;
 /// Fixed accelerometer bias of the bias table, every body axis [m/s^2].
 pub const ACCEL_BIAS_M_S2: f64 = 0.005;
-/// The issue's targets for the sway variant: RMS heading error [deg] at 60 and 120 s.
+/// The targets for the sway variant: RMS heading error [deg] at 60 and 120 s.
 pub const SWAY_TARGETS_DEG: [(f64, f64); 2] = [(60.0, 0.45), (120.0, 0.30)];
-/// The issue's tolerance on the general filter against its floor (5 %) and on the bias
+/// The tolerance on the general filter against its floor (5 %) and on the bias
 /// predictions (10 %).
 pub const FLOOR_TOLERANCE: f64 = 0.05;
 /// See [`FLOOR_TOLERANCE`].
@@ -442,7 +442,7 @@ fn earth(lat: f64) -> (f64, f64) {
     (OMEGA_IE * lat.cos(), normal_gravity(lat, 0.0))
 }
 
-/// The issue's approximation of the general floor [rad] at `t_s` [s] (module docs) for noise
+/// The RSS approximation of the general floor [rad] at `t_s` [s] (module docs) for noise
 /// densities `gyro_noise` [rad/sqrt(s)] and `accel_noise` [m/s/sqrt(s)] at latitude `lat`
 /// [rad]: `sqrt((N_g / (W sqrt(T)))^2 + (sqrt(12) N_a / (g W T^1.5))^2)`.
 pub fn floor_rss(t_s: f64, gyro_noise: f64, accel_noise: f64, lat: f64) -> f64 {
@@ -565,7 +565,7 @@ pub struct Row {
     pub fine_sigma: f64,
     /// General Cramer–Rao bound.
     pub crb: f64,
-    /// The issue's RSS approximation of it.
+    /// The RSS approximation of it.
     pub rss: f64,
     /// Sway variant: heading RMS.
     pub sway_rms: f64,
@@ -586,7 +586,7 @@ pub struct BiasRow {
     pub sem_phi: Vector3<f64>,
     /// `phi_n` of the noise-free run (started at the true heading: module docs).
     pub exact_phi: Vector3<f64>,
-    /// The issue's prediction: the whole bias unobservable ([`bias_prediction`]).
+    /// The prediction with the whole bias unobservable ([`bias_prediction`]).
     pub predicted_phi: Vector3<f64>,
     /// Mean over the runs of the prediction from what the filter left of the biases: level
     /// `= (b_n - b_hat_n) / g` (`b_n` the body bias projected at the checkpoint), heading
@@ -594,8 +594,8 @@ pub struct BiasRow {
     pub residual_phi: Vector3<f64>,
 }
 
-/// The issue's prediction [rad] (module docs) for body biases `gyro_b` [rad/s] and `accel_b`
-/// [m/s^2] on `rec`: tilt `(b_E / g, -b_N / g)`, heading `eps_E / W - tan(lat) b_E / g`.
+/// The unobservable-bias prediction [rad] (module docs) for body biases `gyro_b` [rad/s] and
+/// `accel_b` [m/s^2] on `rec`: tilt `(b_E / g, -b_N / g)`, heading `eps_E / W - tan(lat) b_E / g`.
 pub fn bias_prediction(
     rec: &Recorded,
     gyro_b: &Vector3<f64>,

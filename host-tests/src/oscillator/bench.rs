@@ -1,6 +1,6 @@
-//! The estimator's accuracy (issue 7, requirement 4): attitude and specific-force error against
+//! The estimator's accuracy: attitude and specific-force error against
 //! truth as functions of the ratio of the oscillator frequency to the body rate and of the
-//! readout noise, for the seed's method as written and with the rotation compensation.
+//! readout noise, for the method of [Oscillator INS] as written and with the rotation compensation.
 //!
 //! The motion is coning, the harshest for attitude algorithms: roll `beta sin(w t)`, pitch
 //! `beta cos(w t)` (half-angle `beta` = 0.2 rad), on the ground at 45 deg; the body rate is about
@@ -82,7 +82,7 @@ pub struct Row {
     pub ratio: f64,
     /// Readout noise [m].
     pub noise_m: f64,
-    /// The seed's method as written.
+    /// The method of [Oscillator INS] as written.
     pub seed: Accuracy,
     /// With the rotation compensation.
     pub compensated: Accuracy,

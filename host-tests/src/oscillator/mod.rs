@@ -1,4 +1,4 @@
-//! The isotropic-oscillator sensor simulator (seed 001; issue 7, requirement 1): the
+//! The isotropic-oscillator sensor simulator ([Oscillator INS]): the
 //! displacement of a spring-suspended proof mass, observed in body axes, for a body that rotates
 //! and accelerates along a [`Trajectory`](crate::trajectory::Trajectory).
 //!

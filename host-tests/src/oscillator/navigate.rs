@@ -1,5 +1,5 @@
 //! The oscillator as the mechanization's attitude source, against a gyro-based run on the same
-//! motion (issue 7, requirement 5).
+//! motion.
 //!
 //! - **Oscillator run**: the simulated readouts ([`simulate_oscillator`]) go through
 //!   [`OscillatorEstimator`] (f64), its epochs through [`OscillatorIncrements`] (exact rotation
@@ -45,7 +45,7 @@ pub struct NavCompareOptions {
     pub params: OscillatorParams,
     /// Grade of the gyro-based IMU.
     pub grade: Grade,
-    /// The estimator's rate compensation (`false`: the seed's method as written).
+    /// The estimator's rate compensation (`false`: the method of [Oscillator INS] as written).
     pub compensate: bool,
 }
 

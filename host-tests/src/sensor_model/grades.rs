@@ -34,9 +34,9 @@ pub fn gauss_markov_at_floor(b: f64, white_density: f64) -> GaussMarkov {
 pub enum Grade {
     /// No errors at all.
     Ideal,
-    /// Fibre-optic gyro IMU of seed 003's bench test.
+    /// Fibre-optic gyro IMU of the bench test of [Vavilova et al., §4].
     Fog,
-    /// Ring-laser-gyro IMU of seed 004's flight simulation.
+    /// Ring-laser-gyro IMU of the flight simulation of [Stand model].
     Rlg,
     /// Tactical MEMS, ADIS16505-2 class (the navigation board's IMU).
     MemsTactical,
@@ -135,8 +135,8 @@ fn misalignment_deg(off: [f64; 6]) -> Matrix3<f64> {
     Matrix3::new(0.0, xy, xz, yx, 0.0, yz, zx, zy, 0.0)
 }
 
-/// Seed 003 (bench test): gyro bias 0.2 deg/h, noise 0.003 deg/s RMS at 400 Hz; accelerometer
-/// bias 0.005 m/s^2, noise 0.02 m/s^2 RMS at 400 Hz. Nothing else is given.
+/// [Vavilova et al., §4] (bench test): gyro bias 0.2 deg/h, noise 0.003 deg/s RMS at 400 Hz;
+/// accelerometer bias 0.005 m/s^2, noise 0.02 m/s^2 RMS at 400 Hz. Nothing else is given.
 fn fog() -> ImuErrorModel {
     let mut m = ImuErrorModel::IDEAL;
     m.gyro.turn_on_bias_sigma = Vector3::repeat(deg_h(0.2));
@@ -152,7 +152,7 @@ fn fog() -> ImuErrorModel {
     m
 }
 
-/// Seed 004 (flight simulation): gyro drift 0.01 deg/h, accelerometer error 0.1e-3 g; the
+/// [Stand model] (flight simulation): gyro drift 0.01 deg/h, accelerometer error 0.1e-3 g; the
 /// random walks are assumed (RLG and navigation-grade accelerometer typical).
 fn rlg() -> ImuErrorModel {
     let mut m = ImuErrorModel::IDEAL;

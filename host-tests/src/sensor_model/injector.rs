@@ -421,7 +421,8 @@ mod tests {
 
     #[test]
     fn white_noise_matches_its_density_and_its_rms_at_rate() {
-        // Seed 003's gyro noise given as RMS at 400 Hz: sampled at 400 Hz the rate's std is the RMS.
+        // [Vavilova et al., §4] gives the gyro noise as RMS at 400 Hz: sampled at 400 Hz the rate's
+        // std is the RMS.
         let rms = 0.003f64.to_radians();
         let mut m = ImuErrorModel::IDEAL;
         m.gyro.white_noise = WhiteNoise::RmsAtRate {

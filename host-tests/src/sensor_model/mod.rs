@@ -1,4 +1,4 @@
-//! Sensor error models of the IMU simulator (issue 4): exact increments in, what a real sensor
+//! Sensor error models of the IMU simulator: exact increments in, what a real sensor
 //! would output out.
 //!
 //! - [`triad`]: one triad's errors ([`TriadErrors`], [`WhiteNoise`], [`GaussMarkov`]).
@@ -9,7 +9,7 @@
 //! - [`allan`]: overlapping Allan variance and the noise-model fit.
 //! - [`units`]: datasheet units to SI.
 //!
-//! # The model (Groves 2nd ed. §4.4, error models §4.4.6; seed 000 eqs. (3), (8))
+//! # The model (Groves 2nd ed. §4.4, error models §4.4.6; [Berdinskikh et al., eqs. 3, 8])
 //! Per triad, with `U` = [rad/s] (gyros) or [m/s^2] (accelerometers), over an interval `dt`:
 //!
 //! ```text
@@ -40,13 +40,13 @@
 //!
 //! | grade | quantity | value | source |
 //! | ----- | -------- | ----- | ------ |
-//! | fog | gyro bias (turn-on 1-sigma) | 0.2 deg/h | seed 003 |
-//! | fog | gyro white noise | 0.003 deg/s RMS at 400 Hz (= 0.009 deg/sqrt(h)) | seed 003 |
-//! | fog | accel bias (turn-on 1-sigma) | 0.005 m/s^2 | seed 003 |
-//! | fog | accel white noise | 0.02 m/s^2 RMS at 400 Hz (= 0.06 m/s/sqrt(h)) | seed 003 |
-//! | fog | everything else | none | seed 003 gives nothing else |
-//! | rlg | gyro drift (turn-on 1-sigma) | 0.01 deg/h | seed 004 |
-//! | rlg | accel error (turn-on 1-sigma) | 0.1e-3 g | seed 004 |
+//! | fog | gyro bias (turn-on 1-sigma) | 0.2 deg/h | [Vavilova et al., §4] |
+//! | fog | gyro white noise | 0.003 deg/s RMS at 400 Hz (= 0.009 deg/sqrt(h)) | [Vavilova et al., §4] |
+//! | fog | accel bias (turn-on 1-sigma) | 0.005 m/s^2 | [Vavilova et al., §4] |
+//! | fog | accel white noise | 0.02 m/s^2 RMS at 400 Hz (= 0.06 m/s/sqrt(h)) | [Vavilova et al., §4] |
+//! | fog | everything else | none | [Vavilova et al., §4] gives nothing else |
+//! | rlg | gyro drift (turn-on 1-sigma) | 0.01 deg/h | [Stand model] |
+//! | rlg | accel error (turn-on 1-sigma) | 0.1e-3 g | [Stand model] |
 //! | rlg | gyro ARW | 0.002 deg/sqrt(h) | assumed (RLG-typical 0.001-0.003) |
 //! | rlg | accel VRW | 0.005 m/s/sqrt(h) (8.5 ug/sqrt(Hz)) | assumed (navigation-grade accelerometer) |
 //! | mems-tactical | gyro ARW | 0.13 deg/sqrt(h) | front page (-1, x and y axes) |
@@ -67,10 +67,10 @@
 //! | mems-tactical | accel scale errors | -250, +100, +200 ppm | assumed |
 //! | mems-tactical | accel full scale | 78.4 m/s^2 (8 g) | front page |
 //! | mems-tactical | delta-velocity LSB | 100 m/s / 2^31 | driver table (32-bit burst) |
-//! | mems-consumer | gyro noise density | 2.8 mdps/sqrt(Hz) (0.168 deg/sqrt(h)) | ICM-42688-P data sheet (issue 4) |
-//! | mems-consumer | accel noise density | 70 ug/sqrt(Hz) | ICM-42688-P data sheet (issue 4) |
-//! | mems-consumer | full scale | 2000 deg/s, 16 g | ICM-42688-P data sheet (issue 4); driver table |
-//! | mems-consumer | increment LSB | 16-bit word (2000/32768 deg/s, 16/32768 g) x 1/400 s | issue 4 (16-bit); held over one 400 Hz sample: assumed |
+//! | mems-consumer | gyro noise density | 2.8 mdps/sqrt(Hz) (0.168 deg/sqrt(h)) | ICM-42688-P data sheet (quoted, not read) |
+//! | mems-consumer | accel noise density | 70 ug/sqrt(Hz) | ICM-42688-P data sheet (quoted, not read) |
+//! | mems-consumer | full scale | 2000 deg/s, 16 g | ICM-42688-P data sheet (quoted, not read); driver table |
+//! | mems-consumer | increment LSB | 16-bit word (2000/32768 deg/s, 16/32768 g) x 1/400 s | ICM-42688-P data sheet (16-bit; quoted, not read); held over one 400 Hz sample: assumed |
 //! | mems-consumer | gyro turn-on bias | 0.5 deg/s | assumed (consumer-typical zero-rate offset) |
 //! | mems-consumer | gyro bias instability | 3 deg/h, correlation time 6.0 s (floor rule) | assumed |
 //! | mems-consumer | gyro rate random walk | 10 deg/h/sqrt(h) | assumed |

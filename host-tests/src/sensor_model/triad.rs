@@ -1,5 +1,5 @@
 //! The error model of one sensor triad (three gyros or three accelerometers), Groves 2nd ed.
-//! §4.4.6, seed 000 eqs. (3) and (8).
+//! §4.4.6, [Berdinskikh et al., eqs. 3 and 8].
 //!
 //! Units: every field is in the triad's SI unit `U` = [rad/s] for gyros, [m/s^2] for
 //! accelerometers, combined with time as written ([U/sqrt(Hz)], [U/sqrt(s)]).
@@ -15,8 +15,9 @@ pub enum WhiteNoise {
     /// [deg/sqrt(h)] is `60 N` with `N` in [deg/s/sqrt(Hz)]). An increment over `dt` gets
     /// `N sqrt(dt) n`, `n ~ N(0, 1)` (IEEE Std 952-1997 Annex C: Allan variance `N^2 / tau`).
     Density(f64),
-    /// RMS of the rate sampled at `rate_hz` ([U], [Hz]), as seed 003 gives it ("0.003 deg/s RMS at
-    /// 400 Hz"): density = `rms / sqrt(rate_hz)` (the rate averaged over `1 / rate_hz`).
+    /// RMS of the rate sampled at `rate_hz` ([U], [Hz]), as [Vavilova et al., §4] gives it
+    /// ("0.003 deg/s RMS at 400 Hz"): density = `rms / sqrt(rate_hz)` (the rate averaged over
+    /// `1 / rate_hz`).
     RmsAtRate {
         /// RMS of one rate sample [U].
         rms: f64,
@@ -88,7 +89,7 @@ impl GaussMarkov {
 }
 
 /// Error model of one triad. The sensed increment over an interval `dt` is
-/// (Groves §4.4.6; seed 000 eqs. (3), (8): `measured = (1 + m) true + bias` per axis)
+/// (Groves §4.4.6; [Berdinskikh et al., eqs. 3, 8]: `measured = (1 + m) true + bias` per axis)
 ///
 /// ```text
 /// d_meas = (I + diag(scale) + misalignment) d_true
@@ -101,7 +102,7 @@ pub struct TriadErrors {
     pub bias: Vector3<f64>,
     /// Turn-on bias (bias repeatability) 1-sigma per axis [U]: drawn once per seed, then constant.
     pub turn_on_bias_sigma: Vector3<f64>,
-    /// Scale-factor errors `m` per axis [-] (seed 000's `m_omega`, `m_a`).
+    /// Scale-factor errors `m` per axis [-] (`m_omega`, `m_a` of [Berdinskikh et al., eqs. 3, 8]).
     pub scale: Vector3<f64>,
     /// Misalignment / non-orthogonality [rad]: `M_ij` couples true axis `j` into sensed axis `i`
     /// (small angles). The diagonal should be zero (scale errors live in `scale`); it is used as
@@ -251,7 +252,7 @@ mod tests {
 
     #[test]
     fn rms_at_rate_is_density_times_sqrt_rate() {
-        // Seed 003: 0.003 deg/s RMS at 400 Hz -> 1.5e-4 deg/s/sqrt(Hz).
+        // [Vavilova et al., §4]: 0.003 deg/s RMS at 400 Hz -> 1.5e-4 deg/s/sqrt(Hz).
         let w = WhiteNoise::RmsAtRate {
             rms: 0.003,
             rate_hz: 400.0,

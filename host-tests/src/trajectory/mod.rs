@@ -1,10 +1,10 @@
 //! The exact IMU generator: trajectory -> ideal increments and truth (the inverse of
-//! navigation, seed 004).
+//! navigation, [Stand model]).
 //!
 //! A [`Trajectory`] gives, at any time and position, the body's NED velocity and its derivative,
 //! and its roll, pitch and yaw with their rates. The generator integrates the position and, over
 //! each sample interval, the integrals of what ideal sensors sense (Groves §5.4.1, eq. 5.53–5.54,
-//! rearranged; seed 004 writes the same in its level frame):
+//! rearranged; [Stand model] writes the same in its level frame):
 //!
 //! - `omega_ib_b = omega_nb_b + C_n_b (omega_ie_n + omega_en_n)`, with `omega_nb_b` from the
 //!   Euler-angle rates (Titterton & Weston eq. 3.52);

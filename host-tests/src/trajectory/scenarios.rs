@@ -4,13 +4,13 @@
 //! | name | what | source |
 //! |---|---|---|
 //! | `static` | at rest, any attitude | — |
-//! | `ship-rocking` | harmonic roll, pitch and yaw of a ship, IMU at a lever arm from the centre of rotation | seed 002 |
-//! | `auv-bench` | roll and pitch 5 deg, 11 s for 5 min, then still; 15 min | seed 003 |
-//! | `flight` | Nizhny Novgorod UWGG to St Petersburg ULLI along the geodesic, 900 km/h at 10,000 m, climb and descent | seed 004 |
+//! | `ship-rocking` | harmonic roll, pitch and yaw of a ship, IMU at a lever arm from the centre of rotation | [Ship alignment] |
+//! | `auv-bench` | roll and pitch 5 deg, 11 s for 5 min, then still; 15 min | [Vavilova et al., §4] |
+//! | `flight` | Nizhny Novgorod UWGG to St Petersburg ULLI along the geodesic, 900 km/h at 10,000 m, climb and descent | [Stand model] |
 //! | `land-vehicle` | a car: starts, stops, accelerations, turns with body roll and pitch | — |
 //!
-//! Sea states of `ship-rocking` (seed 002 gives only sea state 6: 2 deg, 8 s; the others are
-//! this project's assumption for a large ship, amplitudes roughly proportional to the
+//! Sea states of `ship-rocking` ([Ship alignment] gives only sea state 6: 2 deg, 8 s; the others
+//! are this project's assumption for a large ship, amplitudes roughly proportional to the
 //! significant wave height): roll amplitude / period 3: 0.5 deg / 5 s, 4: 1.0 deg / 6 s, 5:
 //! 1.5 deg / 7 s, 6: 2.0 deg / 8 s. Pitch has half the roll amplitude at 0.75 of its period
 //! (phase +60 deg), yaw a quarter at the roll period (phase +120 deg).
@@ -330,14 +330,14 @@ impl Translation {
 }
 
 /// Rocking about a mean attitude, with the IMU at a lever arm from the centre of rotation:
-/// `ship-rocking` (seed 002) and `auv-bench` (seed 003).
+/// `ship-rocking` ([Ship alignment]) and `auv-bench` ([Vavilova et al., §4]).
 ///
 /// The centre moves at a constant speed along the mean heading (0 by default) and may
 /// oscillate about that path ([`Translation`]: surge, sway, heave; none by default); the IMU's
 /// NED offset from it is `C_b_n(t) R`, whose first and second time derivatives (exact, through
 /// [`Jet`]s) add the lever-arm velocity and the acceleration `omega_dot x R + omega x (omega x
-/// R)` of seed 002. Roll and pitch oscillate about a mean roll and pitch (0 by default). The
-/// rocking (and the translation) can stop at `rock_until_s`, tapered to rest over one roll
+/// R)` of [Ship alignment]. Roll and pitch oscillate about a mean roll and pitch (0 by default).
+/// The rocking (and the translation) can stop at `rock_until_s`, tapered to rest over one roll
 /// period by a smooth step.
 ///
 /// With the defaults of the extensions (mean roll and pitch 0, [`Translation::NONE`]) the
@@ -416,8 +416,8 @@ impl Rocking {
         }
     }
 
-    /// `auv-bench` (seed 003): roll and pitch 5 deg, 11 s (pitch a quarter period behind) for
-    /// 5 min, then still; 15 min; IMU on the rotation centre.
+    /// `auv-bench` ([Vavilova et al., §4]): roll and pitch 5 deg, 11 s (pitch a quarter period
+    /// behind) for 5 min, then still; 15 min; IMU on the rotation centre.
     pub fn auv_bench() -> Self {
         Self {
             lat_deg: 45.0,
@@ -728,7 +728,7 @@ pub fn geodesic_direct(lat: f64, lon: f64, az: f64, s: f64) -> (f64, f64) {
     (y[0], y[1])
 }
 
-/// `flight` (seed 004): from one airfield to another along the geodesic. Defaults: Nizhny
+/// `flight` ([Stand model]): from one airfield to another along the geodesic. Defaults: Nizhny
 /// Novgorod Strigino (UWGG, 56.2301 N 43.7840 E, 78 m) to St Petersburg Pulkovo (ULLI, 59.8003 N
 /// 30.2625 E, 24 m), airfield elevations used as ellipsoidal heights.
 ///

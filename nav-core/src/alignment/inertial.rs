@@ -193,7 +193,7 @@ pub struct SensorNoise<T: Scalar> {
 }
 
 impl<T: Scalar> SensorNoise<T> {
-    /// Seed 003's FOG IMU [Vavilova et al., §4], the fine filters' defaults: gyro white noise
+    /// The FOG IMU of [Vavilova et al., §4], the fine filters' defaults: gyro white noise
     /// 0.003 deg/s RMS at 400 Hz = 2.618e-6 rad/sqrt(s), accelerometer white noise 0.02 m/s^2
     /// RMS at 400 Hz = 1e-3 m/s/sqrt(s), gyro bias 0.2 deg/h, accelerometer bias 0.005 m/s^2
     /// (1-sigma per axis).

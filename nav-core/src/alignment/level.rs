@@ -1,4 +1,4 @@
-//! Level alignment on a rocking ship (seed 002): gyros propagate the attitude, the
+//! Level alignment on a rocking ship ([Ship alignment]): gyros propagate the attitude, the
 //! accelerometers' output re-projected to the level frame is compared with gravity by a
 //! discrete Kalman filter that estimates the two horizontal tilt errors, and the attitude is
 //! corrected by a small rotation after every filter update. A constant-gain variant replaces the
@@ -129,7 +129,7 @@ pub struct LevelConfig<T: Scalar> {
     /// Ellipsoidal height [m].
     pub h_m: T,
     /// IMU position relative to the ship's centre of rotation, IMU body axes (FRD) [m]
-    /// (seed 002's `R`, known from the parking spot).
+    /// (the `R` of [Ship alignment], known from the parking spot).
     pub lever_arm_b_m: Vector3<T>,
     /// Gyro angle random walk, the white-noise density `N_g` [rad/sqrt(s)] (= [rad/s/sqrt(Hz)]).
     pub gyro_arw_rad_per_sqrt_s: T,
@@ -162,10 +162,10 @@ const MEASUREMENT_FLOOR_MPS: f64 = 1e-6;
 
 impl<T: Scalar> LevelConfig<T> {
     /// A configuration with the initial attitude [rad], latitude [rad], height [m] and lever arm
-    /// (IMU body axes) [m]; the rest defaults to: tilt sigma 2 deg, yaw sigma 0.5 deg, seed 003's
-    /// FOG figures (ARW 0.009 deg/sqrt(h), drift 0.2 deg/h, VRW 1e-3 m/s^2/sqrt(Hz), accelerometer
-    /// bias 0.005 m/s^2), no reference noise, updates at 10 Hz, full Kalman gains, default input
-    /// limits.
+    /// (IMU body axes) [m]; the rest defaults to: tilt sigma 2 deg, yaw sigma 0.5 deg, the
+    /// FOG figures of [Vavilova et al., §4] (ARW 0.009 deg/sqrt(h), drift 0.2 deg/h,
+    /// VRW 1e-3 m/s^2/sqrt(Hz), accelerometer bias 0.005 m/s^2), no reference noise, updates at
+    /// 10 Hz, full Kalman gains, default input limits.
     pub fn new(
         roll_rad: T,
         pitch_rad: T,
@@ -299,7 +299,7 @@ pub struct LevelStatus {
     pub failed_updates: u32,
 }
 
-/// Level alignment filter on a rocking base (seed 002; see the [module docs](self)).
+/// Level alignment filter on a rocking base ([Ship alignment]; see the [module docs](self)).
 #[derive(Clone, Debug)]
 pub struct LevelFilter<T: Scalar> {
     config: LevelConfig<T>,

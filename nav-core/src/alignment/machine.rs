@@ -8,7 +8,7 @@
 //! |---|---|---|
 //! | [`AlignMethod::Static`] | [`StaticAlignment`] over the whole period | — |
 //! | [`AlignMethod::Inertial`] | [`InertialAlignment`] over the whole period | — |
-//! | [`AlignMethod::Fine`] | [`InertialAlignment`] for [`AlignSettings::coarse_samples`] | [`FineAlignment`] (seed 003: position and zero velocity, closed loop) |
+//! | [`AlignMethod::Fine`] | [`InertialAlignment`] for [`AlignSettings::coarse_samples`] | [`FineAlignment`] ([Vavilova et al.]: position and zero velocity, closed loop) |
 //! | [`AlignMethod::Sway`] | [`InertialAlignment`] for [`AlignSettings::coarse_samples`] | [`SwayAlignment`] (the base sways about a mean attitude) |
 //!
 //! The fine stages start from the coarse attitude and its 1-sigma and use the same IMU noise
@@ -38,7 +38,8 @@ pub enum AlignMethod {
     Static,
     /// Inertial-frame coarse alignment: rocking or disturbed base, no initial heading.
     Inertial,
-    /// Inertial-frame coarse, then seed 003's position-aided closed-loop Kalman filter.
+    /// Inertial-frame coarse, then the position-aided closed-loop Kalman filter of
+    /// [Vavilova et al.].
     Fine,
     /// Inertial-frame coarse, then the base-motion-model filter (still or swaying base).
     Sway,

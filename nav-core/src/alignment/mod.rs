@@ -2,13 +2,13 @@
 //!
 //! - [`analytic`]: static analytic (coarse) alignment — levelling from the mean specific force,
 //!   heading by gyrocompassing the mean angular rate.
-//! - [`fine`]: position-aided closed-loop fine alignment (seed 003) — an error-state Kalman
-//!   filter (position, velocity, attitude, sensor biases) around the strapdown, fed the known
-//!   position and zero velocity, its estimates fed back.
+//! - [`fine`]: position-aided closed-loop fine alignment ([Vavilova et al.]) — an error-state
+//!   Kalman filter (position, velocity, attitude, sensor biases) around the strapdown, fed the
+//!   known position and zero velocity, its estimates fed back.
 //! - [`inertial`]: inertial-frame coarse alignment — gravity observed in a frame frozen in
 //!   inertial space; rocking base, no initial heading.
-//! - [`level`]: level alignment on a rocking ship (seed 002) — a Kalman or constant-gain filter
-//!   of the horizontal tilt from the lever-arm-compensated level-frame velocity.
+//! - [`level`]: level alignment on a rocking ship ([Ship alignment]) — a Kalman or constant-gain
+//!   filter of the horizontal tilt from the lever-arm-compensated level-frame velocity.
 //! - [`machine`]: the state machine `COARSE -> FINE -> ALIGNED` (or `FAILED`) that runs one of
 //!   them as the firmware's alignment task and the harness's replay do.
 //! - [`sway`]: base-motion-model fine alignment — a base still or swaying about a fixed mean

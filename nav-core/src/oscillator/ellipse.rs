@@ -1,5 +1,5 @@
 //! The ellipse of one period: its principal axes from the generator's components, the rotation
-//! they define, and the two degenerate shapes (seed 001 eq. 2.7–2.18).
+//! they define, and the two degenerate shapes ([Oscillator INS, eqs. 2.7–2.18]).
 //!
 //! With the oscillator's phase ahead of the generator's by `delta`, the components of the
 //! principal semi-axes `p` (major) and `q` (minor) are `a = p cos(delta) + q sin(delta)` and

@@ -1,5 +1,5 @@
 //! The estimator: reference generator with its phase-locked loop, the per-period fit, the rate
-//! the fit is rotated back with, and the checks (seed 001 eq. 2.16–2.18).
+//! the fit is rotated back with, and the checks ([Oscillator INS, eqs. 2.16–2.18]).
 
 use super::ellipse::Ellipse;
 use super::window::{Window, WindowFit};

@@ -1,4 +1,4 @@
-//! Gyro-free attitude and specific force from a spatial isotropic oscillator (seed 001).
+//! Gyro-free attitude and specific force from a spatial isotropic oscillator ([Oscillator INS]).
 //!
 //! A mass on three orthogonal springs of equal stiffness, free of other forces, moves on an
 //! ellipse `rho(t) = c + p cos(w0 t) + q sin(w0 t)` that keeps its orientation in inertial space
@@ -16,8 +16,8 @@
 //! 3. `A = [a/|a|, b/|b|, a x b/|a x b|]` (eq. 2.18) gives `C_b_e`, the body's attitude relative
 //!    to the ellipse frame `e` (fixed in inertial space); `f_ib_b = -w0^2 c`.
 //!
-//! Beyond the seed: the seed takes the attitude as constant over a period, which leaves errors of
-//! first order in `omega/w0` (the body turns by `2 pi omega/w0` per period). With
+//! Beyond [Oscillator INS]: the paper takes the attitude as constant over a period, which leaves
+//! errors of first order in `omega/w0` (the body turns by `2 pi omega/w0` per period). With
 //! [`OscillatorConfig::compensate`] each period's readouts are rotated back to its reference
 //! instant by the body rate, which the estimator measures from its own successive attitudes, and
 //! the centre gets a trend; the error drops to the series' remainder and the noise.
@@ -48,7 +48,7 @@ pub struct OscillatorConfig<T: Scalar> {
     /// Time of the first readout [s] (epochs are tagged on this clock).
     pub start_s: f64,
     /// Rotate each period back by the measured body rate and fit the centre's trend (default);
-    /// `false` is the seed's method as written (attitude constant over a period).
+    /// `false` is the method of [Oscillator INS] as written (attitude constant over a period).
     pub compensate: bool,
     /// Below this `Q/P` the ellipse is a near-line [-] (default 0.05).
     pub min_axis_ratio: T,

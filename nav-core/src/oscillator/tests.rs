@@ -172,8 +172,8 @@ fn constant_rate_is_exact_with_compensation() {
     assert!(rms(&r.f_err[r.f_err.len() / 2..]) < 1e-7);
 }
 
-/// The seed's method as written is off at first order in `omega/w0`: the readouts of a period
-/// turn with the body. The first-order perturbation of the components
+/// The method of [Oscillator INS] as written is off at first order in `omega/w0`: the readouts of a
+/// period turn with the body. The first-order perturbation of the components
 /// (`a + omega x b/(2 w0)`, `b + omega x a/(2 w0) - 2 omega x c/w0`, from expanding
 /// `r_b(tau) = (I - tau [omega x]) rho` over a period) predicts the error, at the phase where
 /// the loop settles (`a . b = 0` for the perturbed components). The centre's term does not turn
@@ -236,7 +236,7 @@ fn coning_error_is_bounded_by_the_rate_estimate() {
     let omega_ddot = rate * w * w;
     let d_omega = omega_ddot * t * t / 3.0;
     // Sensitivities (first order, from the series of the rotation back): a rate error acts like
-    // the seed's first-order error; an error in omega_dot (omega'' T: the three epochs give it
+    // the paper's first-order error; an error in omega_dot (omega'' T: the three epochs give it
     // at the middle one) leaks the centre through the tau^2 term, `2 |c|/(w0^2 Q)` per rad/s^2;
     // the dropped omega'' tau^3/6 term adds `1.3 |omega''| |c|/(w0^3 Q)`.
     let (q_m, c_m) = (s.q.norm(), s.c.norm());

@@ -1,8 +1,8 @@
 //! One reference-generator period of readouts, fitted by least squares to
 //! `r(u) = c + c' u + a cos(phi) + b sin(phi)` after undoing the body's rotation within the period.
 //!
-//! Seed 001 eq. (2.16) takes `a` and `b` as the cosine and sine components of the readout at the
-//! generator's phase `phi`. Over a period the readout is not that simple:
+//! [Oscillator INS, eq. 2.16] takes `a` and `b` as the cosine and sine components of the readout at
+//! the generator's phase `phi`. Over a period the readout is not that simple:
 //!
 //! - the body turns by `omega T` while the ellipse stays fixed in inertial space, so the readout
 //!   in body axes is `r_b(tau) = D(tau)^T rho(tau)` with `D(tau)` the body's rotation from the
@@ -18,8 +18,8 @@
 //! trend. Since `D` is linear in the readout, the window keeps
 //! the moments `S_j = sum u^j B r` (`j = 0..3`, `B` the four basis functions, `u = tau/T` the
 //! time in periods) and applies `D` at the end of the period, when the rate is known: the fit
-//! needs no rate while it accumulates. With `W = 0` it is the seed's own demodulation plus the
-//! trend.
+//! needs no rate while it accumulates. With `W = 0` it is the demodulation of [Oscillator INS] plus
+//! the trend.
 
 use crate::Scalar;
 use nalgebra::{Matrix3, Matrix4, Vector3, Vector4};
@@ -62,7 +62,7 @@ pub struct Window<T: Scalar> {
 pub struct WindowFit<T: Scalar> {
     /// Centre of the ellipse at `u = 0` [m].
     pub centre: Vector3<T>,
-    /// Cosine component `a` [m] (seed 001 eq. 2.16).
+    /// Cosine component `a` [m] ([Oscillator INS, eq. 2.16]).
     pub a: Vector3<T>,
     /// Sine component `b` [m].
     pub b: Vector3<T>,
@@ -136,8 +136,8 @@ impl<T: Scalar> Window<T> {
 
     /// The least-squares fit after rotating every readout back by the body's rotation with rate
     /// `w_t = omega T` [rad per period] and acceleration `w_dot_t2 = omega_dot T^2`; without
-    /// `trend` the centre is taken constant (the seed's plain demodulation). `None` if the normal
-    /// matrix is singular (too few readouts).
+    /// `trend` the centre is taken constant (the plain demodulation of [Oscillator INS]). `None` if
+    /// the normal matrix is singular (too few readouts).
     pub fn fit(
         &self,
         w_t: &Vector3<T>,

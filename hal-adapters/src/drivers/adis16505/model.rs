@@ -15,7 +15,8 @@ pub const OUTPUT_PERIOD_S: f32 = (DEC_RATE_400_HZ as f32 + 1.0) / INTERNAL_RATE_
 /// Chip-select-high stall between 16-bit register words [us] (Linux and no-OS
 /// `cs_change_delay = 16`, PX4 `SPI_STALL_PERIOD`).
 pub const STALL_US: u32 = 16;
-/// Maximum SCLK for register access [Hz] (issue 5; not confirmed, see [`crate::drivers`]).
+/// Maximum SCLK for register access [Hz] (project specification; not confirmed, see
+/// [`crate::drivers`]).
 pub const MAX_SCLK_HZ: u32 = 2_000_000;
 /// Maximum SCLK for burst reads [Hz] (Linux `ADIS16475_BURST_MAX_SPEED`).
 pub const MAX_BURST_SCLK_HZ: u32 = 1_000_000;

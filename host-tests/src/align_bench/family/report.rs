@@ -5,12 +5,12 @@
 //! - counts: runs, `ALIGNED`, refusals by reason;
 //! - attitude consistency: the largest `|error / sigma|` over roll, pitch and heading (with its
 //!   member), how many results have an axis beyond [`ATTITUDE_SIGMAS`], and the RMS of
-//!   `error / sigma` per axis (1 for an honest sigma; the target is 0.7–1.3 over 200
+//!   `error / sigma` per axis (1 for an honest sigma; the target is 0.7–1.3 over 200
 //!   members or more);
 //! - heading against the floor, over the aligned members whose floor is below
 //!   [`FLOOR_CAP_DEG`] (the `mems-tactical` members' gyro biases leave the heading
 //!   unobservable: their floor is many radians): RMS heading error, RMS floor, RMS of `error /
-//!   floor` (the target for `fine`: at most [`FLOOR_TARGET`]) and RMS of `sigma /
+//!   floor` (the target for `fine`: at most [`FLOOR_TARGET`]) and RMS of `sigma /
 //!   floor` (below 1: the method claims more than the data can hold);
 //! - hand-over: how many velocities and positions have an axis beyond [`HANDOVER_SIGMAS`] and
 //!   the RMS of `error / sigma` per NED axis.
@@ -29,7 +29,7 @@ pub const ATTITUDE_SIGMAS: f64 = 4.0;
 pub const HANDOVER_SIGMAS: f64 = 3.0;
 /// Members whose heading floor exceeds this are left out of the floor columns [deg].
 pub const FLOOR_CAP_DEG: f64 = 10.0;
-/// The target for `fine`: RMS of heading error over floor at most this.
+/// The target for `fine`: RMS of heading error over floor at most this.
 pub const FLOOR_TARGET: f64 = 1.2;
 
 /// The largest normalised attitude error of a cell.

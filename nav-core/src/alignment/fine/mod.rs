@@ -80,7 +80,7 @@ pub const MAGNITUDE_SIGMA: f64 = 5e-3;
 /// refused.
 pub const EARTH_RATE_SIGMAS: f64 = 4.0;
 
-/// Settings of the filter. `Default` is seed 003's FOG IMU [Vavilova et al., §4] on a base that
+/// Settings of the filter. `Default` is the FOG IMU of [Vavilova et al., §4] on a base that
 /// may sway and heave, the lever arm unknown (5 m per axis).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FineConfig<T: Scalar> {
