@@ -50,7 +50,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Emulate a SINS with given errors along a truth trajectory (seed 004): propagate the
+    /// Emulate a SINS with given errors along a truth trajectory [Stand model]: propagate the
     /// linearised error model and write truth + errors in the trajectory CSV format. Errors come
     /// from the preset, then the error file, then each --set line (see `host_tests::emulate`
     /// for the keys; e.g. `gyro_drift_deg_h = 0.01 0.01 0.01`).
@@ -81,8 +81,8 @@ enum Command {
     /// DIR/imu.bin and DIR/imu.csv (recordings), DIR/truth.csv and DIR/scenario.txt.
     #[command(allow_negative_numbers = true)]
     Sim(SimArgs),
-    /// Alignment benchmarks with their physical floors: seed 002's level filter on a rocking ship
-    /// (sea states 3-6), seed 003's fine alignment on the AUV bench, heading repeatability on
+    /// Alignment benchmarks with their physical floors: the level filter on a rocking ship [Ship alignment]
+    /// (sea states 3-6), fine alignment on the AUV bench [Vavilova et al.], heading repeatability on
     /// the real laser-gyro recording, and every method on a seeded family of still and swaying
     /// bases (family).
     AlignBench {
@@ -91,7 +91,7 @@ enum Command {
         /// Monte Carlo runs per cell (seed002, seed003); members (family).
         #[arg(long, default_value_t = 50)]
         runs: usize,
-        /// Sensor grade of the seed 002 runs.
+        /// Sensor grade of the `seed002` runs.
         #[arg(long, default_value = "fog")]
         grade: host_tests::sensor_model::Grade,
         /// Threads (seed003, family).
@@ -114,9 +114,9 @@ enum Command {
         #[arg(long, value_name = "PART,...", value_delimiter = ',', value_parser = parse_ablation)]
         ablate: Vec<host_tests::trajectory::family::Ablation>,
     },
-    /// Gyro-free attitude from an isotropic oscillator (seed 001): the estimator's accuracy
+    /// Gyro-free attitude from an isotropic oscillator [Oscillator INS]: the estimator's accuracy
     /// against the ratio of the oscillator frequency to the body rate and against readout noise,
-    /// for the seed's method as written and with the rotation compensation.
+    /// for the paper's method as written and with the rotation compensation.
     OscBench {
         /// Seconds of coning per row (after 1 s of lock).
         #[arg(long, default_value_t = 4.0)]
@@ -125,7 +125,7 @@ enum Command {
         #[arg(long, default_value_t = 500.0)]
         noise_ratio: f64,
     },
-    /// Navigate a scenario on the gyro-free oscillator (seed 001) and on a gyro IMU of the same
+    /// Navigate a scenario on the gyro-free oscillator [Oscillator INS] and on a gyro IMU of the same
     /// motion: the oscillator's attitude and specific force feed the same mechanization; prints
     /// both runs' errors against the truth.
     #[command(allow_negative_numbers = true)]
@@ -144,14 +144,14 @@ enum Command {
         /// Natural frequency [Hz] (readout at 50 samples per period).
         #[arg(long, default_value_t = 100.0)]
         f0_hz: f64,
-        /// The seed's method as written (no rotation compensation).
+        /// The paper's method as written (no rotation compensation).
         #[arg(long)]
         seed_method: bool,
         /// Also write the oscillator's readouts (the `osc.csv` format) to this file.
         #[arg(long, value_name = "FILE")]
         readouts: Option<PathBuf>,
     },
-    /// Run the oscillator estimator (seed 001) over a readout file (`t_s,x_m,y_m,z_m`, e.g. from
+    /// Run the oscillator estimator [Oscillator INS] over a readout file (`t_s,x_m,y_m,z_m`, e.g. from
     /// `nav oscillator --readouts`): counts, faults and, with --out, one CSV row per epoch
     /// (attitude C_b_e as a quaternion, specific force, 1-sigma, frequency).
     OscReplay {
@@ -163,7 +163,7 @@ enum Command {
         /// Epoch rows to write.
         #[arg(long, value_name = "FILE")]
         out: Option<PathBuf>,
-        /// The seed's method as written (no rotation compensation).
+        /// The paper's method as written (no rotation compensation).
         #[arg(long)]
         seed_method: bool,
         /// Precision of the estimator.
@@ -254,9 +254,9 @@ enum Precision {
 /// `nav align-bench` tables.
 #[derive(Clone, Copy, ValueEnum)]
 enum AlignBenchKind {
-    /// Seed 002: level alignment on a rocking ship.
+    /// Level alignment on a rocking ship [Ship alignment].
     Seed002,
-    /// Seed 003: fine alignment on the AUV bench.
+    /// Fine alignment on the AUV bench [Vavilova et al.].
     Seed003,
     /// The real laser-gyro recording.
     Lasergyro,
@@ -323,8 +323,8 @@ struct ReplayArgs {
     #[arg(long, default_value = "free", value_parser = named(&config::VERTICALS))]
     vertical: VerticalChannel,
     /// Alignment method: static (analytic, still base), inertial (inertial-frame coarse:
-    /// rocking base, no initial heading), fine (inertial coarse, then seed 003's
-    /// position-aided Kalman filter), sway (inertial coarse, then the swaying-base model).
+    /// rocking base, no initial heading), fine (inertial coarse, then the
+    /// position-aided Kalman filter [Vavilova et al.]), sway (inertial coarse, then the swaying-base model).
     #[arg(long, default_value = "static", value_parser = parse_align_method)]
     align_method: AlignMethod,
     /// IMU noise assumed by the alignment, as a simulator grade (fog, rlg, mems-tactical,
