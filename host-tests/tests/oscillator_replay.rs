@@ -53,3 +53,45 @@ fn a_corrupt_file_is_refused_with_its_line() {
     }];
     assert!(replay::replay::<f64>(&short, 100.0, true, None).is_err());
 }
+
+/// Readouts that are all NaN give no epoch: a failure naming the counts, and `nav
+/// osc-replay` exits non-zero leaving nothing at `--out`.
+#[test]
+fn no_epoch_is_a_failure() {
+    let mut rows = readouts(1.0);
+    for r in &mut rows {
+        r.r_b_m = None;
+    }
+    let msg = replay::replay::<f64>(&rows, 100.0, true, None)
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("no attitude epoch"), "{msg}");
+    assert!(msg.contains(&format!("({} missing)", rows.len())), "{msg}");
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("osc.csv");
+    let text: String = std::iter::once("t_s,x_m,y_m,z_m\n".to_string())
+        .chain(rows.iter().map(|r| format!("{},NaN,NaN,NaN\n", r.t_s)))
+        .collect();
+    std::fs::write(&input, text).unwrap();
+    let out = dir.path().join("epochs.csv");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+        .args([
+            "osc-replay",
+            input.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        !o.status.success(),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("no attitude epoch"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(!out.exists());
+}

@@ -118,6 +118,14 @@ pub fn replay<T: Scalar>(
     let seconds = started.elapsed().as_secs_f64();
     s.readouts_per_s = (s.readouts + s.missing) as f64 / seconds.max(1e-9);
     s.frequency_hz = est.frequency_hz();
+    // An estimator that gave no epoch answered nothing: a failure, with the counts by cause.
+    if s.epochs == 0 {
+        return Err(anyhow!(
+            "no attitude epoch from {} readouts: {}",
+            s.readouts + s.missing,
+            s.to_string().trim_end().replace('\n', "; ")
+        ));
+    }
     Ok(s)
 }
 
