@@ -498,22 +498,9 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
             q_c[i] = self.q_ins[i] * T::c(1.0 / (model::unit(i) * model::unit(i)));
         }
         let ext_propagated = ext.transition(&mut self.x, &mut phi, &mut q_c, dt);
-        // Q_d = (Phi Q_c Phi^T + Q_c) dt / 2 for the parts driven by white noise (INS and
-        // extension); the translation block's exact Q_d is already in.
-        let mut q_w = SMatrix::<T, N, N>::zeros();
-        for i in 0..N {
-            for j in 0..N {
-                let mut s = T::zero();
-                for k in 0..N {
-                    if q_c[k] != T::zero() {
-                        s += phi[(i, k)] * q_c[k] * phi[(j, k)];
-                    }
-                }
-                q_w[(i, j)] = s;
-            }
-            q_w[(i, i)] += q_c[i];
-        }
-        q_d += q_w * (dt * T::c(0.5));
+        // The parts driven by white noise (INS and extension); the translation block's exact
+        // Q_d is already in.
+        q_d += kalman::discrete_noise(&phi, &q_c, dt);
         let propagated = phi * self.x;
         for i in 0..N {
             if !(ext_propagated && i >= FINE_STATES) {
