@@ -285,6 +285,17 @@ pub enum SettingsError {
     /// heading 1-sigma is not true then (an unknown lever arm's estimate and the sway model
     /// share the roll and pitch signal), so it is not offered.
     SwayNeedsLeverArm,
+    /// [`AlignMethod::Fine`] or [`AlignMethod::Sway`] with gyros whose bias 1-sigma alone puts
+    /// the heading beyond the filter's limit: on a still base the east bias and the Earth
+    /// rate's east tilt drift are the same signal, so the heading's 1-sigma is at least
+    /// `sigma_b / (Omega cos(lat))` [Titterton & Weston, §10.3.2], and the filter's linear model
+    /// no longer holds at such errors (on the family the answers were 30-60 sigma off).
+    GyrosTooCoarse {
+        /// Gyro bias 1-sigma [rad/s].
+        bias_rad_s: f64,
+        /// Horizontal Earth rate at the latitude [rad/s].
+        earth_rad_s: f64,
+    },
 }
 
 impl core::fmt::Display for SettingsError {
@@ -305,6 +316,19 @@ impl core::fmt::Display for SettingsError {
             Self::SwayNeedsLeverArm => f.write_str(
                 "the sway method needs the lever arm (--lever-arm X,Y,Z; 0,0,0 at the centre of rotation): with an unknown one its 1-sigma is not true; use fine",
             ),
+            Self::GyrosTooCoarse {
+                bias_rad_s,
+                earth_rad_s,
+            } => {
+                let deg_h = |v: f64| v.to_degrees() * 3600.0;
+                write!(
+                    f,
+                    "gyros too coarse to find north: bias 1-sigma {:.3} deg/h against a horizontal Earth rate of {:.3} deg/h (heading 1-sigma >= {:.0} deg); give the heading or use better gyros",
+                    deg_h(*bias_rad_s),
+                    deg_h(*earth_rad_s),
+                    (bias_rad_s / earth_rad_s).to_degrees()
+                )
+            }
         }
     }
 }
@@ -392,6 +416,17 @@ impl<T: Scalar> AlignSettings<T> {
         self.validate_values()?;
         if self.method == AlignMethod::Sway && matches!(self.lever_arm, LeverArm::Unknown { .. }) {
             return Err(SettingsError::SwayNeedsLeverArm);
+        }
+        if matches!(self.method, AlignMethod::Fine | AlignMethod::Sway) {
+            let bias_rad_s = self.noise.gyro_bias_rad_s.to_f64();
+            let earth_rad_s = crate::earth::OMEGA_IE * libm::cos(self.position.lat_f64());
+            let limit = FineConfig::<f64>::default().max_heading_sigma_rad;
+            if !(bias_rad_s <= limit * earth_rad_s) {
+                return Err(SettingsError::GyrosTooCoarse {
+                    bias_rad_s,
+                    earth_rad_s,
+                });
+            }
         }
         Ok(())
     }
@@ -960,6 +995,26 @@ mod tests {
         assert!(std::format!("{}", SettingsError::SwayNeedsLeverArm).contains("--lever-arm"));
         let given = sway.with_lever_arm(LeverArm::Known(Vector3::zeros()));
         assert_eq!(given.validate(), Ok(()));
+        // Gyros whose bias alone puts the heading beyond 10 deg: the filters refuse them
+        // before any sample; the coarse methods answer or refuse from the data.
+        for method in AlignMethod::ALL {
+            let mut s = settings(method, 120.0).with_lever_arm(LeverArm::Known(Vector3::zeros()));
+            let earth = crate::earth::OMEGA_IE * libm::cos(s.position.lat_f64());
+            s.noise.gyro_bias_rad_s = 0.15 * earth;
+            assert!(s.validate().is_ok(), "{method:?} at 0.15 of the Earth rate");
+            s.noise.gyro_bias_rad_s = 0.2 * earth;
+            let filter = matches!(method, AlignMethod::Fine | AlignMethod::Sway);
+            match s.validate() {
+                Err(e @ SettingsError::GyrosTooCoarse { .. }) if filter => {
+                    assert!(
+                        std::format!("{e}").contains("too coarse to find north"),
+                        "{e}"
+                    );
+                }
+                Ok(()) if !filter => {}
+                other => panic!("{method:?}: {other:?}"),
+            }
+        }
         let s = settings(AlignMethod::Inertial, 5.0);
         let inc = at_rest(&s, &q);
         let mut a = Aligner::new(s);

@@ -56,6 +56,8 @@ pub struct Cell {
     pub refused: BTreeMap<String, usize>,
     /// Aligned cases with an attitude axis beyond [`ATTITUDE_SIGMAS`].
     pub beyond: usize,
+    /// Those cases, each at its worst axis.
+    pub outliers: Vec<Worst>,
     /// The largest `|error / sigma|` of attitude.
     pub worst: Option<Worst>,
     /// Sum of `(error / sigma)^2`, roll, pitch, heading.
@@ -95,6 +97,15 @@ impl Cell {
         let z = a.attitude_z();
         if z.amax() > ATTITUDE_SIGMAS || z.iter().any(|v| v.is_nan()) {
             self.beyond += 1;
+            let axis = (0..3)
+                .max_by(|&i, &j| z[i].abs().total_cmp(&z[j].abs()))
+                .unwrap_or(0);
+            self.outliers.push(Worst {
+                z: z[axis].abs(),
+                member: run.member.index,
+                window_s: case.window_s,
+                axis,
+            });
         }
         for (axis, v) in z.iter().enumerate() {
             if self.worst.is_none_or(|w| v.abs() > w.z) {
@@ -448,7 +459,28 @@ pub fn format_summary(s: &Summary) -> String {
         );
     }
 
-    let _ = writeln!(w, "\n4. by kind of member, all windows");
+    let _ = writeln!(
+        w,
+        "\n4. results beyond {ATTITUDE_SIGMAS} sigma (|z| #member window axis)"
+    );
+    for (m, l, _, c) in s.cells.iter().filter(|c| c.2.is_none()) {
+        if c.outliers.is_empty() {
+            continue;
+        }
+        let list: Vec<String> = c
+            .outliers
+            .iter()
+            .map(|o| {
+                format!(
+                    "{:.1} #{} {:.0}s {}",
+                    o.z, o.member, o.window_s, AXES[o.axis]
+                )
+            })
+            .collect();
+        let _ = writeln!(w, "{:<8} {:<9} {}", m.name(), l.name(), list.join("; "));
+    }
+
+    let _ = writeln!(w, "\n5. by kind of member, all windows");
     let _ = writeln!(
         w,
         "{:<8} {:<9} {:<24} {:>5} {:>5} {:>5} {:>8} {:>8} {:>8} {:>5} {:>5}  refused",
