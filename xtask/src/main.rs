@@ -428,6 +428,9 @@ fn align_costs(nav: &Path, elf: &Path) -> Result<Vec<(&'static str, (f64, f64))>
         c.arg("firmware/qemu-run.sh")
             .arg(elf)
             .args(["--align-method", method])
+            // The recording is FOG-grade: the board's default (ADIS16505) noise prior would have
+            // `fine` refuse gyros too coarse to find north.
+            .args(["--imu-noise", "fog"])
             .args(["out/bench-rock/imu.bin", "out/bench-rock/fw.csv"])
             .args(["45", "30", "0", "40"]);
         eprintln!("$ {}", show(&c));
