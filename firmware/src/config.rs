@@ -104,7 +104,7 @@ const NAMES: [&str; 8] = [
 ];
 
 /// The usage line for error messages.
-pub const USAGE: &str = "firmware [--device adis16505|icm42688|bmi088] [--align-method static|inertial|fine] [--imu-noise fog|rlg|mems-tactical|mems-consumer] [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S] [--frame wander|ned] [--attitude NAME] [--vertical free|hold] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
+pub const USAGE: &str = "firmware [--device adis16505|icm42688|bmi088] [--align-method static|inertial|fine] [--imu-noise fog|rlg|mems-tactical|mems-consumer] [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S] [--base-translation M] [--frame wander|ned] [--attitude NAME] [--vertical free|hold] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
 
 /// nav-core's noise model of a part's or grade's figures.
 pub fn sensor_noise(n: &NoiseSpec) -> SensorNoise<f64> {

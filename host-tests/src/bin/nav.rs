@@ -31,7 +31,7 @@ use host_tests::generate::Stationary;
 use host_tests::pipeline::{DEFAULT_LOG_EVERY, MechanizationChoices, RunConfig, sensor_noise};
 use host_tests::recording_io;
 use host_tests::replay::{FileReport, ImuDevice, ReplayOptions, replay_file};
-use nav_core::alignment::{AlignMethod, LeverArm};
+use nav_core::alignment::{AlignMethod, BaseMotion, LeverArm};
 use nav_core::navigator::config;
 use nav_core::{AttitudeMethod, ImuCalibration, NavFrame, VerticalChannel};
 use std::path::{Path, PathBuf};
@@ -343,6 +343,10 @@ struct ReplayArgs {
     #[arg(long, value_name = "S", conflicts_with = "lever_arm",
           default_value_t = nav_core::alignment::machine::DEFAULT_LEVER_ARM_SIGMA_M)]
     lever_arm_sigma: f64,
+    /// The base's horizontal translation (waves' surge and sway of its centre), stationary
+    /// 1-sigma per axis [m]; 0 for a base that only turns (a motion table).
+    #[arg(long, value_name = "M", default_value_t = BaseMotion::<f64>::default().translation_sigma_m)]
+    base_translation: f64,
 }
 
 impl ReplayArgs {
@@ -369,6 +373,10 @@ impl ReplayArgs {
                 },
             },
             log_every: self.log_every,
+            base: BaseMotion {
+                translation_sigma_m: self.base_translation,
+                ..BaseMotion::default()
+            },
             calibration,
             mechanization: MechanizationChoices {
                 frame: self.frame,

@@ -192,6 +192,7 @@ impl AlignFailure {
                 I::HeadingUnobservable => "inertial: heading not resolved",
                 I::NonFinite => "inertial: not finite",
                 I::BaseDisturbed => "inertial: base disturbed",
+                I::TranslationLeak => "inertial: window too short for a translating base",
             },
             Self::Fine(e) => match e {
                 F::HeadingUnresolved { .. } => "fine: heading not resolved",
@@ -758,7 +759,14 @@ impl<T: Scalar> Aligner<T> {
                         })
                         .map_err(AlignFailure::Static),
                 },
-                Coarse::Inertial(a) => a.estimate().map_err(AlignFailure::Inertial),
+                Coarse::Inertial(a) => a
+                    .estimate()
+                    .and_then(|e| match scatter {
+                        // A still base does not translate (its accelerometers would scatter).
+                        Some((true, _)) => Ok(e),
+                        _ => with_translation_leak(a, &self.settings, e),
+                    })
+                    .map_err(AlignFailure::Inertial),
             }
         };
         match estimate {
@@ -780,6 +788,40 @@ impl<T: Scalar> Aligner<T> {
             }
         }
     }
+}
+
+/// The inertial-frame estimate `e` of a base that is not still, with ramps shorter than
+/// [`RAMP_MAX_S`](super::inertial::RAMP_MAX_S) (windows below 120 s): the leak of its
+/// translation prior ([`BaseMotion::translation_sigma_m`], the fine filter's wave model)
+/// through the ramps added to its 1-sigma ([`InertialAlignment::translation_leak`]), or refused
+/// when that leak alone is beyond the largest heading 1-sigma answered. With such ramps the
+/// check's half-length ramps leak about as much as the main ones and can agree with them by
+/// chance (on the family, 60 s windows answered 12 sigma off in heading). With the longest
+/// ramps the check's leak is some 50 times the main one's, so its excess bounds what is
+/// left (module docs of [`super::inertial`]) and the prior, a worst case, is not added.
+fn with_translation_leak<T: Scalar>(
+    a: &InertialAlignment<T>,
+    s: &AlignSettings<T>,
+    mut e: AttitudeEstimate<T>,
+) -> Result<AttitudeEstimate<T>, InertialAlignError> {
+    if a.ramp_s() >= super::inertial::RAMP_MAX_S - 1e-9 {
+        return Ok(e);
+    }
+    let wave = Translation {
+        horizontal_sigma_m: s.base.translation_sigma_m.to_f64(),
+        ..Translation::<f64>::default()
+    };
+    let (tilt, heading) = a.translation_leak(&wave);
+    if !(heading <= super::inertial::MAX_HEADING_SIGMA_RAD) {
+        return Err(InertialAlignError::TranslationLeak);
+    }
+    let add = |sigma: T, leak: f64| T::c(libm::sqrt(sigma.to_f64().powi(2) + leak * leak));
+    e.sigma_rad = Vector3::new(
+        add(e.sigma_rad.x, tilt),
+        add(e.sigma_rad.y, tilt),
+        add(e.sigma_rad.z, heading),
+    );
+    Ok(e)
 }
 
 /// Longest period of base motion the still-base velocity bound assumes [s].

@@ -203,6 +203,9 @@ impl RunConfig {
                     sigma_m: number("lever-arm-sigma", value)?,
                 };
             }
+            "base-translation" => {
+                self.base.translation_sigma_m = number("base-translation", value)?;
+            }
             "log-every" => {
                 self.log_every = value
                     .parse::<u32>()
