@@ -11,10 +11,10 @@ use hal_adapters::drivers::icm42688::{self as icm, Icm42688};
 use hal_adapters::drivers::{Error, Health, Mounting};
 use hal_adapters::sim::{
     NoDelay, SimAdis16505, SimBmi088, SimBmi088Accel, SimBmi088Gyro, SimError, SimIcm42688,
-    SimulatedBus,
+    SimulatedBus, flag_unrepresentable,
 };
 use hal_adapters::{Imu, ImuSample, SampleFlags};
-use nav_core::navigator::ImuInput;
+use nav_core::navigator::{ImuInput, Unusable};
 
 /// Which device sits on the bus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
@@ -141,8 +141,10 @@ impl<S: Imu + 'static> BoardImu<S> {
             }
         };
         let c2 = counts();
-        let result = result.map(|mut s| {
-            if let Some(source) = self.last_source_sample() {
+        // A non-finite source sample is delivered flagged, as the host's `SimulatedImu` does.
+        let source = self.last_source_sample();
+        let result = flag_unrepresentable(result, source).map(|mut s| {
+            if let Some(source) = source {
                 s.t_us = source.t_us;
             }
             s
@@ -172,8 +174,8 @@ impl<S: Imu + 'static> BoardImu<S> {
     }
 }
 
-/// The navigator's input of a driver's sample: its increments, and usable / after a gap
-/// from its flags (as the host harness converts them).
+/// The navigator's input of a driver's sample: its increments, and why it is not usable / after
+/// a gap from its flags (as the host harness converts them).
 pub fn nav_input(s: &ImuSample) -> ImuInput {
     let (delta_theta_ib_b, delta_v_ib_b) = s.increments();
     ImuInput::new(
@@ -181,7 +183,23 @@ pub fn nav_input(s: &ImuSample) -> ImuInput {
         delta_theta_ib_b,
         delta_v_ib_b,
         s.dt_s,
-        s.flags.usable(),
+        unusable(s.flags),
         s.flags.contains(SampleFlags::GAP),
     )
+}
+
+/// Why `flags` make a sample unusable, in nav-core's terms (`None`: usable).
+pub fn unusable(flags: SampleFlags) -> Option<Unusable> {
+    let cause = flags.unusable_cause()?;
+    Some(if cause == SampleFlags::NON_FINITE {
+        Unusable::NonFinite
+    } else if cause == SampleFlags::BAD_INTERVAL {
+        Unusable::BadInterval
+    } else if cause == SampleFlags::STALE {
+        Unusable::Stale
+    } else if cause == SampleFlags::DEVICE_FAULT {
+        Unusable::DeviceFault
+    } else {
+        Unusable::Other
+    })
 }

@@ -29,10 +29,14 @@ pub enum ExitCode {
     Config = 3,
     /// The recording could not be opened, or it is truncated or corrupt.
     Recording = 4,
-    /// Alignment failed (base moving, bad sensors...).
+    /// Alignment failed (base moving, bad sensors...), or the recording ended before it had
+    /// its samples.
     Alignment = 5,
     /// The solution log could not be written.
     Output = 6,
+    /// Aligned, but not one navigation step followed: every later sample was flagged or
+    /// refused, or there was none (the counts by cause in the defmt log).
+    NothingNavigated = 7,
 }
 
 /// Ends the program (QEMU: with this exit status; a real board stops in a breakpoint loop when

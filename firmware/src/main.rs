@@ -446,16 +446,21 @@ mod app {
             }
         }
 
-        // End of the recording.
-        let summary = navigator.finish().unwrap_or_else(|e| failed(&e, &imu));
+        // End of the recording: the last row, then the end record (only a complete run has it).
+        let summary = navigator.finish().unwrap_or_else(|e| {
+            log::health(&imu.health);
+            failed(&e, &imu)
+        });
         if let Some(row) = summary.final_row {
             write_line(out, row);
         }
+        write_line(out, summary.end_record());
         let c = summary.counters;
         defmt::info!(
-            "summary: samples {=u32}, flagged {=u32}, rejected {=u32}, navigated {=u32}, missed {=u32}, channel overruns {=u32}, last data-ready at {=u64} us",
+            "summary: samples {=u32}, flagged {=u32} ({}), rejected {=u32}, navigated {=u32}, missed {=u32}, channel overruns {=u32}, last data-ready at {=u64} us",
             c.samples,
             c.flagged,
+            defmt::Display2Format(&c.flagged_by),
             c.rejected,
             c.nav_steps,
             MISSED.load(Ordering::Relaxed),
@@ -492,11 +497,18 @@ mod app {
         }
     }
 
-    /// Logs why the run could not navigate and exits with [`ExitCode::Alignment`].
+    /// Logs why the run could not navigate (with the counts by cause) and exits with
+    /// [`ExitCode::NothingNavigated`] or [`ExitCode::Alignment`]. The solution log is left
+    /// without its end record.
     fn failed(e: &NavError, imu: &ImuStats) -> ! {
         defmt::error!("{}", defmt::Display2Format(e));
         log_imu_costs(imu);
-        exit(ExitCode::Alignment)
+        exit(match e {
+            NavError::NothingNavigated { .. } => ExitCode::NothingNavigated,
+            NavError::Alignment { .. } | NavError::EndedDuringAlignment { .. } => {
+                ExitCode::Alignment
+            }
+        })
     }
 
     /// Alignment, below navigation: the navigator's background on the forwarded increments;

@@ -52,9 +52,27 @@ impl SampleFlags {
         .union(Self::BAD_INTERVAL)
         .union(Self::DEVICE_FAULT);
 
+    /// The [`Self::UNUSABLE`] flags in the order a sample's cause is reported.
+    pub const CAUSES: [Self; 4] = [
+        Self::NON_FINITE,
+        Self::BAD_INTERVAL,
+        Self::STALE,
+        Self::DEVICE_FAULT,
+    ];
+
     /// `true` when the sample may be fed to the navigation core.
     pub fn usable(self) -> bool {
         !self.intersects(Self::UNUSABLE)
+    }
+
+    /// Why the sample is not usable: the first of [`Self::CAUSES`] it has (`None`: usable).
+    /// Consumers count flagged samples by this cause, one cause per sample.
+    pub fn unusable_cause(self) -> Option<Self> {
+        if self.usable() {
+            return None;
+        }
+        let cause = Self::CAUSES.into_iter().find(|&flag| self.contains(flag));
+        Some(cause.unwrap_or(self.intersection(Self::UNUSABLE)))
     }
 }
 
@@ -99,5 +117,28 @@ impl ImuSample {
                 f_ib_b.map(|f| f * self.dt_s),
             ),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::SampleFlags;
+
+    #[test]
+    fn one_cause_per_unusable_sample() {
+        let all = SampleFlags::CAUSES
+            .into_iter()
+            .fold(SampleFlags::empty(), SampleFlags::union);
+        assert_eq!(all, SampleFlags::UNUSABLE);
+        let f = SampleFlags::STALE | SampleFlags::NON_FINITE | SampleFlags::GAP;
+        assert_eq!(f.unusable_cause(), Some(SampleFlags::NON_FINITE));
+        assert_eq!(
+            (SampleFlags::DEVICE_FAULT | SampleFlags::STALE).unusable_cause(),
+            Some(SampleFlags::STALE)
+        );
+        assert_eq!(
+            (SampleFlags::GAP | SampleFlags::GYRO_SATURATED).unusable_cause(),
+            None
+        );
     }
 }

@@ -4,13 +4,16 @@
 //! Every rule (the sample gate, the calibration, the counters, the align -> navigate hand-over,
 //! the logging cadence) is the navigator's; the firmware's tasks drive the same navigator
 //! across their channels, and an end-to-end test compares the two logs line by line. This
-//! module only reads samples, converts them ([`input_of`]), writes [`CSV_HEADER`] then one
-//! [`Solution`] row (its `Display`) per line, and reports in output units.
+//! module only reads samples, converts them ([`input_of`]), writes [`CSV_HEADER`], one
+//! [`Solution`] row (its `Display`) per line and the end record
+//! ([`nav_core::output::EndRecord`]), and reports in output units.
 
 use hal_adapters::drivers::NoiseSpec;
 use hal_adapters::{Imu, ImuSample, SampleFlags};
 use nav_core::alignment::{AlignMethod, AlignOutcome, SensorNoise};
-use nav_core::navigator::{Background, ConfigError, ImuInput, NavError, Navigator, Setup};
+use nav_core::navigator::{
+    Background, ConfigError, FlaggedCounts, ImuInput, NavError, Navigator, Setup, Unusable,
+};
 use nav_core::output::CSV_HEADER;
 use nav_core::{Scalar, Solution};
 use std::fmt;
@@ -29,8 +32,8 @@ pub fn sensor_noise<T: Scalar>(n: &NoiseSpec) -> SensorNoise<T> {
     }
 }
 
-/// The navigator's input of a source's sample: its increments, and usable / after a gap from
-/// its flags.
+/// The navigator's input of a source's sample: its increments, and why it is not usable / after
+/// a gap from its flags (as the firmware converts them).
 pub fn input_of(s: &ImuSample) -> ImuInput {
     let (delta_theta_ib_b, delta_v_ib_b) = s.increments();
     ImuInput::new(
@@ -38,9 +41,25 @@ pub fn input_of(s: &ImuSample) -> ImuInput {
         delta_theta_ib_b,
         delta_v_ib_b,
         s.dt_s,
-        s.flags.usable(),
+        unusable(s.flags),
         s.flags.contains(SampleFlags::GAP),
     )
+}
+
+/// Why `flags` make a sample unusable, in nav-core's terms (`None`: usable).
+pub fn unusable(flags: SampleFlags) -> Option<Unusable> {
+    let cause = flags.unusable_cause()?;
+    Some(if cause == SampleFlags::NON_FINITE {
+        Unusable::NonFinite
+    } else if cause == SampleFlags::BAD_INTERVAL {
+        Unusable::BadInterval
+    } else if cause == SampleFlags::STALE {
+        Unusable::Stale
+    } else if cause == SampleFlags::DEVICE_FAULT {
+        Unusable::DeviceFault
+    } else {
+        Unusable::Other
+    })
 }
 
 /// The alignment result in output units.
@@ -110,6 +129,8 @@ pub struct Report {
     pub samples: u32,
     /// Samples skipped for their flags.
     pub flagged: u32,
+    /// The same by cause.
+    pub flagged_by: FlaggedCounts,
     /// Increments refused by nav-core's input checks (alignment or navigation).
     pub rejected: u32,
     /// Samples of the alignment (`n_align`).
@@ -179,11 +200,14 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
     if let Some(sol) = summary.final_row {
         row(&mut out, &sol)?;
     }
+    // Only a complete run ends its log with the end record.
+    writeln!(out, "{}", summary.end_record()).map_err(PipelineError::Output)?;
     out.flush().map_err(PipelineError::Output)?;
     let c = summary.counters;
     Ok(Report {
         samples: c.samples,
         flagged: c.flagged,
+        flagged_by: c.flagged_by,
         rejected: c.rejected,
         n_align: setup.n_align(),
         nav_steps: c.nav_steps,
@@ -272,9 +296,11 @@ mod tests {
         );
         assert_eq!(r.rows, 1 + 24 + 1);
         let text = String::from_utf8(log).unwrap();
-        let lines: Vec<&str> = text.lines().collect();
+        let mut lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines[0], CSV_HEADER);
+        assert_eq!(lines.pop(), Some("# end: 26 rows, ok"));
         assert_eq!(lines.len(), 1 + r.rows as usize);
+        assert_eq!((r.flagged_by.non_finite, r.flagged_by.stale), (1, 1));
         // The alignment ended on sample 1001 (sample 5 was skipped).
         assert!(
             lines[1].starts_with("10.010000,45.000000000,0.000000000,0,0,0,0,"),
@@ -295,8 +321,28 @@ mod tests {
             run::<f64, _, _>(&config(10.0, 40), 100.0, &mut still(50, 0), &mut log).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "recording ended during alignment: 50 of 1000 samples"
+            "recording ended during alignment: 50 of 1000 samples used"
         );
+        // All flagged: counted by cause, and the log has no end record.
+        let mut all_nan = still(1500, 0);
+        all_nan.bad = (1..=1500).map(|k| (k, SampleFlags::NON_FINITE)).collect();
+        let mut log = Vec::new();
+        let e = run::<f64, _, _>(&config(10.0, 40), 100.0, &mut all_nan, &mut log).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "recording ended during alignment: 0 of 1000 samples used (1500 flagged: non-finite 1500)"
+        );
+        assert_eq!(String::from_utf8(log).unwrap(), format!("{CSV_HEADER}\n"));
+        // Aligned, then nothing usable.
+        let mut stale = still(1500, 0);
+        stale.bad = (1001..=1500).map(|k| (k, SampleFlags::STALE)).collect();
+        let e =
+            run::<f64, _, _>(&config(10.0, 40), 100.0, &mut stale, &mut Vec::new()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "no navigation step after the alignment: 1500 samples, 1000 used by the alignment (500 flagged: stale 500)"
+        );
+        let mut log = Vec::new();
         let e = run::<f64, _, _>(&config(10.0, 40), 100.0, &mut still(50, u32::MAX), &mut log)
             .unwrap_err();
         assert_eq!(e.to_string(), "broken");

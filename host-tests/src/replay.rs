@@ -123,20 +123,6 @@ pub fn replay_file<T: Scalar, W: Write>(
         non_finite: stats.non_finite,
         bad_interval: stats.bad_interval,
     });
-    // A run that navigated nothing is a failure, with the counts by cause.
-    if report.nav_steps == 0 {
-        return Err(anyhow!(
-            "recording {}: no navigation step after the alignment ({} samples: {} used by the alignment, flagged {} (non-finite {}, bad interval {}), rejected {}, missed {})",
-            path.display(),
-            report.samples,
-            report.n_align,
-            report.flagged,
-            stats.non_finite,
-            stats.bad_interval,
-            report.rejected,
-            stats.missed
-        ));
-    }
     Ok(FileReport {
         format,
         rate_hz,

@@ -11,6 +11,11 @@
 //! - velocity north, east, down [m/s];
 //! - roll, pitch and yaw differences [deg], each wrapped to [-180, 180), and the total rotation
 //!   angle of `q_true^-1 q_sol` [deg] (free of the Euler angles' singularities).
+//!
+//! A solution log ends with its end record (`# end: N rows, ok`, [`EndRecord`]), which only a
+//! run that finished writes. A CSV solution without it is still compared (the rows it has are
+//! valid), with a warning on stderr that the run was cut short; the exit status stays 0. An end
+//! record whose count differs from the rows read, or anything after it, is an error.
 
 use crate::truth::Truth;
 use crate::{kf_gins, truth_csv};
@@ -18,11 +23,12 @@ use anyhow::{Context, Result, anyhow, bail, ensure};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use nav_core::attitude::euler;
 use nav_core::earth::radii;
+use nav_core::output::EndRecord;
 use plotters::prelude::*;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::fs::File;
-use std::io::{BufRead, BufReader, IsTerminal, Read};
+use std::io::{self, BufRead, BufReader, IsTerminal, Read};
 use std::path::{Path, PathBuf};
 
 /// Slack [s] at the ends of the truth's span: the solution log's time resolution.
@@ -314,10 +320,26 @@ fn wrap_pi(a: f64) -> f64 {
     (a + PI).rem_euclid(2.0 * PI) - PI
 }
 
+/// A trajectory file as read ([`read_trajectory_file`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Trajectory {
+    /// The rows, in file order.
+    pub rows: Vec<Truth>,
+    /// The file is a KF-GINS `.nav` file (otherwise the solution log's CSV).
+    pub kf_gins: bool,
+    /// The solution log's end record, if the file has one (its count matches `rows`).
+    pub end: Option<EndRecord>,
+}
+
 /// Reads a trajectory: a CSV with the solution log's header (truth files, `nav replay` logs) or a
 /// KF-GINS `.nav` file (first data line all numbers). Shows a progress bar for large files when
 /// `progress` is set and stderr is a terminal.
 pub fn read_trajectory(path: &Path, progress: bool) -> Result<Vec<Truth>> {
+    Ok(read_trajectory_file(path, progress)?.rows)
+}
+
+/// [`read_trajectory`], with the file's format and its end record (see the module docs).
+pub fn read_trajectory_file(path: &Path, progress: bool) -> Result<Trajectory> {
     let file = File::open(path).with_context(|| format!("{}", path.display()))?;
     let len = file.metadata().map(|m| m.len()).unwrap_or(0);
     let bar = (progress && len >= PROGRESS_MIN_BYTES && std::io::stderr().is_terminal())
@@ -333,16 +355,97 @@ pub fn read_trajectory(path: &Path, progress: bool) -> Result<Vec<Truth>> {
             line.split([' ', '\t', ','])
                 .all(|f| f.is_empty() || f.parse::<f64>().is_ok())
         });
+    let mut lines = EndRecordFilter::new(reader);
     let rows = if is_kf_gins {
-        kf_gins::read_truth_from(reader, path).map_err(anyhow::Error::from)
+        kf_gins::read_truth_from(BufReader::new(&mut lines), path).map_err(anyhow::Error::from)
     } else {
-        truth_csv::read_from(reader, path).map_err(anyhow::Error::from)
+        truth_csv::read_from(&mut lines, path).map_err(anyhow::Error::from)
     };
     // Cleared on errors too, so the message is not printed after a stale bar.
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    rows
+    let rows = rows?;
+    if let Some(end) = lines.end
+        && end.rows as usize != rows.len()
+    {
+        bail!(
+            "{}: line {}: the end record says {} rows, the file has {}",
+            path.display(),
+            lines.line,
+            end.rows,
+            rows.len()
+        );
+    }
+    Ok(Trajectory {
+        rows,
+        kf_gins: is_kf_gins,
+        end: lines.end,
+    })
+}
+
+/// Passes a file's lines on, one at a time, up to the solution log's end record, which it keeps
+/// instead; a malformed end record, or anything but blank lines after it, is an error.
+struct EndRecordFilter<R> {
+    inner: R,
+    /// Lines read so far (the number of the current one).
+    line: usize,
+    /// The current line and how much of it was passed on.
+    buf: Vec<u8>,
+    at: usize,
+    end: Option<EndRecord>,
+}
+
+impl<R: BufRead> EndRecordFilter<R> {
+    fn new(inner: R) -> Self {
+        Self {
+            inner,
+            line: 0,
+            buf: Vec::new(),
+            at: 0,
+            end: None,
+        }
+    }
+
+    /// Reads the next line into `buf`, unless it is the end record or follows it; `false` at
+    /// the end of the file.
+    fn next_line(&mut self) -> io::Result<bool> {
+        loop {
+            self.buf.clear();
+            self.at = 0;
+            if self.inner.read_until(b'\n', &mut self.buf)? == 0 {
+                return Ok(false);
+            }
+            self.line += 1;
+            let text = String::from_utf8_lossy(&self.buf);
+            let bad = |what: String| io::Error::new(io::ErrorKind::InvalidData, what);
+            if let Some(end) = self.end {
+                if text.trim().is_empty() {
+                    continue;
+                }
+                return Err(bad(format!(
+                    "line {}: text after the end record '{end}'",
+                    self.line
+                )));
+            }
+            match EndRecord::parse(&text) {
+                None => return Ok(true),
+                Some(Ok(end)) => self.end = Some(end),
+                Some(Err(e)) => return Err(bad(format!("line {}: {e}", self.line))),
+            }
+        }
+    }
+}
+
+impl<R: BufRead> Read for EndRecordFilter<R> {
+    fn read(&mut self, out: &mut [u8]) -> io::Result<usize> {
+        if self.at == self.buf.len() && !self.next_line()? {
+            return Ok(0);
+        }
+        let n = (&self.buf[self.at..]).read(out)?;
+        self.at += n;
+        Ok(n)
+    }
 }
 
 /// The first line that is not blank or a `#`/`%` comment, without consuming the buffer.
@@ -449,7 +552,24 @@ pub fn report_files(
     if let Some(t) = at_s.iter().find(|t| !t.is_finite()) {
         bail!("--at {t}: expected finite times in seconds");
     }
-    let sol = read_trajectory(solution, true)?;
+    let Trajectory {
+        rows: sol,
+        kf_gins,
+        end,
+    } = read_trajectory_file(solution, true)?;
+    let complete = if end.is_some() || kf_gins {
+        ""
+    } else {
+        // A KF-GINS solution has no end record to miss.
+        eprintln!(
+            "warning: {}: no end record ('{} N rows, ok'): the run that wrote this log did \
+             not finish (it failed, crashed or was stopped); comparing the {} rows it has",
+            solution.display(),
+            EndRecord::PREFIX,
+            sol.len()
+        );
+        ", no end record: cut short"
+    };
     let tru = read_trajectory(truth, true)?;
     let series = compare(&sol, &tru).with_context(|| {
         format!(
@@ -460,7 +580,7 @@ pub fn report_files(
     })?;
     let (t_a, t_b) = series.truth_span_s;
     let mut out = format!(
-        "solution {} ({} rows) against truth {} ({} rows, t = {t_a} .. {t_b} s)\n\
+        "solution {} ({} rows{complete}) against truth {} ({} rows, t = {t_a} .. {t_b} s)\n\
          compared {} rows, skipped {} before and {} after the truth's span; t0 = {} s (the \
          truth's first row)\n",
         solution.display(),
@@ -815,6 +935,11 @@ mod tests {
             text.contains("compared 11 rows, skipped 0 before and 0 after"),
             "{text}"
         );
+        // Written without an end record: compared, and said to be cut short.
+        assert!(
+            text.contains("(11 rows, no end record: cut short)"),
+            "{text}"
+        );
         for name in ["attitude_errors", "velocity_errors", "position_errors"] {
             let svg = std::fs::read_to_string(plots.join(format!("{name}.svg"))).unwrap();
             assert!(svg.starts_with("<svg") && svg.len() > 1000, "{name}");
@@ -828,6 +953,40 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("missing.nav"), "{err}");
+    }
+
+    #[test]
+    fn reads_the_end_record_and_refuses_a_wrong_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("sol.csv");
+        let t = truth();
+        truth_csv::write(&path, &t).unwrap();
+        let rows = std::fs::read_to_string(&path).unwrap();
+        let read = |text: &str| {
+            std::fs::write(&path, text).unwrap();
+            read_trajectory_file(&path, false).map_err(|e| format!("{e:#}"))
+        };
+        // Without an end record: the rows, and no end.
+        let plain = read(&rows).unwrap();
+        assert_eq!(
+            (plain.rows.len(), plain.end, plain.kf_gins),
+            (11, None, false)
+        );
+        // With it (and blank lines after it): the same rows.
+        let complete = read(&format!("{rows}# end: 11 rows, ok\n\n")).unwrap();
+        assert_eq!(complete.rows, plain.rows);
+        assert_eq!(complete.end, Some(EndRecord { rows: 11 }));
+        // A count that does not match, a malformed end record, rows after it: refused.
+        let e = read(&format!("{rows}# end: 12 rows, ok\n")).unwrap_err();
+        assert!(
+            e.contains("line 13: the end record says 12 rows, the file has 11"),
+            "{e}"
+        );
+        let e = read(&format!("{rows}# end: eleven rows\n")).unwrap_err();
+        assert!(e.contains("line 13: malformed end record"), "{e}");
+        let last = rows.lines().last().unwrap();
+        let e = read(&format!("{rows}# end: 11 rows, ok\n{last}\n")).unwrap_err();
+        assert!(e.contains("line 14: text after the end record"), "{e}");
     }
 
     #[test]

@@ -193,7 +193,47 @@ fn recording_ending_during_alignment() {
     recording_io::write(&path, &short).unwrap();
     let msg = replay_error(&path, &options());
     assert!(
-        msg.contains("two-seconds.bin: recording ended during alignment: 800 of 4000 samples"),
+        msg.ends_with(
+            "two-seconds.bin: recording ended during alignment: 800 of 4000 samples used"
+        ),
+        "{msg}"
+    );
+}
+
+/// Every sample NaN: the alignment never gets one, and the message counts them by cause, not
+/// as samples that were missing.
+#[test]
+fn all_samples_flagged_are_counted_by_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rec = clean();
+    for r in &mut rec.records {
+        r.gyro[0] = f32::NAN;
+    }
+    // Two finite samples with a zero interval instead: counted as such.
+    for k in [101, 201] {
+        rec.records[k] = rec.records[k - 1];
+        rec.records[k].gyro[0] = 0.0;
+    }
+    let path = dir.path().join("all-nan.bin");
+    recording_io::write(&path, &rec).unwrap();
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.ends_with(
+            "all-nan.bin: recording ended during alignment: 0 of 4000 samples used (8000 flagged: non-finite 7998, bad interval 2)"
+        ),
+        "{msg}"
+    );
+    // Good samples before the NaN ones: aligned, then not one navigation step.
+    let mut rec = clean();
+    for r in &mut rec.records[4000..] {
+        r.accel[2] = f32::INFINITY;
+    }
+    recording_io::write(&path, &rec).unwrap();
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.ends_with(
+            "all-nan.bin: no navigation step after the alignment: 8000 samples, 4000 used by the alignment (4000 flagged: non-finite 4000)"
+        ),
         "{msg}"
     );
 }

@@ -194,9 +194,11 @@ fn firmware_in_qemu_matches_host_replay() {
     assert_eq!(field(&log, "missed"), 0, "missed data-ready interrupts");
     assert_eq!(field(&log, "channel overruns"), 0, "channel overruns");
     // The NaN record reaches the driver as a frame with a bad checksum: rejected and counted,
-    // and the next sample shows the gap. The repeated timestamp is a repeated DATA_CNTR: stale.
-    assert_eq!(field(&log, "summary: samples"), 7999);
-    assert_eq!(field(&log, "flagged"), 1, "the stale sample");
+    // and the next sample shows the gap; the sample stream delivers the record flagged
+    // non-finite. The repeated timestamp is a repeated DATA_CNTR: stale.
+    assert_eq!(field(&log, "summary: samples"), 8000);
+    assert_eq!(field(&log, "flagged"), 2, "the NaN and the stale sample");
+    assert!(log.contains("flagged 2 (non-finite 1, stale 1)"), "{log}");
     assert_eq!(field(&log, "checksum errors"), 1, "the NaN record's frame");
     assert_eq!(field(&log, "bus errors"), 0);
     // Data-ready k (from 1) fires at k * 2.5 ms of SysTick time: exactly 400 Hz under icount.
@@ -236,8 +238,9 @@ fn firmware_in_qemu_matches_host_replay() {
     let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
     let host = std::fs::read_to_string(d.join("host.csv")).unwrap();
     // Header, the aligned state at 10 s, then 3998 navigation steps logged every 40 (99 rows)
-    // and the final one.
-    assert_eq!(host.lines().count(), 1 + 1 + 99 + 1, "host log rows");
+    // and the final one, and the end record.
+    assert_eq!(host.lines().count(), 1 + 1 + 99 + 1 + 1, "host log rows");
+    assert_eq!(host.lines().last(), Some("# end: 101 rows, ok"));
     assert_eq!(
         fw.lines().count(),
         host.lines().count(),
@@ -263,6 +266,104 @@ fn firmware_in_qemu_matches_host_replay() {
         "alignment errors with the calibration: tilt {tilt:.4} deg, heading {heading:.3} deg; without: {tilt_raw:.4} deg, {heading_raw:.3} deg"
     );
     assert!(tilt < tilt_raw / 2.0 && heading < heading_raw / 2.0);
+}
+
+/// Recordings that navigate nothing: every sample NaN (the alignment never gets one), NaN after
+/// the alignment, and frozen time after the alignment (the simulated ADIS16505 repeats its
+/// DATA_CNTR: stale). The firmware and `nav replay --device adis16505` fail alike, with the same
+/// message counting the samples by cause; the firmware's log has no end record, and the host
+/// leaves no log.
+#[test]
+fn firmware_and_host_fail_alike_when_nothing_is_navigated() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // 11 s at 400 Hz: a 10 s alignment (4000 samples) and 400 more.
+    let clean = static_recording(11.0, Grade::Ideal);
+    let n = clean.records.len();
+    assert_eq!(n, 4400);
+    let with = |from: usize, spoil: &dyn Fn(&mut hal_adapters::recording::Record, u64)| {
+        let mut rec = clean.clone();
+        let t_frozen = rec.records[from.max(1) - 1].t_ns;
+        for r in &mut rec.records[from..] {
+            spoil(r, t_frozen);
+        }
+        rec
+    };
+    let nan = |r: &mut hal_adapters::recording::Record, _| r.gyro[2] = f32::NAN;
+    let frozen = |r: &mut hal_adapters::recording::Record, t: u64| r.t_ns = t;
+    let cases = [
+        (
+            "all-nan.bin",
+            with(0, &nan),
+            5,
+            "recording ended during alignment: 0 of 4000 samples used (4400 flagged: non-finite 4400)",
+        ),
+        (
+            "nav-nan.bin",
+            with(4000, &nan),
+            7,
+            "no navigation step after the alignment: 4400 samples, 4000 used by the alignment (400 flagged: non-finite 400)",
+        ),
+        (
+            "nav-frozen.bin",
+            with(4000, &frozen),
+            7,
+            "no navigation step after the alignment: 4400 samples, 4000 used by the alignment (400 flagged: stale 400)",
+        ),
+    ];
+    let s = Static::default();
+    let (lat, lon, h) = (
+        s.lat_deg.to_string(),
+        s.lon_deg.to_string(),
+        s.h_m.to_string(),
+    );
+    for (file, rec, fw_code, expect) in cases {
+        recording_io::write(&d.join(file), &rec).unwrap();
+        let (code, log) = run_firmware(d, &[file, "fw.csv", &lat, &lon, &h, "10"]);
+        assert_eq!(code, fw_code, "{file}: firmware exit code; log:\n{log}");
+        let fw_msg = log
+            .lines()
+            .find_map(|l| l.split_once("ERROR ").map(|(_, m)| m.trim()))
+            .unwrap_or_else(|| panic!("{file}: no error in the firmware log:\n{log}"));
+        assert_eq!(fw_msg, expect, "{file}: firmware");
+        let fw_log = std::fs::read_to_string(d.join("fw.csv")).unwrap();
+        assert!(
+            fw_log.starts_with(nav_core::output::CSV_HEADER) && !fw_log.contains("# end:"),
+            "{file}: the firmware's log of a failed run must not look complete:\n{fw_log}"
+        );
+
+        let out = nav(
+            d,
+            &[
+                "replay",
+                "--imu",
+                file,
+                "--out",
+                "host.csv",
+                "--lat",
+                &lat,
+                "--lon",
+                &lon,
+                "--h",
+                &h,
+                "--align-seconds",
+                "10",
+                "--device",
+                "adis16505",
+                "--precision",
+                "f32",
+            ],
+        );
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{file}: host: {stderr}");
+        let prefix = format!("recording {file}: ");
+        let host_msg = stderr
+            .lines()
+            .find_map(|l| l.split_once(&prefix).map(|(_, m)| m.trim()))
+            .unwrap_or_else(|| panic!("{file}: no message in:\n{stderr}"));
+        assert_eq!(host_msg, fw_msg, "{file}: host and firmware differ");
+        assert!(!d.join("host.csv").exists(), "{file}: the host left a log");
+    }
 }
 
 /// A truncated and a corrupt recording stop the firmware with the recording exit code (4) and a

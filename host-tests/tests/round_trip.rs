@@ -247,11 +247,12 @@ fn cli_generate_and_replay() {
     );
 
     // 8000 samples, 4000 aligned, 4000 steps: the alignment row, 121 periodic rows (3993 steps)
-    // and the last step.
+    // and the last step, then the end record.
     let text = std::fs::read_to_string(&log).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some(nav_core::output::CSV_HEADER));
-    assert_eq!(lines.count(), 1 + 121 + 1);
+    assert_eq!(lines.count(), 1 + 121 + 1 + 1);
+    assert!(text.ends_with("\n# end: 123 rows, ok\n"), "{text}");
     let rows = parse_log(&text);
     assert_eq!(rows[0].t_s, 10.0);
     assert_eq!(rows[1].t_s, 10.0 + 33.0 / 400.0);

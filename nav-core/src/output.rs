@@ -4,6 +4,11 @@
 //! `Display`, so equal states print as equal text. Latitude and longitude are printed from the
 //! fixed-point position as exact decimal nanodegrees; the other values are widened to `f64` and
 //! printed in Rust's shortest round-trip form (platform independent).
+//!
+//! A log is [`CSV_HEADER`], one [`Solution`] row per line, and, as its last line, the
+//! [`EndRecord`] (`# end: 102 rows, ok`). Only a run that ended normally writes the end record,
+//! after its last row: a log without it was cut short (the run failed, crashed or was stopped),
+//! whatever rows it has. CSV readers that skip `#` comment lines read the rows unchanged.
 
 use crate::{NavState, Scalar};
 use core::fmt;
@@ -11,6 +16,55 @@ use core::fmt;
 /// Column header of the solution CSV (more columns may be appended later).
 pub const CSV_HEADER: &str =
     "t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,pitch_deg,yaw_deg";
+
+/// The solution log's last line, written only by a run that ended normally: `# end: N rows, ok`,
+/// with `N` the number of solution rows between the header and it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EndRecord {
+    /// Solution rows in the log (the header and the end record not counted).
+    pub rows: u32,
+}
+
+impl EndRecord {
+    /// What every end record starts with (a CSV comment).
+    pub const PREFIX: &'static str = "# end:";
+
+    /// The end record of `line` (without its line terminator; surrounding blanks allowed):
+    /// `None` unless it starts with [`Self::PREFIX`]; an error when it does but is not
+    /// `# end: N rows, ok`.
+    pub fn parse(line: &str) -> Option<Result<Self, MalformedEndRecord>> {
+        let rest = line.trim().strip_prefix(Self::PREFIX)?;
+        let rows = rest
+            .strip_prefix(' ')
+            .and_then(|r| r.strip_suffix(" rows, ok"))
+            .filter(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+            .and_then(|n| n.parse::<u32>().ok());
+        Some(rows.map(|rows| Self { rows }).ok_or(MalformedEndRecord))
+    }
+}
+
+/// A line starts like an [`EndRecord`] but is not one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MalformedEndRecord;
+
+impl fmt::Display for MalformedEndRecord {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "malformed end record: expected '{} N rows, ok'",
+            EndRecord::PREFIX
+        )
+    }
+}
+
+impl core::error::Error for MalformedEndRecord {}
+
+impl fmt::Display for EndRecord {
+    /// `# end: N rows, ok` (no line terminator).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} {} rows, ok", Self::PREFIX, self.rows)
+    }
+}
 
 /// One navigation solution in output units.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -124,5 +178,36 @@ mod tests {
             "60.002500,45.123456789,-0.000000500,100.25,0.5,-0,0.0000001,1.5,-2,30"
         );
         assert_eq!(CSV_HEADER.split(',').count(), 10);
+    }
+
+    #[test]
+    fn end_record_round_trip_and_refusals() {
+        let mut b = Buf([0; 64], 0);
+        let end = EndRecord { rows: 102 };
+        fmt::Write::write_fmt(&mut b, format_args!("{end}")).unwrap();
+        let text = core::str::from_utf8(&b.0[..b.1]).unwrap();
+        assert_eq!(text, "# end: 102 rows, ok");
+        assert_eq!(EndRecord::parse(text), Some(Ok(end)));
+        assert_eq!(
+            EndRecord::parse("  # end: 0 rows, ok\r"),
+            Some(Ok(EndRecord { rows: 0 }))
+        );
+        // Rows and other comments are not end records.
+        assert_eq!(EndRecord::parse("60.002500,45.1,7.5,0,0,0,0,0,0,0"), None);
+        assert_eq!(EndRecord::parse("# a comment"), None);
+        for bad in [
+            "# end:",
+            "# end: rows, ok",
+            "# end: +5 rows, ok",
+            "# end: 5 rows",
+            "# end: 5 rows, failed",
+            "# end: 99999999999 rows, ok",
+        ] {
+            assert_eq!(
+                EndRecord::parse(bad),
+                Some(Err(MalformedEndRecord)),
+                "{bad}"
+            );
+        }
     }
 }

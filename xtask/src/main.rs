@@ -152,12 +152,15 @@ fn demo(root: &Path) -> Result<()> {
     run(&mut qemu(&elf))?;
     let qemu_s = started.elapsed().as_secs_f64();
     let log = std::fs::read_to_string(root.join("out/solution-firmware.csv"))?;
-    let rows: Vec<&str> = log.lines().collect();
+    let lines: Vec<&str> = log.lines().collect();
+    // The header, the rows, and the end record that only a complete run writes (`nav report`
+    // warns about a log without it).
     println!(
-        "\nsolution log out/solution-firmware.csv: {} rows; first and last:",
-        rows.len().saturating_sub(1)
+        "\nsolution log out/solution-firmware.csv: {} rows; the first, the last and the end record:",
+        lines.len().saturating_sub(2)
     );
-    for l in rows.iter().take(2).chain(rows.last()) {
+    let tail = lines.len().saturating_sub(2).max(2);
+    for l in lines.iter().take(2).chain(lines.iter().skip(tail)) {
         println!("  {l}");
     }
     println!("QEMU run time: {qemu_s:.1} s ({DEMO_SECONDS} s of data at 400 Hz)");

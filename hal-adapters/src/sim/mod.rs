@@ -19,7 +19,7 @@
 //! | --- | --- | --- |
 //! | interval of `k` periods (`dt_s / T` rounded; 2.5 ms) | `DATA_CNTR` advances by `k`: the driver flags `GAP` (`k` 2..=10) or `BAD_INTERVAL`, increments per period = sample / `k` | first packet's timestamp jumps by `k - 1` output periods: same flags, rates = sample / `dt_s` |
 //! | `dt_s <= 0` (`BAD_INTERVAL` in the replay) | `DATA_CNTR` repeated: `STALE` | timestamps repeated: `STALE` |
-//! | a NaN or infinite value (`NON_FINITE`) | [`NonFinite::BadChecksum`] (default): a frame with a wrong checksum, the driver returns [`Error::Checksum`], the next sample shows the lost one as a `GAP`; or [`NonFinite::ZeroFrame`] | the invalid-data marker in all five packets: `NON_FINITE`, zero increments |
+//! | a NaN or infinite value (`NON_FINITE`) | [`NonFinite::BadChecksum`] (default): a frame with a wrong checksum, the driver returns [`Error::Checksum`], the next sample shows the lost one as a `GAP`; or [`NonFinite::ZeroFrame`]; either way the sample stream delivers the source sample, `NON_FINITE` ([`flag_unrepresentable`]) | the invalid-data marker in all five packets: `NON_FINITE`, zero increments |
 //! | NaN temperature (unknown) | `TEMP_OUT` = 0 (0 deg C) | invalid temperature: NaN |
 //! | value beyond the register range | clamped: the driver flags saturation | clamped to full scale: saturation |
 //! | end of the source | every bus transaction fails with [`SimError::End`] | the same |
@@ -28,8 +28,15 @@
 //! reads at the gyro's data-ready) into both sensors' rate registers (nearest count, clamped to
 //! +-32767: saturation) and advances its sensor time by `k` periods of 64 counts (`k` as above):
 //! the driver sees `GAP` / `BAD_INTERVAL`; `dt_s <= 0` holds data and sensor time: `STALE`. A
-//! non-finite sample also holds them (`STALE`), and the next sample's sensor time covers the
-//! lost period (`GAP`). A NaN temperature becomes the invalid marker (NaN again).
+//! non-finite sample also holds them (`STALE`, and `NON_FINITE` in the sample stream), and the
+//! next sample's sensor time covers the lost period (`GAP`). A NaN temperature becomes the
+//! invalid marker (NaN again).
+//!
+//! No register holds a NaN or an infinity, so whatever a device makes of a non-finite source
+//! sample, the sample stream ([`SimulatedImu`], the firmware's board IMU) delivers it flagged
+//! `NON_FINITE` ([`flag_unrepresentable`]): the sample is counted as non-finite on every device
+//! path, as a plain replay of the recording counts it, and the driver's own handling (a rejected
+//! frame, an invalid marker, held data) still runs and is counted in its health.
 //!
 //! # Firmware use
 //! ```
@@ -87,7 +94,7 @@ use crate::drivers::adis16505::{self as adis, Adis16505};
 use crate::drivers::bmi088::{self as bmi, Bmi088};
 use crate::drivers::icm42688::{self as icm, Icm42688};
 use crate::drivers::{Error, ImuDriver, Mounting};
-use crate::{Imu, ImuSample, Motion};
+use crate::{Imu, ImuSample, Motion, SampleFlags};
 
 /// A [`DelayNs`] that returns at once: a simulated device needs no waiting.
 #[derive(Clone, Copy, Debug, Default)]
@@ -128,6 +135,34 @@ pub trait SimulatedBus {
     fn last_source_sample(&self) -> Option<&ImuSample>;
 }
 
+/// One data read's result as the sample stream delivers it, given the `source` sample behind
+/// the read ([`SimulatedBus::last_source_sample`]): when that sample has a NaN or infinite value,
+/// which no register can hold, the result is flagged [`SampleFlags::NON_FINITE`] whatever the
+/// device made of it. A frame the driver rejected as corrupt ([`Error::Checksum`],
+/// [`Error::ZeroFrame`]: the ADIS16505's [`NonFinite`] answers) becomes the source sample itself
+/// (its time, its flags); a sample the driver decoded (the ICM-42688-P's invalid marker, the
+/// BMI088's held data) gets the flag added. Other results pass unchanged.
+pub fn flag_unrepresentable<E>(
+    result: Result<ImuSample, Error<E>>,
+    source: Option<&ImuSample>,
+) -> Result<ImuSample, Error<E>> {
+    let Some(source) = source.filter(|s| !is_finite(s)) else {
+        return result;
+    };
+    match result {
+        Ok(mut sample) => {
+            sample.flags |= SampleFlags::NON_FINITE;
+            Ok(sample)
+        }
+        Err(Error::Checksum { .. } | Error::ZeroFrame) => {
+            let mut sample = *source;
+            sample.flags |= SampleFlags::NON_FINITE;
+            Ok(sample)
+        }
+        Err(e) => Err(e),
+    }
+}
+
 /// Consecutive transient driver errors [`SimulatedImu`] skips before it reports one.
 const MAX_CONSECUTIVE_TRANSIENT: u32 = 64;
 
@@ -136,9 +171,9 @@ const MAX_CONSECUTIVE_TRANSIENT: u32 = 64;
 ///
 /// Each [`Imu::read_sample`] is one data-ready: [`ImuDriver::read_sample`], with `t_us` set to
 /// the source sample's `t_us` (the recording's clock, as [`crate::recording::Replay`] gives).
-/// Transient driver errors (a corrupt frame standing for a non-finite sample) are skipped like a
-/// data-ready whose burst was rejected, and counted in the driver's health; the end of the
-/// source is `Ok(None)`.
+/// A non-finite source sample is delivered flagged ([`flag_unrepresentable`]); other transient
+/// driver errors are skipped like a data-ready whose burst was rejected, and counted in the
+/// driver's health; the end of the source is `Ok(None)`.
 pub struct SimulatedImu<D> {
     driver: D,
 }
@@ -213,7 +248,8 @@ where
     fn read_sample(&mut self) -> Result<Option<ImuSample>, Self::Error> {
         let mut transient = 0;
         loop {
-            match self.driver.read_sample(0) {
+            let read = self.driver.read_sample(0);
+            match flag_unrepresentable(read, self.driver.bus().last_source_sample()) {
                 Ok(mut sample) => {
                     if let Some(source) = self.driver.bus().last_source_sample() {
                         sample.t_us = source.t_us;

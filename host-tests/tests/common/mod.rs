@@ -21,15 +21,24 @@ pub struct Row {
     pub rpy_deg: [f64; 3],
 }
 
-/// Parses a solution log, checking its header line.
+/// Parses a solution log, checking its header line and its end record (the last line, with the
+/// number of rows).
 pub fn parse_log(text: &str) -> Vec<Row> {
-    let mut lines = text.lines();
+    let mut lines: Vec<&str> = text.lines().collect();
     assert_eq!(
-        lines.next(),
+        lines.first().copied(),
         Some(nav_core::output::CSV_HEADER),
         "log header"
     );
-    lines
+    let end = lines.pop().and_then(nav_core::output::EndRecord::parse);
+    let rows = lines.len() - 1;
+    assert_eq!(
+        end,
+        Some(Ok(nav_core::output::EndRecord { rows: rows as u32 })),
+        "end record of a log with {rows} rows"
+    );
+    lines[1..]
+        .iter()
         .map(|line| {
             let v: Vec<f64> = line
                 .split(',')

@@ -8,7 +8,7 @@ use crate::Scalar;
 use crate::alignment::{AlignFailure, AlignOutcome};
 use crate::calibration::ImuCompensation;
 use crate::increment::{ImuIncrement, InputError, InputLimits};
-use crate::output::Solution;
+use crate::output::{EndRecord, Solution};
 use crate::strapdown::{MechanizationConfig, Strapdown};
 use core::fmt;
 
@@ -20,28 +20,102 @@ pub struct ImuInput {
     /// The increments as the sensor gave them: `delta_theta_ib_b` [rad], `delta_v_ib_b` [m/s],
     /// body FRD, over the measured interval `dt` [s].
     pub increment: ImuIncrement<f32>,
-    /// The source's flags allow navigating it (finite values, a plausible interval, not stale,
-    /// not saturated...).
-    pub usable: bool,
+    /// Why the source's flags forbid navigating it (non-finite values, an implausible interval,
+    /// stale data, a device fault...); `None`: usable.
+    pub unusable: Option<Unusable>,
     /// Samples were lost just before this one.
     pub gap: bool,
 }
 
+/// Why a source flagged a sample as not usable: the first of these causes that applies (a
+/// source converting its flags names one).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unusable {
+    /// A value is NaN or infinite.
+    NonFinite,
+    /// The interval is zero, negative or implausibly long (time went backwards or jumped).
+    BadInterval,
+    /// The sensor repeated its previous data.
+    Stale,
+    /// The sensor reported an internal fault.
+    DeviceFault,
+    /// Another reason of the source's.
+    Other,
+}
+
+/// Flagged samples by cause ([`Unusable`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FlaggedCounts {
+    /// NaN or infinite values.
+    pub non_finite: u32,
+    /// Implausible intervals.
+    pub bad_interval: u32,
+    /// Stale data.
+    pub stale: u32,
+    /// Device faults.
+    pub device_fault: u32,
+    /// Other causes.
+    pub other: u32,
+}
+
+impl FlaggedCounts {
+    /// Counts one sample flagged for `cause`.
+    pub fn add(&mut self, cause: Unusable) {
+        let n = match cause {
+            Unusable::NonFinite => &mut self.non_finite,
+            Unusable::BadInterval => &mut self.bad_interval,
+            Unusable::Stale => &mut self.stale,
+            Unusable::DeviceFault => &mut self.device_fault,
+            Unusable::Other => &mut self.other,
+        };
+        *n = n.saturating_add(1);
+    }
+
+    /// The counts with their names, in [`Unusable`]'s order.
+    pub fn by_name(&self) -> [(&'static str, u32); 5] {
+        [
+            ("non-finite", self.non_finite),
+            ("bad interval", self.bad_interval),
+            ("stale", self.stale),
+            ("device fault", self.device_fault),
+            ("other", self.other),
+        ]
+    }
+}
+
+impl fmt::Display for FlaggedCounts {
+    /// The causes that occurred, e.g. `non-finite 4000, stale 2` (`none` without any).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mut first = true;
+        for (name, n) in self.by_name().into_iter().filter(|(_, n)| *n > 0) {
+            if !first {
+                f.write_str(", ")?;
+            }
+            write!(f, "{name} {n}")?;
+            first = false;
+        }
+        if first {
+            f.write_str("none")?;
+        }
+        Ok(())
+    }
+}
+
 impl ImuInput {
     /// A sample at `t_us` [us] of increments `delta_theta_ib_b` [rad] and `delta_v_ib_b`
-    /// [m/s] over `dt_s` [s], with its two flags.
+    /// [m/s] over `dt_s` [s], with why it is not usable (`None`: usable) and its gap flag.
     pub fn new(
         t_us: u64,
         delta_theta_ib_b: [f32; 3],
         delta_v_ib_b: [f32; 3],
         dt_s: f32,
-        usable: bool,
+        unusable: Option<Unusable>,
         gap: bool,
     ) -> Self {
         Self {
             t_us,
             increment: ImuIncrement::new(delta_theta_ib_b, delta_v_ib_b, dt_s),
-            usable,
+            unusable,
             gap,
         }
     }
@@ -54,12 +128,37 @@ pub struct Counters {
     pub samples: u32,
     /// Samples skipped for their flags.
     pub flagged: u32,
+    /// The same by cause.
+    pub flagged_by: FlaggedCounts,
     /// Increments refused by the input limits (aligning or navigating).
     pub rejected: u32,
     /// Navigation steps integrated after the alignment.
     pub nav_steps: u32,
     /// Solution rows produced (the aligned row, the periodic rows, the final row).
     pub rows: u32,
+}
+
+impl Counters {
+    /// What was not used, e.g. ` (4000 flagged: non-finite 4000; 3 rejected)`, with its
+    /// leading blank; empty when every sample was used.
+    fn unused(&self) -> Unused<'_> {
+        Unused(self)
+    }
+}
+
+/// [`Counters::unused`]'s text.
+struct Unused<'a>(&'a Counters);
+
+impl fmt::Display for Unused<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let c = self.0;
+        match (c.flagged, c.rejected) {
+            (0, 0) => Ok(()),
+            (0, r) => write!(f, " ({r} rejected)"),
+            (n, 0) => write!(f, " ({n} flagged: {})", c.flagged_by),
+            (n, r) => write!(f, " ({n} flagged: {}; {r} rejected)", c.flagged_by),
+        }
+    }
 }
 
 /// What became of one sample ([`Navigator::push`]).
@@ -101,6 +200,16 @@ pub enum NavError {
         samples: u32,
         /// Samples it needs.
         n_align: u32,
+        /// What was counted (the samples flagged or rejected by cause).
+        counters: Counters,
+    },
+    /// The alignment finished but not one navigation step followed it: every later sample was
+    /// flagged or rejected, or there was none.
+    NothingNavigated {
+        /// Samples the alignment used.
+        n_align: u32,
+        /// What was counted.
+        counters: Counters,
     },
 }
 
@@ -110,9 +219,20 @@ impl fmt::Display for NavError {
             Self::Alignment { samples, failure } => {
                 write!(f, "alignment failed after {samples} samples: {failure}")
             }
-            Self::EndedDuringAlignment { samples, n_align } => write!(
+            Self::EndedDuringAlignment {
+                samples,
+                n_align,
+                counters,
+            } => write!(
                 f,
-                "recording ended during alignment: {samples} of {n_align} samples"
+                "recording ended during alignment: {samples} of {n_align} samples used{}",
+                counters.unused()
+            ),
+            Self::NothingNavigated { n_align, counters } => write!(
+                f,
+                "no navigation step after the alignment: {} samples, {n_align} used by the alignment{}",
+                counters.samples,
+                counters.unused()
             ),
         }
     }
@@ -131,6 +251,15 @@ pub struct Summary<T: Scalar> {
     pub counters: Counters,
     /// The alignment's result.
     pub alignment: AlignOutcome<T>,
+}
+
+impl<T: Scalar> Summary<T> {
+    /// The solution log's end record, to write after the final row.
+    pub fn end_record(&self) -> EndRecord {
+        EndRecord {
+            rows: self.counters.rows,
+        }
+    }
 }
 
 enum Phase<T: Scalar> {
@@ -192,12 +321,13 @@ impl<T: Scalar> Navigator<T> {
         }
         let c = &mut self.counters;
         c.samples = c.samples.saturating_add(1);
-        if !input.usable || input.gap {
+        if input.unusable.is_some() || input.gap {
             // The two-sample coning/sculling terms must not span a hole in the data.
             self.restart_increments();
         }
-        if !input.usable {
+        if let Some(cause) = input.unusable {
             self.counters.flagged = self.counters.flagged.saturating_add(1);
+            self.counters.flagged_by.add(cause);
             return Step::Flagged;
         }
         let inc = self.compensated(&input.increment);
@@ -285,20 +415,27 @@ impl<T: Scalar> Navigator<T> {
     }
 
     /// Ends the run: the final row (the last step, unless already logged, or already given by
-    /// an earlier call) and the summary; an error when the alignment failed or never finished.
+    /// an earlier call) and the summary; an error when the alignment failed or never finished,
+    /// or when no navigation step followed it.
     pub fn finish(&mut self) -> Result<Summary<T>, NavError> {
+        let ended_during_alignment = NavError::EndedDuringAlignment {
+            samples: self.forwarded,
+            n_align: self.n_align,
+            counters: self.counters,
+        };
         let nav = match &self.phase {
             Phase::Navigating(nav) => nav,
             Phase::Failed(e) => return Err(*e),
-            Phase::Aligning | Phase::AwaitingAlignment => {
-                return Err(NavError::EndedDuringAlignment {
-                    samples: self.forwarded,
-                    n_align: self.n_align,
-                });
-            }
+            Phase::Aligning | Phase::AwaitingAlignment => return Err(ended_during_alignment),
         };
         let steps = self.counters.nav_steps;
-        let final_row = (steps > 0 && !steps.is_multiple_of(self.log_every) && !self.finished)
+        if steps == 0 {
+            return Err(NavError::NothingNavigated {
+                n_align: self.n_align,
+                counters: self.counters,
+            });
+        }
+        let final_row = (!steps.is_multiple_of(self.log_every) && !self.finished)
             .then(|| Solution::from_state(self.last_step_us, nav.state()));
         self.finished = true;
         if let Some(row) = final_row {
@@ -312,10 +449,7 @@ impl<T: Scalar> Navigator<T> {
                 alignment,
             }),
             // Navigating implies both (the aligned row is logged at the hand-over).
-            _ => Err(NavError::EndedDuringAlignment {
-                samples: self.forwarded,
-                n_align: self.n_align,
-            }),
+            _ => Err(ended_during_alignment),
         }
     }
 

@@ -16,7 +16,7 @@
 //!
 //! The rules (every one is part of the contract between firmware and harness):
 //! - every sample counts in `samples`; a sample that is not usable (its source's flags) counts
-//!   in `flagged` and is skipped; an unusable sample or one after a gap restarts the
+//!   in `flagged`, and by its cause ([`Unusable`]) in `flagged_by`, and is skipped; an unusable sample or one after a gap restarts the
 //!   strapdown's two-sample coning/sculling history;
 //! - the increments are taken from `f32` exactly ([`Scalar::of_f32`](crate::Scalar::of_f32))
 //!   with the sample's measured interval, then the calibration ([`ImuCompensation`]) is applied
@@ -29,7 +29,10 @@
 //!   waits for the background's answer: aligned, navigation starts from the alignment's state,
 //!   and that state is logged at the time of the last alignment sample; failed, the run ends;
 //! - navigating: every `log_every`-th navigation step is logged; at the end, the last step is
-//!   logged unless it already was.
+//!   logged unless it already was, and the log's last line is the end record
+//!   ([`Summary::end_record`]);
+//! - a run fails, with the counts by cause, when the data end during the alignment or when not
+//!   one navigation step follows it (every later sample flagged or rejected, or none).
 //!
 //! The run's settings are one plain [`RunConfig`] (the CLI's and the firmware's arguments),
 //! checked and converted for the data's rate into a [`Setup`] from which both halves are built.
@@ -47,5 +50,7 @@ mod tests;
 
 pub use background::{Background, FromBackground, ToBackground};
 pub use config::{ConfigError, MechanizationChoices, OptionError, RunConfig};
-pub use foreground::{Counters, ImuInput, NavError, Navigator, Step, Summary};
+pub use foreground::{
+    Counters, FlaggedCounts, ImuInput, NavError, Navigator, Step, Summary, Unusable,
+};
 pub use setup::Setup;

@@ -47,7 +47,7 @@ fn input(k: u32, dtheta: [f64; 3], dv: [f64; 3]) -> ImuInput {
         dtheta.map(|x| x as f32),
         dv.map(|x| x as f32),
         DT as f32,
-        true,
+        None,
         false,
     )
 }
@@ -87,7 +87,8 @@ fn run<T: Scalar>(
 fn counts_rows_and_logs_the_last_step() {
     let inputs = still(2000).map(|mut i| {
         match i.t_us / 10_000 {
-            5 | 1500 => i.usable = false,
+            5 => i.unusable = Some(Unusable::NonFinite),
+            1500 => i.unusable = Some(Unusable::Stale),
             1600 => i.gap = true,
             _ => {}
         }
@@ -101,6 +102,14 @@ fn counts_rows_and_logs_the_last_step() {
         (c.samples, c.flagged, c.rejected, c.nav_steps),
         (2000, 2, 0, 998)
     );
+    assert_eq!(
+        c.flagged_by,
+        FlaggedCounts {
+            non_finite: 1,
+            stale: 1,
+            ..FlaggedCounts::default()
+        }
+    );
     // The aligned row, 24 periodic rows (960 steps), and the final step 998.
     assert_eq!(c.rows, 1 + 24 + 1);
     assert_eq!(rows.len(), c.rows as usize);
@@ -111,6 +120,7 @@ fn counts_rows_and_logs_the_last_step() {
     assert_eq!(s.final_row, rows.last().copied());
     assert_eq!(s.last_solution, *rows.last().unwrap());
     assert_eq!(s.alignment.times.coarse_samples, 1000);
+    assert_eq!(s.end_record().to_string(), "# end: 26 rows, ok");
 }
 
 #[test]
@@ -318,7 +328,7 @@ fn failures_end_the_run_with_a_reason() {
     let (_, e) = run::<f64>(&config(10.0, 40), still(500));
     assert_eq!(
         e.unwrap_err().to_string(),
-        "recording ended during alignment: 500 of 1000 samples"
+        "recording ended during alignment: 500 of 1000 samples used"
     );
     // Settings refused before any sample, naming the minimum window.
     let e = Setup::<f32>::new(&config(0.0, 40), RATE_HZ).unwrap_err();
@@ -352,6 +362,75 @@ fn failures_end_the_run_with_a_reason() {
         ..config(10.0, 40)
     };
     assert!(Setup::<f64>::new(&bad_lever, RATE_HZ).is_err());
+}
+
+/// A run that navigated nothing fails, with the samples counted by cause: all flagged from the
+/// start (the data end during the alignment), all flagged or refused after the alignment, or no
+/// sample after it.
+#[test]
+fn a_run_that_navigates_nothing_fails_with_the_counts() {
+    let flag = |cause: Unusable, from: u32| {
+        move |mut i: ImuInput| {
+            if i.t_us / 10_000 >= u64::from(from) {
+                i.unusable = Some(cause);
+            }
+            i
+        }
+    };
+    let c = config(10.0, 40);
+    let (rows, e) = run::<f64>(&c, still(2000).map(flag(Unusable::NonFinite, 1)));
+    assert!(rows.is_empty());
+    assert_eq!(
+        e.unwrap_err().to_string(),
+        "recording ended during alignment: 0 of 1000 samples used (2000 flagged: non-finite 2000)"
+    );
+    // Aligned on the first 1000, then nothing usable: the aligned row only, and an error.
+    let (rows, e) = run::<f64>(&c, still(2000).map(flag(Unusable::BadInterval, 1001)));
+    assert_eq!(rows.len(), 1);
+    let e = e.unwrap_err();
+    let NavError::NothingNavigated { n_align, counters } = e else {
+        panic!("{e}")
+    };
+    assert_eq!(
+        (
+            n_align,
+            counters.samples,
+            counters.flagged,
+            counters.nav_steps
+        ),
+        (1000, 2000, 1000, 0)
+    );
+    assert_eq!(
+        e.to_string(),
+        "no navigation step after the alignment: 2000 samples, 1000 used by the alignment (1000 flagged: bad interval 1000)"
+    );
+    // Flagged and refused by the input limits.
+    let mixed = still(1300).map(|mut i| {
+        match i.t_us / 10_000 {
+            1001..=1100 => i.unusable = Some(Unusable::DeviceFault),
+            1101..=1200 => i.increment.delta_theta_ib_b.x = 1.0e3,
+            1201.. => i.unusable = Some(Unusable::Stale),
+            _ => {}
+        }
+        i
+    });
+    let (_, e) = run::<f32>(&c, mixed);
+    assert_eq!(
+        e.unwrap_err().to_string(),
+        "no navigation step after the alignment: 1300 samples, 1000 used by the alignment (200 flagged: stale 100, device fault 100; 100 rejected)"
+    );
+    // No sample after the alignment at all; a second finish says the same.
+    let setup = Setup::<f64>::new(&c, RATE_HZ).unwrap();
+    let (mut nav, mut bg) = (Navigator::new(&setup), Background::new(&setup));
+    for i in still(1000) {
+        nav.push_inline(&mut bg, &i).unwrap();
+    }
+    let e = nav.finish().unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "no navigation step after the alignment: 1000 samples, 1000 used by the alignment"
+    );
+    assert_eq!(nav.finish().unwrap_err(), e);
 }
 
 /// The firmware's way: the background runs later than the foreground (a queue between them,
