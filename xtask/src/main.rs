@@ -9,6 +9,11 @@
 //! - `bench`: the benchmark figures: guest instructions per navigation step in QEMU, host
 //!   samples per second, flash and RAM.
 //! - `size`: release build of the firmware and its flash/RAM use.
+//! - `fuzz [CASES [RECORDING_CASES]]`: the decoder fuzz targets (`hal-adapters/tests/
+//!   fuzz_decoders.rs`: recording header, records, replay, the three drivers' decode paths) with
+//!   `CASES` cases each (default 100 000), then the mutated-recording properties through `nav
+//!   replay` (`host-tests/tests/mutated_recordings.rs`) with `RECORDING_CASES` per format
+//!   (default 1000); release builds; each target prints its count and wall time.
 //! - `lint`: `cargo fmt --check`, clippy with `-D warnings` for the host crates and for the
 //!   no_std crates and the firmware on the thumb target, and the docs with `-D warnings`.
 
@@ -40,8 +45,9 @@ fn main() -> Result<()> {
         Some("size") => size(&root).map(|_| ()),
         Some("bench") => bench(&root),
         Some("lint") => lint(),
+        Some("fuzz") => fuzz(&args[1..]),
         _ => {
-            eprintln!("usage: cargo xtask <setup|demo|test|bench|size|lint>");
+            eprintln!("usage: cargo xtask <setup|demo|test|bench|size|lint|fuzz>");
             std::process::exit(2)
         }
     }
@@ -458,6 +464,38 @@ fn test(root: &Path) -> Result<()> {
     run(cargo()
         .args(["test", "--workspace", "--exclude", "firmware"])
         .env("FIRMWARE_ELF", &elf))
+}
+
+/// The decoder fuzz targets with `args[0]` cases each (default 100 000), then the
+/// mutated-recording properties with `args[1]` per format (default 1000).
+fn fuzz(args: &[String]) -> Result<()> {
+    let count = |i: usize, default: u32| -> Result<String> {
+        match args.get(i) {
+            None => Ok(default.to_string()),
+            Some(a) => a
+                .parse::<u32>()
+                .map(|n| n.to_string())
+                .with_context(|| format!("fuzz: case count {a:?} is not a number")),
+        }
+    };
+    let (decoders, recordings) = (count(0, 100_000)?, count(1, 1000)?);
+    // One thread: each target's wall time is its own.
+    let targets = [
+        ("hal-adapters", "fuzz_decoders", &decoders),
+        ("host-tests", "mutated_recordings", &recordings),
+    ];
+    for (package, test, cases) in targets {
+        let started = std::time::Instant::now();
+        run(cargo()
+            .args(["test", "--release", "-p", package, "--test", test])
+            .args(["--", "--nocapture", "--test-threads", "1"])
+            .env("PROPTEST_CASES", cases))?;
+        eprintln!(
+            "fuzz: {package} {test}: {cases} cases per target, {:.1} s in all",
+            started.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
 }
 
 /// Flash and RAM use of the release firmware.
