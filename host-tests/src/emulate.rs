@@ -42,6 +42,16 @@
 //! of errors (linear model) and the change of the radii of curvature with latitude (relative
 //! `e^2 ~ 0.7 %` of the position-dependent terms).
 //!
+//! The linear model holds for small errors only, so errors beyond its range are refused
+//! before anything is written, naming the key and the limit: an attitude error beyond
+//! [`MAX_MISALIGNMENT_RAD`], a gyro drift that over the truth's length (or a gyro scale error
+//! that over the angle the body turns) would turn the attitude beyond it, an accelerometer bias
+//! or scale error whose balancing tilt (bias / g) is beyond it, a velocity error beyond
+//! [`MAX_VELOCITY_ERROR_M_S`], a position error beyond [`MAX_POSITION_ERROR_M`]. Errors that
+//! grow out of that range during the run (the misalignment, the position error) refuse it at
+//! the first row beyond, and every displayed row is checked as the trajectory CSV's reader
+//! would ([`crate::output_check`]).
+//!
 //! The vertical channel is [`Vertical::Aided`] by default (height from an external baro or
 //! the truth: `dh = dv_D = 0`, as on aircraft SINS); [`Vertical::Free`] integrates it and
 //! diverges with time constant `sqrt(R / 2g)` ~ 570 s.
@@ -67,6 +77,7 @@
 //! [--set 'KEY = V1 V2 V3']... [--vertical aided|free] [--errors-out FILE]`; the preset, the file
 //! and the `--set` lines apply in that order, each overriding the quantities it names.
 
+use crate::output_check::RowError;
 use crate::truth::Truth;
 use anyhow::Context;
 use core::f64::consts::PI;
@@ -74,6 +85,7 @@ use core::fmt;
 use nav_core::attitude;
 use nav_core::earth::{LocalEarth, OMEGA_IE};
 use nav_core::nalgebra::{Matrix3, SVector, UnitQuaternion, Vector3};
+use nav_core::number::Rounded;
 use std::io::Write;
 use std::path::Path;
 
@@ -86,6 +98,19 @@ pub const DEG_H_RAD_S: f64 = PI / (180.0 * 3600.0);
 /// Largest absolute truth latitude [rad] (89 deg): the NED error model is singular at the poles
 /// (`tan(lat)`, `1 / cos(lat)`).
 pub const MAX_ABS_LAT_RAD: f64 = 89.0 * PI / 180.0;
+
+/// Largest misalignment the linear error model is used for [rad] (11.5 deg): the phi-angle
+/// model takes `sin(phi) = phi` and `cos(phi) = 1`, within 0.7 % and 2 % there.
+pub const MAX_MISALIGNMENT_RAD: f64 = 0.2;
+
+/// Largest position error [m] (1.6 % of the Earth's radius): the model's coefficients (radii,
+/// Earth rate, gravity) are those at the true position, which differ from those at the
+/// displayed one by about the error over the radius.
+pub const MAX_POSITION_ERROR_M: f64 = 100_000.0;
+
+/// Largest initial velocity error [m/s]: the transport-rate product `(dv / R) dv` the model
+/// drops stays below a ninth of its Coriolis term `2 Omega dv` (`2 Omega R` ~ 930 m/s).
+pub const MAX_VELOCITY_ERROR_M_S: f64 = 100.0;
 
 // Offsets in the error state.
 const PHI: usize = 0;
@@ -409,6 +434,35 @@ pub enum EmulateError {
     VerticalErrorWhenAided,
     /// `max_step_s` not positive and finite.
     BadStep,
+    /// An error parameter beyond the linear model's range (the limits' docs say why).
+    BeyondLinearRange {
+        /// The quantity's SI key in the error file.
+        key: &'static str,
+        /// Its size: the largest component or the norm [the key's unit].
+        value: f64,
+        /// The largest accepted [the key's unit].
+        limit: f64,
+        /// Why the limit.
+        reason: &'static str,
+    },
+    /// The propagated errors left the linear model's range (or overflowed) at a truth row.
+    LeftLinearRange {
+        /// Row index (0-based).
+        row: usize,
+        /// Its time [s].
+        t_s: f64,
+        /// Which error (`misalignment`, `position error`, `error state`).
+        quantity: &'static str,
+        /// Its size, in `unit`.
+        value: f64,
+        /// The range's limit, in `unit`.
+        limit: f64,
+        /// The unit.
+        unit: &'static str,
+    },
+    /// A displayed row its readers would refuse (a latitude beyond a pole, a non-finite
+    /// value).
+    Row(RowError),
 }
 
 impl fmt::Display for EmulateError {
@@ -435,6 +489,32 @@ impl fmt::Display for EmulateError {
                 "down velocity/position errors need the free vertical channel (aided holds dh = dv_D = 0)"
             ),
             Self::BadStep => write!(f, "max_step_s must be positive and finite"),
+            Self::BeyondLinearRange {
+                key,
+                value,
+                limit,
+                reason,
+            } => write!(
+                f,
+                "{key} {} is beyond {}: {reason}",
+                Rounded(*value),
+                Rounded(*limit)
+            ),
+            Self::LeftLinearRange {
+                row,
+                t_s,
+                quantity,
+                value,
+                limit,
+                unit,
+            } => write!(
+                f,
+                "row {row} (t = {} s): the {quantity} reached {} {unit}, beyond the linear error model's range {} {unit} (smaller errors or a shorter truth)",
+                Rounded(*t_s),
+                Rounded(*value),
+                Rounded(*limit)
+            ),
+            Self::Row(e) => write!(f, "refusing to write {e}"),
         }
     }
 }
@@ -493,6 +573,7 @@ pub fn emulate(
         errors: Vec::with_capacity(truth.len()),
     };
     out.push(first, &x);
+    out.check_last()?;
     for pair in truth.windows(2) {
         let interval = Interval::new(&pair[0], &pair[1], errors);
         let n_sub = (interval.dt / opts.max_step_s).ceil().max(1.0) as usize;
@@ -505,11 +586,47 @@ pub fn emulate(
             start = end;
         }
         out.push(&pair[1], &x);
+        out.check_last()?;
     }
+    crate::output_check::check_truth("displayed row", &out.displayed).map_err(EmulateError::Row)?;
     Ok(out)
 }
 
 impl Emulated {
+    /// Refuses the last error sample if it left the linear model's range
+    /// ([`MAX_MISALIGNMENT_RAD`], [`MAX_POSITION_ERROR_M`]) or is not finite.
+    fn check_last(&self) -> Result<(), EmulateError> {
+        let row = self.errors.len() - 1;
+        let e = &self.errors[row];
+        let left = |quantity, value, limit, unit| EmulateError::LeftLinearRange {
+            row,
+            t_s: e.t_s,
+            quantity,
+            value,
+            limit,
+            unit,
+        };
+        let state = [
+            e.phi_n_rad.as_slice(),
+            e.dv_eb_n_m_s.as_slice(),
+            &[e.d_lat_rad, e.d_lon_rad, e.d_h_m],
+            e.dr_n_m.as_slice(),
+        ];
+        if let Some(&v) = state.iter().flat_map(|s| s.iter()).find(|v| !v.is_finite()) {
+            return Err(left("error state", v, f64::MAX, "(SI)"));
+        }
+        // Finite here: NaN was refused above.
+        let phi = e.phi_n_rad.norm();
+        if phi > MAX_MISALIGNMENT_RAD {
+            return Err(left("misalignment", phi, MAX_MISALIGNMENT_RAD, "rad"));
+        }
+        let dr = e.dr_n_m.norm();
+        if dr > MAX_POSITION_ERROR_M {
+            return Err(left("position error", dr, MAX_POSITION_ERROR_M, "m"));
+        }
+        Ok(())
+    }
+
     fn push(&mut self, truth: &Truth, x: &ErrorState) {
         let e = LocalEarth::new(truth.lat, truth.h);
         let phi_n_rad: Vector3<f64> = x.fixed_rows::<3>(PHI).into_owned();
@@ -596,6 +713,87 @@ fn validate(
                 row,
                 prev_t_s: truth[row - 1].t_s,
                 t_s: t.t_s,
+            });
+        }
+    }
+    check_linear_range(truth, errors)
+}
+
+/// Refuses errors beyond the linear model's range: the misalignment each causes
+/// (directly, by drift over the truth's length, by scale factor over the angle the body turns,
+/// or as the tilt that balances an accelerometer error) beyond [`MAX_MISALIGNMENT_RAD`],
+/// a velocity error beyond [`MAX_VELOCITY_ERROR_M_S`], a position error beyond
+/// [`MAX_POSITION_ERROR_M`].
+fn check_linear_range(truth: &[Truth], errors: &EmulatorErrors) -> Result<(), EmulateError> {
+    let duration_s = truth[truth.len() - 1].t_s - truth[0].t_s;
+    // The angle the body turns relative to inertial space (its own turns and the Earth's).
+    let turned_rad = truth
+        .windows(2)
+        .map(|w| w[0].q_b_ned.angle_to(&w[1].q_b_ned))
+        .sum::<f64>()
+        + OMEGA_IE * duration_s;
+    let largest = |v: &Vector3<f64>| v.amax();
+    // The norm without overflow: 1e300 deg/h squared is beyond f64.
+    let norm = |v: &Vector3<f64>| {
+        let m = v.amax();
+        if m > 0.0 && m.is_finite() {
+            m * (v / m).norm()
+        } else {
+            m
+        }
+    };
+    let checks = [
+        (
+            "attitude_error_rad",
+            norm(&errors.euler_error_rad),
+            MAX_MISALIGNMENT_RAD,
+            "beyond the linear error model's small-angle range (0.2 rad)",
+        ),
+        (
+            "gyro_drift_rad_s",
+            norm(&errors.gyro_drift_rad_s),
+            MAX_MISALIGNMENT_RAD / duration_s,
+            "over the truth's length the drift turns the attitude beyond the linear error model's small-angle range (0.2 rad)",
+        ),
+        (
+            "gyro_scale",
+            largest(&errors.gyro_scale),
+            MAX_MISALIGNMENT_RAD / turned_rad,
+            "times the angle the body turns over the truth it turns the attitude beyond the linear error model's small-angle range (0.2 rad)",
+        ),
+        (
+            "accel_bias_m_s2",
+            norm(&errors.accel_bias_m_s2),
+            MAX_MISALIGNMENT_RAD * G0_M_S2,
+            "the tilt bias/g that balances it is beyond the linear error model's small-angle range (0.2 rad)",
+        ),
+        (
+            "accel_scale",
+            largest(&errors.accel_scale),
+            MAX_MISALIGNMENT_RAD,
+            "on gravity it is a bias of scale x g, balanced by a tilt beyond the linear error model's small-angle range (0.2 rad)",
+        ),
+        (
+            "velocity_error_m_s",
+            norm(&errors.dv_eb_n_m_s),
+            MAX_VELOCITY_ERROR_M_S,
+            "the transport-rate products the linear error model drops are no longer small",
+        ),
+        (
+            "position_error_m",
+            norm(&errors.dr_n_m),
+            MAX_POSITION_ERROR_M,
+            "the linear error model takes the radii, Earth rate and gravity at the true position; 100 km is 1.6 % of the Earth's radius",
+        ),
+    ];
+    for (key, value, limit, reason) in checks {
+        // Finite values only reach here (validated above): `>` refuses what is beyond.
+        if value > limit {
+            return Err(EmulateError::BeyondLinearRange {
+                key,
+                value,
+                limit,
+                reason,
             });
         }
     }
@@ -807,15 +1005,36 @@ impl EmulateJob<'_> {
     }
 
     /// Reads the truth, emulates, writes the outputs; returns a summary for the terminal.
+    ///
+    /// Nothing is written unless every row is valid ([`emulate`]); the error series is
+    /// renamed into place before the displayed trajectory, which is renamed only if the
+    /// series was written.
     pub fn run(&self) -> anyhow::Result<String> {
+        crate::atomic::refuse_same_file(&[self.truth], self.out)?;
+        if let Some(path) = self.errors_out {
+            crate::atomic::refuse_same_file(&[self.truth, self.out], path)?;
+            anyhow::ensure!(
+                !same_path(path, self.out),
+                "--errors-out {} is --out: refusing to write both into one file",
+                path.display()
+            );
+        }
         let errors = self.errors()?;
         let truth = crate::truth_csv::read(self.truth)?;
         let out = emulate(&truth, &errors, &self.options)
             .with_context(|| format!("emulating along {}", self.truth.display()))?;
-        crate::truth_csv::write(self.out, &out.displayed)?;
-        if let Some(path) = self.errors_out {
-            write_errors_csv(path, &out.errors)?;
-        }
+        crate::atomic::write(self.out, |w| -> anyhow::Result<()> {
+            let mut rows = crate::truth_csv::TruthWriter::new(w)?;
+            for row in &out.displayed {
+                rows.write(row)?;
+            }
+            rows.finish()?;
+            if let Some(path) = self.errors_out {
+                write_errors_csv(path, &out.errors)?;
+            }
+            Ok(())
+        })
+        .with_context(|| format!("writing {}", self.out.display()))?;
         let (first, last) = (&out.errors[0], &out.errors[out.errors.len() - 1]);
         let mut s = format!(
             "emulated {} rows ({} s to {} s) of {} into {} (vertical {:?})\nerrors:\n{}",
@@ -844,6 +1063,14 @@ impl EmulateJob<'_> {
             s += &format!("error series: {}\n", path.display());
         }
         Ok(s)
+    }
+}
+
+/// Whether `a` and `b` name the same path (not yet existing files compared as written).
+fn same_path(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
     }
 }
 

@@ -9,6 +9,8 @@
 use crate::recording_io::Recording;
 use anyhow::{Result, ensure};
 use hal_adapters::recording::{Kind, Record};
+use nav_core::navigator::config::{MAX_HEIGHT_M, MIN_HEIGHT_M};
+use nav_core::number::Number;
 use nav_core::{Vector3, attitude, earth};
 
 /// A stationary scenario: where the body stands, how it is oriented, how it is sampled.
@@ -48,6 +50,9 @@ impl Default for Stationary {
     }
 }
 
+/// Highest sampling rate accepted [Hz] (as `nav sim`'s): timestamps are whole nanoseconds.
+pub const MAX_RATE_HZ: f64 = 100_000.0;
+
 /// Sensor temperature written into synthetic records [deg C].
 pub const TEMPERATURE_C: f32 = 25.0;
 
@@ -81,25 +86,38 @@ impl Stationary {
     /// Each increment is the constant input times its own interval `(t_ns(k) - t_ns(k-1)) / 1e9`
     /// (with `t_ns(-1) = 0`), which is what the replay measures as `dt`; at rates dividing 1e9
     /// every interval is the nominal one.
+    ///
+    /// Refused: a rate outside (0, [`MAX_RATE_HZ`]] Hz, a length giving no sample (or more
+    /// than the binary format holds), a site `nav replay` would refuse (latitude, longitude,
+    /// height range), non-finite angles; and, independently, any record that is not finite
+    /// or not after the previous one ([`crate::output_check::check_records`]).
     pub fn recording(&self) -> Result<Recording> {
         ensure!(
-            self.rate_hz.is_finite() && self.rate_hz > 0.0,
-            "the rate must be positive, not {}",
-            self.rate_hz
+            self.rate_hz.is_finite() && self.rate_hz > 0.0 && self.rate_hz <= MAX_RATE_HZ,
+            "the rate must be within (0, {MAX_RATE_HZ}] Hz, not {}",
+            Number(self.rate_hz)
         );
         ensure!(
-            self.seconds.is_finite() && self.seconds >= 0.0,
-            "the duration must not be negative, not {}",
-            self.seconds
+            self.seconds.is_finite() && self.seconds > 0.0,
+            "the duration must be positive, not {} s",
+            Number(self.seconds)
         );
         ensure!(
             (-90.0..=90.0).contains(&self.lat_deg),
             "the latitude must be within [-90, 90] deg, not {}",
-            self.lat_deg
+            Number(self.lat_deg)
+        );
+        ensure!(
+            (-180.0..=180.0).contains(&self.lon_deg),
+            "the longitude must be within [-180, 180] deg, not {}",
+            Number(self.lon_deg)
+        );
+        ensure!(
+            (MIN_HEIGHT_M..=MAX_HEIGHT_M).contains(&self.h_m),
+            "the height must be within [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m (the Earth model's range), not {}",
+            Number(self.h_m)
         );
         for (name, v) in [
-            ("lon", self.lon_deg),
-            ("h", self.h_m),
             ("roll", self.roll_deg),
             ("pitch", self.pitch_deg),
             ("yaw", self.yaw_deg),
@@ -107,6 +125,12 @@ impl Stationary {
             ensure!(v.is_finite(), "{name} must be a finite number, not {v}");
         }
         let n = self.sample_count();
+        ensure!(
+            n >= 1,
+            "{} s at {} Hz gives no sample",
+            Number(self.seconds),
+            Number(self.rate_hz)
+        );
         ensure!(
             n <= u64::from(u32::MAX),
             "{n} samples do not fit the binary format"
@@ -126,7 +150,9 @@ impl Stationary {
                     temperature_c: TEMPERATURE_C,
                 }
             })
-            .collect();
+            .collect::<Vec<_>>();
+        crate::output_check::check_records(0, &records)
+            .map_err(|e| anyhow::anyhow!("not a valid recording, nothing written: {e}"))?;
         Ok(Recording {
             kind: Kind::Increments,
             rate_hz: self.rate_hz,

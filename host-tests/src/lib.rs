@@ -35,6 +35,7 @@ pub mod generate;
 pub mod imu_csv;
 pub mod kf_gins;
 pub mod oscillator;
+pub mod output_check;
 pub mod pipeline;
 pub mod psins;
 pub mod recording_io;

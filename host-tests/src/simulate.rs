@@ -6,19 +6,24 @@
 //! (`key = value` lines: scenario, grade, seed, rates, parameters, the start, and the `nav
 //! replay` command that navigates the recording). Same options and seed: the same files, byte
 //! for byte.
+//!
+//! Parameters are checked by the scenario ([`Scenario::build`]: speeds, heights, lever arms
+//! within physical ranges), a length giving no sample is refused, and, independently, every
+//! truth row and IMU record is checked before the first file is written
+//! ([`crate::output_check`]): a refused run leaves nothing new in `DIR`.
 
 use crate::recording_io::{self, Recording};
 use crate::sensor_model::{ErrorInjector, Grade, InjectorCounters};
 use crate::trajectory::scenarios::Scenario;
 use crate::trajectory::{Sampling, generate};
 use crate::truth::Truth;
-use crate::truth_csv::TruthWriter;
-use crate::{generate::TEMPERATURE_C, imu_csv};
+use crate::{generate::TEMPERATURE_C, imu_csv, truth_csv};
 use anyhow::{Context, Result, bail, ensure};
 use hal_adapters::recording::{Kind, Record};
+use nav_core::number::Number;
 use std::fmt::Write as _;
-use std::fs::{self, File};
-use std::io::{BufWriter, Write};
+use std::fs;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Which recording files to write.
@@ -102,11 +107,7 @@ pub fn simulate(opts: &SimOptions, mut progress: impl FnMut(u64, u64)) -> Result
         "the length must be positive, not {seconds} s"
     );
     let sampling = Sampling::new(opts.rate_hz, seconds);
-    ensure!(
-        sampling.n <= u64::from(u32::MAX),
-        "{} samples do not fit the binary format",
-        sampling.n
-    );
+    check_sample_count(sampling, seconds)?;
     let mut injector = ErrorInjector::new(opts.grade.model(), opts.seed)
         .map_err(|e| anyhow::anyhow!("grade {}: {e}", opts.grade))?;
     let mut records = Vec::with_capacity(sampling.n as usize);
@@ -128,7 +129,7 @@ pub fn simulate(opts: &SimOptions, mut progress: impl FnMut(u64, u64)) -> Result
         }
     });
     progress(sampling.n, sampling.n);
-    Ok(Simulated {
+    checked(Simulated {
         recording: Recording {
             kind: Kind::Increments,
             rate_hz: opts.rate_hz,
@@ -138,6 +139,35 @@ pub fn simulate(opts: &SimOptions, mut progress: impl FnMut(u64, u64)) -> Result
         truth,
         counters: injector.counters(),
     })
+}
+
+/// Refuses a length that gives no sample, or more than the binary format holds.
+pub(crate) fn check_sample_count(sampling: Sampling, seconds: f64) -> Result<()> {
+    ensure!(
+        sampling.n >= 1,
+        "{} s at {} Hz gives no sample",
+        Number(seconds),
+        Number(sampling.rate_hz)
+    );
+    ensure!(
+        sampling.n <= u64::from(u32::MAX),
+        "{} samples do not fit the binary format",
+        sampling.n
+    );
+    Ok(())
+}
+
+/// `sim` if every truth row and IMU record is one its readers accept
+/// ([`crate::output_check`]): a trajectory that left the Earth model's range (a latitude
+/// beyond a pole, a value that overflowed) is refused before anything is written.
+pub(crate) fn checked(sim: Simulated) -> Result<Simulated> {
+    let refuse = |e: crate::output_check::RowError| {
+        anyhow::anyhow!("the simulated run is not a valid recording, nothing written: {e}")
+    };
+    crate::output_check::check_truth("truth row", &sim.truth).map_err(refuse)?;
+    crate::output_check::check_records(sim.recording.t0_ns, &sim.recording.records)
+        .map_err(refuse)?;
+    Ok(sim)
 }
 
 /// The files written by [`write`].
@@ -153,36 +183,49 @@ pub struct SimFiles {
     pub description: PathBuf,
 }
 
-/// Writes `sim` of `opts` into `dir` (created if missing).
+/// Writes `sim` of `opts` into `dir` (created if missing). Every file's content is made
+/// before the first is written, and each is written whole or not at all ([`crate::atomic`]).
 pub fn write(dir: &Path, opts: &SimOptions, sim: &Simulated) -> Result<SimFiles> {
-    fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let replay_file = if opts.formats != Formats::Csv {
+        dir.join("imu.bin")
+    } else {
+        dir.join("imu.csv")
+    };
+    let description = describe(opts, sim, &replay_file)?;
+    write_files(dir, opts.formats, sim, &description)
+}
+
+/// Writes the recording(s) of `sim` as `formats` asks, `truth.csv` and `scenario.txt` (the
+/// text `description`) into `dir` (created if missing).
+pub(crate) fn write_files(
+    dir: &Path,
+    formats: Formats,
+    sim: &Simulated,
+    description: &str,
+) -> Result<SimFiles> {
     let binary = dir.join("imu.bin");
     let csv = dir.join("imu.csv");
-    let want_bin = opts.formats != Formats::Csv;
-    let want_csv = opts.formats != Formats::Binary;
+    let want_bin = formats != Formats::Csv;
+    let want_csv = formats != Formats::Binary;
     let r = &sim.recording;
+    let csv_rows = if want_csv { Some(r.to_csv()?) } else { None };
+    fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     if want_bin {
         recording_io::write_binary(&binary, r.kind, r.rate_hz, r.t0_ns, &r.records)?;
     }
-    if want_csv {
-        imu_csv::write(&csv, &r.to_csv()?)?;
+    if let Some(rows) = &csv_rows {
+        imu_csv::write(&csv, rows)?;
     }
     let truth = dir.join("truth.csv");
-    let file = File::create(&truth).with_context(|| format!("creating {}", truth.display()))?;
-    let mut w = TruthWriter::new(BufWriter::new(file))?;
-    for t in &sim.truth {
-        w.write(t)?;
-    }
-    w.finish()?.flush()?;
-    let description = dir.join("scenario.txt");
-    let replay_file = if want_bin { &binary } else { &csv };
-    fs::write(&description, describe(opts, sim, replay_file)?)
-        .with_context(|| format!("writing {}", description.display()))?;
+    truth_csv::write(&truth, &sim.truth)?;
+    let description_path = dir.join("scenario.txt");
+    crate::atomic::write(&description_path, |w| w.write_all(description.as_bytes()))
+        .with_context(|| format!("writing {}", description_path.display()))?;
     Ok(SimFiles {
         binary: want_bin.then_some(binary),
         csv: want_csv.then_some(csv),
         truth,
-        description,
+        description: description_path,
     })
 }
 

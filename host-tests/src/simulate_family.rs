@@ -8,17 +8,16 @@
 //! [`FamilyMember::error_model`] seeded with its [`FamilyMember::injector_seed`]), so the
 //! recording is the one `nav align-bench family` aligns on, rounded to the binary format's f32.
 
-use crate::recording_io::{self, Recording};
+use crate::generate::TEMPERATURE_C;
+use crate::recording_io::Recording;
 use crate::sensor_model::ErrorInjector;
 use crate::simulate::{Formats, SimFiles, Simulated};
 use crate::trajectory::family::FamilyMember;
 use crate::trajectory::{Generator, Sampling, generate};
-use crate::{generate::TEMPERATURE_C, imu_csv, truth_csv};
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use hal_adapters::recording::{Kind, Record};
 use nav_core::alignment::AlignMethod;
 use std::fmt::Write as _;
-use std::fs;
 use std::path::Path;
 
 /// What to write of a member.
@@ -74,11 +73,8 @@ pub fn simulate_member(
     );
     let every = every as u64;
     let sampling = Sampling::new(opts.rate_hz, opts.seconds);
-    ensure!(
-        sampling.n <= u64::from(u32::MAX),
-        "{} samples do not fit the binary format",
-        sampling.n
-    );
+    crate::simulate::check_sample_count(sampling, opts.seconds)?;
+    member.rocking.check().context("the member's trajectory")?;
     let mut injector = ErrorInjector::new(member.error_model(), member.injector_seed)
         .map_err(|e| anyhow!("grade {}: {e}", member.grade))?;
     let traj = &member.rocking;
@@ -101,7 +97,7 @@ pub fn simulate_member(
         }
     });
     progress(sampling.n, sampling.n);
-    Ok(Simulated {
+    crate::simulate::checked(Simulated {
         recording: Recording {
             kind: Kind::Increments,
             rate_hz: opts.rate_hz,
@@ -113,40 +109,21 @@ pub fn simulate_member(
     })
 }
 
-/// Writes `sim` of `member` into `dir` (created if missing).
+/// Writes `sim` of `member` into `dir` (created if missing), as [`crate::simulate::write`]
+/// does.
 pub fn write_member(
     dir: &Path,
     member: &FamilyMember,
     opts: &FamilySimOptions,
     sim: &Simulated,
 ) -> Result<SimFiles> {
-    fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let binary = dir.join("imu.bin");
-    let csv = dir.join("imu.csv");
-    let want_bin = opts.formats != Formats::Csv;
-    let want_csv = opts.formats != Formats::Binary;
-    let r = &sim.recording;
-    if want_bin {
-        recording_io::write_binary(&binary, r.kind, r.rate_hz, r.t0_ns, &r.records)?;
-    }
-    if want_csv {
-        imu_csv::write(&csv, &r.to_csv()?)?;
-    }
-    let truth = dir.join("truth.csv");
-    truth_csv::write(&truth, &sim.truth)?;
-    let description = dir.join("scenario.txt");
-    let replay_file = if want_bin { &binary } else { &csv };
-    fs::write(
-        &description,
-        describe_member(member, opts, sim, replay_file)?,
-    )
-    .with_context(|| format!("writing {}", description.display()))?;
-    Ok(SimFiles {
-        binary: want_bin.then_some(binary),
-        csv: want_csv.then_some(csv),
-        truth,
-        description,
-    })
+    let replay_file = if opts.formats != Formats::Csv {
+        dir.join("imu.bin")
+    } else {
+        dir.join("imu.csv")
+    };
+    let description = describe_member(member, opts, sim, &replay_file)?;
+    crate::simulate::write_files(dir, opts.formats, sim, &description)
 }
 
 /// The `scenario.txt` text of `member`.

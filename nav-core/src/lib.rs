@@ -22,6 +22,7 @@ pub mod coning;
 pub mod earth;
 pub mod increment;
 pub mod navigator;
+pub mod number;
 pub mod oscillator;
 pub mod output;
 pub mod poisson;

@@ -600,6 +600,8 @@ mod tests {
             assert_eq!(m, FamilyMember::draw(7, i));
             assert_ne!(m, FamilyMember::draw(8, i));
             let r = &m.rocking;
+            // Every member passes the scenario checks `nav sim family` applies.
+            r.check().unwrap();
             let within = |v: f64, s: Span| v >= s.lo && v <= s.hi;
             assert!(within(r.lat_deg, LATITUDE_DEG) && within(r.h_m, HEIGHT_M));
             assert!(within(m.lever_arm_b_m().norm(), LEVER_ARM_M));

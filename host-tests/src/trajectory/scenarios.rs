@@ -19,7 +19,10 @@ use super::jet::{Jet, Profile};
 use super::{Motion, Point, Trajectory, wrap_pi};
 use anyhow::{Result, bail};
 use nav_core::Vector3;
+use nav_core::alignment::machine::MAX_LEVER_ARM_M;
 use nav_core::earth::LocalEarth;
+use nav_core::navigator::config::{MAX_HEIGHT_M, MIN_HEIGHT_M};
+use nav_core::number::Number;
 use std::f64::consts::TAU;
 
 /// One documented parameter of a scenario.
@@ -172,6 +175,52 @@ fn check_lat(lat_deg: f64) -> Result<()> {
     Ok(())
 }
 
+/// Fastest speed a scenario accepts [m/s]: the scenarios are vehicles on or near the Earth
+/// (an aircraft at Mach 3 flies at about 1000 m/s); towards the orbital 7.9 km/s gravity no
+/// longer holds a body on such a path, and a latitude integrated at 1e9 m/s leaves [-90, 90].
+pub const MAX_SPEED_MPS: f64 = 1000.0;
+
+fn check_speed(key: &str, v: f64) -> Result<()> {
+    if v.is_nan() || v.abs() > MAX_SPEED_MPS {
+        bail!(
+            "{key} {} is beyond {MAX_SPEED_MPS} m/s: the scenarios are vehicles on or near the Earth (Mach 3 is about 1000 m/s, orbital speed 7900 m/s)",
+            Number(v)
+        );
+    }
+    Ok(())
+}
+
+fn check_lon(key: &str, lon_deg: f64) -> Result<()> {
+    if !(-180.0..=180.0).contains(&lon_deg) {
+        bail!("{key} {} is not within [-180, 180] deg", Number(lon_deg));
+    }
+    Ok(())
+}
+
+/// Heights as `nav replay` accepts a site's ([`MIN_HEIGHT_M`], [`MAX_HEIGHT_M`]).
+fn check_height(key: &str, h_m: f64) -> Result<()> {
+    if !(MIN_HEIGHT_M..=MAX_HEIGHT_M).contains(&h_m) {
+        bail!(
+            "{key} {} is not within [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m (the Earth model's range)",
+            Number(h_m)
+        );
+    }
+    Ok(())
+}
+
+/// A lever arm `[x, y, z]` [m] no longer than nav-core's [`MAX_LEVER_ARM_M`] (the alignment
+/// refuses longer ones).
+fn check_lever_arm(lever_arm_m: &[f64; 3]) -> Result<()> {
+    let length_m = Vector3::from(*lever_arm_m).norm();
+    if length_m.is_nan() || length_m > MAX_LEVER_ARM_M {
+        bail!(
+            "lever arm {} m (lever_x_m, lever_y_m, lever_z_m) is beyond {MAX_LEVER_ARM_M} m: the IMU sits on the base, within a hull's length of its centre of rotation",
+            Number(length_m)
+        );
+    }
+    Ok(())
+}
+
 fn check_positive(key: &str, v: f64) -> Result<()> {
     if v.is_nan() || v <= 0.0 {
         bail!("{key} must be positive, not {v}");
@@ -229,6 +278,8 @@ impl Params for Static {
 impl Static {
     fn check(&self) -> Result<Self> {
         check_lat(self.lat_deg)?;
+        check_lon("lon_deg", self.lon_deg)?;
+        check_height("h_m", self.h_m)?;
         if self.pitch_deg.abs() >= 89.0 {
             bail!("pitch_deg must be within (-89, 89), not {}", self.pitch_deg);
         }
@@ -449,8 +500,18 @@ impl Rocking {
         }
     }
 
+    /// Checks the parameters (as [`Scenario::build`] does): a rocking base from elsewhere
+    /// (the alignment family's members) is refused like one given on the command line.
+    pub fn check(&self) -> Result<()> {
+        self.build().map(|_| ())
+    }
+
     fn build(&self) -> Result<Self> {
         check_lat(self.lat_deg)?;
+        check_lon("lon_deg", self.lon_deg)?;
+        check_height("h_m", self.h_m)?;
+        check_speed("speed_mps", self.speed_mps)?;
+        check_lever_arm(&self.lever_arm_m)?;
         for (k, h) in [
             ("roll", self.roll),
             ("pitch", self.pitch),
@@ -857,9 +918,19 @@ impl FlightPlan {
     pub fn build(&self) -> Result<Flight> {
         check_lat(self.from_lat_deg)?;
         check_lat(self.to_lat_deg)?;
+        check_lon("from_lon_deg", self.from_lon_deg)?;
+        check_lon("to_lon_deg", self.to_lon_deg)?;
+        for (k, h) in [
+            ("from_h_m", self.from_h_m),
+            ("to_h_m", self.to_h_m),
+            ("cruise_h_m", self.cruise_h_m),
+        ] {
+            check_height(k, h)?;
+        }
         for (k, v) in [("cruise_mps", self.cruise_mps), ("climb_s", self.climb_s)] {
             check_positive(k, v)?;
         }
+        check_speed("cruise_mps", self.cruise_mps)?;
         if self.cruise_mps <= RUNWAY_MPS {
             bail!("cruise_mps must exceed the runway speed {RUNWAY_MPS} m/s");
         }
@@ -1028,10 +1099,15 @@ impl LandVehicle {
     /// Plans the route over `seconds`.
     pub fn build(&self) -> Result<Drive> {
         check_lat(self.lat_deg)?;
+        check_lon("lon_deg", self.lon_deg)?;
+        check_height("h_m", self.h_m)?;
         check_positive("speed_mps", self.speed_mps)?;
         check_positive("seconds", self.seconds)?;
         if self.speed_mps > 70.0 {
-            bail!("speed_mps above 70 m/s is not a road vehicle");
+            bail!(
+                "speed_mps {} is beyond 70 m/s: not a road vehicle (the route's fastest leg is 4/3 of it)",
+                Number(self.speed_mps)
+            );
         }
         if !(0.0..=0.05).contains(&self.tilt_rad_per_mps2) {
             bail!("tilt_rad_per_mps2 must be within [0, 0.05]");

@@ -45,13 +45,14 @@ impl<T: Scalar> AlignmentResult<T> {
 }
 
 /// Why static alignment failed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AlignError {
     /// Nothing was accumulated.
     NoSamples,
-    /// The mean specific force differs from normal gravity by more than 2 %: the base was
-    /// accelerating, or the accelerometers are faulty.
-    SpecificForceNotGravity,
+    /// The mean specific force differs from normal gravity by more than
+    /// [`GRAVITY_TOLERANCE`]: the base was accelerating, the accelerometers are faulty, or
+    /// (a large factor) the sample rate, timestamps or units are wrong.
+    SpecificForceNotGravity(GravityMismatch),
     /// The mean angular rate exceeds 3x the Earth rate: the base was turning.
     BaseRotating,
     /// The horizontal Earth rate is too small to gyrocompass: within ~1 deg of a pole, or the
@@ -62,16 +63,74 @@ pub enum AlignError {
 
 impl core::fmt::Display for AlignError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(match self {
-            Self::NoSamples => "no samples to align on",
-            Self::SpecificForceNotGravity => {
-                "mean specific force is not gravity (base accelerating?)"
+        match self {
+            Self::NoSamples => f.write_str("no samples to align on"),
+            Self::SpecificForceNotGravity(m) => write!(f, "{m}"),
+            Self::BaseRotating => {
+                f.write_str("mean angular rate exceeds the Earth rate (base turning?)")
             }
-            Self::BaseRotating => "mean angular rate exceeds the Earth rate (base turning?)",
-            Self::HeadingUnobservable => {
-                "horizontal Earth rate not measurable for gyrocompassing (near a pole, or gyros too coarse or biased)"
-            }
-        })
+            Self::HeadingUnobservable => f.write_str(
+                "horizontal Earth rate not measurable for gyrocompassing (near a pole, or gyros too coarse or biased)",
+            ),
+        }
+    }
+}
+
+/// Largest relative difference between the mean specific force and normal gravity at rest [-]
+/// (2 %), for the static and the inertial-frame methods.
+pub const GRAVITY_TOLERANCE: f64 = 0.02;
+
+/// Beyond this factor (or below its inverse) between the mean specific force and gravity, the
+/// mismatch is not motion but the data's scale: increments over the wrong intervals (a sample
+/// rate or timestamps off by a factor) or in the wrong units (g instead of m/s^2). A vehicle
+/// at rest does not sustain half a g for the window.
+pub const SCALE_MISMATCH_FACTOR: f64 = 1.5;
+
+/// A mean specific force that is not gravity: what was measured and what the site's normal
+/// gravity is, so the message can tell a wrong scale (a factor) from motion (a few %).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GravityMismatch {
+    /// Magnitude of the mean specific force over the window [m/s^2].
+    pub measured_mps2: f64,
+    /// Normal gravity at the site's latitude and height [m/s^2].
+    pub gravity_mps2: f64,
+}
+
+impl GravityMismatch {
+    /// `measured / gravity` [-].
+    pub fn ratio(&self) -> f64 {
+        self.measured_mps2 / self.gravity_mps2
+    }
+
+    /// Whether the mismatch is a factor ([`SCALE_MISMATCH_FACTOR`]) rather than a few %.
+    pub fn is_scale(&self) -> bool {
+        let r = self.ratio();
+        !(r <= SCALE_MISMATCH_FACTOR && r * SCALE_MISMATCH_FACTOR >= 1.0)
+    }
+}
+
+impl core::fmt::Display for GravityMismatch {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        use crate::number::Rounded;
+        write!(
+            f,
+            "mean specific force {} m/s^2 is not gravity {} m/s^2",
+            Rounded(self.measured_mps2),
+            Rounded(self.gravity_mps2)
+        )?;
+        if self.is_scale() {
+            write!(
+                f,
+                " ({} times it): sample rate, timestamps or units wrong?",
+                Rounded(self.ratio())
+            )
+        } else {
+            write!(
+                f,
+                " (beyond {} %): base accelerating?",
+                crate::number::Number(GRAVITY_TOLERANCE * 100.0)
+            )
+        }
     }
 }
 
@@ -122,8 +181,11 @@ impl<T: Scalar> StaticAlignment<T> {
         let omega_ib_b = self.sum_dtheta.sum() / duration;
         let g = earth::normal_gravity(lat, h);
         let (f_mean, omega_mean) = (f_ib_b.norm(), omega_ib_b.norm());
-        if (f_mean - g).abs() > T::c(0.02) * g {
-            return Err(AlignError::SpecificForceNotGravity);
+        if !((f_mean - g).abs() <= T::c(GRAVITY_TOLERANCE) * g) {
+            return Err(AlignError::SpecificForceNotGravity(GravityMismatch {
+                measured_mps2: f_mean.to_f64(),
+                gravity_mps2: g.to_f64(),
+            }));
         }
         if omega_mean > T::c(3.0 * earth::OMEGA_IE) {
             return Err(AlignError::BaseRotating);
@@ -176,6 +238,7 @@ pub fn samples_for(seconds: f64, rate_hz: f64) -> u32 {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
     use super::*;
     use crate::attitude::from_euler;
     use nalgebra::Vector3;
@@ -232,7 +295,36 @@ mod tests {
         );
         let mut a = feed::<f64>(0.0, 0.0, 0.0, lat, 100);
         a.add(&ImuIncrement::new([0.0; 3], [1.0, 0.0, 0.0], 0.0025));
-        assert_eq!(a.solve(lat, 0.0), Err(AlignError::SpecificForceNotGravity));
+        assert!(matches!(
+            a.solve(lat, 0.0),
+            Err(AlignError::SpecificForceNotGravity(_))
+        ));
+        // The message gives the numbers, and a factor points at the data's scale.
+        let g = earth::normal_gravity(lat, 0.0);
+        let mut fast = StaticAlignment::<f64>::new();
+        for _ in 0..100 {
+            // 400 Hz increments stamped 10 times too far apart: a tenth of gravity.
+            fast.add(&ImuIncrement::new([0.0; 3], [0.0, 0.0, -g * 0.0025], 0.025));
+        }
+        let e = fast.solve(lat, 0.0).unwrap_err();
+        let AlignError::SpecificForceNotGravity(m) = e else {
+            panic!("{e:?}");
+        };
+        assert!((m.measured_mps2 - g / 10.0).abs() < 1e-12 && m.gravity_mps2 == g);
+        assert_eq!(
+            std::format!("{e}"),
+            "mean specific force 0.9806 m/s^2 is not gravity 9.806 m/s^2 (0.1000 times it): sample rate, timestamps or units wrong?"
+        );
+        let mut pushed = feed::<f64>(0.0, 0.0, 0.0, lat, 100);
+        for _ in 0..10 {
+            pushed.add(&ImuIncrement::new(
+                [0.0; 3],
+                [0.1, 0.0, -g * 0.0025],
+                0.0025,
+            ));
+        }
+        let text = std::format!("{}", pushed.solve(lat, 0.0).unwrap_err());
+        assert!(text.ends_with("(beyond 2 %): base accelerating?"), "{text}");
         let mut a = feed::<f64>(0.0, 0.0, 0.0, lat, 100);
         a.add(&ImuIncrement::new(
             [0.0, 0.0, 0.01],

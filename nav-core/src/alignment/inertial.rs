@@ -80,6 +80,7 @@
 //! time (the fine filters' start).
 
 use super::AttitudeEstimate;
+use super::analytic::GravityMismatch;
 use super::kahan::{Kahan, Kahan3};
 use crate::coning::ConingSculling;
 use crate::{ImuIncrement, InputError, InputLimits, Scalar, attitude, earth};
@@ -94,8 +95,8 @@ pub const MIN_DURATION_S: f64 = 10.0;
 pub const MIN_COS_LAT: f64 = 0.02;
 
 /// Largest relative difference between `|V_w|` and the reference's [-]: the mean specific force
-/// must be gravity to 2 %.
-pub const GRAVITY_TOLERANCE: f64 = 0.02;
+/// must be gravity to 2 % (the static method's tolerance).
+pub const GRAVITY_TOLERANCE: f64 = super::analytic::GRAVITY_TOLERANCE;
 
 /// Largest relative difference between the heading signal measured (the part of `M_w` normal to
 /// `V_w`) and the reference's [-]: beyond it the heading would be dominated by noise,
@@ -133,7 +134,7 @@ const LEAK_STEPS: usize = 256;
 pub const MAX_HEADING_SIGMA_RAD: f64 = 15.0 * core::f64::consts::PI / 180.0;
 
 /// Why the inertial-frame alignment gave no attitude.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum InertialAlignError {
     /// Less than [`MIN_DURATION_S`] or less than the window accumulated.
     TooShort,
@@ -145,8 +146,10 @@ pub enum InertialAlignError {
     /// height is not finite.
     NearPole,
     /// `|V_w|` differs from the reference by more than [`GRAVITY_TOLERANCE`]: the base
-    /// accelerated (moved) or the accelerometers are faulty.
-    SpecificForceNotGravity,
+    /// accelerated (moved), the accelerometers are faulty, or (a large factor) the sample
+    /// rate, timestamps or units are wrong. The measured value is the weighted mean
+    /// `g |V_w| / |V_w,i0|`.
+    SpecificForceNotGravity(GravityMismatch),
     /// The heading signal differs from the Earth rate's by more than
     /// [`HEADING_SIGNAL_TOLERANCE`], or the heading 1-sigma exceeds [`MAX_HEADING_SIGMA_RAD`]:
     /// too noisy, too disturbed, or the gyros do not resolve the Earth rate.
@@ -169,9 +172,7 @@ impl core::fmt::Display for InertialAlignError {
             Self::TooShort => f.write_str("window not complete or shorter than 10 s"),
             Self::InputRefused(e) => write!(f, "an increment was refused ({e}); restart"),
             Self::NearPole => f.write_str("latitude too close to a pole (or not finite)"),
-            Self::SpecificForceNotGravity => {
-                f.write_str("integrated specific force is not gravity (base moving?)")
-            }
+            Self::SpecificForceNotGravity(m) => write!(f, "{m}"),
             Self::HeadingUnobservable => f.write_str(
                 "Earth-rate heading signal not resolved (noise, disturbance or coarse gyros)",
             ),
@@ -636,6 +637,17 @@ impl<T: Scalar> InertialAlignment<T> {
         self.q_b_b0.unit()
     }
 
+    /// Magnitude of the plain mean specific force `|int f_b0 dt| / t` [m/s^2] so far (NaN
+    /// before any time has passed).
+    pub fn mean_specific_force_mps2(&self) -> f64 {
+        let t = self.t_s.sum.to_f64();
+        if t > 0.0 {
+            self.v_b0.sum().norm().to_f64() / t
+        } else {
+            f64::NAN
+        }
+    }
+
     /// The attitude at the end of the last increment levelled on the plain mean specific force
     /// (`int f_b0 dt`), with an arbitrary azimuth: `q_b_c` for a level frame `c` (the fine
     /// filters' start, [`super::fine`]). The vertical is the window's mean one, so it is off by
@@ -679,7 +691,8 @@ impl<T: Scalar> InertialAlignment<T> {
         let v_i0 = self.v_w_i0.sum();
         let m_b0 = self.slope.m_b0.sum() - lever(&self.slope.g);
         let m_i0 = self.slope.m_i0.sum();
-        let c_b0_i0 = solve(&v_b0, &m_b0, &v_i0, &m_i0)?;
+        let g = earth::normal_gravity(self.lat_rad.to_f64(), self.h_m.to_f64());
+        let c_b0_i0 = solve(&v_b0, &m_b0, &v_i0, &m_i0, g)?;
         let sigma = self.sigma(t, cos_lat);
         if let Some(s) = sigma
             && !(s.z.to_f64() <= MAX_HEADING_SIGMA_RAD)
@@ -789,7 +802,8 @@ impl<T: Scalar> InertialAlignment<T> {
             .lever_b_m
             .map_or(Vector3::zeros(), |l| self.slope_short.g.sum() * l);
         let m_b0 = self.slope_short.m_b0.sum() - lever;
-        let c2 = solve(v_b0, &m_b0, v_i0, &self.slope_short.m_i0.sum())
+        let g = earth::normal_gravity(self.lat_rad.to_f64(), self.h_m.to_f64());
+        let c2 = solve(v_b0, &m_b0, v_i0, &self.slope_short.m_i0.sum(), g)
             .map_err(|_| InertialAlignError::BaseDisturbed)?;
         let r = Rotation3::from_matrix_unchecked(c2 * c_b0_i0.transpose());
         let d_yaw = r.scaled_axis().z.abs().to_f64();
@@ -797,7 +811,6 @@ impl<T: Scalar> InertialAlignment<T> {
         let w = earth::OMEGA_IE * cos_lat;
         let (a, b) = (&self.slope.moments, &self.slope_short.moments);
         let (na, nb) = (a.wt, b.wt);
-        let g = earth::normal_gravity(self.lat_rad.to_f64(), self.h_m.to_f64());
         let vrw2 = sq(n.vrw_mps_per_sqrt_s.to_f64());
         let arw2 = sq(n.arw_rad_per_sqrt_s.to_f64());
         let acc = a.w2 / (na * na) + b.w2 / (nb * nb) - 2.0 * self.cross_w / (na * nb);
@@ -850,19 +863,25 @@ impl<T: Scalar> InertialAlignment<T> {
 }
 
 /// `C_b0_i0` from the observation vectors in `b0` and their references in `i0` by TRIAD
-/// (eq. 6), or why not.
+/// (eq. 6), or why not; `g_mps2` is the site's normal gravity (the references' magnitude).
 fn solve<T: Scalar>(
     v_b0: &Vector3<T>,
     m_b0: &Vector3<T>,
     v_i0: &Vector3<T>,
     m_i0: &Vector3<T>,
+    g_mps2: f64,
 ) -> Result<Matrix3<T>, InertialAlignError> {
     if !(v_b0.iter().chain(m_b0.iter()).all(|x| x.finite())) {
         return Err(InertialAlignError::NonFinite);
     }
     let (nv_b0, nv_i0) = (v_b0.norm(), v_i0.norm());
     if !(nv_i0 > T::zero()) || (nv_b0 - nv_i0).abs() > T::c(GRAVITY_TOLERANCE) * nv_i0 {
-        return Err(InertialAlignError::SpecificForceNotGravity);
+        return Err(InertialAlignError::SpecificForceNotGravity(
+            GravityMismatch {
+                measured_mps2: g_mps2 * (nv_b0 / nv_i0).to_f64(),
+                gravity_mps2: g_mps2,
+            },
+        ));
     }
     let (a1_b0, a1_i0) = (v_b0 / nv_b0, v_i0 / nv_i0);
     let (c_b0, c_i0) = (a1_b0.cross(m_b0), a1_i0.cross(m_i0));
@@ -1070,9 +1089,23 @@ mod tests {
         let lat = 45f64.to_radians();
         let mut heavy = InertialAlignment::<f64>::new(lat, 0.0, 20.0);
         feed(&mut heavy, lat, 20.0, 1.05, 1.0);
-        assert_eq!(
-            heavy.estimate().unwrap_err(),
-            InertialAlignError::SpecificForceNotGravity
+        let e = heavy.estimate().unwrap_err();
+        let InertialAlignError::SpecificForceNotGravity(m) = e else {
+            panic!("{e:?}");
+        };
+        // The weighted mean of a force 1.05 g is 1.05 g: the message gives both and reads
+        // as motion, not as a wrong scale.
+        let g = earth::normal_gravity(lat, 0.0);
+        assert!((m.measured_mps2 / (1.05 * g) - 1.0).abs() < 1e-9, "{m:?}");
+        assert_eq!(m.gravity_mps2, g);
+        assert!(!m.is_scale());
+        // Increments ten times too large for their intervals (a rate 10x too low): a factor.
+        let mut fast = InertialAlignment::<f64>::new(lat, 0.0, 20.0);
+        feed(&mut fast, lat, 20.0, 10.0, 1.0);
+        let text = std::format!("{}", fast.estimate().unwrap_err());
+        assert!(
+            text.starts_with("mean specific force 98.06 m/s^2 is not gravity 9.806 m/s^2 (10.00 times it): sample rate"),
+            "{text}"
         );
         let mut blind = InertialAlignment::<f64>::new(lat, 0.0, 20.0);
         feed(&mut blind, lat, 20.0, 1.0, 0.0);

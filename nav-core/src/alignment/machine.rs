@@ -19,7 +19,7 @@
 //! seconds) each stage took.
 
 use super::AttitudeEstimate;
-use super::analytic::{AlignError, StaticAlignment};
+use super::analytic::{AlignError, GravityMismatch, StaticAlignment};
 use super::fine::bank::Bank;
 use super::fine::base::Translation;
 use super::fine::model::FINE_STATES;
@@ -180,7 +180,7 @@ impl AlignFailure {
         match self {
             Self::Static(e) => match e {
                 AlignError::NoSamples => "static: no samples",
-                AlignError::SpecificForceNotGravity => "static: specific force not gravity",
+                AlignError::SpecificForceNotGravity(_) => "static: specific force not gravity",
                 AlignError::BaseRotating => "static: base rotating",
                 AlignError::HeadingUnobservable => "static: Earth rate not measurable",
             },
@@ -188,7 +188,7 @@ impl AlignFailure {
                 I::TooShort => "inertial: too short",
                 I::InputRefused(_) => "inertial: increment refused",
                 I::NearPole => "inertial: near a pole",
-                I::SpecificForceNotGravity => "inertial: specific force not gravity",
+                I::SpecificForceNotGravity(_) => "inertial: specific force not gravity",
                 I::HeadingUnobservable => "inertial: heading not resolved",
                 I::NonFinite => "inertial: not finite",
                 I::BaseDisturbed => "inertial: base disturbed",
@@ -263,6 +263,11 @@ impl<T: Scalar> Default for BaseMotion<T> {
     }
 }
 
+/// Longest lever arm (and largest lever-arm 1-sigma) accepted [m]: the IMU sits on the base,
+/// within a hull's length of its centre of rotation (a large ship's bow is some 100 m from
+/// it); beyond that the value is a typing or unit error, not a base.
+pub const MAX_LEVER_ARM_M: f64 = 100.0;
+
 /// Why alignment settings were refused before any sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SettingsError {
@@ -282,6 +287,16 @@ pub enum SettingsError {
     NearPole,
     /// A noise, lever-arm or base-motion value is negative or not finite.
     BadValue(&'static str),
+    /// A known lever arm longer than [`MAX_LEVER_ARM_M`].
+    LeverArmTooLong {
+        /// Its length [m].
+        length_m: f64,
+    },
+    /// An unknown lever arm's 1-sigma beyond [`MAX_LEVER_ARM_M`].
+    LeverArmSigmaTooLarge {
+        /// The 1-sigma per axis [m].
+        sigma_m: f64,
+    },
     /// [`AlignMethod::Sway`] with the lever arm not given: on the alignment family its
     /// heading 1-sigma is not true then (an unknown lever arm's estimate and the sway model
     /// share the roll and pitch signal), so it is not offered.
@@ -314,6 +329,16 @@ impl core::fmt::Display for SettingsError {
             Self::BadRate(r) => write!(f, "sampling rate {r} Hz is not a positive number"),
             Self::NearPole => f.write_str("latitude not finite or too close to a pole to align"),
             Self::BadValue(what) => write!(f, "{what} must be finite and not negative"),
+            Self::LeverArmTooLong { length_m } => write!(
+                f,
+                "lever arm {} m is beyond {MAX_LEVER_ARM_M} m (the IMU sits on the base, within a hull's length of its centre of rotation)",
+                crate::number::Rounded(*length_m)
+            ),
+            Self::LeverArmSigmaTooLarge { sigma_m } => write!(
+                f,
+                "lever arm 1-sigma {} m is beyond {MAX_LEVER_ARM_M} m (the IMU sits on the base, within a hull's length of its centre of rotation)",
+                crate::number::Rounded(*sigma_m)
+            ),
             Self::SwayNeedsLeverArm => f.write_str(
                 "the sway method needs the lever arm (--lever-arm X,Y,Z; 0,0,0 at the centre of rotation): with an unknown one its 1-sigma is not true; use fine",
             ),
@@ -465,6 +490,22 @@ impl<T: Scalar> AlignSettings<T> {
         };
         if !lever_ok {
             return Err(SettingsError::BadValue("the lever arm"));
+        }
+        match self.lever_arm {
+            LeverArm::Known(r) => {
+                // The norm in f64: an f32 lever arm of 1e30 m would overflow its square.
+                let length_m = libm::sqrt(r.iter().map(|v| v.to_f64() * v.to_f64()).sum());
+                if !(length_m <= MAX_LEVER_ARM_M) {
+                    return Err(SettingsError::LeverArmTooLong { length_m });
+                }
+            }
+            LeverArm::Unknown { sigma_m } => {
+                if !(sigma_m.to_f64() <= MAX_LEVER_ARM_M) {
+                    return Err(SettingsError::LeverArmSigmaTooLarge {
+                        sigma_m: sigma_m.to_f64(),
+                    });
+                }
+            }
         }
 
         if !(ok(self.base.position_sigma_m) && ok(self.base.translation_sigma_m)) {
@@ -666,6 +707,20 @@ impl<T: Scalar> Aligner<T> {
             return;
         };
         let position = self.settings.position;
+        // A mean specific force a factor off gravity is the data's scale (rate, timestamps,
+        // units), not the base's motion: refused here with the numbers, not later as an
+        // unresolved heading. (Motion of a swaying base is the fine stage's to judge.)
+        let mismatch = GravityMismatch {
+            measured_mps2: a.mean_specific_force_mps2(),
+            gravity_mps2: crate::earth::normal_gravity(position.lat_f64(), position.h_f64()),
+        };
+        if mismatch.is_scale() {
+            self.failure = Some(AlignFailure::Inertial(
+                InertialAlignError::SpecificForceNotGravity(mismatch),
+            ));
+            self.stage = Stage::Failed;
+            return;
+        }
         let Some(q_b_c) = a.level() else {
             self.failure = Some(AlignFailure::Inertial(InertialAlignError::NonFinite));
             self.stage = Stage::Failed;
@@ -1077,6 +1132,54 @@ mod tests {
         bad.delta_v_ib_b.x = f64::NAN;
         assert_eq!(a.add(&bad), Progress::Coarse);
         assert_eq!((a.samples(), a.refused()), (0, 1));
+    }
+
+    /// A lever arm (or its 1-sigma) beyond a hull's length is refused naming its size, in f32
+    /// too (whose square of 1e30 would overflow); 100 m itself is accepted.
+    #[test]
+    fn a_lever_arm_beyond_the_plausible_size_is_refused() {
+        let s = settings(AlignMethod::Fine, 40.0);
+        let e = s
+            .with_lever_arm(LeverArm::Known(Vector3::new(1e30, 0.0, 0.0)))
+            .validate()
+            .unwrap_err();
+        assert_eq!(e, SettingsError::LeverArmTooLong { length_m: 1e30 });
+        assert!(
+            std::format!("{e}").starts_with("lever arm 1.000e30 m is beyond 100 m"),
+            "{e}"
+        );
+        let e = s
+            .with_lever_arm(LeverArm::Known(Vector3::new(60.0, 0.0, 80.0 + 1e-9)))
+            .validate()
+            .unwrap_err();
+        assert!(matches!(e, SettingsError::LeverArmTooLong { length_m } if length_m > 100.0));
+        let at_limit = Vector3::new(60.0, 0.0, 80.0);
+        assert_eq!(
+            s.with_lever_arm(LeverArm::Known(at_limit)).validate(),
+            Ok(())
+        );
+        let e = s
+            .with_lever_arm(LeverArm::Unknown { sigma_m: 1e3 })
+            .validate()
+            .unwrap_err();
+        assert_eq!(e, SettingsError::LeverArmSigmaTooLarge { sigma_m: 1e3 });
+        assert!(
+            std::format!("{e}").starts_with("lever arm 1-sigma 1000 m is beyond 100 m"),
+            "{e}"
+        );
+        let mut s32 = AlignSettings::<f32>::new(
+            AlignMethod::Inertial,
+            Position::from_degrees(45.0, 7.5, 100.0),
+            20.0,
+            400.0,
+            SensorNoise::seed003(),
+        )
+        .unwrap();
+        s32.lever_arm = LeverArm::Known(Vector3::new(1e30_f32, 1e30, 0.0));
+        assert!(matches!(
+            s32.validate(),
+            Err(SettingsError::LeverArmTooLong { length_m }) if length_m > 1e30
+        ));
     }
 
     /// A sway over a whole number of periods averages out of the mean rate and specific force,

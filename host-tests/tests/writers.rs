@@ -1,0 +1,423 @@
+//! The writers (`nav sim`, `nav emulate`, `nav generate`) never emit what their readers
+//! refuse: implausible parameters are refused with the reason, every row is checked before
+//! anything is written, and a refusal leaves nothing at `--out` (an existing file there
+//! untouched). Misleading alignment messages name the actual cause. Through the real command
+//! line.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn nav(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_nav"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// Asserts a refusal: exit status 1 (the `nav` binary's for every error) and `msg` in the
+/// output.
+fn assert_refused(o: &Output, msg: &str) {
+    assert_eq!(o.status.code(), Some(1), "{}", text(o));
+    assert!(text(o).contains(msg), "expected {msg:?} in: {}", text(o));
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The names in `dir`.
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn sim_refuses_a_speed_beyond_any_vehicle_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let o = nav(&[
+        "sim",
+        "ship-rocking",
+        "--set",
+        "speed_mps=1e9",
+        "--out",
+        s(&out),
+    ]);
+    assert_refused(&o, "speed_mps 1e9 is beyond 1000 m/s");
+    assert!(!out.exists());
+    let o = nav(&[
+        "sim",
+        "flight",
+        "--set",
+        "cruise_mps=2000",
+        "--out",
+        s(&out),
+    ]);
+    assert_refused(&o, "cruise_mps 2000 is beyond 1000 m/s");
+    assert!(!out.exists());
+}
+
+#[test]
+fn sim_refuses_a_lever_arm_a_height_or_a_longitude_out_of_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    for (set, msg) in [
+        ("lever_x_m=1e30", "lever arm 1e30 m"),
+        ("h_m=-1e7", "h_m -1e7 is not within [-12000, 100000] m"),
+        ("lon_deg=400", "lon_deg 400 is not within [-180, 180] deg"),
+    ] {
+        let o = nav(&["sim", "ship-rocking", "--set", set, "--out", s(&out)]);
+        assert_refused(&o, msg);
+        assert!(!out.exists(), "{set}");
+    }
+}
+
+#[test]
+fn sim_refuses_a_length_with_no_sample() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let o = nav(&["sim", "static", "--seconds", "1e-9", "--out", s(&out)]);
+    assert_refused(&o, "1e-9 s at 400 Hz gives no sample");
+    assert!(!out.exists());
+    let o = nav(&["sim", "static", "--seconds", "0", "--out", s(&out)]);
+    assert_refused(&o, "the length must be positive");
+    assert!(!out.exists());
+}
+
+/// Independently of the parameter checks: 1000 m/s is accepted, but north for 6000 s it
+/// crosses the pole, and the first truth row beyond it refuses the run; the old files in the
+/// directory stay as they were.
+#[test]
+fn sim_refuses_the_first_row_past_the_pole_and_keeps_the_old_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("truth.csv"), "old\n").unwrap();
+    let o = nav(&[
+        "sim",
+        "ship-rocking",
+        "--set",
+        "speed_mps=1000",
+        "--set",
+        "heading_deg=0",
+        "--seconds",
+        "6000",
+        "--rate",
+        "10",
+        "--truth-rate",
+        "10",
+        "--out",
+        s(&out),
+    ]);
+    assert_refused(&o, "nothing written: truth row ");
+    assert!(
+        text(&o).contains("deg is not within [-90, 90]") || text(&o).contains("not a finite"),
+        "{}",
+        text(&o)
+    );
+    assert_eq!(names(&out), ["truth.csv"]);
+    assert_eq!(
+        std::fs::read_to_string(out.join("truth.csv")).unwrap(),
+        "old\n"
+    );
+}
+
+/// A still truth of 600 s at 1 Hz, from `nav sim static`.
+fn still_truth(dir: &Path) -> PathBuf {
+    let sim = dir.join("still");
+    let o = nav(&[
+        "sim",
+        "static",
+        "--seconds",
+        "600",
+        "--rate",
+        "50",
+        "--truth-rate",
+        "1",
+        "--format",
+        "bin",
+        "--out",
+        s(&sim),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    sim.join("truth.csv")
+}
+
+fn emulate(truth: &Path, out: &Path, errors_out: &Path, set: &str) -> Output {
+    nav(&[
+        "emulate",
+        "--truth",
+        s(truth),
+        "--out",
+        s(out),
+        "--errors-out",
+        s(errors_out),
+        "--set",
+        set,
+    ])
+}
+
+#[test]
+fn emulate_refuses_errors_beyond_the_linear_model_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let truth = still_truth(dir.path());
+    let out = dir.path().join("displayed.csv");
+    let errors_out = dir.path().join("errors.csv");
+    std::fs::write(&out, "previous run\n").unwrap();
+    for (set, msg) in [
+        (
+            "gyro_drift_deg_h = 1e300 0 0",
+            "gyro_drift_rad_s 4.848e294 is beyond 3.333e-4: over the truth's length",
+        ),
+        (
+            "accel_bias_g = 1e6 0 0",
+            "accel_bias_m_s2 9.807e6 is beyond 1.961: the tilt bias/g",
+        ),
+        (
+            "position_error_m = 1e12 0 0",
+            "position_error_m 1.000e12 is beyond 100000",
+        ),
+        (
+            "attitude_error_deg = 20 0 0",
+            "attitude_error_rad 0.3491 is beyond 0.2000",
+        ),
+        (
+            "velocity_error_m_s = 1e3 0 0",
+            "velocity_error_m_s 1000 is beyond 100.0",
+        ),
+    ] {
+        let o = emulate(&truth, &out, &errors_out, set);
+        assert_refused(&o, msg);
+        assert_eq!(std::fs::read_to_string(&out).unwrap(), "previous run\n");
+        assert!(!errors_out.exists(), "{set}");
+    }
+    assert_eq!(names(dir.path()), ["displayed.csv", "still"]);
+    // Within the range: written.
+    let o = emulate(&truth, &out, &errors_out, "gyro_drift_deg_h = 10 0 0");
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(errors_out.exists());
+    assert!(
+        std::fs::read_to_string(&out)
+            .unwrap()
+            .starts_with("t_s,lat_deg")
+    );
+}
+
+/// A 0.1 g bias is within the parameter range, but its position error grows past 100 km
+/// within the 600 s (b t^2 / 2): the first row beyond refuses the run.
+#[test]
+fn emulate_refuses_errors_that_grow_out_of_the_linear_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let truth = still_truth(dir.path());
+    let out = dir.path().join("displayed.csv");
+    let errors_out = dir.path().join("errors.csv");
+    let o = emulate(&truth, &out, &errors_out, "accel_bias_g = 0.1 0 0");
+    assert_refused(&o, "the position error reached");
+    // sqrt(2 * 100 km / 0.98 m/s^2) = 452 s (a little later: the Schuler loop bends it).
+    let t = text(&o);
+    let row: usize = t
+        .split("row ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|r| r.parse().ok())
+        .unwrap_or_else(|| panic!("{t}"));
+    assert!((452..=470).contains(&row), "{t}");
+    assert!(!out.exists() && !errors_out.exists());
+}
+
+#[test]
+fn emulate_refuses_an_output_that_is_its_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let truth = still_truth(dir.path());
+    let before = std::fs::read(&truth).unwrap();
+    let o = nav(&["emulate", "--truth", s(&truth), "--out", s(&truth)]);
+    assert_refused(&o, "is the input");
+    assert_eq!(std::fs::read(&truth).unwrap(), before);
+    let out = dir.path().join("displayed.csv");
+    let o = nav(&[
+        "emulate",
+        "--truth",
+        s(&truth),
+        "--out",
+        s(&out),
+        "--errors-out",
+        s(&out),
+    ]);
+    assert_refused(&o, "is --out");
+    assert!(!out.exists());
+}
+
+#[test]
+fn generate_refuses_what_the_replay_would_refuse_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("imu.bin");
+    for (arg, value, msg) in [
+        ("--seconds", "0", "the duration must be positive, not 0 s"),
+        ("--seconds", "1e-9", "1e-9 s at 400 Hz gives no sample"),
+        (
+            "--rate",
+            "0",
+            "the rate must be within (0, 100000] Hz, not 0",
+        ),
+        (
+            "--rate",
+            "1e12",
+            "the rate must be within (0, 100000] Hz, not 1e12",
+        ),
+        (
+            "--lon",
+            "400",
+            "the longitude must be within [-180, 180] deg, not 400",
+        ),
+        (
+            "--h",
+            "-1e7",
+            "the height must be within [-12000, 100000] m (the Earth model's range), not -1e7",
+        ),
+    ] {
+        let o = nav(&["generate", "--out", s(&out), arg, value]);
+        assert_refused(&o, msg);
+        assert!(!out.exists(), "{arg} {value}");
+    }
+}
+
+fn replay(imu: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "replay",
+        "--imu",
+        s(imu),
+        "--out",
+        s(out),
+        "--lat",
+        "45",
+        "--lon",
+        "7.5",
+        "--h",
+        "150",
+    ];
+    args.extend_from_slice(extra);
+    nav(&args)
+}
+
+fn generated(dir: &Path, name: &str, seconds: &str) -> PathBuf {
+    let path = dir.join(name);
+    let o = nav(&["generate", "--out", s(&path), "--seconds", seconds]);
+    assert!(o.status.success(), "{}", text(&o));
+    path
+}
+
+#[test]
+fn a_lever_arm_beyond_a_hull_is_refused_as_a_bad_argument() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = generated(dir.path(), "imu.bin", "30");
+    let out = dir.path().join("log.csv");
+    let inertial = ["--align-seconds", "20", "--align-method", "inertial"];
+    let o = replay(
+        &imu,
+        &out,
+        &[&inertial[..], &["--lever-arm", "1e30,0,0"]].concat(),
+    );
+    assert_refused(
+        &o,
+        "invalid configuration: lever arm 1.000e30 m is beyond 100 m",
+    );
+    assert!(!text(&o).contains("gravity"), "{}", text(&o));
+    assert!(!out.exists());
+    let o = replay(
+        &imu,
+        &out,
+        &[&inertial[..], &["--lever-arm-sigma", "1e30"]].concat(),
+    );
+    assert_refused(&o, "lever arm 1-sigma 1.000e30 m is beyond 100 m");
+    assert!(!out.exists());
+    // A ship's deck lever arm is accepted (a FOG's noise: the ADIS16505 default cannot
+    // resolve the Earth rate in 20 s).
+    let o = replay(
+        &imu,
+        &out,
+        &[
+            &inertial[..],
+            &["--lever-arm", "30,10,15", "--imu-noise", "fog"],
+        ]
+        .concat(),
+    );
+    assert!(o.status.success(), "{}", text(&o));
+}
+
+#[test]
+fn a_height_far_from_the_earth_is_a_bad_argument_not_a_gravity_mismatch() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = generated(dir.path(), "imu.bin", "20");
+    let out = dir.path().join("log.csv");
+    let mut args = vec![
+        "replay",
+        "--imu",
+        s(&imu),
+        "--out",
+        s(&out),
+        "--lat",
+        "45",
+        "--lon",
+        "7.5",
+        "--h",
+        "-1e7",
+        "--align-seconds",
+        "10",
+    ];
+    let o = nav(&args);
+    assert_refused(
+        &o,
+        "invalid configuration: height -10000000 m is not within [-12000, 100000] m",
+    );
+    assert!(!text(&o).contains("gravity"), "{}", text(&o));
+    assert!(!out.exists());
+    args[10] = "150";
+    assert!(nav(&args).status.success());
+}
+
+/// A CSV whose timestamps were multiplied by 10 (400 Hz increments 25 ms apart: 40 Hz
+/// apparent): a tenth of gravity per second, which the alignment names as a scale error
+/// with the numbers, for the static, inertial and two-stage methods alike.
+#[test]
+fn timestamps_ten_times_too_far_apart_are_named_as_a_scale_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = generated(dir.path(), "imu.csv", "30");
+    let text_in = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text_in.lines();
+    let mut scaled = format!("{}\n", lines.next().unwrap());
+    for line in lines {
+        let (t, rest) = line.split_once(',').unwrap();
+        let t: f64 = t.parse().unwrap();
+        scaled += &format!("{},{rest}\n", t * 10.0);
+    }
+    let x10 = dir.path().join("x10.csv");
+    std::fs::write(&x10, scaled).unwrap();
+    let out = dir.path().join("log.csv");
+    for method in ["static", "inertial", "fine"] {
+        let o = replay(
+            &x10,
+            &out,
+            &["--align-seconds", "100", "--align-method", method],
+        );
+        assert_refused(
+            &o,
+            "mean specific force 0.9806 m/s^2 is not gravity 9.806 m/s^2 (0.1000 times it): sample rate, timestamps or units wrong?",
+        );
+        assert!(!out.exists(), "{method}");
+    }
+    // The same file with its own timestamps aligns.
+    let o = replay(&csv, &out, &["--align-seconds", "20"]);
+    assert!(o.status.success(), "{}", text(&o));
+}
