@@ -870,7 +870,10 @@ fn with_translation_leak<T: Scalar>(
     if !(heading <= super::inertial::MAX_HEADING_SIGMA_RAD) {
         return Err(InertialAlignError::TranslationLeak);
     }
-    let add = |sigma: T, leak: f64| T::c(libm::sqrt(sigma.to_f64().powi(2) + leak * leak));
+    let add = |sigma: T, leak: f64| {
+        let s = sigma.to_f64();
+        T::c(libm::sqrt(s * s + leak * leak))
+    };
     e.sigma_rad = Vector3::new(
         add(e.sigma_rad.x, tilt),
         add(e.sigma_rad.y, tilt),
