@@ -198,6 +198,7 @@ impl AlignFailure {
                 F::HeadingUnresolved { .. } => "fine: heading not resolved",
                 F::EarthRateMismatch { .. } => "fine: gyros disagree with the Earth rate",
                 F::MotionNotModelled { .. } => "fine: base motion not modelled",
+                F::YawSwayBeyondModel { .. } => "sway: yaw sway beyond the model",
                 F::NotStarted => "fine: not started",
                 F::NonFinite => "fine: not finite",
             },

@@ -208,6 +208,13 @@ pub enum FineRefusal {
         /// The mean normalised innovation square.
         mean_nis: f64,
     },
+    /// The sway model ([`crate::alignment::sway`]) found a yaw sway beyond
+    /// [`crate::alignment::sway::MAX_YAW_SWAY_RAD`], outside the envelope where its heading
+    /// 1-sigma was found true.
+    YawSwayBeyondModel {
+        /// Amplitude of the yaw sway found [rad].
+        amplitude_rad: f64,
+    },
     /// No filter interval has completed yet.
     NotStarted,
     /// The covariance became non-finite (inputs at the edge of the limits): the filter
@@ -230,6 +237,12 @@ impl core::fmt::Display for FineRefusal {
             Self::MotionNotModelled { mean_nis } => write!(
                 f,
                 "base motion not modelled: position innovations {mean_nis:.1} times their variance"
+            ),
+            Self::YawSwayBeyondModel { amplitude_rad } => write!(
+                f,
+                "yaw sway of {:.2} deg is beyond the sway model's {:.1} deg (its heading 1-sigma is not true there); use fine",
+                amplitude_rad.to_degrees(),
+                crate::alignment::sway::MAX_YAW_SWAY_RAD.to_degrees()
             ),
             Self::NotStarted => f.write_str("fine filter has not run yet"),
             Self::NonFinite => f.write_str("fine filter's covariance became non-finite"),
