@@ -17,7 +17,7 @@
 //! read one line at a time ([`PsinsReader`]); a last line that no newline ends is checked for a
 //! cut inside a field ([`crate::text_stream`]).
 
-use crate::text_error::{Cut, MAX_TIME_S, seconds_to_ns};
+use crate::text_error::{Cut, MAX_TIME_S, number_text, seconds_to_ns};
 use crate::text_stream::{CutCheck, LineReader};
 use std::fmt;
 use std::fs::File;
@@ -222,17 +222,19 @@ impl fmt::Display for PsinsError {
                 )
             }
             PsinsErrorKind::BadHeaderValue { what, found } => {
-                write!(f, "header: {what}, found {found}")
+                write!(f, "header: {what}, found {}", number_text(*found))
             }
             PsinsErrorKind::BadScale { sensor, found } => write!(
                 f,
-                "header line 3: PSINS scale factor {found} for {sensor}: scale factors must be \
-                 positive (gyro [arcsec/count], accel [ug*s/count])"
+                "header line 3: PSINS scale factor {} for {sensor}: scale factors must be \
+                 positive (gyro [arcsec/count], accel [ug*s/count])",
+                number_text(*found)
             ),
             PsinsErrorKind::TimeOutOfRange { sample, t_s } => write!(
                 f,
-                "sample {sample} ends at t0 + {sample} * interval = {t_s} s, beyond the \
-                 recording clock's range (0 to {MAX_TIME_S} s, u64 nanoseconds)"
+                "sample {sample} ends at t0 + {sample} * interval = {} s, beyond the \
+                 recording clock's range (0 to {MAX_TIME_S} s, u64 nanoseconds)",
+                number_text(*t_s)
             ),
             PsinsErrorKind::Truncated { line, cut } => write!(
                 f,
@@ -417,8 +419,8 @@ fn check_line_2(v: &[f64; 6]) -> Result<(), PsinsErrorKind> {
     }
     if interval_ns(interval_ms).is_none() {
         return bad(
-            "the sampling interval [ms] must be a whole number of nanoseconds from 1 ns to \
-             the recording clock's range",
+            "the sampling interval [ms] must be at least 1 ns and within the recording \
+             clock's range",
             interval_ms,
         );
     }

@@ -24,6 +24,16 @@ pub fn seconds_to_ns(t_s: f64) -> Option<u64> {
     (t_s.is_finite() && t_s >= 0.0 && ns < TWO_POW_64).then_some(ns as u64)
 }
 
+/// `x` as a message shows it: `{}`, but in exponent form when very large or very small (`1e300`,
+/// not 301 digits).
+pub fn number_text(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-6..1e15).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
 /// Why the last line of a file, which no newline ends, looks cut off inside a field. A line that
 /// ends with a newline is complete; one that does not is checked against the lines before it.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -420,8 +430,9 @@ impl fmt::Display for TextErrorKind {
             ),
             Self::TimeOutOfRange { column, t_s } => write!(
                 f,
-                "column {column}: time {t_s} s is beyond the recording clock's range (0 to \
-                 {MAX_TIME_S} s, u64 nanoseconds)"
+                "column {column}: time {} s is beyond the recording clock's range (0 to \
+                 {MAX_TIME_S} s, u64 nanoseconds)",
+                number_text(*t_s)
             ),
             Self::Truncated { line, cut } => write!(
                 f,
@@ -475,6 +486,9 @@ mod tests {
     fn times_beyond_the_clock_do_not_convert() {
         assert_eq!(seconds_to_ns(0.0025), Some(2_500_000));
         assert_eq!(seconds_to_ns(1.8e10), Some(18_000_000_000_000_000_000));
+        assert_eq!(number_text(1e300), "1e300");
+        assert_eq!(number_text(2e10), "20000000000");
+        assert_eq!(number_text(-0.0025), "-0.0025");
         for t_s in [MAX_TIME_S, 1e300, f64::INFINITY, f64::NAN, -1e-9] {
             assert_eq!(seconds_to_ns(t_s), None, "{t_s}");
         }

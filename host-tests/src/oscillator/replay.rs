@@ -8,6 +8,7 @@
 //! (`q` is `C_b_e`, body to the ellipse frame).
 
 use super::file::OscRow;
+use crate::text_error::number_text;
 use anyhow::{Result, anyhow, ensure};
 use nav_core::Scalar;
 use nav_core::oscillator::{OscillatorConfig, OscillatorEstimator, OscillatorFault};
@@ -134,9 +135,10 @@ where
         let skipped = ((row.t_s - last_t) / dt).round() as i64 - 1;
         ensure!(
             skipped <= MAX_HOLE_READOUTS,
-            "the readout times jump from {last_t} s to {} s: {skipped} readouts missing in a row \
+            "the readout times jump from {} s to {} s: {skipped} readouts missing in a row \
              (more than {MAX_HOLE_READOUTS}; a wrong time?)",
-            row.t_s
+            number_text(last_t),
+            number_text(row.t_s)
         );
         for _ in 0..skipped.max(0) {
             s.missing += 1;
