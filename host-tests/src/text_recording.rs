@@ -223,13 +223,15 @@ impl HeaderScan {
     }
 }
 
-/// Reads all of `records` (a first pass): the binary header, or the first error.
-pub fn scan<R: BufRead>(mut records: TextRecords<R>) -> Result<Header> {
+/// Reads all of `records` (a first pass) of the file `path`: the binary header, or the first
+/// error (a line's error names the file and the line already).
+pub fn scan<R: BufRead>(mut records: TextRecords<R>, path: &Path) -> Result<Header> {
     let mut scan = HeaderScan::new(&records);
     for record in records.by_ref() {
         scan.push(&record?);
     }
     scan.finish()
+        .with_context(|| format!("recording {}", path.display()))
 }
 
 /// A header and records as the bytes of the binary format, each record encoded when the reader
@@ -295,7 +297,7 @@ pub fn replay<R: BufRead>(
     let context = || format!("recording {}", path.display());
     let records = TextRecords::new(format, open().with_context(context)?, path)?;
     let psins = records.psins_header().copied();
-    let header = scan(records).with_context(context)?;
+    let header = scan(records, path)?;
     let records = TextRecords::new(format, open().with_context(context)?, path)?;
     let replay = Replay::new(Encoded::new(&header, records))
         .map_err(|e| anyhow!("recording {}: {e}", path.display()))?;

@@ -211,6 +211,9 @@ fn osc_line(k: u64, out: &mut Vec<u8>) {
     }
 }
 
+/// A generated format: its generator and its lines that are not samples.
+type Case = (Format, fn(u64, &mut Vec<u8>), u64);
+
 /// Replays a generated text recording of `lines` lines through the harness's text replay (two
 /// passes, as `nav replay` reads a file); returns the samples and the peak bytes held.
 fn replay_generated(format: Format, lines: u64, make: fn(u64, &mut Vec<u8>)) -> (u64, usize) {
@@ -229,8 +232,7 @@ fn replay_generated(format: Format, lines: u64, make: fn(u64, &mut Vec<u8>)) -> 
 
 #[test]
 fn text_replays_stream_in_bounded_memory() {
-    // (format, generator, lines that are not samples)
-    let cases: [(Format, fn(u64, &mut Vec<u8>), u64); 3] = [
+    let cases: [Case; 3] = [
         (Format::Csv, csv_line, 1),
         (Format::KfGins, kf_gins_line, 0),
         (Format::Psins, psins_line, 3),
@@ -259,16 +261,16 @@ fn text_replays_stream_in_bounded_memory() {
 fn trajectory_and_readout_readers_stream_in_bounded_memory() {
     for rows in [20_000_u64, 400_000] {
         let (n, peak) = peak_bytes(|| {
-            let reader =
+            let mut reader =
                 TruthReader::new(Generated::new(rows + 1, truth_line), Path::new("t")).unwrap();
-            reader.map(|r| r.unwrap()).count() as u64
+            reader.try_fold(0_u64, |n, r| r.map(|_| n + 1)).unwrap()
         });
         assert_eq!(n, rows);
         assert!(peak < BOUND_BYTES, "truth: {rows} rows held {peak} bytes");
         let (n, peak) = peak_bytes(|| {
-            let reader =
+            let mut reader =
                 OscReader::new(Generated::new(rows + 1, osc_line), Path::new("o")).unwrap();
-            reader.map(|r| r.unwrap()).count() as u64
+            reader.try_fold(0_u64, |n, r| r.map(|_| n + 1)).unwrap()
         });
         assert_eq!(n, rows);
         assert!(peak < BOUND_BYTES, "osc: {rows} rows held {peak} bytes");
@@ -282,11 +284,12 @@ fn trajectory_and_readout_readers_stream_in_bounded_memory() {
 #[ignore = "benchmark: 12 M samples per format, tens of seconds in release"]
 fn text_replay_benchmark_12m_samples() {
     let samples = 12_000_000_u64;
-    for (format, make, header_lines) in [
-        (Format::Csv, csv_line as fn(u64, &mut Vec<u8>), 1),
+    let cases: [Case; 3] = [
+        (Format::Csv, csv_line, 1),
         (Format::KfGins, kf_gins_line, 0),
         (Format::Psins, psins_line, 3),
-    ] {
+    ];
+    for (format, make, header_lines) in cases {
         let started = Instant::now();
         let (n, peak) = replay_generated(format, samples + header_lines, make);
         let seconds = started.elapsed().as_secs_f64();
