@@ -10,14 +10,17 @@
 //! The optional `temp_c` column is the sensor temperature [deg C] (empty or `NaN`: unknown).
 //!
 //! NaN and infinite increments are parsed, not refused (the replay flags them), and so is time
-//! that does not increase (the replay flags the interval); a time that is negative or not a
-//! number cannot be placed on the recording's clock and is an error.
+//! that does not increase (the replay flags the interval); a time that is negative, not a number
+//! or beyond the recording clock's range ([`crate::text_error::MAX_TIME_S`]) cannot be placed on
+//! the recording's clock and is an error. A last line that no newline ends is checked for a cut
+//! inside a field ([`crate::text_stream`]).
 
-use crate::text_error::{TextError, TextErrorKind, csv_header};
+use crate::text_error::{TextError, TextErrorKind, seconds_to_ns};
+use crate::text_stream::{CsvRecords, CutCheck};
 use serde::Serialize;
 use std::fs::File;
 use std::io::{self, BufReader, Read, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Column names without the optional temperature.
 pub const COLUMNS: [&str; 7] = [
@@ -70,103 +73,182 @@ pub fn header_line(with_temperature: bool) -> String {
     s
 }
 
-/// Reads a CSV recording from `path`.
+/// Reads a CSV recording from `path` into memory (a replay streams it instead: [`CsvReader`]).
 pub fn read(path: &Path) -> Result<ImuCsv, CsvError> {
     let file = File::open(path).map_err(|e| TextError::io(path, e))?;
     read_from(BufReader::new(file), path)
 }
 
-/// Reads a CSV recording from `reader`; `path` names it in errors.
+/// Reads a CSV recording from `reader` into memory; `path` names it in errors.
 pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<ImuCsv, CsvError> {
-    let (header, records) = csv_header(reader, path, &header_line(false))?;
-    let header_line_no = header.position().map(|p| p.line());
-    let names: Vec<&str> = header.iter().collect();
-    let has_temperature = if names == COLUMNS {
-        false
-    } else if names.len() == COLUMNS.len() + 1
-        && names[..COLUMNS.len()] == COLUMNS
-        && names[COLUMNS.len()] == TEMPERATURE_COLUMN
-    {
-        true
-    } else {
-        let found = names.join(",");
-        return Err(TextError::new(
-            path,
-            header_line_no,
-            CsvErrorKind::WrongHeader {
-                expected: header_line(false),
-                optional: Some(TEMPERATURE_COLUMN),
-                found,
-            },
-        ));
-    };
-    let width = COLUMNS.len() + usize::from(has_temperature);
-
-    let mut rows = Vec::new();
-    for record in records {
-        let record = record.map_err(|e| TextError::from_csv(path, e))?;
-        let line = record.position().map(|p| p.line());
-        let at = |kind| TextError::new(path, line, kind);
-        if record.len() < width {
-            let column = if record.len() < COLUMNS.len() {
-                COLUMNS[record.len()]
-            } else {
-                TEMPERATURE_COLUMN
-            };
-            return Err(at(CsvErrorKind::MissingColumn {
-                column,
-                found: record.len(),
-            }));
-        }
-        if record.len() > width {
-            return Err(at(CsvErrorKind::ExtraColumns {
-                expected: width,
-                found: record.len(),
-            }));
-        }
-        let t_text = &record[0];
-        let t_s: f64 = t_text.parse().map_err(|_| {
-            at(CsvErrorKind::NotANumber {
-                column: COLUMNS[0],
-                found: t_text.to_owned(),
-            })
-        })?;
-        if !(t_s.is_finite() && t_s >= 0.0) {
-            return Err(at(CsvErrorKind::BadTime {
-                found: t_text.to_owned(),
-            }));
-        }
-        // Increments are parsed straight to f32 (correctly rounded, no double rounding through
-        // f64), so writing and reading back is lossless.
-        let number = |i: usize| -> Result<f32, CsvError> {
-            record[i].parse().map_err(|_| {
-                at(CsvErrorKind::NotANumber {
-                    column: COLUMNS[i],
-                    found: record[i].to_owned(),
-                })
-            })
-        };
-        let delta_theta_ib_b = [number(1)?, number(2)?, number(3)?];
-        let delta_v_ib_b = [number(4)?, number(5)?, number(6)?];
-        let temperature_c = match record.get(COLUMNS.len()) {
-            None | Some("") => f32::NAN,
-            Some(text) => text.parse().map_err(|_| {
-                at(CsvErrorKind::NotANumber {
-                    column: TEMPERATURE_COLUMN,
-                    found: text.to_owned(),
-                })
-            })?,
-        };
-        rows.push(CsvRow {
-            t_s,
-            delta_theta_ib_b,
-            delta_v_ib_b,
-            temperature_c,
-        });
-    }
+    let rows = CsvReader::new(reader, path)?;
+    let has_temperature = rows.has_temperature();
     Ok(ImuCsv {
         has_temperature,
-        rows,
+        rows: rows.collect::<Result<_, _>>()?,
+    })
+}
+
+/// The rows of a CSV recording, read one at a time (memory bounded by the longest line). Stops
+/// after the first error.
+#[derive(Debug)]
+pub struct CsvReader<R: Read> {
+    records: CsvRecords<R>,
+    path: PathBuf,
+    has_temperature: bool,
+    cut: CutCheck,
+    failed: bool,
+}
+
+impl<R: Read> CsvReader<R> {
+    /// Reads and checks the header of `reader`; `path` names it in errors.
+    pub fn new(reader: R, path: &Path) -> Result<Self, CsvError> {
+        let (records, header) = CsvRecords::new(reader, path, &header_line(false))?;
+        let names: Vec<&str> = header.iter().collect();
+        let has_temperature = if names == COLUMNS {
+            false
+        } else if names.len() == COLUMNS.len() + 1
+            && names[..COLUMNS.len()] == COLUMNS
+            && names[COLUMNS.len()] == TEMPERATURE_COLUMN
+        {
+            true
+        } else {
+            return Err(TextError::new(
+                path,
+                header.position().map(|p| p.line()),
+                CsvErrorKind::WrongHeader {
+                    expected: header_line(false),
+                    optional: Some(TEMPERATURE_COLUMN),
+                    found: names.join(","),
+                },
+            ));
+        };
+        Ok(Self {
+            records,
+            path: path.to_owned(),
+            has_temperature,
+            cut: CutCheck::default(),
+            failed: false,
+        })
+    }
+
+    /// `true` when the header has the `temp_c` column.
+    pub fn has_temperature(&self) -> bool {
+        self.has_temperature
+    }
+
+    fn next_row(&mut self) -> Option<Result<CsvRow, CsvError>> {
+        let width = COLUMNS.len() + usize::from(self.has_temperature);
+        let line = match self.records.next_record()? {
+            Ok(line) => line,
+            Err(e) => return Some(Err(e)),
+        };
+        let path = &self.path;
+        let record = line.record;
+        let at = |kind| TextError::new(path, Some(line.line), kind);
+        let column = |i: usize| COLUMNS.get(i).copied().unwrap_or(TEMPERATURE_COLUMN);
+        if line.unterminated {
+            let fields: Vec<&str> = record.iter().collect();
+            let is_number = |i: usize, text: &str| {
+                (i == COLUMNS.len() && text.is_empty()) || text.parse::<f64>().is_ok()
+            };
+            if let Err(cut) = self
+                .cut
+                .check(&fields, width, |i| column(i).to_owned(), is_number)
+            {
+                let kind = CsvErrorKind::Truncated {
+                    line: line.line,
+                    cut,
+                };
+                return Some(Err(TextError::new(path, None, kind)));
+            }
+        } else {
+            self.cut.note(record.iter());
+        }
+        Some(parse_row(record, width, at))
+    }
+}
+
+impl<R: Read> Iterator for CsvReader<R> {
+    type Item = Result<CsvRow, CsvError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.failed {
+            return None;
+        }
+        let row = self.next_row();
+        self.failed = matches!(row, Some(Err(_)));
+        row
+    }
+}
+
+/// One data row of `width` fields; `at` makes an error of its line.
+fn parse_row(
+    record: &csv::StringRecord,
+    width: usize,
+    at: impl Fn(CsvErrorKind) -> CsvError,
+) -> Result<CsvRow, CsvError> {
+    if record.len() < width {
+        let column = if record.len() < COLUMNS.len() {
+            COLUMNS[record.len()]
+        } else {
+            TEMPERATURE_COLUMN
+        };
+        return Err(at(CsvErrorKind::MissingColumn {
+            column,
+            found: record.len(),
+        }));
+    }
+    if record.len() > width {
+        return Err(at(CsvErrorKind::ExtraColumns {
+            expected: width,
+            found: record.len(),
+        }));
+    }
+    let t_text = &record[0];
+    let t_s: f64 = t_text.parse().map_err(|_| {
+        at(CsvErrorKind::NotANumber {
+            column: COLUMNS[0],
+            found: t_text.to_owned(),
+        })
+    })?;
+    if !(t_s.is_finite() && t_s >= 0.0) {
+        return Err(at(CsvErrorKind::BadTime {
+            found: t_text.to_owned(),
+        }));
+    }
+    if seconds_to_ns(t_s).is_none() {
+        return Err(at(CsvErrorKind::TimeOutOfRange {
+            column: COLUMNS[0],
+            t_s,
+        }));
+    }
+    // Increments are parsed straight to f32 (correctly rounded, no double rounding through
+    // f64), so writing and reading back is lossless.
+    let number = |i: usize| -> Result<f32, CsvError> {
+        record[i].parse().map_err(|_| {
+            at(CsvErrorKind::NotANumber {
+                column: COLUMNS[i],
+                found: record[i].to_owned(),
+            })
+        })
+    };
+    let delta_theta_ib_b = [number(1)?, number(2)?, number(3)?];
+    let delta_v_ib_b = [number(4)?, number(5)?, number(6)?];
+    let temperature_c = match record.get(COLUMNS.len()) {
+        None | Some("") => f32::NAN,
+        Some(text) => text.parse().map_err(|_| {
+            at(CsvErrorKind::NotANumber {
+                column: TEMPERATURE_COLUMN,
+                found: text.to_owned(),
+            })
+        })?,
+    };
+    Ok(CsvRow {
+        t_s,
+        delta_theta_ib_b,
+        delta_v_ib_b,
+        temperature_c,
     })
 }
 

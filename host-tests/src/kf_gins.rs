@@ -16,15 +16,19 @@
 //! east, down [m/s], roll, pitch, yaw [deg] (z-y-x Euler angles, FRD body to NED). Every value
 //! must be finite, the week a non-negative whole number that does not change within the file, and
 //! time must not go backwards. Times are returned as seconds of week: the IMU file has no week.
+//!
+//! Both are read one line at a time ([`ImuReader`], [`NavReader`]); a last line that no newline
+//! ends is checked for a cut inside a field ([`crate::text_stream`]).
 
 use crate::imu_csv::{CsvRow, ImuCsv};
-use crate::text_error::{Record, TextError, TextErrorKind};
+use crate::text_error::{Record, TextError, TextErrorKind, seconds_to_ns};
+use crate::text_stream::{CutCheck, LineReader};
 use crate::truth::Truth;
 use nav_core::Vector3;
 use nav_core::attitude::from_euler;
 use std::fs::File;
 use std::io::{BufRead, BufReader};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// IMU file columns, as named in errors.
 pub const IMU_COLUMNS: [&str; 7] = [
@@ -83,19 +87,23 @@ impl KfGinsImu {
     /// The rows in the project's CSV form (increments rounded to f32 as the binary format stores
     /// them; no temperature).
     pub fn to_imu_csv(&self) -> ImuCsv {
-        let to_f32 = |v: [f64; 3]| v.map(|x| x as f32);
         ImuCsv {
             has_temperature: false,
-            rows: self
-                .rows
-                .iter()
-                .map(|r| CsvRow {
-                    t_s: r.t_s,
-                    delta_theta_ib_b: to_f32(r.delta_theta_ib_b),
-                    delta_v_ib_b: to_f32(r.delta_v_ib_b),
-                    temperature_c: f32::NAN,
-                })
-                .collect(),
+            rows: self.rows.iter().map(KfGinsImuRow::to_csv_row).collect(),
+        }
+    }
+}
+
+impl KfGinsImuRow {
+    /// The row in the project's CSV form (increments rounded to f32 as the binary format stores
+    /// them; no temperature).
+    pub fn to_csv_row(&self) -> CsvRow {
+        let to_f32 = |v: [f64; 3]| v.map(|x| x as f32);
+        CsvRow {
+            t_s: self.t_s,
+            delta_theta_ib_b: to_f32(self.delta_theta_ib_b),
+            delta_v_ib_b: to_f32(self.delta_v_ib_b),
+            temperature_c: f32::NAN,
         }
     }
 }
@@ -176,37 +184,64 @@ pub fn looks_like_imu(head: &str) -> bool {
         })
 }
 
-/// Reads a KF-GINS IMU file.
+/// Reads a KF-GINS IMU file into memory (a replay streams it instead: [`ImuReader`]).
 pub fn read_imu(path: &Path) -> Result<KfGinsImu, KfGinsError> {
     let file = File::open(path).map_err(|e| TextError::io(path, e))?;
     read_imu_from(BufReader::new(file), path)
 }
 
-/// Reads a KF-GINS IMU file from `reader`; `path` names it in errors.
+/// Reads a KF-GINS IMU file from `reader` into memory; `path` names it in errors.
 pub fn read_imu_from<R: BufRead>(reader: R, path: &Path) -> Result<KfGinsImu, KfGinsError> {
-    let mut rows: Vec<KfGinsImuRow> = Vec::new();
-    for_each_line(reader, path, FileKind::Imu, |values, at| {
-        let number = |i: usize| parse(values[i], IMU_COLUMNS[i]).map_err(at);
-        let t_s = number(0)?;
-        check_time(t_s, values[0]).map_err(at)?;
-        if let Some(previous) = rows.last()
-            && t_s <= previous.t_s
-        {
-            return Err(at(KfGinsErrorKind::TimeNotIncreasing {
-                column: IMU_COLUMNS[0],
-                t_s,
-                previous_t_s: previous.t_s,
-                record: Record::Line,
-            }));
+    Ok(KfGinsImu {
+        rows: ImuReader::new(reader, path).collect::<Result<_, _>>()?,
+    })
+}
+
+/// The rows of a KF-GINS IMU file, read one at a time (memory bounded by the longest line).
+/// Stops after the first error.
+#[derive(Debug)]
+pub struct ImuReader<R> {
+    lines: DataLines<R>,
+    previous_t_s: Option<f64>,
+}
+
+impl<R: BufRead> ImuReader<R> {
+    /// Reads `reader` from its start; `path` names it in errors.
+    pub fn new(reader: R, path: &Path) -> Self {
+        Self {
+            lines: DataLines::new(reader, path, FileKind::Imu),
+            previous_t_s: None,
         }
-        rows.push(KfGinsImuRow {
-            t_s,
-            delta_theta_ib_b: [number(1)?, number(2)?, number(3)?],
-            delta_v_ib_b: [number(4)?, number(5)?, number(6)?],
-        });
-        Ok(())
-    })?;
-    Ok(KfGinsImu { rows })
+    }
+}
+
+impl<R: BufRead> Iterator for ImuReader<R> {
+    type Item = Result<KfGinsImuRow, KfGinsError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let previous_t_s = &mut self.previous_t_s;
+        self.lines.next_with(|values, at| {
+            let number = |i: usize| parse(values[i], IMU_COLUMNS[i]).map_err(at);
+            let t_s = number(0)?;
+            check_time(t_s, values[0]).map_err(at)?;
+            if let Some(previous) = *previous_t_s
+                && t_s <= previous
+            {
+                return Err(at(KfGinsErrorKind::TimeNotIncreasing {
+                    column: IMU_COLUMNS[0],
+                    t_s,
+                    previous_t_s: previous,
+                    record: Record::Line,
+                }));
+            }
+            *previous_t_s = Some(t_s);
+            Ok(KfGinsImuRow {
+                t_s,
+                delta_theta_ib_b: [number(1)?, number(2)?, number(3)?],
+                delta_v_ib_b: [number(4)?, number(5)?, number(6)?],
+            })
+        })
+    }
 }
 
 /// Reads a KF-GINS trajectory (`.nav`) file; times are seconds of week.
@@ -217,110 +252,192 @@ pub fn read_truth(path: &Path) -> Result<Vec<Truth>, KfGinsError> {
 
 /// Reads a KF-GINS trajectory from `reader`; `path` names it in errors.
 pub fn read_truth_from<R: BufRead>(reader: R, path: &Path) -> Result<Vec<Truth>, KfGinsError> {
-    let mut rows: Vec<Truth> = Vec::new();
-    let mut week0: Option<f64> = None;
-    for_each_line(reader, path, FileKind::Nav, |fields, at| {
-        let mut v = [0.0_f64; NAV_COLUMNS.len()];
-        for (i, slot) in v.iter_mut().enumerate() {
-            let x = parse(fields[i], NAV_COLUMNS[i]).map_err(at)?;
-            if !x.is_finite() {
-                return Err(at(KfGinsErrorKind::NotFinite {
-                    column: NAV_COLUMNS[i],
-                    found: fields[i].to_owned(),
+    NavReader::new(reader, path).collect()
+}
+
+/// The rows of a KF-GINS trajectory (`.nav`) file, read one at a time. Stops after the first
+/// error.
+#[derive(Debug)]
+pub struct NavReader<R> {
+    lines: DataLines<R>,
+    week0: Option<f64>,
+    previous_t_s: Option<f64>,
+}
+
+impl<R: BufRead> NavReader<R> {
+    /// Reads `reader` from its start; `path` names it in errors.
+    pub fn new(reader: R, path: &Path) -> Self {
+        Self {
+            lines: DataLines::new(reader, path, FileKind::Nav),
+            week0: None,
+            previous_t_s: None,
+        }
+    }
+}
+
+impl<R: BufRead> Iterator for NavReader<R> {
+    type Item = Result<Truth, KfGinsError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let (week0, previous_t_s) = (&mut self.week0, &mut self.previous_t_s);
+        self.lines.next_with(|fields, at| {
+            let mut v = [0.0_f64; NAV_COLUMNS.len()];
+            for (i, slot) in v.iter_mut().enumerate() {
+                let x = parse(fields[i], NAV_COLUMNS[i]).map_err(at)?;
+                if !x.is_finite() {
+                    return Err(at(KfGinsErrorKind::NotFinite {
+                        column: NAV_COLUMNS[i],
+                        found: fields[i].to_owned(),
+                    }));
+                }
+                *slot = x;
+            }
+            let week = v[WEEK];
+            if week < 0.0 || week.fract() != 0.0 {
+                return Err(at(KfGinsErrorKind::BadWeek { week }));
+            }
+            match *week0 {
+                Some(w) if w != week => {
+                    return Err(at(KfGinsErrorKind::WeekChange { from: w, to: week }));
+                }
+                _ => *week0 = Some(week),
+            }
+            check_time(v[SOW], fields[SOW]).map_err(at)?;
+            if let Some(previous) = *previous_t_s
+                && v[SOW] < previous
+            {
+                return Err(at(KfGinsErrorKind::TimeBackwards {
+                    column: NAV_COLUMNS[SOW],
+                    t_s: v[SOW],
+                    previous_t_s: previous,
+                    record: Record::Line,
                 }));
             }
-            *slot = x;
-        }
-        let week = v[WEEK];
-        if week < 0.0 || week.fract() != 0.0 {
-            return Err(at(KfGinsErrorKind::BadWeek { week }));
-        }
-        match week0 {
-            Some(w) if w != week => {
-                return Err(at(KfGinsErrorKind::WeekChange { from: w, to: week }));
+            *previous_t_s = Some(v[SOW]);
+            if !(-90.0..=90.0).contains(&v[LAT]) {
+                return Err(at(KfGinsErrorKind::BadLatitude {
+                    column: NAV_COLUMNS[LAT],
+                    lat_deg: v[LAT],
+                }));
             }
-            _ => week0 = Some(week),
-        }
-        check_time(v[SOW], fields[SOW]).map_err(at)?;
-        if let Some(previous) = rows.last()
-            && v[SOW] < previous.t_s
-        {
-            return Err(at(KfGinsErrorKind::TimeBackwards {
-                column: NAV_COLUMNS[SOW],
+            Ok(Truth {
                 t_s: v[SOW],
-                previous_t_s: previous.t_s,
-                record: Record::Line,
-            }));
-        }
-        if !(-90.0..=90.0).contains(&v[LAT]) {
-            return Err(at(KfGinsErrorKind::BadLatitude {
-                column: NAV_COLUMNS[LAT],
-                lat_deg: v[LAT],
-            }));
-        }
-        rows.push(Truth {
-            t_s: v[SOW],
-            lat: v[LAT].to_radians(),
-            lon: v[LON].to_radians(),
-            h: v[H],
-            v_eb_ned: Vector3::new(v[VEL], v[VEL + 1], v[VEL + 2]),
-            q_b_ned: from_euler(
-                v[ATT].to_radians(),
-                v[ATT + 1].to_radians(),
-                v[ATT + 2].to_radians(),
-            ),
-        });
-        Ok(())
-    })?;
-    Ok(rows)
+                lat: v[LAT].to_radians(),
+                lon: v[LON].to_radians(),
+                h: v[H],
+                v_eb_ned: Vector3::new(v[VEL], v[VEL + 1], v[VEL + 2]),
+                q_b_ned: from_euler(
+                    v[ATT].to_radians(),
+                    v[ATT + 1].to_radians(),
+                    v[ATT + 2].to_radians(),
+                ),
+            })
+        })
+    }
 }
 
 /// Makes an error of the current line.
 type LineError<'a> = &'a dyn Fn(KfGinsErrorKind) -> KfGinsError;
 
-/// Calls `row(fields, at)` for each data line with the right number of fields; `at` makes
-/// an error of that line. Errors when there is no data line.
-fn for_each_line<R: BufRead>(
-    reader: R,
-    path: &Path,
+/// The data lines of a KF-GINS file with the right number of fields, one at a time; the last
+/// line, when no newline ends it, checked for a cut ([`crate::text_stream`]). Errors when there
+/// is no data line; stops after the first error.
+#[derive(Debug)]
+struct DataLines<R> {
+    lines: LineReader<R>,
+    path: PathBuf,
     file: FileKind,
-    mut row: impl FnMut(&[&str], LineError) -> Result<(), KfGinsError>,
-) -> Result<(), KfGinsError> {
-    let width = file.columns().len();
-    let mut any = false;
-    for (index, line) in reader.lines().enumerate() {
-        let line_no = index as u64 + 1;
-        let at = |kind| TextError::new(path, Some(line_no), kind);
-        let line = line.map_err(|e| at(KfGinsErrorKind::Io(e)))?;
-        let text = line.trim().trim_start_matches('\u{feff}');
-        if skipped(text) {
-            continue;
+    cut: CutCheck,
+    any: bool,
+    done: bool,
+}
+
+impl<R: BufRead> DataLines<R> {
+    fn new(reader: R, path: &Path, file: FileKind) -> Self {
+        Self {
+            lines: LineReader::new(reader),
+            path: path.to_owned(),
+            file,
+            cut: CutCheck::default(),
+            any: false,
+            done: false,
         }
-        let values: Vec<&str> = fields(text).collect();
-        let allowed = match file {
-            FileKind::Imu => matches!(values.len(), 7 | 8),
-            FileKind::Nav => values.len() == width,
-        };
-        if !allowed {
-            return Err(at(KfGinsErrorKind::ColumnCount {
-                expected: file.expected().to_owned(),
-                found: values.len(),
-                hint: file.hint(values.len()),
-            }));
-        }
-        row(&values, &at)?;
-        any = true;
     }
-    if any {
-        Ok(())
-    } else {
-        Err(TextError::new(
-            path,
-            None,
-            KfGinsErrorKind::NoData {
-                columns: file.columns(),
-            },
-        ))
+
+    /// `row(fields, at)` of the next data line; `at` makes an error of that line.
+    fn next_with<T>(
+        &mut self,
+        row: impl FnOnce(&[&str], LineError) -> Result<T, KfGinsError>,
+    ) -> Option<Result<T, KfGinsError>> {
+        if self.done {
+            return None;
+        }
+        let result = self.next_line(row);
+        self.done = !matches!(result, Some(Ok(_)));
+        result
+    }
+
+    fn next_line<T>(
+        &mut self,
+        row: impl FnOnce(&[&str], LineError) -> Result<T, KfGinsError>,
+    ) -> Option<Result<T, KfGinsError>> {
+        let (path, file) = (&self.path, self.file);
+        loop {
+            let line = match self.lines.next_line() {
+                None if self.any => return None,
+                None => {
+                    let kind = KfGinsErrorKind::NoData {
+                        columns: file.columns(),
+                    };
+                    return Some(Err(TextError::new(path, None, kind)));
+                }
+                Some(Err((line_no, e))) => {
+                    return Some(Err(TextError::new(
+                        path,
+                        Some(line_no),
+                        KfGinsErrorKind::Io(e),
+                    )));
+                }
+                Some(Ok(line)) => line,
+            };
+            let line_no = line.number;
+            let at = |kind| TextError::new(path, Some(line_no), kind);
+            let text = line.text.trim().trim_start_matches('\u{feff}');
+            if skipped(text) {
+                continue;
+            }
+            let values: Vec<&str> = fields(text).collect();
+            if line.unterminated {
+                let column = |i: usize| {
+                    file.columns()
+                        .get(i)
+                        .copied()
+                        .unwrap_or("odometer")
+                        .to_owned()
+                };
+                let is_number = |_: usize, text: &str| text.parse::<f64>().is_ok();
+                let min_fields = file.columns().len();
+                if let Err(cut) = self.cut.check(&values, min_fields, column, is_number) {
+                    let kind = KfGinsErrorKind::Truncated { line: line_no, cut };
+                    return Some(Err(TextError::new(path, None, kind)));
+                }
+            } else {
+                self.cut.note(values.iter().copied());
+            }
+            let allowed = match file {
+                FileKind::Imu => matches!(values.len(), 7 | 8),
+                FileKind::Nav => values.len() == file.columns().len(),
+            };
+            if !allowed {
+                return Some(Err(at(KfGinsErrorKind::ColumnCount {
+                    expected: file.expected().to_owned(),
+                    found: values.len(),
+                    hint: file.hint(values.len()),
+                })));
+            }
+            self.any = true;
+            return Some(row(&values, &at));
+        }
     }
 }
 
@@ -331,7 +448,8 @@ fn parse(text: &str, column: &'static str) -> Result<f64, KfGinsErrorKind> {
     })
 }
 
-/// A time must be finite and non-negative (it becomes nanoseconds on the recording's clock).
+/// A time must be finite, non-negative and within the recording clock's range (it becomes
+/// nanoseconds on the recording's clock).
 fn check_time(t_s: f64, text: &str) -> Result<(), KfGinsErrorKind> {
     if !t_s.is_finite() {
         Err(KfGinsErrorKind::NotFinite {
@@ -340,6 +458,11 @@ fn check_time(t_s: f64, text: &str) -> Result<(), KfGinsErrorKind> {
         })
     } else if t_s < 0.0 {
         Err(KfGinsErrorKind::NegativeTime { t_s })
+    } else if seconds_to_ns(t_s).is_none() {
+        Err(KfGinsErrorKind::TimeOutOfRange {
+            column: "seconds of week",
+            t_s,
+        })
     } else {
         Ok(())
     }

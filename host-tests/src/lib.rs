@@ -1,11 +1,12 @@
 //! `host-tests`: the desktop harness around `nav-core` and `hal-adapters`.
 //!
-//! A recording's way through the harness: a file ([`imu_csv`], [`psins`] or the project's binary
-//! format) -> [`recording_io::Recording`] -> bytes of the binary format ->
+//! A recording's way through the harness: a file ([`imu_csv`], [`kf_gins`], [`psins`] or the
+//! project's binary format) -> records of the binary format ->
 //! [`hal_adapters::recording::Replay`] (flags NaN samples and bad intervals, measures `dt`) ->
 //! [`pipeline::run`] (static alignment, then strapdown navigation) -> solution log (CSV rows of
-//! [`nav_core::Solution`]). Binary files are replayed straight from disk; CSV and PSINS files are
-//! converted in memory first, so every format goes through the same flagging and `dt` code.
+//! [`nav_core::Solution`]). Binary files are replayed straight from disk; text files are read
+//! line by line and each record encoded as the replay reads it ([`text_recording`]), so every
+//! format goes through the same flagging and `dt` code in memory independent of its length.
 //!
 //! - [`imu_csv`]: the CSV increment format (reader and writer).
 //! - [`psins`]: reader of PSINS `.imu` text recordings.
@@ -20,6 +21,8 @@
 //!   readout file.
 //! - [`text_error`]: the error of the text-format readers and writers (file, line, what went
 //!   wrong).
+//! - [`text_recording`]: CSV, KF-GINS and PSINS files as streams of binary records (replay).
+//! - [`text_stream`]: text files one record at a time, and the test of a cut-off last line.
 //!
 //! The `nav` binary (`src/bin/nav.rs`) is the command-line front end.
 #![deny(unsafe_code)]
@@ -45,6 +48,8 @@ pub mod sensor_model;
 pub mod simulate;
 pub mod simulate_family;
 pub mod text_error;
+pub mod text_recording;
+pub mod text_stream;
 pub mod trajectory;
 pub mod truth;
 pub mod truth_csv;

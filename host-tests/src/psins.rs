@@ -10,7 +10,15 @@
 //! right-forward-up (RFU). The reader converts them to SI (rad, m/s with the header's `g`) and to
 //! the project's forward-right-down (FRD) body axes: `x_frd = y_rfu, y_frd = x_rfu, z_frd =
 //! -z_rfu`.
+//!
+//! The header is checked before any sample: interval, `g` and every scale factor positive, the
+//! interval at least 1 ns, `t0` and each sample's time `t0 + k * interval` within the recording
+//! clock's range, latitude within [-90, 90] deg and longitude within [-180, 180] deg. Samples are
+//! read one line at a time ([`PsinsReader`]); a last line that no newline ends is checked for a
+//! cut inside a field ([`crate::text_stream`]).
 
+use crate::text_error::{Cut, MAX_TIME_S, number_text, seconds_to_ns};
+use crate::text_stream::{CutCheck, LineReader};
 use std::fmt;
 use std::fs::File;
 use std::io::{self, BufRead, BufReader};
@@ -57,6 +65,23 @@ impl PsinsHeader {
     /// Nominal sampling rate [Hz].
     pub fn rate_hz(&self) -> f64 {
         1e3 / self.interval_ms
+    }
+
+    /// The sampling interval rounded to whole nanoseconds [ns] (the reader checked it is at
+    /// least 1 ns and fits the clock).
+    pub fn interval_ns(&self) -> u64 {
+        interval_ns(self.interval_ms).unwrap_or(0)
+    }
+
+    /// `t0` on the recording clock [ns] (the reader checked it fits).
+    pub fn t0_ns(&self) -> u64 {
+        seconds_to_ns(self.t0_s).unwrap_or(0)
+    }
+
+    /// End of sample `k`'s interval (`k` = 1 for the first sample) on the recording clock:
+    /// `t0 + k * interval` [ns], or `None` when it is beyond the clock's range.
+    pub fn sample_end_ns(&self, k: u64) -> Option<u64> {
+        k.checked_mul(self.interval_ns())?.checked_add(self.t0_ns())
     }
 
     /// Converts one line of counts (RFU) to increments in SI, FRD axes.
@@ -132,6 +157,27 @@ pub enum PsinsErrorKind {
         /// The value found.
         found: f64,
     },
+    /// A scale factor is zero or negative.
+    BadScale {
+        /// The sensor axis, e.g. `gyro x`.
+        sensor: &'static str,
+        /// The scale found.
+        found: f64,
+    },
+    /// A sample's time `t0 + k * interval` is beyond the recording clock's range.
+    TimeOutOfRange {
+        /// The sample's number `k` (1 for the first).
+        sample: u64,
+        /// Its time [s].
+        t_s: f64,
+    },
+    /// The file's last line, which no newline ends, looks cut off.
+    Truncated {
+        /// 1-based number of the last line.
+        line: u64,
+        /// Why it looks cut off.
+        cut: Cut,
+    },
     /// A sample line does not hold six integer counts.
     BadCounts {
         /// 1-based field position (1..=6) of the first bad field, 7 for extra fields.
@@ -176,8 +222,25 @@ impl fmt::Display for PsinsError {
                 )
             }
             PsinsErrorKind::BadHeaderValue { what, found } => {
-                write!(f, "header: {what}, found {found}")
+                write!(f, "header: {what}, found {}", number_text(*found))
             }
+            PsinsErrorKind::BadScale { sensor, found } => write!(
+                f,
+                "header line 3: PSINS scale factor {} for {sensor}: scale factors must be \
+                 positive (gyro [arcsec/count], accel [ug*s/count])",
+                number_text(*found)
+            ),
+            PsinsErrorKind::TimeOutOfRange { sample, t_s } => write!(
+                f,
+                "sample {sample} ends at t0 + {sample} * interval = {} s, beyond the \
+                 recording clock's range (0 to {MAX_TIME_S} s, u64 nanoseconds)",
+                number_text(*t_s)
+            ),
+            PsinsErrorKind::Truncated { line, cut } => write!(
+                f,
+                "truncated: last line {line} ends inside a field ({cut}; no newline ends the \
+                 file; if the line is complete, end the file with a newline)"
+            ),
             PsinsErrorKind::BadCounts { field, found } if *field <= 6 => write!(
                 f,
                 "expected 6 integer counts (gyro x y z, accel x y z): field {field} ({}) is not an integer or is missing, in '{found}'",
@@ -201,74 +264,165 @@ impl std::error::Error for PsinsError {
     }
 }
 
-/// Reads a PSINS recording from `path`.
+/// Reads a PSINS recording from `path` into memory (a replay streams it instead:
+/// [`PsinsReader`]).
 pub fn read(path: &Path) -> Result<PsinsRecording, PsinsError> {
     let file = File::open(path).map_err(|e| error(path, None, PsinsErrorKind::Io(e)))?;
     read_from(BufReader::new(file), path)
 }
 
-/// Reads a PSINS recording from `reader`; `path` names it in errors.
+/// Reads a PSINS recording from `reader` into memory; `path` names it in errors.
 pub fn read_from<R: BufRead>(reader: R, path: &Path) -> Result<PsinsRecording, PsinsError> {
-    let mut header_values: Vec<[f64; 6]> = Vec::with_capacity(3);
-    let mut header: Option<PsinsHeader> = None;
-    let mut samples = Vec::new();
-    for (index, line) in reader.lines().enumerate() {
-        let line_no = index as u64 + 1;
-        let at = |kind| error(path, Some(line_no), kind);
-        let line = line.map_err(|e| at(PsinsErrorKind::Io(e)))?;
-        let text = line.trim();
-        if text.is_empty() || text.starts_with('%') {
-            continue;
-        }
-        match &header {
-            Some(h) => {
-                let counts = parse_counts(text).map_err(|field| {
-                    at(PsinsErrorKind::BadCounts {
-                        field,
+    let samples = PsinsReader::new(reader, path)?;
+    let header = *samples.header();
+    Ok(PsinsRecording {
+        header,
+        samples: samples.collect::<Result<_, _>>()?,
+    })
+}
+
+/// The samples of a PSINS file, read one line at a time (memory bounded by the longest line)
+/// after its header. Stops after the first error.
+#[derive(Debug)]
+pub struct PsinsReader<R> {
+    lines: LineReader<R>,
+    path: PathBuf,
+    header: PsinsHeader,
+    /// Samples read so far.
+    count: u64,
+    cut: CutCheck,
+    done: bool,
+}
+
+impl<R: BufRead> PsinsReader<R> {
+    /// Reads and checks the three header lines of `reader`; `path` names it in errors.
+    pub fn new(reader: R, path: &Path) -> Result<Self, PsinsError> {
+        let mut lines = LineReader::new(reader);
+        let mut values: Vec<[f64; 6]> = Vec::with_capacity(3);
+        while values.len() < 3 {
+            let which = values.len() + 1;
+            let line = match lines.next_line() {
+                None => {
+                    return Err(error(path, None, PsinsErrorKind::MissingHeader { which }));
+                }
+                Some(Err((line_no, e))) => {
+                    return Err(error(path, Some(line_no), PsinsErrorKind::Io(e)));
+                }
+                Some(Ok(line)) => line,
+            };
+            let at = |kind| error(path, Some(line.number), kind);
+            let text = line.text.trim();
+            if text.is_empty() || text.starts_with('%') {
+                continue;
+            }
+            let v = parse_six::<f64>(text)
+                .filter(|v| v.iter().all(|x| x.is_finite()))
+                .ok_or_else(|| {
+                    at(PsinsErrorKind::BadHeaderLine {
+                        which,
+                        expected: HEADER_EXPECTED[which - 1],
                         found: text.to_owned(),
                     })
                 })?;
-                samples.push(h.convert(counts));
+            match which {
+                2 => check_line_2(&v).map_err(at)?,
+                3 => check_line_3(&v).map_err(at)?,
+                _ => {}
             }
-            None => {
-                let which = header_values.len() + 1;
-                let values = parse_six::<f64>(text)
-                    .filter(|v| v.iter().all(|x| x.is_finite()))
-                    .ok_or_else(|| {
-                        at(PsinsErrorKind::BadHeaderLine {
-                            which,
-                            expected: HEADER_EXPECTED[which - 1],
-                            found: text.to_owned(),
-                        })
-                    })?;
-                if which == 2 {
-                    check_line_2(&values).map_err(at)?;
+            values.push(v);
+        }
+        Ok(Self {
+            lines,
+            path: path.to_owned(),
+            header: build_header(&values),
+            count: 0,
+            cut: CutCheck::default(),
+            done: false,
+        })
+    }
+
+    /// The header.
+    pub fn header(&self) -> &PsinsHeader {
+        &self.header
+    }
+
+    fn next_sample(&mut self) -> Option<Result<PsinsSample, PsinsError>> {
+        let path = &self.path;
+        loop {
+            let line = match self.lines.next_line()? {
+                Err((line_no, e)) => {
+                    return Some(Err(error(path, Some(line_no), PsinsErrorKind::Io(e))));
                 }
-                header_values.push(values);
-                if header_values.len() == 3 {
-                    header = Some(build_header(&header_values));
-                }
+                Ok(line) => line,
+            };
+            let line_no = line.number;
+            let at = |kind| error(path, Some(line_no), kind);
+            let text = line.text.trim();
+            if text.is_empty() || text.starts_with('%') {
+                continue;
             }
+            if line.unterminated {
+                let fields: Vec<&str> = text.split_whitespace().collect();
+                let column = |i: usize| COUNT_NAMES.get(i).copied().unwrap_or("extra").to_owned();
+                let is_count = |_: usize, t: &str| t.parse::<i64>().is_ok();
+                if let Err(cut) = self.cut.check(&fields, 6, column, is_count) {
+                    return Some(Err(error(
+                        path,
+                        None,
+                        PsinsErrorKind::Truncated { line: line_no, cut },
+                    )));
+                }
+            } else {
+                self.cut.note(text.split_whitespace());
+            }
+            let counts = match parse_counts(text) {
+                Ok(counts) => counts,
+                Err(field) => {
+                    return Some(Err(at(PsinsErrorKind::BadCounts {
+                        field,
+                        found: text.to_owned(),
+                    })));
+                }
+            };
+            self.count += 1;
+            // The sample's interval ends at t0 + count * interval: it must be on the clock.
+            if self.header.sample_end_ns(self.count).is_none() {
+                return Some(Err(at(PsinsErrorKind::TimeOutOfRange {
+                    sample: self.count,
+                    t_s: self.header.t0_s + self.count as f64 * self.header.interval_s(),
+                })));
+            }
+            return Some(Ok(self.header.convert(counts)));
         }
     }
-    match header {
-        Some(header) => Ok(PsinsRecording { header, samples }),
-        None => Err(error(
-            path,
-            None,
-            PsinsErrorKind::MissingHeader {
-                which: header_values.len() + 1,
-            },
-        )),
+}
+
+impl<R: BufRead> Iterator for PsinsReader<R> {
+    type Item = Result<PsinsSample, PsinsError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        let sample = self.next_sample();
+        self.done = !matches!(sample, Some(Ok(_)));
+        sample
     }
 }
 
 /// Domain checks of header line 2 (position, time, interval, g).
 fn check_line_2(v: &[f64; 6]) -> Result<(), PsinsErrorKind> {
-    let [lat_deg, _, _, t0_s, interval_ms, g_mps2] = *v;
+    let [lat_deg, lon_deg, _, t0_s, interval_ms, g_mps2] = *v;
     let bad = |what, found| Err(PsinsErrorKind::BadHeaderValue { what, found });
     if interval_ms <= 0.0 {
         return bad("the sampling interval [ms] must be positive", interval_ms);
+    }
+    if interval_ns(interval_ms).is_none() {
+        return bad(
+            "the sampling interval [ms] must be at least 1 ns and within the recording \
+             clock's range",
+            interval_ms,
+        );
     }
     if g_mps2 <= 0.0 {
         return bad("g [m/s^2] must be positive", g_mps2);
@@ -276,10 +430,38 @@ fn check_line_2(v: &[f64; 6]) -> Result<(), PsinsErrorKind> {
     if t0_s < 0.0 {
         return bad("t0 [s] must not be negative", t0_s);
     }
+    if seconds_to_ns(t0_s).is_none() {
+        return bad(
+            "t0 [s] must be within the recording clock's range (0 to 18446744073.709553 s, \
+             u64 nanoseconds)",
+            t0_s,
+        );
+    }
     if !(-90.0..=90.0).contains(&lat_deg) {
         return bad("latitude [deg] must be within [-90, 90]", lat_deg);
     }
+    if !(-180.0..=180.0).contains(&lon_deg) {
+        return bad("longitude [deg] must be within [-180, 180]", lon_deg);
+    }
     Ok(())
+}
+
+/// Domain check of header line 3: every scale factor positive (a zero scale turns every count
+/// into 0, a negative one flips an axis).
+fn check_line_3(v: &[f64; 6]) -> Result<(), PsinsErrorKind> {
+    match v.iter().position(|&x| x <= 0.0) {
+        Some(i) => Err(PsinsErrorKind::BadScale {
+            sensor: COUNT_NAMES[i],
+            found: v[i],
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The sampling interval `interval_ms` [ms] in whole nanoseconds, or `None` when it rounds to
+/// 0 or does not fit the clock.
+fn interval_ns(interval_ms: f64) -> Option<u64> {
+    seconds_to_ns(interval_ms * 1e-3).filter(|&ns| ns > 0)
 }
 
 fn build_header(v: &[[f64; 6]]) -> PsinsHeader {

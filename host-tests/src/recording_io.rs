@@ -1,15 +1,23 @@
 //! Recordings on disk: format detection, the common in-memory form, the binary writer and the
 //! replay sources.
 //!
-//! Every format is read into a [`Recording`] (the binary format's header values and records). For
-//! a replay, binary files are read straight from disk by [`Replay`]; CSV, PSINS and KF-GINS
-//! recordings are encoded into the binary format in memory and replayed from there, so the sample
-//! flags and the measured `dt` come from the same code whatever the input format.
+//! Every format can be read into a [`Recording`] (the binary format's header values and records).
+//! For a replay, binary files are read straight from disk by [`Replay`]; CSV, PSINS and KF-GINS
+//! files are read from disk too, one line at a time, each record encoded into the binary format
+//! as the replay reads it ([`text_recording`]), so the sample flags and the measured `dt` come
+//! from the same code whatever the input format, in memory independent of the file's length.
 //!
 //! Conversion of timed increments to the binary format: `t_ns = round(t_s * 1e9)` (the end of each
-//! interval); the nominal rate is `1 / median interval` (CSV, KF-GINS) or the PSINS header's; the
-//! header's `t0_ns` (start of the first interval) is `t_ns[0] - round(nominal period)`.
+//! interval); the nominal rate is `1 / median interval` over the first
+//! [`RATE_PREFIX_RECORDS`] records (CSV, KF-GINS) or the PSINS header's; the header's `t0_ns`
+//! (start of the first interval) is `t_ns[0] - round(nominal period)`, or the PSINS `t0`.
 
+use crate::psins::PsinsHeader;
+use crate::text_error::{MAX_TIME_S, seconds_to_ns};
+use crate::text_recording::{
+    self, HeaderScan, RATE_PREFIX_RECORDS, TextRecordError, TextRecords, TextReplay,
+    rate_from_times,
+};
 use crate::{imu_csv, kf_gins, psins};
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use core::convert::Infallible;
@@ -129,40 +137,38 @@ impl Recording {
 
     /// Builds a recording of increments from a CSV file's rows (see the module docs).
     pub fn from_csv(csv: &imu_csv::ImuCsv) -> Result<Self> {
-        ensure!(
-            csv.rows.len() >= 2,
-            "at least 2 samples are needed to find the sampling rate"
-        );
-        let t_ns: Vec<u64> = csv.rows.iter().map(|r| seconds_to_ns(r.t_s)).collect();
-        let mut intervals: Vec<i128> = t_ns
-            .windows(2)
-            .map(|w| i128::from(w[1]) - i128::from(w[0]))
-            .collect();
-        intervals.sort_unstable();
-        let n = intervals.len();
-        let median_ns = if n % 2 == 1 {
-            intervals[n / 2] as f64
-        } else {
-            (intervals[n / 2 - 1] + intervals[n / 2]) as f64 / 2.0
-        };
-        ensure!(
-            median_ns > 0.0,
-            "the median sampling interval is {median_ns} ns: time does not increase"
-        );
-        let rate_hz = 1e9 / median_ns;
         let records = csv
             .rows
             .iter()
-            .zip(&t_ns)
-            .map(|(r, &t_ns)| Record {
-                t_ns,
-                gyro: r.delta_theta_ib_b,
-                accel: r.delta_v_ib_b,
-                temperature_c: r.temperature_c,
+            .enumerate()
+            .map(|(i, r)| {
+                let t_ns = seconds_to_ns(r.t_s).ok_or_else(|| {
+                    anyhow!(
+                        "row {}: time {} s is not on the recording clock (0 to {MAX_TIME_S} s)",
+                        i + 1,
+                        r.t_s
+                    )
+                })?;
+                Ok(Record {
+                    t_ns,
+                    gyro: r.delta_theta_ib_b,
+                    accel: r.delta_v_ib_b,
+                    temperature_c: r.temperature_c,
+                })
             })
+            .collect::<Result<Vec<_>>>()?;
+        Self::timed(records)
+    }
+
+    /// A recording of increments `records`, rate and `t0` from their first times (see the
+    /// module docs).
+    fn timed(records: Vec<Record>) -> Result<Self> {
+        let prefix: Vec<u64> = records
+            .iter()
+            .take(RATE_PREFIX_RECORDS)
+            .map(|r| r.t_ns)
             .collect();
-        // A first sample at t = 0 gives t0 = 0: its zero interval is flagged on replay.
-        let t0_ns = t_ns[0].saturating_sub(median_ns.round() as u64);
+        let (rate_hz, t0_ns) = rate_from_times(&prefix)?;
         Ok(Self {
             kind: Kind::Increments,
             rate_hz,
@@ -172,27 +178,30 @@ impl Recording {
     }
 
     /// Builds a recording of increments from a PSINS file (see the module docs).
-    pub fn from_psins(p: &psins::PsinsRecording) -> Self {
-        let period_ns = (p.header.interval_ms * 1e6).round() as u64;
-        let t0_ns = seconds_to_ns(p.header.t0_s);
+    pub fn from_psins(p: &psins::PsinsRecording) -> Result<Self> {
         let to_f32 = |v: [f64; 3]| v.map(|x| x as f32);
         let records = p
             .samples
             .iter()
             .zip(1_u64..)
-            .map(|(s, k)| Record {
-                t_ns: t0_ns + k * period_ns,
-                gyro: to_f32(s.delta_theta_ib_b),
-                accel: to_f32(s.delta_v_ib_b),
-                temperature_c: f32::NAN,
+            .map(|(s, k)| {
+                let t_ns = p.header.sample_end_ns(k).ok_or_else(|| {
+                    anyhow!("sample {k}: t0 + {k} * interval is beyond the recording clock")
+                })?;
+                Ok(Record {
+                    t_ns,
+                    gyro: to_f32(s.delta_theta_ib_b),
+                    accel: to_f32(s.delta_v_ib_b),
+                    temperature_c: f32::NAN,
+                })
             })
-            .collect();
-        Self {
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Self {
             kind: Kind::Increments,
             rate_hz: p.header.rate_hz(),
-            t0_ns,
+            t0_ns: p.header.t0_ns(),
             records,
-        }
+        })
     }
 
     /// Builds a recording of increments from a KF-GINS IMU file (as from CSV: rate from the median
@@ -225,23 +234,33 @@ impl Recording {
     }
 }
 
-/// `round(t_s * 1e9)` [ns]; `t_s` must be finite and non-negative (the readers check it).
-fn seconds_to_ns(t_s: f64) -> u64 {
-    (t_s * 1e9).round() as u64
-}
-
 /// Reads any recording file into memory (format from [`detect`]). Errors name the file and the
-/// line or byte offset.
+/// line or byte offset. Text files are read as a replay reads them ([`text_recording`]), so the
+/// header found is the same.
 pub fn read(path: &Path) -> Result<Recording> {
+    let context = || format!("recording {}", path.display());
     match detect(path)? {
-        Format::Csv => {
-            let csv = imu_csv::read(path)?;
-            Recording::from_csv(&csv).with_context(|| format!("recording {}", path.display()))
-        }
-        Format::Psins => Ok(Recording::from_psins(&psins::read(path)?)),
-        Format::KfGins => Recording::from_kf_gins(&kf_gins::read_imu(path)?)
-            .with_context(|| format!("recording {}", path.display())),
         Format::Binary => read_binary(path),
+        format => {
+            let file = File::open(path).with_context(context)?;
+            let mut records = TextRecords::new(format, BufReader::new(file), path)?;
+            let mut scan = HeaderScan::new(&records);
+            let all = records
+                .by_ref()
+                .map(|r| {
+                    let r = r?;
+                    scan.push(&r);
+                    Ok(r)
+                })
+                .collect::<Result<Vec<_>, TextRecordError>>()?;
+            let header = scan.finish().with_context(context)?;
+            Ok(Recording {
+                kind: header.kind,
+                rate_hz: header.rate_hz,
+                t0_ns: header.t0_ns,
+                records: all,
+            })
+        }
     }
 }
 
@@ -397,7 +416,10 @@ impl From<ReplayError<std::io::Error>> for SourceError {
 pub enum ReplaySource {
     /// A binary file, read from disk as it goes.
     File(Replay<StdReader>),
-    /// A CSV, PSINS or KF-GINS recording converted to the binary format in memory.
+    /// A CSV, PSINS or KF-GINS file, read from disk as it goes (after a first pass that checked
+    /// it), each record encoded to the binary format as it is read; with the PSINS header.
+    Text(Box<TextReplay<BufReader<File>>>, Option<PsinsHeader>),
+    /// A recording in memory, encoded to the binary format.
     Memory(Replay<MemReader>),
 }
 
@@ -473,7 +495,9 @@ impl ReplaySource {
                 Self::File(replay)
             }
             Format::Csv | Format::Psins | Format::KfGins => {
-                Self::from_recording(&read(path)?).with_context(context)?
+                let (replay, psins) =
+                    text_recording::replay(format, path, || File::open(path).map(BufReader::new))?;
+                Self::Text(Box::new(replay), psins)
             }
         };
         Ok((source, format))
@@ -491,7 +515,16 @@ impl ReplaySource {
     pub fn header(&self) -> &Header {
         match self {
             Self::File(r) => r.header(),
+            Self::Text(r, _) => r.header(),
             Self::Memory(r) => r.header(),
+        }
+    }
+
+    /// The PSINS file's header (its site, start time and scales), for a PSINS recording.
+    pub fn psins_header(&self) -> Option<&PsinsHeader> {
+        match self {
+            Self::Text(_, psins) => psins.as_ref(),
+            _ => None,
         }
     }
 
@@ -499,6 +532,7 @@ impl ReplaySource {
     pub fn stats(&self) -> ReplayStats {
         match self {
             Self::File(r) => r.stats(),
+            Self::Text(r, _) => r.stats(),
             Self::Memory(r) => r.stats(),
         }
     }
@@ -510,6 +544,7 @@ impl Imu for ReplaySource {
     fn read_sample(&mut self) -> Result<Option<ImuSample>, SourceError> {
         match self {
             Self::File(r) => r.read_sample().map_err(SourceError::from),
+            Self::Text(r, _) => r.read_sample().map_err(SourceError::from),
             Self::Memory(r) => r
                 .read_sample()
                 .map_err(|e| SourceError::Format(format_error(e))),

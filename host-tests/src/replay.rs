@@ -1,7 +1,9 @@
 //! A recording file replayed end to end: open (any format), run the [`pipeline`] in the chosen
-//! precision, attach the replay's counters, and name the file in every error.
+//! precision, attach the replay's counters, and name the file in every error. A PSINS file's
+//! header site must be within [`PSINS_SITE_TOLERANCE_M`] of the run's `--lat/--lon`.
 
 use crate::pipeline::{self, Report, RunConfig, SourceCounters, sensor_noise};
+use crate::psins::PsinsHeader;
 use crate::recording_io::{Format, ReplaySource, in_file};
 use anyhow::{Result, anyhow};
 use hal_adapters::Imu;
@@ -86,6 +88,9 @@ pub fn replay_file<T: Scalar, W: Write>(
     out: W,
 ) -> Result<FileReport> {
     let (mut source, format) = ReplaySource::open(path)?;
+    if let Some(h) = source.psins_header() {
+        check_psins_site(path, h, &options.run)?;
+    }
     let rate_hz = source.header().rate_hz;
     let config = (&options.run, rate_hz);
     let stats = match options.device {
@@ -128,6 +133,44 @@ pub fn replay_file<T: Scalar, W: Write>(
         rate_hz,
         report,
     })
+}
+
+/// Farthest a PSINS header's site may be from the run's `--lat/--lon` [m].
+pub const PSINS_SITE_TOLERANCE_M: f64 = 1000.0;
+
+/// Refuses a PSINS recording whose header site (latitude, longitude) is more than
+/// [`PSINS_SITE_TOLERANCE_M`] from the run's: one of the two is wrong, and the alignment would
+/// use the run's without a word.
+fn check_psins_site(path: &Path, h: &PsinsHeader, run: &RunConfig) -> Result<()> {
+    let distance_m = horizontal_distance_m(
+        (h.lat_deg.to_radians(), h.lon_deg.to_radians()),
+        (run.lat_deg.to_radians(), run.lon_deg.to_radians()),
+    );
+    if distance_m > PSINS_SITE_TOLERANCE_M {
+        return Err(anyhow!(
+            "recording {}: the PSINS header's site ({} deg, {} deg) is {:.0} m from --lat {} \
+             --lon {} (more than {PSINS_SITE_TOLERANCE_M} m): pass the header's position or \
+             correct the header",
+            path.display(),
+            h.lat_deg,
+            h.lon_deg,
+            distance_m,
+            run.lat_deg,
+            run.lon_deg
+        ));
+    }
+    Ok(())
+}
+
+/// Great-circle distance [m] between two (latitude, longitude) [rad] points (haversine), on the
+/// sphere of the Gaussian radius `sqrt(R_N R_E)` at their mean latitude (radii of curvature
+/// [Groves, eqs. 2.105-2.106]): within 0.5 % of the ellipsoidal distance, enough for a
+/// plausibility bound.
+fn horizontal_distance_m((lat_a, lon_a): (f64, f64), (lat_b, lon_b): (f64, f64)) -> f64 {
+    let (r_n, r_e) = nav_core::earth::radii(0.5 * (lat_a + lat_b));
+    let hav = |x: f64| (0.5 * x).sin().powi(2);
+    let a = hav(lat_b - lat_a) + lat_a.cos() * lat_b.cos() * hav(lon_b - lon_a);
+    2.0 * (r_n * r_e).sqrt() * a.sqrt().min(1.0).asin()
 }
 
 /// Runs the pipeline over `source`, naming `path` in its errors.

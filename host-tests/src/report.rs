@@ -334,6 +334,11 @@ pub struct Trajectory {
 /// Reads a trajectory: a CSV with the solution log's header (truth files, `nav replay` logs) or a
 /// KF-GINS `.nav` file (first data line all numbers). Shows a progress bar for large files when
 /// `progress` is set and stderr is a terminal.
+///
+/// The readers stream ([`truth_csv::TruthReader`], [`kf_gins::NavReader`]); the rows are held
+/// here because the comparison's result holds one error sample per solution row anyway (the
+/// statistics, the table at chosen times and the plots are made from the whole series), and the
+/// truth is interpolated at each solution time by a search over all its rows.
 pub fn read_trajectory(path: &Path, progress: bool) -> Result<Vec<Truth>> {
     Ok(read_trajectory_file(path, progress)?.rows)
 }

@@ -1,14 +1,89 @@
 //! The error of the text-format readers and writers ([`crate::imu_csv`], [`crate::truth_csv`],
 //! [`crate::kf_gins`], [`crate::oscillator::file`]): the file, the line (for content errors) and
-//! what went wrong.
+//! what went wrong; and the conversion of a text time to the recording clock
+//! ([`seconds_to_ns`]).
 //!
 //! Messages read `<path>: line <n>: <what>` (no line for errors about the whole file). Where two
 //! formats word the same case differently, the kind carries what differs (the column's name, the
 //! expected header, whether records are rows or lines).
 
 use std::fmt;
-use std::io::{self, Read};
+use std::io;
 use std::path::{Path, PathBuf};
+
+/// The largest time the recording clock holds [s]: `u64::MAX` nanoseconds (about 584 years).
+/// The binary format's `t_ns` and the samples' `t_us` derive from it.
+pub const MAX_TIME_S: f64 = 18_446_744_073.709_553;
+
+/// `round(t_s * 1e9)` [ns] on the recording clock, or `None` for a time that is not finite, is
+/// negative or is beyond [`MAX_TIME_S`] (a cast would saturate or wrap silently).
+pub fn seconds_to_ns(t_s: f64) -> Option<u64> {
+    // 2^64 is exactly representable in f64; anything rounding to it or above does not fit.
+    const TWO_POW_64: f64 = 18_446_744_073_709_551_616.0;
+    let ns = (t_s * 1e9).round();
+    (t_s.is_finite() && t_s >= 0.0 && ns < TWO_POW_64).then_some(ns as u64)
+}
+
+/// `x` as a message shows it: `{}`, but in exponent form when very large or very small (`1e300`,
+/// not 301 digits).
+pub fn number_text(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-6..1e15).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+/// Why the last line of a file, which no newline ends, looks cut off inside a field. A line that
+/// ends with a newline is complete; one that does not is checked against the lines before it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Cut {
+    /// It has fewer fields than a line of the file needs.
+    Fields {
+        /// Fields found.
+        found: usize,
+        /// Fields a line has (the header's, or the line before's).
+        expected: usize,
+    },
+    /// Its last field is not a number (e.g. `1.5e` or `-`).
+    NotANumber {
+        /// Name of the last field's column.
+        column: String,
+        /// The field's text.
+        found: String,
+    },
+    /// Its last field has fewer characters than that column's field on every line before it.
+    Shorter {
+        /// Name of the last field's column.
+        column: String,
+        /// The field's text.
+        found: String,
+        /// The fewest characters of that column's fields on the lines before.
+        shortest: usize,
+    },
+}
+
+impl fmt::Display for Cut {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Fields { found, expected } => {
+                write!(f, "it has {found} of the {expected} fields of a line")
+            }
+            Self::NotANumber { column, found } => {
+                write!(f, "column {column}: '{found}' is not a number")
+            }
+            Self::Shorter {
+                column,
+                found,
+                shortest,
+            } => write!(
+                f,
+                "column {column}: '{found}' has {} characters, the lines before at least {shortest}",
+                found.chars().count()
+            ),
+        }
+    }
+}
 
 /// A reading or writing error, naming the file and (for content errors) the line.
 #[derive(Debug)]
@@ -177,6 +252,20 @@ pub enum TextErrorKind {
         /// What a record is called.
         record: Record,
     },
+    /// A time is beyond the recording clock's range: `u64` nanoseconds, [`MAX_TIME_S`].
+    TimeOutOfRange {
+        /// Column name.
+        column: &'static str,
+        /// The time found [s].
+        t_s: f64,
+    },
+    /// The file's last line, which no newline ends, looks cut off (see [`Cut`]).
+    Truncated {
+        /// 1-based number of the last line.
+        line: u64,
+        /// Why it looks cut off.
+        cut: Cut,
+    },
     /// Malformed CSV (quoting, invalid UTF-8).
     Syntax(String),
     /// The file could not be opened, read or written.
@@ -209,33 +298,6 @@ impl TextError {
             other => TextErrorKind::Syntax(format!("{other:?}")),
         };
         Self::new(path, line, kind)
-    }
-}
-
-/// Starts reading CSV from `reader` as the project's CSV formats do (the header is the caller's
-/// to check, rows may have any length, fields are trimmed): the first row (the header) and the
-/// rows after it. A file without a row is [`TextErrorKind::MissingHeader`], `expected` naming the
-/// header row; `path` names the file in errors.
-pub fn csv_header<R: Read>(
-    reader: R,
-    path: &Path,
-    expected: &str,
-) -> Result<(csv::StringRecord, csv::StringRecordsIntoIter<R>), TextError> {
-    let mut records = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .from_reader(reader)
-        .into_records();
-    match records.next() {
-        None => Err(TextError::new(
-            path,
-            None,
-            TextErrorKind::MissingHeader {
-                expected: expected.to_owned(),
-            },
-        )),
-        Some(header) => Ok((header.map_err(|e| TextError::from_csv(path, e))?, records)),
     }
 }
 
@@ -366,6 +428,17 @@ impl fmt::Display for TextErrorKind {
                 "column {column}: time goes backwards: {t_s} s after {previous_t_s} s on the \
                  previous {record}"
             ),
+            Self::TimeOutOfRange { column, t_s } => write!(
+                f,
+                "column {column}: time {} s is beyond the recording clock's range (0 to \
+                 {MAX_TIME_S} s, u64 nanoseconds)",
+                number_text(*t_s)
+            ),
+            Self::Truncated { line, cut } => write!(
+                f,
+                "truncated: last line {line} ends inside a field ({cut}; no newline ends the \
+                 file; if the line is complete, end the file with a newline)"
+            ),
             Self::Syntax(msg) => write!(f, "malformed CSV: {msg}"),
             Self::Io(e) => write!(f, "{e}"),
         }
@@ -407,12 +480,17 @@ mod tests {
         let e = TextError::io(path, io::Error::other("disk full"));
         assert_eq!(e.to_string(), "f.csv: disk full");
         assert!(e.source().is_some());
-        let Err(e) = csv_header(&b""[..], path, "a,b") else {
-            panic!("an empty file has no header");
-        };
-        assert_eq!(
-            e.to_string(),
-            "f.csv: empty file: expected the header row 'a,b'"
-        );
+    }
+
+    #[test]
+    fn times_beyond_the_clock_do_not_convert() {
+        assert_eq!(seconds_to_ns(0.0025), Some(2_500_000));
+        assert_eq!(seconds_to_ns(1.8e10), Some(18_000_000_000_000_000_000));
+        assert_eq!(number_text(1e300), "1e300");
+        assert_eq!(number_text(2e10), "20000000000");
+        assert_eq!(number_text(-0.0025), "-0.0025");
+        for t_s in [MAX_TIME_S, 1e300, f64::INFINITY, f64::NAN, -1e-9] {
+            assert_eq!(seconds_to_ns(t_s), None, "{t_s}");
+        }
     }
 }

@@ -11,21 +11,23 @@
 //! columns appended later (or in another order) are ignored.
 //!
 //! Every value must be a finite number, the latitude within [-90, 90] deg, and time must not go
-//! backwards (equal times are allowed).
+//! backwards (equal times are allowed). Rows are read one at a time ([`TruthReader`]); a last
+//! line that no newline ends is checked for a cut inside a field ([`crate::text_stream`]).
 //!
 //! The writer prints floats in their shortest round-trip form, so degrees keep the full f64
 //! resolution (1.4e-14 deg at 100 deg, 2 nm on the Earth). Reading back is exact for time, height
 //! and velocity; latitude, longitude and attitude pass through the deg <-> rad conversion and the
 //! Euler angles, which round to within a few ulp (below 1e-12 deg).
 
-use crate::text_error::{Record, TextError, TextErrorKind, csv_header};
+use crate::text_error::{Record, TextError, TextErrorKind};
+use crate::text_stream::{CsvRecords, CutCheck};
 use crate::truth::Truth;
 use nav_core::Vector3;
 use nav_core::attitude::{euler, from_euler};
 use nav_core::output::CSV_HEADER;
 use std::fs::File;
 use std::io::{self, BufReader, Read, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The column names, in the order the writer uses (nav-core's [`CSV_HEADER`]).
 pub const COLUMNS: [&str; 10] = [
@@ -109,23 +111,44 @@ pub fn write(path: &Path, rows: &[Truth]) -> Result<(), TruthCsvError> {
     Ok(())
 }
 
-/// Reads a trajectory (truth file or solution log) from `path`.
+/// Reads a trajectory (truth file or solution log) from `path` into memory.
 pub fn read(path: &Path) -> Result<Vec<Truth>, TruthCsvError> {
     let file = File::open(path).map_err(|e| TextError::io(path, e))?;
     read_from(BufReader::new(file), path)
 }
 
-/// Reads a trajectory from `reader`; `path` names it in errors.
+/// Reads a trajectory from `reader` into memory; `path` names it in errors.
 pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<Vec<Truth>, TruthCsvError> {
-    let (header, records) = csv_header(reader, path, CSV_HEADER)?;
-    let header_line = header.position().map(|p| p.line());
-    // Field index of each required column.
-    let mut index = [0_usize; COLUMNS.len()];
-    for (slot, &name) in index.iter_mut().zip(&COLUMNS) {
-        *slot = header
+    TruthReader::new(reader, path)?.collect()
+}
+
+/// The rows of a trajectory CSV, read one at a time (memory bounded by the longest line). Stops
+/// after the first error.
+#[derive(Debug)]
+pub struct TruthReader<R: Read> {
+    records: CsvRecords<R>,
+    path: PathBuf,
+    /// Field index of each of [`COLUMNS`].
+    index: [usize; COLUMNS.len()],
+    /// The header's names (for a cut-off last line).
+    names: Vec<String>,
+    previous_t_s: Option<f64>,
+    cut: CutCheck,
+    done: bool,
+}
+
+impl<R: Read> TruthReader<R> {
+    /// Reads the header of `reader` and finds the columns; `path` names it in errors.
+    pub fn new(reader: R, path: &Path) -> Result<Self, TruthCsvError> {
+        let (records, header) = CsvRecords::new(reader, path, CSV_HEADER)?;
+        let header_line = header.position().map(|p| p.line());
+        let names: Vec<String> = header
             .iter()
-            .position(|h| h.trim_start_matches('\u{feff}') == name)
-            .ok_or_else(|| {
+            .map(|h| h.trim_start_matches('\u{feff}').to_owned())
+            .collect();
+        let mut index = [0_usize; COLUMNS.len()];
+        for (slot, &name) in index.iter_mut().zip(&COLUMNS) {
+            *slot = names.iter().position(|h| h == name).ok_or_else(|| {
                 TextError::new(
                     path,
                     header_line,
@@ -136,55 +159,103 @@ pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<Vec<Truth>, TruthCsv
                     },
                 )
             })?;
+        }
+        Ok(Self {
+            records,
+            path: path.to_owned(),
+            index,
+            names,
+            previous_t_s: None,
+            cut: CutCheck::default(),
+            done: false,
+        })
     }
 
-    let mut rows: Vec<Truth> = Vec::new();
-    for record in records {
-        let record = record.map_err(|e| TextError::from_csv(path, e))?;
-        let line = record.position().map(|p| p.line());
-        let at = |kind| TextError::new(path, line, kind);
+    fn next_row(&mut self) -> Option<Result<Truth, TruthCsvError>> {
+        let line = match self.records.next_record()? {
+            Ok(line) => line,
+            Err(e) => return Some(Err(e)),
+        };
+        let path = &self.path;
+        let record = line.record;
+        let at = |kind| TextError::new(path, Some(line.line), kind);
+        if line.unterminated {
+            let fields: Vec<&str> = record.iter().collect();
+            let names = &self.names;
+            let column = |i: usize| {
+                names
+                    .get(i)
+                    .cloned()
+                    .unwrap_or_else(|| format!("{}", i + 1))
+            };
+            // Only the required columns must be numbers; others are the writer's business.
+            let index = &self.index;
+            let is_number = |i: usize, t: &str| !index.contains(&i) || t.parse::<f64>().is_ok();
+            if let Err(cut) = self.cut.check(&fields, names.len(), column, is_number) {
+                let kind = TruthCsvErrorKind::Truncated {
+                    line: line.line,
+                    cut,
+                };
+                return Some(Err(TextError::new(path, None, kind)));
+            }
+        } else {
+            self.cut.note(record.iter());
+        }
         let mut values = [0.0_f64; COLUMNS.len()];
         for (c, value) in values.iter_mut().enumerate() {
             let column = COLUMNS[c];
-            let text = record.get(index[c]).ok_or_else(|| {
-                at(TruthCsvErrorKind::MissingColumn {
+            let Some(text) = record.get(self.index[c]) else {
+                return Some(Err(at(TruthCsvErrorKind::MissingColumn {
                     column,
                     found: record.len(),
-                })
-            })?;
-            let x: f64 = text.parse().map_err(|_| {
-                at(TruthCsvErrorKind::NotANumber {
+                })));
+            };
+            let Ok(x) = text.parse::<f64>() else {
+                return Some(Err(at(TruthCsvErrorKind::NotANumber {
                     column,
                     found: text.to_owned(),
-                })
-            })?;
+                })));
+            };
             if !x.is_finite() {
-                return Err(at(TruthCsvErrorKind::NotFinite {
+                return Some(Err(at(TruthCsvErrorKind::NotFinite {
                     column,
                     found: text.to_owned(),
-                }));
+                })));
             }
             *value = x;
         }
         if !(-90.0..=90.0).contains(&values[LAT]) {
-            return Err(at(TruthCsvErrorKind::BadLatitude {
+            return Some(Err(at(TruthCsvErrorKind::BadLatitude {
                 column: COLUMNS[LAT],
                 lat_deg: values[LAT],
-            }));
+            })));
         }
-        if let Some(previous) = rows.last()
-            && values[T] < previous.t_s
+        if let Some(previous) = self.previous_t_s
+            && values[T] < previous
         {
-            return Err(at(TruthCsvErrorKind::TimeBackwards {
+            return Some(Err(at(TruthCsvErrorKind::TimeBackwards {
                 column: COLUMNS[T],
                 t_s: values[T],
-                previous_t_s: previous.t_s,
+                previous_t_s: previous,
                 record: Record::Row,
-            }));
+            })));
         }
-        rows.push(truth_from_degrees(&values));
+        self.previous_t_s = Some(values[T]);
+        Some(Ok(truth_from_degrees(&values)))
     }
-    Ok(rows)
+}
+
+impl<R: Read> Iterator for TruthReader<R> {
+    type Item = Result<Truth, TruthCsvError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        let row = self.next_row();
+        self.done = !matches!(row, Some(Ok(_)));
+        row
+    }
 }
 
 /// The [`Truth`] of one row of values in the file's units, in [`COLUMNS`] order.

@@ -767,10 +767,11 @@ fn run(cli: Cli) -> Result<()> {
             precision,
         } => {
             use host_tests::oscillator::{file as osc_file, replay};
-            let rows = osc_file::read(&file)?;
-            let run = |w: Option<&mut dyn std::io::Write>| match precision {
-                Precision::F32 => replay::replay::<f32>(&rows, f0_hz, !seed_method, w),
-                Precision::F64 => replay::replay::<f64>(&rows, f0_hz, !seed_method, w),
+            // Read one row at a time, as the estimator goes.
+            let rows = osc_file::open(&file)?;
+            let run = move |w: Option<&mut dyn std::io::Write>| match precision {
+                Precision::F32 => replay::replay_rows::<f32, _>(rows, f0_hz, !seed_method, w),
+                Precision::F64 => replay::replay_rows::<f64, _>(rows, f0_hz, !seed_method, w),
             };
             let summary = match &out {
                 Some(p) => {

@@ -13,11 +13,12 @@
 //! an infinite value, or text that is not a number is an error naming the line and the column.
 
 use super::OscSample;
-use crate::text_error::{TextError, TextErrorKind, csv_header};
+use crate::text_error::{TextError, TextErrorKind};
+use crate::text_stream::{CsvRecords, CutCheck};
 use nav_core::Vector3;
 use std::fs::File;
 use std::io::{self, BufReader, Read, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The columns.
 pub const COLUMNS: [&str; 4] = ["t_s", "x_m", "y_m", "z_m"];
@@ -87,84 +88,157 @@ pub fn write(path: &Path, samples: &[OscSample]) -> Result<(), OscCsvError> {
     .map_err(|e| TextError::io(path, e))
 }
 
-/// Reads `path`.
+/// Reads `path` into memory (`nav osc-replay` streams it instead: [`OscReader`]).
 pub fn read(path: &Path) -> Result<Vec<OscRow>, OscCsvError> {
     let file = File::open(path).map_err(|e| TextError::io(path, e))?;
     read_from(BufReader::new(file), path)
 }
 
-/// Reads from `reader`; `path` names it in errors.
+/// Reads from `reader` into memory; `path` names it in errors.
 pub fn read_from<R: Read>(reader: R, path: &Path) -> Result<Vec<OscRow>, OscCsvError> {
-    let (header, records) = csv_header(reader, path, &COLUMNS.join(","))?;
-    if header.iter().ne(COLUMNS) {
-        let found = header.iter().collect::<Vec<_>>().join(",");
-        let line = header.position().map(|p| p.line());
-        return Err(TextError::new(
-            path,
-            line,
-            OscCsvErrorKind::WrongHeader {
-                expected: COLUMNS.join(","),
-                optional: None,
-                found,
-            },
-        ));
+    OscReader::new(reader, path)?.collect()
+}
+
+/// Opens `path` to read its rows one at a time.
+pub fn open(path: &Path) -> Result<OscReader<BufReader<File>>, OscCsvError> {
+    let file = File::open(path).map_err(|e| TextError::io(path, e))?;
+    OscReader::new(BufReader::new(file), path)
+}
+
+/// The rows of an `osc.csv` file, read one at a time (memory bounded by the longest line).
+/// Stops after the first error.
+#[derive(Debug)]
+pub struct OscReader<R: Read> {
+    records: CsvRecords<R>,
+    path: PathBuf,
+    previous_t_s: Option<f64>,
+    cut: CutCheck,
+    done: bool,
+}
+
+impl<R: Read> OscReader<R> {
+    /// Reads and checks the header of `reader`; `path` names it in errors.
+    pub fn new(reader: R, path: &Path) -> Result<Self, OscCsvError> {
+        let (records, header) = CsvRecords::new(reader, path, &COLUMNS.join(","))?;
+        if header.iter().ne(COLUMNS) {
+            let found = header.iter().collect::<Vec<_>>().join(",");
+            let line = header.position().map(|p| p.line());
+            return Err(TextError::new(
+                path,
+                line,
+                OscCsvErrorKind::WrongHeader {
+                    expected: COLUMNS.join(","),
+                    optional: None,
+                    found,
+                },
+            ));
+        }
+        Ok(Self {
+            records,
+            path: path.to_owned(),
+            previous_t_s: None,
+            cut: CutCheck::default(),
+            done: false,
+        })
     }
 
-    let mut rows: Vec<OscRow> = Vec::new();
-    for record in records {
-        let record = record.map_err(|e| TextError::from_csv(path, e))?;
-        let line = record.position().map(|p| p.line());
-        let at = |kind| TextError::new(path, line, kind);
-        if record.len() != COLUMNS.len() {
-            return Err(at(OscCsvErrorKind::ColumnCount {
-                expected: format!("{} columns ({})", COLUMNS.len(), COLUMNS.join(",")),
-                found: record.len(),
-                hint: None,
-            }));
-        }
-        let number = |i: usize| -> Result<f64, OscCsvError> {
-            record[i].parse().map_err(|_| {
-                at(OscCsvErrorKind::NotANumber {
-                    column: COLUMNS[i],
-                    found: record[i].to_owned(),
-                })
-            })
+    fn next_row(&mut self) -> Option<Result<OscRow, OscCsvError>> {
+        let line = match self.records.next_record()? {
+            Ok(line) => line,
+            Err(e) => return Some(Err(e)),
         };
-        let t_s = number(0)?;
-        if !(t_s.is_finite() && t_s >= 0.0) {
-            return Err(at(OscCsvErrorKind::BadTime {
-                found: record[0].to_owned(),
-            }));
-        }
-        if let Some(prev) = rows.last()
-            && t_s <= prev.t_s
-        {
-            return Err(at(OscCsvErrorKind::SampleTimeNotIncreasing {
-                previous: prev.t_s,
-                found: t_s,
-            }));
-        }
-        let v = [number(1)?, number(2)?, number(3)?];
-        if let Some(i) = v.iter().position(|x| x.is_infinite()) {
-            return Err(at(OscCsvErrorKind::Infinite {
-                column: COLUMNS[i + 1],
-                found: record[i + 1].to_owned(),
-            }));
-        }
-        let nan = v.iter().filter(|x| x.is_nan()).count();
-        let r_b_m = match nan {
-            0 => Some(Vector3::from(v)),
-            3 => None,
-            _ => {
-                let i = v.iter().position(|x| x.is_nan()).unwrap_or(0);
-                return Err(at(OscCsvErrorKind::PartlyMissing {
-                    column: COLUMNS[i + 1],
-                }));
+        let path = &self.path;
+        let record = line.record;
+        let at = |kind| TextError::new(path, Some(line.line), kind);
+        if line.unterminated {
+            let fields: Vec<&str> = record.iter().collect();
+            let column = |i: usize| COLUMNS.get(i).copied().unwrap_or("extra").to_owned();
+            let is_number = |_: usize, t: &str| t.parse::<f64>().is_ok();
+            if let Err(cut) = self.cut.check(&fields, COLUMNS.len(), column, is_number) {
+                let kind = OscCsvErrorKind::Truncated {
+                    line: line.line,
+                    cut,
+                };
+                return Some(Err(TextError::new(path, None, kind)));
             }
-        };
-        rows.push(OscRow { t_s, r_b_m });
+        } else {
+            self.cut.note(record.iter());
+        }
+        let row = parse_row(record, self.previous_t_s, at);
+        if let Ok(r) = &row {
+            self.previous_t_s = Some(r.t_s);
+        }
+        Some(row)
     }
-    Ok(rows)
+}
+
+impl<R: Read> Iterator for OscReader<R> {
+    type Item = Result<OscRow, OscCsvError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        let row = self.next_row();
+        self.done = !matches!(row, Some(Ok(_)));
+        row
+    }
+}
+
+/// One data row after a row at `previous_t_s`; `at` makes an error of its line.
+fn parse_row(
+    record: &csv::StringRecord,
+    previous_t_s: Option<f64>,
+    at: impl Fn(OscCsvErrorKind) -> OscCsvError,
+) -> Result<OscRow, OscCsvError> {
+    if record.len() != COLUMNS.len() {
+        return Err(at(OscCsvErrorKind::ColumnCount {
+            expected: format!("{} columns ({})", COLUMNS.len(), COLUMNS.join(",")),
+            found: record.len(),
+            hint: None,
+        }));
+    }
+    let number = |i: usize| -> Result<f64, OscCsvError> {
+        record[i].parse().map_err(|_| {
+            at(OscCsvErrorKind::NotANumber {
+                column: COLUMNS[i],
+                found: record[i].to_owned(),
+            })
+        })
+    };
+    let t_s = number(0)?;
+    if !(t_s.is_finite() && t_s >= 0.0) {
+        return Err(at(OscCsvErrorKind::BadTime {
+            found: record[0].to_owned(),
+        }));
+    }
+    if let Some(prev) = previous_t_s
+        && t_s <= prev
+    {
+        return Err(at(OscCsvErrorKind::SampleTimeNotIncreasing {
+            previous: prev,
+            found: t_s,
+        }));
+    }
+    let v = [number(1)?, number(2)?, number(3)?];
+    if let Some(i) = v.iter().position(|x| x.is_infinite()) {
+        return Err(at(OscCsvErrorKind::Infinite {
+            column: COLUMNS[i + 1],
+            found: record[i + 1].to_owned(),
+        }));
+    }
+    let nan = v.iter().filter(|x| x.is_nan()).count();
+    let r_b_m = match nan {
+        0 => Some(Vector3::from(v)),
+        3 => None,
+        _ => {
+            let i = v.iter().position(|x| x.is_nan()).unwrap_or(0);
+            return Err(at(OscCsvErrorKind::PartlyMissing {
+                column: COLUMNS[i + 1],
+            }));
+        }
+    };
+    Ok(OscRow { t_s, r_b_m })
 }
 
 #[cfg(test)]

@@ -1,16 +1,19 @@
 //! `nav osc-replay`: the estimator over a recorded readout file (`osc.csv`), epoch by epoch.
 //!
-//! The readout rate is the file's median interval; a row of `NaN` is a missing readout, and a
+//! The readout rate is the median interval of the file's first [`RATE_PREFIX_READOUTS`] rows
+//! (the rows are read one at a time, [`replay_rows`]); a row of `NaN` is a missing readout, and a
 //! hole in the times (an interval above 1.5 times the median) counts its missing readouts, so
 //! the estimator's clock stays on the file's. Each epoch becomes a row of
 //! `t_s,qw,qx,qy,qz,f_x_mps2,f_y_mps2,f_z_mps2,sigma_e1_rad,sigma_e2_rad,sigma_e3_rad,frequency_hz`
 //! (`q` is `C_b_e`, body to the ellipse frame).
 
 use super::file::OscRow;
+use crate::text_error::number_text;
 use anyhow::{Result, anyhow, ensure};
 use nav_core::Scalar;
 use nav_core::oscillator::{OscillatorConfig, OscillatorEstimator, OscillatorFault};
 use std::collections::BTreeMap;
+use std::convert::Infallible;
 use std::fmt;
 use std::io::Write;
 use std::time::Instant;
@@ -62,6 +65,14 @@ impl fmt::Display for ReplaySummary {
     }
 }
 
+/// Readouts whose median interval gives the readout rate: a bounded prefix of the file, so the
+/// rows after it are read one at a time.
+pub const RATE_PREFIX_READOUTS: usize = 4097;
+
+/// Most readouts a hole in the times may miss in a row; a longer hole is a wrong time (e.g.
+/// 1e300 s), not a pause, and would keep the estimator counting missing readouts for ever.
+pub const MAX_HOLE_READOUTS: i64 = 10_000_000;
+
 /// The readout interval of `rows`: the median of their time differences [s].
 pub fn median_interval(rows: &[OscRow]) -> Result<f64> {
     let mut d: Vec<f64> = rows.windows(2).map(|w| w[1].t_s - w[0].t_s).collect();
@@ -81,11 +92,32 @@ pub fn replay<T: Scalar>(
     rows: &[OscRow],
     f0_hz: f64,
     compensate: bool,
-    mut out: Option<&mut dyn Write>,
+    out: Option<&mut dyn Write>,
 ) -> Result<ReplaySummary> {
-    let dt = median_interval(rows)?;
+    replay_rows::<T, Infallible>(rows.iter().copied().map(Ok), f0_hz, compensate, out)
+}
+
+/// [`replay`] over rows read one at a time (e.g. [`super::file::OscReader`]): the rate from the
+/// first [`RATE_PREFIX_READOUTS`], the rows after them never held together; a reading error ends
+/// the replay with that error.
+pub fn replay_rows<T: Scalar, E>(
+    rows: impl IntoIterator<Item = Result<OscRow, E>>,
+    f0_hz: f64,
+    compensate: bool,
+    mut out: Option<&mut dyn Write>,
+) -> Result<ReplaySummary>
+where
+    E: std::error::Error + Send + Sync + 'static,
+{
+    let mut rows = rows.into_iter();
+    let mut prefix = Vec::with_capacity(RATE_PREFIX_READOUTS);
+    for row in rows.by_ref().take(RATE_PREFIX_READOUTS) {
+        prefix.push(row?);
+    }
+    let dt = median_interval(&prefix)?;
+    let t_first = prefix[0].t_s;
     let mut cfg = OscillatorConfig::<T>::new(1.0 / dt, f0_hz);
-    cfg.start_s = rows[0].t_s;
+    cfg.start_s = t_first;
     cfg.compensate = compensate;
     let mut est = OscillatorEstimator::new(cfg).map_err(|e| anyhow!("oscillator: {e}"))?;
     let mut s = ReplaySummary {
@@ -96,10 +128,18 @@ pub fn replay<T: Scalar>(
         writeln!(o, "{EPOCH_HEADER}")?;
     }
     let started = Instant::now();
-    let mut last_t = rows[0].t_s - dt;
-    for row in rows {
+    let mut last_t = t_first - dt;
+    for row in prefix.into_iter().map(Ok).chain(rows) {
+        let row = row?;
         // A hole in the times: its readouts are missing.
         let skipped = ((row.t_s - last_t) / dt).round() as i64 - 1;
+        ensure!(
+            skipped <= MAX_HOLE_READOUTS,
+            "the readout times jump from {} s to {} s: {skipped} readouts missing in a row \
+             (more than {MAX_HOLE_READOUTS}; a wrong time?)",
+            number_text(last_t),
+            number_text(row.t_s)
+        );
         for _ in 0..skipped.max(0) {
             s.missing += 1;
             note(&mut s, est.missing(), &mut out)?;
