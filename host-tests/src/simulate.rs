@@ -84,35 +84,54 @@ pub struct Simulated {
 }
 
 /// Runs the simulation in memory; `progress(done, total)` is called every 4096 samples.
-pub fn simulate(opts: &SimOptions, mut progress: impl FnMut(u64, u64)) -> Result<Simulated> {
-    ensure!(
-        opts.rate_hz.is_finite() && opts.rate_hz > 0.0 && opts.rate_hz <= 100_000.0,
-        "the rate must be within (0, 100000] Hz, not {}",
-        opts.rate_hz
-    );
-    let every = (opts.rate_hz / opts.truth_rate_hz).round();
-    ensure!(
-        opts.truth_rate_hz > 0.0
-            && every >= 1.0
-            && (every * opts.truth_rate_hz - opts.rate_hz).abs() < 1e-9 * opts.rate_hz,
-        "the truth rate {} Hz must divide the IMU rate {} Hz",
-        opts.truth_rate_hz,
-        opts.rate_hz
-    );
-    let every = every as u64;
+pub fn simulate(opts: &SimOptions, progress: impl FnMut(u64, u64)) -> Result<Simulated> {
     let traj = opts.scenario.build()?;
     let seconds = opts.seconds.unwrap_or(traj.duration_s());
+    let (sampling, every) = plan(opts.rate_hz, opts.truth_rate_hz, seconds)?;
+    let injector = ErrorInjector::new(opts.grade.model(), opts.seed)
+        .map_err(|e| anyhow::anyhow!("grade {}: {e}", opts.grade))?;
+    sense(traj.as_ref(), sampling, every, injector, progress)
+}
+
+/// The sampling of `seconds` [s] at `rate_hz` [Hz] and the number of samples between truth
+/// rows at `truth_rate_hz` [Hz], or why the three do not make a run.
+pub(crate) fn plan(rate_hz: f64, truth_rate_hz: f64, seconds: f64) -> Result<(Sampling, u64)> {
+    ensure!(
+        rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= 100_000.0,
+        "the rate must be within (0, 100000] Hz, not {}",
+        rate_hz
+    );
+    let every = (rate_hz / truth_rate_hz).round();
+    ensure!(
+        truth_rate_hz > 0.0
+            && every >= 1.0
+            && (every * truth_rate_hz - rate_hz).abs() < 1e-9 * rate_hz,
+        "the truth rate {} Hz must divide the IMU rate {} Hz",
+        truth_rate_hz,
+        rate_hz
+    );
     ensure!(
         seconds.is_finite() && seconds > 0.0,
         "the length must be positive, not {seconds} s"
     );
-    let sampling = Sampling::new(opts.rate_hz, seconds);
+    let sampling = Sampling::new(rate_hz, seconds);
     check_sample_count(sampling, seconds)?;
-    let mut injector = ErrorInjector::new(opts.grade.model(), opts.seed)
-        .map_err(|e| anyhow::anyhow!("grade {}: {e}", opts.grade))?;
+    Ok((sampling, every as u64))
+}
+
+/// `traj` sampled by `sampling`, sensed through `injector`, with a truth row at the start and
+/// every `every` samples, checked as its readers would ([`checked`]); `progress(done, total)`
+/// every 4096 samples.
+pub(crate) fn sense(
+    traj: &dyn crate::trajectory::Trajectory,
+    sampling: Sampling,
+    every: u64,
+    mut injector: ErrorInjector,
+    mut progress: impl FnMut(u64, u64),
+) -> Result<Simulated> {
     let mut records = Vec::with_capacity(sampling.n as usize);
-    let mut truth = vec![crate::trajectory::Generator::new(traj.as_ref()).truth()];
-    generate(traj.as_ref(), sampling, |k, t_ns, exact, t| {
+    let mut truth = vec![crate::trajectory::Generator::new(traj).truth()];
+    generate(traj, sampling, |k, t_ns, exact, t| {
         let sensed = injector.apply(exact);
         let f32s = |v: &nav_core::Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
         records.push(Record {
@@ -132,7 +151,7 @@ pub fn simulate(opts: &SimOptions, mut progress: impl FnMut(u64, u64)) -> Result
     checked(Simulated {
         recording: Recording {
             kind: Kind::Increments,
-            rate_hz: opts.rate_hz,
+            rate_hz: sampling.rate_hz,
             t0_ns: 0,
             records,
         },

@@ -8,14 +8,10 @@
 //! [`FamilyMember::error_model`] seeded with its [`FamilyMember::injector_seed`]), so the
 //! recording is the one `nav align-bench family` aligns on, rounded to the binary format's f32.
 
-use crate::generate::TEMPERATURE_C;
-use crate::recording_io::Recording;
 use crate::sensor_model::ErrorInjector;
 use crate::simulate::{Formats, SimFiles, Simulated};
 use crate::trajectory::family::FamilyMember;
-use crate::trajectory::{Generator, Sampling, generate};
-use anyhow::{Context, Result, anyhow, bail, ensure};
-use hal_adapters::recording::{Kind, Record};
+use anyhow::{Context, Result, anyhow, bail};
 use nav_core::alignment::AlignMethod;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -50,63 +46,13 @@ impl Default for FamilySimOptions {
 pub fn simulate_member(
     member: &FamilyMember,
     opts: &FamilySimOptions,
-    mut progress: impl FnMut(u64, u64),
+    progress: impl FnMut(u64, u64),
 ) -> Result<Simulated> {
-    ensure!(
-        opts.rate_hz.is_finite() && opts.rate_hz > 0.0 && opts.rate_hz <= 100_000.0,
-        "the rate must be within (0, 100000] Hz, not {}",
-        opts.rate_hz
-    );
-    ensure!(
-        opts.seconds.is_finite() && opts.seconds > 0.0,
-        "the length must be positive, not {} s",
-        opts.seconds
-    );
-    let every = (opts.rate_hz / opts.truth_rate_hz).round();
-    ensure!(
-        opts.truth_rate_hz > 0.0
-            && every >= 1.0
-            && (every * opts.truth_rate_hz - opts.rate_hz).abs() < 1e-9 * opts.rate_hz,
-        "the truth rate {} Hz must divide the IMU rate {} Hz",
-        opts.truth_rate_hz,
-        opts.rate_hz
-    );
-    let every = every as u64;
-    let sampling = Sampling::new(opts.rate_hz, opts.seconds);
-    crate::simulate::check_sample_count(sampling, opts.seconds)?;
+    let (sampling, every) = crate::simulate::plan(opts.rate_hz, opts.truth_rate_hz, opts.seconds)?;
     member.rocking.check().context("the member's trajectory")?;
-    let mut injector = ErrorInjector::new(member.error_model(), member.injector_seed)
+    let injector = ErrorInjector::new(member.error_model(), member.injector_seed)
         .map_err(|e| anyhow!("grade {}: {e}", member.grade))?;
-    let traj = &member.rocking;
-    let mut records = Vec::with_capacity(sampling.n as usize);
-    let mut truth = vec![Generator::new(traj).truth()];
-    generate(traj, sampling, |k, t_ns, exact, t| {
-        let sensed = injector.apply(exact);
-        let f32s = |v: &nav_core::Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
-        records.push(Record {
-            t_ns,
-            gyro: f32s(&sensed.delta_theta_ib_b),
-            accel: f32s(&sensed.delta_v_ib_b),
-            temperature_c: TEMPERATURE_C,
-        });
-        if (k + 1) % every == 0 {
-            truth.push(*t);
-        }
-        if k % 4096 == 0 {
-            progress(k, sampling.n);
-        }
-    });
-    progress(sampling.n, sampling.n);
-    crate::simulate::checked(Simulated {
-        recording: Recording {
-            kind: Kind::Increments,
-            rate_hz: opts.rate_hz,
-            t0_ns: 0,
-            records,
-        },
-        truth,
-        counters: injector.counters(),
-    })
+    crate::simulate::sense(&member.rocking, sampling, every, injector, progress)
 }
 
 /// Writes `sim` of `member` into `dir` (created if missing), as [`crate::simulate::write`]

@@ -618,7 +618,7 @@ fn check_against_mechanization(name: &str, source: &dyn Exact, seconds: usize) {
         let [dr, dv, max_r, max_v] = agreement(&decimated, &emulated, &mech, every);
         let last = emulated.errors.last().unwrap();
         println!(
-            "{name}, seed 004 RLG errors, {} min, truth at {} Hz: mechanization errors up to \
+            "{name}, [Stand model] RLG errors, {} min, truth at {} Hz: mechanization errors up to \
              {max_r:.0} m and {max_v:.3} m/s; emulator off by at most {:.2} % (position) and \
              {:.2} % (velocity) of them; final emulated error N {:.0} m E {:.0} m",
             seconds / 60,

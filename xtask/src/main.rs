@@ -379,7 +379,7 @@ fn bench(root: &Path) -> Result<()> {
     println!("| host replay, f32, samples/s (one thread, I/O included) | {f32_speed:.0} |");
     println!("| host replay, f64, samples/s (one thread, I/O included) | {f64_speed:.0} |");
     println!(
-        "| guest instructions per oscillator readout (seed 001, f32, 5 kHz; max / mean) | {:.0} / {:.0} |",
+        "| guest instructions per oscillator readout ([Oscillator INS], f32, 5 kHz; max / mean) | {:.0} / {:.0} |",
         osc_readout.0, osc_readout.1
     );
     println!(
@@ -387,7 +387,7 @@ fn bench(root: &Path) -> Result<()> {
         osc_period.0, osc_period.1
     );
     println!(
-        "| host oscillator estimator (seed 001), f32 / f64, readouts/s (one thread, no I/O) | {:.0} / {:.0} |",
+        "| host oscillator estimator ([Oscillator INS]), f32 / f64, readouts/s (one thread, no I/O) | {:.0} / {:.0} |",
         osc.0, osc.1
     );
     println!("| flash (text + data) [B] | {} |", text + data);

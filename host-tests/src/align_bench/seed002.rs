@@ -93,7 +93,7 @@ pub fn record(scenario: &Scenario, seconds: f64) -> Result<Recorded> {
             (r.lat_deg.to_radians(), r.h_m, Vector3::from(r.lever_arm_m))
         }
         Scenario::Static(_) => (start.lat, start.h, Vector3::zeros()),
-        _ => bail!("seed 002's benchmark runs on ship-rocking or static"),
+        _ => bail!("[Ship alignment]'s benchmark runs on ship-rocking or static"),
     };
     let s = Sampling::new(RATE_HZ, seconds);
     let mut increments = Vec::with_capacity(s.n as usize);
@@ -413,7 +413,7 @@ pub fn run(runs: usize, grade: Grade) -> Result<String> {
     let mut out = String::new();
     writeln!(
         out,
-        "seed 002: level alignment on a rocking ship (ship-rocking, lever arm (30, 10, 15) m), {runs} runs per sea state"
+        "[Ship alignment]: level alignment on a rocking ship (ship-rocking, lever arm (30, 10, 15) m), {runs} runs per sea state"
     )?;
     writeln!(
         out,
@@ -528,7 +528,7 @@ pub fn run(runs: usize, grade: Grade) -> Result<String> {
     writeln!(
         out,
         "
-target: RMS <= {TARGET_20S_DEG} deg at 20 s for every sea state, within 0.01 deg of the b/g floor; seed 002 reports 0.3 deg (SS 6) to 0.02 deg (SS 3)"
+target: RMS <= {TARGET_20S_DEG} deg at 20 s for every sea state, within 0.01 deg of the b/g floor; [Ship alignment] reports 0.3 deg (SS 6) to 0.02 deg (SS 3)"
     )?;
     Ok(out)
 }

@@ -124,7 +124,7 @@ pub fn record(scenario: &Scenario, seconds: f64) -> Result<Recorded> {
     });
     ensure!(
         moved < 1e-9,
-        "the IMU moves ({moved} m/s): seed 003's bench has it on the rotation centre"
+        "the IMU moves ({moved} m/s): [Vavilova et al.]'s bench has it on the rotation centre"
     );
     Ok(Recorded {
         increments,
@@ -759,7 +759,7 @@ pub fn format_summary(s: &Summary) -> String {
     let w = &mut out;
     let _ = writeln!(
         w,
-        "seed 003: auv-bench (roll, pitch 5 deg / 11 s for 300 s, 45 deg), fog noise only, {} runs per method",
+        "[Vavilova et al.]: auv-bench (roll, pitch 5 deg / 11 s for 300 s, 45 deg), fog noise only, {} runs per method",
         s.runs
     );
     let _ = writeln!(

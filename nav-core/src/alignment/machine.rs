@@ -360,6 +360,23 @@ impl core::fmt::Display for SettingsError {
     }
 }
 
+impl SettingsError {
+    /// A short name of the refusal, without its numbers (for counting).
+    pub fn reason(&self) -> &'static str {
+        match self {
+            Self::WindowTooShort { .. } => "window too short",
+            Self::BadRate(_) => "bad sampling rate",
+            Self::NearPole => "near a pole",
+            Self::BadValue(_) => "bad value",
+            Self::SwayNeedsLeverArm => "sway needs the lever arm",
+            Self::GyrosTooCoarse { .. } => "gyros too coarse to find north",
+            Self::LeverArmTooLong { .. } | Self::LeverArmSigmaTooLarge { .. } => {
+                "lever arm beyond a hull"
+            }
+        }
+    }
+}
+
 impl core::error::Error for SettingsError {}
 
 /// What to run, where.

@@ -254,10 +254,10 @@ pub fn align(
             Err(SettingsError::WindowTooShort { .. }) => {
                 return Outcome::Refused("window too short".into());
             }
-            Err(e) => return Outcome::Refused(format!("settings: {e}")),
+            Err(e) => return Outcome::Refused(format!("settings: {}", e.reason())),
         };
     if let Err(e) = settings.validate() {
-        return Outcome::Refused(format!("settings: {e}"));
+        return Outcome::Refused(format!("settings: {}", e.reason()));
     }
     let Some(truth) = rec.truth_after(settings.samples) else {
         return Outcome::Refused("no truth at the window's end (harness)".into());

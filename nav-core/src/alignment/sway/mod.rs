@@ -199,8 +199,9 @@ pub struct SwayStatus<T: Scalar> {
     pub roll: SwayAxis<T>,
     /// Pitch sway.
     pub pitch: SwayAxis<T>,
-    /// Amplitude of the yaw sway over the identification window [rad]: `sqrt(2)` times the
-    /// RMS of the open-loop yaw about its least-squares line (0 before the identification).
+    /// Amplitude of the yaw sway [rad]: half the range of the filter's yaw so far, or
+    /// `sqrt(2)` times the RMS of the identification window's open-loop yaw about its
+    /// least-squares line, whichever is larger.
     pub yaw_amplitude_rad: f64,
 }
 
@@ -229,6 +230,9 @@ pub struct SwayModel<T: Scalar> {
     /// Time of the last roll/pitch sample [s].
     last_sample_s: f64,
     nis_sum: f64,
+    /// The filter's first yaw [rad] and the range of its yaw since, about it [rad].
+    yaw_first: Option<f64>,
+    yaw_range: (f64, f64),
     status: SwayStatus<T>,
 }
 
@@ -256,6 +260,8 @@ impl<T: Scalar> SwayModel<T> {
             omega: [None; 2],
             last_sample_s: f64::NEG_INFINITY,
             nis_sum: 0.0,
+            yaw_first: None,
+            yaw_range: (0.0, 0.0),
             status: SwayStatus {
                 phase: SwayPhase::Identifying,
                 euler_updates: 0,
@@ -390,6 +396,18 @@ impl<T: Scalar> SwayModel<T> {
         }
     }
 
+    /// Widens the range of the filter's yaw seen so far with `q_b_c`'s (unwrapped about the
+    /// first), and the status's yaw amplitude with half of it.
+    fn track_yaw(&mut self, q_b_c: &UnitQuaternion<T>) {
+        let (_, _, yaw) = attitude::euler(q_b_c);
+        let yaw = yaw.to_f64();
+        let first = *self.yaw_first.get_or_insert(yaw);
+        let d = wrap_pi(yaw - first);
+        self.yaw_range = (self.yaw_range.0.min(d), self.yaw_range.1.max(d));
+        let half = 0.5 * (self.yaw_range.1 - self.yaw_range.0);
+        self.status.yaw_amplitude_rad = self.status.yaw_amplitude_rad.max(half);
+    }
+
     /// `sqrt(2)` times the RMS of the kept open-loop yaw about its least-squares line [rad].
     fn yaw_amplitude(&self) -> f64 {
         let n = self.search.len().min(search::BUFFER_LEN);
@@ -433,7 +451,7 @@ impl<T: Scalar> SwayModel<T> {
         q_b_c: &UnitQuaternion<T>,
         now_s: f64,
     ) {
-        self.status.yaw_amplitude_rad = self.yaw_amplitude();
+        self.status.yaw_amplitude_rad = self.status.yaw_amplitude_rad.max(self.yaw_amplitude());
         self.apply_drift(core, now_s);
         let (roll, pitch, _) = attitude::euler(q_b_c);
         let var = |s: f64| s * s;
@@ -553,6 +571,7 @@ impl<T: Scalar> Extension<T, SWAY_STATES> for SwayModel<T> {
         }
         self.last_sample_s = elapsed_s;
         let q = core.strapdown().q_b_c();
+        self.track_yaw(&q);
         if !self.open {
             if elapsed_s + half_step < OPEN_LOOP_START_S {
                 return;
