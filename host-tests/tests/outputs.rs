@@ -4,22 +4,8 @@
 use host_tests::generate::Stationary;
 use host_tests::recording_io;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn nav(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nav"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
+mod common;
+use common::{nav, output_text as text};
 
 fn replay_args<'a>(imu: &'a str, out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
     let mut v = vec![

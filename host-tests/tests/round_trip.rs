@@ -24,13 +24,13 @@
 
 mod common;
 
+use common::nav;
 use common::{EARTH_RADIUS_M, Row, expected_rows, parse_log, replay};
 use host_tests::generate::Stationary;
 use host_tests::recording_io;
 use host_tests::replay::ReplayOptions;
 use nav_core::Scalar;
 use std::path::Path;
-use std::process::Command;
 
 const ALIGN_SECONDS: f64 = 10.0;
 
@@ -176,13 +176,6 @@ fn another_attitude_and_site() {
     // Shorter navigation (20 s): the f64 budget above holds a fortiori; tan(33.9 deg) < 1.
     check::<f64>(&path, &s, &F64_BOUNDS);
     check::<f32>(&path, &s, &F32_BOUNDS);
-}
-
-fn nav(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_nav"))
-        .args(args)
-        .output()
-        .expect("run nav")
 }
 
 #[test]

@@ -5,6 +5,7 @@
 
 mod common;
 
+use common::nav;
 use common::{replay, replay_error};
 use hal_adapters::Imu;
 use hal_adapters::recording::Record;
@@ -21,7 +22,6 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 use std::time::Instant;
 
 // ---------------------------------------------------------------------------------------------
@@ -316,13 +316,6 @@ fn scenario() -> Stationary {
 fn options() -> ReplayOptions {
     let s = scenario();
     ReplayOptions::new(s.lat_deg, s.lon_deg, s.h_m, 10.0)
-}
-
-fn nav(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nav"))
-        .args(args)
-        .output()
-        .unwrap()
 }
 
 /// `text` without its final newline, its last line's last field (after a `,` or a blank) cut

@@ -5,22 +5,9 @@
 //! line.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn nav(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nav"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
+use std::process::Output;
+mod common;
+use common::{nav, output_text as text};
 
 /// Asserts a refusal: exit status 1 (the `nav` binary's for every error) and `msg` in the
 /// output.

@@ -79,3 +79,20 @@ pub fn expected_rows(report: &Report, log_every: u32) -> u32 {
     let n = report.nav_steps;
     1 + n / log_every + u32::from(!n.is_multiple_of(log_every))
 }
+
+/// Runs the `nav` binary with `args`.
+pub fn nav(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+        .args(args)
+        .output()
+        .expect("run nav")
+}
+
+/// A command's stdout and stderr, as text.
+pub fn output_text(o: &std::process::Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
