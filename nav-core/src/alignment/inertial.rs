@@ -49,6 +49,13 @@
 //! the ends): the sums `G = int w'' C_b_b0 dt` are kept and `G l` is taken off `V_w`, `M_w`.
 //! No body rate is needed, so no rate noise enters.
 //!
+//! # Unknown lever arm
+//! With the offset `l` unknown (1-sigma `s` per axis, [`InertialAlignment::with_lever_arm_unknown`])
+//! the sums `G` are kept all the same and the leak `G l` is a random vector of covariance
+//! `s^2 G G^T`: its heading share (along `a2`, against the heading signal `|M_perp|`) and its
+//! tilt share (normal to `V`, against `|V|`) join the 1-sigma. A rotation at periods the ramps
+//! reject leaves `G` near zero; one they pass (a slow yaw of a few metres' arm) does not.
+//!
 //! # Disturbance check
 //! A second slope vector with shorter ramps ([`CHECK_RAMP_FRACTION`], `M_w'`, eq. 8) leaks more
 //! of a bounded disturbance (at 120 s, 50 times more of a 16 s surge); its heading must agree
@@ -69,9 +76,14 @@
 //!   accelerometers' white noise on the slope, the gyros' attitude random walk turning
 //!   gravity), `+ b_g^2 / W^2` (east gyro bias), `+ ARW^2 T + b_g^2 T^2` (vertical gyro drift
 //!   to the end);
-//! - tilt: `VRW^2 int w0^2 / (g int w0)^2 + ARW^2 int (S0(u) / S0(T))^2 du + (b_a / g)^2
-//!   + (b_g (T - t0))^2`, `t0` the centroid of `w0` (the vertical is measured there and carried
-//!   to the end by the gyros).
+//! - tilt: `VRW^2 int w0^2 / (g int w0)^2 + ARW^2 int (S0(u) / S0(T))^2 du + (b_a / g)^2 +
+//!   (b_g (T - t0))^2`, `t0` the centroid of `w0` (the vertical is measured there and carried
+//!   to the end by the gyros);
+//! - the heading's measurement error `psi` (its first term, and the disturbance check's excess)
+//!   is an error about the vertical of `t0`, which the Earth turns east by `W (T - t0)` until
+//!   the end: an east tilt `psi W (T - t0)` there, pitch by `cos(yaw)` and roll by `sin(yaw)`
+//!   (0.002 deg of pitch for 1.6 deg of heading at 56 deg latitude and 60 s).
+//!
 //! For `w1 = 2t - T` these are the least-squares slope's `12 VRW^2 / (g^2 W^2 T^3)` (the
 //! Cramér–Rao bound itself) and `(6/5) ARW^2 / (W^2 T)`.
 //!
@@ -463,6 +475,8 @@ pub struct InertialAlignment<T: Scalar> {
     noise: Option<SensorNoise<T>>,
     limits: InputLimits<T>,
     lever_b_m: Option<Vector3<T>>,
+    /// 1-sigma per axis of an unknown lever arm [m] (its leak joins the 1-sigma).
+    lever_sigma_m: Option<f64>,
     coning: ConingSculling<T>,
     q_b_b0: CompensatedQuat<T>,
     /// Plain `int f_b0 dt` [m/s] (the levelling of [`Self::level`]).
@@ -503,6 +517,7 @@ impl<T: Scalar> InertialAlignment<T> {
             noise: None,
             limits: InputLimits::default(),
             lever_b_m: None,
+            lever_sigma_m: None,
             coning: ConingSculling::new(),
             q_b_b0: CompensatedQuat::identity(),
             v_b0: Kahan3::new(),
@@ -541,6 +556,16 @@ impl<T: Scalar> InertialAlignment<T> {
     /// known position, removed exactly (module docs, eq. 7).
     pub fn with_lever_arm(mut self, r_b_m: Vector3<T>) -> Self {
         self.lever_b_m = Some(r_b_m);
+        self.lever_sigma_m = None;
+        self
+    }
+
+    /// The same with the IMU at an unknown offset from a centre of rotation at rest at the
+    /// known position, `sigma_m` [m] 1-sigma per axis: what its motion leaks through the sums
+    /// (eq. 7 with the measured `G`) joins the 1-sigma (module docs).
+    pub fn with_lever_arm_unknown(mut self, sigma_m: T) -> Self {
+        self.lever_b_m = None;
+        self.lever_sigma_m = Some(sigma_m.to_f64());
         self
     }
 
@@ -551,6 +576,7 @@ impl<T: Scalar> InertialAlignment<T> {
             noise: self.noise,
             limits: self.limits,
             lever_b_m: self.lever_b_m,
+            lever_sigma_m: self.lever_sigma_m,
             ..Self::new(self.lat_rad, self.h_m, self.slope.taper.window)
         };
     }
@@ -605,7 +631,7 @@ impl<T: Scalar> InertialAlignment<T> {
         }
         self.cross_w += wa.w1 * wb.w1 * dt;
         self.cross_s += 0.5 * (s1 * s2 + self.slope.moments.s * self.slope_short.moments.s) * dt;
-        if self.lever_b_m.is_some() {
+        if self.lever_b_m.is_some() || self.lever_sigma_m.is_some() {
             // C_b_b0 at the interval's middle, where the weights are taken (to first order
             // in the increment): the start's would shift the sums by dt/2, a leak of
             // `dt/2 int w'' v_l dt` that short ramps make visible.
@@ -693,19 +719,14 @@ impl<T: Scalar> InertialAlignment<T> {
         let m_i0 = self.slope.m_i0.sum();
         let g = earth::normal_gravity(self.lat_rad.to_f64(), self.h_m.to_f64());
         let c_b0_i0 = solve(&v_b0, &m_b0, &v_i0, &m_i0, g)?;
-        let sigma = self.sigma(t, cos_lat);
+        let parts = self.sigma(t, cos_lat);
+        let sigma = parts.map(|p| p.sigma);
         if let Some(s) = sigma
             && !(s.z.to_f64() <= MAX_HEADING_SIGMA_RAD)
         {
             return Err(InertialAlignError::HeadingUnobservable);
         }
         let excess = self.check_disturbance(&c_b0_i0, &v_b0, &v_i0, t, cos_lat, sigma)?;
-        // What the check saw beyond its noise bounds the main slope's own leak: it joins the
-        // heading's 1-sigma.
-        let sigma = sigma.map(|mut s| {
-            s.z = T::c(libm::sqrt(sq(s.z.to_f64()) + sq(excess)));
-            s
-        });
         let q_b0_i0 =
             UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(c_b0_i0));
         // C_n_i0(T): the NED frame turned by Omega T about the polar axis since the start.
@@ -723,6 +744,12 @@ impl<T: Scalar> InertialAlignment<T> {
         if !q_b_n.coords.iter().all(|x| x.finite()) {
             return Err(InertialAlignError::NonFinite);
         }
+        let (_, _, yaw) = attitude::euler(&q_b_n);
+        let c_b0_n = (q_n_i0.inverse() * q_b0_i0)
+            .to_rotation_matrix()
+            .into_inner();
+        let lever = self.lever_leak(&v_b0, &m_b0, &c_b0_n);
+        let sigma = parts.map(|p| p.with_leaks(excess, &lever, yaw.to_f64()));
         Ok(AttitudeEstimate {
             q_b_n,
             sigma_rad: sigma.unwrap_or_else(|| Vector3::repeat(T::c(f64::NAN))),
@@ -785,6 +812,35 @@ impl<T: Scalar> InertialAlignment<T> {
         (tilt, heading)
     }
 
+    /// What an unknown lever arm's motion leaks (module docs, **Unknown lever arm**): the
+    /// sums take `G0 l` and `G1 l` for the offset `l`, 1-sigma `s` per axis, so the heading
+    /// (from the part of `M` along `a2 = V x M / |V x M|` against `|M_perp|`) has a variance
+    /// `s^2 |G1^T a2|^2 / |M_perp|^2`, and the vertical `a1` moves by `P G0 l / |V|` (`P` the
+    /// projection normal to `V`), carried to NED at the end by `c_b0_n`. Nothing without an
+    /// unknown lever arm.
+    fn lever_leak(&self, v_b0: &Vector3<T>, m_b0: &Vector3<T>, c_b0_n: &Matrix3<T>) -> LeverLeak {
+        let Some(s) = self.lever_sigma_m else {
+            return LeverLeak::default();
+        };
+        let f = |m: &Matrix3<T>| m.map(|x| x.to_f64());
+        let (v, m) = (v_b0.map(|x| x.to_f64()), m_b0.map(|x| x.to_f64()));
+        let (g0, g1, r) = (f(&self.g0.sum()), f(&self.slope.g.sum()), f(c_b0_n));
+        let a1 = v.normalize();
+        let m_perp = m - a1 * a1.dot(&m);
+        let a2 = v.cross(&m).normalize();
+        let (vn, mn) = (v.norm(), m_perp.norm());
+        if !(vn > 0.0 && mn > 0.0 && a2.iter().all(|x| x.is_finite())) {
+            return LeverLeak::default();
+        }
+        let heading2 = s * s * (g1.transpose() * a2).norm_squared() / (mn * mn);
+        let p = Matrix3::identity() - a1 * a1.transpose();
+        let down = r * p * g0 / vn;
+        LeverLeak {
+            heading2,
+            level_n: down * down.transpose() * (s * s),
+        }
+    }
+
     /// The disturbance check (module docs, eq. 8): the short-ramp heading against the main one.
     fn check_disturbance(
         &self,
@@ -833,9 +889,9 @@ impl<T: Scalar> InertialAlignment<T> {
         Ok(excess)
     }
 
-    /// Roll, pitch, yaw 1-sigma [rad] after `t` [s] (module docs, eqs. S1–S3); `None` without
-    /// a noise model.
-    fn sigma(&self, t: f64, cos_lat: f64) -> Option<Vector3<T>> {
+    /// Roll, pitch, yaw 1-sigma [rad] after `t` [s] (module docs, eqs. S1–S3) and what the
+    /// heading's error tilts the end by; `None` without a noise model.
+    fn sigma(&self, t: f64, cos_lat: f64) -> Option<SigmaParts<T>> {
         let n = self.noise?;
         let g = earth::normal_gravity(self.lat_rad.to_f64(), self.h_m.to_f64());
         let w = earth::OMEGA_IE * cos_lat;
@@ -844,22 +900,78 @@ impl<T: Scalar> InertialAlignment<T> {
         let (bg2, ba2) = (sq(f(n.gyro_bias_rad_s)), sq(f(n.accel_bias_mps2)));
         let m1 = &self.slope.moments;
         let heading_scale = g * w * m1.wt;
-        let yaw2 = (vrw2 * m1.w2 + g * g * arw2 * m1.tail2(t)) / (heading_scale * heading_scale)
-            + bg2 / (w * w)
-            + arw2 * t
-            + bg2 * t * t;
+        let slope2 = (vrw2 * m1.w2 + g * g * arw2 * m1.tail2(t)) / (heading_scale * heading_scale);
+        let yaw2 = slope2 + bg2 / (w * w) + arw2 * t + bg2 * t * t;
         let m0 = &self.m0;
         let centroid = self.w0_t / m0.s;
         let tilt2 = vrw2 * m0.w2 / sq(g * m0.s)
             + arw2 * m0.int_s2 / (m0.s * m0.s)
             + ba2 / (g * g)
             + bg2 * sq(t - centroid);
-        Some(Vector3::new(
-            T::c(libm::sqrt(tilt2)),
-            T::c(libm::sqrt(tilt2)),
-            T::c(libm::sqrt(yaw2)),
-        ))
+        Some(SigmaParts {
+            sigma: Vector3::new(
+                T::c(libm::sqrt(tilt2)),
+                T::c(libm::sqrt(tilt2)),
+                T::c(libm::sqrt(yaw2)),
+            ),
+            slope_heading2: slope2,
+            carried_rad: w * (t - centroid),
+        })
     }
+}
+
+/// The 1-sigma of an estimate before the disturbance check's excess, with what its heading's
+/// measurement error does to the tilt at the end.
+#[derive(Clone, Copy, Debug)]
+struct SigmaParts<T: Scalar> {
+    /// Roll, pitch, yaw 1-sigma [rad] (eqs. S1–S3).
+    sigma: Vector3<T>,
+    /// Variance of the heading measured by the slope (TRIAD's error about the vertical at the
+    /// centroid of `w0`) [rad^2].
+    slope_heading2: f64,
+    /// The Earth's turn of the vertical from that centroid to the end, `Omega cos(L) (T - t0)`
+    /// [rad].
+    carried_rad: f64,
+}
+
+impl<T: Scalar> SigmaParts<T> {
+    /// The 1-sigma with the disturbance check's `excess` [rad] and an unknown lever arm's leak
+    /// added, and the east tilt the heading's error leaves at the end: TRIAD's error is about
+    /// the vertical of `t0`, which the Earth has turned east by `carried_rad` by the end, so its
+    /// heading error `psi` is also an east tilt `psi carried_rad` there. A tilt `phi` (north,
+    /// east) is roll `phi_N cos(yaw) + phi_E sin(yaw)` and pitch `-phi_N sin(yaw) + phi_E
+    /// cos(yaw)` (`yaw` [rad], the estimate's); a move `d` of the measured vertical is the tilt
+    /// `(-d_E, d_N)`.
+    fn with_leaks(&self, excess: f64, lever: &LeverLeak, yaw: f64) -> Vector3<T> {
+        let heading2 = self.slope_heading2 + sq(excess) + lever.heading2;
+        let d = &lever.level_n;
+        // Tilt covariance (north, east): the lever's, and the heading's carried east.
+        let (nn, ee, ne) = (
+            d[(1, 1)],
+            d[(0, 0)] + heading2 * sq(self.carried_rad),
+            -d[(0, 1)],
+        );
+        let (s, c) = (libm::sin(yaw), libm::cos(yaw));
+        let roll2 = c * c * nn + s * s * ee + 2.0 * c * s * ne;
+        let pitch2 = s * s * nn + c * c * ee - 2.0 * c * s * ne;
+        let f = |x: T| x.to_f64();
+        Vector3::new(
+            T::c(libm::sqrt(sq(f(self.sigma.x)) + roll2.max(0.0))),
+            T::c(libm::sqrt(sq(f(self.sigma.y)) + pitch2.max(0.0))),
+            T::c(libm::sqrt(
+                sq(f(self.sigma.z)) + sq(excess) + lever.heading2,
+            )),
+        )
+    }
+}
+
+/// What an unknown lever arm leaks into the estimate ([`InertialAlignment::lever_leak`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct LeverLeak {
+    /// Heading variance [rad^2].
+    heading2: f64,
+    /// Covariance of the measured vertical's move in NED at the end [rad^2].
+    level_n: Matrix3<f64>,
 }
 
 /// `C_b0_i0` from the observation vectors in `b0` and their references in `i0` by TRIAD

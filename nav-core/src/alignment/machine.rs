@@ -571,6 +571,9 @@ pub fn coarse_samples_for(samples: u32, rate_hz: f64) -> u32 {
     (samples / 4).clamp(min, max.max(min)).min(samples)
 }
 
+// One coarse stage lives in the machine for the whole alignment and is never moved in the
+// sample path; no allocator (no_std) to box the larger one.
+#[allow(clippy::large_enum_variant)]
 enum Coarse<T: Scalar> {
     Static(StaticAlignment<T>),
     Inertial(InertialAlignment<T>),
@@ -613,9 +616,9 @@ impl<T: Scalar> Aligner<T> {
                 };
                 let window_s = f64::from(samples) / settings.rate_hz;
                 let a = InertialAlignment::new(lat, h, window_s).with_noise(settings.noise);
-                Coarse::Inertial(match settings.lever_arm.known() {
-                    Some(r) => a.with_lever_arm(r),
-                    None => a,
+                Coarse::Inertial(match settings.lever_arm {
+                    LeverArm::Known(r) => a.with_lever_arm(r),
+                    LeverArm::Unknown { sigma_m } => a.with_lever_arm_unknown(sigma_m),
                 })
             }
         };

@@ -821,6 +821,20 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
                 mean_nis: self.status.mean_nis,
             });
         }
+        self.solution()
+    }
+
+    /// The state and 1-sigma the filter holds now, without [`Self::outcome`]'s checks (a
+    /// comparison with another filter's); refused only before the first interval or once
+    /// broken.
+    pub fn solution(&self) -> Result<FineOutcome<T>, FineRefusal> {
+        if self.status.updates == 0 {
+            return Err(FineRefusal::NotStarted);
+        }
+        if self.broken {
+            return Err(FineRefusal::NonFinite);
+        }
+        let g = self.azimuth_gradient();
         let estimate = self.estimate();
         let alpha = self.frame_azimuth();
         let rz = attitude::about_z(alpha).to_rotation_matrix().into_inner();
