@@ -877,15 +877,14 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Convert { input, out } => {
-            let format = recording_io::detect(&input)?;
-            host_tests::atomic::refuse_same_file(&[&input], &out)?;
-            let recording = recording_io::read(&input)?;
-            recording_io::write(&out, &recording)?;
+            // Streamed: memory independent of the file's length.
+            let c = recording_io::convert(&input, &out)?;
             println!(
-                "converted {} ({format}, {} samples at {} Hz) to {}",
+                "converted {} ({}, {} samples at {} Hz) to {}",
                 input.display(),
-                recording.records.len(),
-                recording.rate_hz,
+                c.format,
+                c.header.sample_count,
+                c.header.rate_hz,
                 out.display()
             );
             Ok(())
