@@ -61,21 +61,9 @@ pub fn aligned(r: &AlignOutcome<f32>) {
     );
 }
 
-/// Logs the IMU driver's counters.
+/// Logs the IMU driver's counters (their `Display`, which `nav replay --device` prints too).
 pub fn health(h: &Health) {
-    defmt::info!(
-        "IMU driver: samples {=u32}, checksum errors {=u32}, stale {=u32}, device missed {=u32}, bus errors {=u32}, faults {=u32}, FIFO overflows {=u32}, invalid {=u32}, gyro clips {}, accel clips {}",
-        h.samples,
-        h.checksum_errors,
-        h.stale,
-        h.missed,
-        h.bus_errors,
-        h.device_faults,
-        h.fifo_overflows,
-        h.invalid,
-        h.gyro_clips,
-        h.accel_clips
-    );
+    defmt::info!("IMU driver: {}", defmt::Display2Format(h));
 }
 
 /// Logs the alignment's attitude and the last solution.

@@ -39,7 +39,7 @@ mod app {
     use hal_adapters::drivers::{Error as ImuError, Health};
     use hal_adapters::io::{Buffered, SemihostingFile};
     use hal_adapters::recording::Replay;
-    use hal_adapters::sim::{SimBmi088, SimError};
+    use hal_adapters::sim::{SimBmi088, SimError, health_at_end};
     use nav_core::alignment::{AlignOutcome, Stage};
     use nav_core::calibration::ImuCalibration;
     use nav_core::navigator::{
@@ -320,8 +320,7 @@ mod app {
             ),
             Err(ImuError::Spi(SimError::End)) => {
                 // The simulated device ends the recording by failing the bus: not a bus error.
-                let mut health = imu.health();
-                health.bus_errors = health.bus_errors.saturating_sub(1);
+                let health = health_at_end(imu.health());
                 (DataReady::End { health }, true)
             }
             Err(ImuError::Spi(SimError::Source(e))) => {

@@ -307,6 +307,28 @@ fn firmware_style_reads_end_with_the_recording() {
     assert_eq!(ImuDriver::health(&imu).samples, 10);
 }
 
+/// The end of the recording fails the bus once, which the driver counts as a bus error; the
+/// simulated IMU reports its health without it, ends for good, and reads nothing more.
+#[test]
+fn the_end_of_the_recording_is_not_a_bus_error() {
+    let bytes = recording(Kind::Increments, &records(Kind::Increments)[..10]);
+    let config = adis16505::Config::new(Model::Adis16505(Range::Dps500));
+    let mut sim = SimulatedImu::adis16505(replay(&bytes), config).unwrap();
+    assert_eq!(all(&mut sim).len(), 10);
+    assert_eq!(sim.driver().health().bus_errors, 1);
+    for _ in 0..3 {
+        assert!(sim.read_sample().unwrap().is_none());
+    }
+    let h = sim.health();
+    assert_eq!((h.samples, h.bus_errors), (10, 0));
+    assert_eq!(
+        sim.driver().health().bus_errors,
+        1,
+        "nothing read after the end"
+    );
+    assert_eq!(sim.driver().bus().bursts(), 10);
+}
+
 #[test]
 fn icm_sim_answers_nothing_until_configured() {
     // A FIFO read before init finds no data: the driver reports NotReady, not garbage.

@@ -274,14 +274,36 @@ struct RowOut {
 
 /// Writes the header and the rows of `csv` to `out`.
 pub fn write_to<W: Write>(out: W, csv: &ImuCsv) -> io::Result<()> {
-    let mut w = csv::WriterBuilder::new()
-        .has_headers(false)
-        .from_writer(out);
-    w.write_record(header_line(csv.has_temperature).split(','))?;
+    let mut w = CsvWriter::new(out, csv.has_temperature)?;
     for row in &csv.rows {
+        w.write_row(row)?;
+    }
+    w.finish()
+}
+
+/// A CSV recording written row by row: the header first, then each row as it comes (memory
+/// independent of the number of rows).
+#[derive(Debug)]
+pub struct CsvWriter<W: Write> {
+    w: csv::Writer<W>,
+    has_temperature: bool,
+}
+
+impl<W: Write> CsvWriter<W> {
+    /// Writes the header row to `out`, with the `temp_c` column when `has_temperature`.
+    pub fn new(out: W, has_temperature: bool) -> io::Result<Self> {
+        let mut w = csv::WriterBuilder::new()
+            .has_headers(false)
+            .from_writer(out);
+        w.write_record(header_line(has_temperature).split(','))?;
+        Ok(Self { w, has_temperature })
+    }
+
+    /// Writes `row` (its temperature only when the header has the column).
+    pub fn write_row(&mut self, row: &CsvRow) -> io::Result<()> {
         let [dtheta_x_rad, dtheta_y_rad, dtheta_z_rad] = row.delta_theta_ib_b;
         let [dv_x_mps, dv_y_mps, dv_z_mps] = row.delta_v_ib_b;
-        w.serialize(RowOut {
+        self.w.serialize(RowOut {
             t_s: row.t_s,
             dtheta_x_rad,
             dtheta_y_rad,
@@ -289,10 +311,15 @@ pub fn write_to<W: Write>(out: W, csv: &ImuCsv) -> io::Result<()> {
             dv_x_mps,
             dv_y_mps,
             dv_z_mps,
-            temp_c: csv.has_temperature.then_some(row.temperature_c),
+            temp_c: self.has_temperature.then_some(row.temperature_c),
         })?;
+        Ok(())
     }
-    w.flush()
+
+    /// Flushes the rows written to the output.
+    pub fn finish(mut self) -> io::Result<()> {
+        self.w.flush()
+    }
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@
 //! [`Solution`] row (its `Display`) per line and the end record
 //! ([`nav_core::output::EndRecord`]), and reports in output units.
 
-use hal_adapters::drivers::NoiseSpec;
+use hal_adapters::drivers::{Health, NoiseSpec};
 use hal_adapters::{Imu, ImuSample, SampleFlags};
 use nav_core::alignment::{AlignMethod, AlignOutcome, SensorNoise};
 use nav_core::navigator::{
@@ -141,6 +141,9 @@ pub struct Report {
     pub rows: u32,
     /// The source's own counters, when it is a replay (filled by [`crate::replay`]).
     pub source: Option<SourceCounters>,
+    /// The driver's counters, when the samples came through a simulated IMU's driver (filled
+    /// by [`crate::replay`]; the firmware logs the same).
+    pub driver: Option<Health>,
     /// The alignment.
     pub alignment: AlignmentDeg,
     /// The last solution written.
@@ -213,6 +216,7 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
         nav_steps: c.nav_steps,
         rows: c.rows,
         source: None,
+        driver: None,
         alignment: AlignmentDeg::new(config.align_method, &summary.alignment),
         final_solution: summary.last_solution,
     })

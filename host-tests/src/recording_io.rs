@@ -1,8 +1,10 @@
 //! Recordings on disk: format detection, the common in-memory form, the binary writer and the
 //! replay sources.
 //!
-//! Every format can be read into a [`Recording`] (the binary format's header values and records).
-//! For a replay, binary files are read straight from disk by [`Replay`]; CSV, PSINS and KF-GINS
+//! Every format can be read into a [`Recording`] (the binary format's header values and records),
+//! or converted to the binary or CSV format without holding it in memory ([`convert`]: two
+//! passes, a check that finds the header, then the records streamed into the output). For a
+//! replay, binary files are read straight from disk by [`Replay`]; CSV, PSINS and KF-GINS
 //! files are read from disk too, one line at a time, each record encoded into the binary format
 //! as the replay reads it ([`text_recording`]), so the sample flags and the measured `dt` come
 //! from the same code whatever the input format, in memory independent of the file's length.
@@ -15,8 +17,7 @@
 use crate::psins::PsinsHeader;
 use crate::text_error::{MAX_TIME_S, seconds_to_ns};
 use crate::text_recording::{
-    self, HeaderScan, RATE_PREFIX_RECORDS, TextRecordError, TextRecords, TextReplay,
-    rate_from_times,
+    self, HeaderScan, RATE_PREFIX_RECORDS, TextRecords, TextReplay, rate_from_times,
 };
 use crate::{imu_csv, kf_gins, psins};
 use anyhow::{Context, Result, anyhow, bail, ensure};
@@ -27,7 +28,7 @@ use hal_adapters::recording::{
     ReplayStats,
 };
 use hal_adapters::{Imu, ImuSample};
-use std::fs::{self, File};
+use std::fs::File;
 use std::io::{BufReader, Read, Write};
 use std::path::Path;
 
@@ -216,16 +217,7 @@ impl Recording {
             matches!(self.kind, Kind::Increments),
             "the CSV format holds increments, this recording holds rates"
         );
-        let rows = self
-            .records
-            .iter()
-            .map(|r| imu_csv::CsvRow {
-                t_s: r.t_ns as f64 / 1e9,
-                delta_theta_ib_b: r.gyro,
-                delta_v_ib_b: r.accel,
-                temperature_c: r.temperature_c,
-            })
-            .collect();
+        let rows = self.records.iter().map(csv_row).collect();
         let has_temperature = self.records.iter().any(|r| !r.temperature_c.is_nan());
         Ok(imu_csv::ImuCsv {
             has_temperature,
@@ -235,63 +227,189 @@ impl Recording {
 }
 
 /// Reads any recording file into memory (format from [`detect`]). Errors name the file and the
-/// line or byte offset. Text files are read as a replay reads them ([`text_recording`]), so the
-/// header found is the same.
+/// line or byte offset. The records are those [`convert`] writes: a first pass checks the file
+/// and finds the header, a second reads the records.
 pub fn read(path: &Path) -> Result<Recording> {
-    let context = || format!("recording {}", path.display());
-    match detect(path)? {
-        Format::Binary => read_binary(path),
-        format => {
-            let file = File::open(path).with_context(context)?;
-            let mut records = TextRecords::new(format, BufReader::new(file), path)?;
-            let mut scan = HeaderScan::new(&records);
-            let all = records
-                .by_ref()
-                .map(|r| {
-                    let r = r?;
-                    scan.push(&r);
-                    Ok(r)
-                })
-                .collect::<Result<Vec<_>, TextRecordError>>()?;
-            let header = scan.finish().with_context(context)?;
-            Ok(Recording {
-                kind: header.kind,
-                rate_hz: header.rate_hz,
-                t0_ns: header.t0_ns,
-                records: all,
-            })
-        }
+    let format = detect(path)?;
+    let scanned = scan(path, format)?;
+    let mut stream = RecordStream::open(path, format)?;
+    let mut records = Vec::new();
+    while let Some(r) = stream.next_record()? {
+        records.push(r);
     }
-}
-
-/// Reads a binary recording, checked by a full [`Replay`] pass first (so truncation and CRC errors
-/// read exactly as they do on replay).
-fn read_binary(path: &Path) -> Result<Recording> {
-    let context = || format!("recording {}", path.display());
-    let bytes = fs::read(path).with_context(context)?;
-    let mut replay = Replay::new(bytes.as_slice()).map_err(|e| in_file(path, format_error(e)))?;
-    while replay
-        .read_sample()
-        .map_err(|e| in_file(path, format_error(e)))?
-        .is_some()
-    {}
-    let header = *replay.header();
-    let records = (0..header.sample_count)
-        .map(|index| {
-            let offset = HEADER_LEN + RECORD_LEN * index as usize;
-            let chunk: &[u8; RECORD_LEN] = bytes[offset..offset + RECORD_LEN]
-                .try_into()
-                .expect("the replay pass checked the length");
-            Record::decode(chunk, offset as u64, index)
-        })
-        .collect::<Result<Vec<_>, FormatError>>()
-        .map_err(|e| in_file(path, e))?;
+    let header = scanned.header;
     Ok(Recording {
         kind: header.kind,
         rate_hz: header.rate_hz,
         t0_ns: header.t0_ns,
         records,
     })
+}
+
+/// What a first pass over a recording file found: the binary header (a text file's is found as
+/// a replay finds it, [`text_recording`]) and whether a record has a temperature.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Scanned {
+    header: Header,
+    has_temperature: bool,
+}
+
+/// The first pass over `path` (of `format`): checks every record as a replay does (a binary file
+/// through [`Replay`], so truncation and CRC errors read as they do on replay), in memory
+/// independent of the file's length.
+fn scan(path: &Path, format: Format) -> Result<Scanned> {
+    let context = || format!("recording {}", path.display());
+    let file = File::open(path).with_context(context)?;
+    let mut has_temperature = false;
+    let header = match format {
+        Format::Binary => {
+            let reader = StdReader::new(BufReader::new(file));
+            let mut replay =
+                Replay::new(reader).map_err(|e| in_file(path, SourceError::from(e)))?;
+            while let Some(s) = replay
+                .read_sample()
+                .map_err(|e| in_file(path, SourceError::from(e)))?
+            {
+                has_temperature |= !s.temperature_c.is_nan();
+            }
+            *replay.header()
+        }
+        _ => {
+            let mut records = TextRecords::new(format, BufReader::new(file), path)?;
+            let mut scan = HeaderScan::new(&records);
+            for r in records.by_ref() {
+                let r = r?;
+                has_temperature |= !r.temperature_c.is_nan();
+                scan.push(&r);
+            }
+            scan.finish().with_context(context)?
+        }
+    };
+    Ok(Scanned {
+        header,
+        has_temperature,
+    })
+}
+
+/// The records of a recording file in file order, each read when asked for: the second pass,
+/// after [`scan`] checked the file.
+enum RecordStream<'a> {
+    /// A binary file after its header: the next record's index.
+    Binary(BufReader<File>, u32, &'a Path),
+    /// A text file (boxed: its reader is large).
+    Text(Box<TextRecords<BufReader<File>>>),
+}
+
+impl<'a> RecordStream<'a> {
+    /// Opens `path` (of `format`) at its first record.
+    fn open(path: &'a Path, format: Format) -> Result<Self> {
+        let context = || format!("recording {}", path.display());
+        let mut file = BufReader::new(File::open(path).with_context(context)?);
+        Ok(match format {
+            Format::Binary => {
+                file.read_exact(&mut [0u8; HEADER_LEN])
+                    .with_context(context)?;
+                Self::Binary(file, 0, path)
+            }
+            _ => Self::Text(Box::new(TextRecords::new(format, file, path)?)),
+        })
+    }
+
+    /// The next record; `None` at the end of the file.
+    fn next_record(&mut self) -> Result<Option<Record>> {
+        match self {
+            Self::Binary(file, index, path) => {
+                let mut bytes = [0u8; RECORD_LEN];
+                match file.read(&mut bytes[..1]) {
+                    Ok(0) => return Ok(None),
+                    Ok(_) => {}
+                    Err(e) => return Err(in_file(path, e)),
+                }
+                file.read_exact(&mut bytes[1..])
+                    .map_err(|e| in_file(path, e))?;
+                let offset = HEADER_LEN as u64 + RECORD_LEN as u64 * u64::from(*index);
+                let r = Record::decode(&bytes, offset, *index).map_err(|e| in_file(path, e))?;
+                *index = index.saturating_add(1);
+                Ok(Some(r))
+            }
+            Self::Text(records) => Ok(records.next().transpose()?),
+        }
+    }
+}
+
+/// What [`convert`] did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Converted {
+    /// The input's format.
+    pub format: Format,
+    /// The header of the recording written (the count, rate, `t0` and kind).
+    pub header: Header,
+}
+
+/// Converts the recording `input` (any format, [`detect`]) to `out`: CSV when its name ends in
+/// `.csv`, binary otherwise; the same bytes as [`write`] of [`read`]'s recording, in memory
+/// independent of the file's length. A first pass checks `input` and finds the header (a text
+/// file's count and rate, a binary file's own; whether a record has a temperature, for the CSV
+/// header), the second streams the records into `out`. `out` is written whole or not at all
+/// ([`crate::atomic`]) and must not be `input`.
+pub fn convert(input: &Path, out: &Path) -> Result<Converted> {
+    let format = detect(input)?;
+    crate::atomic::refuse_same_file(&[input], out)?;
+    let scanned = scan(input, format)?;
+    let header = scanned.header;
+    let writing = || format!("writing {}", out.display());
+    let to_csv = is_csv(out);
+    if to_csv {
+        ensure!(
+            header.kind == Kind::Increments,
+            "writing {}: the CSV format holds increments, this recording holds rates",
+            out.display()
+        );
+    }
+    crate::atomic::write(out, |w| -> Result<()> {
+        let mut records = RecordStream::open(input, format)?;
+        let mut written = 0_u64;
+        if to_csv {
+            let mut csv = imu_csv::CsvWriter::new(&mut *w, scanned.has_temperature)?;
+            while let Some(r) = records.next_record()? {
+                csv.write_row(&csv_row(&r))?;
+                written += 1;
+            }
+            csv.finish()?;
+        } else {
+            w.write_all(&header.encode())?;
+            while let Some(r) = records.next_record()? {
+                w.write_all(&r.encode())?;
+                written += 1;
+            }
+        }
+        ensure!(
+            written == u64::from(header.sample_count),
+            "recording {}: {written} records on the second reading, {} on the first (the file \
+             changed during the conversion)",
+            input.display(),
+            header.sample_count
+        );
+        Ok(())
+    })
+    .with_context(writing)?;
+    Ok(Converted { format, header })
+}
+
+/// `true` when `path`'s name ends in `.csv` (any case).
+fn is_csv(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+}
+
+/// The CSV row of a record of increments.
+fn csv_row(r: &Record) -> imu_csv::CsvRow {
+    imu_csv::CsvRow {
+        t_s: r.t_ns as f64 / 1e9,
+        delta_theta_ib_b: r.gyro,
+        delta_v_ib_b: r.accel,
+        temperature_c: r.temperature_c,
+    }
 }
 
 /// An error of the recording `path`: "recording PATH: byte offset ... (record ...): ...".
@@ -340,10 +458,7 @@ pub fn write_binary(
 
 /// Writes `recording` to `path`: CSV when the name ends in `.csv`, binary otherwise.
 pub fn write(path: &Path, recording: &Recording) -> Result<()> {
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
-    {
+    if is_csv(path) {
         let csv = recording
             .to_csv()
             .with_context(|| format!("writing {}", path.display()))?;

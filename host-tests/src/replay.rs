@@ -1,17 +1,19 @@
 //! A recording file replayed end to end: open (any format), run the [`pipeline`] in the chosen
-//! precision, attach the replay's counters, and name the file in every error. A PSINS file's
-//! header site must be within [`PSINS_SITE_TOLERANCE_M`] of the run's `--lat/--lon`.
+//! precision, attach the replay's counters (and the driver's, through a simulated IMU), and name
+//! the file in every error. A PSINS file's header site must be within
+//! [`PSINS_SITE_TOLERANCE_M`] of the run's `--lat/--lon`.
 
 use crate::pipeline::{self, Report, RunConfig, SourceCounters, sensor_noise};
 use crate::psins::PsinsHeader;
 use crate::recording_io::{Format, ReplaySource, in_file};
 use anyhow::{Result, anyhow};
 use hal_adapters::Imu;
-use hal_adapters::drivers::Mounting;
 use hal_adapters::drivers::adis16505::{self, Model};
+use hal_adapters::drivers::{Health, Mounting};
 use hal_adapters::drivers::{NoiseSpec, bmi088, icm42688, noise};
 use hal_adapters::sim::{SimBmi088, SimulatedImu};
 use nav_core::Scalar;
+use std::fmt;
 use std::io::Write;
 use std::path::Path;
 
@@ -77,8 +79,50 @@ pub struct FileReport {
     pub format: Format,
     /// The recording's nominal rate [Hz].
     pub rate_hz: f64,
-    /// The pipeline's report (with the replay's counters).
+    /// The pipeline's report (with the replay's counters, and the driver's with `--device`).
     pub report: Report,
+}
+
+/// A failed replay: why, and the driver's counters at the failure when the samples came through
+/// a simulated IMU's driver (the firmware logs them before its error too).
+#[derive(Debug)]
+pub struct ReplayFailure {
+    /// Why (naming the file).
+    pub error: anyhow::Error,
+    /// The driver's counters at the failure ([`ImuDevice`] other than the recording).
+    pub driver: Option<Health>,
+}
+
+impl fmt::Display for ReplayFailure {
+    /// The error's message; with `{:#}`, its whole chain.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if f.alternate() {
+            write!(f, "{:#}", self.error)
+        } else {
+            write!(f, "{}", self.error)
+        }
+    }
+}
+
+impl std::error::Error for ReplayFailure {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.error.source()
+    }
+}
+
+impl From<anyhow::Error> for ReplayFailure {
+    fn from(error: anyhow::Error) -> Self {
+        Self {
+            error,
+            driver: None,
+        }
+    }
+}
+
+impl From<std::io::Error> for ReplayFailure {
+    fn from(e: std::io::Error) -> Self {
+        anyhow::Error::from(e).into()
+    }
 }
 
 /// Replays `path` in precision `T`, writing the solution log to `out`.
@@ -86,24 +130,24 @@ pub fn replay_file<T: Scalar, W: Write>(
     path: &Path,
     options: &ReplayOptions,
     out: W,
-) -> Result<FileReport> {
+) -> Result<FileReport, ReplayFailure> {
     let (mut source, format) = ReplaySource::open(path)?;
     if let Some(h) = source.psins_header() {
         check_psins_site(path, h, &options.run)?;
     }
     let rate_hz = source.header().rate_hz;
     let config = (&options.run, rate_hz);
-    let stats = match options.device {
+    let (run, driver, stats) = match options.device {
         ImuDevice::Recording => {
-            let report = run_source::<T, _, _>(path, config, &mut source, out)?;
-            (report, source.stats())
+            let run = run_source::<T, _, _>(path, config, &mut source, out);
+            (run, None, source.stats())
         }
         ImuDevice::Adis16505 => {
             let driver_config = adis16505::Config::new(Model::BOARD);
             let mut imu = SimulatedImu::adis16505(source, driver_config)
                 .map_err(|e| anyhow!("simulated ADIS16505: {e}"))?;
-            let report = run_source::<T, _, _>(path, config, &mut imu, out)?;
-            (report, imu.driver().bus().source().stats())
+            let run = run_source::<T, _, _>(path, config, &mut imu, out);
+            (run, Some(imu.health()), imu.driver().bus().source().stats())
         }
         ImuDevice::Icm42688 => {
             let driver_config = icm42688::Config {
@@ -111,23 +155,24 @@ pub fn replay_file<T: Scalar, W: Write>(
             };
             let mut imu = SimulatedImu::icm42688(source, driver_config)
                 .map_err(|e| anyhow!("simulated ICM-42688-P: {e}"))?;
-            let report = run_source::<T, _, _>(path, config, &mut imu, out)?;
-            (report, imu.driver().bus().source().stats())
+            let run = run_source::<T, _, _>(path, config, &mut imu, out);
+            (run, Some(imu.health()), imu.driver().bus().source().stats())
         }
         ImuDevice::Bmi088 => {
             let device = SimBmi088::new(source);
             let mut imu = SimulatedImu::bmi088(&device, bmi088::Config::default())
                 .map_err(|e| anyhow!("simulated BMI088: {e}"))?;
-            let report = run_source::<T, _, _>(path, config, &mut imu, out)?;
-            (report, device.into_source().stats())
+            let run = run_source::<T, _, _>(path, config, &mut imu, out);
+            (run, Some(imu.health()), device.into_source().stats())
         }
     };
-    let (mut report, stats) = stats;
+    let mut report = run.map_err(|error| ReplayFailure { error, driver })?;
     report.source = Some(SourceCounters {
         missed: stats.missed,
         non_finite: stats.non_finite,
         bad_interval: stats.bad_interval,
     });
+    report.driver = driver;
     Ok(FileReport {
         format,
         rate_hz,

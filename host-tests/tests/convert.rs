@@ -93,3 +93,133 @@ fn binary_to_csv_and_back() {
     // The median interval is 3333333 ns here, not 1e9 / 300.
     assert!((back.rate_hz - 300.0).abs() < 1e-4, "{}", back.rate_hz);
 }
+
+/// `recording_io::convert` (`nav convert`, streaming) writes the bytes the in-memory path wrote
+/// (`recording_io::read`, then `recording_io::write`) for every input format, to binary and to
+/// CSV; a recording converts CSV -> binary -> CSV to the bytes of the CSV and binary writers.
+#[test]
+fn convert_writes_the_bytes_of_the_in_memory_path() {
+    use hal_adapters::recording::Kind;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let s = Stationary {
+        seconds: 12.0,
+        ..Stationary::default()
+    };
+    let generated = s.recording().unwrap();
+    let mut without_temperature = generated.clone();
+    for r in &mut without_temperature.records {
+        r.temperature_c = f32::NAN;
+    }
+    let mut rates = generated.clone();
+    rates.kind = Kind::Rates;
+    let mut inputs = Vec::new();
+    for (name, rec) in [
+        ("gen.bin", &generated),
+        ("gen.csv", &generated),
+        ("no-temp.csv", &without_temperature),
+        ("rates.bin", &rates),
+    ] {
+        recording_io::write(&d.join(name), rec).unwrap();
+        inputs.push(d.join(name));
+    }
+    let kf_gins: String = (1..=3000)
+        .map(|k| {
+            let t = 456_300.0 + f64::from(k) * 0.005;
+            format!("{t:.9} 1.1e-7 -2.0e-8 3.3e-7 1.2e-4 -3.0e-5 -0.049042\n")
+        })
+        .collect();
+    std::fs::write(d.join("imu.txt"), kf_gins).unwrap();
+    inputs.push(d.join("imu.txt"));
+    let mut psins = "% test\n0 0 -90.6 0 0 0\n34.246048 108.909664 380.0 0 10 9.780327\n\
+                     0.1 0.1 0.1 125 125 125\n"
+        .to_owned();
+    for k in 0..2000 {
+        psins.push_str(&format!("{} 9 3 0 {} 80\n", k % 11, k % 3));
+    }
+    std::fs::write(d.join("imu.imu"), psins).unwrap();
+    inputs.push(d.join("imu.imu"));
+
+    for input in &inputs {
+        let recording = recording_io::read(input).unwrap();
+        for ext in ["bin", "csv"] {
+            let (expected, converted) = (
+                d.join(format!("expected.{ext}")),
+                d.join(format!("converted.{ext}")),
+            );
+            let name = format!("{} to {ext}", input.display());
+            for p in [&expected, &converted] {
+                let _ = std::fs::remove_file(p);
+            }
+            match recording_io::write(&expected, &recording) {
+                Ok(()) => {
+                    let c = recording_io::convert(input, &converted).unwrap();
+                    assert_eq!(c.header, recording.header().unwrap(), "{name}");
+                    assert_eq!(
+                        std::fs::read(&converted).unwrap(),
+                        std::fs::read(&expected).unwrap(),
+                        "{name}"
+                    );
+                }
+                Err(e) => {
+                    // Rates to CSV: the same refusal, and nothing written.
+                    assert_eq!(recording.kind, Kind::Rates, "{name}: {e:#}");
+                    let msg = format!(
+                        "{:#}",
+                        recording_io::convert(input, &converted).unwrap_err()
+                    );
+                    assert!(
+                        msg.contains("the CSV format holds increments, this recording holds rates"),
+                        "{msg}"
+                    );
+                    assert!(!converted.exists(), "{name}");
+                }
+            }
+        }
+    }
+
+    // CSV -> binary -> CSV: the binary writer's bytes, then the CSV writer's again.
+    let (bin, csv) = (d.join("round.bin"), d.join("round.csv"));
+    recording_io::convert(&d.join("gen.csv"), &bin).unwrap();
+    assert_eq!(
+        std::fs::read(&bin).unwrap(),
+        generated.to_bytes().unwrap(),
+        "CSV to binary"
+    );
+    recording_io::convert(&bin, &csv).unwrap();
+    assert_eq!(
+        std::fs::read(&csv).unwrap(),
+        std::fs::read(d.join("gen.csv")).unwrap(),
+        "binary back to CSV"
+    );
+}
+
+/// A failed conversion leaves an existing output as it was and no temporary file; an output
+/// that is the input is refused.
+#[test]
+fn a_failed_convert_leaves_the_output_untouched() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let text = "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,dv_y_mps,dv_z_mps\n\
+                0.0025,0,0,0,0,0,-0.0245\n0.005,0,0,0,0,x,-0.0245\n0.0075,0,0,0,0,0,-0.0245\n";
+    std::fs::write(d.join("bad.csv"), text).unwrap();
+    std::fs::write(d.join("out.bin"), "older output\n").unwrap();
+    let e = recording_io::convert(&d.join("bad.csv"), &d.join("out.bin")).unwrap_err();
+    let msg = format!("{e:#}");
+    assert!(
+        msg.contains("bad.csv: line 3: column dv_y_mps: expected a number, found 'x'"),
+        "{msg}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(d.join("out.bin")).unwrap(),
+        "older output\n"
+    );
+    let mut names: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["bad.csv", "out.bin"]);
+    let e = recording_io::convert(&d.join("out.bin"), &d.join(".").join("out.bin")).unwrap_err();
+    assert!(e.to_string().contains("is the input"), "{e}");
+}

@@ -48,8 +48,9 @@ fn output_equal_to_the_input_is_refused_and_the_input_kept() {
     assert_eq!(std::fs::read(&imu).unwrap(), before);
     // The same for `nav convert`, under another spelling of the path.
     let other = dir.path().join(".").join("imu.bin");
-    let o = nav(&["convert", &imu, other.to_str().unwrap()]);
-    assert!(!o.status.success(), "{}", text(&o));
+    let o = nav(&["convert", "--in", &imu, "--out", other.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("is the input"), "{}", text(&o));
     assert_eq!(std::fs::read(&imu).unwrap(), before);
 }
 

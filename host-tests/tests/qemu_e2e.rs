@@ -97,6 +97,17 @@ fn field(log: &str, key: &str) -> u64 {
         .unwrap_or_else(|_| panic!("no number after '{key}' in:\n{log}"))
 }
 
+/// The IMU driver's counts in a log: the text after `IMU driver: ` to the end of its line (the
+/// firmware's defmt line, or the host's summary line; the same `Health` display on both).
+fn driver_counts<'a>(log: &'a str, who: &str) -> &'a str {
+    log.lines()
+        .find_map(|l| {
+            l.split_once("IMU driver: ")
+                .map(|(_, counts)| counts.trim_end())
+        })
+        .unwrap_or_else(|| panic!("no 'IMU driver:' line from the {who}:\n{log}"))
+}
+
 /// `seconds` of the simulator's `static` scenario (45 deg N, 7.5 deg E, 150 m, attitude (1.5,
 /// -2, 30) deg) sensed by `grade` (seed 3), with its truth.
 fn static_sim(seconds: f64, grade: Grade) -> host_tests::simulate::Simulated {
@@ -231,9 +242,27 @@ fn firmware_in_qemu_matches_host_replay() {
         }
         let o = nav(d, &args);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
     };
-    replay("host.csv", Some("imu.cal"));
+    let host_stdout = replay("host.csv", Some("imu.cal"));
     replay("uncalibrated.csv", None);
+    // The driver's own counts, the same on both sides: 7999 frames decoded, the NaN record's
+    // rejected (its sample delivered flagged), the repeated DATA_CNTR stale; the frames after
+    // the NaN record and after the repeated time each span two periods (one missed output
+    // sample each); the end of the recording is not a bus error.
+    let fw_counts = driver_counts(&log, "firmware");
+    assert_eq!(
+        driver_counts(&host_stdout, "host"),
+        fw_counts,
+        "driver counts of the host and the firmware"
+    );
+    assert!(
+        fw_counts.starts_with(
+            "samples 7999, checksum errors 1, stale 1, device missed 2, bus errors 0, faults 0, \
+             FIFO overflows 0, invalid 0,"
+        ),
+        "{fw_counts}"
+    );
 
     let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
     let host = std::fs::read_to_string(d.join("host.csv")).unwrap();
@@ -271,8 +300,8 @@ fn firmware_in_qemu_matches_host_replay() {
 /// Recordings that navigate nothing: every sample NaN (the alignment never gets one), NaN after
 /// the alignment, and frozen time after the alignment (the simulated ADIS16505 repeats its
 /// DATA_CNTR: stale). The firmware and `nav replay --device adis16505` fail alike, with the same
-/// message counting the samples by cause; the firmware's log has no end record, and the host
-/// leaves no log.
+/// message counting the samples by cause and the same driver counts; the firmware's log has no
+/// end record, and the host leaves no log.
 #[test]
 fn firmware_and_host_fail_alike_when_nothing_is_navigated() {
     let dir = tempfile::tempdir().unwrap();
@@ -291,24 +320,29 @@ fn firmware_and_host_fail_alike_when_nothing_is_navigated() {
     };
     let nan = |r: &mut hal_adapters::recording::Record, _| r.gyro[2] = f32::NAN;
     let frozen = |r: &mut hal_adapters::recording::Record, t: u64| r.t_ns = t;
+    // (file, recording, firmware exit code, message, the driver's counts): a NaN record is a
+    // frame the driver rejects (checksum), a frozen time a repeated DATA_CNTR (stale).
     let cases = [
         (
             "all-nan.bin",
             with(0, &nan),
             5,
             "recording ended during alignment: 0 of 4000 samples used (4400 flagged: non-finite 4400)",
+            "samples 0, checksum errors 4400, stale 0, device missed 0, bus errors 0,",
         ),
         (
             "nav-nan.bin",
             with(4000, &nan),
             7,
             "no navigation step after the alignment: 4400 samples, 4000 used by the alignment (400 flagged: non-finite 400)",
+            "samples 4000, checksum errors 400, stale 0, device missed 0, bus errors 0,",
         ),
         (
             "nav-frozen.bin",
             with(4000, &frozen),
             7,
             "no navigation step after the alignment: 4400 samples, 4000 used by the alignment (400 flagged: stale 400)",
+            "samples 4400, checksum errors 0, stale 400, device missed 0, bus errors 0,",
         ),
     ];
     let s = Static::default();
@@ -317,7 +351,7 @@ fn firmware_and_host_fail_alike_when_nothing_is_navigated() {
         s.lon_deg.to_string(),
         s.h_m.to_string(),
     );
-    for (file, rec, fw_code, expect) in cases {
+    for (file, rec, fw_code, expect, driver_expect) in cases {
         recording_io::write(&d.join(file), &rec).unwrap();
         let (code, log) = run_firmware(d, &[file, "fw.csv", &lat, &lon, &h, "10"]);
         assert_eq!(code, fw_code, "{file}: firmware exit code; log:\n{log}");
@@ -356,6 +390,15 @@ fn firmware_and_host_fail_alike_when_nothing_is_navigated() {
         );
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{file}: host: {stderr}");
+        // The driver's counts of the failed run, as the firmware logs them.
+        let host_stdout = String::from_utf8_lossy(&out.stdout);
+        let fw_counts = driver_counts(&log, "firmware");
+        assert_eq!(
+            driver_counts(&host_stdout, "host"),
+            fw_counts,
+            "{file}: driver counts of the host and the firmware"
+        );
+        assert!(fw_counts.contains(driver_expect), "{file}: {fw_counts}");
         let prefix = format!("recording {file}: ");
         let host_msg = stderr
             .lines()

@@ -1,7 +1,8 @@
 //! The text readers (CSV, KF-GINS, PSINS, truth CSV, oscillator readouts): a cut-off last line,
 //! times beyond the recording clock and PSINS header values are refused naming the cause, and
-//! every reader streams in memory independent of the file's length (a per-thread counting
-//! allocator watches the peak while generated files of many rows run through).
+//! every reader (and `nav convert`) streams in memory independent of the file's length (a
+//! per-thread counting allocator watches the peak while generated files of many rows run
+//! through).
 
 mod common;
 
@@ -274,6 +275,66 @@ fn trajectory_and_readout_readers_stream_in_bounded_memory() {
         });
         assert_eq!(n, rows);
         assert!(peak < BOUND_BYTES, "osc: {rows} rows held {peak} bytes");
+    }
+}
+
+/// `lines` lines of `make` written to `path` (streamed, nothing held).
+fn write_generated(path: &Path, lines: u64, make: fn(u64, &mut Vec<u8>)) {
+    let mut file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    std::io::copy(&mut Generated::new(lines, make), &mut file).unwrap();
+}
+
+/// `nav convert` ([`recording_io::convert`]) streams: CSV to binary and binary to CSV of 50 000
+/// and of 200 000 rows hold about the same memory at the peak, far below either file's size
+/// (the in-memory conversion held every record, 40 bytes each and more).
+#[test]
+fn convert_streams_in_bounded_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut peaks = Vec::new();
+    for samples in [50_000_u64, 200_000] {
+        let csv = dir.path().join(format!("in-{samples}.csv"));
+        write_generated(&csv, samples + 1, csv_line);
+        let (bin, back) = (
+            dir.path().join(format!("{samples}.bin")),
+            dir.path().join(format!("{samples}.csv")),
+        );
+        let (c, to_binary) = peak_bytes(|| recording_io::convert(&csv, &bin).unwrap());
+        assert_eq!(
+            (c.format, u64::from(c.header.sample_count)),
+            (Format::Csv, samples)
+        );
+        let (c, to_csv) = peak_bytes(|| recording_io::convert(&bin, &back).unwrap());
+        assert_eq!(
+            (c.format, u64::from(c.header.sample_count)),
+            (Format::Binary, samples)
+        );
+        let size = |p: &Path| std::fs::metadata(p).unwrap().len() as usize;
+        let smallest = size(&csv).min(size(&bin)).min(size(&back));
+        println!(
+            "convert {samples} samples: CSV ({} KiB) to binary ({} KiB) peak {} KiB, back to CSV \
+             peak {} KiB",
+            size(&csv) / 1024,
+            size(&bin) / 1024,
+            to_binary / 1024,
+            to_csv / 1024
+        );
+        for (what, peak) in [("CSV to binary", to_binary), ("binary to CSV", to_csv)] {
+            assert!(
+                peak < BOUND_BYTES && peak < smallest / 8,
+                "{what}, {samples} samples: {peak} bytes at the peak, files of {smallest} bytes and more"
+            );
+        }
+        peaks.push((to_binary, to_csv));
+    }
+    // Four times the rows, about the same memory.
+    for (what, small, large) in [
+        ("CSV to binary", peaks[0].0, peaks[1].0),
+        ("binary to CSV", peaks[0].1, peaks[1].1),
+    ] {
+        assert!(
+            large <= small + 64 * 1024,
+            "{what}: the peak grows with the length: {small} then {large} bytes"
+        );
     }
 }
 

@@ -29,6 +29,29 @@ pub struct Health {
     pub accel_clips: [u32; 3],
 }
 
+impl core::fmt::Display for Health {
+    /// The counters as the firmware and the host harness print them: `samples N, checksum
+    /// errors N, stale N, device missed N, bus errors N, faults N, FIFO overflows N, invalid N,
+    /// gyro clips [x, y, z], accel clips [x, y, z]`.
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "samples {}, checksum errors {}, stale {}, device missed {}, bus errors {}, faults {}, \
+             FIFO overflows {}, invalid {}, gyro clips {:?}, accel clips {:?}",
+            self.samples,
+            self.checksum_errors,
+            self.stale,
+            self.missed,
+            self.bus_errors,
+            self.device_faults,
+            self.fifo_overflows,
+            self.invalid,
+            self.gyro_clips,
+            self.accel_clips
+        )
+    }
+}
+
 impl Health {
     /// Adds the per-axis clip masks (bit `i` = sensor axis `i`).
     pub(crate) fn count_clips(&mut self, gyro_mask: u8, accel_mask: u8) {
@@ -65,4 +88,33 @@ pub(crate) fn inc(counter: &mut u32) {
 #[inline]
 pub(crate) fn add(counter: &mut u32, n: u32) {
     *counter = counter.saturating_add(n);
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use std::format;
+
+    #[test]
+    fn display_names_every_counter_in_order() {
+        let h = Health {
+            samples: 1,
+            checksum_errors: 2,
+            stale: 3,
+            missed: 4,
+            bus_errors: 5,
+            device_faults: 6,
+            fifo_overflows: 7,
+            invalid: 8,
+            gyro_clips: [9, 10, 11],
+            accel_clips: [12, 13, 14],
+        };
+        assert_eq!(
+            format!("{h}"),
+            "samples 1, checksum errors 2, stale 3, device missed 4, bus errors 5, faults 6, \
+             FIFO overflows 7, invalid 8, gyro clips [9, 10, 11], accel clips [12, 13, 14]"
+        );
+    }
 }

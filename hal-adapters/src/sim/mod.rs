@@ -93,7 +93,7 @@ use embedded_hal::spi::{ErrorKind, Operation};
 use crate::drivers::adis16505::{self as adis, Adis16505};
 use crate::drivers::bmi088::{self as bmi, Bmi088};
 use crate::drivers::icm42688::{self as icm, Icm42688};
-use crate::drivers::{Error, ImuDriver, Mounting};
+use crate::drivers::{Error, Health, ImuDriver, Mounting};
 use crate::{Imu, ImuSample, Motion, SampleFlags};
 
 /// A [`DelayNs`] that returns at once: a simulated device needs no waiting.
@@ -176,12 +176,25 @@ const MAX_CONSECUTIVE_TRANSIENT: u32 = 64;
 /// driver's health; the end of the source is `Ok(None)`.
 pub struct SimulatedImu<D> {
     driver: D,
+    ended: bool,
+}
+
+/// The driver's counters `health` once its simulated device has ended the recording: the data
+/// read that found the source at its end failed on the bus ([`SimError::End`]) and was counted as
+/// a bus error, which it is not. The firmware's board IMU and [`SimulatedImu::health`] both
+/// report this.
+pub fn health_at_end(mut health: Health) -> Health {
+    health.bus_errors = health.bus_errors.saturating_sub(1);
+    health
 }
 
 impl<D> SimulatedImu<D> {
     /// Wraps an initialised driver.
     pub fn new(driver: D) -> Self {
-        SimulatedImu { driver }
+        SimulatedImu {
+            driver,
+            ended: false,
+        }
     }
 
     /// The driver.
@@ -237,6 +250,19 @@ impl<'a, S: Imu> SimulatedImu<Bmi088<SimBmi088Gyro<'a, S>, SimBmi088Accel<'a, S>
     }
 }
 
+impl<D: ImuDriver> SimulatedImu<D> {
+    /// The driver's counters so far; after the end of the source, without the end's failed
+    /// read ([`health_at_end`]).
+    pub fn health(&self) -> Health {
+        let health = self.driver.health();
+        if self.ended {
+            health_at_end(health)
+        } else {
+            health
+        }
+    }
+}
+
 impl<D, E> Imu for SimulatedImu<D>
 where
     D: ImuDriver<BusError = SimError<E>>,
@@ -245,7 +271,12 @@ where
 {
     type Error = Error<SimError<E>>;
 
+    /// The next sample; `Ok(None)` once the source has ended (and after that, without a
+    /// further read).
     fn read_sample(&mut self) -> Result<Option<ImuSample>, Self::Error> {
+        if self.ended {
+            return Ok(None);
+        }
         let mut transient = 0;
         loop {
             let read = self.driver.read_sample(0);
@@ -256,7 +287,10 @@ where
                     }
                     return Ok(Some(sample));
                 }
-                Err(Error::Spi(SimError::End)) => return Ok(None),
+                Err(Error::Spi(SimError::End)) => {
+                    self.ended = true;
+                    return Ok(None);
+                }
                 Err(e) if e.is_transient() && transient < MAX_CONSECUTIVE_TRANSIENT => {
                     transient += 1;
                 }

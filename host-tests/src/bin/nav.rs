@@ -410,6 +410,13 @@ fn replay(a: ReplayArgs) -> Result<()> {
         Precision::F32 => replay_file::<f32, _>(imu, &options, writer),
         Precision::F64 => replay_file::<f64, _>(imu, &options, writer),
     })
+    .map_err(|failure| {
+        // The driver's counts of a failed run too, as the firmware logs them.
+        if let Some(h) = failure.driver {
+            println!("IMU driver: {h}");
+        }
+        failure.error
+    })
     .with_context(|| format!("replay of {} into {}", imu.display(), out.display()))?;
     let seconds = started.elapsed().as_secs_f64();
     print_summary(imu, out, a.precision, &report);
@@ -877,15 +884,14 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Convert { input, out } => {
-            let format = recording_io::detect(&input)?;
-            host_tests::atomic::refuse_same_file(&[&input], &out)?;
-            let recording = recording_io::read(&input)?;
-            recording_io::write(&out, &recording)?;
+            // Streamed: memory independent of the file's length.
+            let c = recording_io::convert(&input, &out)?;
             println!(
-                "converted {} ({format}, {} samples at {} Hz) to {}",
+                "converted {} ({}, {} samples at {} Hz) to {}",
                 input.display(),
-                recording.records.len(),
-                recording.rate_hz,
+                c.format,
+                c.header.sample_count,
+                c.header.rate_hz,
                 out.display()
             );
             Ok(())
@@ -921,6 +927,10 @@ fn print_summary(imu: &Path, out: &Path, precision: Precision, fr: &FileReport) 
         "samples {}: flagged {} (non-finite {}, bad interval {}), rejected {}, missed {}; navigation steps {}",
         r.samples, r.flagged, c.non_finite, c.bad_interval, r.rejected, c.missed, r.nav_steps
     );
+    if let Some(h) = r.driver {
+        // The firmware's line, field for field.
+        println!("IMU driver: {h}");
+    }
     let a = &r.alignment;
     println!(
         "alignment ({}) over {} samples ({:.3} s: coarse {:.3} s, fine {:.3} s): roll {:.6} deg, pitch {:.6} deg, yaw {:.6} deg; 1-sigma {:.4} {:.4} {:.4} deg",
