@@ -11,7 +11,9 @@
 //!   [`FLOOR_CAP_DEG`] (the `mems-tactical` members' gyro biases leave the heading
 //!   unobservable: their floor is many radians): RMS heading error, RMS floor, RMS of `error /
 //!   floor` (the target for `fine`: at most [`FLOOR_TARGET`]) and RMS of `sigma /
-//!   floor` (below 1: the method claims more than the data can hold);
+//!   floor` (below 1: the method claims more than the data can hold), and the RMS of `error /
+//!   floor` over the still members and over the swaying ones apart (the floor is the noise's
+//!   and the biases'; a swaying base's unknown translation raises the real one);
 //! - hand-over: how many velocities and positions have an axis beyond [`HANDOVER_SIGMAS`] and
 //!   the RMS of `error / sigma` per NED axis.
 
@@ -72,6 +74,9 @@ pub struct Cell {
     pub error_floor2: f64,
     /// Sum of `(sigma / floor)^2`.
     pub sigma_floor2: f64,
+    /// Still members in the floor columns, and their sum of `(error / floor)^2` (the floor is
+    /// the noise's and the biases' only; a swaying base's translation adds to it).
+    pub still_floor: (usize, f64),
     /// Aligned cases with a velocity axis beyond [`HANDOVER_SIGMAS`].
     pub v_beyond: usize,
     /// Sum of `(velocity error / sigma)^2`, NED.
@@ -126,6 +131,10 @@ impl Cell {
             self.floor2 += floor * floor;
             self.error_floor2 += (e / floor).powi(2);
             self.sigma_floor2 += (s / floor).powi(2);
+            if run.member.still {
+                self.still_floor.0 += 1;
+                self.still_floor.1 += (e / floor).powi(2);
+            }
         }
         let (vz, pz) = (a.velocity_z(), a.position_z());
         self.v_beyond += usize::from(vz.amax() > HANDOVER_SIGMAS);
@@ -160,6 +169,16 @@ impl Cell {
             self.sigma_floor2,
         ]
         .map(|s| (s / n).sqrt())
+    }
+
+    /// RMS of `error / floor` over the still members and over the swaying ones (NaN without).
+    pub fn error_floor_by_base(&self) -> [f64; 2] {
+        let (n, sum) = self.still_floor;
+        let rest = self.floor_n - n;
+        [
+            (sum / n as f64).sqrt(),
+            ((self.error_floor2 - sum).max(0.0) / rest as f64).sqrt(),
+        ]
     }
 
     /// Refused cases.
@@ -400,14 +419,24 @@ pub fn format_summary(s: &Summary) -> String {
     );
     let _ = writeln!(
         w,
-        "{:<8} {:<9} {:>6} {:>5} {:>12} {:>12} {:>12} {:>12}",
-        "method", "lever", "T [s]", "n", "RMS e [deg]", "floor [deg]", "RMS e/floor", "RMS sig/flr"
+        "{:<8} {:<9} {:>6} {:>5} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}",
+        "method",
+        "lever",
+        "T [s]",
+        "n",
+        "RMS e [deg]",
+        "floor [deg]",
+        "RMS e/floor",
+        "RMS sig/flr",
+        "still e/flr",
+        "sway e/flr"
     );
     for (m, l, win, c) in s.cells.iter().filter(|c| c.2.is_some()) {
         let [e, fl, ef, sf] = c.floor_columns();
+        let [still, sway] = c.error_floor_by_base();
         let _ = writeln!(
             w,
-            "{:<8} {:<9} {:>6} {:>5} {} {} {} {}",
+            "{:<8} {:<9} {:>6} {:>5} {} {} {} {} {} {}",
             m.name(),
             l.name(),
             window_name(*win),
@@ -415,7 +444,9 @@ pub fn format_summary(s: &Summary) -> String {
             f(e.to_degrees(), 12, 4),
             f(fl.to_degrees(), 12, 4),
             f(ef, 12, 2),
-            f(sf, 12, 2)
+            f(sf, 12, 2),
+            f(still, 12, 2),
+            f(sway, 12, 2)
         );
     }
 
