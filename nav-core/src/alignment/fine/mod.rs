@@ -791,12 +791,7 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
 
     /// The result, or why there is none (module docs, **Honesty**).
     pub fn outcome(&self) -> Result<FineOutcome<T>, FineRefusal> {
-        if self.status.updates == 0 {
-            return Err(FineRefusal::NotStarted);
-        }
-        if self.broken {
-            return Err(FineRefusal::NonFinite);
-        }
+        let solution = self.solution()?;
         let p = self.ins_cov();
         // Heading: the tangential error of the horizontal Earth rate.
         let g = self.azimuth_gradient();
@@ -821,7 +816,7 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
                 mean_nis: self.status.mean_nis,
             });
         }
-        self.solution()
+        Ok(solution)
     }
 
     /// The state and 1-sigma the filter holds now, without [`Self::outcome`]'s checks (a
