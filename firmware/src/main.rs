@@ -512,13 +512,15 @@ mod app {
 
     /// Alignment, below navigation: the navigator's background on the forwarded increments;
     /// logs its stage changes and cost, and answers.
-    #[task(priority = 1, local = [setup])]
+    /// The background (the alignment filters, some 45 KB in `f32`) lives in the task's static
+    /// slot, not on its stack.
+    #[task(priority = 1, local = [setup, background: Option<Background<f32>> = None])]
     async fn align(
         cx: align::Context,
         mut from_navigate: Receiver<'static, ToBackground<f32>, ALIGN_CAP>,
         mut to_navigate: Sender<'static, FromBackground<f32>, 1>,
     ) {
-        let mut background = Background::new(cx.local.setup);
+        let background = cx.local.background.insert(Background::new(cx.local.setup));
         let settings = *background.settings();
         defmt::info!(
             "aligning: {=str}, {=u32} samples; stage COARSE",

@@ -28,7 +28,7 @@ use super::inertial::{InertialAlignError, InertialAlignment, SensorNoise};
 use super::stillness::{Scatter, Stillness};
 use super::sway::{SwayAlignment, SwayConfig};
 use crate::{ImuIncrement, InputLimits, NavState, Position, Scalar, earth};
-use nalgebra::Vector3;
+use nalgebra::{UnitQuaternion, Vector3};
 
 /// Which alignment to run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -262,6 +262,40 @@ impl<T: Scalar> Default for BaseMotion<T> {
             translation_sigma_m: T::c(0.5),
         }
     }
+}
+
+/// Starts the fine filters in `slot`. Not inlined: the bank's temporaries (some 25 KB in
+/// `f32`) then take stack only while it is built, not in every frame of the sample path (an
+/// MCU task's stack is a few tens of KB).
+#[inline(never)]
+fn start_fine<T: Scalar>(
+    slot: &mut Option<Bank<T, FINE_STATES, NoExtension>>,
+    q_b_c: UnitQuaternion<T>,
+    omega_eb_b: Vector3<T>,
+    position: Position,
+    fine: FineConfig<T>,
+) {
+    *slot = Some(Bank::new(q_b_c, omega_eb_b, position, fine, NoExtension));
+}
+
+/// Starts the sway filters in `slot` (not inlined, as [`start_fine`]).
+#[inline(never)]
+fn start_sway<T: Scalar>(
+    slot: &mut Option<SwayAlignment<T>>,
+    q_b_c: UnitQuaternion<T>,
+    omega_eb_b: Vector3<T>,
+    position: Position,
+    fine: FineConfig<T>,
+) {
+    *slot = Some(SwayAlignment::new(
+        q_b_c,
+        omega_eb_b,
+        position,
+        SwayConfig {
+            fine,
+            ..SwayConfig::default()
+        },
+    ));
 }
 
 /// Longest lever arm (and largest lever-arm 1-sigma) accepted [m]: the IMU sits on the base,
@@ -758,23 +792,9 @@ impl<T: Scalar> Aligner<T> {
             ..FineConfig::default()
         };
         if self.settings.method == AlignMethod::Sway {
-            self.sway = Some(SwayAlignment::new(
-                q_b_c,
-                self.last_rate,
-                position,
-                SwayConfig {
-                    fine,
-                    ..SwayConfig::default()
-                },
-            ));
+            start_sway(&mut self.sway, q_b_c, self.last_rate, position, fine);
         } else {
-            self.kalman = Some(Bank::new(
-                q_b_c,
-                self.last_rate,
-                position,
-                fine,
-                NoExtension,
-            ));
+            start_fine(&mut self.kalman, q_b_c, self.last_rate, position, fine);
         }
         self.stage = Stage::Fine;
     }

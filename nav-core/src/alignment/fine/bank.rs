@@ -1,36 +1,51 @@
-//! Two filters that differ only in whether the base's centre translates horizontally, weighted
-//! by the likelihood of their innovations (a static multiple-model filter, [Bar-Shalom et
-//! al., §11.6.2]).
+//! Filters that differ only in how far the base's centre translates horizontally, weighted by
+//! the likelihood of their innovations (a static multiple-model filter, [Bar-Shalom et al.,
+//! §11.6.2]).
 //!
-//! Why two: the heading's signature in the IMU's position is a slow cubic ([`super`]); a
+//! Why several: the heading's signature in the IMU's position is a slow cubic ([`super`]); a
 //! stationary model of horizontal translation (surge, sway) has power at those slow
 //! frequencies however it is shaped, and costs the heading of a 60 s alignment 17 % already at
 //! 1 cm (2.5x at 0.1 m; vertical heave costs nothing: it does not reach the heading). A base
 //! that does not translate horizontally should not pay for one that might. So one filter
-//! assumes no horizontal translation, the other the configured one; each accumulates the log
-//! likelihood of its scalar innovations, `-(ln S + nu^2 / S) / 2`, and the result is their
-//! mixture: weights `w_i ∝ exp(L_i)`, mean `sum w_i x_i`, variance `sum w_i (P_i + (x_i -
-//! x)^2)` per angle and axis. When the base does translate, the first filter's innovations
-//! grow with it and its weight vanishes within seconds; when it does not, the second's
-//! extra freedom only widens its innovation variances and the first wins by Occam's factor.
+//! assumes no horizontal translation, one a quarter of the configured 1-sigma and one the
+//! configured one ([`TRANSLATION_FRACTIONS`]); each accumulates the log likelihood of its
+//! scalar innovations, `-(ln S + nu^2 / S) / 2`, and the result is their mixture: weights
+//! `w_i ∝ exp(L_i)`, mean `sum w_i x_i`, variance `sum w_i (P_i + (x_i - x)^2)` per angle and
+//! axis. When the base translates, the smaller models' innovations grow with it and their
+//! weight vanishes within seconds; when it does not, the larger models' extra freedom only
+//! widens their innovation variances and the smallest wins by Occam's factor. The middle one
+//! is there for the common case between: a few centimetres of sway, which the still model
+//! would otherwise explain by a wrong lever arm and heading (and win), and which the
+//! configured model pays for with a heading 1-sigma near the limit at 60 s. A smaller model
+//! the general one refutes is dropped ([`REFUTE_SIGMAS`]).
 
 use super::{Extension, FineConfig, FineCore, FineOutcome, FineRefusal};
 use crate::alignment::AttitudeEstimate;
 use crate::{ImuIncrement, InputError, NavState, Position, Scalar, attitude};
 use nalgebra::{UnitQuaternion, Vector3};
 
-/// The two filters and their extensions.
+/// Models in the bank: no horizontal translation, a quarter of the configured one, the
+/// configured one.
+pub const MODELS: usize = 3;
+
+/// Each model's horizontal translation 1-sigma, as a fraction of the configured one.
+pub const TRANSLATION_FRACTIONS: [f64; MODELS] = [0.0, 0.25, 1.0];
+
+/// The most general model (the configured translation): the one the others are tested against.
+const GENERAL: usize = MODELS - 1;
+
+/// The filters and their extensions.
 #[derive(Clone, Debug)]
 pub struct Bank<T: Scalar, const N: usize, E: Extension<T, N> + Clone> {
-    filters: [FineCore<T, N>; 2],
-    ext: [E; 2],
+    filters: [FineCore<T, N>; MODELS],
+    ext: [E; MODELS],
     /// `false` when the configuration has no horizontal translation: one filter only.
-    two: bool,
+    several: bool,
 }
 
 impl<T: Scalar, const N: usize, E: Extension<T, N> + Clone> Bank<T, N, E> {
-    /// The bank for `config` (its horizontal translation 1-sigma is the second filter's; the
-    /// first has none) started as [`FineCore::new`].
+    /// The bank for `config` (model `k`'s horizontal translation 1-sigma is
+    /// [`TRANSLATION_FRACTIONS`]`[k]` of the configuration's) started as [`FineCore::new`].
     pub fn new(
         q_b_c: UnitQuaternion<T>,
         omega_eb_b: Vector3<T>,
@@ -38,28 +53,36 @@ impl<T: Scalar, const N: usize, E: Extension<T, N> + Clone> Bank<T, N, E> {
         config: FineConfig<T>,
         ext: E,
     ) -> Self {
-        let mut still = config;
-        still.translation.horizontal_sigma_m = T::zero();
-        let two = config.translation.horizontal_sigma_m > T::zero();
+        let several = config.translation.horizontal_sigma_m > T::zero();
+        let filters = core::array::from_fn(|k| {
+            let mut c = config;
+            c.translation.horizontal_sigma_m *= T::c(TRANSLATION_FRACTIONS[k]);
+            FineCore::new(q_b_c, omega_eb_b, position, c)
+        });
         Self {
-            filters: [
-                FineCore::new(q_b_c, omega_eb_b, position, still),
-                FineCore::new(q_b_c, omega_eb_b, position, config),
-            ],
-            ext: [ext.clone(), ext],
-            two,
+            filters,
+            ext: core::array::from_fn(|_| ext.clone()),
+            several,
         }
     }
 
-    /// Adds one increment to both filters.
+    /// Adds one increment to every filter (the first's result).
     pub fn add(&mut self, inc: &ImuIncrement<T>) -> Result<(), InputError> {
-        let [a, b] = &mut self.filters;
-        let [ea, eb] = &mut self.ext;
-        let r = a.add_with(inc, ea);
-        if self.two {
-            let _ = b.add_with(inc, eb);
+        let n = if self.several { MODELS } else { 1 };
+        let mut first = Ok(());
+        for (k, (f, e)) in self
+            .filters
+            .iter_mut()
+            .zip(&mut self.ext)
+            .take(n)
+            .enumerate()
+        {
+            let r = f.add_with(inc, e);
+            if k == 0 {
+                first = r;
+            }
         }
-        r
+        first
     }
 
     /// A gap in the data.
@@ -69,29 +92,45 @@ impl<T: Scalar, const N: usize, E: Extension<T, N> + Clone> Bank<T, N, E> {
         }
     }
 
-    /// The filters' weights (sum 1).
-    pub fn weights(&self) -> [f64; 2] {
-        if !self.two {
-            return [1.0, 0.0];
+    /// The filters' weights (sum 1) among those `allowed`.
+    fn weights_among(&self, allowed: [bool; MODELS]) -> [f64; MODELS] {
+        let mut w = [0.0; MODELS];
+        if !self.several {
+            w[0] = 1.0;
+            return w;
         }
-        let (la, lb) = (
-            self.filters[0].log_likelihood(),
-            self.filters[1].log_likelihood(),
-        );
-        let m = la.max(lb);
-        let (ea, eb) = (libm::exp(la - m), libm::exp(lb - m));
-        [ea / (ea + eb), eb / (ea + eb)]
+        let l: [f64; MODELS] = core::array::from_fn(|k| self.filters[k].log_likelihood());
+        let m = (0..MODELS)
+            .filter(|&k| allowed[k])
+            .map(|k| l[k])
+            .fold(f64::NEG_INFINITY, f64::max);
+        for k in 0..MODELS {
+            if allowed[k] {
+                w[k] = libm::exp(l[k] - m);
+            }
+        }
+        let sum: f64 = w.iter().sum();
+        if !(sum > 0.0 && sum.is_finite()) {
+            let mut only = [0.0; MODELS];
+            only[GENERAL] = 1.0;
+            return only;
+        }
+        w.map(|x| x / sum)
     }
 
-    /// The filter with the larger weight, and its extension.
+    /// The filters' weights (sum 1).
+    pub fn weights(&self) -> [f64; MODELS] {
+        self.weights_among([true; MODELS])
+    }
+
+    /// The filter with the largest weight, and its extension.
     pub fn best(&self) -> (&FineCore<T, N>, &E) {
-        let w = self.weights();
-        let k = usize::from(w[1] > w[0]);
+        let k = argmax(&self.weights());
         (&self.filters[k], &self.ext[k])
     }
 
     /// The filters and their extensions.
-    pub fn members(&self) -> (&[FineCore<T, N>; 2], &[E; 2]) {
+    pub fn members(&self) -> (&[FineCore<T, N>; MODELS], &[E; MODELS]) {
         (&self.filters, &self.ext)
     }
 
@@ -100,43 +139,54 @@ impl<T: Scalar, const N: usize, E: Extension<T, N> + Clone> Bank<T, N, E> {
         self.best().0.estimate()
     }
 
-    /// The mixture's outcome, or the best filter's refusal. With one filter refusing, the
-    /// other's outcome alone (weights renormalised). A still model the translating one refutes
-    /// (a Hausman test, [`REFUTE_SIGMAS`]) is dropped, whatever its likelihood: the
-    /// translating filter's outcome (or refusal) alone.
+    /// The mixture's outcome, or the best filter's refusal. A model the most general one
+    /// refutes (a Hausman test, [`REFUTE_SIGMAS`]; its state tests the others even where it
+    /// cannot answer itself) is dropped, whatever its likelihood; the best of the rest decides
+    /// (its refusal is the bank's), and the rest that answer are mixed, weights renormalised.
     pub fn outcome(&self) -> Result<FineOutcome<T>, FineRefusal> {
-        let w = self.weights();
-        let k = usize::from(w[1] > w[0]);
-        if !self.two {
-            return self.filters[k].outcome();
+        if !self.several {
+            return self.filters[0].outcome();
         }
-        // The translating filter's state tests the still one's even where it cannot answer
-        // itself (its heading not resolved): then neither answers.
-        if let (Ok(still), Ok(general)) = (self.filters[0].outcome(), self.filters[1].solution())
-            && refutes(&general, &still)
-        {
-            return self.filters[1].outcome();
+        let general = self.filters[GENERAL].solution();
+        let allowed: [bool; MODELS] = core::array::from_fn(|k| {
+            k == GENERAL
+                || match (&general, self.filters[k].outcome()) {
+                    (Ok(g), Ok(o)) => !refutes(g, &o),
+                    _ => true,
+                }
+        });
+        let w = self.weights_among(allowed);
+        let k = argmax(&w);
+        let mut mixed = self.filters[k].outcome()?;
+        let mut weight = w[k];
+        for j in (0..MODELS).filter(|&j| j != k && w[j] > 0.0) {
+            if let Ok(o) = self.filters[j].outcome() {
+                let total = weight + w[j];
+                mixed = mix(&mixed, weight / total, &o, w[j] / total);
+                weight = total;
+            }
         }
-        let best = self.filters[k].outcome()?;
-        let Ok(other) = self.filters[1 - k].outcome() else {
-            return Ok(best);
-        };
-        Ok(mix(&best, w[k], &other, w[1 - k]))
+        Ok(mixed)
     }
 }
 
-/// A difference between the two filters beyond this many of its 1-sigma refutes the still one.
+/// The index of the largest of `w` (the first of equals).
+fn argmax(w: &[f64; MODELS]) -> usize {
+    (0..MODELS).fold(0, |best, k| if w[k] > w[best] { k } else { best })
+}
+
+/// A difference between two filters beyond this many of its 1-sigma refutes the less general.
 pub const REFUTE_SIGMAS: f64 = 3.0;
 
-/// Whether the translating filter's outcome `general` refutes the still one's, `still` (a
-/// Hausman test [Hausman, 1978]): the general model nests the still one, so where the base does
-/// not translate both are right and their difference has the variance `sigma_g^2 - sigma_s^2`
-/// (the still one is the efficient estimator); a difference in roll, pitch, heading,
-/// velocity or position beyond [`REFUTE_SIGMAS`] of that (at least half of `sigma_g`) means
-/// the still model explained the base's translation by something else (a lever arm, a
-/// velocity, a heading) and its likelihood, exact only for a linear model, cannot be trusted.
-/// On the alignment family the still model otherwise wins with a 17 m lever-arm estimate from
-/// a 5 m prior and a heading 6 of its sigma off.
+/// Whether the most general filter's outcome `general` refutes a smaller model's, `still` (a
+/// Hausman test [Hausman, 1978]): the general model nests the smaller one, so where the base
+/// translates no more than the smaller model allows both are right and their difference has
+/// the variance `sigma_g^2 - sigma_s^2` (the smaller one is the efficient estimator); a
+/// difference in roll, pitch, heading, velocity or position beyond [`REFUTE_SIGMAS`] of that
+/// (at least half of `sigma_g`) means the smaller model explained the base's translation by
+/// something else (a lever arm, a velocity, a heading) and its likelihood, exact only for a
+/// linear model, cannot be trusted. On the alignment family the still model otherwise wins
+/// with a 17 m lever-arm estimate from a 5 m prior and a heading 6 of its sigma off.
 fn refutes<T: Scalar>(general: &FineOutcome<T>, still: &FineOutcome<T>) -> bool {
     let f = |v: &Vector3<T>| v.map(|x| x.to_f64());
     let (rg, pg, yg) = attitude::euler(&general.estimate.q_b_n);
