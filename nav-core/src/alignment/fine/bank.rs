@@ -148,21 +148,23 @@ impl<T: Scalar, const N: usize, E: Extension<T, N> + Clone> Bank<T, N, E> {
             return self.filters[0].outcome();
         }
         let general = self.filters[GENERAL].solution();
+        let outcomes: [Result<FineOutcome<T>, FineRefusal>; MODELS] =
+            core::array::from_fn(|k| self.filters[k].outcome());
         let allowed: [bool; MODELS] = core::array::from_fn(|k| {
             k == GENERAL
-                || match (&general, self.filters[k].outcome()) {
-                    (Ok(g), Ok(o)) => !refutes(g, &o),
+                || match (&general, &outcomes[k]) {
+                    (Ok(g), Ok(o)) => !refutes(g, o),
                     _ => true,
                 }
         });
         let w = self.weights_among(allowed);
         let k = argmax(&w);
-        let mut mixed = self.filters[k].outcome()?;
+        let mut mixed = outcomes[k]?;
         let mut weight = w[k];
         for j in (0..MODELS).filter(|&j| j != k && w[j] > 0.0) {
-            if let Ok(o) = self.filters[j].outcome() {
+            if let Ok(o) = &outcomes[j] {
                 let total = weight + w[j];
-                mixed = mix(&mixed, weight / total, &o, w[j] / total);
+                mixed = mix(&mixed, weight / total, o, w[j] / total);
                 weight = total;
             }
         }
