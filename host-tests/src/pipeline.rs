@@ -10,7 +10,7 @@
 
 use hal_adapters::drivers::{Health, NoiseSpec};
 use hal_adapters::{Imu, ImuSample, SampleFlags};
-use nav_core::alignment::{AlignMethod, AlignOutcome, SensorNoise};
+use nav_core::alignment::{AlignMethod, AlignNote, AlignOutcome, SensorNoise};
 use nav_core::navigator::{
     Background, ConfigError, FlaggedCounts, ImuInput, NavError, Navigator, Setup, Unusable,
 };
@@ -87,6 +87,8 @@ pub struct AlignmentDeg {
     pub coarse_s: f64,
     /// Time in the fine stage [s].
     pub fine_s: f64,
+    /// What to know about how the result was reached.
+    pub note: Option<AlignNote>,
 }
 
 impl AlignmentDeg {
@@ -107,6 +109,7 @@ impl AlignmentDeg {
             duration_s: o.times.coarse_s + o.times.fine_s,
             coarse_s: o.times.coarse_s,
             fine_s: o.times.fine_s,
+            note: o.note,
         }
     }
 }

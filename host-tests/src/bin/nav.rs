@@ -946,6 +946,9 @@ fn print_summary(imu: &Path, out: &Path, precision: Precision, fr: &FileReport) 
         a.sigma_deg[1],
         a.sigma_deg[2]
     );
+    if let Some(note) = a.note {
+        println!("  note: {note}");
+    }
     let (v, p) = (a.velocity_sigma_m_s, a.position_sigma_m);
     println!(
         "  hand-over 1-sigma: velocity {:.2} {:.2} {:.2} m/s, position {:.2} {:.2} {:.2} m (N E D)",

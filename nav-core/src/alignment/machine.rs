@@ -594,6 +594,44 @@ pub struct AlignOutcome<T: Scalar> {
     pub position_sigma_m: Vector3<T>,
     /// Where the time went.
     pub times: StageTimes,
+    /// What the user should know about how the result was reached.
+    pub note: Option<AlignNote>,
+}
+
+/// Something to know about an `ALIGNED` result.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlignNote {
+    /// [`AlignMethod::Sway`] found a yaw sway beyond its model's envelope
+    /// ([`super::sway::MAX_YAW_SWAY_RAD`]) at the identification: the result is the general
+    /// filter's, as [`AlignMethod::Fine`]'s, with its 1-sigma.
+    SwayModelOff {
+        /// The yaw sway's amplitude [rad].
+        yaw_amplitude_rad: f64,
+    },
+}
+
+impl AlignNote {
+    /// A short, fixed name of the note (for counting; the `Display` text carries the figures).
+    pub fn reason(&self) -> &'static str {
+        match self {
+            Self::SwayModelOff { .. } => {
+                "sway: model off (yaw sway beyond it), the general filter's answer"
+            }
+        }
+    }
+}
+
+impl core::fmt::Display for AlignNote {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::SwayModelOff { yaw_amplitude_rad } => write!(
+                f,
+                "sway model not applied: yaw sway of {:.2} deg is beyond its {:.1} deg; the general filter's answer (as fine)",
+                yaw_amplitude_rad.to_degrees(),
+                super::sway::MAX_YAW_SWAY_RAD.to_degrees()
+            ),
+        }
+    }
 }
 
 /// Samples of the coarse stage for an alignment of `samples` at `rate_hz` [Hz]: a quarter of
@@ -685,6 +723,11 @@ impl<T: Scalar> Aligner<T> {
     /// The result, once [`Stage::Aligned`].
     pub fn outcome(&self) -> Option<&AlignOutcome<T>> {
         self.outcome.as_ref()
+    }
+
+    /// The fine stage's filter bank, once [`AlignMethod::Fine`]'s has started (for inspection).
+    pub fn fine_bank(&self) -> Option<&Bank<T, FINE_STATES, NoExtension>> {
+        self.kalman.as_ref()
     }
 
     /// Increments refused by the input limits (not counted as alignment samples).
@@ -801,9 +844,14 @@ impl<T: Scalar> Aligner<T> {
 
     /// Ends the alignment with the fine stage's result.
     fn finish_fine(&mut self) {
-        let result = match (&self.kalman, &self.sway) {
-            (Some(f), _) => f.outcome(),
-            (_, Some(f)) => f.outcome(),
+        let (result, note) = match (&self.kalman, &self.sway) {
+            (Some(f), _) => (f.outcome(), None),
+            (_, Some(f)) => (
+                f.outcome(),
+                f.model_off().map(|a| AlignNote::SwayModelOff {
+                    yaw_amplitude_rad: a,
+                }),
+            ),
             _ => return,
         };
         let o = match result {
@@ -823,6 +871,7 @@ impl<T: Scalar> Aligner<T> {
             velocity_sigma_m_s,
             position_sigma_m,
             times: self.times,
+            note,
         });
         self.stage = Stage::Aligned;
     }
@@ -981,6 +1030,7 @@ fn coarse_handover<T: Scalar>(
         velocity_sigma_m_s: Vector3::repeat(v2.sqrt()),
         position_sigma_m: Vector3::repeat(p2.sqrt()),
         times,
+        note: None,
     }
 }
 

@@ -32,8 +32,8 @@ pub use fine::{FineAlignment, FineConfig, FineStatus};
 pub use inertial::{InertialAlignError, InertialAlignment, SensorNoise};
 pub use level::{GainMode, LevelConfig, LevelConfigError, LevelFilter, LevelStatus};
 pub use machine::{
-    AlignFailure, AlignMethod, AlignOutcome, AlignSettings, Aligner, BaseMotion, LeverArm,
-    Progress, SettingsError, Stage, StageTimes,
+    AlignFailure, AlignMethod, AlignNote, AlignOutcome, AlignSettings, Aligner, BaseMotion,
+    LeverArm, Progress, SettingsError, Stage, StageTimes,
 };
 pub use sway::{SwayAlignment, SwayConfig, SwayStatus};
 

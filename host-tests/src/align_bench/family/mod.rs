@@ -30,7 +30,8 @@ use crate::truth::Truth;
 use anyhow::{Result, anyhow, ensure};
 use nav_core::alignment::machine::DEFAULT_LEVER_ARM_SIGMA_M;
 use nav_core::alignment::{
-    AlignMethod, AlignSettings, Aligner, BaseMotion, LeverArm, Progress, SettingsError, samples_for,
+    AlignMethod, AlignNote, AlignSettings, Aligner, BaseMotion, LeverArm, Progress, SettingsError,
+    samples_for,
 };
 use nav_core::earth::{LocalEarth, OMEGA_IE, normal_gravity};
 use nav_core::{ImuIncrement, Vector3, attitude};
@@ -87,6 +88,8 @@ pub struct Aligned {
     pub p_error_m: Vector3<f64>,
     /// Its 1-sigma, north, east, down [m].
     pub p_sigma_m: Vector3<f64>,
+    /// The result's note.
+    pub note: Option<AlignNote>,
 }
 
 impl Aligned {
@@ -291,6 +294,7 @@ pub fn align(
                     truth,
                 ),
                 p_sigma_m: o.position_sigma_m,
+                note: o.note,
             })
         }
         Progress::Failed(f) => Outcome::Refused(f.reason().to_string()),

@@ -56,6 +56,8 @@ pub struct Cell {
     pub aligned: usize,
     /// Refusals by reason.
     pub refused: BTreeMap<String, usize>,
+    /// `ALIGNED` cases with a note, by note.
+    pub noted: BTreeMap<String, usize>,
     /// Aligned cases with an attitude axis beyond [`ATTITUDE_SIGMAS`].
     pub beyond: usize,
     /// Those cases, each at its worst axis.
@@ -99,6 +101,9 @@ impl Cell {
             Outcome::Aligned(a) => a,
         };
         self.aligned += 1;
+        if let Some(note) = a.note {
+            *self.noted.entry(note.reason().to_string()).or_default() += 1;
+        }
         let z = a.attitude_z();
         if z.amax() > ATTITUDE_SIGMAS || z.iter().any(|v| v.is_nan()) {
             self.beyond += 1;
@@ -305,10 +310,10 @@ fn f(v: f64, width: usize, prec: usize) -> String {
     }
 }
 
-fn refusal_codes(s: &Summary) -> BTreeMap<String, usize> {
-    let reasons: BTreeSet<&String> = s.cells.iter().flat_map(|c| c.3.refused.keys()).collect();
-    reasons
-        .into_iter()
+/// A number from 1 for each key of the cells' `counts` (refusals or notes), in key order.
+fn code_map(s: &Summary, counts: fn(&Cell) -> &BTreeMap<String, usize>) -> BTreeMap<String, usize> {
+    let keys: BTreeSet<&String> = s.cells.iter().flat_map(|c| counts(&c.3).keys()).collect();
+    keys.into_iter()
         .enumerate()
         .map(|(i, r)| (r.clone(), i + 1))
         .collect()
@@ -325,6 +330,14 @@ fn refusal_list(cell: &Cell, codes: &BTreeMap<String, usize>) -> String {
     } else {
         list.join(", ")
     }
+}
+
+/// `"; N1 98, ..."` for the cell's notes, or nothing.
+fn note_list(cell: &Cell, codes: &BTreeMap<String, usize>) -> String {
+    cell.noted
+        .iter()
+        .map(|(r, n)| format!("; N{} {n}", codes.get(r).copied().unwrap_or(0)))
+        .collect()
 }
 
 fn window_name(w: Option<f64>) -> String {
@@ -374,7 +387,8 @@ pub fn format_summary(s: &Summary) -> String {
             names.join(", ")
         );
     }
-    let codes = refusal_codes(s);
+    let codes = code_map(s, |c| &c.refused);
+    let note_codes = code_map(s, |c| &c.noted);
 
     let _ = writeln!(
         w,
@@ -409,7 +423,7 @@ pub fn format_summary(s: &Summary) -> String {
             f(z.x, 8, 2),
             f(z.y, 8, 2),
             f(z.z, 8, 2),
-            refusal_list(c, &codes)
+            refusal_list(c, &codes) + &note_list(c, &note_codes)
         );
     }
 
@@ -550,6 +564,15 @@ pub fn format_summary(s: &Summary) -> String {
     for (r, code) in &codes {
         let _ = writeln!(w, "  R{code}: {r}");
     }
+    if !note_codes.is_empty() {
+        let _ = writeln!(
+            w,
+            "notes (ALIGNED with one, in table 1 after the refusals):"
+        );
+        for (r, code) in &note_codes {
+            let _ = writeln!(w, "  N{code}: {r}");
+        }
+    }
     out
 }
 
@@ -612,8 +635,9 @@ fn aligned_text(a: &Aligned) -> String {
             .collect::<Vec<_>>()
             .join(" ")
     };
+    let note = a.note.map(|n| format!(" | {n}")).unwrap_or_default();
     format!(
-        "{} | v {} | p {}",
+        "{} | v {} | p {}{note}",
         att.join(" "),
         vec3(&a.v_error_m_s, &vz),
         vec3(&a.p_error_m, &pz)

@@ -9,7 +9,8 @@
 //! that does not translate horizontally should not pay for one that might. So one filter
 //! assumes no horizontal translation, one a quarter of the configured 1-sigma and one the
 //! configured one ([`TRANSLATION_FRACTIONS`]); each accumulates the log likelihood of its
-//! scalar innovations, `-(ln S + nu^2 / S) / 2`, and the result is their mixture: weights
+//! scalar innovations, `-(ln S + nu^2 / S) / 2` (the gated ones too: a model that gates what it
+//! cannot explain must not win on what it keeps), and the result is their mixture: weights
 //! `w_i ∝ exp(L_i)`, mean `sum w_i x_i`, variance `sum w_i (P_i + (x_i - x)^2)` per angle and
 //! axis. When the base translates, the smaller models' innovations grow with it and their
 //! weight vanishes within seconds; when it does not, the larger models' extra freedom only
@@ -21,6 +22,7 @@
 
 use super::{Extension, FineConfig, FineCore, FineOutcome, FineRefusal};
 use crate::alignment::AttitudeEstimate;
+use crate::alignment::LeverArm;
 use crate::{ImuIncrement, InputError, NavState, Position, Scalar, attitude};
 use nalgebra::{UnitQuaternion, Vector3};
 
@@ -167,6 +169,19 @@ impl<T: Scalar, const N: usize, E: Extension<T, N> + Clone> Bank<T, N, E> {
                 mixed = mix(&mixed, weight / total, o, w[j] / total);
                 weight = total;
             }
+        }
+        // With the lever arm unknown the IMU's position rests on telling the lever arm from the
+        // centre's translation, and a translation coherent with the sway (a ship's sway and
+        // roll are driven by the same waves) reads as a lever arm in the smaller models: on
+        // the alignment family their down position was 4-7 of its 1-sigma off at 120-300 s
+        // with a vertical lever arm 1.6 m off. Only the general model's translation covers
+        // it: its position 1-sigma is the least the hand-over carries.
+        let unknown = matches!(
+            self.filters[GENERAL].config().lever_arm,
+            LeverArm::Unknown { .. }
+        );
+        if let (true, Ok(g)) = (unknown, &general) {
+            mixed.position_sigma_m = mixed.position_sigma_m.sup(&g.position_sigma_m);
         }
         Ok(mixed)
     }

@@ -30,7 +30,9 @@
 //!
 //! **Honesty.** The roll/pitch innovations' mean normalised square must stay below
 //! [`MAX_EULER_NIS`]: roll or pitch that is not one sinusoid (irregular waves, several
-//! periods) is refused, not answered with a gyro-noise sigma it does not have.
+//! periods) is refused, not answered with a gyro-noise sigma it does not have. A yaw sway beyond
+//! [`MAX_YAW_SWAY_RAD`] at the identification switches the model off ([`SwayPhase::Off`]): the
+//! general filter then answers alone, and [`SwayAlignment::model_off`] says so.
 
 pub mod search;
 
@@ -54,11 +56,14 @@ pub const FREQ: usize = FINE_STATES + 6;
 /// Number of states.
 pub const SWAY_STATES: usize = FINE_STATES + 8;
 
-/// Largest yaw sway answered [rad] (0.5 deg). The model's heading 1-sigma was 4 to 12 times
-/// too small on the alignment family's members with a yaw sway of 0.6 to 1.4 deg and roll
-/// sway of several degrees (an effect of the yaw sway on the drift that the model does not
-/// describe; `nav align-bench family --ablate yaw` removes it): beyond this envelope the
-/// method refuses rather than answer with a sigma it does not have.
+/// Largest yaw sway the model is applied to [rad] (0.5 deg). The model's heading 1-sigma was
+/// 4 to 12 times too small on the alignment family's members with a yaw sway of 0.6 to 1.4 deg
+/// and roll sway of several degrees (an effect of the yaw sway on the drift that the model
+/// does not describe; `nav align-bench family --ablate yaw` removes it). A yaw sway beyond
+/// this envelope at the identification switches the model off ([`SwayPhase::Off`]): the
+/// general filter answers alone, as `fine` would. One that grows beyond it after the model's
+/// measurements started is refused ([`FineRefusal::YawSwayBeyondModel`]): they are in the
+/// estimate.
 pub const MAX_YAW_SWAY_RAD: f64 = 0.5 * core::f64::consts::PI / 180.0;
 
 /// Largest mean normalised square of the roll and pitch innovations accepted.
@@ -171,6 +176,9 @@ pub enum SwayPhase {
     Searching,
     /// Sway identified, measurements running.
     Running,
+    /// Yaw sway beyond [`MAX_YAW_SWAY_RAD`] at the identification: no sway measurement is
+    /// applied, the general filter answers alone.
+    Off,
 }
 
 /// The identified sway of one axis.
@@ -452,6 +460,10 @@ impl<T: Scalar> SwayModel<T> {
         now_s: f64,
     ) {
         self.status.yaw_amplitude_rad = self.status.yaw_amplitude_rad.max(self.yaw_amplitude());
+        if !(self.status.yaw_amplitude_rad <= MAX_YAW_SWAY_RAD) {
+            self.status.phase = SwayPhase::Off;
+            return;
+        }
         self.apply_drift(core, now_s);
         let (roll, pitch, _) = attitude::euler(q_b_c);
         let var = |s: f64| s * s;
@@ -534,7 +546,7 @@ impl<T: Scalar> Extension<T, SWAY_STATES> for SwayModel<T> {
     }
 
     fn increment(&mut self, inc: &ImuIncrement<T>, c_b_c: &Matrix3<T>) {
-        if self.status.phase == SwayPhase::Running || !self.open {
+        if matches!(self.status.phase, SwayPhase::Running | SwayPhase::Off) || !self.open {
             return;
         }
         // The open-loop attitude: q <- q(-zeta) q q(phi_b), zeta the vertical Earth rate only
@@ -622,6 +634,7 @@ impl<T: Scalar> Extension<T, SWAY_STATES> for SwayModel<T> {
                     }
                 }
             }
+            SwayPhase::Off => {}
             SwayPhase::Running => {
                 let (roll, pitch, _) = attitude::euler(&q);
                 let r = self.config.euler_sigma_rad * self.config.euler_sigma_rad;
@@ -716,10 +729,22 @@ impl<T: Scalar> SwayAlignment<T> {
         &self.bank
     }
 
+    /// The yaw sway amplitude [rad] when it switched the model off ([`SwayPhase::Off`]): the
+    /// result is then the general filter's.
+    pub fn model_off(&self) -> Option<f64> {
+        let status = self.status();
+        (status.phase == SwayPhase::Off).then_some(status.yaw_amplitude_rad)
+    }
+
     /// The result, or why there is none: the general filter's refusals, and a sway model that
-    /// does not hold (roll/pitch innovations beyond [`MAX_EULER_NIS`]).
+    /// does not hold (roll/pitch innovations beyond [`MAX_EULER_NIS`], a yaw sway grown beyond
+    /// [`MAX_YAW_SWAY_RAD`] after its measurements started). With the model off
+    /// ([`Self::model_off`]), the general filter's result.
     pub fn outcome(&self) -> Result<FineOutcome<T>, FineRefusal> {
         let status = self.status();
+        if status.phase == SwayPhase::Off {
+            return self.bank.outcome();
+        }
         if !(status.yaw_amplitude_rad <= MAX_YAW_SWAY_RAD) {
             return Err(FineRefusal::YawSwayBeyondModel {
                 amplitude_rad: status.yaw_amplitude_rad,
