@@ -21,8 +21,7 @@
 //! the general one refutes is dropped ([`REFUTE_SIGMAS`]).
 
 use super::{Extension, FineConfig, FineCore, FineOutcome, FineRefusal};
-use crate::alignment::AttitudeEstimate;
-use crate::alignment::LeverArm;
+use crate::alignment::{AttitudeEstimate, LeverArm};
 use crate::{ImuIncrement, InputError, NavState, Position, Scalar, attitude};
 use nalgebra::{UnitQuaternion, Vector3};
 

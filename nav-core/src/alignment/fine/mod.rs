@@ -566,37 +566,31 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
             }
             let innovation = z[k] - h.dot(&self.x);
             let s = h.dot(&(self.p * h)) + r;
-            match update_scalar(
+            let nis = (innovation * innovation / s).to_f64();
+            let result = update_scalar(
                 &mut self.x,
                 &mut self.p,
                 &h,
                 innovation,
                 r,
                 self.config.gate_sigma,
-            ) {
-                ScalarUpdate::Accepted => {
-                    self.status.accepted_measurements =
-                        self.status.accepted_measurements.saturating_add(1);
-                    let nis = (innovation * innovation / s).to_f64();
-                    self.nis_sum += nis;
-                    self.nis_n += 1;
-                    self.log_likelihood -= 0.5 * (libm::log(s.to_f64()) + nis);
-                }
-                ScalarUpdate::Gated => {
-                    self.status.rejected_measurements =
-                        self.status.rejected_measurements.saturating_add(1);
-                    // Not applied, but still evidence against the model: a filter whose
-                    // model does not hold (a still model on a translating base) gates the
-                    // innovations it cannot explain and would otherwise win the bank on those
-                    // it keeps ([`bank`]; on the alignment family: 13 % gated, its lever arm
-                    // 50 of its sigma off).
-                    let nis = (innovation * innovation / s).to_f64();
-                    self.log_likelihood -= 0.5 * (libm::log(s.to_f64()) + nis);
-                }
-                ScalarUpdate::Degenerate => {
-                    self.status.rejected_measurements =
-                        self.status.rejected_measurements.saturating_add(1);
-                }
+            );
+            if matches!(result, ScalarUpdate::Accepted) {
+                self.status.accepted_measurements =
+                    self.status.accepted_measurements.saturating_add(1);
+                self.nis_sum += nis;
+                self.nis_n += 1;
+            } else {
+                self.status.rejected_measurements =
+                    self.status.rejected_measurements.saturating_add(1);
+            }
+            // A gated innovation is not applied but is still evidence against the model: a
+            // filter whose model does not hold (a still model on a translating base) gates
+            // what it cannot explain and would otherwise win the bank on what it keeps
+            // ([`bank`]; on the alignment family: 13 % gated, its lever arm 50 of its sigma
+            // off).
+            if !matches!(result, ScalarUpdate::Degenerate) {
+                self.log_likelihood -= 0.5 * (libm::log(s.to_f64()) + nis);
             }
         }
         self.status.mean_nis = self.nis_sum / f64::from(self.nis_n.max(1));
