@@ -608,6 +608,14 @@ pub enum AlignNote {
         /// The yaw sway's amplitude [rad].
         yaw_amplitude_rad: f64,
     },
+    /// [`AlignMethod::Sway`]'s model was refuted by the data (the refusal it gave: roll or
+    /// pitch that is not one sinusoid, a yaw sway grown beyond its envelope, an Earth rate
+    /// its measurements pulled off): the result is the general filter's, run beside it, as
+    /// [`AlignMethod::Fine`]'s, with its 1-sigma.
+    SwayModelRefuted {
+        /// What the sway model's filter refused.
+        refusal: FineRefusal,
+    },
 }
 
 impl AlignNote {
@@ -617,6 +625,7 @@ impl AlignNote {
             Self::SwayModelOff { .. } => {
                 "sway: model off (yaw sway beyond it), the general filter's answer"
             }
+            Self::SwayModelRefuted { .. } => "sway: model refuted, the general filter's answer",
         }
     }
 }
@@ -629,6 +638,10 @@ impl core::fmt::Display for AlignNote {
                 "sway model not applied: yaw sway of {:.2} deg is beyond its {:.1} deg; the general filter's answer (as fine)",
                 yaw_amplitude_rad.to_degrees(),
                 super::sway::MAX_YAW_SWAY_RAD.to_degrees()
+            ),
+            Self::SwayModelRefuted { refusal } => write!(
+                f,
+                "sway model refuted ({refusal}); the general filter's answer (as fine)"
             ),
         }
     }
@@ -657,7 +670,9 @@ pub struct Aligner<T: Scalar> {
     limits: InputLimits<T>,
     coarse: Coarse<T>,
     /// The fine stage, kept apart so that only the one in use is ever built (the sway model is
-    /// the larger: as one enum it was built on the stack, which the MCU's cannot afford).
+    /// the larger: as one enum it was built on the stack, which the MCU's cannot afford). The
+    /// sway method runs the general bank beside its own: its answer when the sway model is
+    /// off or refuted.
     kalman: Option<Bank<T, FINE_STATES, NoExtension>>,
     sway: Option<SwayAlignment<T>>,
     stage: Stage,
@@ -725,9 +740,15 @@ impl<T: Scalar> Aligner<T> {
         self.outcome.as_ref()
     }
 
-    /// The fine stage's filter bank, once [`AlignMethod::Fine`]'s has started (for inspection).
+    /// The general filter bank, once the fine stage of [`AlignMethod::Fine`] or
+    /// [`AlignMethod::Sway`] has started (for inspection).
     pub fn fine_bank(&self) -> Option<&Bank<T, FINE_STATES, NoExtension>> {
         self.kalman.as_ref()
+    }
+
+    /// The sway stage, once [`AlignMethod::Sway`]'s has started (for inspection).
+    pub fn sway(&self) -> Option<&SwayAlignment<T>> {
+        self.sway.as_ref()
     }
 
     /// Increments refused by the input limits (not counted as alignment samples).
@@ -771,7 +792,8 @@ impl<T: Scalar> Aligner<T> {
             if let Some(f) = &mut self.kalman {
                 let _ = f.add(inc);
             }
-            if let Some(f) = &mut self.sway {
+            // With its model off the sway bank is the general one: not run twice.
+            if let Some(f) = self.sway.as_mut().filter(|f| f.model_off().is_none()) {
                 let _ = f.add(inc);
             }
             self.times.fine_samples += 1;
@@ -836,23 +858,35 @@ impl<T: Scalar> Aligner<T> {
         };
         if self.settings.method == AlignMethod::Sway {
             start_sway(&mut self.sway, q_b_c, self.last_rate, position, fine);
-        } else {
-            start_fine(&mut self.kalman, q_b_c, self.last_rate, position, fine);
         }
+        start_fine(&mut self.kalman, q_b_c, self.last_rate, position, fine);
         self.stage = Stage::Fine;
     }
 
     /// Ends the alignment with the fine stage's result.
     fn finish_fine(&mut self) {
-        let (result, note) = match (&self.kalman, &self.sway) {
-            (Some(f), _) => (f.outcome(), None),
-            (_, Some(f)) => (
-                f.outcome(),
-                f.model_off().map(|a| AlignNote::SwayModelOff {
-                    yaw_amplitude_rad: a,
-                }),
-            ),
-            _ => return,
+        let Some(general) = &self.kalman else {
+            return;
+        };
+        // The sway model's answer where it holds; else the general filter's, with a note
+        // (its refusal where it refuses too: the data support no answer).
+        let (result, note) = match &self.sway {
+            None => (general.outcome(), None),
+            Some(f) => match f.model_off() {
+                Some(a) => (
+                    general.outcome(),
+                    Some(AlignNote::SwayModelOff {
+                        yaw_amplitude_rad: a,
+                    }),
+                ),
+                None => match f.outcome() {
+                    Ok(o) => (Ok(o), None),
+                    Err(refusal) => (
+                        general.outcome(),
+                        Some(AlignNote::SwayModelRefuted { refusal }),
+                    ),
+                },
+            },
         };
         let o = match result {
             Ok(o) => o,

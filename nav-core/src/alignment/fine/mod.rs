@@ -241,7 +241,7 @@ impl core::fmt::Display for FineRefusal {
             ),
             Self::YawSwayBeyondModel { amplitude_rad } => write!(
                 f,
-                "yaw sway of {:.2} deg grew beyond the sway model's {:.1} deg after its measurements started (its heading 1-sigma is not true there); use fine",
+                "yaw sway of {:.2} deg grew beyond the sway model's {:.1} deg after its measurements started (its heading 1-sigma is not true there)",
                 amplitude_rad.to_degrees(),
                 crate::alignment::sway::MAX_YAW_SWAY_RAD.to_degrees()
             ),
