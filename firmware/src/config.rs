@@ -79,10 +79,11 @@ impl fmt::Display for ArgError<'_> {
             Self::LeverArmTwice => {
                 f.write_str("--lever-arm (known) and --lever-arm-sigma (unknown) exclude each other")
             }
-            // The sway method identifies its periods in one go (~1e8 soft-float instructions):
-            // the alignment queue would overflow and drop samples.
+            // Its period identification is incremental (a few fits per filter step), but its
+            // filters (the sway bank and the general bank beside it) are built by value: the
+            // construction's frame (`start_sway`, some 87 KB in f32) is beyond the task's stack.
             Self::SwayOnMcu => f.write_str(
-                "alignment method sway runs on the host only (its one-off period identification would stall the MCU's alignment task)",
+                "alignment method sway runs on the host only (building its filters takes more stack than the MCU's alignment task has)",
             ),
             Self::Option(e) => write!(f, "{e}"),
             Self::NoValue(name) => write!(f, "--{name} has no value"),

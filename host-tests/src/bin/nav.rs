@@ -110,7 +110,7 @@ enum Command {
         #[arg(long, value_name = "K")]
         member: Option<u64>,
         /// Switch parts of every member off, to find what a method trips on (family):
-        /// translation, lever-arm, biases, yaw, rotation, mean-tilt.
+        /// translation, surge-sway (the horizontal translation only), lever-arm, biases, yaw, rotation, mean-tilt.
         #[arg(long, value_name = "PART,...", value_delimiter = ',', value_parser = parse_ablation)]
         ablate: Vec<host_tests::trajectory::family::Ablation>,
     },

@@ -177,6 +177,8 @@ pub struct FamilyMember {
 pub enum Ablation {
     /// No translation of the centre (surge, sway, heave amplitudes 0).
     Translation,
+    /// No surge and sway of the centre (its horizontal translation); the heave stays.
+    SurgeSway,
     /// The IMU on the centre (lever arm 0).
     LeverArm,
     /// No turn-on or fixed biases (and none assumed), whatever the grade; a bias instability
@@ -192,8 +194,9 @@ pub enum Ablation {
 
 impl Ablation {
     /// Every ablation.
-    pub const ALL: [Ablation; 6] = [
+    pub const ALL: [Ablation; 7] = [
         Ablation::Translation,
+        Ablation::SurgeSway,
         Ablation::LeverArm,
         Ablation::Biases,
         Ablation::Yaw,
@@ -205,6 +208,7 @@ impl Ablation {
     pub fn name(self) -> &'static str {
         match self {
             Self::Translation => "translation",
+            Self::SurgeSway => "surge-sway",
             Self::LeverArm => "lever-arm",
             Self::Biases => "biases",
             Self::Yaw => "yaw",
@@ -345,6 +349,10 @@ impl FamilyMember {
                     ] {
                         d.amp_m = 0.0;
                     }
+                }
+                Ablation::SurgeSway => {
+                    r.translation.surge.amp_m = 0.0;
+                    r.translation.sway.amp_m = 0.0;
                 }
                 Ablation::LeverArm => r.lever_arm_m = [0.0; 3],
                 Ablation::Biases => self.biases = false,
