@@ -100,7 +100,7 @@ pub fn describe_member(
     writeln!(s, "accel_saturated_samples = {}", c.accel_saturated)?;
     writeln!(
         s,
-        "# drawn values (the position is the centre of rotation's)"
+        "# drawn values (lat_deg, lon_deg, h_m: the centre of rotation; given_*: as surveyed, what the alignment is told)"
     )?;
     s.push_str(&member.describe());
     writeln!(s, "# start (the IMU's truth at t = 0)")?;

@@ -405,6 +405,11 @@ fn nav_sim_writes_a_member_and_its_drawn_values() {
         m.rocking.translation.heave.amp_m.to_string()
     );
     assert_eq!(value("lever_x_m"), m.rocking.lever_arm_m[0].to_string());
+    assert_eq!(value("survey_n_m"), m.survey_error_m[0].to_string());
+    // The replay line tells the surveyed position, not the centre's.
+    let given_lat = m.position().lat_f64().to_degrees();
+    assert_ne!(given_lat, m.rocking.lat_deg);
+    assert!(text.contains(&format!("--lat {given_lat} ")), "{text}");
     assert_eq!(value("samples"), "800");
     let [x, y, z] = m.rocking.lever_arm_m;
     assert!(

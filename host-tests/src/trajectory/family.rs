@@ -35,24 +35,30 @@
 //! base whose angles repeat together is a special case an estimator could exploit or trip on.
 //! The translation periods are free.
 //!
-//! The given position is always the centre's ([`FamilyMember::position`]): the IMU is at
-//! `C_b_n l` from it, so even a still member's IMU is up to 10 m away from the position the user
-//! types. The truth (attitude, velocity, position) is the IMU's.
+//! The given position is the centre's as surveyed ([`FamilyMember::position`]): the centre plus
+//! a survey error drawn per north, east and down axis from a normal distribution of the
+//! alignment's default site 1-sigma ([`BaseMotion::position_sigma_m`], 0.1 m), as a user's
+//! surveyed point is never exact (without it, every hand-over position would look several
+//! times better than its 1-sigma). The IMU is at `C_b_n l` from the centre, so even a still
+//! member's IMU is up to 10 m away from the position the user types. The truth (attitude,
+//! velocity, position) is the IMU's.
 //!
 //! Draw order (fixed, whatever the base): still, latitude, longitude, height, heading, mean
 //! roll, mean pitch, lever length, lever direction (z, azimuth), grade, biases, injector seed,
 //! then amplitude and phase of roll, pitch, yaw, heave, surge, sway, their periods (heave,
-//! surge, sway), and last the rotation periods with their redraws. A still member draws the
+//! surge, sway), the rotation periods with their redraws, whether the centre surges and sways,
+//! and last the survey error (north, east, down). A still member draws the
 //! same values and sets the amplitudes to 0, so its site, lever arm and grade are those it
 //! would have had swaying.
 
 use super::scenarios::{Displacement, Harmonic, Rocking, Translation};
 use crate::pipeline::sensor_noise;
 use crate::sensor_model::{Grade, ImuErrorModel};
-use nav_core::alignment::{AlignMethod, SensorNoise};
+use nav_core::alignment::{AlignMethod, BaseMotion, SensorNoise};
 use nav_core::{Position, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -167,6 +173,8 @@ pub struct FamilyMember {
     pub injector_seed: u64,
     /// How many times the rotation periods were drawn (1: the first draw was incommensurate).
     pub period_draws: u32,
+    /// Error of the given (surveyed) position from the centre's, north, east, down [m].
+    pub survey_error_m: [f64; 3],
     /// What was switched off after the draw ([`Self::ablated`]; empty: the member as drawn).
     pub ablations: Vec<Ablation>,
 }
@@ -283,11 +291,16 @@ impl FamilyMember {
                 break;
             }
         }
-        // Drawn last, so that the draws above do not depend on it.
+        // Drawn after the others, so that the draws above do not depend on it.
         if unit(rng) >= SURGE_PROBABILITY {
             translation.surge.amp_m = 0.0;
             translation.sway.amp_m = 0.0;
         }
+        let survey = BaseMotion::<f64>::default().position_sigma_m;
+        let survey_error_m: [f64; 3] = core::array::from_fn(|_| {
+            let z: f64 = StandardNormal.sample(&mut *rng);
+            survey * z
+        });
         if still {
             for h in [&mut roll, &mut pitch, &mut yaw] {
                 h.amp_deg = 0.0;
@@ -332,6 +345,7 @@ impl FamilyMember {
             biases,
             injector_seed,
             period_draws,
+            survey_error_m,
             ablations: Vec::new(),
         }
     }
@@ -406,8 +420,13 @@ impl FamilyMember {
         Vector3::from(self.rocking.lever_arm_m)
     }
 
-    /// The given position: the centre's.
+    /// The given position: the centre's as surveyed (module docs).
     pub fn position(&self) -> Position {
+        self.centre().offset_ned(self.survey_error_m)
+    }
+
+    /// The centre's true position.
+    pub fn centre(&self) -> Position {
         let r = &self.rocking;
         Position::from_degrees(r.lat_deg, r.lon_deg, r.h_m)
     }
@@ -538,21 +557,45 @@ impl FamilyMember {
             "IMU from the centre, down [m]",
         );
         line("lever_m", l.norm().to_string(), "lever-arm length [m]");
+        for (k, axis) in ["n", "e", "d"].into_iter().enumerate() {
+            line(
+                &format!("survey_{axis}_m"),
+                self.survey_error_m[k].to_string(),
+                "given position less the centre's [m]",
+            );
+        }
+        let given = self.position();
+        for (name, v, doc) in [
+            (
+                "given_lat_deg",
+                given.lat_f64().to_degrees(),
+                "given latitude [deg]",
+            ),
+            (
+                "given_lon_deg",
+                given.lon_f64().to_degrees(),
+                "given longitude [deg]",
+            ),
+            ("given_h_m", given.h_f64(), "given height [m]"),
+        ] {
+            line(name, v.to_string(), doc);
+        }
         s
     }
 
     /// The `nav replay` command that aligns on this member's recording `imu` over
     /// `align_seconds` [s] with `method`, telling it what the benchmark's "lever arm given" case
-    /// does: the centre's position, the grade's noise, whether to assume biases, the lever arm.
+    /// does: the given (surveyed) position, the grade's noise, whether to assume biases, the
+    /// lever arm.
     pub fn replay_command(&self, imu: &Path, align_seconds: f64, method: AlignMethod) -> String {
-        let r = &self.rocking;
-        let [x, y, z] = r.lever_arm_m;
+        let [x, y, z] = self.rocking.lever_arm_m;
+        let given = self.position();
         format!(
             "nav replay --imu {} --lat {} --lon {} --h {} --align-seconds {align_seconds} --align-method {} --imu-noise {} --bias-prior {} --lever-arm {x},{y},{z} --out solution.csv",
             imu.display(),
-            r.lat_deg,
-            r.lon_deg,
-            r.h_m,
+            given.lat_f64().to_degrees(),
+            given.lon_f64().to_degrees(),
+            given.h_f64(),
             method.name(),
             self.grade.name(),
             u8::from(self.biases),
@@ -603,6 +646,7 @@ mod tests {
     fn draws_are_reproducible_and_within_the_ranges() {
         let mut still = 0;
         let mut grades = [0usize; 3];
+        let mut survey_sq = 0.0;
         for i in 0..400 {
             let m = FamilyMember::draw(7, i);
             assert_eq!(m, FamilyMember::draw(7, i));
@@ -612,6 +656,12 @@ mod tests {
             r.check().unwrap();
             let within = |v: f64, s: Span| v >= s.lo && v <= s.hi;
             assert!(within(r.lat_deg, LATITUDE_DEG) && within(r.h_m, HEIGHT_M));
+            survey_sq += m.survey_error_m.iter().map(|e| e * e).sum::<f64>();
+            // The given position is the centre's moved by the survey error.
+            let (given, centre) = (m.position(), m.centre());
+            let back = given.offset_ned(m.survey_error_m.map(|e| -e));
+            assert!((back.lat_f64() - centre.lat_f64()).abs() < 1e-12);
+            assert!((given.h_f64() - centre.h_f64() + m.survey_error_m[2]).abs() < 1e-9);
             assert!(within(m.lever_arm_b_m().norm(), LEVER_ARM_M));
             assert!(within(r.mean_roll_deg, MEAN_TILT_DEG));
             assert!(within(r.roll.period_s, ROLL_PERIOD_S));
@@ -649,6 +699,11 @@ mod tests {
             (n as f64 - mean).abs() < 4.0 * sd
         };
         assert!(near(still, STILL_PROBABILITY), "{still}");
+        // 1200 survey errors of 1-sigma 0.1 m: RMS within 10 % of it (the chi-square's 1-sigma
+        // is 2 %).
+        let rms = (survey_sq / 1200.0).sqrt();
+        let sigma = BaseMotion::<f64>::default().position_sigma_m;
+        assert!((rms / sigma - 1.0).abs() < 0.1, "{rms}");
         assert!(
             near(grades[0], FOG_SHARE) && near(grades[1], RLG_SHARE),
             "{grades:?}"
