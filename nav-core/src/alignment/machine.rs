@@ -9,7 +9,7 @@
 //! | [`AlignMethod::Static`] | [`StaticAlignment`] over the whole period | — |
 //! | [`AlignMethod::Inertial`] | [`InertialAlignment`] over the whole period | — |
 //! | [`AlignMethod::Fine`] | [`InertialAlignment`] for [`AlignSettings::coarse_samples`] | [`FineAlignment`] ([Vavilova et al.]: position and zero velocity, closed loop) |
-//! | [`AlignMethod::Sway`] | [`InertialAlignment`] for [`AlignSettings::coarse_samples`] | [`SwayAlignment`] (the base sways about a mean attitude) |
+//! | [`AlignMethod::Sway`] | [`InertialAlignment`] for [`AlignSettings::coarse_samples`] | [`SwayAlignment`] (the base sways about a mean attitude), and the general bank beside it: the answer, with an [`AlignNote`], where the sway model is off or refuted |
 //!
 //! The fine stages start from the coarse attitude and its 1-sigma and use the same IMU noise
 //! model; the fine filter's corrected navigation state is the result.
@@ -746,7 +746,8 @@ impl<T: Scalar> Aligner<T> {
         self.kalman.as_ref()
     }
 
-    /// The sway stage, once [`AlignMethod::Sway`]'s has started (for inspection).
+    /// The sway stage, once [`AlignMethod::Sway`]'s has started (for inspection; no longer
+    /// fed once its model is off).
     pub fn sway(&self) -> Option<&SwayAlignment<T>> {
         self.sway.as_ref()
     }
