@@ -747,7 +747,7 @@ impl<T: Scalar> Aligner<T> {
     }
 
     /// The sway stage, once [`AlignMethod::Sway`]'s has started (for inspection; no longer
-    /// fed once its model is off).
+    /// fed once no filter applies its model, [`SwayAlignment::model_in_use`]).
     pub fn sway(&self) -> Option<&SwayAlignment<T>> {
         self.sway.as_ref()
     }
@@ -793,8 +793,9 @@ impl<T: Scalar> Aligner<T> {
             if let Some(f) = &mut self.kalman {
                 let _ = f.add(inc);
             }
-            // With its model off the sway bank is the general one: not run twice.
-            if let Some(f) = self.sway.as_mut().filter(|f| f.model_off().is_none()) {
+            // With its model off in every filter the sway bank is the general one: not run
+            // twice.
+            if let Some(f) = self.sway.as_mut().filter(|f| f.model_in_use()) {
                 let _ = f.add(inc);
             }
             self.times.fine_samples += 1;

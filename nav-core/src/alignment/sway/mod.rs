@@ -736,6 +736,16 @@ impl<T: Scalar> SwayAlignment<T> {
         (status.phase == SwayPhase::Off).then_some(status.yaw_amplitude_rad)
     }
 
+    /// Whether any filter still applies its sway model (or has yet to decide): once none does,
+    /// the bank is the general one and need not be run (no weights computed: cheap per sample).
+    pub fn model_in_use(&self) -> bool {
+        self.bank
+            .members()
+            .1
+            .iter()
+            .any(|e| e.status().phase != SwayPhase::Off)
+    }
+
     /// The result, or why there is none: the general filter's refusals, and a sway model that
     /// does not hold (roll/pitch innovations beyond [`MAX_EULER_NIS`], a yaw sway grown beyond
     /// [`MAX_YAW_SWAY_RAD`] after its measurements started). With the model off
