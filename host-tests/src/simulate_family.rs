@@ -29,17 +29,30 @@ pub struct FamilySimOptions {
     pub formats: Formats,
 }
 
+/// Seconds of the recording left after the replay line's alignment window, so that the run
+/// navigates (a replay whose alignment takes every sample fails: nothing was navigated).
+pub const NAVIGATE_AFTER_S: f64 = 10.0;
+
 impl Default for FamilySimOptions {
-    /// The member's whole recording ([`crate::trajectory::family::FINAL_S`] at
-    /// [`crate::trajectory::family::RATE_HZ`]), truth at 50 Hz, both formats.
+    /// The benchmark's longest window ([`crate::trajectory::family::FINAL_S`]) and
+    /// [`NAVIGATE_AFTER_S`] more at [`crate::trajectory::family::RATE_HZ`], truth at 50 Hz,
+    /// both formats.
     fn default() -> Self {
         Self {
-            seconds: crate::trajectory::family::FINAL_S,
+            seconds: crate::trajectory::family::FINAL_S + NAVIGATE_AFTER_S,
             rate_hz: crate::trajectory::family::RATE_HZ,
             truth_rate_hz: 50.0,
             formats: Formats::Both,
         }
     }
+}
+
+/// The alignment window [s] of the replay line for a recording of `seconds` [s]: all but the
+/// last [`NAVIGATE_AFTER_S`], at most the benchmark's longest window; `None` when that is
+/// shorter than `fine`'s minimum.
+pub fn replay_window_s(seconds: f64) -> Option<f64> {
+    let align_s = (seconds - NAVIGATE_AFTER_S).min(crate::trajectory::family::FINAL_S);
+    (align_s >= AlignMethod::Fine.min_seconds()).then_some(align_s)
 }
 
 /// Simulates `member` in memory; `progress(done, total)` is called every 4096 samples.
@@ -110,12 +123,19 @@ pub fn describe_member(
     writeln!(s, "start_roll_deg = {}", roll.to_degrees())?;
     writeln!(s, "start_pitch_deg = {}", pitch.to_degrees())?;
     writeln!(s, "start_yaw_deg = {}", yaw.to_degrees())?;
-    let align_s = (samples as f64 / opts.rate_hz).min(crate::trajectory::family::FINAL_S);
-    writeln!(
-        s,
-        "# replay: {}",
-        member.replay_command(imu, align_s, AlignMethod::Fine)
-    )?;
+    match replay_window_s(samples as f64 / opts.rate_hz) {
+        Some(align_s) => writeln!(
+            s,
+            "# replay: {}",
+            member.replay_command(imu, align_s, AlignMethod::Fine)
+        )?,
+        None => writeln!(
+            s,
+            "# replay: none: {:.1} s is shorter than fine's {} s minimum window and {NAVIGATE_AFTER_S} s of navigation after it",
+            samples as f64 / opts.rate_hz,
+            AlignMethod::Fine.min_seconds()
+        )?,
+    }
     writeln!(
         s,
         "# (--align-method inertial, sway or static the same way; without --lever-arm: the benchmark's \"not given\" case)"

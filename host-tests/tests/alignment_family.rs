@@ -383,7 +383,7 @@ fn nav_sim_writes_a_member_and_its_drawn_values() {
         "--set",
         "member=5",
         "--seconds",
-        "2",
+        "32",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -410,7 +410,7 @@ fn nav_sim_writes_a_member_and_its_drawn_values() {
     let given_lat = m.position().lat_f64().to_degrees();
     assert_ne!(given_lat, m.rocking.lat_deg);
     assert!(text.contains(&format!("--lat {given_lat} ")), "{text}");
-    assert_eq!(value("samples"), "800");
+    assert_eq!(value("samples"), "12800");
     let [x, y, z] = m.rocking.lever_arm_m;
     assert!(
         text.contains(&format!(
@@ -423,6 +423,53 @@ fn nav_sim_writes_a_member_and_its_drawn_values() {
     for f in ["imu.bin", "imu.csv", "truth.csv"] {
         assert!(out.join(f).exists(), "{f}");
     }
+    // The replay line runs as written: it aligns over all but the last 10 s, then navigates.
+    let line = text
+        .lines()
+        .find_map(|l| l.strip_prefix("# replay: nav "))
+        .unwrap_or_else(|| panic!("no replay line in\n{text}"));
+    assert!(line.contains("--align-seconds 22 "), "{line}");
+    let solution = dir.path().join("solution.csv");
+    let args: Vec<String> = line
+        .split_whitespace()
+        .map(|a| {
+            if a == "solution.csv" {
+                solution.to_str().unwrap().to_owned()
+            } else {
+                a.to_owned()
+            }
+        })
+        .collect();
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let o = run(&args);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(stdout.contains("alignment (fine)"), "{stdout}");
+    assert!(solution.exists());
+    // Too short for an alignment and some navigation: the line says so instead.
+    let short = dir.path().join("short");
+    let o = run(&[
+        "sim",
+        "family",
+        "--seed",
+        "1",
+        "--set",
+        "member=5",
+        "--seconds",
+        "2",
+        "--out",
+        short.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(short.join("scenario.txt")).unwrap();
+    assert!(
+        text.contains("# replay: none: 2.0 s is shorter than fine's 20 s minimum"),
+        "{text}"
+    );
     // The member draws its own grade; unknown keys are refused.
     let o = run(&[
         "sim",
