@@ -48,8 +48,6 @@ pub enum ArgError<'a> {
     UnknownOption(&'a str),
     /// `--lever-arm` and `--lever-arm-sigma` together.
     LeverArmTwice,
-    /// `--align-method sway`: host only.
-    SwayOnMcu,
     /// A run-configuration option was refused (its message).
     Option(OptionError),
     /// An option without its value.
@@ -73,22 +71,21 @@ impl fmt::Display for ArgError<'_> {
                 "unknown IMU noise grade {name}: fog, rlg, mems-tactical or mems-consumer"
             ),
             Self::UnknownMethod(name) => {
-                write!(f, "unknown alignment method {name}: static, inertial or fine")
+                write!(
+                    f,
+                    "unknown alignment method {name}: static, inertial, fine or sway"
+                )
             }
             Self::UnknownOption(name) => write!(f, "unknown option --{name}"),
-            Self::LeverArmTwice => {
-                f.write_str("--lever-arm (known) and --lever-arm-sigma (unknown) exclude each other")
-            }
-            // Its period identification is incremental (a few fits per filter step), but its
-            // filters (the sway bank and the general bank beside it) are built by value: the
-            // construction's frame (`start_sway`, some 87 KB in f32) is beyond the task's stack.
-            Self::SwayOnMcu => f.write_str(
-                "alignment method sway runs on the host only (building its filters takes more stack than the MCU's alignment task has)",
+            Self::LeverArmTwice => f.write_str(
+                "--lever-arm (known) and --lever-arm-sigma (unknown) exclude each other",
             ),
             Self::Option(e) => write!(f, "{e}"),
             Self::NoValue(name) => write!(f, "--{name} has no value"),
             Self::Extra(word) => write!(f, "unexpected argument {word} after CAL_FILE"),
-            Self::SameFile => f.write_str("OUT_FILE is IMU_FILE: refusing to overwrite the recording"),
+            Self::SameFile => {
+                f.write_str("OUT_FILE is IMU_FILE: refusing to overwrite the recording")
+            }
         }
     }
 }
@@ -105,7 +102,7 @@ const NAMES: [&str; 8] = [
 ];
 
 /// The usage line for error messages.
-pub const USAGE: &str = "firmware [--device adis16505|icm42688|bmi088] [--align-method static|inertial|fine] [--imu-noise fog|rlg|mems-tactical|mems-consumer] [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S] [--base-translation M] [--frame wander|ned] [--attitude NAME] [--vertical free|hold] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
+pub const USAGE: &str = "firmware [--device adis16505|icm42688|bmi088] [--align-method static|inertial|fine|sway] [--imu-noise fog|rlg|mems-tactical|mems-consumer] [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S] [--base-translation M] [--frame wander|ned] [--attitude NAME] [--vertical free|hold] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
 
 /// nav-core's noise model of a part's or grade's figures.
 pub fn sensor_noise(n: &NoiseSpec) -> SensorNoise<f64> {
@@ -136,11 +133,10 @@ impl Args {
                 "imu-noise" => {
                     noise = Some(grade::by_name(value).ok_or(ArgError::UnknownGrade(value))?);
                 }
-                "align-method" => match AlignMethod::from_name(value) {
-                    Some(AlignMethod::Sway) => return Err(ArgError::SwayOnMcu),
-                    Some(method) => run.align_method = method,
-                    None => return Err(ArgError::UnknownMethod(value)),
-                },
+                "align-method" => {
+                    run.align_method =
+                        AlignMethod::from_name(value).ok_or(ArgError::UnknownMethod(value))?;
+                }
                 _ => {
                     match name {
                         "lever-arm" => lever_arm_given.0 = true,

@@ -59,6 +59,11 @@ pub fn aligned(r: &AlignOutcome<f32>) {
         p.y,
         p.z
     );
+    // How the result was reached, in `nav replay`'s words (sway: the general filter's answer
+    // where the sway model is off or refuted).
+    if let Some(note) = &r.note {
+        defmt::info!("note: {}", defmt::Display2Format(note));
+    }
 }
 
 /// Logs the IMU driver's counters (their `Display`, which `nav replay --device` prints too).

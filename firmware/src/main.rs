@@ -513,7 +513,8 @@ mod app {
     /// Alignment, below navigation: the navigator's background on the forwarded increments;
     /// logs its stage changes and cost, and answers.
     /// The background (the alignment filters, some 45 KB in `f32`) lives in the task's static
-    /// slot, not on its stack.
+    /// slot, not on its stack; the fine stage's filters (`sway` included) are started there in
+    /// place (`nav_core::alignment::fine::Blank`), never built on the stack.
     #[task(priority = 1, local = [setup, background: Option<Background<f32>> = None])]
     async fn align(
         cx: align::Context,

@@ -634,7 +634,7 @@ fn firmware_panic_and_hardfault_exit_nonzero() {
 /// FOG grade: `--imu-noise fog --lever-arm -5.9,0.6,-7.5`); each logs its stages, attitude and
 /// 1-sigma, misses no sample, overruns no channel, and ends in the same state as the host
 /// harness given the same options (identical solution logs, alignment row included). The sway
-/// method is refused on the MCU.
+/// method: [`firmware_runs_the_sway_alignment_like_the_harness`].
 #[test]
 fn firmware_aligns_on_a_rocking_base_like_the_harness() {
     let dir = tempfile::tempdir().unwrap();
@@ -745,19 +745,148 @@ fn firmware_aligns_on_a_rocking_base_like_the_harness() {
         println!("{method} alignment on the rocking bench, 40 s: yaw error {err:.3} deg");
         assert!(err < 4.0 * 1.6, "{method}: {err} deg");
     }
-    let (code, log) = run_firmware(
-        d,
-        &[
+}
+
+/// The member's 1-sigma of yaw [deg] from `nav replay`'s alignment line (`...; 1-sigma R P Y
+/// deg`).
+fn host_yaw_sigma_deg(stdout: &str) -> f64 {
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("alignment ("))
+        .unwrap_or_else(|| panic!("no alignment line in:\n{stdout}"));
+    let (_, rest) = line
+        .split_once("1-sigma ")
+        .unwrap_or_else(|| panic!("no 1-sigma in: {line}"));
+    rest.split_whitespace()
+        .nth(2)
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no yaw 1-sigma in: {line}"))
+}
+
+/// The text after `note: ` in a log (the firmware's defmt line, or `nav replay`'s), if any.
+fn note(log: &str) -> Option<&str> {
+    log.lines()
+        .find_map(|l| l.split_once("note: ").map(|(_, n)| n.trim_end()))
+}
+
+/// The sway method ([`nav_core::alignment::AlignMethod::Sway`]) in the firmware: its period
+/// identification runs a few least-squares fits per filter step in the low-priority alignment
+/// task, and its filters are started in place in the task's static slot. On two swaying members
+/// of the alignment family (seed 1, 42 s, aligned over 40 s with the lever arm given, as the
+/// member's `nav sim family` replay command gives it): member 21, whose drawn yaw sway is far
+/// inside the sway model's envelope (the sway model's answer), and member 8, whose yaw sway is
+/// far beyond it (the general filter's answer, with the note saying so). The firmware misses no
+/// sample, overruns no channel, and ends in the same state as the host harness in `f32`
+/// (identical solution logs, the same note), with a heading within 4 of its own 1-sigma.
+#[test]
+fn firmware_runs_the_sway_alignment_like_the_harness() {
+    use host_tests::simulate_family::{FamilySimOptions, simulate_member};
+    use host_tests::trajectory::family::FamilyMember;
+    use nav_core::alignment::AlignMethod;
+    use nav_core::alignment::sway::MAX_YAW_SWAY_RAD;
+
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let envelope_deg = MAX_YAW_SWAY_RAD.to_degrees();
+    // (member, the sway model applies): its yaw sway is a tenth of the envelope, or 1.5 times
+    // beyond it.
+    for (index, model_applies) in [(21, true), (8, false)] {
+        let member = FamilyMember::draw(1, index);
+        let yaw_amp_deg = member.rocking.yaw.amp_deg;
+        assert!(!member.still, "member {index} must sway");
+        if model_applies {
+            assert!(
+                yaw_amp_deg < 0.1 * envelope_deg,
+                "member {index}: {yaw_amp_deg} deg"
+            );
+        } else {
+            assert!(
+                yaw_amp_deg > 1.5 * envelope_deg,
+                "member {index}: {yaw_amp_deg} deg"
+            );
+        }
+        let opts = FamilySimOptions {
+            seconds: 42.0,
+            ..FamilySimOptions::default()
+        };
+        let sim = simulate_member(&member, &opts, |_, _| {}).unwrap();
+        recording_io::write(&d.join("sway.bin"), &sim.recording).unwrap();
+        // The member's replay command: `nav replay --imu sway.bin --lat .. --lon .. --h ..
+        // --align-seconds 40 --align-method sway --imu-noise G --bias-prior B --lever-arm X,Y,Z
+        // --out solution.csv`.
+        let command = member.replay_command(Path::new("sway.bin"), 40.0, AlignMethod::Sway);
+        let words: Vec<&str> = command.split_whitespace().skip(2).collect();
+        let value = |key: &str| {
+            let at = words.iter().position(|w| *w == key).unwrap();
+            words[at + 1]
+        };
+        let mut fw_args = vec![];
+        for key in [
             "--align-method",
-            "sway",
-            "rock.bin",
-            "fw.csv",
-            "45",
-            "7.5",
-            "0",
+            "--imu-noise",
+            "--bias-prior",
+            "--lever-arm",
+        ] {
+            fw_args.extend_from_slice(&[key, value(key)]);
+        }
+        fw_args.extend_from_slice(&["sway.bin", "fw.csv"]);
+        fw_args.extend_from_slice(&[value("--lat"), value("--lon"), value("--h"), "40", "40"]);
+        let started = std::time::Instant::now();
+        let (code, log) = run_firmware(d, &fw_args);
+        let wall_s = started.elapsed().as_secs_f64();
+        println!("{log}\nmember {index}: QEMU run {wall_s:.1} s for 42 s of data");
+        assert_eq!(
+            code, 0,
+            "member {index}: firmware exit code {code}; log:\n{log}"
+        );
+        for expect in [
+            "aligning: sway, 16000 samples; stage COARSE",
+            "alignment stage FINE after 2000 samples",
+            "alignment stage ALIGNED after 16000 samples",
+            "instructions per alignment sample (sway)",
+        ] {
+            assert!(
+                log.contains(expect),
+                "member {index}: no '{expect}' in:\n{log}"
+            );
+        }
+        assert_eq!(field(&log, "missed"), 0, "missed data-ready interrupts");
+        assert_eq!(field(&log, "channel overruns"), 0, "channel overruns");
+
+        let mut args: Vec<&str> = vec!["replay"];
+        args.extend(words.iter().take_while(|w| **w != "--out"));
+        args.extend_from_slice(&[
+            "--out",
+            "host.csv",
+            "--log-every",
             "40",
-        ],
-    );
-    assert_eq!(code, 3, "sway on the MCU: {log}");
-    assert!(log.contains("runs on the host only"), "{log}");
+            "--device",
+            "adis16505",
+            "--precision",
+            "f32",
+        ]);
+        let out = nav(d, &args);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "member {index}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
+        let host = std::fs::read_to_string(d.join("host.csv")).unwrap();
+        assert_eq!(fw, host, "member {index}: firmware and harness logs differ");
+        assert_eq!(note(&log), note(&stdout), "member {index}: notes differ");
+        match note(&stdout) {
+            None => assert!(model_applies, "member {index}: no note:\n{stdout}"),
+            Some(n) => assert!(
+                !model_applies && n.starts_with("sway model not applied"),
+                "member {index}: {n}"
+            ),
+        }
+        // The IMU's truth at the end of the window (truth every 20 ms).
+        let (_, err_deg) = alignment_errors(&host, &sim.truth[40 * 50].q_b_ned);
+        let sigma_deg = host_yaw_sigma_deg(&stdout);
+        println!("member {index}: yaw error {err_deg:.3} deg, 1-sigma {sigma_deg:.3} deg");
+        assert!(err_deg < 4.0 * sigma_deg, "member {index}: {err_deg} deg");
+    }
 }

@@ -29,7 +29,7 @@ pub struct ConingSculling<T: Scalar> {
 
 impl<T: Scalar> ConingSculling<T> {
     /// No previous sample yet.
-    pub fn new() -> Self {
+    pub const fn new() -> Self {
         Self { prev: None }
     }
 

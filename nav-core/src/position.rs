@@ -31,6 +31,13 @@ pub struct Position {
 }
 
 impl Position {
+    /// All zero: no place (its `q_n_e` is not a rotation), only the storage of a value started
+    /// later in place (the fine filters' [`crate::alignment::fine::FineCore::BLANK`]).
+    pub(crate) const BLANK: Self = Self {
+        q_n_e: [I2F62::ZERO; 4],
+        h_m: I32F32::ZERO,
+    };
+
     /// Position at geodetic latitude `lat` [rad] (clamped to +-pi/2), longitude `lon` [rad] and
     /// height `h` [m] (saturated), with a north-pointing (NED) navigation frame.
     pub fn from_radians(lat: f64, lon: f64, h: f64) -> Self {

@@ -6,7 +6,7 @@
 //! can differ by an ulp and would break the firmware/harness bit-identity.
 
 use fixed::traits::{FromFixed, ToFixed};
-use nalgebra::RealField;
+use nalgebra::{ArrayStorage, RealField, SMatrix};
 
 /// A floating-point scalar usable by every nav-core algorithm.
 ///
@@ -33,6 +33,15 @@ pub trait Scalar: RealField + Copy + ToFixed + FromFixed {
     /// [`crate::attitude::rotation_vector_quat`] (to the 6th power) is exact to this precision:
     /// the first omitted term is `x^8 / 10321920` relative.
     const ROTATION_SERIES_MAX2: f64;
+    /// Zero, for `const` values (nalgebra's `zero()` is not `const`).
+    const ZERO: Self;
+}
+
+/// The zero matrix in a `const` (nalgebra's `zeros()` is not `const`): the storage of a value
+/// that is written once into its place (a `static`, or a slot assigned from a `const`) rather
+/// than built on the stack and copied.
+pub const fn zeros<T: Scalar, const R: usize, const C: usize>() -> SMatrix<T, R, C> {
+    SMatrix::from_array_storage(ArrayStorage([[T::ZERO; R]; C]))
 }
 
 impl Scalar for f32 {
@@ -54,6 +63,7 @@ impl Scalar for f32 {
     }
     // x = 0.5 rad: 3.8e-10 < 6e-8 (f32 epsilon / 2); covers 2000 deg/s at 400 Hz.
     const ROTATION_SERIES_MAX2: f64 = 0.25;
+    const ZERO: Self = 0.0;
     #[inline]
     fn c(x: f64) -> Self {
         x as f32
@@ -91,6 +101,7 @@ impl Scalar for f64 {
     }
     // x = 0.05 rad: 3.8e-18 < 1.1e-16.
     const ROTATION_SERIES_MAX2: f64 = 0.0025;
+    const ZERO: Self = 0.0;
     #[inline]
     fn c(x: f64) -> Self {
         x

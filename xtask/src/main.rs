@@ -417,7 +417,8 @@ fn osc_speed(nav: &Path) -> Result<(f64, f64)> {
 }
 
 /// `(method, (max, mean))` guest instructions per alignment sample of the firmware's alignment
-/// task for the MCU's methods, on 40 s of the simulator's rocking `auv-bench` (FOG grade).
+/// task for every method, on 40 s of the simulator's rocking `auv-bench` (FOG grade; sway's
+/// maximum is a filter interval of its period identification).
 fn align_costs(nav: &Path, elf: &Path) -> Result<Vec<(&'static str, (f64, f64))>> {
     run(Command::new(nav).args([
         "sim",
@@ -432,15 +433,19 @@ fn align_costs(nav: &Path, elf: &Path) -> Result<Vec<(&'static str, (f64, f64))>
         "out/bench-rock",
     ]))?;
     let mut costs = Vec::new();
-    for method in ["static", "inertial", "fine"] {
+    for method in ["static", "inertial", "fine", "sway"] {
         let mut c = Command::new("bash");
         c.arg("firmware/qemu-run.sh")
             .arg(elf)
             .args(["--align-method", method])
             // The recording is FOG-grade: the board's default (ADIS16505) noise prior would have
             // `fine` refuse gyros too coarse to find north.
-            .args(["--imu-noise", "fog"])
-            .args(["out/bench-rock/imu.bin", "out/bench-rock/fw.csv"])
+            .args(["--imu-noise", "fog"]);
+        if method == "sway" {
+            // Sway needs the lever arm given: the bench's IMU is at the centre of rotation.
+            c.args(["--lever-arm", "0,0,0"]);
+        }
+        c.args(["out/bench-rock/imu.bin", "out/bench-rock/fw.csv"])
             .args(["45", "30", "0", "40"]);
         eprintln!("$ {}", show(&c));
         let out = c.output().context("run QEMU")?;

@@ -23,7 +23,7 @@ use super::analytic::{AlignError, GravityMismatch, StaticAlignment};
 use super::fine::bank::Bank;
 use super::fine::base::Translation;
 use super::fine::model::FINE_STATES;
-use super::fine::{FineConfig, FineRefusal, NoExtension};
+use super::fine::{Blank, FineConfig, FineRefusal, NoExtension};
 use super::inertial::{InertialAlignError, InertialAlignment, SensorNoise};
 use super::stillness::{Scatter, Stillness};
 use super::sway::{SwayAlignment, SwayConfig};
@@ -264,9 +264,11 @@ impl<T: Scalar> Default for BaseMotion<T> {
     }
 }
 
-/// Starts the fine filters in `slot`. Not inlined: the bank's temporaries (some 25 KB in
-/// `f32`) then take stack only while it is built, not in every frame of the sample path (an
-/// MCU task's stack is a few tens of KB).
+/// Starts the fine filters in `slot`, in place: the slot is assigned the blank bank once
+/// ([`Blank::BLANK`], a `const`: written where it lives, zeros by one `memset`), then started
+/// through `&mut` ([`Bank::init_in`]), so no bank is built on the stack and moved (an MCU
+/// task's stack is a few tens of KB). Not inlined: its locals take stack only while the
+/// filters start.
 #[inline(never)]
 fn start_fine<T: Scalar>(
     slot: &mut Option<Bank<T, FINE_STATES, NoExtension>>,
@@ -275,10 +277,16 @@ fn start_fine<T: Scalar>(
     position: Position,
     fine: FineConfig<T>,
 ) {
-    *slot = Some(Bank::new(q_b_c, omega_eb_b, position, fine, NoExtension));
+    if slot.is_none() {
+        *slot = Some(Bank::BLANK);
+    }
+    if let Some(bank) = slot {
+        bank.init_in(q_b_c, omega_eb_b, position, fine, |_| {});
+    }
 }
 
-/// Starts the sway filters in `slot` (not inlined, as [`start_fine`]).
+/// Starts the sway filters in `slot`, in place ([`Blank::BLANK`] once, then
+/// [`SwayAlignment::init_in`]; not inlined, as [`start_fine`]).
 #[inline(never)]
 fn start_sway<T: Scalar>(
     slot: &mut Option<SwayAlignment<T>>,
@@ -287,15 +295,20 @@ fn start_sway<T: Scalar>(
     position: Position,
     fine: FineConfig<T>,
 ) {
-    *slot = Some(SwayAlignment::new(
-        q_b_c,
-        omega_eb_b,
-        position,
-        SwayConfig {
-            fine,
-            ..SwayConfig::default()
-        },
-    ));
+    if slot.is_none() {
+        *slot = Some(SwayAlignment::BLANK);
+    }
+    if let Some(sway) = slot {
+        sway.init_in(
+            q_b_c,
+            omega_eb_b,
+            position,
+            SwayConfig {
+                fine,
+                ..SwayConfig::default()
+            },
+        );
+    }
 }
 
 /// Longest lever arm (and largest lever-arm 1-sigma) accepted [m]: the IMU sits on the base,
@@ -669,10 +682,10 @@ pub struct Aligner<T: Scalar> {
     settings: AlignSettings<T>,
     limits: InputLimits<T>,
     coarse: Coarse<T>,
-    /// The fine stage, kept apart so that only the one in use is ever built (the sway model is
-    /// the larger: as one enum it was built on the stack, which the MCU's cannot afford). The
-    /// sway method runs the general bank beside its own: its answer when the sway model is
-    /// off or refuted.
+    /// The fine stage, kept apart so that only the one in use is ever made, and started in
+    /// place ([`start_fine`], [`start_sway`]: the sway filters are some 30 KB in `f32`, beyond
+    /// what an MCU task's stack can hold twice). The sway method runs the general bank beside
+    /// its own: its answer when the sway model is off or refuted.
     kalman: Option<Bank<T, FINE_STATES, NoExtension>>,
     sway: Option<SwayAlignment<T>>,
     stage: Stage,
@@ -789,22 +802,17 @@ impl<T: Scalar> Aligner<T> {
         let dt = inc.dt.to_f64();
         self.last_rate = inc.delta_theta_ib_b / inc.dt;
         if self.stage == Stage::Fine {
-            // Checked above with the filters' default limits: cannot be refused.
-            if let Some(f) = &mut self.kalman {
-                let _ = f.add(inc);
-            }
-            // With its model off in every filter the sway bank is the general one: not run
-            // twice.
-            if let Some(f) = self.sway.as_mut().filter(|f| f.model_in_use()) {
-                let _ = f.add(inc);
-            }
-            self.times.fine_samples += 1;
-            self.times.fine_s += dt;
-            if self.samples() >= self.settings.samples {
-                self.finish_fine();
-            }
-            return;
+            self.step_fine(inc, dt);
+        } else {
+            self.step_coarse(inc, dt);
         }
+    }
+
+    /// One sample of the coarse stage (`dt` [s]); starts the fine stage or ends the
+    /// alignment after its last. Not inlined, as [`Self::step_fine`]: the two stages' frames
+    /// are never on the stack together.
+    #[inline(never)]
+    fn step_coarse(&mut self, inc: &ImuIncrement<T>, dt: f64) {
         self.still.add(inc);
         match &mut self.coarse {
             Coarse::Static(a) => a.add(inc),
@@ -820,6 +828,28 @@ impl<T: Scalar> Aligner<T> {
             self.finish_coarse();
         } else if two_stage && self.times.coarse_samples >= self.settings.coarse_samples {
             self.start_fine();
+        }
+    }
+
+    /// One sample of the fine stage (`dt` [s]). Not inlined: the filters' interval
+    /// temporaries (some 30 KB in `f32` for the sway filters' 37 states) then take stack only
+    /// on this path, not under the coarse stage's ([`Self::step_coarse`]) or the filters'
+    /// start ([`start_sway`]).
+    #[inline(never)]
+    fn step_fine(&mut self, inc: &ImuIncrement<T>, dt: f64) {
+        // Checked above with the filters' default limits: cannot be refused.
+        if let Some(f) = &mut self.kalman {
+            let _ = f.add(inc);
+        }
+        // With its model off in every filter the sway bank is the general one: not run
+        // twice.
+        if let Some(f) = self.sway.as_mut().filter(|f| f.model_in_use()) {
+            let _ = f.add(inc);
+        }
+        self.times.fine_samples += 1;
+        self.times.fine_s += dt;
+        if self.samples() >= self.settings.samples {
+            self.finish_fine();
         }
     }
 

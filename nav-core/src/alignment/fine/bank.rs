@@ -20,7 +20,7 @@
 //! configured model pays for with a heading 1-sigma near the limit at 60 s. A smaller model
 //! the general one refutes is dropped ([`REFUTE_SIGMAS`]).
 
-use super::{Extension, FineConfig, FineCore, FineOutcome, FineRefusal};
+use super::{Blank, Extension, FineConfig, FineCore, FineOutcome, FineRefusal};
 use crate::alignment::{AttitudeEstimate, LeverArm};
 use crate::{ImuIncrement, InputError, NavState, Position, Scalar, attitude};
 use nalgebra::{UnitQuaternion, Vector3};
@@ -54,16 +54,31 @@ impl<T: Scalar, const N: usize, E: Extension<T, N> + Clone> Bank<T, N, E> {
         config: FineConfig<T>,
         ext: E,
     ) -> Self {
-        let several = config.translation.horizontal_sigma_m > T::zero();
-        let filters = core::array::from_fn(|k| {
+        let mut bank = Self {
+            filters: [FineCore::BLANK, FineCore::BLANK, FineCore::BLANK],
+            ext: core::array::from_fn(|_| ext.clone()),
+            several: false,
+        };
+        bank.init_in(q_b_c, omega_eb_b, position, config, |_| {});
+        bank
+    }
+
+    /// (Re)starts the bank in place as [`Self::new`] does ([`FineCore::init_in`] per filter),
+    /// `init_ext` (re)starting each filter's extension where it lives.
+    pub fn init_in(
+        &mut self,
+        q_b_c: UnitQuaternion<T>,
+        omega_eb_b: Vector3<T>,
+        position: Position,
+        config: FineConfig<T>,
+        mut init_ext: impl FnMut(&mut E),
+    ) {
+        self.several = config.translation.horizontal_sigma_m > T::zero();
+        for (k, (f, e)) in self.filters.iter_mut().zip(&mut self.ext).enumerate() {
             let mut c = config;
             c.translation.horizontal_sigma_m *= T::c(TRANSLATION_FRACTIONS[k]);
-            FineCore::new(q_b_c, omega_eb_b, position, c)
-        });
-        Self {
-            filters,
-            ext: core::array::from_fn(|_| ext.clone()),
-            several,
+            f.init_in(q_b_c, omega_eb_b, position, c);
+            init_ext(e);
         }
     }
 
@@ -184,6 +199,16 @@ impl<T: Scalar, const N: usize, E: Extension<T, N> + Clone> Bank<T, N, E> {
         }
         Ok(mixed)
     }
+}
+
+impl<T: Scalar, const N: usize, E: Extension<T, N> + Clone + Blank> Blank for Bank<T, N, E> {
+    /// Filters that have not started ([`FineCore::BLANK`]) and blank extensions: the storage
+    /// [`Bank::init_in`] starts in place.
+    const BLANK: Self = Self {
+        filters: [FineCore::BLANK, FineCore::BLANK, FineCore::BLANK],
+        ext: [E::BLANK, E::BLANK, E::BLANK],
+        several: false,
+    };
 }
 
 /// The index of the largest of `w` (the first of equals).

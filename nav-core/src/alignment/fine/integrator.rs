@@ -23,6 +23,7 @@
 
 use crate::coning::ConingSculling;
 use crate::earth::{LocalEarth, OMEGA_IE};
+use crate::scalar::zeros;
 use crate::strapdown::{dcm_of, kahan_add, small_rotation};
 use crate::{ImuIncrement, Scalar};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
@@ -57,6 +58,24 @@ pub struct SiteStrapdown<T: Scalar> {
 }
 
 impl<T: Scalar> SiteStrapdown<T> {
+    /// All zero (attitude included: no rotation): the storage of an integrator started later
+    /// in place (the fine filters' [`super::FineCore::BLANK`]).
+    pub(crate) const BLANK: Self = Self {
+        q: Quaternion::from_vector(zeros()),
+        q_carry: Quaternion::from_vector(zeros()),
+        v_c: zeros(),
+        v_carry: zeros(),
+        r_c: zeros(),
+        r_carry: zeros(),
+        cs: ConingSculling::new(),
+        e_h: [T::ZERO; 2],
+        omega_down: T::ZERO,
+        g0: T::ZERO,
+        dg_dd: T::ZERO,
+        gyro_bias_b: zeros(),
+        accel_bias_b: zeros(),
+    };
+
     /// At latitude `lat` [rad], height `h` [m], attitude `q_b_c`, velocity `v_c` [m/s] and
     /// displacement `r_c` [m], the horizontal Earth rate taken as `e_h` [rad/s].
     pub fn new(

@@ -79,7 +79,7 @@ pub fn update_scalar<T: Scalar, const N: usize>(
     r: T,
     gate: T,
 ) -> ScalarUpdate {
-    let ph = *p * h;
+    let ph = times(p, h);
     let s = h.dot(&ph) + r;
     if !(s.finite() && s > T::zero() && innovation.finite()) {
         return ScalarUpdate::Degenerate;
@@ -92,12 +92,29 @@ pub fn update_scalar<T: Scalar, const N: usize>(
         return ScalarUpdate::Degenerate;
     }
     *x += k * innovation;
-    // (I - K h^T) P = P - K (P h)^T for a symmetric P.
-    let a = *p - k * ph.transpose();
-    let ah = a * h;
-    *p = a - ah * k.transpose() + k * k.transpose() * r;
+    // In place, element by element (no N x N temporary: 5.5 KB each at 37 states in `f32`,
+    // on an MCU task's stack), the same operations in the same order as the matrix form
+    // `A = P - K (P h)^T`, `P = A - (A h) K^T + K K^T r`. `A = (I - K h^T) P` for a
+    // symmetric P.
+    for j in 0..N {
+        for i in 0..N {
+            p[(i, j)] -= k[i] * ph[j];
+        }
+    }
+    let ah = times(p, h);
+    for j in 0..N {
+        for i in 0..N {
+            p[(i, j)] = p[(i, j)] - ah[i] * k[j] + k[i] * k[j] * r;
+        }
+    }
     symmetrize(p);
     ScalarUpdate::Accepted
+}
+
+/// `m v` with `m` by reference (`*p * h` would copy the covariance: 5.5 KB at 37 states in
+/// `f32`, on an MCU task's stack).
+fn times<T: Scalar, const N: usize>(m: &SMatrix<T, N, N>, v: &SVector<T, N>) -> SVector<T, N> {
+    m * v
 }
 
 /// True when every element is finite.

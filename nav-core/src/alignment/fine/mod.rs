@@ -40,11 +40,13 @@
 
 pub mod bank;
 pub mod base;
+pub mod blank;
 pub mod euler;
 pub mod integrator;
 pub mod kalman;
 pub mod model;
 
+pub use blank::Blank;
 pub use euler::{euler_jacobian, euler_sigma, phi_covariance};
 
 use super::machine::LeverArm;
@@ -350,6 +352,21 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
         position: Position,
         config: FineConfig<T>,
     ) -> Self {
+        let mut filter = Self::BLANK;
+        filter.init_in(q_b_c, omega_eb_b, position, config);
+        filter
+    }
+
+    /// (Re)starts the filter in place as [`Self::new`] does, through `&mut` only: the
+    /// covariance is filled where it lives, so no filter-sized temporary is built (an MCU
+    /// task's stack is a few tens of KB; the sway bank is some 30 KB in `f32`).
+    pub fn init_in(
+        &mut self,
+        q_b_c: UnitQuaternion<T>,
+        omega_eb_b: Vector3<T>,
+        position: Position,
+        config: FineConfig<T>,
+    ) {
         let config = config.sanitized();
         let q_b_c = if q_b_c.coords.iter().all(|v| v.finite()) {
             q_b_c
@@ -380,7 +397,8 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
             ShapingBlock::new(t, t.vertical_sigma_m),
         ];
         let var = |s: T| s * s;
-        let mut p0 = SMatrix::<T, N, N>::zeros();
+        let p0 = &mut self.p;
+        p0.fill(T::zero());
         let sd = t.horizontal_sigma_m.max(t.vertical_sigma_m);
         let w_rate = omega_eb_b.norm();
         let tilt = config.tilt_sigma_rad;
@@ -407,7 +425,7 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
         // The horizontal Earth rate in `c`: any direction, magnitude W (mean 0, isotropic).
         p0[(EARTH, EARTH)] = w_h * w_h * T::c(0.5);
         p0[(EARTH + 1, EARTH + 1)] = w_h * w_h * T::c(0.5);
-        let p0 = scale_cov(&p0);
+        scale_cov(p0);
         let n = &config.noise;
         let q_ins = model::ins_noise(
             n.arw_rad_per_sqrt_s,
@@ -415,28 +433,49 @@ impl<T: Scalar, const N: usize> FineCore<T, N> {
             config.gyro_bias_walk,
             config.accel_bias_walk,
         );
-        Self {
-            config,
-            nav,
-            centre,
-            w_h,
-            lever_b,
-            c0,
-            blocks,
-            x: SVector::zeros(),
-            p: p0,
-            broken: false,
-            q_ins,
-            interval_s: 0.0,
-            sum_c: Matrix3::zeros(),
-            sum_dv_c: Vector3::zeros(),
-            elapsed_s: 0.0,
-            nis_sum: 0.0,
-            nis_n: 0,
-            log_likelihood: 0.0,
-            magnitude_z: None,
-            status: FineStatus::default(),
-        }
+        // Every field by name (a field added later must be started here too: the pattern
+        // does not compile without it); the covariance is already in place.
+        let Self {
+            config: config_in,
+            nav: nav_in,
+            centre: centre_in,
+            w_h: w_h_in,
+            lever_b: lever_b_in,
+            c0: c0_in,
+            blocks: blocks_in,
+            x,
+            p: _,
+            broken,
+            q_ins: q_ins_in,
+            interval_s,
+            sum_c,
+            sum_dv_c,
+            elapsed_s,
+            nis_sum,
+            nis_n,
+            log_likelihood,
+            magnitude_z,
+            status,
+        } = self;
+        *config_in = config;
+        *nav_in = nav;
+        *centre_in = centre;
+        *w_h_in = w_h;
+        *lever_b_in = lever_b;
+        *c0_in = c0;
+        *blocks_in = blocks;
+        x.fill(T::zero());
+        *broken = false;
+        *q_ins_in = q_ins;
+        *interval_s = 0.0;
+        *sum_c = Matrix3::zeros();
+        *sum_dv_c = Vector3::zeros();
+        *elapsed_s = 0.0;
+        *nis_sum = 0.0;
+        *nis_n = 0;
+        *log_likelihood = 0.0;
+        *magnitude_z = None;
+        *status = FineStatus::default();
     }
 
     /// Adds one increment: integrates it and at the end of every filter interval propagates,
@@ -935,7 +974,11 @@ impl<T: Scalar> FineCore<T, FINE_STATES> {
     }
 }
 
-/// `P_SI` -> the filter's units.
-fn scale_cov<T: Scalar, const N: usize>(p: &SMatrix<T, N, N>) -> SMatrix<T, N, N> {
-    SMatrix::from_fn(|i, j| p[(i, j)] * T::c(1.0 / (model::unit(i) * model::unit(j))))
+/// `P_SI` -> the filter's units, in place.
+fn scale_cov<T: Scalar, const N: usize>(p: &mut SMatrix<T, N, N>) {
+    for j in 0..N {
+        for i in 0..N {
+            p[(i, j)] *= T::c(1.0 / (model::unit(i) * model::unit(j)));
+        }
+    }
 }

@@ -39,8 +39,11 @@ pub mod search;
 use super::AttitudeEstimate;
 use super::fine::bank::Bank;
 use super::fine::model::{self, FINE_STATES};
-use super::fine::{Extension, FineConfig, FineCore, FineOutcome, FineRefusal, euler_jacobian};
+use super::fine::{
+    Blank, Extension, FineConfig, FineCore, FineOutcome, FineRefusal, euler_jacobian,
+};
 use crate::coning::ConingSculling;
+use crate::scalar::zeros;
 use crate::strapdown::{kahan_add, small_rotation};
 use crate::{ImuIncrement, InputError, Position, Scalar, attitude};
 use nalgebra::{Matrix3, Quaternion, SMatrix, SVector, UnitQuaternion, Vector3};
@@ -248,39 +251,64 @@ impl<T: Scalar> SwayModel<T> {
     /// A model before its identification, the body at `q_b_c` at latitude `lat` [rad] (the
     /// attitude is replaced by the filter's at [`OPEN_LOOP_START_S`]).
     pub fn new(config: &SwayConfig<T>, q_b_c: &UnitQuaternion<T>, lat: T) -> Self {
+        let mut model = Self::BLANK;
+        model.init_in(config, q_b_c, lat);
+        model
+    }
+
+    /// (Re)starts the model in place as [`Self::new`] does: every field through `&mut`, the
+    /// identification buffers filled where they live.
+    pub fn init_in(&mut self, config: &SwayConfig<T>, q_b_c: &UnitQuaternion<T>, lat: T) {
         let c = config.sanitized();
         let tau = core::f64::consts::TAU;
         let axis = SwayAxis {
             period_s: T::c(f64::NAN),
             amplitude_rad: T::zero(),
         };
-        Self {
-            config: c,
-            search: Search::new(tau / c.max_period_s.to_f64(), tau / c.min_period_s.to_f64()),
-            open: false,
-            q_open: *q_b_c.quaternion(),
-            q_open_carry: Quaternion::new(T::zero(), T::zero(), T::zero(), T::zero()),
-            coning: ConingSculling::new(),
-            omega_down: -T::c(crate::earth::OMEGA_IE) * lat.psin(),
-            yaw: [0.0; search::BUFFER_LEN],
-            sum_c: Matrix3::zeros(),
-            sum_t: 0.0,
-            omega: [None; 2],
-            last_sample_s: f64::NEG_INFINITY,
-            nis_sum: 0.0,
-            yaw_first: None,
-            yaw_range: (0.0, 0.0),
-            status: SwayStatus {
-                phase: SwayPhase::Identifying,
-                euler_updates: 0,
-                euler_mean_nis: 0.0,
-                relocks: 0,
-                attempts: 0,
-                roll: axis,
-                pitch: axis,
-                yaw_amplitude_rad: 0.0,
-            },
-        }
+        // Every field by name (a field added later must be started here too).
+        let Self {
+            config: config_in,
+            search,
+            open,
+            q_open,
+            q_open_carry,
+            coning,
+            omega_down,
+            yaw,
+            sum_c,
+            sum_t,
+            omega,
+            last_sample_s,
+            nis_sum,
+            yaw_first,
+            yaw_range,
+            status,
+        } = self;
+        *config_in = c;
+        search.init_in(tau / c.max_period_s.to_f64(), tau / c.min_period_s.to_f64());
+        *open = false;
+        *q_open = *q_b_c.quaternion();
+        *q_open_carry = Quaternion::new(T::zero(), T::zero(), T::zero(), T::zero());
+        coning.reset();
+        *omega_down = -T::c(crate::earth::OMEGA_IE) * lat.psin();
+        yaw.fill(0.0);
+        *sum_c = Matrix3::zeros();
+        *sum_t = 0.0;
+        *omega = [None; 2];
+        *last_sample_s = f64::NEG_INFINITY;
+        *nis_sum = 0.0;
+        *yaw_first = None;
+        *yaw_range = (0.0, 0.0);
+        *status = SwayStatus {
+            phase: SwayPhase::Identifying,
+            euler_updates: 0,
+            euler_mean_nis: 0.0,
+            relocks: 0,
+            attempts: 0,
+            roll: axis,
+            pitch: axis,
+            yaw_amplitude_rad: 0.0,
+        };
     }
 
     /// Counters and the identified sway.
@@ -516,6 +544,55 @@ impl<T: Scalar> SwayModel<T> {
     }
 }
 
+impl<T: Scalar> Blank for SwayModel<T> {
+    /// A model not started, all zero: the storage [`SwayModel::init_in`] starts in place.
+    const BLANK: Self = Self {
+        config: SwayConfig {
+            fine: FineConfig::ZERO,
+            euler_sigma_rad: T::ZERO,
+            amplitude_walk: T::ZERO,
+            frequency_walk: T::ZERO,
+            first_identify_s: T::ZERO,
+            identify_s: T::ZERO,
+            sample_period_s: T::ZERO,
+            min_period_s: T::ZERO,
+            max_period_s: T::ZERO,
+            min_amplitude_rad: T::ZERO,
+            fits_per_step: 0,
+        },
+        search: Search::BLANK,
+        open: false,
+        q_open: Quaternion::from_vector(zeros()),
+        q_open_carry: Quaternion::from_vector(zeros()),
+        coning: ConingSculling::new(),
+        omega_down: T::ZERO,
+        yaw: [0.0; search::BUFFER_LEN],
+        sum_c: zeros(),
+        sum_t: 0.0,
+        omega: [None; 2],
+        last_sample_s: 0.0,
+        nis_sum: 0.0,
+        yaw_first: None,
+        yaw_range: (0.0, 0.0),
+        status: SwayStatus {
+            phase: SwayPhase::Identifying,
+            euler_updates: 0,
+            euler_mean_nis: 0.0,
+            relocks: 0,
+            attempts: 0,
+            roll: SwayAxis {
+                period_s: T::ZERO,
+                amplitude_rad: T::ZERO,
+            },
+            pitch: SwayAxis {
+                period_s: T::ZERO,
+                amplitude_rad: T::ZERO,
+            },
+            yaw_amplitude_rad: 0.0,
+        },
+    };
+}
+
 impl<T: Scalar> Extension<T, SWAY_STATES> for SwayModel<T> {
     fn transition(
         &mut self,
@@ -697,16 +774,26 @@ impl<T: Scalar> SwayAlignment<T> {
         position: Position,
         config: SwayConfig<T>,
     ) -> Self {
+        let mut sway = Self::BLANK;
+        sway.init_in(q_b_c, omega_eb_b, position, config);
+        sway
+    }
+
+    /// (Re)starts in place as [`Self::new`] does ([`Bank::init_in`], [`SwayModel::init_in`]):
+    /// no bank-sized temporary is built, so an MCU task can start it (some 30 KB in `f32`).
+    pub fn init_in(
+        &mut self,
+        q_b_c: UnitQuaternion<T>,
+        omega_eb_b: Vector3<T>,
+        position: Position,
+        config: SwayConfig<T>,
+    ) {
         let config = config.sanitized();
-        Self {
-            bank: Bank::new(
-                q_b_c,
-                omega_eb_b,
-                position,
-                config.fine,
-                SwayModel::new(&config, &q_b_c, position.lat::<T>()),
-            ),
-        }
+        let lat = position.lat::<T>();
+        self.bank
+            .init_in(q_b_c, omega_eb_b, position, config.fine, |model| {
+                model.init_in(&config, &q_b_c, lat)
+            });
     }
 
     /// Adds one increment.
@@ -767,6 +854,12 @@ impl<T: Scalar> SwayAlignment<T> {
         }
         self.bank.outcome()
     }
+}
+
+impl<T: Scalar> Blank for SwayAlignment<T> {
+    /// Filters that have not started (the [`Bank`]'s and [`SwayModel`]'s blanks): the storage
+    /// [`SwayAlignment::init_in`] starts in place.
+    const BLANK: Self = Self { bank: Bank::BLANK };
 }
 
 /// `a` [rad] wrapped to (-pi, pi].

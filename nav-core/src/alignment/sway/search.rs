@@ -149,14 +149,14 @@ struct Golden {
 /// Where a [`Search`] is.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Step {
+    /// Done (first: a blank search, [`Search::BLANK`], is then all zero bytes).
+    Done,
     /// Evaluating the grid at `w`.
     Grid { w: f64 },
     /// The first golden point to evaluate.
     GoldenStart,
     /// Inside the golden section.
     Golden(Golden),
-    /// Done.
-    Done,
 }
 
 /// [`identify`] one fit at a time, for every axis of a buffer: the same grid, the same golden
@@ -176,6 +176,21 @@ pub struct Search<const AXES: usize> {
 }
 
 impl<const AXES: usize> Search<AXES> {
+    /// An empty buffer, all zero (an empty band, no search running): the storage
+    /// [`Self::init_in`] starts in place (the sway filters' [`super::SwayModel`]).
+    pub const BLANK: Self = Self {
+        t: [0.0; BUFFER_LEN],
+        y: [[0.0; BUFFER_LEN]; AXES],
+        n: 0,
+        w_min: 0.0,
+        w_max: 0.0,
+        axis: 0,
+        step: Step::Done,
+        best_w: 0.0,
+        best: 0.0,
+        results: [None; AXES],
+    };
+
     /// An empty buffer for frequencies in `[w_min, w_max]` [rad/s].
     pub fn new(w_min: f64, w_max: f64) -> Self {
         Self {
@@ -190,6 +205,35 @@ impl<const AXES: usize> Search<AXES> {
             best: f64::INFINITY,
             results: [None; AXES],
         }
+    }
+
+    /// Empties the buffer in place, as [`Self::new`] leaves it, for frequencies in
+    /// `[w_min, w_max]` [rad/s].
+    pub fn init_in(&mut self, w_min: f64, w_max: f64) {
+        let Self {
+            t,
+            y,
+            n,
+            w_min: w_min_in,
+            w_max: w_max_in,
+            axis,
+            step,
+            best_w,
+            best,
+            results,
+        } = self;
+        t.fill(0.0);
+        for y in y.iter_mut() {
+            y.fill(0.0);
+        }
+        *n = 0;
+        *w_min_in = w_min;
+        *w_max_in = w_max;
+        *axis = 0;
+        *step = Step::Done;
+        *best_w = f64::NAN;
+        *best = f64::INFINITY;
+        *results = [None; AXES];
     }
 
     /// Keeps one sample `(t [s], y [rad] per axis)`; `false` once the buffer is full.
