@@ -193,6 +193,7 @@ impl AlignFailure {
                 I::NonFinite => "inertial: not finite",
                 I::BaseDisturbed => "inertial: base disturbed",
                 I::TranslationLeak => "inertial: window too short for a translating base",
+                I::LeverArmLeak { .. } => "inertial: unknown lever arm hides the heading",
             },
             Self::Fine(e) => match e {
                 F::HeadingUnresolved { .. } => "fine: heading not resolved",
@@ -1035,6 +1036,10 @@ fn with_translation_leak<T: Scalar>(
         add(e.sigma_rad.y, tilt),
         add(e.sigma_rad.z, heading),
     );
+    // The leak with the rest: a heading 1-sigma beyond the limit is no heading.
+    if !(e.sigma_rad.z.to_f64() <= super::inertial::MAX_HEADING_SIGMA_RAD) {
+        return Err(InertialAlignError::TranslationLeak);
+    }
     Ok(e)
 }
 

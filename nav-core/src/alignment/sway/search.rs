@@ -8,6 +8,11 @@ use nalgebra::{Matrix4, Vector4};
 /// Most samples a search keeps.
 pub const BUFFER_LEN: usize = 128;
 
+/// Golden-section steps after the grid: they narrow the bracket of two grid spacings by
+/// `0.618^40 = 4e-9` (about 1e-10 rad/s for a 25 s window, far below what the fit's noise
+/// resolves).
+pub const GOLDEN_STEPS: u32 = 40;
+
 /// A least-squares fit `y = mean + trend (t - t0) + cos a(t) + sin b(t)` over `a(t) =
 /// w (t - t0)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -36,16 +41,86 @@ impl SinusoidFit {
     }
 }
 
+/// `(cos, sin)` of `omega tau` along increasing `tau`, by rotation: the first value and the
+/// first step's rotation by `libm`, every later step as that rotation corrected by the small
+/// rotation of its difference (samples a filter step apart differ by the rounding of their
+/// intervals: `|x| < 1e-4` rad, where `cos x = 1 - x^2/2` and `sin x = x - x^3/6` are exact to
+/// `f64` rounding), a step that is not close by `libm` again. Two trigonometric calls per fit
+/// instead of four per sample (an MCU does `f64` in software: the fits were the alignment
+/// task's largest cost).
+struct Rotor {
+    omega: f64,
+    tau: f64,
+    c: f64,
+    s: f64,
+    /// The first step [s] and its rotation.
+    step: Option<(f64, f64, f64)>,
+}
+
+impl Rotor {
+    /// Below this [rad] a step's difference from the first is rotated by its Taylor series.
+    const SMALL: f64 = 1e-4;
+
+    fn new(omega: f64, tau: f64) -> Self {
+        let (s, c) = (libm::sin(omega * tau), libm::cos(omega * tau));
+        Self {
+            omega,
+            tau,
+            c,
+            s,
+            step: None,
+        }
+    }
+
+    /// `(cos, sin)` of `omega tau` for `tau` at or after the last.
+    fn at(&mut self, tau: f64) -> (f64, f64) {
+        let d = tau - self.tau;
+        if d == 0.0 {
+            return (self.c, self.s);
+        }
+        let (step, cd, sd) = *self
+            .step
+            .get_or_insert_with(|| (d, libm::cos(self.omega * d), libm::sin(self.omega * d)));
+        let x = self.omega * (d - step);
+        let (cr, sr) = if x.abs() < Self::SMALL {
+            let x2 = x * x;
+            let (cx, sx) = (1.0 - 0.5 * x2, x - x * x2 / 6.0);
+            (cd * cx - sd * sx, sd * cx + cd * sx)
+        } else {
+            (libm::cos(self.omega * d), libm::sin(self.omega * d))
+        };
+        let (c, s) = (self.c * cr - self.s * sr, self.s * cr + self.c * sr);
+        self.tau = tau;
+        self.c = c;
+        self.s = s;
+        (c, s)
+    }
+}
+
 /// Least-squares fit of a line plus a sinusoid of angular frequency `omega` [rad/s] to
-/// `(t, y)`, times relative to `t0`; `None` if singular.
+/// `(t, y)` (times increasing), times relative to `t0`; `None` if singular. The normal
+/// equations (their upper triangle), then the residual sample by sample (`sum y^2 - sol . b`
+/// would lose it to cancellation on a sway the fit describes well).
 fn fit_at(t: &[f64], y: &[f64], t0: f64, omega: f64) -> Option<SinusoidFit> {
     let mut a = Matrix4::<f64>::zeros();
     let mut b = Vector4::<f64>::zeros();
+    let first = t.first().map_or(0.0, |&t1| t1 - t0);
+    let mut rotor = Rotor::new(omega, first);
     for (&ti, &yi) in t.iter().zip(y) {
         let tau = ti - t0;
-        let row = Vector4::new(1.0, tau, libm::cos(omega * tau), libm::sin(omega * tau));
-        a += row * row.transpose();
-        b += row * yi;
+        let (c, s) = rotor.at(tau);
+        let row = [1.0, tau, c, s];
+        for i in 0..4 {
+            b[i] += row[i] * yi;
+            for j in i..4 {
+                a[(i, j)] += row[i] * row[j];
+            }
+        }
+    }
+    for i in 1..4 {
+        for j in 0..i {
+            a[(i, j)] = a[(j, i)];
+        }
     }
     let chol = a.cholesky()?;
     let sol = chol.solve(&b);
@@ -58,14 +133,12 @@ fn fit_at(t: &[f64], y: &[f64], t0: f64, omega: f64) -> Option<SinusoidFit> {
     } else {
         f64::INFINITY
     };
+    let mut rotor = Rotor::new(omega, first);
     let mut sse = 0.0;
     for (&ti, &yi) in t.iter().zip(y) {
         let tau = ti - t0;
-        let e = yi
-            - (sol[0]
-                + sol[1] * tau
-                + sol[2] * libm::cos(omega * tau)
-                + sol[3] * libm::sin(omega * tau));
+        let (c, s) = rotor.at(tau);
+        let e = yi - (sol[0] + sol[1] * tau + sol[2] * c + sol[3] * s);
         sse += e * e;
     }
     Some(SinusoidFit {
@@ -116,7 +189,7 @@ pub fn identify(t: &[f64], y: &[f64], t0: f64, w_min: f64, w_max: f64) -> Sinuso
     let (mut lo, mut hi) = ((best_w - step).max(w_min), (best_w + step).min(w_max));
     let (mut a, mut b) = (hi - g * (hi - lo), lo + g * (hi - lo));
     let (mut ca, mut cb) = (cost(a), cost(b));
-    for _ in 0..60 {
+    for _ in 0..GOLDEN_STEPS {
         if ca < cb {
             hi = b;
             b = a;
@@ -371,7 +444,7 @@ impl<const AXES: usize> Search<AXES> {
                 Step::Golden(mut s) => {
                     if s.cb.is_nan() {
                         s.cb = self.cost(s.b);
-                    } else if s.iter < 60 {
+                    } else if s.iter < GOLDEN_STEPS {
                         if s.ca < s.cb {
                             s.hi = s.b;
                             s.b = s.a;
@@ -417,6 +490,28 @@ mod tests {
     extern crate std;
     use super::*;
     use std::vec::Vec;
+
+    /// The rotation recurrence gives `omega tau`'s cosine and sine as `libm` does, on steps
+    /// that jitter, repeat and jump (a gap).
+    #[test]
+    fn the_rotor_follows_the_angle_through_jitter_and_gaps() {
+        let omega = core::f64::consts::TAU / 7.3;
+        let mut tau = 0.37;
+        let mut rotor = Rotor::new(omega, tau);
+        let mut worst: f64 = 0.0;
+        for k in 0..400 {
+            tau += match k % 50 {
+                49 => 3.1,                          // a gap
+                7 => 0.0,                           // the same time again
+                _ => 0.2 + 1e-7 * f64::from(k % 3), // the intervals' rounding
+            };
+            let (c, s) = rotor.at(tau);
+            worst = worst
+                .max((c - libm::cos(omega * tau)).abs())
+                .max((s - libm::sin(omega * tau)).abs());
+        }
+        assert!(worst < 1e-13, "{worst}");
+    }
 
     #[test]
     fn identifies_a_sinusoid_on_a_trend() {

@@ -91,6 +91,8 @@
 //! the window has been accumulated; [`InertialAlignment::level`] gives a levelled attitude at any
 //! time (the fine filters' start).
 
+mod ramp_power;
+
 use super::AttitudeEstimate;
 use super::analytic::GravityMismatch;
 use super::kahan::{Kahan, Kahan3};
@@ -139,6 +141,14 @@ pub const EXCESS_SIGMAS: f64 = 2.0;
 /// Frequencies of [`InertialAlignment::translation_leak`]'s spectral integral.
 const LEAK_FREQUENCIES: usize = 96;
 
+/// The frequencies [rad/s] of [`InertialAlignment::translation_leak`]'s spectral integral for
+/// a wave model resonant at `omega0` [rad/s]: log-spaced over two decades either side.
+fn leak_omegas(omega0: f64) -> [f64; LEAK_FREQUENCIES] {
+    let (lo, hi) = (0.01 * omega0, 100.0 * omega0);
+    let n = LEAK_FREQUENCIES;
+    core::array::from_fn(|k| lo * libm::pow(hi / lo, k as f64 / (n - 1) as f64))
+}
+
 /// Midpoint steps per ramp of its transfer integrals.
 const LEAK_STEPS: usize = 256;
 
@@ -173,9 +183,16 @@ pub enum InertialAlignError {
     /// slowly yawing base). Give the lever arm, or align longer.
     BaseDisturbed,
     /// On a moving base, the translation prior's leak through the ramps
-    /// ([`InertialAlignment::translation_leak`]) alone exceeds [`MAX_HEADING_SIGMA_RAD`]:
-    /// the window is too short to hide waves of its size.
+    /// ([`InertialAlignment::translation_leak`]) takes the heading 1-sigma beyond
+    /// [`MAX_HEADING_SIGMA_RAD`]: the window is too short to hide waves of its size.
     TranslationLeak,
+    /// The heading 1-sigma with what an unknown lever arm's motion leaks (module docs,
+    /// **Unknown lever arm**) exceeds [`MAX_HEADING_SIGMA_RAD`]: the swaying IMU's offset
+    /// from the centre, not known, hides the Earth rate. Give the lever arm, or align longer.
+    LeverArmLeak {
+        /// The heading 1-sigma, leaks included [rad].
+        heading_sigma_rad: f64,
+    },
 }
 
 impl core::fmt::Display for InertialAlignError {
@@ -193,7 +210,12 @@ impl core::fmt::Display for InertialAlignError {
                 "heading depends on the taper: base disturbed beyond what the window hides (unknown lever arm?)",
             ),
             Self::TranslationLeak => f.write_str(
-                "base moving: its translation (1-sigma --base-translation) leaks more than 15 deg of heading through this window's ramps; align 120 s or more, or give a smaller translation",
+                "base moving: its translation (1-sigma --base-translation) leaks so much heading through this window's ramps that the heading 1-sigma passes 15 deg; align 120 s or more, or give a smaller translation",
+            ),
+            Self::LeverArmLeak { heading_sigma_rad } => write!(
+                f,
+                "heading not resolved: the unknown lever arm's motion on this swaying base leaves a heading 1-sigma of {:.1} deg (more than 15); give the lever arm (--lever-arm X,Y,Z) or align longer",
+                heading_sigma_rad.to_degrees()
             ),
         }
     }
@@ -498,6 +520,10 @@ pub struct InertialAlignment<T: Scalar> {
     dt_last: f64,
     samples: u32,
     refused: Option<InputError>,
+    /// The main ramps' power spectrum at the default wave model's frequencies
+    /// ([`Self::translation_leak`]), computed while the increments arrive; `None` for ramps
+    /// of [`RAMP_MAX_S`], whose leak is not asked for.
+    leak_power: Option<ramp_power::RampPower>,
 }
 
 impl<T: Scalar> InertialAlignment<T> {
@@ -537,6 +563,10 @@ impl<T: Scalar> InertialAlignment<T> {
             dt_last: 0.0,
             samples: 0,
             refused: None,
+            leak_power: (ramp < RAMP_MAX_S - 1e-9).then(|| {
+                let wave = super::fine::base::Translation::<f64>::default();
+                ramp_power::RampPower::new(main, leak_omegas(wave.omega0_rad_s))
+            }),
         }
     }
 
@@ -645,6 +675,13 @@ impl<T: Scalar> InertialAlignment<T> {
         self.dt_last = dt;
         self.q_b_b0.rotate(&c.phi_b);
         self.samples = self.samples.saturating_add(1);
+        if let Some(l) = &mut self.leak_power {
+            l.advance(dt);
+            // The window complete (as [`Self::estimate`] has it): whatever is left, now.
+            if self.t_s.sum.to_f64() + 0.5 * dt >= self.slope.taper.window {
+                l.finish();
+            }
+        }
         Ok(())
     }
 
@@ -750,6 +787,19 @@ impl<T: Scalar> InertialAlignment<T> {
             .into_inner();
         let lever = self.lever_leak(&v_b0, &m_b0, &c_b0_n);
         let sigma = parts.map(|p| p.with_leaks(excess, &lever, yaw.to_f64()));
+        // The noise alone resolved the heading (above); with the leaks it may not be: an
+        // answer whose heading 1-sigma is beyond the limit is no heading.
+        if let Some(s) = sigma
+            && !(s.z.to_f64() <= MAX_HEADING_SIGMA_RAD)
+        {
+            return Err(if lever.heading2 >= sq(excess) {
+                InertialAlignError::LeverArmLeak {
+                    heading_sigma_rad: s.z.to_f64(),
+                }
+            } else {
+                InertialAlignError::BaseDisturbed
+            });
+        }
         Ok(AttitudeEstimate {
             q_b_n,
             sigma_rad: sigma.unwrap_or_else(|| Vector3::repeat(T::c(f64::NAN))),
@@ -785,12 +835,16 @@ impl<T: Scalar> InertialAlignment<T> {
         if !(sigma > 0.0 && omega0 > 0.0 && zeta > 0.0 && corner >= 0.0 && s0 > 0.0 && wt > 0.0) {
             return (0.0, 0.0);
         }
-        // Log-spaced frequencies over two decades either side of omega0.
-        let (lo, hi) = (0.01 * omega0, 100.0 * omega0);
+        let omega = leak_omegas(omega0);
         let n = LEAK_FREQUENCIES;
-        let omega: [f64; LEAK_FREQUENCIES] =
-            core::array::from_fn(|k| lo * libm::pow(hi / lo, k as f64 / (n - 1) as f64));
-        let power = self.slope.taper.ramp_power(&omega);
+        // Computed while the increments arrived where it could be (the default wave model, a
+        // complete window), else now.
+        let early = self
+            .leak_power
+            .as_ref()
+            .filter(|l| l.omega() == &omega)
+            .and_then(|l| l.power().copied());
+        let power = early.unwrap_or_else(|| self.slope.taper.ramp_power(&omega));
         // |H(i w)|^2 up to the gain, which the stationary 1-sigma fixes.
         let shape = |w: f64| {
             let d = omega0 * omega0 - w * w;
