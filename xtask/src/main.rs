@@ -369,9 +369,17 @@ fn bench(root: &Path) -> Result<()> {
         "| guest instructions per IMU sample, decode + conversion, BMI088, gyro + accel frames (max / mean) | {:.0} / {:.0} |",
         bmi.0, bmi.1
     );
-    for (method, (max, mean)) in &align {
+    for (method, (max, mean), _) in &align {
         println!(
             "| guest instructions per alignment sample, {method}, rocking bench (max / mean) | {max:.0} / {mean:.0} |"
+        );
+    }
+    for (method, _, lost) in &align {
+        let value = lost.map_or("- (alignment refused: no summary)".to_owned(), |(m, o)| {
+            format!("{m:.0} / {o:.0}")
+        });
+        println!(
+            "| samples lost at 125 MIPS (QEMU icount shift 3), {method}, rocking bench (missed / channel overruns) | {value} |"
         );
     }
     println!("| host mechanization, f32, steps/s (one thread, no I/O) | {mech_f32:.0} |");
@@ -419,7 +427,15 @@ fn osc_speed(nav: &Path) -> Result<(f64, f64)> {
 /// `(method, (max, mean))` guest instructions per alignment sample of the firmware's alignment
 /// task for every method, on 40 s of the simulator's rocking `auv-bench` (FOG grade; sway's
 /// maximum is a filter interval of its period identification).
-fn align_costs(nav: &Path, elf: &Path) -> Result<Vec<(&'static str, (f64, f64))>> {
+/// Per alignment method on the rocking bench: guest instructions per alignment sample (max,
+/// mean) at QEMU's 1000 MIPS, and the samples the firmware lost (missed data-ready, channel
+/// overruns) at 125 MIPS (`QEMU_ICOUNT_SHIFT=3`: slower than a 168 MHz Cortex-M4 with flash
+/// wait states; whether the tasks keep up on the real part).
+/// A method whose alignment refuses the swaying bench (`static`) ends without a summary: no
+/// loss figure (`None`).
+type AlignCost = (&'static str, (f64, f64), Option<(f64, f64)>);
+
+fn align_costs(nav: &Path, elf: &Path) -> Result<Vec<AlignCost>> {
     run(Command::new(nav).args([
         "sim",
         "auv-bench",
@@ -434,29 +450,42 @@ fn align_costs(nav: &Path, elf: &Path) -> Result<Vec<(&'static str, (f64, f64))>
     ]))?;
     let mut costs = Vec::new();
     for method in ["static", "inertial", "fine", "sway"] {
-        let mut c = Command::new("bash");
-        c.arg("firmware/qemu-run.sh")
-            .arg(elf)
-            .args(["--align-method", method])
-            // The recording is FOG-grade: the board's default (ADIS16505) noise prior would have
-            // `fine` refuse gyros too coarse to find north.
-            .args(["--imu-noise", "fog"]);
-        if method == "sway" {
-            // Sway needs the lever arm given: the bench's IMU is at the centre of rotation.
-            c.args(["--lever-arm", "0,0,0"]);
-        }
-        c.args(["out/bench-rock/imu.bin", "out/bench-rock/fw.csv"])
-            .args(["45", "30", "0", "40"]);
-        eprintln!("$ {}", show(&c));
-        let out = c.output().context("run QEMU")?;
-        let log = String::from_utf8_lossy(&out.stdout);
+        let log_at = |shift: &str| -> Result<String> {
+            let mut c = Command::new("bash");
+            c.arg("firmware/qemu-run.sh")
+                .env("QEMU_ICOUNT_SHIFT", shift)
+                .arg(elf)
+                .args(["--align-method", method])
+                // The recording is FOG-grade: the board's default (ADIS16505) noise prior would
+                // have `fine` refuse gyros too coarse to find north.
+                .args(["--imu-noise", "fog"]);
+            if method == "sway" {
+                // Sway needs the lever arm given: the bench's IMU is at the centre of rotation.
+                c.args(["--lever-arm", "0,0,0"]);
+            }
+            c.args(["out/bench-rock/imu.bin", "out/bench-rock/fw.csv"])
+                .args(["45", "30", "0", "40"]);
+            eprintln!("$ QEMU_ICOUNT_SHIFT={shift} {}", show(&c));
+            let out = c.output().context("run QEMU")?;
+            Ok(String::from_utf8_lossy(&out.stdout).into_owned())
+        };
+        let log = log_at("0")?;
         let at = log
             .find("instructions per alignment sample")
             .with_context(|| format!("no alignment costs in:\n{log}"))?;
         let part = &log[at..];
+        let slow = log_at("3")?;
+        let lost = match slow.find("summary:") {
+            Some(at) => Some((
+                number_after(&slow[at..], "missed")?,
+                number_after(&slow[at..], "channel overruns")?,
+            )),
+            None => None,
+        };
         costs.push((
             method,
             (number_after(part, "max")?, number_after(part, "mean")?),
+            lost,
         ));
     }
     Ok(costs)
