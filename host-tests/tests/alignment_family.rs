@@ -375,20 +375,24 @@ fn nav_sim_writes_a_member_and_its_drawn_values() {
             .output()
             .unwrap()
     };
-    let o = run(&[
-        "sim",
-        "family",
-        "--seed",
-        "1",
-        "--set",
-        "member=5",
-        "--seconds",
-        "32",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let text = std::fs::read_to_string(out.join("scenario.txt")).unwrap();
+    // Member 5 of family 1, `seconds` long, into `dir`: its scenario.txt.
+    let sim = |seconds: &str, dir: &std::path::Path| {
+        let o = run(&[
+            "sim",
+            "family",
+            "--seed",
+            "1",
+            "--set",
+            "member=5",
+            "--seconds",
+            seconds,
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read_to_string(dir.join("scenario.txt")).unwrap()
+    };
+    let text = sim("32", &out);
     let m = FamilyMember::draw(1, 5);
     let value = |key: &str| {
         text.lines()
@@ -451,21 +455,7 @@ fn nav_sim_writes_a_member_and_its_drawn_values() {
     assert!(stdout.contains("alignment (fine)"), "{stdout}");
     assert!(solution.exists());
     // Too short for an alignment and some navigation: the line says so instead.
-    let short = dir.path().join("short");
-    let o = run(&[
-        "sim",
-        "family",
-        "--seed",
-        "1",
-        "--set",
-        "member=5",
-        "--seconds",
-        "2",
-        "--out",
-        short.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let text = std::fs::read_to_string(short.join("scenario.txt")).unwrap();
+    let text = sim("2", &dir.path().join("short"));
     assert!(
         text.contains("# replay: none: 2.0 s is shorter than fine's 20 s minimum"),
         "{text}"
