@@ -9,6 +9,7 @@ use host_tests::sensor_model::{ErrorInjector, Grade, ImuErrorModel};
 use host_tests::trajectory::scenarios::Scenario;
 use host_tests::trajectory::{Generator, Sampling, generate, wrap_pi};
 use host_tests::truth::Truth;
+use nav_core::alignment::inertial::MAX_HEADING_SIGMA_RAD;
 use nav_core::alignment::{AttitudeEstimate, InertialAlignError, InertialAlignment, SensorNoise};
 use nav_core::attitude::{euler, quat_to_f64};
 use nav_core::earth::{self, OMEGA_IE};
@@ -522,4 +523,40 @@ fn an_unknown_lever_arms_leak_is_in_the_sigma() {
             Err(e) => panic!("{name}: refused: {e}"),
         }
     }
+}
+
+/// An IMU swaying 5 deg at its centre of rotation, told only that its lever arm is unknown
+/// (5 m per axis), over 30 s: what such a lever arm's motion could leak puts the heading
+/// 1-sigma far beyond 15 deg. That is no heading: refused, naming the lever arm, not answered
+/// with a heading 1-sigma of a hundred degrees; with the lever arm given (0) it answers.
+#[test]
+fn a_heading_the_unknown_lever_arm_hides_is_refused() {
+    let d = auv_bench();
+    let (_, fog) = fog_white();
+    let run = |unknown: bool| {
+        let mut a = InertialAlignment::new(d.lat, d.h, 30.0).with_noise(fog);
+        a = if unknown {
+            a.with_lever_arm_unknown(5.0)
+        } else {
+            a.with_lever_arm(Vector3::zeros())
+        };
+        for inc in &d.incs[..index_at(30.0) + 1] {
+            a.add(inc).unwrap();
+        }
+        a.estimate()
+    };
+    match run(true) {
+        Err(e @ InertialAlignError::LeverArmLeak { heading_sigma_rad }) => {
+            println!("lever arm unknown, 30 s: {e}");
+            assert!(heading_sigma_rad > MAX_HEADING_SIGMA_RAD, "{e}");
+            assert!(format!("{e}").contains("--lever-arm"), "{e}");
+        }
+        other => panic!("not refused as the lever arm's leak: {other:?}"),
+    }
+    let est = run(false).expect("the lever arm given: an answer");
+    assert!(
+        est.sigma_rad.z < MAX_HEADING_SIGMA_RAD,
+        "{}",
+        est.sigma_rad.z
+    );
 }
