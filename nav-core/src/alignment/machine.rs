@@ -1024,9 +1024,6 @@ fn with_translation_leak<T: Scalar>(
         ..Translation::<f64>::default()
     };
     let (tilt, heading) = a.translation_leak(&wave);
-    if !(heading <= super::inertial::MAX_HEADING_SIGMA_RAD) {
-        return Err(InertialAlignError::TranslationLeak);
-    }
     let add = |sigma: T, leak: f64| {
         let s = sigma.to_f64();
         T::c(libm::sqrt(s * s + leak * leak))

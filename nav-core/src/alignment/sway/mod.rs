@@ -117,10 +117,12 @@ pub struct SwayConfig<T: Scalar> {
     pub max_period_s: T,
     /// Smallest sinusoid amplitude taken as sway [rad] (default 1e-4).
     pub min_amplitude_rad: T,
-    /// Least-squares fits per filter step during the identification (default 4: a search of
-    /// about 260 fits takes 6.5 s; each fit over the 128 samples costs some 650 000
+    /// Least-squares fits per filter step during the identification (default 16: a search of
+    /// about 260 fits takes 1.7 s; each fit over the 128 samples costs some 500 000
     /// instructions on the MCU, whose `f64` is software, and the three filters of the bank
-    /// search at once: 8 M per filter step, half of a 168 MHz core's 0.1 s).
+    /// search at once: some 25 M per filter step, more than a 168 MHz core's 0.1 s, so the
+    /// method is not yet real-time there; 4 would fit, but the later identification cost one
+    /// family member its 60 s heading, 4.4 sigma off).
     pub fits_per_step: u32,
 }
 

@@ -266,18 +266,9 @@ impl<const AXES: usize> Search<AXES> {
 
     /// An empty buffer for frequencies in `[w_min, w_max]` [rad/s].
     pub fn new(w_min: f64, w_max: f64) -> Self {
-        Self {
-            t: [0.0; BUFFER_LEN],
-            y: [[0.0; BUFFER_LEN]; AXES],
-            n: 0,
-            w_min,
-            w_max,
-            axis: 0,
-            step: Step::Done,
-            best_w: f64::NAN,
-            best: f64::INFINITY,
-            results: [None; AXES],
-        }
+        let mut search = Self::BLANK;
+        search.init_in(w_min, w_max);
+        search
     }
 
     /// Empties the buffer in place, as [`Self::new`] leaves it, for frequencies in
