@@ -15,6 +15,8 @@
 //! - [`generate`]: exact synthetic recordings of a stationary body.
 //! - [`pipeline`]: the replay pipeline (the same semantics as the firmware's tasks).
 //! - [`replay`]: a file replayed end to end (open, run, attach the replay counters).
+//! - [`gnss_file`]: GNSS fix files as the navigator takes them (text or the firmware's binary
+//!   fix file) and the binary file's writer.
 //! - [`bench`]: the mechanization's host benchmark (`nav bench`).
 //! - [`truth`]: exactly known trajectories and their exact increments (physics tests).
 //! - [`oscillator`]: the isotropic-oscillator sensor simulator ([Oscillator INS]) and its `osc.csv`
@@ -30,13 +32,23 @@
 #![allow(rustdoc::broken_intra_doc_links)]
 #![warn(missing_docs)]
 
+pub mod aided;
+pub mod aided_bench;
+pub mod aided_cmd;
 pub mod align_bench;
 pub mod atomic;
 pub mod bench;
 pub mod emulate;
+pub mod filter_bench;
 pub mod generate;
+pub mod gnss;
+pub mod gnss_bench;
+pub mod gnss_sim;
 pub mod imu_csv;
 pub mod kf_gins;
+pub mod kf_gins_config;
+pub mod kf_gins_run;
+pub mod nav_writer;
 pub mod oscillator;
 pub mod output_check;
 pub mod pipeline;

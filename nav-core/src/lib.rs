@@ -21,6 +21,7 @@ pub mod calibration;
 pub mod coning;
 pub mod earth;
 pub mod increment;
+pub mod ins_filter;
 pub mod navigator;
 pub mod number;
 pub mod oscillator;

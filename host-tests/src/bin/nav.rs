@@ -173,9 +173,27 @@ enum Command {
     /// Benchmark the mechanization alone (no I/O): steps per second on one thread, f32 and f64,
     /// over 10 min of exact 400 Hz increments of a 900 km/h flight.
     Bench {
-        /// Passes over the 240,000 increments.
+        /// What to measure: mechanization (steps/s, no I/O), filter (`nav kf-gins` speed and
+        /// accuracy on a generated 1-hour KF-GINS data set), consistency (NEES/NIS Monte Carlo
+        /// of the GNSS-aided filter), outages (drift in 60 s GNSS outages every 180 s) or
+        /// outliers (jumps, spikes, multipath, NaN fixes).
+        #[arg(default_value = "mechanization")]
+        what: BenchKind,
+        /// Passes over the 240,000 increments (mechanization).
         #[arg(long, default_value_t = 10)]
         passes: u32,
+        /// Monte Carlo runs per cell (consistency, outages).
+        #[arg(long, default_value_t = 30)]
+        runs: usize,
+        /// Threads (consistency, outages).
+        #[arg(long, default_value_t = 2)]
+        threads: usize,
+        /// Length of each simulated run [s] (consistency; filter and outages use 1 h).
+        #[arg(long, default_value_t = 600.0)]
+        seconds: f64,
+        /// Directory for the generated data set (filter) [default: a temporary directory].
+        #[arg(long, value_name = "DIR")]
+        dir: Option<PathBuf>,
     },
     /// Write a synthetic recording of a body at rest on the Earth (exact inputs).
     #[command(allow_negative_numbers = true)]
@@ -217,6 +235,18 @@ enum Command {
         /// Output file.
         #[arg(long, value_name = "FILE")]
         out: PathBuf,
+    },
+    /// Run a KF-GINS configuration file as it is (its IMU and GNSS text files, start, noise and
+    /// lever arm) through this project's GNSS-aided filter, writing KF-GINS's 11-column .nav
+    /// trajectory, one row per IMU epoch.
+    KfGins {
+        /// The KF-GINS YAML configuration (keys imupath, gnsspath, outputpath, imudatalen,
+        /// imudatarate, starttime, endtime, initpos, initvel, initatt, init*std, imunoise,
+        /// antlever; KF-GINS's units).
+        config: PathBuf,
+        /// The trajectory to write [default: OUTPUTPATH/KF_GINS_Navresult.nav].
+        #[arg(long, value_name = "FILE.nav")]
+        out: Option<PathBuf>,
     },
     /// Align and navigate over a recording (any format), writing the solution log as CSV.
     #[command(allow_negative_numbers = true)]
@@ -264,6 +294,21 @@ enum AlignBenchKind {
     Family,
 }
 
+/// `nav bench` measurements.
+#[derive(Clone, Copy, ValueEnum)]
+enum BenchKind {
+    /// Mechanization steps per second.
+    Mechanization,
+    /// `nav kf-gins` speed and accuracy.
+    Filter,
+    /// NEES/NIS consistency.
+    Consistency,
+    /// GNSS outages.
+    Outages,
+    /// GNSS outliers.
+    Outliers,
+}
+
 /// Recording files of `nav sim`.
 #[derive(Clone, Copy, ValueEnum)]
 enum SimFormat {
@@ -283,18 +328,49 @@ struct ReplayArgs {
     #[arg(long, value_name = "FILE")]
     imu: PathBuf,
     /// Latitude of the site [deg].
-    #[arg(long)]
-    lat: f64,
+    #[arg(long, required_unless_present_any = ["init_pos", "start_in_motion"])]
+    lat: Option<f64>,
     /// Longitude of the site [deg].
-    #[arg(long)]
-    lon: f64,
+    #[arg(long, required_unless_present_any = ["init_pos", "start_in_motion"])]
+    lon: Option<f64>,
     /// Ellipsoidal height of the site [m].
-    #[arg(long)]
-    h: f64,
+    #[arg(long, required_unless_present_any = ["init_pos", "start_in_motion"])]
+    h: Option<f64>,
     /// Length of the alignment window at the start [s] (at least the method's minimum: 10 s
     /// for static and inertial, 20 s for fine, 40 s for sway).
-    #[arg(long)]
-    align_seconds: f64,
+    #[arg(long, required_unless_present_any = ["init_pos", "start_in_motion"])]
+    align_seconds: Option<f64>,
+    /// GNSS fixes: CSV with units in the header (t_s,lat_deg,lon_deg,h_m,sigma_n_m,...) or
+    /// KF-GINS's text (7 columns, or 13 with velocity). Navigates with the GNSS-aided filter,
+    /// started by --init-pos/--init-vel/--init-att or --start-in-motion.
+    #[arg(long, value_name = "FILE")]
+    gnss: Option<PathBuf>,
+    /// The GNSS antenna's position from the IMU, body forward,right,down [m].
+    #[arg(long, value_name = "X,Y,Z", requires = "gnss", allow_hyphen_values = true, value_parser = parse_vector3)]
+    gnss_lever_arm: Option<[f64; 3]>,
+    /// Initial position of the IMU: latitude, longitude [deg], height [m] (KF-GINS's initpos).
+    #[arg(long, value_name = "LAT,LON,H", requires_all = ["gnss", "init_vel", "init_att"], allow_hyphen_values = true, value_parser = parse_vector3)]
+    init_pos: Option<[f64; 3]>,
+    /// Initial velocity north, east, down [m/s] (initvel).
+    #[arg(long, value_name = "VN,VE,VD", requires = "init_pos", allow_hyphen_values = true, value_parser = parse_vector3)]
+    init_vel: Option<[f64; 3]>,
+    /// Initial roll, pitch, yaw [deg] (initatt).
+    #[arg(long, value_name = "ROLL,PITCH,YAW", requires = "init_pos", allow_hyphen_values = true, value_parser = parse_vector3)]
+    init_att: Option<[f64; 3]>,
+    /// 1-sigma of the initial position [m], velocity [m/s] and attitude [deg], each for all
+    /// three axes.
+    #[arg(long, value_name = "POS,VEL,ATT", requires = "init_pos", default_value = "1,0.1,1", value_parser = parse_vector3)]
+    init_std: [f64; 3],
+    /// Start the filter in motion from GNSS (level when quasi-static, heading from the track
+    /// above 5 m/s): for IMUs that cannot find north (MEMS).
+    #[arg(long, requires = "gnss", conflicts_with = "init_pos")]
+    start_in_motion: bool,
+    /// Leave the scale-factor states out of the filter (15 states).
+    #[arg(long, requires = "gnss")]
+    no_scale_factors: bool,
+    /// Covariance propagation rate of the filter [Hz].
+    #[arg(long, requires = "gnss", default_value_t = 10.0)]
+    propagation_rate: f64,
     /// Solution log (CSV).
     #[arg(long, value_name = "FILE")]
     out: PathBuf,
@@ -384,10 +460,10 @@ impl ReplayArgs {
                 vertical: self.vertical,
             },
             ..RunConfig::new(
-                self.lat,
-                self.lon,
-                self.h,
-                self.align_seconds,
+                self.lat.unwrap_or(f64::NAN),
+                self.lon.unwrap_or(f64::NAN),
+                self.h.unwrap_or(f64::NAN),
+                self.align_seconds.unwrap_or(f64::NAN),
                 sensor_noise(&noise),
             )
         };
@@ -398,8 +474,269 @@ impl ReplayArgs {
     }
 }
 
+/// `nav bench outages`: 1-hour land-vehicle runs, 60 s outages every 180 s.
+fn bench_outages(runs: usize, threads: usize) -> Result<()> {
+    use host_tests::gnss_bench::{outage_case, outage_drifts};
+    use host_tests::sensor_model::Grade;
+    anyhow::ensure!(runs >= 1, "--runs must be at least 1");
+    println!(
+        "1 h land vehicle, 1 Hz fixes (0.5/0.5/1 m), 60 s outages every 180 s from 300 s; {runs} run(s) per grade; drift = horizontal error at the outage's end"
+    );
+    println!(
+        "| grade | outages | drift RMS [m] | drift max [m] | predicted 1-sigma RMS [m] | max drift/sigma | beyond 3 sigma |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    for grade in [
+        Grade::Rlg,
+        Grade::Fog,
+        Grade::MemsTactical,
+        Grade::MemsConsumer,
+    ] {
+        let seeds: Vec<u64> = (1..=runs as u64).collect();
+        let all = std::sync::Mutex::new(Vec::new());
+        std::thread::scope(|s| {
+            for t in 0..threads.max(1) {
+                let (all, seeds) = (&all, &seeds);
+                s.spawn(move || {
+                    for seed in seeds.iter().skip(t).step_by(threads.max(1)) {
+                        let r = outage_drifts(&outage_case(grade, 3600.0, *seed));
+                        all.lock().expect("no panic").push(r);
+                    }
+                });
+            }
+        });
+        let mut drifts = Vec::new();
+        for r in all.into_inner().expect("no panic") {
+            drifts.extend(r?);
+        }
+        let n = drifts.len().max(1) as f64;
+        let rms = |f: &dyn Fn(&host_tests::gnss_bench::OutageDrift) -> f64| {
+            (drifts.iter().map(|d| f(d).powi(2)).sum::<f64>() / n).sqrt()
+        };
+        println!(
+            "| {grade} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {} |",
+            drifts.len(),
+            rms(&|d| d.drift_m),
+            drifts.iter().map(|d| d.drift_m).fold(0.0, f64::max),
+            rms(&|d| d.sigma_m),
+            drifts
+                .iter()
+                .map(|d| d.drift_m / d.sigma_m)
+                .fold(0.0, f64::max),
+            drifts
+                .iter()
+                .filter(|d| d.drift_m > 3.0 * d.sigma_m)
+                .count()
+        );
+    }
+    Ok(())
+}
+
+/// `nav bench outliers`.
+fn bench_outliers() -> Result<()> {
+    use host_tests::gnss_bench::{outlier_case, outliers};
+    use host_tests::sensor_model::Grade;
+    println!(
+        "land vehicle, 1 Hz fixes of 0.5 m; each outlier, what the gate did, the largest horizontal error from its start to 30 s after it"
+    );
+    println!(
+        "| grade | outlier | at [s] | fixes | refused | max error [m] | 1-sigma there [m] | DEGRADED | accepted again |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for grade in [Grade::Fog, Grade::MemsTactical] {
+        for o in outliers(&outlier_case(grade, 1))? {
+            println!(
+                "| {grade} | {} | {} | {} | {} | {:.2} | {:.2} | {} | {} |",
+                o.name,
+                o.t_s,
+                o.fixes,
+                o.refused,
+                o.max_error_m,
+                o.sigma_at_max_m,
+                if o.degraded { "yes" } else { "no" },
+                if o.reacquired { "yes" } else { "no" }
+            );
+        }
+    }
+    Ok(())
+}
+
+/// `nav bench filter`.
+fn bench_filter(dir: Option<PathBuf>) -> Result<()> {
+    use host_tests::filter_bench::{FilterBenchOptions, generate, run};
+    let temp = tempfile::tempdir()?;
+    let dir = dir.unwrap_or_else(|| temp.path().to_path_buf());
+    let o = FilterBenchOptions::default();
+    println!(
+        "generating {} s of {} at {} Hz with 1 Hz RTK fixes ({:?} m) in {} ...",
+        o.seconds,
+        o.grade,
+        o.imu_rate_hz,
+        o.gnss_sigma_ned_m,
+        dir.display()
+    );
+    let data = generate(&dir, &o)?;
+    let r = run(&data)?;
+    println!(
+        "nav kf-gins: {} IMU samples in {:.3} s: {:.0} samples/s (one thread; text parsing and .nav writing included; target >= 650000)",
+        r.samples,
+        r.seconds,
+        r.samples as f64 / r.seconds
+    );
+    println!(
+        "accuracy over {} truth epochs: horizontal RMS {:.4} m (target <= 0.02), max {:.4} m; yaw RMS {:.4} deg (target <= 0.06)",
+        r.compared, r.horizontal_rms_m, r.horizontal_max_m, r.yaw_rms_deg
+    );
+    Ok(())
+}
+
+/// `nav bench consistency`.
+fn bench_consistency(runs: usize, threads: usize, seconds: f64) -> Result<()> {
+    use host_tests::aided_bench::{Case, average_chi2_bounds, consistency_cell};
+    use host_tests::gnss_sim::GnssSimOptions;
+    use host_tests::sensor_model::Grade;
+    anyhow::ensure!(runs >= 2, "--runs must be at least 2");
+    let (lo9, hi9) = average_chi2_bounds(9.0, runs);
+    let (lo3, hi3) = average_chi2_bounds(3.0, runs);
+    println!(
+        "{runs} runs per cell, {seconds} s each; 95 % bounds of the average NEES (9 dof) \
+         [{lo9:.2}, {hi9:.2}], NIS (3 dof) [{lo3:.2}, {hi3:.2}]"
+    );
+    println!(
+        "| scenario | grade | GNSS | epochs | NEES inside | mean NEES (pos/vel/att) | NIS inside | mean NIS | bias z RMS gyro/accel | max |bias z| | gated |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    for (scenario, grade, rate, sigma, vel) in [
+        ("land-vehicle", Grade::Fog, 1.0, [0.5, 0.5, 1.0], None),
+        (
+            "land-vehicle",
+            Grade::MemsTactical,
+            1.0,
+            [0.5, 0.5, 1.0],
+            None,
+        ),
+        (
+            "land-vehicle",
+            Grade::MemsConsumer,
+            10.0,
+            [1.0, 1.0, 2.0],
+            Some([0.05, 0.05, 0.1]),
+        ),
+        (
+            "flight",
+            Grade::Rlg,
+            5.0,
+            [0.5, 0.5, 1.0],
+            Some([0.05, 0.05, 0.1]),
+        ),
+        ("flight", Grade::MemsTactical, 2.0, [1.0, 1.0, 2.0], None),
+    ] {
+        let case = Case {
+            scenario: scenario.into(),
+            grade,
+            seconds,
+            imu_rate_hz: 200.0,
+            gnss: GnssSimOptions {
+                rate_hz: rate,
+                sigma_ned_m: sigma,
+                sigma_v_ned_m_s: vel,
+                lever_arm_b_m: [0.8, -0.3, -1.1],
+                ..GnssSimOptions::default()
+            },
+            seed: 1,
+        };
+        let r = consistency_cell(&case, runs, threads)?;
+        println!(
+            "| {scenario} | {grade} | {rate} Hz | {} | {:.0} % | {:.2} ({:.2}/{:.2}/{:.2}) | {:.0} % | {:.2} | {:.2} / {:.2} | {:.2} | {}/{} |",
+            r.epochs,
+            100.0 * r.nees_inside,
+            r.nees_mean,
+            r.nees_blocks_mean[0],
+            r.nees_blocks_mean[1],
+            r.nees_blocks_mean[2],
+            100.0 * r.nis_inside,
+            r.nis_mean,
+            r.bias_z_rms.0,
+            r.bias_z_rms.1,
+            r.bias_z_max,
+            r.rejected.0,
+            r.rejected.1
+        );
+    }
+    Ok(())
+}
+
+/// `nav replay --gnss`: the aided filter.
+fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
+    use host_tests::aided_cmd::{self, AidedReplay, AidedStart, GivenStart};
+    let spec = a.imu_noise.map_or(a.device.noise(), |g| g.noise_spec());
+    let noise = match a.imu_noise {
+        Some(g) => aided_cmd::grade_noise(g),
+        None => aided_cmd::noise_of_spec(&spec),
+    };
+    anyhow::ensure!(
+        a.propagation_rate.is_finite() && (1.0..=1000.0).contains(&a.propagation_rate),
+        "--propagation-rate must be within 1 to 1000 Hz, not {}",
+        a.propagation_rate
+    );
+    let mut config = nav_core::ins_filter::FilterConfig::new(noise);
+    config.scale_factors = !a.no_scale_factors;
+    config.propagation_interval_s = 1.0 / a.propagation_rate;
+    config.antenna_lever_arm_b_m = a.gnss_lever_arm.unwrap_or([0.0; 3]).into();
+    let start = match (a.init_pos, a.init_vel, a.init_att) {
+        (Some(pos), Some(vel), Some(att)) => AidedStart::Given(Box::new(GivenStart {
+            pos_deg_m: pos,
+            vel_m_s: vel,
+            att_deg: att,
+            pos_std_m: [a.init_std[0]; 3],
+            vel_std_m_s: [a.init_std[1]; 3],
+            att_std_deg: [a.init_std[2]; 3],
+            sensors: Default::default(),
+            sensor_sigma: None,
+        })),
+        _ if a.start_in_motion => AidedStart::Motion,
+        _ => {
+            anyhow::bail!("with --gnss give --init-pos/--init-vel/--init-att or --start-in-motion")
+        }
+    };
+    let job = AidedReplay {
+        imu: a.imu.clone(),
+        gnss: gnss.to_path_buf(),
+        out: a.out.clone(),
+        config,
+        start,
+        log_every: a.log_every,
+    };
+    let started = std::time::Instant::now();
+    let (report, rows) = match a.precision {
+        Precision::F32 => aided_cmd::replay_aided::<f32>(&job),
+        Precision::F64 => aided_cmd::replay_aided::<f64>(&job),
+    }
+    .with_context(|| {
+        format!(
+            "aided replay of {} into {}",
+            a.imu.display(),
+            a.out.display()
+        )
+    })?;
+    let seconds = started.elapsed().as_secs_f64();
+    println!("{}", aided_cmd::summary(&report, rows, &a.imu, &a.out));
+    println!(
+        "speed: {:.0} samples/s ({seconds:.3} s wall clock, file reading and logging included)",
+        report.samples as f64 / seconds.max(1e-9)
+    );
+    Ok(())
+}
+
 /// `nav replay`.
 fn replay(a: ReplayArgs) -> Result<()> {
+    if let Some(gnss) = a.gnss.clone() {
+        return replay_aided(&a, &gnss);
+    }
+    anyhow::ensure!(
+        a.lat.is_some() && a.lon.is_some() && a.h.is_some() && a.align_seconds.is_some(),
+        "without --gnss, --lat, --lon, --h and --align-seconds are required"
+    );
     let options = a.options()?;
     let (imu, out) = (&a.imu, &a.out);
     host_tests::atomic::refuse_same_file(&[imu], out)?;
@@ -481,6 +818,94 @@ struct SimArgs {
     /// Print the scenario's parameters with their defaults and exit.
     #[arg(long)]
     list_params: bool,
+    /// Also write DIR/gnss.csv: a simulated GNSS receiver at this rate [Hz] (its interval a
+    /// whole number of truth intervals), on the truth of the run.
+    #[arg(long, value_name = "HZ")]
+    gnss_rate: Option<f64>,
+    /// GNSS position 1-sigma north, east, down [m].
+    #[arg(long, value_name = "N,E,D", default_value = "0.5,0.5,1", value_parser = parse_vector3, requires = "gnss_rate")]
+    gnss_sigma: [f64; 3],
+    /// GNSS velocity 1-sigma north, east, down [m/s] (without it: position only).
+    #[arg(long, value_name = "N,E,D", value_parser = parse_vector3, requires = "gnss_rate")]
+    gnss_velocity_sigma: Option<[f64; 3]>,
+    /// The antenna's position from the IMU, body forward,right,down [m].
+    #[arg(long, value_name = "X,Y,Z", default_value = "0,0,0", allow_hyphen_values = true, value_parser = parse_vector3, requires = "gnss_rate")]
+    gnss_lever_arm: [f64; 3],
+    /// Outages: PERIOD,LENGTH,FIRST [s] (e.g. 180,60,300: 60 s without fixes every 180 s
+    /// from 300 s).
+    #[arg(long, value_name = "PERIOD,LENGTH,FIRST", value_parser = parse_vector3, requires = "gnss_rate")]
+    gnss_outages: Option<[f64; 3]>,
+    /// A position jump T,LENGTH,N,E,D [s, s, m] (repeatable).
+    #[arg(long, value_name = "T,LEN,N,E,D", allow_hyphen_values = true, value_parser = parse_numbers::<5>, requires = "gnss_rate")]
+    gnss_jump: Vec<[f64; 5]>,
+    /// A one-fix spike T,N,E,D [s, m] (repeatable).
+    #[arg(long, value_name = "T,N,E,D", allow_hyphen_values = true, value_parser = parse_numbers::<4>, requires = "gnss_rate")]
+    gnss_spike: Vec<[f64; 4]>,
+    /// A multipath bias growing linearly to N,E,D over LENGTH from T, then gone:
+    /// T,LENGTH,N,E,D [s, s, m] (repeatable).
+    #[arg(long, value_name = "T,LEN,N,E,D", allow_hyphen_values = true, value_parser = parse_numbers::<5>, requires = "gnss_rate")]
+    gnss_ramp: Vec<[f64; 5]>,
+    /// A NaN fix at T [s] (repeatable).
+    #[arg(long, value_name = "T", requires = "gnss_rate")]
+    gnss_nan: Vec<f64>,
+}
+
+/// `K` comma-separated finite numbers.
+fn parse_numbers<const K: usize>(s: &str) -> Result<[f64; K], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected {K} comma-separated numbers, not {s:?}"))?;
+    let arr: [f64; K] = v
+        .try_into()
+        .map_err(|_| format!("expected {K} comma-separated numbers, not {s:?}"))?;
+    if arr.iter().all(|x| x.is_finite()) {
+        Ok(arr)
+    } else {
+        Err(format!("expected finite numbers, not {s:?}"))
+    }
+}
+
+/// `nav sim --gnss-rate`'s receiver.
+fn gnss_options(a: &SimArgs, rate_hz: f64, seconds: f64) -> host_tests::gnss_sim::GnssSimOptions {
+    use host_tests::gnss_sim::{GnssSimOptions, Outage, Outlier};
+    let mut outliers = Vec::new();
+    for j in &a.gnss_jump {
+        outliers.push(Outlier::Jump {
+            t_s: j[0],
+            length_s: j[1],
+            offset_ned_m: [j[2], j[3], j[4]],
+        });
+    }
+    for p in &a.gnss_spike {
+        outliers.push(Outlier::Spike {
+            t_s: p[0],
+            offset_ned_m: [p[1], p[2], p[3]],
+        });
+    }
+    for r in &a.gnss_ramp {
+        outliers.push(Outlier::Ramp {
+            start_s: r[0],
+            length_s: r[1],
+            final_offset_ned_m: [r[2], r[3], r[4]],
+        });
+    }
+    for t in &a.gnss_nan {
+        outliers.push(Outlier::NaN { t_s: *t });
+    }
+    GnssSimOptions {
+        rate_hz,
+        sigma_ned_m: a.gnss_sigma,
+        sigma_v_ned_m_s: a.gnss_velocity_sigma,
+        lever_arm_b_m: a.gnss_lever_arm,
+        outages: a
+            .gnss_outages
+            .map(|[p, l, f]| Outage::every(p, l, f, seconds))
+            .unwrap_or_default(),
+        outliers,
+        seed: a.seed,
+    }
 }
 
 /// The `--set KEY=VALUE` pairs of `nav sim`.
@@ -587,7 +1012,7 @@ fn sim(a: SimArgs) -> Result<()> {
         }
         return Ok(());
     }
-    let Some(out) = a.out else {
+    let Some(out) = a.out.clone() else {
         anyhow::bail!("--out DIR is required");
     };
     let opts = SimOptions {
@@ -613,6 +1038,22 @@ fn sim(a: SimArgs) -> Result<()> {
     }
     let files = write(&out, &opts, &sim)?;
     let n = sim.recording.records.len();
+    if let Some(rate) = a.gnss_rate {
+        let seconds = n as f64 / opts.rate_hz;
+        let g = gnss_options(&a, rate, seconds);
+        let receiver =
+            host_tests::gnss_sim::simulate(&sim.truth, &g).context("simulated GNSS receiver")?;
+        let path = out.join("gnss.csv");
+        host_tests::gnss::write_gnss_csv(&path, &receiver.fixes)?;
+        println!(
+            "  GNSS       {} ({} fixes)",
+            path.display(),
+            receiver.fixes.len()
+        );
+        for line in receiver.describe(&g).lines() {
+            println!("    {line}");
+        }
+    }
     println!(
         "{} ({} grade, seed {}): {n} samples at {} Hz ({:.1} s)",
         opts.scenario.name(),
@@ -867,7 +1308,29 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
-        Command::Bench { passes } => {
+        Command::Bench {
+            what: BenchKind::Consistency,
+            runs,
+            threads,
+            seconds,
+            ..
+        } => bench_consistency(runs, threads, seconds),
+        Command::Bench {
+            what: BenchKind::Filter,
+            dir,
+            ..
+        } => bench_filter(dir),
+        Command::Bench {
+            what: BenchKind::Outages,
+            runs,
+            threads,
+            ..
+        } => bench_outages(runs, threads),
+        Command::Bench {
+            what: BenchKind::Outliers,
+            ..
+        } => bench_outliers(),
+        Command::Bench { passes, .. } => {
             let increments = host_tests::bench::flight_increments();
             for (name, rate) in [
                 (
@@ -907,6 +1370,28 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Replay(args) => replay(args),
+        Command::KfGins { config, out } => {
+            let started = std::time::Instant::now();
+            let run = host_tests::kf_gins_run::run(&config, out.as_deref())
+                .with_context(|| format!("KF-GINS configuration {}", config.display()))?;
+            let seconds = started.elapsed().as_secs_f64();
+            for w in &run.warnings {
+                println!("warning: {w}");
+            }
+            println!(
+                "{}",
+                host_tests::aided_cmd::summary(&run.report, run.rows, &config, &run.out)
+            );
+            println!(
+                "IMU epochs outside starttime..endtime: {}",
+                run.outside_window
+            );
+            println!(
+                "speed: {:.0} IMU samples/s ({seconds:.3} s wall clock, text parsing and .nav writing included)",
+                run.report.samples as f64 / seconds.max(1e-9)
+            );
+            Ok(())
+        }
     }
 }
 

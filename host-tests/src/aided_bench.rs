@@ -1,0 +1,426 @@
+//! Consistency of the GNSS-aided filter on simulated runs: the normalised estimation error
+//! squared (NEES) of position, velocity and attitude after each update, the normalised
+//! innovation squared (NIS) of the position fixes, and the sensor errors' final normalised
+//! errors [Bar-Shalom et al., §5.4].
+
+use crate::aided::{self, AidedSample, AidedSink};
+use crate::aided_cmd::grade_noise;
+use crate::gnss_sim::{self, GnssSimOptions};
+use crate::report::interpolate;
+use crate::sensor_model::{ErrorInjector, Grade};
+use crate::simulate::{SimOptions, simulate};
+use crate::trajectory::scenarios::Scenario;
+use crate::truth::Truth;
+use anyhow::{Result, anyhow};
+use nav_core::attitude::rotation_vector_of;
+use nav_core::ins_filter::sequencer::{Sequencer, Start};
+use nav_core::ins_filter::{
+    ATT, AidResult, AidedIns, BA, BG, FilterConfig, InitialSigma, POS, SA, SensorErrors, VEL,
+};
+use nav_core::nalgebra::{SMatrix, SVector};
+use nav_core::{NavState, Position, Vector3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+/// One simulated aided run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Case {
+    /// Scenario name (`land-vehicle`, `flight`, ...).
+    pub scenario: String,
+    /// Sensor grade.
+    pub grade: Grade,
+    /// Length [s].
+    pub seconds: f64,
+    /// IMU rate [Hz].
+    pub imu_rate_hz: f64,
+    /// The GNSS receiver.
+    pub gnss: GnssSimOptions,
+    /// Seed of the sensor errors, the GNSS noise and the start's errors.
+    pub seed: u64,
+}
+
+/// Per-epoch statistics of one run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Epoch {
+    /// Time of the update [s].
+    pub t_s: f64,
+    /// NEES of position, velocity and attitude (9 degrees of freedom).
+    pub nees: f64,
+    /// NEES of each block alone: position, velocity, attitude (3 degrees of freedom each).
+    pub nees_blocks: [f64; 3],
+    /// The position fix's NIS (3 degrees of freedom), when it was not invalid.
+    pub nis: Option<f64>,
+    /// Horizontal position error [m] and its 1-sigma (RSS of north and east) [m].
+    pub horizontal_m: (f64, f64),
+}
+
+/// One run's result.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CaseResult {
+    /// After each GNSS update.
+    pub epochs: Vec<Epoch>,
+    /// Final gyro and accelerometer bias errors over their 1-sigma, per axis.
+    pub bias_z: [f64; 6],
+    /// Position fixes accepted and rejected.
+    pub accepted: u32,
+    /// Position fixes rejected.
+    pub rejected: u32,
+}
+
+/// Error of the filter's state against the truth: position NED [m], velocity [m/s], attitude
+/// `phi` [rad] (computed minus true, the filter's convention).
+pub fn state_error(ins_state: &NavState<f64>, truth: &Truth) -> SVector<f64, 9> {
+    let tp = Position::from_radians(truth.lat, truth.lon, truth.h);
+    let dr = tp.ned_to(&ins_state.position);
+    let dv = ins_state.v_eb_n - truth.v_eb_ned;
+    // C~ = (I - [phi x]) C: q~ q^-1 is the rotation by -phi.
+    let q_err = ins_state.q_b_n * truth.q_b_ned.inverse();
+    let phi = -rotation_vector_of(&q_err);
+    SVector::<f64, 9>::from_iterator(
+        dr.into_iter()
+            .chain(dv.iter().copied())
+            .chain(phi.iter().copied()),
+    )
+}
+
+/// The NEES after every update.
+struct Consistency<'a> {
+    truth: &'a [Truth],
+    epochs: Vec<Epoch>,
+    last: Option<AidedIns<f64>>,
+}
+
+impl AidedSink<f64> for Consistency<'_> {
+    fn sample(&mut self, _t_us: u64, _ins: &AidedIns<f64>) -> Result<()> {
+        Ok(())
+    }
+
+    fn updated(&mut self, t_us: u64, ins: &AidedIns<f64>) {
+        let t_s = t_us as f64 * 1e-6;
+        if let Some(truth) = interpolate(self.truth, t_s) {
+            let e = state_error(ins.state(), &truth);
+            let p = ins.covariance();
+            let blocks = [POS, VEL, ATT];
+            let mut p9 = SMatrix::<f64, 9, 9>::zeros();
+            for (a, ia) in blocks.iter().enumerate() {
+                for (b, ib) in blocks.iter().enumerate() {
+                    p9.fixed_view_mut::<3, 3>(3 * a, 3 * b)
+                        .copy_from(&p.fixed_view::<3, 3>(*ia, *ib));
+                }
+            }
+            let nees = p9
+                .cholesky()
+                .map(|c| e.dot(&c.solve(&e)))
+                .unwrap_or(f64::INFINITY);
+            let block = |b: usize| {
+                let eb = e.fixed_rows::<3>(3 * b).into_owned();
+                p9.fixed_view::<3, 3>(3 * b, 3 * b)
+                    .into_owned()
+                    .cholesky()
+                    .map(|c| eb.dot(&c.solve(&eb)))
+                    .unwrap_or(f64::INFINITY)
+            };
+            self.epochs.push(Epoch {
+                t_s,
+                nees,
+                nees_blocks: [block(0), block(1), block(2)],
+                nis: None,
+                horizontal_m: (
+                    (e[0] * e[0] + e[1] * e[1]).sqrt(),
+                    (p[(0, 0)] + p[(1, 1)]).sqrt(),
+                ),
+            });
+        }
+        self.last = Some(ins.clone());
+    }
+}
+
+/// A simulated case ready to run: the simulation, its fixes and the filter's sequencer
+/// (started from the truth with errors drawn from the start's own 1-sigma).
+pub struct Prepared {
+    /// The simulation.
+    pub sim: crate::simulate::Simulated,
+    /// The GNSS receiver's output.
+    pub gnss: crate::gnss_sim::GnssSim,
+    /// The sequencer.
+    pub seq: Sequencer<f64>,
+}
+
+impl Prepared {
+    /// The recording's samples for [`aided::run`].
+    pub fn samples(&self) -> impl FnMut() -> Result<Option<AidedSample<f64>>, String> + '_ {
+        let records = &self.sim.recording.records;
+        let mut prev_t_ns = self.sim.recording.t0_ns;
+        let mut k = 0;
+        move || {
+            let Some(r) = records.get(k) else {
+                return Ok(None);
+            };
+            k += 1;
+            let dt = (r.t_ns - prev_t_ns) as f64 * 1e-9;
+            prev_t_ns = r.t_ns;
+            Ok(Some(AidedSample {
+                t_us: r.t_ns / 1000,
+                increment: nav_core::ImuIncrement::new(
+                    r.gyro.map(f64::from),
+                    r.accel.map(f64::from),
+                    dt,
+                ),
+                unusable: false,
+                gap: false,
+            }))
+        }
+    }
+}
+
+/// Simulates `case` and builds its filter.
+pub fn prepare(case: &Case) -> Result<Prepared> {
+    let mut scenario = Scenario::by_name(&case.scenario)?;
+    if case.scenario == "land-vehicle" {
+        // The route fills the run (its own default is 600 s).
+        scenario.set("seconds", case.seconds)?;
+    }
+    let mut opts = SimOptions::new(scenario, case.grade);
+    opts.seconds = Some(case.seconds);
+    opts.rate_hz = case.imu_rate_hz;
+    opts.seed = case.seed;
+    let sim = simulate(&opts, |_, _| {})?;
+    let gnss = gnss_sim::simulate(&sim.truth, &case.gnss)?;
+    let noise = grade_noise(case.grade);
+    let mut config = FilterConfig::new(noise);
+    config.antenna_lever_arm_b_m = Vector3::from(case.gnss.lever_arm_b_m);
+    // A start with errors drawn from its own 1-sigma.
+    let t0 = sim.truth[0];
+    let sigma = InitialSigma {
+        position_ned_m: Vector3::repeat(2.0),
+        velocity_ned_m_s: Vector3::repeat(0.1),
+        attitude_rad: Vector3::new(0.05f64, 0.05, 0.5).map(f64::to_radians),
+        gyro_bias_rad_s: Vector3::repeat(noise.gyro_bias_rad_s),
+        accel_bias_mps2: Vector3::repeat(noise.accel_bias_mps2),
+        gyro_scale: Vector3::repeat(noise.gyro_scale),
+        accel_scale: Vector3::repeat(noise.accel_scale),
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(case.seed ^ 0x005E_ED0F_57A7);
+    let mut draw = |s: &Vector3<f64>| {
+        s.map(|x| {
+            let n: f64 = StandardNormal.sample(&mut rng);
+            n * x
+        })
+    };
+    let dr = draw(&sigma.position_ned_m);
+    let dv = draw(&sigma.velocity_ned_m_s);
+    let dphi = draw(&sigma.attitude_rad);
+    let start_state = NavState {
+        q_b_n: nav_core::attitude::rotation_vector_quat(&(-dphi)) * t0.q_b_ned,
+        v_eb_n: t0.v_eb_ned + dv,
+        position: Position::from_radians(t0.lat, t0.lon, t0.h).offset_ned(dr.into()),
+    };
+    let seq = Sequencer::new(
+        config,
+        Start::Given {
+            state: start_state,
+            sensors: SensorErrors::default(),
+            sigma,
+        },
+    )
+    .map_err(|e| anyhow!("{e}"))?;
+    Ok(Prepared { sim, gnss, seq })
+}
+
+/// Runs one case in `f64`.
+pub fn run_case(case: &Case) -> Result<CaseResult> {
+    let Prepared { sim, gnss, seq } = prepare(case)?;
+    let fixes = gnss.fixes.clone();
+    let prepared_sim = Prepared {
+        sim,
+        gnss,
+        seq: seq.clone(),
+    };
+    let sim = &prepared_sim.sim;
+    let t0 = sim.truth[0];
+    let mut sink = Consistency {
+        truth: &sim.truth,
+        epochs: Vec::new(),
+        last: None,
+    };
+    let report = aided::run(prepared_sim.samples(), &fixes, seq, &mut sink)?;
+    let Consistency {
+        mut epochs, last, ..
+    } = sink;
+    // NIS in the same order as the epochs (one position update per epoch).
+    let mut nis = report.updates.iter().map(|u| match u.position {
+        AidResult::Accepted { nis } | AidResult::Rejected { nis } => Some(nis),
+        AidResult::Invalid => None,
+    });
+    for e in &mut epochs {
+        e.nis = nis.next().flatten();
+    }
+    let ins = last.ok_or_else(|| anyhow!("no GNSS update in the run"))?;
+    let injector = ErrorInjector::new(case.grade.model(), case.seed)
+        .map_err(|e| anyhow!("grade {}: {e}", case.grade))?;
+    // What the filter can see of the sensor errors is their total at the motion's specific
+    // force: the misalignments and the gyros' g-sensitivity acting on gravity add to the
+    // biases (a level body: f_b = C_n_b (0, 0, -g)), and the accelerometers' scale error on
+    // the vertical axis cannot be told from their bias. Compared: the total error predicted
+    // at the last truth's f_b (Gauss–Markov and random-walk parts of the biases, small for
+    // these grades, left out).
+    let m = case.grade.model();
+    let end = sim.truth.last().copied().unwrap_or(t0);
+    let g = nav_core::earth::LocalEarth::new(end.lat, end.h).g;
+    let f_b = end.q_b_ned.inverse() * Vector3::new(0.0, 0.0, -g);
+    let true_bg =
+        m.gyro.bias + injector.gyro_state().turn_on_bias + m.g_sensitivity_rad_s_per_m_s2 * f_b;
+    let true_ba = m.accel.bias
+        + injector.accel_state().turn_on_bias
+        + (m.accel.model_matrix() - nav_core::nalgebra::Matrix3::identity()) * f_b;
+    let est = ins.sensor_errors();
+    let p = ins.covariance();
+    let mut bias_z = [0.0; 6];
+    for k in 0..3 {
+        bias_z[k] = (est.gyro_bias_rad_s[k] - true_bg[k]) / p[(BG + k, BG + k)].sqrt();
+        let est_a = est.accel_bias_mps2[k] + f_b[k] * est.accel_scale[k];
+        let var_a = p[(BA + k, BA + k)]
+            + f_b[k] * f_b[k] * p[(SA + k, SA + k)]
+            + 2.0 * f_b[k] * p[(BA + k, SA + k)];
+        bias_z[3 + k] = (est_a - true_ba[k]) / var_a.sqrt();
+    }
+    Ok(CaseResult {
+        epochs,
+        bias_z,
+        accepted: report.counters.position.accepted,
+        rejected: report.counters.position.rejected,
+    })
+}
+
+/// 95 % two-sided bounds of the average of `runs` chi-square variables with `dof` degrees of
+/// freedom (Wilson–Hilferty approximation of the chi-square quantiles).
+pub fn average_chi2_bounds(dof: f64, runs: usize) -> (f64, f64) {
+    let k = dof * runs as f64;
+    let q = |z: f64| {
+        let a = 2.0 / (9.0 * k);
+        k * (1.0 - a + z * a.sqrt()).powi(3)
+    };
+    (q(-1.959_964) / runs as f64, q(1.959_964) / runs as f64)
+}
+
+/// The consistency table of `runs` seeded runs of each (scenario, grade, GNSS rate) cell: the
+/// fraction of epochs whose average NEES (9 dof) and NIS (3 dof) over the runs lies inside the
+/// 95 % bounds, the sensor biases' final normalised errors, and the gate's refusals.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConsistencyRow {
+    /// Scenario.
+    pub scenario: String,
+    /// Grade.
+    pub grade: Grade,
+    /// GNSS rate [Hz].
+    pub gnss_rate_hz: f64,
+    /// Runs.
+    pub runs: usize,
+    /// Epochs compared (common to all runs).
+    pub epochs: usize,
+    /// Fraction of epochs with the average NEES inside its 95 % bounds.
+    pub nees_inside: f64,
+    /// Mean of the average NEES over the epochs (9 when consistent).
+    pub nees_mean: f64,
+    /// The same of each block: position, velocity, attitude (3 when consistent).
+    pub nees_blocks_mean: [f64; 3],
+    /// Fraction of epochs with the average NIS inside its 95 % bounds.
+    pub nis_inside: f64,
+    /// Mean NIS (3 when consistent).
+    pub nis_mean: f64,
+    /// RMS of the final bias errors over their 1-sigma (gyro, accelerometer).
+    pub bias_z_rms: (f64, f64),
+    /// Largest |bias error / 1-sigma|.
+    pub bias_z_max: f64,
+    /// Fixes refused by the gate, of all.
+    pub rejected: (u32, u32),
+}
+
+/// Runs `runs` seeds of one cell on `threads` threads.
+pub fn consistency_cell(base: &Case, runs: usize, threads: usize) -> Result<ConsistencyRow> {
+    let seeds: Vec<u64> = (0..runs as u64).map(|k| base.seed + k).collect();
+    let results = std::sync::Mutex::new(Vec::new());
+    let chunks: Vec<Vec<u64>> = (0..threads.max(1))
+        .map(|t| {
+            seeds
+                .iter()
+                .copied()
+                .skip(t)
+                .step_by(threads.max(1))
+                .collect()
+        })
+        .collect();
+    std::thread::scope(|s| {
+        for chunk in &chunks {
+            let results = &results;
+            s.spawn(move || {
+                for seed in chunk {
+                    let mut case = base.clone();
+                    case.seed = *seed;
+                    case.gnss.seed = *seed;
+                    let r = run_case(&case);
+                    results.lock().expect("no panics").push((*seed, r));
+                }
+            });
+        }
+    });
+    let mut results = results.into_inner().expect("no panics");
+    results.sort_by_key(|(s, _)| *s);
+    let results: Vec<CaseResult> = results
+        .into_iter()
+        .map(|(s, r)| r.map_err(|e| anyhow!("seed {s}: {e}")))
+        .collect::<Result<_>>()?;
+    let epochs = results.iter().map(|r| r.epochs.len()).min().unwrap_or(0);
+    let (lo9, hi9) = average_chi2_bounds(9.0, runs);
+    let (lo3, hi3) = average_chi2_bounds(3.0, runs);
+    let (mut nees_in, mut nis_in, mut nis_n) = (0, 0, 0);
+    let (mut nees_sum, mut nis_sum) = (0.0, 0.0);
+    let mut blocks = [0.0; 3];
+    for k in 0..epochs {
+        for (b, sum) in blocks.iter_mut().enumerate() {
+            *sum += results
+                .iter()
+                .map(|r| r.epochs[k].nees_blocks[b])
+                .sum::<f64>()
+                / (runs * epochs.max(1)) as f64;
+        }
+        let nees = results.iter().map(|r| r.epochs[k].nees).sum::<f64>() / runs as f64;
+        nees_sum += nees;
+        if (lo9..=hi9).contains(&nees) {
+            nees_in += 1;
+        }
+        let nis: Vec<f64> = results.iter().filter_map(|r| r.epochs[k].nis).collect();
+        if nis.len() == runs {
+            let m = nis.iter().sum::<f64>() / runs as f64;
+            nis_sum += m;
+            nis_n += 1;
+            if (lo3..=hi3).contains(&m) {
+                nis_in += 1;
+            }
+        }
+    }
+    let z: Vec<[f64; 6]> = results.iter().map(|r| r.bias_z).collect();
+    let rms = |range: std::ops::Range<usize>| {
+        let v: Vec<f64> = z.iter().flat_map(|b| b[range.clone()].to_vec()).collect();
+        (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
+    };
+    Ok(ConsistencyRow {
+        scenario: base.scenario.clone(),
+        grade: base.grade,
+        gnss_rate_hz: base.gnss.rate_hz,
+        runs,
+        epochs,
+        nees_inside: nees_in as f64 / epochs.max(1) as f64,
+        nees_mean: nees_sum / epochs.max(1) as f64,
+        nees_blocks_mean: blocks,
+        nis_inside: nis_in as f64 / nis_n.max(1) as f64,
+        nis_mean: nis_sum / nis_n.max(1) as f64,
+        bias_z_rms: (rms(0..3), rms(3..6)),
+        bias_z_max: z.iter().flatten().fold(0.0_f64, |a, b| a.max(b.abs())),
+        rejected: (
+            results.iter().map(|r| r.rejected).sum(),
+            results.iter().map(|r| r.accepted + r.rejected).sum(),
+        ),
+    })
+}

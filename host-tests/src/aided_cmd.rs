@@ -1,0 +1,317 @@
+//! The GNSS-aided commands: `nav replay --gnss` (a recording with GNSS fixes) and the filter's
+//! settings from the command line's units.
+
+use crate::aided::{self, AidedReport, AidedRow};
+use crate::atomic;
+use crate::gnss::{self, GnssFix};
+use crate::recording_io::ReplaySource;
+use crate::sensor_model::Grade;
+use anyhow::{Context, Result, anyhow, bail};
+use hal_adapters::drivers::NoiseSpec;
+use nav_core::ins_filter::model::FilterNoise;
+use nav_core::ins_filter::motion::MotionAlignConfig;
+use nav_core::ins_filter::sequencer::{Sequencer, Start};
+use nav_core::ins_filter::{FilterConfig, InitialSigma, SensorErrors};
+use nav_core::{NavState, Position, Scalar, Vector3, attitude};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Default scale-factor 1-sigma when the noise model has none [-] (1000 ppm).
+pub const DEFAULT_SCALE_SIGMA: f64 = 1e-3;
+/// Default gyro cross-axis coupling 1-sigma when the noise model has none [rad] (0.1 deg,
+/// the misalignment data sheets of tactical MEMS give).
+pub const DEFAULT_CROSS_COUPLING_RAD: f64 = 1.745e-3;
+/// Default gyro g-sensitivity 1-sigma when the noise model has none [rad/s per m/s^2]
+/// (0.01 deg/s/g).
+pub const DEFAULT_G_SENSITIVITY: f64 = 1.78e-5;
+/// Default correlation time of the sensor errors [s] (1 h, KF-GINS's usual `corrtime`).
+pub const DEFAULT_CORRELATION_TIME_S: f64 = 3600.0;
+
+/// The filter's noise model of a part's data-sheet figures.
+pub fn noise_of_spec(n: &NoiseSpec) -> FilterNoise<f64> {
+    FilterNoise {
+        arw_rad_per_sqrt_s: n.gyro_arw_rad_per_sqrt_s,
+        vrw_mps_per_sqrt_s: n.accel_vrw_mps_per_sqrt_s,
+        gyro_bias_rad_s: n.gyro_bias_rad_s,
+        accel_bias_mps2: n.accel_bias_mps2,
+        gyro_scale: DEFAULT_SCALE_SIGMA,
+        accel_scale: DEFAULT_SCALE_SIGMA,
+        correlation_time_s: DEFAULT_CORRELATION_TIME_S,
+        gyro_cross_coupling_rad: DEFAULT_CROSS_COUPLING_RAD,
+        accel_cross_coupling_rad: DEFAULT_CROSS_COUPLING_RAD,
+        gyro_g_sensitivity: DEFAULT_G_SENSITIVITY,
+    }
+}
+
+/// The filter's assumptions for a grade: its white noise, and per axis the largest of the
+/// fixed bias, the turn-on 1-sigma and the Gauss–Markov 1-sigma (as the alignment's);
+/// scale factors: the largest fixed scale error; cross-axis coupling: the largest
+/// misalignment; correlation time 1 h.
+pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {
+    let m = grade.model();
+    let spec = grade.noise_spec();
+    let scale = |t: &crate::sensor_model::TriadErrors| t.scale.amax().max(1e-6);
+    FilterNoise {
+        arw_rad_per_sqrt_s: spec.gyro_arw_rad_per_sqrt_s,
+        vrw_mps_per_sqrt_s: spec.accel_vrw_mps_per_sqrt_s,
+        gyro_bias_rad_s: spec.gyro_bias_rad_s.max(1e-9),
+        accel_bias_mps2: spec.accel_bias_mps2.max(1e-7),
+        gyro_scale: scale(&m.gyro),
+        accel_scale: scale(&m.accel),
+        correlation_time_s: 3600.0,
+        gyro_cross_coupling_rad: m.gyro.misalignment.amax(),
+        accel_cross_coupling_rad: m.accel.misalignment.amax(),
+        gyro_g_sensitivity: m.g_sensitivity_rad_s_per_m_s2.amax(),
+    }
+}
+
+/// `f64` settings in the working scalar.
+pub fn config_in<T: Scalar>(c: &FilterConfig<f64>) -> FilterConfig<T> {
+    let n = &c.noise;
+    let v = |v: &Vector3<f64>| v.map(T::c);
+    FilterConfig {
+        noise: FilterNoise {
+            arw_rad_per_sqrt_s: T::c(n.arw_rad_per_sqrt_s),
+            vrw_mps_per_sqrt_s: T::c(n.vrw_mps_per_sqrt_s),
+            gyro_bias_rad_s: T::c(n.gyro_bias_rad_s),
+            accel_bias_mps2: T::c(n.accel_bias_mps2),
+            gyro_scale: T::c(n.gyro_scale),
+            accel_scale: T::c(n.accel_scale),
+            correlation_time_s: T::c(n.correlation_time_s),
+            gyro_cross_coupling_rad: T::c(n.gyro_cross_coupling_rad),
+            accel_cross_coupling_rad: T::c(n.accel_cross_coupling_rad),
+            gyro_g_sensitivity: T::c(n.gyro_g_sensitivity),
+        },
+        scale_factors: c.scale_factors,
+        propagation_interval_s: T::c(c.propagation_interval_s),
+        antenna_lever_arm_b_m: v(&c.antenna_lever_arm_b_m),
+        gate_nis: T::c(c.gate_nis),
+        rejections_to_degrade: c.rejections_to_degrade,
+        max_horizontal_sigma_m: T::c(c.max_horizontal_sigma_m),
+        zero_motion: c
+            .zero_motion
+            .map(|z| nav_core::ins_filter::ZeroMotionConfig {
+                detector: nav_core::ins_filter::stationarity::StationarityConfig {
+                    window_s: T::c(z.detector.window_s),
+                    noise_ratio: T::c(z.detector.noise_ratio),
+                    accel_floor_mps2_sq: T::c(z.detector.accel_floor_mps2_sq),
+                    gyro_floor_rad_s_sq: T::c(z.detector.gyro_floor_rad_s_sq),
+                    max_rate_rad_s: T::c(z.detector.max_rate_rad_s),
+                    max_gravity_error_mps2: T::c(z.detector.max_gravity_error_mps2),
+                    windows_to_declare: z.detector.windows_to_declare,
+                },
+                velocity_sigma_m_s: T::c(z.velocity_sigma_m_s),
+                rate_sigma_rad_s: T::c(z.rate_sigma_rad_s),
+                max_speed_m_s: T::c(z.max_speed_m_s),
+            }),
+        mechanization: nav_core::MechanizationConfig::default(),
+    }
+}
+
+/// A given start in output units (KF-GINS's `initpos`, `initvel`, `initatt`, `init*std`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GivenStart {
+    /// Latitude, longitude [deg], height [m] of the IMU.
+    pub pos_deg_m: [f64; 3],
+    /// Velocity north, east, down [m/s].
+    pub vel_m_s: [f64; 3],
+    /// Roll, pitch, yaw [deg].
+    pub att_deg: [f64; 3],
+    /// 1-sigma position north, east, down [m].
+    pub pos_std_m: [f64; 3],
+    /// 1-sigma velocity [m/s].
+    pub vel_std_m_s: [f64; 3],
+    /// 1-sigma roll, pitch, yaw [deg].
+    pub att_std_deg: [f64; 3],
+    /// Sensor errors known at the start (compensated from the first sample).
+    pub sensors: SensorErrors<f64>,
+    /// Their 1-sigma (`None`: the noise model's).
+    pub sensor_sigma: Option<[[f64; 3]; 4]>,
+}
+
+impl GivenStart {
+    /// nav-core's start in precision `T`, or why the values are not a start.
+    pub fn start<T: Scalar>(&self, noise: &FilterNoise<f64>) -> Result<Start<T>> {
+        let all = self
+            .pos_deg_m
+            .iter()
+            .chain(&self.vel_m_s)
+            .chain(&self.att_deg)
+            .chain(&self.pos_std_m)
+            .chain(&self.vel_std_m_s)
+            .chain(&self.att_std_deg);
+        if !all.clone().all(|v| v.is_finite()) {
+            bail!("the initial state and its 1-sigma must be finite numbers");
+        }
+        if self.pos_deg_m[0].abs() > 90.0 {
+            bail!("initial latitude {} deg is beyond +-90", self.pos_deg_m[0]);
+        }
+        let [r, p, y] = self.att_deg.map(|d| T::c(d.to_radians()));
+        let v3 = |a: [f64; 3]| Vector3::new(T::c(a[0]), T::c(a[1]), T::c(a[2]));
+        let state = NavState {
+            q_b_n: attitude::from_euler(r, p, y),
+            v_eb_n: v3(self.vel_m_s),
+            position: Position::from_degrees(
+                self.pos_deg_m[0],
+                self.pos_deg_m[1],
+                self.pos_deg_m[2],
+            ),
+        };
+        let [sbg, sba, ssg, ssa] = self.sensor_sigma.unwrap_or([
+            [noise.gyro_bias_rad_s; 3],
+            [noise.accel_bias_mps2; 3],
+            [noise.gyro_scale; 3],
+            [noise.accel_scale; 3],
+        ]);
+        let sigma = InitialSigma {
+            position_ned_m: v3(self.pos_std_m),
+            velocity_ned_m_s: v3(self.vel_std_m_s),
+            attitude_rad: v3(self.att_std_deg.map(f64::to_radians)),
+            gyro_bias_rad_s: v3(sbg),
+            accel_bias_mps2: v3(sba),
+            gyro_scale: v3(ssg),
+            accel_scale: v3(ssa),
+        };
+        if !sigma.is_valid() {
+            bail!("every initial 1-sigma must be a finite number >= 0");
+        }
+        let s = &self.sensors;
+        Ok(Start::Given {
+            state,
+            sensors: SensorErrors {
+                gyro_bias_rad_s: s.gyro_bias_rad_s.map(T::c),
+                accel_bias_mps2: s.accel_bias_mps2.map(T::c),
+                gyro_scale: s.gyro_scale.map(T::c),
+                accel_scale: s.accel_scale.map(T::c),
+            },
+            sigma,
+        })
+    }
+}
+
+/// How an aided replay starts.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AidedStart {
+    /// From a given state.
+    Given(Box<GivenStart>),
+    /// In motion from GNSS.
+    Motion,
+}
+
+/// `nav replay --gnss`'s inputs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AidedReplay {
+    /// The IMU recording (any format).
+    pub imu: PathBuf,
+    /// The GNSS file.
+    pub gnss: PathBuf,
+    /// The solution log.
+    pub out: PathBuf,
+    /// The filter's settings.
+    pub config: FilterConfig<f64>,
+    /// The start.
+    pub start: AidedStart,
+    /// Samples between logged rows.
+    pub log_every: u32,
+}
+
+/// The sequencer of a start in precision `T`.
+pub fn sequencer<T: Scalar>(
+    config: &FilterConfig<f64>,
+    start: &AidedStart,
+) -> Result<Sequencer<T>> {
+    let start = match start {
+        AidedStart::Given(g) => g.start::<T>(&config.noise)?,
+        AidedStart::Motion => {
+            let d = MotionAlignConfig::<f64>::default();
+            Start::Motion(MotionAlignConfig {
+                min_speed_m_s: T::c(d.min_speed_m_s),
+                max_accel_mps2: T::c(d.max_accel_mps2),
+                sideslip_rad: T::c(d.sideslip_rad),
+                accel_bias_mps2: T::c(config.noise.accel_bias_mps2.max(d.accel_bias_mps2)),
+            })
+        }
+    };
+    Sequencer::new(config_in(config), start).map_err(|e| anyhow!("filter settings: {e}"))
+}
+
+/// Runs an aided replay in precision `T`, writing the log atomically.
+pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
+    atomic::refuse_same_file(&[&a.imu, &a.gnss], &a.out)?;
+    let fixes: Vec<GnssFix> =
+        gnss::read_gnss(&a.gnss).with_context(|| format!("GNSS file {}", a.gnss.display()))?;
+    let seq = sequencer::<T>(&a.config, &a.start)?;
+    let (mut source, _format) = ReplaySource::open(&a.imu)?;
+    let report = atomic::write(&a.out, |w| -> Result<(AidedReport, u64)> {
+        writeln!(w, "{}", aided::header())?;
+        let mut rows = aided::CsvRows::new(a.log_every, |row: &AidedRow| {
+            writeln!(w, "{row}")?;
+            Ok(())
+        });
+        let report = aided::run_source(&mut source, &fixes, seq, &mut rows)?;
+        let n_rows = rows.rows();
+        if report.start_s.is_none() {
+            bail!(
+                "the filter never started: {}",
+                match a.start {
+                    AidedStart::Motion =>
+                        "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold (5 m/s)",
+                    AidedStart::Given(_) => "no usable IMU sample",
+                }
+            );
+        }
+        writeln!(
+            w,
+            "{}",
+            nav_core::output::EndRecord {
+                rows: u32::try_from(n_rows).unwrap_or(u32::MAX)
+            }
+        )?;
+        Ok((report, n_rows))
+    })?;
+    Ok(report)
+}
+
+/// The report's lines for the terminal.
+pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
+    let c = &r.counters;
+    let line = |name: &str, a: &nav_core::ins_filter::AidCounters| {
+        format!(
+            "{name}: {} accepted, {} rejected by the gate, {} invalid",
+            a.accepted, a.rejected, a.invalid
+        )
+    };
+    [
+        format!(
+            "{}: {} samples ({} flagged, {} refused), {} rows -> {}",
+            imu.display(),
+            r.samples,
+            r.flagged,
+            r.rejected,
+            rows,
+            out.display()
+        ),
+        match r.start_s {
+            Some(t) => format!("filter started at t = {t:.3} s"),
+            None => "filter never started".into(),
+        },
+        line("GNSS position", &c.position),
+        line("GNSS velocity", &c.velocity),
+        line("zero velocity", &c.zero_velocity),
+        line("zero rate", &c.zero_rate),
+        format!(
+            "fixes: {} received, {} before/after the IMU data, {} bad time tags, {} out of order, {} late, {} used by the start",
+            r.fixes.received,
+            r.outside_imu_data,
+            r.bad_time_tags,
+            r.fixes.out_of_order,
+            r.fixes.late,
+            r.fixes.for_start
+        ),
+        format!(
+            "covariance propagations: {}, faults: {}",
+            c.propagations, r.covariance_faults
+        ),
+    ]
+    .join("\n")
+}

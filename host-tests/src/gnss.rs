@@ -1,0 +1,526 @@
+//! GNSS fixes (position, optionally velocity, with their 1-sigma): the fix type, the readers of
+//! the project's GNSS CSV and of KF-GINS's GNSS text file, and the CSV writer.
+//!
+//! **Project CSV** (header first, units in the column names):
+//!
+//! ```text
+//! t_s,lat_deg,lon_deg,h_m,sigma_n_m,sigma_e_m,sigma_d_m[,v_n_m_s,v_e_m_s,v_d_m_s,sigma_vn_m_s,sigma_ve_m_s,sigma_vd_m_s]
+//! 1,45.0000123,7.5,250.3,0.5,0.5,1.2[,10.1,0.02,-0.01,0.05,0.05,0.1]
+//! ```
+//!
+//! Receiver time tag [s], geodetic latitude and longitude [deg], ellipsoidal height of the
+//! antenna [m], position 1-sigma north, east, down [m]; with the six velocity columns in the
+//! header, the antenna velocity north, east, down [m/s] and its 1-sigma [m/s]. A row may leave
+//! all six velocity fields empty: that fix has no velocity. Columns are in this order.
+//!
+//! **KF-GINS GNSS text** (no header; fields separated by any run of spaces, tabs and commas;
+//! blank lines and lines starting with `#` or `%` skipped): 7 columns — GNSS seconds of week [s],
+//! latitude, longitude [deg], height [m], 1-sigma north, east, down [m] — or 13 columns, in
+//! KF-GINS's order: time, latitude, longitude, height, **velocity north, east, down [m/s]**, then
+//! the position 1-sigma [m] and the velocity 1-sigma [m/s] (KF-GINS's `GnssFileLoader` takes the
+//! position sigmas from columns 8-10 of a 13-column line). Lines of 7 and 13 columns may mix.
+//!
+//! **Rules** (both formats): a wrong number of fields, a field that is not a number, a time that
+//! is not finite, negative or not strictly increasing, a finite latitude outside [-90, 90] deg and
+//! a last line cut off inside a field ([`crate::text_stream`]) are errors naming the file, the
+//! line and the column; so is a file without a fix. A NaN or infinite position or velocity value,
+//! and a sigma that is zero, negative, NaN or infinite, are **not** file errors: the fix is kept
+//! as read, for the navigation filter to reject and count (a receiver does output such fixes).
+//!
+//! The writer prints floats in their shortest round-trip form (degrees keep the full f64
+//! resolution); reading back is exact for time, height, velocity and sigmas, and within an ulp
+//! or two for latitude and longitude (one deg <-> rad rounding each way).
+
+use crate::kf_gins::{
+    self, DataLines, FileKind, GNSS_COLUMNS, GNSS_VELOCITY_COLUMNS, LineError, check_time,
+};
+use crate::text_error::{Record, TextError, TextErrorKind, seconds_to_ns};
+use crate::text_stream::{CsvRecords, CutCheck, LineReader};
+use std::fs::File;
+use std::io::{self, BufRead, BufReader, Read, Write};
+use std::path::Path;
+
+/// One GNSS fix, in SI units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GnssFix {
+    /// Receiver time tag [s] (GNSS seconds of week for KF-GINS files).
+    pub t_s: f64,
+    /// Geodetic latitude of the antenna [rad].
+    pub lat_rad: f64,
+    /// Longitude of the antenna [rad].
+    pub lon_rad: f64,
+    /// Ellipsoidal height of the antenna [m].
+    pub h_m: f64,
+    /// Position 1-sigma north, east, down [m].
+    pub sigma_ned_m: [f64; 3],
+    /// The antenna velocity, when the fix has one.
+    pub velocity: Option<GnssVelocity>,
+}
+
+/// The velocity of a GNSS fix.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GnssVelocity {
+    /// Antenna velocity relative to the Earth, north, east, down [m/s].
+    pub v_ned_m_s: [f64; 3],
+    /// Its 1-sigma north, east, down [m/s].
+    pub sigma_ned_m_s: [f64; 3],
+}
+
+/// The CSV columns of a fix without velocity.
+pub const CSV_COLUMNS: [&str; 7] = [
+    "t_s",
+    "lat_deg",
+    "lon_deg",
+    "h_m",
+    "sigma_n_m",
+    "sigma_e_m",
+    "sigma_d_m",
+];
+
+/// The six CSV velocity columns that may follow [`CSV_COLUMNS`].
+pub const CSV_VELOCITY_COLUMNS: [&str; 6] = [
+    "v_n_m_s",
+    "v_e_m_s",
+    "v_d_m_s",
+    "sigma_vn_m_s",
+    "sigma_ve_m_s",
+    "sigma_vd_m_s",
+];
+
+/// [`CSV_VELOCITY_COLUMNS`] as they follow the header (for messages).
+const CSV_VELOCITY_TAIL: &str = "v_n_m_s,v_e_m_s,v_d_m_s,sigma_vn_m_s,sigma_ve_m_s,sigma_vd_m_s";
+
+/// The two GNSS file formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GnssFormat {
+    /// The project's CSV (header `t_s,lat_deg,...`).
+    Csv,
+    /// KF-GINS's GNSS text file (7 or 13 numbers a line, no header).
+    KfGins,
+}
+
+/// The name of CSV column `i` (0-based).
+fn csv_column(i: usize) -> &'static str {
+    CSV_COLUMNS
+        .iter()
+        .chain(&CSV_VELOCITY_COLUMNS)
+        .nth(i)
+        .copied()
+        .unwrap_or("(extra)")
+}
+
+/// The format of a GNSS file: the project's CSV when its first line that is not blank or a
+/// `#`/`%` comment starts with `t_s`, KF-GINS's text otherwise.
+pub fn detect(path: &Path) -> Result<GnssFormat, TextError> {
+    let file = File::open(path).map_err(|e| TextError::io(path, e))?;
+    let mut lines = LineReader::new(BufReader::new(file));
+    while let Some(line) = lines.next_line() {
+        let line = line.map_err(|(n, e)| TextError::new(path, Some(n), TextErrorKind::Io(e)))?;
+        let text = line.text.trim().trim_start_matches('\u{feff}');
+        if text.is_empty() || text.starts_with('#') || text.starts_with('%') {
+            continue;
+        }
+        return Ok(if text.starts_with("t_s") {
+            GnssFormat::Csv
+        } else {
+            GnssFormat::KfGins
+        });
+    }
+    Ok(GnssFormat::KfGins) // no data line: the text reader says so
+}
+
+/// Reads a GNSS file of either format ([`detect`]).
+pub fn read_gnss(path: &Path) -> anyhow::Result<Vec<GnssFix>> {
+    let format = detect(path)?;
+    let file = File::open(path).map_err(|e| TextError::io(path, e))?;
+    let reader = BufReader::new(file);
+    Ok(match format {
+        GnssFormat::Csv => read_csv_from(reader, path)?,
+        GnssFormat::KfGins => read_kf_gins_from(reader, path)?,
+    })
+}
+
+/// Reads KF-GINS GNSS text from `reader`; `path` names it in errors.
+pub fn read_kf_gins_from<R: BufRead>(reader: R, path: &Path) -> Result<Vec<GnssFix>, TextError> {
+    let mut lines = DataLines::new(reader, path, FileKind::Gnss);
+    let mut fixes: Vec<GnssFix> = Vec::new();
+    loop {
+        let previous_t_s = fixes.last().map(|f| f.t_s);
+        let fix = lines.next_with(|fields, at| kf_gins_fix(fields, at, previous_t_s));
+        match fix {
+            None => return Ok(fixes),
+            Some(fix) => fixes.push(fix?),
+        }
+    }
+}
+
+/// One KF-GINS GNSS line of 7 or 13 fields (the count is checked by [`DataLines`]).
+fn kf_gins_fix(
+    fields: &[&str],
+    at: LineError,
+    previous_t_s: Option<f64>,
+) -> Result<GnssFix, TextError> {
+    let names: &[&'static str] = if fields.len() == GNSS_COLUMNS.len() {
+        &GNSS_COLUMNS
+    } else {
+        &GNSS_VELOCITY_COLUMNS
+    };
+    let mut v = [0.0_f64; GNSS_VELOCITY_COLUMNS.len()];
+    for (i, (slot, text)) in v.iter_mut().zip(fields).enumerate() {
+        *slot = kf_gins::parse(text, names[i]).map_err(at)?;
+    }
+    check_time(v[0], fields[0]).map_err(at)?;
+    check_increasing(v[0], previous_t_s, names[0], Record::Line).map_err(at)?;
+    check_latitude(v[1], names[1]).map_err(at)?;
+    let (sigma_ned_m, velocity) = if fields.len() == GNSS_COLUMNS.len() {
+        ([v[4], v[5], v[6]], None)
+    } else {
+        let velocity = GnssVelocity {
+            v_ned_m_s: [v[4], v[5], v[6]],
+            sigma_ned_m_s: [v[10], v[11], v[12]],
+        };
+        ([v[7], v[8], v[9]], Some(velocity))
+    };
+    Ok(GnssFix {
+        t_s: v[0],
+        lat_rad: v[1].to_radians(),
+        lon_rad: v[2].to_radians(),
+        h_m: v[3],
+        sigma_ned_m,
+        velocity,
+    })
+}
+
+/// Time must increase strictly from fix to fix.
+fn check_increasing(
+    t_s: f64,
+    previous_t_s: Option<f64>,
+    column: &'static str,
+    record: Record,
+) -> Result<(), TextErrorKind> {
+    match previous_t_s {
+        Some(previous) if t_s <= previous => Err(TextErrorKind::TimeNotIncreasing {
+            column,
+            t_s,
+            previous_t_s: previous,
+            record,
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// A finite latitude must be within [-90, 90] deg (a NaN one is a bad fix, kept).
+fn check_latitude(lat_deg: f64, column: &'static str) -> Result<(), TextErrorKind> {
+    if lat_deg.is_finite() && !(-90.0..=90.0).contains(&lat_deg) {
+        Err(TextErrorKind::BadLatitude { column, lat_deg })
+    } else {
+        Ok(())
+    }
+}
+
+/// Reads the project's GNSS CSV from `reader`; `path` names it in errors.
+pub fn read_csv_from<R: Read>(reader: R, path: &Path) -> Result<Vec<GnssFix>, TextError> {
+    let expected = CSV_COLUMNS.join(",");
+    let (mut records, header) = CsvRecords::new(reader, path, &expected)?;
+    let names: Vec<&str> = header
+        .iter()
+        .enumerate()
+        .map(|(i, h)| {
+            if i == 0 {
+                h.trim_start_matches('\u{feff}')
+            } else {
+                h
+            }
+        })
+        .collect();
+    let width = if names == CSV_COLUMNS {
+        CSV_COLUMNS.len()
+    } else if names.len() == CSV_COLUMNS.len() + CSV_VELOCITY_COLUMNS.len()
+        && names[..CSV_COLUMNS.len()] == CSV_COLUMNS
+        && names[CSV_COLUMNS.len()..] == CSV_VELOCITY_COLUMNS
+    {
+        names.len()
+    } else {
+        return Err(TextError::new(
+            path,
+            header.position().map(|p| p.line()),
+            TextErrorKind::WrongHeader {
+                expected,
+                optional: Some(CSV_VELOCITY_TAIL),
+                found: names.join(","),
+            },
+        ));
+    };
+    let mut cut = CutCheck::default();
+    let mut fixes: Vec<GnssFix> = Vec::new();
+    while let Some(line) = records.next_record() {
+        let line = line?;
+        let record = line.record;
+        if line.unterminated {
+            let fields: Vec<&str> = record.iter().collect();
+            let is_number = |i: usize, text: &str| {
+                (i >= CSV_COLUMNS.len() && text.is_empty()) || text.parse::<f64>().is_ok()
+            };
+            let column = |i: usize| csv_column(i).to_owned();
+            if let Err(cut) = cut.check(&fields, width, column, is_number) {
+                let kind = TextErrorKind::Truncated {
+                    line: line.line,
+                    cut,
+                };
+                return Err(TextError::new(path, None, kind));
+            }
+        } else {
+            cut.note(record.iter());
+        }
+        let at = |kind| TextError::new(path, Some(line.line), kind);
+        let previous_t_s = fixes.last().map(|f| f.t_s);
+        fixes.push(csv_fix(record, width, previous_t_s).map_err(at)?);
+    }
+    if fixes.is_empty() {
+        let kind = TextErrorKind::NoData {
+            columns: &CSV_COLUMNS,
+        };
+        return Err(TextError::new(path, None, kind));
+    }
+    Ok(fixes)
+}
+
+/// One CSV row of `width` fields (7, or 13 with velocity).
+fn csv_fix(
+    record: &csv::StringRecord,
+    width: usize,
+    previous_t_s: Option<f64>,
+) -> Result<GnssFix, TextErrorKind> {
+    if record.len() < width {
+        return Err(TextErrorKind::MissingColumn {
+            column: csv_column(record.len()),
+            found: record.len(),
+        });
+    }
+    if record.len() > width {
+        return Err(TextErrorKind::ExtraColumns {
+            expected: width,
+            found: record.len(),
+        });
+    }
+    let number = |i: usize| -> Result<f64, TextErrorKind> {
+        record[i].parse().map_err(|_| TextErrorKind::NotANumber {
+            column: csv_column(i),
+            found: record[i].to_owned(),
+        })
+    };
+    let t_s = number(0)?;
+    if !(t_s.is_finite() && t_s >= 0.0) {
+        return Err(TextErrorKind::BadTime {
+            found: record[0].to_owned(),
+        });
+    }
+    if seconds_to_ns(t_s).is_none() {
+        return Err(TextErrorKind::TimeOutOfRange {
+            column: CSV_COLUMNS[0],
+            t_s,
+        });
+    }
+    check_increasing(t_s, previous_t_s, CSV_COLUMNS[0], Record::Row)?;
+    let lat_deg = number(1)?;
+    check_latitude(lat_deg, CSV_COLUMNS[1])?;
+    let (lon_deg, h_m) = (number(2)?, number(3)?);
+    let sigma_ned_m = [number(4)?, number(5)?, number(6)?];
+    let n = CSV_COLUMNS.len();
+    let velocity = if width == n || (n..width).all(|i| record[i].is_empty()) {
+        None
+    } else {
+        // All six or none: an empty one among numbers is not a number.
+        Some(GnssVelocity {
+            v_ned_m_s: [number(n)?, number(n + 1)?, number(n + 2)?],
+            sigma_ned_m_s: [number(n + 3)?, number(n + 4)?, number(n + 5)?],
+        })
+    };
+    Ok(GnssFix {
+        t_s,
+        lat_rad: lat_deg.to_radians(),
+        lon_rad: lon_deg.to_radians(),
+        h_m,
+        sigma_ned_m,
+        velocity,
+    })
+}
+
+/// Writes `fixes` to `path` as the project's GNSS CSV, atomically ([`crate::atomic`]): with the
+/// velocity columns when any fix has a velocity (the others leave them empty).
+pub fn write_gnss_csv(path: &Path, fixes: &[GnssFix]) -> anyhow::Result<()> {
+    crate::atomic::write(path, |out| write_csv_to(out, fixes))
+        .map_err(|e| TextError::io(path, e))?;
+    Ok(())
+}
+
+/// Writes `fixes` as the project's GNSS CSV to `out` (see [`write_gnss_csv`]).
+pub fn write_csv_to<W: Write>(mut out: W, fixes: &[GnssFix]) -> io::Result<()> {
+    let with_velocity = fixes.iter().any(|f| f.velocity.is_some());
+    write!(out, "{}", CSV_COLUMNS.join(","))?;
+    if with_velocity {
+        write!(out, ",{CSV_VELOCITY_TAIL}")?;
+    }
+    writeln!(out)?;
+    for f in fixes {
+        let s = &f.sigma_ned_m;
+        write!(
+            out,
+            "{},{},{},{},{},{},{}",
+            f.t_s,
+            f.lat_rad.to_degrees(),
+            f.lon_rad.to_degrees(),
+            f.h_m,
+            s[0],
+            s[1],
+            s[2]
+        )?;
+        match (with_velocity, &f.velocity) {
+            (false, _) => {}
+            (true, None) => write!(out, ",,,,,,")?,
+            (true, Some(v)) => {
+                let (v_m_s, s) = (&v.v_ned_m_s, &v.sigma_ned_m_s);
+                write!(
+                    out,
+                    ",{},{},{},{},{},{}",
+                    v_m_s[0], v_m_s[1], v_m_s[2], s[0], s[1], s[2]
+                )?;
+            }
+        }
+        writeln!(out)?;
+    }
+    out.flush()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn csv(text: &str) -> Result<Vec<GnssFix>, TextError> {
+        read_csv_from(text.as_bytes(), Path::new("mem.csv"))
+    }
+
+    fn kf(text: &str) -> Result<Vec<GnssFix>, TextError> {
+        read_kf_gins_from(text.as_bytes(), Path::new("mem.txt"))
+    }
+
+    /// Two lines as KF-GINS's demo GNSS file looks (fixed-width, a trailing blank).
+    const KF7: &str = "456250.000    30.4447858054   114.4718661162     21.095    0.010    0.009    0.019 \n\
+                       456251.000    30.4447857891   114.4718661133     21.091    0.010    0.009    0.019 \n";
+
+    #[test]
+    fn reads_kf_gins_7_and_13_columns() {
+        let f = kf(KF7).unwrap();
+        assert_eq!(f.len(), 2);
+        assert_eq!(f[0].t_s, 456_250.0);
+        assert_eq!(f[0].lat_rad, 30.4447858054_f64.to_radians());
+        assert_eq!(f[0].lon_rad, 114.4718661162_f64.to_radians());
+        assert_eq!(f[0].h_m, 21.095);
+        assert_eq!(f[0].sigma_ned_m, [0.010, 0.009, 0.019]);
+        assert_eq!(f[0].velocity, None);
+        // 13 columns: velocity before the sigmas, as KF-GINS reads them; commas and comments.
+        let f =
+            kf("% a comment\n\n456252,30.5,114.5,21,1.5,-2.5,0.25,0.01,0.02,0.03,0.1,0.2,0.3\n")
+                .unwrap();
+        assert_eq!(f[0].sigma_ned_m, [0.01, 0.02, 0.03]);
+        assert_eq!(
+            f[0].velocity,
+            Some(GnssVelocity {
+                v_ned_m_s: [1.5, -2.5, 0.25],
+                sigma_ned_m_s: [0.1, 0.2, 0.3]
+            })
+        );
+    }
+
+    #[test]
+    fn bad_values_are_kept_bad_files_are_errors() {
+        let f = kf("1 nan 7 100 0 -1 inf\n2 45 7 100 1 1 1\n").unwrap();
+        assert!(f[0].lat_rad.is_nan());
+        assert_eq!(f[0].sigma_ned_m[..2], [0.0, -1.0]);
+        let msg = |text: &str| kf(text).unwrap_err().to_string();
+        assert_eq!(
+            msg("1 45 7 100 1 1 1\n1 45 7 100 1 1 1\n"),
+            "mem.txt: line 2: column seconds of week: time does not increase: 1 s after 1 s on \
+             the previous line"
+        );
+        assert_eq!(
+            msg("1 45 7 100 1 x 1\n"),
+            "mem.txt: line 1: column sigma east: expected a number, found 'x'"
+        );
+        assert_eq!(
+            msg("1 45 7 100 1 2 3 4 5 6 7 8 y\n"),
+            "mem.txt: line 1: column sigma v down: expected a number, found 'y'"
+        );
+        let m = msg("1 45 7 100 1 1\n");
+        assert!(m.starts_with("mem.txt: line 1: expected 7 numbers"), "{m}");
+        assert!(m.ends_with("found 6"), "{m}");
+        assert!(msg("# nothing\n").contains("no data"));
+        assert!(msg("1 95 7 100 1 1 1\n").contains("line 1: column latitude: 95 deg"));
+        assert!(msg("1 45 7 100 1 1 1\n2 45 7 100 1 1").contains("truncated: last line 2"));
+    }
+
+    #[test]
+    fn csv_round_trips_with_and_without_velocity() {
+        let a = GnssFix {
+            t_s: 0.1 + 0.2,
+            lat_rad: 45.123_456_789_012_3_f64.to_radians(),
+            lon_rad: (-122.987_654_321_098_7_f64).to_radians(),
+            h_m: 250.123_456_789,
+            sigma_ned_m: [0.5, 0.6, 1.25],
+            velocity: None,
+        };
+        let b = GnssFix {
+            t_s: 1.3,
+            velocity: Some(GnssVelocity {
+                v_ned_m_s: [10.0 / 3.0, -1e-7, 0.0],
+                sigma_ned_m_s: [0.05, 0.05, 0.1],
+            }),
+            ..a
+        };
+        for fixes in [vec![a], vec![a, b]] {
+            let mut bytes = Vec::new();
+            write_csv_to(&mut bytes, &fixes).unwrap();
+            let back = csv(std::str::from_utf8(&bytes).unwrap()).unwrap();
+            assert_eq!(back.len(), fixes.len());
+            for (x, y) in fixes.iter().zip(&back) {
+                assert_eq!(x.t_s.to_bits(), y.t_s.to_bits());
+                assert_eq!(
+                    (x.h_m, x.sigma_ned_m, x.velocity),
+                    (y.h_m, y.sigma_ned_m, y.velocity)
+                );
+                assert!((x.lat_rad - y.lat_rad).abs() <= 2.0 * f64::EPSILON * x.lat_rad.abs());
+                assert!((x.lon_rad - y.lon_rad).abs() <= 2.0 * f64::EPSILON * x.lon_rad.abs());
+            }
+        }
+    }
+
+    #[test]
+    fn csv_errors_name_line_and_column() {
+        let h7 = CSV_COLUMNS.join(",");
+        let h13 = format!("{h7},{CSV_VELOCITY_TAIL}");
+        let msg = |text: &str| csv(text).unwrap_err().to_string();
+        assert_eq!(
+            msg(&format!("{h13}\n1,45,7,100,1,1,1,0,,0,1,1,1\n")),
+            "mem.csv: line 2: column v_e_m_s: expected a number, found ''"
+        );
+        assert_eq!(
+            msg(&format!("{h7}\n1,45,7,100,1,1\n")),
+            "mem.csv: line 2: column sigma_d_m: missing (the line has only 6 columns)"
+        );
+        assert_eq!(
+            msg(&format!("{h7}\n2,45,7,100,1,1,1\n1,45,7,100,1,1,1\n")),
+            "mem.csv: line 3: column t_s: time does not increase: 1 s after 2 s on the previous row"
+        );
+        assert!(msg(&format!("{h7}\n")).contains("no data"));
+        assert!(msg("").contains("empty file"));
+        let m = msg("t_s,lat_deg\n");
+        assert!(m.contains("optionally followed by ',v_n_m_s,"), "{m}");
+        // Empty velocity: no velocity; NaN values kept.
+        let f = csv(&format!(
+            "{h13}\n1,NaN,7,100,0,1,1,,,,,,\n2,45,7,100,1,1,1,1,2,3,0,0,0\n"
+        ))
+        .unwrap();
+        assert!(f[0].lat_rad.is_nan() && f[0].velocity.is_none());
+        assert_eq!(f[1].velocity.unwrap().v_ned_m_s, [1.0, 2.0, 3.0]);
+    }
+}

@@ -1,0 +1,357 @@
+//! The KF-GINS trajectory (`.nav`) writer: 11 columns — GNSS week, GNSS seconds of week [s],
+//! latitude, longitude [deg], ellipsoidal height [m], velocity north, east, down [m/s], roll,
+//! pitch, yaw [deg] — the file KF-GINS writes as `KF_GINS_Navresult.nav` and
+//! [`crate::kf_gins::NavReader`] reads.
+//!
+//! **As KF-GINS writes it** (`kf_gins.cpp` `writeNavResult`, `FileSaver::dump_`): the week column
+//! is always 0 (KF-GINS knows no week: its times are seconds of week), every field is printed as
+//! C's `%-15.9lf ` (9 decimals, left-aligned in 15 characters, then one blank; so every line
+//! ends with a blank before its `\n`), and the yaw is in [0, 360) deg (KF-GINS's
+//! `Rotation::matrix2euler` adds 360 deg to a negative heading). Nine decimals are 1e-9 deg
+//! (0.1 mm) in latitude and longitude, 1 nm in height, 1 nm/s in velocity.
+//!
+//! **Fast.** A field is formatted as a fixed-point integer (`round(|x| 1e9)`, ties to even on the
+//! exact binary value, as C's `printf` rounds) written digit pair by digit pair into a stack
+//! buffer, then appended to one reused line buffer: no `format!`, no allocation per row. The output is byte-identical to
+//! `printf("%-15.9f ")` (and to Rust's `{:<15.9} `) for every finite value; values of 9e9 or
+//! more (beyond the fixed-point integer) go through Rust's formatter. NaN and infinities are
+//! written as C writes them (`nan`, `inf`, `-inf`, `-nan`); the reader refuses such lines.
+//!
+//! **Atomic.** Rows go to a temporary file beside the output ([`crate::atomic::AtomicFile`]),
+//! renamed into place by [`NavWriter::finish`]; a writer dropped without `finish` (an error, a
+//! panic) leaves no file, and an existing file at the path untouched.
+
+use crate::atomic::AtomicFile;
+use crate::text_error::TextError;
+use crate::truth::Truth;
+use nav_core::attitude::euler;
+use std::f64::consts::TAU;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The week KF-GINS writes in the first column.
+pub const KF_GINS_WEEK: f64 = 0.0;
+
+/// One trajectory row, in SI units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NavRow {
+    /// GNSS seconds of week [s].
+    pub t_s: f64,
+    /// Geodetic latitude [rad].
+    pub lat_rad: f64,
+    /// Longitude [rad].
+    pub lon_rad: f64,
+    /// Ellipsoidal height [m].
+    pub h_m: f64,
+    /// Velocity relative to the Earth, north, east, down [m/s].
+    pub v_eb_n_m_s: [f64; 3],
+    /// Roll, pitch, yaw of the FRD body relative to NED (z-y-x Euler angles) [rad]; a negative
+    /// yaw is written plus 360 deg.
+    pub euler_rad: [f64; 3],
+}
+
+impl NavRow {
+    /// The row of a [`Truth`] (its `t_s` taken as seconds of week).
+    pub fn from_truth(truth: &Truth) -> Self {
+        let (roll, pitch, yaw) = euler(&truth.q_b_ned);
+        let v = &truth.v_eb_ned;
+        Self {
+            t_s: truth.t_s,
+            lat_rad: truth.lat,
+            lon_rad: truth.lon,
+            h_m: truth.h,
+            v_eb_n_m_s: [v.x, v.y, v.z],
+            euler_rad: [roll, pitch, yaw],
+        }
+    }
+}
+
+/// Appends `row` to `line` as one `.nav` line, `\n` included.
+pub fn format_row(row: &NavRow, line: &mut Vec<u8>) {
+    let yaw_rad = if row.euler_rad[2] < 0.0 {
+        row.euler_rad[2] + TAU
+    } else {
+        row.euler_rad[2]
+    };
+    let v = &row.v_eb_n_m_s;
+    for x in [
+        KF_GINS_WEEK,
+        row.t_s,
+        row.lat_rad.to_degrees(),
+        row.lon_rad.to_degrees(),
+        row.h_m,
+        v[0],
+        v[1],
+        v[2],
+        row.euler_rad[0].to_degrees(),
+        row.euler_rad[1].to_degrees(),
+        yaw_rad.to_degrees(),
+    ] {
+        format_field(x, line);
+    }
+    line.push(b'\n');
+}
+
+/// The width C's `%-15.9lf` pads a field to.
+const WIDTH: usize = 15;
+
+/// `"00".."99"`: two digits a lookup.
+const PAIRS: &[u8; 200] = b"\
+0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
+
+/// Appends `x` as C's `%-15.9lf ` does.
+fn format_field(x: f64, line: &mut Vec<u8>) {
+    let a = x.abs();
+    if !x.is_finite() || a >= 9.0e9 {
+        return format_rare(x, line);
+    }
+    // At most 22 bytes: '-', 10 integer digits, '.', 9 decimals, the blank.
+    let mut buf = [b' '; 24];
+    let mut i = 0;
+    if x.is_sign_negative() {
+        buf[0] = b'-';
+        i = 1;
+    }
+    let n = nano_units(a);
+    let (int, frac) = (n / 1_000_000_000, (n % 1_000_000_000) as u32);
+    i += write_integer(int, &mut buf[i..i + 10]);
+    buf[i] = b'.';
+    write_nine_digits(frac, &mut buf[i + 1..i + 10]);
+    i += 10;
+    // A fixed-size copy (no call to memcpy), then the unused tail cut off.
+    let used = i.max(WIDTH) + 1;
+    line.extend_from_slice(&buf);
+    line.truncate(line.len() - buf.len() + used);
+}
+
+/// NaN, infinities (as C writes them) and values of 9e9 or more (never a position, speed or
+/// angle; through Rust's exact formatter).
+#[cold]
+fn format_rare(x: f64, line: &mut Vec<u8>) {
+    let start = line.len();
+    if x.is_nan() {
+        line.extend_from_slice(if x.is_sign_negative() {
+            b"-nan"
+        } else {
+            b"nan"
+        });
+    } else if x.is_infinite() {
+        line.extend_from_slice(if x < 0.0 { b"-inf" } else { b"inf" });
+    } else {
+        // Writing into a Vec cannot fail.
+        let _ = write!(line, "{x:.9}");
+    }
+    let written = line.len() - start;
+    line.resize(start + written.max(WIDTH), b' ');
+    line.push(b' ');
+}
+
+/// `a * 1e9` rounded to an integer, ties to even, exactly as the decimal expansion of `a`
+/// rounds (C's `printf`): `a` in [0, 9e9).
+///
+/// The product is `p + e` exactly: `1e9 = 1953125 * 2^9` has 21 significant bits, so with `a`
+/// split into halves of 26 and 27 bits both partial products are exact (Dekker's product;
+/// no fused multiply-add, which is a library call on baseline x86-64). The choice between
+/// `floor(p + e)` and the integer above compares the exact fraction with one half.
+fn nano_units(a: f64) -> u64 {
+    const TWO_POW_52: f64 = 4_503_599_627_370_496.0;
+    const SPLIT: f64 = 134_217_729.0; // 2^27 + 1
+    let p = a * 1e9;
+    let t = a * SPLIT;
+    let a_hi = t - (t - a);
+    let a_lo = a - a_hi;
+    let e = (a_hi * 1e9 - p) + a_lo * 1e9;
+    let n = p as u64; // floor: p is in [0, 9e18)
+    if p >= TWO_POW_52 {
+        // p is an integer; the fraction is e's (|e| <= 512).
+        let m = e.floor();
+        let f = e - m; // exact
+        let base = if m >= 0.0 {
+            n + m as u64
+        } else {
+            n - (-m) as u64
+        };
+        return if f > 0.5 || (f == 0.5 && base % 2 == 1) {
+            base + 1
+        } else {
+            base
+        };
+    }
+    // Here |e| <= ulp(p) / 2 <= 0.25.
+    let fp = p - n as f64; // exact, in [0, 1)
+    if fp < 0.25 {
+        return n; // fp + e < 0.5
+    }
+    let r = 0.5 - fp; // exact (Sterbenz: fp in [0.25, 1))
+    if e > r || (e == r && n % 2 == 1) {
+        n + 1
+    } else {
+        n
+    }
+}
+
+/// Writes the decimal digits of `n` (< 1e10; no leading zeros, "0" for 0) at the start of
+/// `out`; returns their count.
+fn write_integer(n: u64, out: &mut [u8]) -> usize {
+    let len = match n {
+        0..10 => 1,
+        10..100 => 2,
+        100..1_000 => 3,
+        1_000..10_000 => 4,
+        10_000..100_000 => 5,
+        100_000..1_000_000 => 6,
+        1_000_000..10_000_000 => 7,
+        10_000_000..100_000_000 => 8,
+        100_000_000..1_000_000_000 => 9,
+        _ => 10,
+    };
+    let (mut n, mut i) = (n as usize, len);
+    while i >= 2 {
+        let k = (n % 100) * 2;
+        n /= 100;
+        i -= 2;
+        out[i..i + 2].copy_from_slice(&PAIRS[k..k + 2]);
+    }
+    if i == 1 {
+        out[0] = b'0' + n as u8;
+    }
+    len
+}
+
+/// Writes `n` (< 1e9) as exactly nine digits.
+fn write_nine_digits(n: u32, out: &mut [u8]) {
+    let mut n = n as usize;
+    for i in [7, 5, 3, 1] {
+        let k = (n % 100) * 2;
+        n /= 100;
+        out[i..i + 2].copy_from_slice(&PAIRS[k..k + 2]);
+    }
+    out[0] = b'0' + n as u8;
+}
+
+/// Writes a KF-GINS `.nav` file row by row, atomically (see the module docs).
+#[derive(Debug)]
+pub struct NavWriter {
+    file: AtomicFile,
+    path: PathBuf,
+    line: Vec<u8>,
+    rows: u64,
+}
+
+impl NavWriter {
+    /// Starts writing `path`: a temporary file beside it until [`Self::finish`].
+    pub fn create(path: &Path) -> Result<Self, TextError> {
+        Ok(Self {
+            file: AtomicFile::create(path).map_err(|e| TextError::io(path, e))?,
+            path: path.to_owned(),
+            line: Vec::with_capacity(11 * (WIDTH + 1) + 1),
+            rows: 0,
+        })
+    }
+
+    /// Writes one row.
+    pub fn write_row(&mut self, row: &NavRow) -> Result<(), TextError> {
+        self.line.clear();
+        format_row(row, &mut self.line);
+        self.file
+            .writer()
+            .write_all(&self.line)
+            .map_err(|e| TextError::io(&self.path, e))?;
+        self.rows += 1;
+        Ok(())
+    }
+
+    /// Writes the row of `truth` ([`NavRow::from_truth`]).
+    pub fn write_truth(&mut self, truth: &Truth) -> Result<(), TextError> {
+        self.write_row(&NavRow::from_truth(truth))
+    }
+
+    /// Rows written so far.
+    pub fn rows(&self) -> u64 {
+        self.rows
+    }
+
+    /// Flushes, syncs and puts the file in place; returns the number of rows.
+    pub fn finish(self) -> Result<u64, TextError> {
+        let path = self.path;
+        self.file.commit().map_err(|e| TextError::io(&path, e))?;
+        Ok(self.rows)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+    use rand_distr::{Distribution, StandardNormal, Uniform};
+
+    fn field(x: f64) -> String {
+        let mut line = Vec::new();
+        format_field(x, &mut line);
+        String::from_utf8(line).unwrap()
+    }
+
+    #[test]
+    fn fields_are_printf_fields() {
+        assert_eq!(field(0.0), "0.000000000     ");
+        assert_eq!(field(456_300.005), "456300.005000000 ");
+        assert_eq!(field(-2.03480295), "-2.034802950    ");
+        assert_eq!(field(-0.0), "-0.000000000    ");
+        assert_eq!(field(-1e-12), "-0.000000000    ");
+        // Exact ties go to the even digit, as printf rounds them.
+        assert_eq!(field(1.0 / 1024.0), "0.000976562     ");
+        assert_eq!(field(3.0 / 1024.0), "0.002929688     ");
+        assert_eq!(field(f64::NAN), "nan             ");
+        assert_eq!(field(f64::NEG_INFINITY), "-inf            ");
+        assert_eq!(field(1.5e10), "15000000000.000000000 ");
+    }
+
+    #[test]
+    fn fields_equal_the_exact_formatter() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let unit = Uniform::new(0.0, 1.0).unwrap();
+        for k in 0..200_000 {
+            let x: f64 = match k % 4 {
+                0 => {
+                    let z: f64 = StandardNormal.sample(&mut rng);
+                    z * 10f64.powi(k % 11 - 5)
+                }
+                1 => 604_800.0 * unit.sample(&mut rng),
+                // Near ties: multiples of 0.5e-9 and their neighbours.
+                2 => {
+                    let m = (unit.sample(&mut rng) * 1e12).floor() + 0.5;
+                    let x = m * 1e-9;
+                    if k % 8 == 2 { x.next_up() } else { x }
+                }
+                _ => (k as f64) / 1024.0 - 100.0,
+            };
+            assert_eq!(field(x), format!("{x:<15.9} "), "{x:e}");
+        }
+    }
+
+    #[test]
+    fn yaw_is_written_in_0_360() {
+        let row = NavRow {
+            t_s: 1.0,
+            lat_rad: 0.5,
+            lon_rad: -2.0,
+            h_m: 10.0,
+            v_eb_n_m_s: [1.0, 2.0, 3.0],
+            euler_rad: [0.0, 0.0, -std::f64::consts::FRAC_PI_2],
+        };
+        let mut line = Vec::new();
+        format_row(&row, &mut line);
+        let text = String::from_utf8(line).unwrap();
+        assert!(
+            text.starts_with("0.000000000     1.000000000     "),
+            "{text}"
+        );
+        assert!(text.ends_with("270.000000000   \n"), "{text}");
+        assert_eq!(text.len(), 11 * 16 + 1);
+    }
+}

@@ -1,0 +1,246 @@
+//! The GNSS-aided filter on exactly known motions: convergence from a wrong start within its own
+//! 1-sigma, the covariance positive definite, the aids counted.
+
+use host_tests::truth::{MeridianFlight, Stationary};
+use nav_core::attitude::{from_euler, rotation_vector_of, rotation_vector_quat};
+use nav_core::ins_filter::model::FilterNoise;
+use nav_core::ins_filter::{
+    ATT, AidResult, AidedIns, FilterConfig, GnssPosition, InitialSigma, POS, SensorErrors, VEL,
+};
+use nav_core::{ImuIncrement, NavState, Position, Vector3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+fn noise() -> FilterNoise<f64> {
+    FilterNoise {
+        arw_rad_per_sqrt_s: 0.002f64.to_radians() / 60.0,
+        vrw_mps_per_sqrt_s: 0.005 / 60.0,
+        gyro_bias_rad_s: 0.01f64.to_radians() / 3600.0,
+        accel_bias_mps2: 1e-3,
+        gyro_scale: 1e-5,
+        accel_scale: 1e-5,
+        correlation_time_s: 3600.0,
+        gyro_cross_coupling_rad: 0.0,
+        accel_cross_coupling_rad: 0.0,
+        gyro_g_sensitivity: 0.0,
+    }
+}
+
+fn sigma0() -> InitialSigma<f64> {
+    let n = noise();
+    InitialSigma {
+        position_ned_m: Vector3::repeat(2.0),
+        velocity_ned_m_s: Vector3::repeat(0.1),
+        attitude_rad: Vector3::new(0.05, 0.05, 1.0).map(f64::to_radians),
+        gyro_bias_rad_s: Vector3::repeat(n.gyro_bias_rad_s),
+        accel_bias_mps2: Vector3::repeat(n.accel_bias_mps2),
+        gyro_scale: Vector3::repeat(n.gyro_scale),
+        accel_scale: Vector3::repeat(n.accel_scale),
+    }
+}
+
+fn normal(rng: &mut ChaCha8Rng) -> f64 {
+    StandardNormal.sample(rng)
+}
+
+/// Position, velocity and attitude errors over their 1-sigma.
+fn z_scores(ins: &AidedIns<f64>, truth: &NavState<f64>) -> [f64; 9] {
+    let s = ins.state();
+    let dr = truth.position.ned_to(&s.position);
+    let dv = s.v_eb_n - truth.v_eb_n;
+    let phi = -rotation_vector_of(&(s.q_b_n * truth.q_b_n.inverse()));
+    let (sp, sv, sa) = (ins.sigma(POS), ins.sigma(VEL), ins.sigma(ATT));
+    [
+        dr[0] / sp.x,
+        dr[1] / sp.y,
+        dr[2] / sp.z,
+        dv.x / sv.x,
+        dv.y / sv.y,
+        dv.z / sv.z,
+        phi.x / sa.x,
+        phi.y / sa.y,
+        phi.z / sa.z,
+    ]
+}
+
+#[test]
+fn a_still_base_with_position_fixes_converges_within_its_sigma() {
+    let body = Stationary {
+        lat: 0.8,
+        lon: 0.2,
+        h: 300.0,
+        q_b_ned: from_euler(0.02, -0.01, 1.2),
+    };
+    let truth = NavState::at_rest(Position::from_radians(0.8, 0.2, 300.0), body.q_b_ned);
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    for run in 0..6 {
+        let s0 = sigma0();
+        let dphi = s0.attitude_rad.map(|s| s * normal(&mut rng));
+        let dr = s0.position_ned_m.map(|s| s * normal(&mut rng));
+        let start = NavState {
+            q_b_n: rotation_vector_quat(&(-dphi)) * truth.q_b_n,
+            v_eb_n: s0.velocity_ned_m_s.map(|s| s * normal(&mut rng)),
+            position: truth.position.offset_ned(dr.into()),
+        };
+        let mut config = FilterConfig::new(noise());
+        // ZUPT/ZARU tested below; here GNSS alone.
+        config.zero_motion = None;
+        let mut ins = AidedIns::new(start, SensorErrors::default(), &s0, config).unwrap();
+        let dt = 0.0025;
+        let inc = body.increment(dt);
+        let sigma_gnss = 0.5;
+        for k in 1..=400 * 300 {
+            ins.step(&inc).unwrap();
+            if k % 400 == 0 {
+                let d = [0, 1, 2].map(|_| sigma_gnss * normal(&mut rng));
+                let fix = truth.position.offset_ned(d);
+                let r = ins.aid_position(
+                    &GnssPosition {
+                        lat_rad: fix.lat_f64(),
+                        lon_rad: fix.lon_f64(),
+                        h_m: fix.h_f64(),
+                        sigma_ned_m: Vector3::repeat(sigma_gnss),
+                    },
+                    0.0,
+                );
+                assert!(
+                    matches!(r, AidResult::Accepted { .. }),
+                    "run {run} k {k}: {r:?}"
+                );
+            }
+        }
+        assert!(ins.covariance_is_positive_definite());
+        let z = z_scores(&ins, &truth);
+        assert!(z.iter().all(|v| v.abs() < 4.0), "run {run}: {z:?}");
+        // Position known to the fixes' averaging; heading by gyrocompassing through the fixes:
+        // a heading error psi tilts at psi Omega cos(lat) and moves the position by
+        // g psi Omega cos(lat) t^3 / 6, 1.3 m at 0.2 deg in 300 s, against 0.5 m fixes: the
+        // heading's 1-sigma is well below the start's 1 deg.
+        assert!(ins.sigma(POS).x < 0.2, "{}", ins.sigma(POS));
+        assert!(ins.sigma(ATT).z < 0.4f64.to_radians(), "{}", ins.sigma(ATT));
+        assert_eq!(ins.counters().position.accepted, 300);
+    }
+}
+
+#[test]
+fn a_flight_with_a_lever_arm_and_late_fixes_stays_consistent() {
+    let flight = MeridianFlight {
+        lat0: 0.5,
+        lon0: 0.1,
+        h: 3000.0,
+        speed: 200.0,
+    };
+    let dt = 0.0025;
+    let n = 400 * 200;
+    let mut incs = Vec::with_capacity(n);
+    let mut truths = Vec::with_capacity(n);
+    flight.run(dt, n, |inc, t| {
+        incs.push(*inc);
+        truths.push(*t);
+    });
+    // The start: level, heading north along the meridian.
+    let t0 = host_tests::truth::Truth {
+        t_s: 0.0,
+        lat: 0.5,
+        lon: 0.1,
+        h: 3000.0,
+        v_eb_ned: Vector3::new(200.0, 0.0, 0.0),
+        q_b_ned: nav_core::UnitQuaternion::identity(),
+    };
+    let s0 = sigma0();
+    let lever = Vector3::new(1.5, -0.3, -1.2);
+    let mut config = FilterConfig::new(noise());
+    config.antenna_lever_arm_b_m = lever;
+    let start = NavState {
+        q_b_n: rotation_vector_quat(&Vector3::new(2e-4, -3e-4, 8e-3)).inverse() * t0.q_b_ned,
+        v_eb_n: t0.v_eb_ned + Vector3::new(0.05, -0.1, 0.02),
+        position: Position::from_radians(t0.lat, t0.lon, t0.h).offset_ned([1.0, -2.0, 0.5]),
+    };
+    let mut ins = AidedIns::new(start, SensorErrors::default(), &s0, config).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let sigma_gnss = 0.3;
+    let mut nis_sum = 0.0;
+    let mut fixes = 0;
+    let mut rejected = 0;
+    for (k, (inc, t)) in incs.iter().zip(&truths).enumerate() {
+        ins.step(&ImuIncrement { ..*inc }).unwrap();
+        // A fix 1.3 ms before every 400th sample's end (between samples).
+        if (k + 1) % 400 == 0 {
+            let lag = 0.0013;
+            // Constant velocity and attitude: the truth `lag` earlier is `v lag` behind.
+            let l_n = t.q_b_ned * lever - t.v_eb_ned * lag;
+            let noise = [0, 1, 2].map(|_| sigma_gnss * normal(&mut rng));
+            let ant = Position::from_radians(t.lat, t.lon, t.h).offset_ned([
+                l_n.x + noise[0],
+                l_n.y + noise[1],
+                l_n.z + noise[2],
+            ]);
+            match ins.aid_position(
+                &GnssPosition {
+                    lat_rad: ant.lat_f64(),
+                    lon_rad: ant.lon_f64(),
+                    h_m: ant.h_f64(),
+                    sigma_ned_m: Vector3::repeat(sigma_gnss),
+                },
+                lag,
+            ) {
+                AidResult::Accepted { nis } => {
+                    nis_sum += nis;
+                    fixes += 1;
+                }
+                AidResult::Rejected { nis } => {
+                    // The 99.9 % gate refuses one consistent fix in a thousand.
+                    rejected += 1;
+                    assert!(rejected <= 2, "fix at {}: NIS {nis}", t.t_s);
+                }
+                AidResult::Invalid => panic!("fix at {}: invalid", t.t_s),
+            }
+        }
+    }
+    let t = truths.last().unwrap();
+    let truth = NavState {
+        q_b_n: t.q_b_ned,
+        v_eb_n: t.v_eb_ned,
+        position: Position::from_radians(t.lat, t.lon, t.h),
+    };
+    let z = z_scores(&ins, &truth);
+    assert!(z.iter().all(|v| v.abs() < 4.0), "{z:?}");
+    // Mean NIS of 200 fixes: chi-square(3) mean 3, 99.9 % band of the mean about 2.3..3.8.
+    let mean = nis_sum / f64::from(fixes);
+    assert!((2.2..4.0).contains(&mean), "mean NIS {mean}");
+    assert!(ins.covariance_is_positive_definite());
+}
+
+#[test]
+fn a_stop_is_detected_and_zero_velocity_updates_bound_the_velocity() {
+    let body = Stationary {
+        lat: 0.6,
+        lon: 0.0,
+        h: 0.0,
+        q_b_ned: from_euler(0.0, 0.0, 0.3),
+    };
+    let truth = NavState::at_rest(Position::from_radians(0.6, 0.0, 0.0), body.q_b_ned);
+    let s0 = sigma0();
+    let mut ins = AidedIns::new(
+        NavState {
+            v_eb_n: Vector3::new(0.05, -0.05, 0.0),
+            ..truth
+        },
+        SensorErrors::default(),
+        &s0,
+        FilterConfig::new(noise()),
+    )
+    .unwrap();
+    let inc = body.increment(0.0025);
+    for _ in 0..400 * 60 {
+        ins.step(&inc).unwrap();
+    }
+    let c = ins.counters();
+    assert!(ins.is_still());
+    // 0.5 s windows, the first update after two: 119 in 60 s.
+    assert!(c.zero_velocity.accepted >= 110, "{c:?}");
+    assert!(c.zero_rate.accepted >= 110, "{c:?}");
+    assert!(ins.state().v_eb_n.norm() < 0.01, "{}", ins.state().v_eb_n);
+    assert!(ins.sigma(VEL).x < 0.02);
+}

@@ -1,0 +1,356 @@
+//! The GNSS-aided filter on simulated families, outages and outliers, and the commands a user
+//! runs: `nav kf-gins`, `nav replay --gnss`, `nav sim --gnss-rate`. Bounds come from the
+//! filter's own covariance or the chi-square distribution, not from earlier runs.
+
+use host_tests::aided_bench::{Case, average_chi2_bounds, consistency_cell};
+use host_tests::filter_bench::{FilterBenchOptions, generate};
+use host_tests::gnss_bench::{outage_case, outage_drifts, outlier_case, outliers};
+use host_tests::gnss_sim::GnssSimOptions;
+use host_tests::sensor_model::Grade;
+use std::path::Path;
+use std::process::Command;
+
+fn nav() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_nav"))
+}
+
+fn run_ok(cmd: &mut Command) -> String {
+    let out = cmd.output().expect("nav runs");
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.status.success(), "{text}");
+    text
+}
+
+fn run_err(cmd: &mut Command) -> String {
+    let out = cmd.output().expect("nav runs");
+    let text = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "expected a refusal: {text}");
+    text
+}
+
+/// A small family (6 seeds, two grades, two GNSS rates): the average NIS inside its 95 % band
+/// on at least 90 % of the epochs; the NEES of each block between a third and 1.5 times its
+/// expectation (the filter is conservative, not several times so, and never overconfident by
+/// half); the biases' final errors within 4 of their 1-sigma.
+#[test]
+fn a_small_family_is_consistent() {
+    let runs = 6;
+    for (scenario, grade, rate, vel) in [
+        ("land-vehicle", Grade::MemsTactical, 1.0, None),
+        ("flight", Grade::Rlg, 5.0, Some([0.05, 0.05, 0.1])),
+    ] {
+        let case = Case {
+            scenario: scenario.into(),
+            grade,
+            seconds: 150.0,
+            imu_rate_hz: 200.0,
+            gnss: GnssSimOptions {
+                rate_hz: rate,
+                sigma_ned_m: [0.5, 0.5, 1.0],
+                sigma_v_ned_m_s: vel,
+                lever_arm_b_m: [0.8, -0.3, -1.1],
+                ..GnssSimOptions::default()
+            },
+            seed: 11,
+        };
+        let r = consistency_cell(&case, runs, 2).unwrap();
+        assert!(r.nis_inside >= 0.9, "{scenario} {grade}: {r:?}");
+        let (lo, hi) = average_chi2_bounds(3.0, runs);
+        assert!((lo..=hi).contains(&r.nis_mean), "{r:?}");
+        for b in r.nees_blocks_mean {
+            assert!(
+                (1.0..=4.5).contains(&b),
+                "{scenario} {grade}: NEES blocks {r:?}"
+            );
+        }
+        assert!(r.bias_z_max < 4.0, "{r:?}");
+    }
+}
+
+/// Every outage's drift within 3 of the filter's predicted 1-sigma, on a tactical MEMS land
+/// vehicle with 60 s outages every 180 s.
+#[test]
+fn outage_drift_stays_within_the_predicted_sigma() {
+    let drifts = outage_drifts(&outage_case(Grade::MemsTactical, 900.0, 3)).unwrap();
+    assert_eq!(drifts.len(), 4, "{drifts:?}");
+    for d in &drifts {
+        assert!(d.drift_m <= 3.0 * d.sigma_m, "{d:?}");
+        // The 1-sigma grows in the outage beyond the aided 0.3 m.
+        assert!(d.sigma_m > 1.0, "{d:?}");
+    }
+}
+
+/// Jumps and NaN fixes are refused and counted; the spike after a 120 s outage is refused or
+/// leaves the error within 3 sigma; a 30 m offset held for 150 s makes the FOG filter
+/// DEGRADED, and it never follows that offset.
+#[test]
+fn outliers_are_refused_or_bounded() {
+    for grade in [Grade::Fog, Grade::MemsTactical] {
+        let out = outliers(&outlier_case(grade, 1)).unwrap();
+        let by = |name: &str, t: f64| {
+            out.iter()
+                .find(|o| o.name == name && o.t_s == t)
+                .unwrap_or_else(|| panic!("{name} at {t}: {out:?}"))
+        };
+        let jump = by("jump", 200.0);
+        assert_eq!(jump.refused, jump.fixes, "{grade}: {jump:?}");
+        assert!(
+            jump.max_error_m < 3.0 * jump.sigma_at_max_m.max(0.5),
+            "{grade}: {jump:?}"
+        );
+        let spike = by("spike", 420.0);
+        assert!(
+            spike.refused == 1 || spike.max_error_m < 3.0 * spike.sigma_at_max_m,
+            "{grade}: {spike:?}"
+        );
+        let nan = by("NaN", 600.0);
+        assert_eq!(nan.refused, 1, "{grade}: {nan:?}");
+        if grade == Grade::Fog {
+            let held = by("jump", 700.0);
+            assert!(held.degraded, "{held:?}");
+            assert!(
+                held.max_error_m < 30.0 / 2.0,
+                "followed the offset: {held:?}"
+            );
+        }
+    }
+}
+
+fn data_set(dir: &Path, seconds: f64) -> host_tests::filter_bench::DataSet {
+    generate(
+        dir,
+        &FilterBenchOptions {
+            seconds,
+            ..FilterBenchOptions::default()
+        },
+    )
+    .unwrap()
+}
+
+/// `nav kf-gins` on a generated KF-GINS data set: one `.nav` row per IMU epoch, within a few
+/// GNSS 1-sigmas of the truth.
+#[test]
+fn kf_gins_runs_a_configuration_as_it_is() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = data_set(dir.path(), 300.0);
+    let text = run_ok(
+        nav()
+            .arg("kf-gins")
+            .arg(&data.config)
+            .arg("--out")
+            .arg(&data.out),
+    );
+    assert!(text.contains("GNSS position: "), "{text}");
+    let r = host_tests::filter_bench::run(&data).unwrap();
+    assert_eq!(r.samples, data.imu_rows);
+    // RTK fixes of 2 cm: the horizontal RMS within 3 times their horizontal 2.8 cm.
+    assert!(r.horizontal_rms_m < 0.085, "{r:?}");
+    let rows = std::fs::read_to_string(&data.out).unwrap().lines().count() as u64;
+    assert_eq!(rows, data.imu_rows);
+    // Without --out: KF-GINS's own name in outputpath.
+    run_ok(nav().arg("kf-gins").arg(&data.config));
+    assert!(dir.path().join("KF_GINS_Navresult.nav").exists());
+}
+
+/// Bad configurations and GNSS files are refused with the reason, and no trajectory is left.
+#[test]
+fn kf_gins_refuses_bad_input_without_a_partial_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = data_set(dir.path(), 20.0);
+    let text = std::fs::read_to_string(&data.config).unwrap();
+    let bad = dir.path().join("bad.yaml");
+    let out = dir.path().join("bad.nav");
+    // A missing key.
+    std::fs::write(&bad, text.replace("imudatarate: 200", "")).unwrap();
+    let e = run_err(nav().arg("kf-gins").arg(&bad).arg("--out").arg(&out));
+    assert!(e.contains("imudatarate"), "{e}");
+    assert!(!out.exists());
+    // A corrupt GNSS file.
+    let gnss = dir.path().join("gnss.txt");
+    let mut g = std::fs::read_to_string(&gnss).unwrap();
+    g.push_str("123 not-a-number\n");
+    std::fs::write(&gnss, g).unwrap();
+    let e = run_err(
+        nav()
+            .arg("kf-gins")
+            .arg(&data.config)
+            .arg("--out")
+            .arg(&out),
+    );
+    assert!(e.contains("gnss.txt"), "{e}");
+    assert!(!out.exists());
+    // Not YAML at all.
+    std::fs::write(&bad, "imupath: [unclosed\n").unwrap();
+    run_err(nav().arg("kf-gins").arg(&bad).arg("--out").arg(&out));
+    assert!(!out.exists());
+}
+
+/// `nav sim --gnss-rate` writes the receiver's file beside the recording; `nav replay --gnss`
+/// navigates it from a given start, writes the 1-sigma and status columns, and counts the
+/// NaN fix and the jump.
+#[test]
+fn sim_and_replay_with_gnss() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run_ok(
+        nav()
+            .args([
+                "sim",
+                "land-vehicle",
+                "--grade",
+                "mems-tactical",
+                "--seconds",
+                "120",
+            ])
+            .args([
+                "--gnss-rate",
+                "2",
+                "--gnss-lever-arm",
+                "0.5,0,-1",
+                "--gnss-nan",
+                "60",
+            ])
+            .args(["--gnss-jump", "80,5,40,0,0", "--format", "bin", "--out"])
+            .arg(d),
+    );
+    assert!(d.join("gnss.csv").exists());
+    let out = d.join("sol.csv");
+    let text = run_ok(
+        nav()
+            .arg("replay")
+            .arg("--imu")
+            .arg(d.join("imu.bin"))
+            .arg("--gnss")
+            .arg(d.join("gnss.csv"))
+            .args([
+                "--gnss-lever-arm",
+                "0.5,0,-1",
+                "--imu-noise",
+                "mems-tactical",
+            ])
+            .args([
+                "--init-pos",
+                "45,7.5,250",
+                "--init-vel",
+                "0,0,0",
+                "--init-att",
+                "0,0,0",
+            ])
+            .args(["--log-every", "400", "--out"])
+            .arg(&out),
+    );
+    assert!(text.contains("1 invalid"), "{text}");
+    let log = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        log.lines()
+            .next()
+            .unwrap()
+            .ends_with("sigma_yaw_deg,status")
+    );
+    assert!(log.lines().last().unwrap().starts_with("# end:"));
+    // The jump's 10 fixes (2 Hz for 5 s) refused.
+    let rejected: u32 = text
+        .lines()
+        .find(|l| l.starts_with("GNSS position:"))
+        .and_then(|l| l.split(", ").nth(1))
+        .and_then(|s| s.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap();
+    assert!(rejected >= 10, "{text}");
+    // The report reads the aided log.
+    run_ok(
+        nav()
+            .arg("report")
+            .arg("--solution")
+            .arg(&out)
+            .arg("--truth")
+            .arg(d.join("truth.csv")),
+    );
+    // Starting otherwise is refused with the reason: a missing start, a NaN start.
+    let e = run_err(
+        nav()
+            .arg("replay")
+            .arg("--imu")
+            .arg(d.join("imu.bin"))
+            .arg("--gnss")
+            .arg(d.join("gnss.csv"))
+            .args([
+                "--init-pos",
+                "NaN,7.5,250",
+                "--init-vel",
+                "0,0,0",
+                "--init-att",
+                "0,0,0",
+            ])
+            .arg("--out")
+            .arg(d.join("x.csv")),
+    );
+    assert!(e.contains("finite"), "{e}");
+    assert!(!d.join("x.csv").exists());
+}
+
+/// The start in motion from GNSS (a consumer MEMS cannot gyrocompass): level while the
+/// vehicle is quasi-static, heading from the track once it moves, then the filter.
+#[test]
+fn start_in_motion_from_gnss() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run_ok(
+        nav()
+            .args([
+                "sim",
+                "land-vehicle",
+                "--grade",
+                "mems-consumer",
+                "--seconds",
+                "150",
+            ])
+            .args(["--gnss-rate", "5", "--gnss-velocity-sigma", "0.05,0.05,0.1"])
+            .args(["--format", "bin", "--out"])
+            .arg(d),
+    );
+    let out = d.join("sol.csv");
+    let text = run_ok(
+        nav()
+            .arg("replay")
+            .arg("--imu")
+            .arg(d.join("imu.bin"))
+            .arg("--gnss")
+            .arg(d.join("gnss.csv"))
+            .args([
+                "--imu-noise",
+                "mems-consumer",
+                "--start-in-motion",
+                "--log-every",
+                "400",
+            ])
+            .arg("--out")
+            .arg(&out),
+    );
+    assert!(text.contains("filter started at t = "), "{text}");
+    // The last row's yaw within 3 of its own 1-sigma of the truth's.
+    let log = std::fs::read_to_string(&out).unwrap();
+    let last: Vec<f64> = log
+        .lines()
+        .rev()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .filter_map(|v| v.parse().ok())
+        .collect();
+    let truth = host_tests::truth_csv::read(&d.join("truth.csv")).unwrap();
+    let t = last[0];
+    let tr = host_tests::report::interpolate(&truth, t).unwrap();
+    let (_, _, yaw) = nav_core::attitude::euler(&tr.q_b_ned);
+    let mut dy = last[9] - yaw.to_degrees();
+    dy -= 360.0 * (dy / 360.0).round();
+    assert!(
+        dy.abs() < 3.0 * last[18],
+        "yaw error {dy} deg, 1-sigma {} deg",
+        last[18]
+    );
+}

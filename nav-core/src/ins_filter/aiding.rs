@@ -1,0 +1,116 @@
+//! Aiding measurements of the navigation filter, their outcomes and counters.
+
+use crate::Scalar;
+use nalgebra::Vector3;
+
+/// A GNSS position fix of the antenna, time-tagged by the caller (see
+/// [`crate::ins_filter::AidedIns::aid_position`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GnssPosition<T: Scalar> {
+    /// Geodetic latitude [rad].
+    pub lat_rad: f64,
+    /// Longitude [rad].
+    pub lon_rad: f64,
+    /// Ellipsoidal height [m].
+    pub h_m: f64,
+    /// 1-sigma north, east, down [m].
+    pub sigma_ned_m: Vector3<T>,
+}
+
+impl<T: Scalar> GnssPosition<T> {
+    /// True when the place is finite (latitude within +-90 deg) and every 1-sigma finite and
+    /// positive.
+    pub fn is_valid(&self) -> bool {
+        self.lat_rad.is_finite()
+            && self.lat_rad.abs() <= core::f64::consts::FRAC_PI_2
+            && self.lon_rad.is_finite()
+            && self.h_m.is_finite()
+            && self.h_m.abs() < 1e7
+            && sigmas_valid(&self.sigma_ned_m)
+    }
+}
+
+/// A GNSS velocity of the antenna.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GnssVelocity<T: Scalar> {
+    /// Velocity north, east, down [m/s].
+    pub v_ned_m_s: Vector3<T>,
+    /// 1-sigma north, east, down [m/s].
+    pub sigma_ned_m_s: Vector3<T>,
+}
+
+impl<T: Scalar> GnssVelocity<T> {
+    /// True when every value is finite and every 1-sigma positive.
+    pub fn is_valid(&self) -> bool {
+        self.v_ned_m_s.iter().all(|v| v.finite()) && sigmas_valid(&self.sigma_ned_m_s)
+    }
+}
+
+pub(crate) fn sigmas_valid<T: Scalar>(s: &Vector3<T>) -> bool {
+    s.iter().all(|v| v.finite() && *v > T::zero())
+}
+
+/// What became of one aiding measurement.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AidResult<T: Scalar> {
+    /// Used; `nis` is its normalised innovation squared (chi-square with 3 degrees of
+    /// freedom when the filter is consistent).
+    Accepted {
+        /// Normalised innovation squared [-].
+        nis: T,
+    },
+    /// Refused by the chi-square innovation gate.
+    Rejected {
+        /// Normalised innovation squared [-].
+        nis: T,
+    },
+    /// Refused: not finite, a non-positive 1-sigma, or a degenerate innovation covariance.
+    Invalid,
+}
+
+/// Counts of one aid's measurements.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AidCounters {
+    /// Used.
+    pub accepted: u32,
+    /// Refused by the gate.
+    pub rejected: u32,
+    /// Refused as invalid.
+    pub invalid: u32,
+    /// Gate refusals since the last accepted one.
+    pub consecutive_rejected: u32,
+}
+
+impl AidCounters {
+    pub(crate) fn count<T: Scalar>(&mut self, r: &AidResult<T>) {
+        match r {
+            AidResult::Accepted { .. } => {
+                self.accepted = self.accepted.saturating_add(1);
+                self.consecutive_rejected = 0;
+            }
+            AidResult::Rejected { .. } => {
+                self.rejected = self.rejected.saturating_add(1);
+                self.consecutive_rejected = self.consecutive_rejected.saturating_add(1);
+            }
+            AidResult::Invalid => self.invalid = self.invalid.saturating_add(1),
+        }
+    }
+}
+
+/// The counters of every aid.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FilterCounters {
+    /// GNSS position.
+    pub position: AidCounters,
+    /// GNSS velocity.
+    pub velocity: AidCounters,
+    /// Zero-velocity updates.
+    pub zero_velocity: AidCounters,
+    /// Zero-angular-rate updates.
+    pub zero_rate: AidCounters,
+    /// Covariance propagations.
+    pub propagations: u32,
+}
+
+/// 99.9 % point of the chi-square distribution with 3 degrees of freedom: the default gate.
+pub const CHI2_3DOF_999: f64 = 16.266;

@@ -1,0 +1,413 @@
+//! The filter's background half: the covariance, its propagation and the measurement updates.
+//! It sees the navigation solution only through [`Snapshot`]s and answers each accepted update
+//! with the [`Correction`] the foreground feeds back.
+
+use super::aiding::{AidCounters, AidResult, FilterCounters, GnssPosition, GnssVelocity};
+use super::foreground::Propagation;
+use super::model;
+use super::stationarity::StillWindow;
+use super::{
+    ATT, BG, Covariance, FilterConfig, FilterError, FilterStatus, InitialSigma, N, POS, SG,
+    StateVector, VEL,
+};
+use crate::alignment::fine::kalman::{ScalarUpdate, update_scalar};
+use crate::earth::LocalEarth;
+use crate::{NavState, Position, Scalar};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+
+/// Largest reduction of a measured quantity's variance by one update [-] (see
+/// `ErrorFilter::update`): a fix shrinks a 100 m prediction to 25 m, not to its own 0.5 m; the
+/// following fixes finish the convergence (each shrinking by up to 16x).
+pub const MAX_SHRINK: f64 = 16.0;
+
+/// What the updates need of one sample: the solution, the Earth at it, the compensated rate
+/// [rad/s] and the solution's acceleration [m/s^2].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Snapshot<T: Scalar> {
+    /// The navigation solution.
+    pub state: NavState<T>,
+    /// Earth quantities at its position.
+    pub earth: LocalEarth<T>,
+    /// Compensated `omega_ib_b` of the sample [rad/s].
+    pub omega_ib_b: Vector3<T>,
+    /// `d v_eb_n / dt` over the sample [m/s^2].
+    pub a_eb_n: Vector3<T>,
+}
+
+/// The error estimate to feed back ("computed minus true"; [`super::states`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Correction<T: Scalar> {
+    /// The error state.
+    pub x: StateVector<T>,
+}
+
+/// The background half (module docs).
+#[derive(Clone, Debug)]
+pub struct ErrorFilter<T: Scalar> {
+    p: Covariance<T>,
+    x: StateVector<T>,
+    config: FilterConfig<T>,
+    counters: FilterCounters,
+    covariance_faults: u32,
+    fault_latched: bool,
+}
+
+impl<T: Scalar> ErrorFilter<T> {
+    /// The filter at its start: covariance from `sigma` at heading `yaw` [rad].
+    pub fn new(
+        sigma: &InitialSigma<T>,
+        yaw: T,
+        config: FilterConfig<T>,
+    ) -> Result<Self, FilterError> {
+        if !config.noise.is_valid() {
+            return Err(FilterError::BadNoise);
+        }
+        if !sigma.is_valid() {
+            return Err(FilterError::BadInitialSigma);
+        }
+        let l = &config.antenna_lever_arm_b_m;
+        if !(l.iter().all(|v| v.finite()) && l.norm() <= T::c(100.0)) {
+            return Err(FilterError::BadLeverArm);
+        }
+        Ok(Self {
+            p: sigma.covariance(yaw, config.scale_factors),
+            x: StateVector::zeros(),
+            config,
+            counters: FilterCounters::default(),
+            covariance_faults: 0,
+            fault_latched: false,
+        })
+    }
+
+    /// The covariance.
+    pub fn covariance(&self) -> &Covariance<T> {
+        &self.p
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &FilterConfig<T> {
+        &self.config
+    }
+
+    /// The aids' counters.
+    pub fn counters(&self) -> &FilterCounters {
+        &self.counters
+    }
+
+    /// Times the covariance lost a positive variance and was reset to its diagonal.
+    pub fn covariance_faults(&self) -> u32 {
+        self.covariance_faults
+    }
+
+    /// 1-sigma of the state's block at `at` (one of the offsets), per axis.
+    pub fn sigma(&self, at: usize) -> Vector3<T> {
+        Vector3::new(
+            self.p[(at, at)],
+            self.p[(at + 1, at + 1)],
+            self.p[(at + 2, at + 2)],
+        )
+        .map(|v| v.max(T::zero()).sqrt())
+    }
+
+    /// 1-sigma of roll, pitch, yaw [rad] at heading `yaw` [rad]: the NED tilt variances turned
+    /// into the body's forward and right axes, and the heading's.
+    pub fn attitude_sigma_rad(&self, yaw: T) -> Vector3<T> {
+        let (s, c) = (yaw.psin(), yaw.pcos());
+        let (pnn, pee, pne) = (
+            self.p[(ATT, ATT)],
+            self.p[(ATT + 1, ATT + 1)],
+            self.p[(ATT, ATT + 1)],
+        );
+        let roll2 = c * c * pnn + s * s * pee + T::c(2.0) * c * s * pne;
+        let pitch2 = s * s * pnn + c * c * pee - T::c(2.0) * c * s * pne;
+        Vector3::new(roll2, pitch2, self.p[(ATT + 2, ATT + 2)]).map(|v| v.max(T::zero()).sqrt())
+    }
+
+    /// The health: a latched covariance fault, [`FilterConfig::rejections_to_degrade`]
+    /// position fixes refused in a row, or a horizontal 1-sigma beyond
+    /// [`FilterConfig::max_horizontal_sigma_m`].
+    pub fn status(&self) -> FilterStatus {
+        if self.fault_latched {
+            FilterStatus::CovarianceFault
+        } else if self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade {
+            FilterStatus::AidingRejected
+        } else if self.p[(POS, POS)] + self.p[(POS + 1, POS + 1)]
+            > self.config.max_horizontal_sigma_m * self.config.max_horizontal_sigma_m
+        {
+            FilterStatus::SigmaAboveLimit
+        } else {
+            FilterStatus::Nominal
+        }
+    }
+
+    fn last_state(&self) -> usize {
+        if self.config.scale_factors { N } else { SG }
+    }
+
+    /// `P <- Phi P Phi^T + Q_d` over the propagation ([`model`]).
+    pub fn propagate(&mut self, prop: &Propagation<T>) {
+        let f = model::system_matrix(&prop.lin, &self.config.noise, self.config.scale_factors);
+        let phi = model::transition(&f, prop.dt);
+        let q = model::noise_density(&self.config.noise, self.config.scale_factors, &prop.lin);
+        model::propagate_covariance(&mut self.p, &phi, &q, prop.dt);
+        self.counters.propagations = self.counters.propagations.wrapping_add(1);
+        self.check_covariance();
+    }
+
+    /// A variance that is not positive and finite (rounding in `f32` after a long
+    /// unobservable stretch) is a fault: counted, latched in the status, and the covariance
+    /// reset to its diagonal (the correlations are lost, the variances kept or floored).
+    fn check_covariance(&mut self) {
+        let last = self.last_state();
+        // One sum finds any NaN or infinity (cheaper than testing 441 values).
+        let bad = (0..last).any(|i| !(self.p[(i, i)].finite() && self.p[(i, i)] > T::zero()))
+            || !self.p.iter().fold(T::zero(), |a, v| a + *v).finite();
+        if bad {
+            self.covariance_faults = self.covariance_faults.saturating_add(1);
+            self.fault_latched = true;
+            for i in 0..N {
+                for j in 0..N {
+                    if i != j {
+                        self.p[(i, j)] = T::zero();
+                    }
+                }
+                let v = self.p[(i, i)];
+                self.p[(i, i)] = if i >= last {
+                    T::zero()
+                } else if v.finite() && v > T::zero() {
+                    v
+                } else {
+                    T::c(1e-12)
+                };
+            }
+        }
+    }
+
+    /// True when the covariance is positive definite: the Cholesky factorisation of its
+    /// correlation matrix exists (the variances span 20 orders of magnitude between states).
+    /// With the scale factors off only the 15 modelled states are checked.
+    pub fn is_positive_definite(&self) -> bool {
+        let last = self.last_state();
+        let mut d = [T::zero(); N];
+        for (i, di) in d.iter_mut().enumerate().take(last) {
+            let v = self.p[(i, i)];
+            if !(v.finite() && v > T::zero()) {
+                return false;
+            }
+            *di = T::one() / v.sqrt();
+        }
+        let mut l = Covariance::<T>::zeros();
+        for j in 0..last {
+            let mut s = T::one();
+            for k in 0..j {
+                s -= l[(j, k)] * l[(j, k)];
+            }
+            if !(s > T::zero()) {
+                return false;
+            }
+            let ljj = s.sqrt();
+            l[(j, j)] = ljj;
+            for i in (j + 1)..last {
+                let mut v = self.p[(i, j)] * d[i] * d[j];
+                for k in 0..j {
+                    v -= l[(i, k)] * l[(j, k)];
+                }
+                l[(i, j)] = v / ljj;
+            }
+        }
+        true
+    }
+
+    /// A vector measurement `z = H x + v`, `v ~ N(0, diag(r))`, `z` "predicted minus
+    /// measured": the chi-square gate on the whole vector, then scalar Joseph updates in
+    /// sequence [Groves, eq. 3.58], and the estimate handed out for the feedback.
+    fn update<const M: usize>(
+        &mut self,
+        z: &SVector<T, M>,
+        h: &SMatrix<T, M, N>,
+        r: &SVector<T, M>,
+    ) -> (AidResult<T>, Option<Correction<T>>) {
+        let ph = self.p * h.transpose();
+        let mut s = h * ph;
+        for i in 0..M {
+            s[(i, i)] += r[i];
+        }
+        let Some(s_inv) = s.try_inverse() else {
+            return (AidResult::Invalid, None);
+        };
+        let nis = (z.transpose() * s_inv * z)[(0, 0)];
+        if !(nis.finite() && nis >= T::zero()) {
+            return (AidResult::Invalid, None);
+        }
+        if nis > self.config.gate_nis {
+            return (AidResult::Rejected { nis }, None);
+        }
+        for i in 0..M {
+            let hi = h.row(i).transpose();
+            let innovation = z[i] - hi.dot(&self.x);
+            // Re-acquisition after a gap: one fix may not shrink the predicted variance more
+            // than MAX_SHRINK times (its noise variance is raised to the prediction's share):
+            // a fix far inside a wide prediction can still be an outlier the gate cannot see,
+            // and the next fixes must be able to pull the solution back.
+            let predicted = s[(i, i)] - r[i];
+            let r_eff = r[i].max(predicted / T::c(MAX_SHRINK - 1.0));
+            if update_scalar(&mut self.x, &mut self.p, &hi, innovation, r_eff, T::c(1e15))
+                != ScalarUpdate::Accepted
+            {
+                // The vector test passed, so this is rounding: keep what was used.
+                break;
+            }
+        }
+        let correction = Correction { x: self.x };
+        self.x = StateVector::zeros();
+        self.check_covariance();
+        (AidResult::Accepted { nis }, Some(correction))
+    }
+
+    fn counted(
+        counters: &mut AidCounters,
+        out: (AidResult<T>, Option<Correction<T>>),
+    ) -> (AidResult<T>, Option<Correction<T>>) {
+        counters.count(&out.0);
+        out
+    }
+
+    /// A GNSS position fix of the antenna taken `lag_s` [s] before the snapshot's sample.
+    pub fn position(
+        &mut self,
+        snap: &Snapshot<T>,
+        fix: &GnssPosition<T>,
+        lag_s: T,
+    ) -> (AidResult<T>, Option<Correction<T>>) {
+        let out = self.position_update(snap, fix, lag_s);
+        Self::counted(&mut self.counters.position, out)
+    }
+
+    fn position_update(
+        &mut self,
+        snap: &Snapshot<T>,
+        fix: &GnssPosition<T>,
+        lag_s: T,
+    ) -> (AidResult<T>, Option<Correction<T>>) {
+        if !(fix.is_valid() && lag_s.finite()) {
+            return (AidResult::Invalid, None);
+        }
+        let st = &snap.state;
+        let c_b_n = st.q_b_n.to_rotation_matrix().into_inner();
+        let l_n = c_b_n * self.config.antenna_lever_arm_b_m;
+        // Predicted minus measured: the INS position's NED offset from the fix (metres, at the
+        // fix), plus the lever arm, moved back to the fix time.
+        let measured = Position::from_radians(fix.lat_rad, fix.lon_rad, fix.h_m);
+        let d = measured.ned_to(&st.position);
+        let z = Vector3::new(T::c(d[0]), T::c(d[1]), T::c(d[2])) + l_n - st.v_eb_n * lag_s;
+        let mut h = SMatrix::<T, 3, N>::zeros();
+        h.fixed_view_mut::<3, 3>(0, POS)
+            .copy_from(&Matrix3::identity());
+        // r~_ant = r + C~ l = r_ant + dr + [(C l) x] phi.
+        h.fixed_view_mut::<3, 3>(0, ATT)
+            .copy_from(&model::skew(&l_n));
+        let r = fix.sigma_ned_m.component_mul(&fix.sigma_ned_m);
+        self.update(&z, &h, &r)
+    }
+
+    /// A GNSS velocity of the antenna taken `lag_s` [s] before the snapshot's sample.
+    pub fn velocity(
+        &mut self,
+        snap: &Snapshot<T>,
+        fix: &GnssVelocity<T>,
+        lag_s: T,
+    ) -> (AidResult<T>, Option<Correction<T>>) {
+        let out = self.velocity_update(snap, fix, lag_s);
+        Self::counted(&mut self.counters.velocity, out)
+    }
+
+    fn velocity_update(
+        &mut self,
+        snap: &Snapshot<T>,
+        fix: &GnssVelocity<T>,
+        lag_s: T,
+    ) -> (AidResult<T>, Option<Correction<T>>) {
+        if !(fix.is_valid() && lag_s.finite()) {
+            return (AidResult::Invalid, None);
+        }
+        let st = &snap.state;
+        let c_b_n = st.q_b_n.to_rotation_matrix().into_inner();
+        let l_b = self.config.antenna_lever_arm_b_m;
+        let l_n = c_b_n * l_b;
+        let omega_ie_n = snap.earth.omega_ie_n();
+        // v_ant = v + C (omega_ib_b x l) - omega_ie_n x (C l): the lever arm's velocity
+        // relative to the Earth.
+        let rot_n = c_b_n * snap.omega_ib_b.cross(&l_b);
+        let v_ant = st.v_eb_n + rot_n - omega_ie_n.cross(&l_n) - snap.a_eb_n * lag_s;
+        let z = v_ant - fix.v_ned_m_s;
+        let mut h = SMatrix::<T, 3, N>::zeros();
+        h.fixed_view_mut::<3, 3>(0, VEL)
+            .copy_from(&Matrix3::identity());
+        h.fixed_view_mut::<3, 3>(0, ATT)
+            .copy_from(&model::skew(&rot_n));
+        // C (d_omega x l) = -C [l x] d_omega, d_omega = b_g + diag(omega) s_g.
+        let c_l = -(c_b_n * model::skew(&l_b));
+        h.fixed_view_mut::<3, 3>(0, BG).copy_from(&c_l);
+        if self.config.scale_factors {
+            h.fixed_view_mut::<3, 3>(0, SG)
+                .copy_from(&(c_l * Matrix3::from_diagonal(&snap.omega_ib_b)));
+        }
+        let r = fix.sigma_ned_m_s.component_mul(&fix.sigma_ned_m_s);
+        self.update(&z, &h, &r)
+    }
+
+    /// Zero-velocity and zero-rate updates over a still window: both results and the
+    /// combined correction.
+    pub fn zero_motion(
+        &mut self,
+        snap: &Snapshot<T>,
+        w: &StillWindow<T>,
+    ) -> (AidResult<T>, AidResult<T>, Option<Correction<T>>) {
+        let Some(zm) = self.config.zero_motion else {
+            return (AidResult::Invalid, AidResult::Invalid, None);
+        };
+        // Zero velocity of the IMU, if the solution is slow enough to be stopped.
+        let z = snap.state.v_eb_n;
+        if !(z.norm() <= zm.max_speed_m_s) {
+            self.counters.zero_velocity.count(&AidResult::<T>::Invalid);
+            return (AidResult::Invalid, AidResult::Invalid, None);
+        }
+        let mut h = SMatrix::<T, 3, N>::zeros();
+        h.fixed_view_mut::<3, 3>(0, VEL)
+            .copy_from(&Matrix3::identity());
+        let r = Vector3::repeat(zm.velocity_sigma_m_s * zm.velocity_sigma_m_s);
+        let (rv, cv) = self.update(&z, &h, &r);
+        self.counters.zero_velocity.count(&rv);
+        // The rate only at a stop the velocity confirms: a gentle curve driven at constant
+        // speed also passes the detector, and its rate taken for a gyro bias would turn the
+        // heading.
+        if !matches!(rv, AidResult::Accepted { .. }) {
+            return (rv, AidResult::Invalid, None);
+        }
+        // Zero rate relative to the Earth: the window's mean rate minus the Earth rate in body
+        // axes is b_g + diag(omega) s_g (the velocity correction's attitude part, micro-
+        // radians, neglected here).
+        let c_n_b = snap
+            .state
+            .q_b_n
+            .to_rotation_matrix()
+            .into_inner()
+            .transpose();
+        let mut z = w.omega_ib_b - c_n_b * snap.earth.omega_ie_n();
+        if let Some(c) = &cv {
+            z -= c.x.fixed_rows::<3>(BG);
+        }
+        let mut h = SMatrix::<T, 3, N>::zeros();
+        h.fixed_view_mut::<3, 3>(0, BG)
+            .copy_from(&Matrix3::identity());
+        let arw = self.config.noise.arw_rad_per_sqrt_s;
+        let var = arw * arw / w.duration_s + zm.rate_sigma_rad_s * zm.rate_sigma_rad_s;
+        let (rr, cr) = self.update(&z, &h, &Vector3::repeat(var));
+        self.counters.zero_rate.count(&rr);
+        let c = match (cv, cr) {
+            (Some(a), Some(b)) => Some(Correction { x: a.x + b.x }),
+            (a, b) => a.or(b),
+        };
+        (rv, rr, c)
+    }
+}

@@ -1,0 +1,229 @@
+//! The filter's foreground half, run on every IMU sample: the sensor compensation with the
+//! estimated errors, the mechanization, the increments accumulated for the next covariance
+//! propagation, the stop detector, and the corrections the background sends back.
+
+use super::background::{Correction, Snapshot};
+use super::model::Linearisation;
+use super::stationarity::{Stationarity, StillWindow};
+use super::{ATT, BA, BG, FilterConfig, FilterError, POS, SA, SG, SensorErrors, VEL};
+use crate::attitude::rotation_vector_quat;
+use crate::earth::LocalEarth;
+use crate::{ImuIncrement, InputError, MechanizationConfig, NavFrame, NavState, Scalar, Strapdown};
+use nalgebra::Vector3;
+
+/// A covariance propagation's inputs: the linearisation point and the interval [s].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Propagation<T: Scalar> {
+    /// The state at the interval's end and the interval's mean sensor outputs.
+    pub lin: Linearisation<T>,
+    /// The interval [s].
+    pub dt: T,
+}
+
+/// What one sample asks of the background.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Events<T: Scalar> {
+    /// A propagation interval is full.
+    pub propagation: Option<Propagation<T>>,
+    /// A still window ended (zero-velocity and zero-rate updates due; the partial propagation
+    /// interval is to be flushed first).
+    pub still: Option<StillWindow<T>>,
+}
+
+/// The foreground half (module docs).
+#[derive(Clone, Debug)]
+pub struct AidedMechanization<T: Scalar> {
+    nav: Strapdown<T>,
+    sensors: SensorErrors<T>,
+    interval_s: T,
+    arw: T,
+    vrw: T,
+    acc_theta: Vector3<T>,
+    acc_v: Vector3<T>,
+    acc_dt: T,
+    snapshot: Snapshot<T>,
+    detector: Option<Stationarity<T>>,
+}
+
+fn local_earth<T: Scalar>(st: &NavState<T>) -> LocalEarth<T> {
+    let c_n = st.position.vertical_row::<T>();
+    LocalEarth::from_sin_lat(-c_n.z, c_n.x * c_n.x + c_n.y * c_n.y, st.position.h::<T>())
+}
+
+impl<T: Scalar> AidedMechanization<T> {
+    /// Starts from `state` with `sensors` compensated; the settings of `config`.
+    pub fn new(
+        state: NavState<T>,
+        sensors: SensorErrors<T>,
+        config: &FilterConfig<T>,
+    ) -> Result<Self, FilterError> {
+        let dt = config.propagation_interval_s;
+        if !(dt.finite() && dt > T::zero() && dt <= T::one()) {
+            return Err(FilterError::BadInterval);
+        }
+        let state_finite = state.v_eb_n.iter().all(|v| v.finite())
+            && state.q_b_n.coords.iter().all(|v| v.finite());
+        if !(state_finite && sensors.is_finite()) {
+            return Err(FilterError::BadState);
+        }
+        let mechanization = MechanizationConfig {
+            frame: NavFrame::Ned,
+            ..config.mechanization
+        };
+        let nav = Strapdown::new(state, mechanization);
+        let st = *nav.state();
+        Ok(Self {
+            nav,
+            sensors,
+            interval_s: dt,
+            arw: config.noise.arw_rad_per_sqrt_s,
+            vrw: config.noise.vrw_mps_per_sqrt_s,
+            acc_theta: Vector3::zeros(),
+            acc_v: Vector3::zeros(),
+            acc_dt: T::zero(),
+            snapshot: Snapshot {
+                state: st,
+                earth: local_earth(&st),
+                omega_ib_b: Vector3::zeros(),
+                a_eb_n: Vector3::zeros(),
+            },
+            detector: config.zero_motion.map(|z| Stationarity::new(z.detector)),
+        })
+    }
+
+    /// The navigation solution.
+    pub fn state(&self) -> &NavState<T> {
+        self.nav.state()
+    }
+
+    /// The mechanization.
+    pub fn strapdown(&self) -> &Strapdown<T> {
+        &self.nav
+    }
+
+    /// The sensor errors compensated.
+    pub fn sensor_errors(&self) -> &SensorErrors<T> {
+        &self.sensors
+    }
+
+    /// What the background's updates need of the current sample.
+    pub fn snapshot(&self) -> Snapshot<T> {
+        self.snapshot
+    }
+
+    pub(crate) fn snapshot_ref(&self) -> &Snapshot<T> {
+        &self.snapshot
+    }
+
+    /// True while the stop detector sees the vehicle still.
+    pub fn is_still(&self) -> bool {
+        self.detector.as_ref().is_some_and(|d| d.is_still())
+    }
+
+    /// Forgets the previous increment after a gap in the data.
+    pub fn restart_increments(&mut self) {
+        self.nav.restart_increments();
+        if let Some(d) = &mut self.detector {
+            d.restart();
+        }
+    }
+
+    /// Integrates one increment, compensated with the estimated sensor errors (`true =
+    /// (measured - b dt) / (1 + s)`); a refused increment leaves everything unchanged.
+    pub fn step(&mut self, inc: &ImuIncrement<T>) -> Result<Events<T>, InputError> {
+        let dt = inc.dt;
+        let s = &self.sensors;
+        let comp = ImuIncrement {
+            delta_theta_ib_b: SensorErrors::apply(
+                &inc.delta_theta_ib_b,
+                &s.gyro_bias_rad_s,
+                &s.gyro_scale,
+                dt,
+            ),
+            delta_v_ib_b: SensorErrors::apply(
+                &inc.delta_v_ib_b,
+                &s.accel_bias_mps2,
+                &s.accel_scale,
+                dt,
+            ),
+            dt,
+        };
+        let v_before = self.nav.state().v_eb_n;
+        self.nav.step(&comp)?;
+        self.acc_theta += comp.delta_theta_ib_b;
+        self.acc_v += comp.delta_v_ib_b;
+        self.acc_dt += dt;
+        let st = *self.nav.state();
+        self.snapshot = Snapshot {
+            state: st,
+            earth: local_earth(&st),
+            omega_ib_b: comp.delta_theta_ib_b / dt,
+            a_eb_n: (st.v_eb_n - v_before) / dt,
+        };
+        let still = match &mut self.detector {
+            Some(det) => det.add(
+                &self.snapshot.omega_ib_b,
+                &(comp.delta_v_ib_b / dt),
+                dt,
+                self.snapshot.earth.g,
+                self.arw,
+                self.vrw,
+            ),
+            None => None,
+        };
+        // A stop's updates flush the interval themselves (Events::still).
+        let propagation = if still.is_none() && self.acc_dt >= self.interval_s {
+            self.flush()
+        } else {
+            None
+        };
+        Ok(Events { propagation, still })
+    }
+
+    /// The propagation of the increments accumulated so far (`None` when there are none).
+    pub fn flush(&mut self) -> Option<Propagation<T>> {
+        if self.acc_dt <= T::zero() {
+            return None;
+        }
+        let st = &self.snapshot.state;
+        let p = Propagation {
+            lin: Linearisation {
+                earth: self.snapshot.earth,
+                v_eb_n: st.v_eb_n,
+                c_b_n: st.q_b_n.to_rotation_matrix().into_inner(),
+                f_ib_b: self.acc_v / self.acc_dt,
+                omega_ib_b: self.acc_theta / self.acc_dt,
+            },
+            dt: self.acc_dt,
+        };
+        self.acc_theta = Vector3::zeros();
+        self.acc_v = Vector3::zeros();
+        self.acc_dt = T::zero();
+        Some(p)
+    }
+
+    /// Applies the background's estimate (closed loop): position, velocity and attitude into
+    /// the mechanization, sensor errors into the compensation [Groves, §14.1.1]. The estimate
+    /// was made at a snapshot of an earlier sample when the halves run in separate tasks; its
+    /// errors change at the INS error dynamics' rates (hours), so it holds for the current one.
+    pub fn apply(&mut self, c: &Correction<T>) {
+        let x = &c.x;
+        let mut st = *self.nav.state();
+        let dr = x.fixed_rows::<3>(POS);
+        st.position = st
+            .position
+            .offset_ned([-dr.x.to_f64(), -dr.y.to_f64(), -dr.z.to_f64()]);
+        st.v_eb_n -= x.fixed_rows::<3>(VEL);
+        let phi: Vector3<T> = x.fixed_rows::<3>(ATT).into();
+        st.q_b_n = rotation_vector_quat(&phi) * st.q_b_n;
+        let s = &mut self.sensors;
+        s.gyro_bias_rad_s += x.fixed_rows::<3>(BG);
+        s.accel_bias_mps2 += x.fixed_rows::<3>(BA);
+        s.gyro_scale += x.fixed_rows::<3>(SG);
+        s.accel_scale += x.fixed_rows::<3>(SA);
+        self.nav.set_state(st);
+        let st = *self.nav.state();
+        self.snapshot.state = st;
+        self.snapshot.earth = local_earth(&st);
+    }
+}

@@ -1,0 +1,363 @@
+//! The navigation filter: a closed-loop error-state Kalman filter on the strapdown solution,
+//! aided by GNSS position and velocity, zero-velocity and zero-angular-rate updates.
+//!
+//! - [`states`]: the 21 error states and their named offsets;
+//! - [`model`]: the INS error equations (the process model) and their discretisation;
+//! - [`aiding`]: the measurements, their outcomes and counters;
+//! - [`stationarity`]: the IMU-only stop detector;
+//! - [`motion`]: the start in motion from GNSS (level from the accelerometers, heading from the
+//!   GNSS track).
+//!
+//! [`AidedIns`] owns the mechanization ([`Strapdown`], NED frame) and the covariance. Every
+//! IMU sample is compensated with the estimated sensor errors and integrated at its own rate;
+//! the increments are accumulated and the covariance propagated every
+//! [`FilterConfig::propagation_interval_s`]; before each update the covariance is brought up to
+//! the current sample. Updates are Joseph-form scalar updates in sequence
+//! ([`crate::alignment::fine::kalman::update_scalar`], [Groves, eq. 3.58]) after a chi-square
+//! gate on the whole measurement vector; the estimate is fed back at once (position, velocity,
+//! attitude into the mechanization, sensor errors into the compensation) and the error state
+//! reset to zero [Groves, §14.1.1, closed-loop correction].
+//!
+//! Time tags: a fix taken between two IMU samples is applied at the first sample after it,
+//! its prediction moved back by the lag `t_sample - t_fix` along the solution's velocity (and,
+//! for a velocity fix, its acceleration): at 400 Hz the lag is below 2.5 ms, and the neglected
+//! second-order terms (`a lag^2 / 2`) below 3 um at 1 g.
+
+pub mod aiding;
+pub mod background;
+pub mod foreground;
+pub mod model;
+pub mod motion;
+pub mod sequencer;
+pub mod states;
+pub mod stationarity;
+
+use crate::{ImuIncrement, InputError, MechanizationConfig, NavState, Scalar, Strapdown};
+pub use aiding::{
+    AidCounters, AidResult, CHI2_3DOF_999, FilterCounters, GnssPosition, GnssVelocity,
+};
+pub use background::{Correction, ErrorFilter, Snapshot};
+pub use foreground::{AidedMechanization, Events, Propagation};
+use model::FilterNoise;
+use nalgebra::Vector3;
+pub use states::{ATT, BA, BG, Covariance, InitialSigma, N, POS, SA, SG, StateVector, VEL};
+use stationarity::StationarityConfig;
+
+/// Zero-velocity and zero-angular-rate updates at stops.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ZeroMotionConfig<T: Scalar> {
+    /// The stop detector.
+    pub detector: StationarityConfig<T>,
+    /// 1-sigma of the zero velocity (residual motion of a stopped vehicle) [m/s].
+    pub velocity_sigma_m_s: T,
+    /// 1-sigma of the zero rate beyond the window mean's white noise [rad/s].
+    pub rate_sigma_rad_s: T,
+    /// Largest solution speed at which a stop is believed [m/s]: a vehicle cruising straight
+    /// at constant speed looks still to the IMU, and once the velocity's 1-sigma has grown
+    /// (a GNSS outage) the chi-square gate alone would let such a ZUPT in.
+    pub max_speed_m_s: T,
+}
+
+impl<T: Scalar> Default for ZeroMotionConfig<T> {
+    /// Default detector, 0.02 m/s, 0.01 deg/s, stops believed below 1 m/s.
+    fn default() -> Self {
+        Self {
+            detector: StationarityConfig::default(),
+            velocity_sigma_m_s: T::c(0.02),
+            rate_sigma_rad_s: T::c(0.01f64.to_radians()),
+            max_speed_m_s: T::c(1.0),
+        }
+    }
+}
+
+/// The filter's settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterConfig<T: Scalar> {
+    /// The IMU's noise and sensor-error model.
+    pub noise: FilterNoise<T>,
+    /// Model the scale factors (21 states) or not (15 states used, the rest held at zero).
+    pub scale_factors: bool,
+    /// Interval between covariance propagations [s] (the mechanization runs on every sample).
+    pub propagation_interval_s: T,
+    /// The GNSS antenna's position from the IMU, body forward, right, down [m].
+    pub antenna_lever_arm_b_m: Vector3<T>,
+    /// Chi-square gate of a 3-component measurement [-] (default [`CHI2_3DOF_999`]).
+    pub gate_nis: T,
+    /// Consecutive position rejections after which the filter reports itself degraded.
+    pub rejections_to_degrade: u32,
+    /// Horizontal position 1-sigma above which the filter reports itself degraded [m].
+    pub max_horizontal_sigma_m: T,
+    /// Zero-velocity and zero-rate updates (`None`: off).
+    pub zero_motion: Option<ZeroMotionConfig<T>>,
+    /// The mechanization's options (its frame is always NED here).
+    pub mechanization: MechanizationConfig<T>,
+}
+
+impl<T: Scalar> FilterConfig<T> {
+    /// Defaults around `noise`: scale factors on, propagation at 10 Hz, no lever arm, the
+    /// 99.9 % gate, degraded after 100 rejections or beyond 50 m, ZUPT/ZARU on.
+    pub fn new(noise: FilterNoise<T>) -> Self {
+        Self {
+            noise,
+            scale_factors: true,
+            propagation_interval_s: T::c(0.1),
+            antenna_lever_arm_b_m: Vector3::zeros(),
+            gate_nis: T::c(CHI2_3DOF_999),
+            rejections_to_degrade: 100,
+            max_horizontal_sigma_m: T::c(50.0),
+            zero_motion: Some(ZeroMotionConfig::default()),
+            mechanization: MechanizationConfig::default(),
+        }
+    }
+}
+
+/// Why a filter cannot start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FilterError {
+    /// A noise figure is negative or not finite, or the correlation time not positive.
+    BadNoise,
+    /// An initial 1-sigma is negative or not finite.
+    BadInitialSigma,
+    /// The propagation interval is not within (0, 1] s.
+    BadInterval,
+    /// The initial state or sensor errors are not finite.
+    BadState,
+    /// The lever arm is not finite or beyond 100 m.
+    BadLeverArm,
+}
+
+impl core::fmt::Display for FilterError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::BadNoise => {
+                "a noise figure is negative or not finite (or the correlation time not positive)"
+            }
+            Self::BadInitialSigma => "an initial 1-sigma is negative or not finite",
+            Self::BadInterval => "the covariance propagation interval must be within (0, 1] s",
+            Self::BadState => "the initial state or sensor errors are not finite",
+            Self::BadLeverArm => "the antenna lever arm is not finite or beyond 100 m",
+        })
+    }
+}
+
+impl core::error::Error for FilterError {}
+
+/// The sensor errors the filter has estimated and compensates: `true = (measured - b) / (1 + s)`
+/// per axis ([Berdinskikh et al., eqs. 3 and 8]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SensorErrors<T: Scalar> {
+    /// Gyro bias [rad/s].
+    pub gyro_bias_rad_s: Vector3<T>,
+    /// Accelerometer bias [m/s^2].
+    pub accel_bias_mps2: Vector3<T>,
+    /// Gyro scale-factor error [-].
+    pub gyro_scale: Vector3<T>,
+    /// Accelerometer scale-factor error [-].
+    pub accel_scale: Vector3<T>,
+}
+
+impl<T: Scalar> Default for SensorErrors<T> {
+    fn default() -> Self {
+        Self {
+            gyro_bias_rad_s: Vector3::zeros(),
+            accel_bias_mps2: Vector3::zeros(),
+            gyro_scale: Vector3::zeros(),
+            accel_scale: Vector3::zeros(),
+        }
+    }
+}
+
+impl<T: Scalar> SensorErrors<T> {
+    pub(crate) fn is_finite(&self) -> bool {
+        [
+            &self.gyro_bias_rad_s,
+            &self.accel_bias_mps2,
+            &self.gyro_scale,
+            &self.accel_scale,
+        ]
+        .iter()
+        .all(|v| v.iter().all(|x| x.finite()))
+    }
+
+    /// Compensates an increment `measured` [rad or m/s] over `dt` [s].
+    #[inline]
+    pub(crate) fn apply(
+        measured: &Vector3<T>,
+        bias: &Vector3<T>,
+        scale: &Vector3<T>,
+        dt: T,
+    ) -> Vector3<T> {
+        (measured - bias * dt).component_div(&scale.add_scalar(T::one()))
+    }
+}
+
+/// The filter's health.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FilterStatus {
+    /// Aided (or free inertial within its limits).
+    Nominal,
+    /// [`FilterConfig::rejections_to_degrade`] position fixes in a row refused by the gate.
+    AidingRejected,
+    /// Horizontal position 1-sigma above [`FilterConfig::max_horizontal_sigma_m`].
+    SigmaAboveLimit,
+    /// The covariance lost a positive variance (it has been reset to its diagonal).
+    CovarianceFault,
+}
+
+impl FilterStatus {
+    /// The name in logs.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Nominal => "NAV",
+            Self::AidingRejected | Self::SigmaAboveLimit | Self::CovarianceFault => "DEGRADED",
+        }
+    }
+}
+
+/// The closed-loop error-state filter with its mechanization (module docs): the foreground
+/// ([`AidedMechanization`]: every sample) and the background ([`ErrorFilter`]: propagation
+/// and updates) run in line, in the order the firmware's tasks run them.
+#[derive(Clone, Debug)]
+pub struct AidedIns<T: Scalar> {
+    mech: AidedMechanization<T>,
+    filter: ErrorFilter<T>,
+}
+
+impl<T: Scalar> AidedIns<T> {
+    /// Starts from `state` with sensor errors `sensors` already known (compensated from the
+    /// start) and the 1-sigma uncertainties `sigma`.
+    pub fn new(
+        state: NavState<T>,
+        sensors: SensorErrors<T>,
+        sigma: &InitialSigma<T>,
+        config: FilterConfig<T>,
+    ) -> Result<Self, FilterError> {
+        let mech = AidedMechanization::new(state, sensors, &config)?;
+        let yaw = mech.state().euler().2;
+        let filter = ErrorFilter::new(sigma, yaw, config)?;
+        Ok(Self { mech, filter })
+    }
+
+    /// The navigation solution (NED frame).
+    pub fn state(&self) -> &NavState<T> {
+        self.mech.state()
+    }
+
+    /// The mechanization.
+    pub fn strapdown(&self) -> &Strapdown<T> {
+        self.mech.strapdown()
+    }
+
+    /// The estimated sensor errors being compensated.
+    pub fn sensor_errors(&self) -> &SensorErrors<T> {
+        self.mech.sensor_errors()
+    }
+
+    /// The error covariance (at the last propagation or update).
+    pub fn covariance(&self) -> &Covariance<T> {
+        self.filter.covariance()
+    }
+
+    /// The background half.
+    pub fn filter(&self) -> &ErrorFilter<T> {
+        &self.filter
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &FilterConfig<T> {
+        self.filter.config()
+    }
+
+    /// The aids' counters.
+    pub fn counters(&self) -> &FilterCounters {
+        self.filter.counters()
+    }
+
+    /// Times the covariance lost a positive variance and was reset to its diagonal.
+    pub fn covariance_faults(&self) -> u32 {
+        self.filter.covariance_faults()
+    }
+
+    /// 1-sigma of the state's block at `at` (one of the offsets), per axis.
+    pub fn sigma(&self, at: usize) -> Vector3<T> {
+        self.filter.sigma(at)
+    }
+
+    /// 1-sigma of roll, pitch, yaw [rad] ([`ErrorFilter::attitude_sigma_rad`]).
+    pub fn attitude_sigma_rad(&self) -> Vector3<T> {
+        self.filter.attitude_sigma_rad(self.state().euler().2)
+    }
+
+    /// The health.
+    pub fn status(&self) -> FilterStatus {
+        self.filter.status()
+    }
+
+    /// True when the covariance is positive definite ([`ErrorFilter::is_positive_definite`]).
+    pub fn covariance_is_positive_definite(&self) -> bool {
+        self.filter.is_positive_definite()
+    }
+
+    /// Forgets the previous increment after a gap in the data.
+    pub fn restart_increments(&mut self) {
+        self.mech.restart_increments();
+    }
+
+    /// Integrates one IMU increment (compensated with the estimated sensor errors), and
+    /// propagates the covariance when the interval is full; at a stop, the zero-velocity and
+    /// zero-rate updates. A refused increment leaves everything unchanged.
+    pub fn step(&mut self, inc: &ImuIncrement<T>) -> Result<(), InputError> {
+        let events = self.mech.step(inc)?;
+        if let Some(w) = events.still {
+            self.propagate();
+            let (_, _, c) = self.filter.zero_motion(&self.mech.snapshot(), &w);
+            if let Some(c) = c {
+                self.mech.apply(&c);
+            }
+        }
+        if let Some(p) = events.propagation {
+            self.filter.propagate(&p);
+        }
+        Ok(())
+    }
+
+    /// Brings the covariance up to the current sample (no-op when it is).
+    pub fn propagate(&mut self) {
+        if let Some(p) = self.mech.flush() {
+            self.filter.propagate(&p);
+        }
+    }
+
+    /// A GNSS position fix of the antenna taken `lag_s` [s] before the current sample
+    /// (0 <= lag < one sample interval; module docs). Counted in
+    /// [`FilterCounters::position`].
+    pub fn aid_position(&mut self, fix: &GnssPosition<T>, lag_s: T) -> AidResult<T> {
+        self.propagate();
+        let (r, c) = self.filter.position(&self.mech.snapshot(), fix, lag_s);
+        if let Some(c) = c {
+            self.mech.apply(&c);
+        }
+        r
+    }
+
+    /// A GNSS velocity of the antenna taken `lag_s` [s] before the current sample. Counted in
+    /// [`FilterCounters::velocity`].
+    pub fn aid_velocity(&mut self, fix: &GnssVelocity<T>, lag_s: T) -> AidResult<T> {
+        self.propagate();
+        let (r, c) = self.filter.velocity(&self.mech.snapshot(), fix, lag_s);
+        if let Some(c) = c {
+            self.mech.apply(&c);
+        }
+        r
+    }
+
+    /// True while the stop detector sees the vehicle still.
+    pub fn is_still(&self) -> bool {
+        self.mech.is_still()
+    }
+
+    /// The current sample's compensated rate `omega_ib_b` [rad/s].
+    pub fn omega_ib_b(&self) -> &Vector3<T> {
+        &self.mech.snapshot_ref().omega_ib_b
+    }
+}

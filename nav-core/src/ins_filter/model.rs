@@ -1,0 +1,442 @@
+//! The process model of the navigation filter: the INS error equations in the NED frame, the
+//! sensor errors as first-order Gauss–Markov processes, and their discretisation.
+//!
+//! Error states (all "computed minus true"), [`crate::ins_filter::states`]:
+//! - `dr` position error, north, east, down [m]; `dv` velocity error [m/s];
+//! - `phi` attitude error [rad]: the computed attitude is `C~_b_n = (I - [phi x]) C_b_n`
+//!   (Groves' psi-angle form, §14.2.1);
+//! - `b_g`, `b_a`, `s_g`, `s_a`: the errors left in the compensated gyro and accelerometer
+//!   outputs: `omega~ = omega + b_g + diag(omega) s_g`, `f~ = f + b_a + diag(f) s_a`
+//!   ([Berdinskikh et al., eqs. 3 and 8], the sensor model `(1 + m) x + b`).
+//!
+//! Continuous model `dx/dt = F x + G w` ([Groves, eqs. 14.63–14.71] written for NED position
+//! errors in metres; [Berdinskikh et al., eq. 22] in the local-level frame: Schuler coupling
+//! through the gravity and transport-rate terms, Earth rate, transport rate):
+//! - `d(dr)/dt = F_rr dr + dv`, `F_rr` from differentiating `(R_N + h) dlat`,
+//!   `(R_E + h) cos(lat) dlon`, `-dh`;
+//! - `d(dv)/dt = [v x](2 W_ie + W_en_r) dr + ([v x] W_en_v - [(2 omega_ie + omega_en) x]) dv
+//!   + [f_n x] phi + C_b_n (b_a + diag(f_b) s_a) + g_d dr_D + w_v`, with
+//!   `g_d = 2 g / (R + h)` the vertical gravity gradient;
+//! - `d(phi)/dt = (W_ie + W_en_r) dr + W_en_v dv - [(omega_ie + omega_en) x] phi
+//!   - C_b_n (b_g + diag(omega_b) s_g) - w_phi`,
+//!
+//! where `W_ie = d omega_ie_n / d dr`, `W_en_r = d omega_en_n / d dr`,
+//! `W_en_v = d omega_en_n / d dv`; the sensor errors decay as `-x / tau` driven by white noise
+//! of density `2 sigma^2 / tau` (Groves eq. 14.80).
+//!
+//! Discretisation over the propagation interval `dt` (the increments accumulated in between):
+//! `Phi = I + F dt + (F dt)^2 / 2` (second order; F at the interval's end, the specific force
+//! and rate its means), `Q_d = (Phi Q_c Phi^T + Q_c) dt / 2` (trapezoidal, Groves eq. 3.46).
+//! Both products skip the zeros of the (sparse) transition matrix.
+
+use super::states::{ATT, BA, BG, Covariance, N, POS, SA, SG, StateVector, VEL};
+use crate::Scalar;
+use crate::earth::{LocalEarth, OMEGA_IE};
+use nalgebra::{Matrix3, Vector3};
+
+/// The IMU's noise and sensor-error model, as the filter assumes it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterNoise<T: Scalar> {
+    /// Angle random walk [rad/sqrt(s)].
+    pub arw_rad_per_sqrt_s: T,
+    /// Velocity random walk [m/s/sqrt(s)].
+    pub vrw_mps_per_sqrt_s: T,
+    /// Gyro bias, stationary 1-sigma [rad/s].
+    pub gyro_bias_rad_s: T,
+    /// Accelerometer bias, stationary 1-sigma [m/s^2].
+    pub accel_bias_mps2: T,
+    /// Gyro scale-factor error, stationary 1-sigma [-].
+    pub gyro_scale: T,
+    /// Accelerometer scale-factor error, stationary 1-sigma [-].
+    pub accel_scale: T,
+    /// Correlation time of the Gauss–Markov bias and scale-factor processes [s].
+    pub correlation_time_s: T,
+    /// Gyro cross-axis coupling (misalignment), 1-sigma [rad]: not a state; its error
+    /// `M omega` is covered by attitude process noise while the body turns (see
+    /// [`noise_density`]).
+    pub gyro_cross_coupling_rad: T,
+    /// Accelerometer cross-axis coupling (misalignment), 1-sigma [rad]: on gravity it is a
+    /// bias; on the motion's acceleration it is covered by velocity process noise.
+    pub accel_cross_coupling_rad: T,
+    /// Gyro g-sensitivity, 1-sigma [rad/s per m/s^2]: on gravity a bias; on the motion's
+    /// acceleration covered by attitude process noise.
+    pub gyro_g_sensitivity: T,
+}
+
+impl<T: Scalar> FilterNoise<T> {
+    /// True when every figure is finite and not negative and the correlation time positive.
+    pub fn is_valid(&self) -> bool {
+        let all = [
+            self.arw_rad_per_sqrt_s,
+            self.vrw_mps_per_sqrt_s,
+            self.gyro_bias_rad_s,
+            self.accel_bias_mps2,
+            self.gyro_scale,
+            self.accel_scale,
+        ];
+        all.iter().all(|v| v.finite() && *v >= T::zero())
+            && [
+                self.gyro_cross_coupling_rad,
+                self.accel_cross_coupling_rad,
+                self.gyro_g_sensitivity,
+            ]
+            .iter()
+            .all(|v| v.finite() && *v >= T::zero())
+            && self.correlation_time_s.finite()
+            && self.correlation_time_s > T::zero()
+    }
+}
+
+/// What the error model is linearised about: the navigation solution at the end of the
+/// propagation interval and the interval's mean sensor outputs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Linearisation<T: Scalar> {
+    /// Earth quantities at the position.
+    pub earth: LocalEarth<T>,
+    /// Velocity `v_eb_n` [m/s].
+    pub v_eb_n: Vector3<T>,
+    /// Attitude `C_b_n` [-].
+    pub c_b_n: Matrix3<T>,
+    /// Mean compensated specific force `f_ib_b` [m/s^2].
+    pub f_ib_b: Vector3<T>,
+    /// Mean compensated body rate `omega_ib_b` [rad/s].
+    pub omega_ib_b: Vector3<T>,
+}
+
+/// `[v x]`.
+#[inline]
+pub fn skew<T: Scalar>(v: &Vector3<T>) -> Matrix3<T> {
+    crate::poisson::skew(v)
+}
+
+fn set_block<T: Scalar>(f: &mut Covariance<T>, row: usize, col: usize, m: &Matrix3<T>) {
+    f.fixed_view_mut::<3, 3>(row, col).copy_from(m);
+}
+
+/// The continuous-time system matrix `F` (module docs). `scale_factors`: whether the
+/// scale-factor states are modelled (off: their rows and columns stay zero).
+pub fn system_matrix<T: Scalar>(
+    lin: &Linearisation<T>,
+    noise: &FilterNoise<T>,
+    scale_factors: bool,
+) -> Covariance<T> {
+    let mut f = Covariance::<T>::zeros();
+    let e = &lin.earth;
+    let v = &lin.v_eb_n;
+    let rn = e.r_meridian + e.h;
+    let re = e.r_transverse + e.h;
+    let s = e.sin_lat;
+    // cos(lat) floored 1 cm from the pole (the NED frame's singularity).
+    let c = e.cos2_lat.sqrt().max(T::c(1e-9));
+    let t = s / c;
+    let w = T::c(OMEGA_IE);
+    let z = T::zero();
+
+    // Partial derivatives of omega_ie_n and omega_en_n (Groves eqs. 2.123, 5.44) by the
+    // position error (dlat = dr_N / (R_N + h), dh = -dr_D) and by the velocity error.
+    let w_ie_r = Matrix3::new(-w * s / rn, z, z, z, z, z, -w * c / rn, z, z);
+    let w_en_r = Matrix3::new(
+        z,
+        z,
+        v.y / (re * re),
+        z,
+        z,
+        -v.x / (rn * rn),
+        -v.y / (re * c * c * rn),
+        z,
+        -v.y * t / (re * re),
+    );
+    let w_en_v = Matrix3::new(z, T::one() / re, z, -T::one() / rn, z, z, z, -t / re, z);
+    let omega_ie_n = Vector3::new(w * c, z, -w * s);
+    let omega_en_n = Vector3::new(v.y / re, -v.x / rn, -v.y * t / re);
+    let v_x = skew(v);
+
+    // Position.
+    let f_rr = Matrix3::new(
+        -v.z / rn,
+        z,
+        v.x / rn,
+        v.y * t / rn,
+        -(v.z / re + v.x * t / rn),
+        v.y / re,
+        z,
+        z,
+        z,
+    );
+    set_block(&mut f, POS, POS, &f_rr);
+    set_block(&mut f, POS, VEL, &Matrix3::identity());
+
+    // Velocity.
+    let mut f_vr = v_x * (w_ie_r * T::c(2.0) + w_en_r);
+    f_vr[(2, 2)] += T::c(2.0) * e.g / ((e.r_meridian * e.r_transverse).sqrt() + e.h);
+    set_block(&mut f, VEL, POS, &f_vr);
+    let f_vv = v_x * w_en_v - skew(&(omega_ie_n * T::c(2.0) + omega_en_n));
+    set_block(&mut f, VEL, VEL, &f_vv);
+    let f_n = lin.c_b_n * lin.f_ib_b;
+    set_block(&mut f, VEL, ATT, &skew(&f_n));
+    set_block(&mut f, VEL, BA, &lin.c_b_n);
+
+    // Attitude.
+    set_block(&mut f, ATT, POS, &(w_ie_r + w_en_r));
+    set_block(&mut f, ATT, VEL, &w_en_v);
+    set_block(&mut f, ATT, ATT, &(-skew(&(omega_ie_n + omega_en_n))));
+    set_block(&mut f, ATT, BG, &(-lin.c_b_n));
+
+    if scale_factors {
+        set_block(
+            &mut f,
+            VEL,
+            SA,
+            &(lin.c_b_n * Matrix3::from_diagonal(&lin.f_ib_b)),
+        );
+        set_block(
+            &mut f,
+            ATT,
+            SG,
+            &(-(lin.c_b_n * Matrix3::from_diagonal(&lin.omega_ib_b))),
+        );
+    }
+
+    // Sensor errors: first-order Gauss–Markov.
+    let decay = -T::one() / noise.correlation_time_s;
+    let last = if scale_factors { N } else { SG };
+    for i in BG..last {
+        f[(i, i)] = decay;
+    }
+    f
+}
+
+/// How long a turn's cross-coupling error builds up before the body turns back or the aiding
+/// sees it [s] (the correlation time of the cross-coupling noise).
+pub const CROSS_COUPLING_TIME_S: f64 = 10.0;
+
+/// Spectral densities of the driving white noise, per state (diagonal of `G Q G^T`):
+/// `vrw^2` on velocity, `arw^2` on attitude (isotropic, so the rotation `C_b_n` drops out),
+/// `2 sigma^2 / tau` on each Gauss–Markov state. The sensor errors that are not states add
+/// white noise while the body moves: the gyros' cross-axis coupling `M omega` (6
+/// misalignments) adds `(m |omega|)^2 T_c` on attitude, `T_c` = [`CROSS_COUPLING_TIME_S`]
+/// (over a turn of length `T_c` its variance equals the coupling's `(m |omega| T_c)^2`;
+/// shorter turns are over-covered, longer ones under-), the gyros' g-sensitivity
+/// `(k_g |a|)^2 T_c` on attitude and the accelerometers' coupling `(m_a |a|)^2 T_c` on
+/// velocity, `a` the motion's acceleration (specific force less gravity's reaction; on
+/// gravity alone both act as biases, which are states).
+pub fn noise_density<T: Scalar>(
+    noise: &FilterNoise<T>,
+    scale_factors: bool,
+    lin: &Linearisation<T>,
+) -> StateVector<T> {
+    let mut q = StateVector::<T>::zeros();
+    let two_over_tau = T::c(2.0) / noise.correlation_time_s;
+    let gm = |sigma: T| sigma * sigma * two_over_tau;
+    let t_c = T::c(CROSS_COUPLING_TIME_S);
+    // The motion's acceleration: f_n + g_n (gravity down).
+    let mut a_n = lin.c_b_n * lin.f_ib_b;
+    a_n.z += lin.earth.g;
+    let a = a_n.norm();
+    let gyro = noise.gyro_cross_coupling_rad * lin.omega_ib_b.norm();
+    let g_sens = noise.gyro_g_sensitivity * a;
+    let accel = noise.accel_cross_coupling_rad * a;
+    let arw2 =
+        noise.arw_rad_per_sqrt_s * noise.arw_rad_per_sqrt_s + (gyro * gyro + g_sens * g_sens) * t_c;
+    let vrw2 = noise.vrw_mps_per_sqrt_s * noise.vrw_mps_per_sqrt_s + accel * accel * t_c;
+    for k in 0..3 {
+        q[VEL + k] = vrw2;
+        q[ATT + k] = arw2;
+        q[BG + k] = gm(noise.gyro_bias_rad_s);
+        q[BA + k] = gm(noise.accel_bias_mps2);
+        if scale_factors {
+            q[SG + k] = gm(noise.gyro_scale);
+            q[SA + k] = gm(noise.accel_scale);
+        }
+    }
+    q
+}
+
+/// `Phi = I + F dt + (F dt)^2 / 2`.
+pub fn transition<T: Scalar>(f: &Covariance<T>, dt: T) -> Covariance<T> {
+    let a = f * dt;
+    let mut phi = sparse_product(&a, &a) * T::c(0.5);
+    phi += a;
+    for i in 0..N {
+        phi[(i, i)] += T::one();
+    }
+    phi
+}
+
+/// `a b`, skipping the zeros of `a`.
+pub fn sparse_product<T: Scalar>(a: &Covariance<T>, b: &Covariance<T>) -> Covariance<T> {
+    let mut out = Covariance::<T>::zeros();
+    for k in 0..N {
+        for i in 0..N {
+            let aik = a[(i, k)];
+            if aik != T::zero() {
+                for j in 0..N {
+                    out[(i, j)] += aik * b[(k, j)];
+                }
+            }
+        }
+    }
+    out
+}
+
+/// `P <- Phi P Phi^T + (Phi Q_c Phi^T + Q_c) dt / 2` in place, skipping the zeros of `Phi`;
+/// symmetric by construction (the upper triangle is mirrored).
+pub fn propagate_covariance<T: Scalar>(
+    p: &mut Covariance<T>,
+    phi: &Covariance<T>,
+    q_c: &StateVector<T>,
+    dt: T,
+) {
+    let half_dt = dt * T::c(0.5);
+    // M = Phi P + (Phi Q_c) dt / 2, then P' = M Phi^T + Q_c dt / 2: the two products of the
+    // module docs in one pass.
+    let mut m = sparse_product(phi, p);
+    for k in 0..N {
+        let qk = q_c[k] * half_dt;
+        if qk != T::zero() {
+            for i in 0..N {
+                m[(i, k)] += phi[(i, k)] * qk;
+            }
+        }
+    }
+    // P'_ij = sum_k M_ik Phi_jk for j >= i.
+    p.fill(T::zero());
+    for j in 0..N {
+        for k in 0..N {
+            let pjk = phi[(j, k)];
+            if pjk != T::zero() {
+                for i in 0..=j {
+                    p[(i, j)] += m[(i, k)] * pjk;
+                }
+            }
+        }
+    }
+    for i in 0..N {
+        p[(i, i)] += q_c[i] * half_dt;
+        for j in (i + 1)..N {
+            p[(j, i)] = p[(i, j)];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ins_filter::states::N;
+    use nalgebra::SMatrix;
+
+    fn noise() -> FilterNoise<f64> {
+        FilterNoise {
+            arw_rad_per_sqrt_s: 1e-4,
+            vrw_mps_per_sqrt_s: 1e-3,
+            gyro_bias_rad_s: 1e-5,
+            accel_bias_mps2: 1e-3,
+            gyro_scale: 1e-4,
+            accel_scale: 1e-4,
+            correlation_time_s: 3600.0,
+            gyro_cross_coupling_rad: 0.0,
+            accel_cross_coupling_rad: 0.0,
+            gyro_g_sensitivity: 0.0,
+        }
+    }
+
+    fn lin(lat: f64, v: Vector3<f64>) -> Linearisation<f64> {
+        Linearisation {
+            earth: LocalEarth::new(lat, 100.0),
+            v_eb_n: v,
+            c_b_n: *nalgebra::Rotation3::from_euler_angles(0.1, -0.05, 1.0).matrix(),
+            f_ib_b: Vector3::new(0.3, -0.2, -9.8),
+            omega_ib_b: Vector3::new(0.01, 0.02, -0.03),
+        }
+    }
+
+    /// Position-error kinematics checked against finite differences of the exact relation
+    /// between a perturbed (lat, lon, h, v) and its NED offset.
+    #[test]
+    fn position_rows_match_finite_differences_of_the_kinematics() {
+        let lat = 0.7;
+        let h = 100.0;
+        let v = Vector3::new(12.0, -7.0, 0.5);
+        let l = lin(lat, v);
+        let f = system_matrix(&l, &noise(), true);
+        // d/dt of the NED offset between a true point and one displaced by dr, both moving:
+        // the true with v, the displaced with v + dv.
+        // The radii of curvature held at the nominal latitude: the model neglects their
+        // gradient (a relative e^2 effect on terms of order v dr / R).
+        let e0 = LocalEarth::new(lat, 0.0);
+        let rates = |lat: f64, h: f64, v: &Vector3<f64>| {
+            (
+                v.x / (e0.r_meridian + h),
+                v.y / ((e0.r_transverse + h) * lat.cos()),
+                -v.z,
+            )
+        };
+        let e = LocalEarth::new(lat, h);
+        let dr = Vector3::new(3.0, -2.0, 1.5);
+        let dlat = dr.x / (e.r_meridian + h);
+        let dlon = dr.y / ((e.r_transverse + h) * lat.cos());
+        let dh = -dr.z;
+        let (lat_r, lon_r, h_r) = rates(lat, h, &v);
+        let (lat_r2, lon_r2, h_r2) = rates(lat + dlat, h + dh, &v);
+        // d(dr_N)/dt = d/dt[(R_N + h)(lat2 - lat)] etc. at fixed dr: the rates' difference
+        // scaled, plus the radii's own change (dh/dt terms).
+        let e2 = LocalEarth::new(lat, h);
+        let d_n = (lat_r2 - lat_r) * (e2.r_meridian + h) + dlat * h_r;
+        let d_e = (lon_r2 - lon_r) * (e2.r_transverse + h) * lat.cos()
+            + dlon * (h_r * lat.cos() - (e2.r_transverse + h) * lat.sin() * lat_r);
+        let d_d = -(h_r2 - h_r);
+        let model = f.fixed_view::<3, 3>(POS, POS) * dr;
+        let exact = Vector3::new(d_n, d_e, d_d);
+        assert!(
+            (model - exact).norm() < 1e-4 * exact.norm() + 1e-12,
+            "{model} vs {exact}"
+        );
+    }
+
+    #[test]
+    fn schuler_period_of_the_horizontal_channel() {
+        // At rest, level, no Earth rate coupling beyond the model: the eigenvalues of the
+        // north channel (dr_N, dv_N, phi_E) give the Schuler frequency sqrt(g / R).
+        let l = Linearisation {
+            earth: LocalEarth::new(0.5, 0.0),
+            v_eb_n: Vector3::zeros(),
+            c_b_n: Matrix3::identity(),
+            f_ib_b: Vector3::new(0.0, 0.0, -LocalEarth::new(0.5, 0.0).g),
+            omega_ib_b: Vector3::zeros(),
+        };
+        let f = system_matrix(&l, &noise(), true);
+        // dv_N' = -g phi_E ; phi_E' = -dv_N / R_N (plus Earth-rate terms of 1e-5 rad/s):
+        let a = f[(VEL, ATT + 1)] * f[(ATT + 1, VEL)];
+        let period_min = 2.0 * core::f64::consts::PI / (-a).sqrt() / 60.0;
+        assert!((period_min - 84.4).abs() < 0.3, "{period_min}");
+    }
+
+    #[test]
+    fn sparse_propagation_equals_the_dense_formula() {
+        let l = lin(0.3, Vector3::new(20.0, 5.0, -1.0));
+        let f = system_matrix(&l, &noise(), true);
+        let dt = 0.05;
+        let phi = transition(&f, dt);
+        let dense_phi = SMatrix::<f64, N, N>::identity() + f * dt + f * f * (dt * dt / 2.0);
+        assert!((phi - dense_phi).amax() < 1e-15);
+        let mut p = SMatrix::<f64, N, N>::identity() * 0.01;
+        p[(0, 3)] = 0.001;
+        p[(3, 0)] = 0.001;
+        let q = noise_density(&noise(), true, &l);
+        let qm = SMatrix::<f64, N, N>::from_diagonal(&q);
+        let dense = phi * p * phi.transpose() + (phi * qm * phi.transpose() + qm) * (dt / 2.0);
+        propagate_covariance(&mut p, &phi, &q, dt);
+        assert!((p - dense).amax() < 1e-15, "{}", (p - dense).amax());
+    }
+
+    #[test]
+    fn scale_factors_off_leave_their_rows_empty() {
+        let f = system_matrix(&lin(0.3, Vector3::zeros()), &noise(), false);
+        for i in SG..N {
+            assert!(f.row(i).iter().all(|x| *x == 0.0));
+            assert!(f.column(i).iter().all(|x| *x == 0.0));
+        }
+        let q = noise_density(&noise(), false, &lin(0.3, Vector3::zeros()));
+        assert!(q.rows(SG, 6).iter().all(|x| *x == 0.0));
+    }
+}
