@@ -3,7 +3,9 @@
 //!
 //! They parse into nav-core's [`RunConfig`] (the host's `nav replay` fills the same type), with
 //! its option names and value syntax ([`RunConfig::set`]); only the files, the device and the
-//! noise grade are the firmware's own.
+//! noise grade are the firmware's own. `--gnss FILE` (a binary fix file,
+//! `hal_adapters::gnss_record`) switches the GNSS-aided phase on ([`RunConfig::aiding`]);
+//! `--gnss-lever-arm X,Y,Z` and `--propagation-rate HZ` tune it and need it.
 
 use crate::imu::Device;
 use core::ffi::CStr;
@@ -11,7 +13,7 @@ use core::fmt;
 use hal_adapters::drivers::NoiseSpec;
 use hal_adapters::drivers::noise::grade;
 use nav_core::alignment::{AlignMethod, SensorNoise};
-use nav_core::navigator::{OptionError, RunConfig};
+use nav_core::navigator::{AidingConfig, OptionError, RunConfig};
 
 /// Longest accepted path, including the terminating NUL.
 pub const MAX_PATH: usize = 96;
@@ -25,6 +27,8 @@ pub struct Args {
     pub out_path: heapless::Vec<u8, MAX_PATH>,
     /// Sensor calibration (nav-core's text form), NUL-terminated; none: identity.
     pub cal_path: Option<heapless::Vec<u8, MAX_PATH>>,
+    /// GNSS fixes (binary fix file), NUL-terminated; none: free inertial after the alignment.
+    pub gnss_path: Option<heapless::Vec<u8, MAX_PATH>>,
     /// The IMU on the bus.
     pub device: Device,
     /// The run configuration (the calibration is loaded into it from [`Self::cal_path`]).
@@ -56,6 +60,12 @@ pub enum ArgError<'a> {
     Extra(&'a str),
     /// The solution log would overwrite the recording.
     SameFile,
+    /// The solution log would overwrite the GNSS file.
+    GnssSameFile,
+    /// `--gnss FILE` is not a valid path.
+    BadGnssPath,
+    /// An aided phase's option without `--gnss FILE`.
+    AidingWithoutGnss,
 }
 
 impl fmt::Display for ArgError<'_> {
@@ -86,6 +96,13 @@ impl fmt::Display for ArgError<'_> {
             Self::SameFile => {
                 f.write_str("OUT_FILE is IMU_FILE: refusing to overwrite the recording")
             }
+            Self::GnssSameFile => {
+                f.write_str("OUT_FILE is the GNSS file: refusing to overwrite the fixes")
+            }
+            Self::BadGnssPath => f.write_str("--gnss FILE is not a valid path"),
+            Self::AidingWithoutGnss => {
+                f.write_str("--gnss-lever-arm and --propagation-rate need --gnss FILE")
+            }
         }
     }
 }
@@ -102,7 +119,7 @@ const NAMES: [&str; 8] = [
 ];
 
 /// The usage line for error messages.
-pub const USAGE: &str = "firmware [--device adis16505|icm42688|bmi088] [--align-method static|inertial|fine|sway] [--imu-noise fog|rlg|mems-tactical|mems-consumer] [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S] [--base-translation M] [--frame wander|ned] [--attitude NAME] [--vertical free|hold] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
+pub const USAGE: &str = "firmware [--device adis16505|icm42688|bmi088] [--align-method static|inertial|fine|sway] [--imu-noise fog|rlg|mems-tactical|mems-consumer] [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S] [--base-translation M] [--frame wander|ned] [--attitude NAME] [--vertical free|hold] [--gnss FILE [--gnss-lever-arm X,Y,Z] [--propagation-rate HZ]] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
 
 /// nav-core's noise model of a part's or grade's figures.
 pub fn sensor_noise(n: &NoiseSpec) -> SensorNoise<f64> {
@@ -123,6 +140,7 @@ impl Args {
         let mut device = Device::Adis16505;
         let mut noise: Option<NoiseSpec> = None;
         let mut lever_arm_given = (false, false);
+        let mut gnss_path = None;
         // The run configuration's values wait for the positional site and window.
         let mut run = RunConfig::new(0.0, 0.0, 0.0, 0.0, SensorNoise::seed003());
         while let Some(name) = args.peek().and_then(|w| w.strip_prefix("--")) {
@@ -137,6 +155,7 @@ impl Args {
                     run.align_method =
                         AlignMethod::from_name(value).ok_or(ArgError::UnknownMethod(value))?;
                 }
+                "gnss" => gnss_path = Some(c_path(value).ok_or(ArgError::BadGnssPath)?),
                 _ => {
                     match name {
                         "lever-arm" => lever_arm_given.0 = true,
@@ -179,12 +198,23 @@ impl Args {
         if imu_path == out_path {
             return Err(ArgError::SameFile);
         }
+        if gnss_path.as_ref() == Some(&out_path) {
+            return Err(ArgError::GnssSameFile);
+        }
+        match (&gnss_path, &mut run.aiding) {
+            (None, Some(_)) => return Err(ArgError::AidingWithoutGnss),
+            (Some(_), aiding) => {
+                aiding.get_or_insert_with(AidingConfig::default);
+            }
+            (None, None) => {}
+        }
         // The device's datasheet figures unless a grade is given.
         run.noise = sensor_noise(&noise.unwrap_or(device.noise()));
         Ok(Self {
             imu_path,
             out_path,
             cal_path,
+            gnss_path,
             device,
             run,
         })
@@ -198,6 +228,13 @@ impl Args {
     /// The calibration file's path as a C string, if one was given.
     pub fn cal_cstr(&self) -> Option<&CStr> {
         self.cal_path
+            .as_ref()
+            .map(|p| CStr::from_bytes_with_nul(p).unwrap_or(c""))
+    }
+
+    /// The GNSS fix file's path as a C string, if one was given.
+    pub fn gnss_cstr(&self) -> Option<&CStr> {
+        self.gnss_path
             .as_ref()
             .map(|p| CStr::from_bytes_with_nul(p).unwrap_or(c""))
     }

@@ -11,6 +11,7 @@ use core::fmt::Write as _;
 use defmt_semihosting as _; // global defmt logger over semihosting stdout
 
 pub mod config;
+pub mod gnss;
 pub mod imu;
 pub mod log;
 pub mod osc_bench;
@@ -27,10 +28,11 @@ pub enum ExitCode {
     HardFault = 2,
     /// Bad command-line (semihosting) arguments.
     Config = 3,
-    /// The recording could not be opened, or it is truncated or corrupt.
+    /// The recording (or the GNSS fix file) could not be opened, or it is truncated or
+    /// corrupt.
     Recording = 4,
     /// Alignment failed (base moving, bad sensors...), or the recording ended before it had
-    /// its samples.
+    /// its samples, or the navigation filter cannot start from its outcome.
     Alignment = 5,
     /// The solution log could not be written.
     Output = 6,
@@ -65,7 +67,7 @@ unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
 }
 
 /// Instruction statistics of a repeated piece of work.
-#[derive(Default)]
+#[derive(Clone, Copy, Default)]
 pub struct StepCost {
     /// Largest [instructions].
     pub max: u64,
@@ -89,10 +91,41 @@ impl StepCost {
     }
 }
 
-/// A line of text formatted into a fixed buffer (no allocation).
-pub type Line = heapless::String<320>;
+/// The background's costs of the navigation filter's work, by kind of message.
+#[derive(Clone, Copy, Default)]
+pub struct FilterCosts {
+    /// Covariance propagations.
+    pub propagation: StepCost,
+    /// GNSS position and velocity updates.
+    pub gnss: StepCost,
+    /// Zero-velocity and zero-rate updates at stops.
+    pub zero_motion: StepCost,
+    /// Reports for rows.
+    pub report: StepCost,
+}
+
+impl FilterCosts {
+    /// Where a message's cost is counted.
+    pub fn kind(
+        message: &nav_core::navigator::ToBackground<f32>,
+    ) -> fn(&mut FilterCosts) -> &mut StepCost {
+        use nav_core::navigator::ToBackground as M;
+        match message {
+            M::Propagate(_) => |c| &mut c.propagation,
+            M::Position { .. } | M::Velocity { .. } => |c| &mut c.gnss,
+            M::Still { .. } => |c| &mut c.zero_motion,
+            // Alignment increments have their own figures (the `align` task's log).
+            M::Report { .. } | M::Align(_) => |c| &mut c.report,
+        }
+    }
+}
+
+/// A line of text formatted into a fixed buffer (no allocation): an aided row's 20 columns fit
+/// (some 330 characters at most: ten `f64` in their shortest form, nine `f32`, the status).
+pub type Line = heapless::String<400>;
 
 /// Formats `value` followed by a newline into a [`Line`]; `None` if it does not fit.
+#[inline(never)]
 pub fn line(value: impl core::fmt::Display) -> Option<Line> {
     let mut s = Line::new();
     writeln!(s, "{value}").ok()?;

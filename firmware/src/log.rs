@@ -3,10 +3,12 @@
 
 use hal_adapters::drivers::Health;
 use nav_core::alignment::{AlignOutcome, LeverArm};
-use nav_core::navigator::RunConfig;
+use nav_core::ins_filter::sequencer::FixCounters;
+use nav_core::navigator::{FilterReport, RunConfig};
 use nav_core::output::Solution;
 
 /// Logs the run configuration: the site, the window, the noise and lever arm assumed.
+#[inline(never)]
 pub fn config(run: &RunConfig) {
     defmt::info!(
         "config: lat {=f64} deg, lon {=f64} deg, h {=f64} m, align {=f64} s ({=str}), log every {=u32}",
@@ -37,6 +39,7 @@ pub fn config(run: &RunConfig) {
 }
 
 /// Logs the alignment's result: stages, attitude, attitude and hand-over 1-sigma.
+#[inline(never)]
 pub fn aligned(r: &AlignOutcome<f32>) {
     let (roll, pitch, yaw) = nav_core::attitude::euler(&r.estimate.q_b_n);
     let sigma = r.estimate.sigma_rad.map(|x| x.to_degrees());
@@ -66,12 +69,93 @@ pub fn aligned(r: &AlignOutcome<f32>) {
     }
 }
 
+/// Logs the aided phase's settings and the GNSS file's fix count, and the static RAM of its
+/// largest parts: the filter (covariance, error state, settings; it takes the aligner's place
+/// in the `align` task's slot), the fix queue, the channel of `filter_cap` messages to the
+/// background and the GNSS file's reader [B].
+#[inline(never)]
+pub fn gnss(fixes: u32, run: &RunConfig, filter_cap: usize) {
+    use core::mem::size_of;
+    use nav_core::ins_filter::ErrorFilter;
+    use nav_core::ins_filter::sequencer::FixQueue;
+    use nav_core::navigator::ToBackground;
+    let Some(a) = &run.aiding else { return };
+    defmt::info!(
+        "aided phase static RAM [B]: filter {=usize} (in the alignment's slot: none of its own), fix queue {=usize}, filter channel {=usize}, GNSS reader {=usize}",
+        size_of::<ErrorFilter<f32>>(),
+        size_of::<FixQueue<f32>>(),
+        filter_cap * size_of::<ToBackground<f32>>(),
+        size_of::<crate::gnss::Fixes>()
+    );
+    let l = a.antenna_lever_arm_b_m;
+    defmt::info!(
+        "GNSS-aided after the alignment: {=u32} fixes; antenna lever arm {=f64} {=f64} {=f64} m, covariance propagation every {=f64} s, scale factors {=bool}, stop updates {=bool}",
+        fixes,
+        l[0],
+        l[1],
+        l[2],
+        a.propagation_interval_s,
+        a.scale_factors,
+        a.zero_motion
+    );
+}
+
+/// Logs the filter's final report and the fixes' counts (the lines `nav replay --gnss`
+/// prints).
+#[inline(never)]
+pub fn filter(r: &FilterReport<f32>, fixes: &FixCounters, unused: u32, after_data: u32) {
+    let c = &r.counters;
+    defmt::info!(
+        "aided navigation: status {=str}, {=u32} covariance propagations, {=u32} covariance faults",
+        r.status.name(),
+        c.propagations,
+        r.covariance_faults
+    );
+    for (name, a) in [
+        ("GNSS position", &c.position),
+        ("GNSS velocity", &c.velocity),
+        ("zero velocity", &c.zero_velocity),
+        ("zero rate", &c.zero_rate),
+    ] {
+        defmt::info!(
+            "  {=str}: {=u32} accepted, {=u32} rejected by the gate, {=u32} invalid",
+            name,
+            a.accepted,
+            a.rejected,
+            a.invalid
+        );
+    }
+    defmt::info!(
+        "  fixes: {=u32} received while aided, {=u32} out of order, {=u32} late; {=u32} before the aided phase, {=u32} after the data",
+        fixes.received,
+        fixes.out_of_order,
+        fixes.late,
+        unused,
+        after_data
+    );
+    let (p, v, a) = (r.sigma_ned_m, r.sigma_v_ned_m_s, r.sigma_att_rad);
+    defmt::info!(
+        "  final 1-sigma: position {=f32} {=f32} {=f32} m, velocity {=f32} {=f32} {=f32} m/s (N E D), roll {=f32} pitch {=f32} yaw {=f32} deg",
+        p.x,
+        p.y,
+        p.z,
+        v.x,
+        v.y,
+        v.z,
+        a.x.to_degrees(),
+        a.y.to_degrees(),
+        a.z.to_degrees()
+    );
+}
+
 /// Logs the IMU driver's counters (their `Display`, which `nav replay --device` prints too).
+#[inline(never)]
 pub fn health(h: &Health) {
     defmt::info!("IMU driver: {}", defmt::Display2Format(h));
 }
 
 /// Logs the alignment's attitude and the last solution.
+#[inline(never)]
 pub fn end(aligned: &AlignOutcome<f32>, last: &Solution) {
     let (roll, pitch, yaw) = nav_core::attitude::euler(&aligned.estimate.q_b_n);
     defmt::info!(

@@ -3,8 +3,14 @@
 //! A sample's way: data-ready interrupt (`data_ready`, highest priority) -> `rtic_sync` channel ->
 //! `navigate` (nav-core's navigator: gate, calibration, strapdown; writes the solution log) ->
 //! what it forwards to `align` (lowest priority: the navigator's background, the alignment) ->
-//! the answer back to `navigate`, which starts navigating from the aligned state. The rules are
-//! all in `nav_core::navigator`; these tasks only carry samples, messages and rows.
+//! the answer back to `navigate`, which starts navigating from the aligned state. With `--gnss
+//! FILE` the navigation after the alignment is aided: `navigate` reads the fixes from the host
+//! file (`firmware::gnss`), hands each to the navigator before the first sample at or after its
+//! time, runs the filter's mechanization, and forwards the filter's work (covariance
+//! propagations, GNSS and stop updates, reports for rows) to `align`, which runs the filter's
+//! covariance; `navigate` waits for each update's answer before its next sample (the sample
+//! channel fills meanwhile). The rules are all in `nav_core::navigator`; these tasks only carry
+//! samples, fixes, messages and rows.
 //!
 //! On the `qemu` board the IMU's data-ready line is emulated: the `pace` task pends `EXTI0` (the
 //! line a real data-ready pin uses) every 2.5 ms of SysTick time, and `data_ready` reads the next
@@ -29,9 +35,10 @@ mod app {
     use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
     use cortex_m::peripheral::{NVIC, SYST};
     use embedded_io::Write as _;
+    use firmware::gnss::{self, Fixes};
     use firmware::imu::{BoardImu, nav_input};
     use firmware::{
-        ExitCode, StepCost,
+        ExitCode, FilterCosts, StepCost,
         config::{Args, USAGE},
         exit, line, log,
     };
@@ -40,12 +47,13 @@ mod app {
     use hal_adapters::io::{Buffered, SemihostingFile};
     use hal_adapters::recording::Replay;
     use hal_adapters::sim::{SimBmi088, SimError, health_at_end};
+    use nav_core::ImuIncrement;
     use nav_core::alignment::{AlignOutcome, Stage};
     use nav_core::calibration::ImuCalibration;
     use nav_core::navigator::{
-        Background, FromBackground, NavError, Navigator, Setup, Step, ToBackground,
+        Background, FromBackground, NavError, Navigator, Setup, Step, Summary, ToBackground,
     };
-    use nav_core::output::{CSV_HEADER, Solution};
+    use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, Solution};
     use rtic_monotonics::systick::prelude::*;
     use rtic_sync::channel::{Receiver, Sender};
     use rtic_sync::make_channel;
@@ -66,7 +74,12 @@ mod app {
     type MonoDuration = fugit::Duration<u64, 1, 400>;
 
     const SAMPLE_CAP: usize = 16;
+    /// Alignment increments queued for `align` (its fine stage's fits lag behind).
     const ALIGN_CAP: usize = 32;
+    /// The aided phase's messages queued for `align`: propagations, then an update or report
+    /// `navigate` waits for (a separate channel: its messages are 6 times an increment's
+    /// size).
+    const FILTER_CAP: usize = 2;
     /// Bytes read from the host per semihosting call.
     const READ_CHUNK: usize = 512;
 
@@ -97,7 +110,11 @@ mod app {
     static STOP: AtomicBool = AtomicBool::new(false);
 
     #[shared]
-    struct Shared {}
+    struct Shared {
+        /// The background's filter work costs (written by `align`, read by `navigate` at the
+        /// end).
+        costs: FilterCosts,
+    }
 
     #[local]
     struct Local {
@@ -107,6 +124,8 @@ mod app {
         navigator: Navigator<f32>,
         /// The solution log, for `navigate`.
         out: SemihostingFile,
+        /// The GNSS fixes and their number, for `navigate` (an aided run).
+        gnss: Option<(Fixes, u32)>,
         /// The run's settings, for `align` (which builds the background from them).
         setup: Setup<f32>,
     }
@@ -158,25 +177,51 @@ mod app {
             );
             exit(ExitCode::Output)
         });
-        write_line(&mut out, CSV_HEADER);
+        let gnss = args.gnss_cstr().map(|path| {
+            let fail = |e: &dyn core::fmt::Display| -> ! {
+                let name = args.gnss_path.as_deref().unwrap_or_default();
+                let name = name.strip_suffix(&[0]).unwrap_or(name);
+                defmt::error!(
+                    "GNSS file {=str}: {}",
+                    core::str::from_utf8(name).unwrap_or("(not UTF-8)"),
+                    defmt::Display2Format(e)
+                );
+                exit(ExitCode::Recording)
+            };
+            // Checked whole before anything is navigated, then read as the samples come.
+            let count = gnss::check(path).unwrap_or_else(|e| fail(&e));
+            let fixes = Fixes::open(path).unwrap_or_else(|e| fail(&e));
+            log::gnss(count, &run, FILTER_CAP);
+            (fixes, count)
+        });
+        let header = if run.aiding.is_some() {
+            AIDED_CSV_HEADER
+        } else {
+            CSV_HEADER
+        };
+        write_line(&mut out, header);
 
         let (samples_tx, samples_rx) = make_channel!(DataReady, SAMPLE_CAP);
-        let (to_background, from_navigate) = make_channel!(ToBackground<f32>, ALIGN_CAP);
+        let (to_align, from_navigate_align) = make_channel!(ImuIncrement<f32>, ALIGN_CAP);
+        let (to_filter, from_navigate) = make_channel!(ToBackground<f32>, FILTER_CAP);
         let (to_navigate, from_background) = make_channel!(FromBackground<f32>, 1);
-        if navigate::spawn(samples_rx, to_background, from_background).is_err()
-            || align::spawn(from_navigate, to_navigate).is_err()
+        if navigate::spawn(samples_rx, to_align, to_filter, from_background).is_err()
+            || align::spawn(from_navigate_align, from_navigate, to_navigate).is_err()
             || pace::spawn().is_err()
         {
             defmt::panic!("task spawn failed");
         }
         let navigator = Navigator::new(&setup);
         (
-            Shared {},
+            Shared {
+                costs: FilterCosts::default(),
+            },
             Local {
                 imu,
                 samples_tx,
                 navigator,
                 out,
+                gnss,
                 setup,
             },
         )
@@ -361,19 +406,32 @@ mod app {
         health: Health,
     }
 
-    /// Navigation: carries every sample through nav-core's navigator, forwards what it asks to
-    /// the background (`align`), hands it the answers, and writes the rows it produces.
-    #[task(priority = 2, local = [navigator, out])]
+    /// The foreground's costs of the aided phase: the filter's mechanization per sample, and
+    /// the work for the background taken and answered per sample (messages, feedback, rows).
+    #[derive(Default)]
+    struct AidedCosts {
+        step: StepCost,
+        messages: StepCost,
+    }
+
+    /// Navigation: carries every sample (and, aided, every GNSS fix) through nav-core's
+    /// navigator, forwards what it asks to the background (`align`), hands it the answers, and
+    /// writes the rows it produces.
+    #[task(priority = 2, local = [navigator, out, gnss], shared = [costs])]
     async fn navigate(
-        cx: navigate::Context,
+        mut cx: navigate::Context,
         mut samples_rx: Receiver<'static, DataReady, SAMPLE_CAP>,
-        mut to_background: Sender<'static, ToBackground<f32>, ALIGN_CAP>,
+        mut to_align: Sender<'static, ImuIncrement<f32>, ALIGN_CAP>,
+        mut to_filter: Sender<'static, ToBackground<f32>, FILTER_CAP>,
         mut from_background: Receiver<'static, FromBackground<f32>, 1>,
     ) {
         let navigator = cx.local.navigator;
         let out = cx.local.out;
+        // By reference: the task's future holds no second copy of the reader.
+        let gnss = cx.local.gnss;
         // Steps without a row, and steps with one (the row's f64 output conversion included).
         let (mut cost, mut row_cost) = (StepCost::default(), StepCost::default());
+        let mut aided = AidedCosts::default();
         let mut imu = ImuStats::default();
         let mut last_ready_us = 0_u64;
         loop {
@@ -404,6 +462,21 @@ mod app {
             {
                 answer_from_background(navigator, answer, out, &imu);
             }
+            // The GNSS fixes due at this sample first.
+            if let Some((fixes, _)) = gnss.as_mut() {
+                loop {
+                    match fixes.due(sample.t_us) {
+                        Ok(Some(fix)) => {
+                            navigator.push_fix(fix);
+                        }
+                        Ok(None) => break,
+                        Err(e) => {
+                            defmt::error!("GNSS file: {}", defmt::Display2Format(&e));
+                            exit(ExitCode::Recording)
+                        }
+                    }
+                }
+            }
             let start = systick_counts();
             let step = navigator.push(&nav_input(&sample));
             let spent = counts_to_instructions(systick_counts() - start);
@@ -414,10 +487,10 @@ mod app {
                     write_line(out, row);
                 }
                 Step::Forward {
-                    message,
+                    increment,
                     await_reply,
                 } => {
-                    if to_background.send(message).await.is_err() {
+                    if to_align.send(increment).await.is_err() {
                         defmt::panic!("alignment channel closed");
                     }
                     if await_reply {
@@ -439,13 +512,23 @@ mod app {
                         );
                     }
                 }
+                Step::Aided => {
+                    aided.step.add(spent);
+                    let work =
+                        background_work(navigator, &mut to_filter, &mut from_background, out, &imu)
+                            .await;
+                    aided.messages.add(work);
+                }
                 Step::Rejected(_) => {}
                 // Not reached: every answer is awaited before the next sample.
                 Step::NotReady => defmt::panic!("navigator not ready"),
             }
         }
 
-        // End of the recording: the last row, then the end record (only a complete run has it).
+        // End of the recording: the last row (aided: with the filter's report), then the end
+        // record (only a complete run has it).
+        navigator.end_of_data();
+        background_work(navigator, &mut to_filter, &mut from_background, out, &imu).await;
         let summary = navigator.finish().unwrap_or_else(|e| {
             log::health(&imu.health);
             failed(&e, &imu)
@@ -466,6 +549,12 @@ mod app {
             OVERRUNS.load(Ordering::Relaxed),
             last_ready_us
         );
+        if let Some(filter) = &summary.filter {
+            let after_data = gnss.as_ref().map_or(0, |(f, n)| f.remaining(*n));
+            log::filter(filter, &summary.fixes, c.fixes_unused, after_data);
+            let costs = cx.shared.costs.lock(|c| *c);
+            log_aided_costs(&aided, &costs, &summary);
+        }
         report(
             &cost,
             &row_cost,
@@ -476,8 +565,82 @@ mod app {
         exit(ExitCode::Success)
     }
 
+    /// Forwards the navigator's work for the background ([`Navigator::next_message`]) and
+    /// waits for each answered message's answer, writing the row an answer completes; returns
+    /// the foreground's instructions in it (the waits for the background not counted).
+    async fn background_work(
+        navigator: &mut Navigator<f32>,
+        to_background: &mut Sender<'static, ToBackground<f32>, FILTER_CAP>,
+        from_background: &mut Receiver<'static, FromBackground<f32>, 1>,
+        out: &mut SemihostingFile,
+        imu: &ImuStats,
+    ) -> u64 {
+        let mut spent = 0;
+        loop {
+            let start = systick_counts();
+            let message = navigator.next_message();
+            spent += counts_to_instructions(systick_counts() - start);
+            let Some(message) = message else {
+                return spent;
+            };
+            let answered = message.is_answered();
+            if to_background.send(message).await.is_err() {
+                defmt::panic!("background channel closed");
+            }
+            if !answered {
+                continue;
+            }
+            let Ok(answer) = from_background.recv().await else {
+                defmt::panic!("background answer channel closed");
+            };
+            let start = systick_counts();
+            let row = navigator.on_background(answer);
+            spent += counts_to_instructions(systick_counts() - start);
+            match row {
+                Ok(Some(row)) => write_line(out, row),
+                Ok(None) => {}
+                Err(e) => failed(&e, imu),
+            }
+        }
+    }
+
+    /// Logs the aided phase's costs: per propagation and update (the background), and the
+    /// total per sample amortised over the aided samples.
+    #[inline(never)]
+    fn log_aided_costs(aided: &AidedCosts, costs: &FilterCosts, summary: &Summary<f32>) {
+        let steps = aided.step.n.max(1);
+        let background =
+            costs.propagation.sum + costs.gnss.sum + costs.zero_motion.sum + costs.report.sum;
+        let total = aided.step.sum + aided.messages.sum + background;
+        defmt::info!(
+            "instructions per covariance propagation: max {=u64}, mean {=u64} ({=u64}); per GNSS update (position or velocity): max {=u64}, mean {=u64} ({=u64}); per stop update: max {=u64}, mean {=u64} ({=u64}); per report: max {=u64}, mean {=u64}",
+            costs.propagation.max,
+            costs.propagation.mean(),
+            costs.propagation.n,
+            costs.gnss.max,
+            costs.gnss.mean(),
+            costs.gnss.n,
+            costs.zero_motion.max,
+            costs.zero_motion.mean(),
+            costs.zero_motion.n,
+            costs.report.max,
+            costs.report.mean()
+        );
+        defmt::info!(
+            "instructions per aided sample: mechanization max {=u64}, mean {=u64}; the sample's filter messages (foreground) max {=u64}, mean {=u64}; amortised total {=u64} over {=u64} samples (rows: {=u32})",
+            aided.step.max,
+            aided.step.mean(),
+            aided.messages.max,
+            aided.messages.mean(),
+            total / steps,
+            steps,
+            summary.counters.rows
+        );
+    }
+
     /// Hands the background's `answer` to the navigator: the aligned row is logged; a failure
     /// ends the run.
+    #[inline(never)]
     fn answer_from_background(
         navigator: &mut Navigator<f32>,
         answer: FromBackground<f32>,
@@ -499,14 +662,15 @@ mod app {
     /// Logs why the run could not navigate (with the counts by cause) and exits with
     /// [`ExitCode::NothingNavigated`] or [`ExitCode::Alignment`]. The solution log is left
     /// without its end record.
+    #[inline(never)]
     fn failed(e: &NavError, imu: &ImuStats) -> ! {
         defmt::error!("{}", defmt::Display2Format(e));
         log_imu_costs(imu);
         exit(match e {
             NavError::NothingNavigated { .. } => ExitCode::NothingNavigated,
-            NavError::Alignment { .. } | NavError::EndedDuringAlignment { .. } => {
-                ExitCode::Alignment
-            }
+            NavError::Alignment { .. }
+            | NavError::EndedDuringAlignment { .. }
+            | NavError::Filter(_) => ExitCode::Alignment,
         })
     }
 
@@ -515,13 +679,16 @@ mod app {
     /// The background (the alignment filters, some 45 KB in `f32`) lives in the task's static
     /// slot, not on its stack; the fine stage's filters (`sway` included) are started there in
     /// place (`nav_core::alignment::fine::Blank`), never built on the stack.
-    #[task(priority = 1, local = [setup, background: Option<Background<f32>> = None])]
+    /// After the alignment, in an aided run, the navigation filter's covariance: propagations
+    /// and updates, their costs kept for `navigate`'s summary.
+    #[task(priority = 1, local = [setup, background: Option<Background<f32>> = None], shared = [costs])]
     async fn align(
-        cx: align::Context,
-        mut from_navigate: Receiver<'static, ToBackground<f32>, ALIGN_CAP>,
+        mut cx: align::Context,
+        mut from_navigate_align: Receiver<'static, ImuIncrement<f32>, ALIGN_CAP>,
+        mut from_navigate: Receiver<'static, ToBackground<f32>, FILTER_CAP>,
         mut to_navigate: Sender<'static, FromBackground<f32>, 1>,
     ) {
-        let background = cx.local.background.insert(Background::new(cx.local.setup));
+        let background = start_background(cx.local.background, cx.local.setup);
         let settings = *background.settings();
         defmt::info!(
             "aligning: {=str}, {=u32} samples; stage COARSE",
@@ -530,9 +697,9 @@ mod app {
         );
         let mut stage = background.stage();
         let mut cost = StepCost::default();
-        while let Ok(message) = from_navigate.recv().await {
+        while let Ok(inc) = from_navigate_align.recv().await {
             let start = systick_counts();
-            let answer = background.handle(message);
+            let answer = background.handle(ToBackground::Align(inc));
             cost.add(counts_to_instructions(systick_counts() - start));
             if background.stage() != stage {
                 stage = background.stage();
@@ -551,12 +718,41 @@ mod app {
                 cost.max,
                 cost.mean()
             );
+            let aligned = matches!(answer, FromBackground::Aligned(_));
             if to_navigate.send(answer).await.is_err() {
                 defmt::panic!("alignment result channel closed");
+            }
+            if aligned {
+                break;
+            }
+        }
+        // An aided run: the navigation filter's covariance, on the aided phase's messages.
+        while let Ok(message) = from_navigate.recv().await {
+            let kind = FilterCosts::kind(&message);
+            let start = systick_counts();
+            let answer = background.handle(message);
+            let spent = counts_to_instructions(systick_counts() - start);
+            cx.shared.costs.lock(|c| kind(c).add(spent));
+            if let Some(answer) = answer
+                && to_navigate.send(answer).await.is_err()
+            {
+                defmt::panic!("background answer channel closed");
             }
         }
     }
 
+    /// Builds the background in the `align` task's static slot. Not inlined: building it
+    /// takes a temporary of some 19 KB, which must not stay in the task's frame under the fine
+    /// alignment's deepest path (there it left 3 KB of the stack free).
+    #[inline(never)]
+    fn start_background<'a>(
+        slot: &'a mut Option<Background<f32>>,
+        setup: &Setup<f32>,
+    ) -> &'a mut Background<f32> {
+        slot.insert(Background::new(setup))
+    }
+
+    #[inline(never)]
     fn write_line(out: &mut SemihostingFile, value: impl core::fmt::Display) {
         let ok = line(value).is_some_and(|l| out.write_all(l.as_bytes()).is_ok());
         if !ok {
@@ -565,6 +761,7 @@ mod app {
         }
     }
 
+    #[inline(never)]
     fn log_imu_costs(imu: &ImuStats) {
         defmt::info!(
             "instructions per IMU read: decode + conversion max {=u64}, mean {=u64}; bus transaction (simulated device included) max {=u64}, mean {=u64}",
@@ -575,6 +772,7 @@ mod app {
         );
     }
 
+    #[inline(never)]
     fn report(
         cost: &StepCost,
         row_cost: &StepCost,

@@ -4,6 +4,8 @@
 //! - [`Imu`]: the trait of sample sources (SPI drivers, replays).
 //! - [`recording`]: the project's binary recording format, its reader ([`recording::Replay`]) and
 //!   writer.
+//! - [`gnss_record`]: the binary GNSS fix file read beside a recording (the firmware's
+//!   `--gnss`), its reader ([`gnss_record::GnssReader`]) and encoders.
 //! - [`io`]: byte sources for replays: slices (always), semihosting files (feature
 //!   `semihosting`), std files (feature `std`).
 //! - [`drivers`]: SPI IMU drivers (ADIS16505/ADIS16465, ICM-42688-P, BMI088) over
@@ -19,6 +21,7 @@
 #![warn(missing_docs)]
 
 pub mod drivers;
+pub mod gnss_record;
 pub mod io;
 pub mod recording;
 pub mod sample;

@@ -2,19 +2,24 @@
 //! ([`nav_core::navigator`]), its background run in line, the rows written as CSV.
 //!
 //! Every rule (the sample gate, the calibration, the counters, the align -> navigate hand-over,
-//! the logging cadence) is the navigator's; the firmware's tasks drive the same navigator
-//! across their channels, and an end-to-end test compares the two logs line by line. This
-//! module only reads samples, converts them ([`input_of`]), writes [`CSV_HEADER`], one
-//! [`Solution`] row (its `Display`) per line and the end record
-//! ([`nav_core::output::EndRecord`]), and reports in output units.
+//! the logging cadence, the aided phase's fix timing and filter work) is the navigator's; the
+//! firmware's tasks drive the same navigator across their channels, and an end-to-end test
+//! compares the two logs line by line. This module only reads samples, converts them
+//! ([`input_of`]), hands each GNSS fix over before the first sample at or after its time (as
+//! the firmware does), writes [`CSV_HEADER`] (an aided run: [`AIDED_CSV_HEADER`]), one row
+//! (its `Display`) per line and the end record ([`nav_core::output::EndRecord`]), and reports
+//! in output units.
 
 use hal_adapters::drivers::{Health, NoiseSpec};
 use hal_adapters::{Imu, ImuSample, SampleFlags};
 use nav_core::alignment::{AlignMethod, AlignNote, AlignOutcome, SensorNoise};
+use nav_core::ins_filter::sequencer::{FixCounters, GnssFixInput};
+use nav_core::ins_filter::{FilterCounters, FilterStatus};
 use nav_core::navigator::{
-    Background, ConfigError, FlaggedCounts, ImuInput, NavError, Navigator, Setup, Unusable,
+    Background, ConfigError, FilterReport, FlaggedCounts, ImuInput, NavError, Navigator, Setup,
+    Unusable,
 };
-use nav_core::output::CSV_HEADER;
+use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, Row};
 use nav_core::{Scalar, Solution};
 use std::fmt;
 use std::io::{self, Write};
@@ -114,6 +119,85 @@ impl AlignmentDeg {
     }
 }
 
+/// The aided phase's outcome in output units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AidedOutcome {
+    /// 1-sigma of position north, east, down [m] at the end.
+    pub sigma_ned_m: [f64; 3],
+    /// 1-sigma of velocity north, east, down [m/s] at the end.
+    pub sigma_v_ned_m_s: [f64; 3],
+    /// 1-sigma of roll, pitch, yaw [deg] at the end.
+    pub sigma_att_deg: [f64; 3],
+    /// The filter's health at the end.
+    pub status: FilterStatus,
+    /// The aids' counters.
+    pub counters: FilterCounters,
+    /// Times the covariance lost a positive variance.
+    pub covariance_faults: u32,
+    /// The fix queue's counters (received in the aided phase, refused, late).
+    pub fixes: FixCounters,
+    /// Fixes handed over before the aided phase (during the alignment).
+    pub fixes_unused: u32,
+    /// Fixes of the file after the last sample (never handed over).
+    pub fixes_after_data: u32,
+}
+
+impl AidedOutcome {
+    fn new<T: Scalar>(r: &FilterReport<T>, fixes: FixCounters, unused: u32, after: u32) -> Self {
+        let wide = |v: &nav_core::Vector3<T>| [v.x, v.y, v.z].map(T::to_f64);
+        Self {
+            sigma_ned_m: wide(&r.sigma_ned_m),
+            sigma_v_ned_m_s: wide(&r.sigma_v_ned_m_s),
+            sigma_att_deg: wide(&r.sigma_att_rad).map(f64::to_degrees),
+            status: r.status,
+            counters: r.counters,
+            covariance_faults: r.covariance_faults,
+            fixes,
+            fixes_unused: unused,
+            fixes_after_data: after,
+        }
+    }
+}
+
+impl fmt::Display for AidedOutcome {
+    /// The aided phase's lines for a terminal (no final newline).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let c = &self.counters;
+        let aid =
+            |f: &mut fmt::Formatter<'_>, name: &str, a: &nav_core::ins_filter::AidCounters| {
+                writeln!(
+                    f,
+                    "  {name}: {} accepted, {} rejected by the gate, {} invalid",
+                    a.accepted, a.rejected, a.invalid
+                )
+            };
+        writeln!(
+            f,
+            "aided navigation: status {} ({:?}), {} covariance propagations, {} covariance faults",
+            self.status.name(),
+            self.status,
+            c.propagations,
+            self.covariance_faults
+        )?;
+        aid(f, "GNSS position", &c.position)?;
+        aid(f, "GNSS velocity", &c.velocity)?;
+        aid(f, "zero velocity", &c.zero_velocity)?;
+        aid(f, "zero rate", &c.zero_rate)?;
+        let x = &self.fixes;
+        writeln!(
+            f,
+            "  fixes: {} received while aided, {} out of order, {} late; {} before the aided phase, {} after the data",
+            x.received, x.out_of_order, x.late, self.fixes_unused, self.fixes_after_data
+        )?;
+        let (p, v, a) = (self.sigma_ned_m, self.sigma_v_ned_m_s, self.sigma_att_deg);
+        write!(
+            f,
+            "  final 1-sigma: position {:.3} {:.3} {:.3} m, velocity {:.4} {:.4} {:.4} m/s (N E D), roll {:.4} pitch {:.4} yaw {:.4} deg",
+            p[0], p[1], p[2], v[0], v[1], v[2], a[0], a[1], a[2]
+        )
+    }
+}
+
 /// Counters of the replay source (see `hal_adapters::recording::ReplayStats`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SourceCounters {
@@ -151,6 +235,8 @@ pub struct Report {
     pub alignment: AlignmentDeg,
     /// The last solution written.
     pub final_solution: Solution,
+    /// The aided phase's outcome, in an aided run.
+    pub aided: Option<AidedOutcome>,
 }
 
 /// Why a run failed.
@@ -185,26 +271,55 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
     config: &RunConfig,
     rate_hz: f64,
     source: &mut I,
+    out: W,
+) -> Result<Report, PipelineError<I::Error>> {
+    run_with_fixes::<T, I, W>(config, rate_hz, source, &[], out)
+}
+
+/// [`run`] with GNSS fixes (time order, on the source's clock): each is handed to the
+/// navigator before the first sample at or after its time; an aided run
+/// ([`RunConfig::aiding`]) uses them after the alignment.
+pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
+    config: &RunConfig,
+    rate_hz: f64,
+    source: &mut I,
+    fixes: &[GnssFixInput<f64>],
     mut out: W,
 ) -> Result<Report, PipelineError<I::Error>> {
     let setup = Setup::<T>::new(config, rate_hz).map_err(PipelineError::Config)?;
     let mut navigator = Navigator::new(&setup);
     // Boxed: the fine filters make it large.
     let mut background = Box::new(Background::new(&setup));
-    let row = |out: &mut W, s: &Solution| writeln!(out, "{s}").map_err(PipelineError::Output);
-
-    writeln!(out, "{CSV_HEADER}").map_err(PipelineError::Output)?;
+    let row = |out: &mut W, r: &Row| writeln!(out, "{r}").map_err(PipelineError::Output);
+    let header = if config.aiding.is_some() {
+        AIDED_CSV_HEADER
+    } else {
+        CSV_HEADER
+    };
+    writeln!(out, "{header}").map_err(PipelineError::Output)?;
+    let mut next_fix = fixes.iter().peekable();
     while let Some(s) = source.read_sample().map_err(PipelineError::Source)? {
+        while let Some(f) = next_fix.next_if(|f| f.t_us <= s.t_us) {
+            navigator.push_fix(crate::gnss_file::narrow::<T>(f));
+        }
         let logged = navigator
             .push_inline(&mut background, &input_of(&s))
             .map_err(PipelineError::Navigation)?;
-        if let Some(sol) = logged {
-            row(&mut out, &sol)?;
+        if let Some(r) = logged {
+            row(&mut out, &r)?;
         }
     }
+    // An aided run's last step: its row with the filter's report.
+    navigator.end_of_data();
+    if let Some(r) = navigator
+        .work_inline(&mut background)
+        .map_err(PipelineError::Navigation)?
+    {
+        row(&mut out, &r)?;
+    }
     let summary = navigator.finish().map_err(PipelineError::Navigation)?;
-    if let Some(sol) = summary.final_row {
-        row(&mut out, &sol)?;
+    if let Some(r) = summary.final_row {
+        row(&mut out, &r)?;
     }
     // Only a complete run ends its log with the end record.
     writeln!(out, "{}", summary.end_record()).map_err(PipelineError::Output)?;
@@ -222,6 +337,14 @@ pub fn run<T: Scalar, I: Imu, W: Write>(
         driver: None,
         alignment: AlignmentDeg::new(config.align_method, &summary.alignment),
         final_solution: summary.last_solution,
+        aided: summary.filter.map(|r| {
+            AidedOutcome::new(
+                &r,
+                summary.fixes,
+                c.fixes_unused,
+                u32::try_from(next_fix.count()).unwrap_or(u32::MAX),
+            )
+        }),
     })
 }
 

@@ -2,7 +2,12 @@
 //! precision, attach the replay's counters (and the driver's, through a simulated IMU), and name
 //! the file in every error. A PSINS file's header site must be within
 //! [`PSINS_SITE_TOLERANCE_M`] of the run's `--lat/--lon`.
+//!
+//! With a GNSS file ([`replay_aided`], `nav replay --gnss FILE` without a given start) the run
+//! aligns as a plain replay does, then navigates aided ([`RunConfig::aiding`]): the firmware's
+//! `--gnss` run, whose log it reproduces line for line.
 
+use crate::gnss_file::{self, GnssFixes};
 use crate::pipeline::{self, Report, RunConfig, SourceCounters, sensor_noise};
 use crate::psins::PsinsHeader;
 use crate::recording_io::{Format, ReplaySource, in_file};
@@ -13,6 +18,7 @@ use hal_adapters::drivers::{Health, Mounting};
 use hal_adapters::drivers::{NoiseSpec, bmi088, icm42688, noise};
 use hal_adapters::sim::{SimBmi088, SimulatedImu};
 use nav_core::Scalar;
+use nav_core::ins_filter::sequencer::GnssFixInput;
 use std::fmt;
 use std::io::Write;
 use std::path::Path;
@@ -131,12 +137,22 @@ pub fn replay_file<T: Scalar, W: Write>(
     options: &ReplayOptions,
     out: W,
 ) -> Result<FileReport, ReplayFailure> {
+    replay_file_with_fixes::<T, W>(path, options, &[], out)
+}
+
+/// [`replay_file`] with GNSS fixes ([`pipeline::run_with_fixes`]).
+pub fn replay_file_with_fixes<T: Scalar, W: Write>(
+    path: &Path,
+    options: &ReplayOptions,
+    fixes: &[GnssFixInput<f64>],
+    out: W,
+) -> Result<FileReport, ReplayFailure> {
     let (mut source, format) = ReplaySource::open(path)?;
     if let Some(h) = source.psins_header() {
         check_psins_site(path, h, &options.run)?;
     }
     let rate_hz = source.header().rate_hz;
-    let config = (&options.run, rate_hz);
+    let config = (&options.run, rate_hz, fixes);
     let (run, driver, stats) = match options.device {
         ImuDevice::Recording => {
             let run = run_source::<T, _, _>(path, config, &mut source, out);
@@ -221,16 +237,172 @@ fn horizontal_distance_m((lat_a, lon_a): (f64, f64), (lat_b, lon_b): (f64, f64))
 /// Runs the pipeline over `source`, naming `path` in its errors.
 fn run_source<T: Scalar, I: Imu, W: Write>(
     path: &Path,
-    (config, rate_hz): (&RunConfig, f64),
+    (config, rate_hz, fixes): (&RunConfig, f64, &[GnssFixInput<f64>]),
     source: &mut I,
     out: W,
 ) -> Result<Report>
 where
     I::Error: std::error::Error + Send + Sync + 'static,
 {
-    match pipeline::run::<T, _, _>(config, rate_hz, source, out) {
+    match pipeline::run_with_fixes::<T, _, _>(config, rate_hz, source, fixes, out) {
         Ok(report) => Ok(report),
         Err(pipeline::PipelineError::Output(e)) => Err(anyhow!(e).context("writing the log")),
         Err(e) => Err(in_file(path, e)),
     }
+}
+
+/// What an aided replay did: the file's report and the GNSS file's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AidedFileReport {
+    /// The replay.
+    pub file: FileReport,
+    /// Fixes read from the GNSS file.
+    pub fixes_read: usize,
+    /// Fixes of a text file whose time tag is not on the IMU clock (left out).
+    pub bad_time_tags: u32,
+}
+
+/// `nav replay --gnss GNSS` from the navigator's alignment: `imu` replayed in precision `T`
+/// with `options` (their [`RunConfig::aiding`] set), the fixes of `gnss` (any format,
+/// [`gnss_file::read_fixes`]) handed over at their samples, the log written to `out`
+/// atomically (nothing is left there on failure).
+pub fn replay_aided<T: Scalar>(
+    imu: &Path,
+    gnss: &Path,
+    out: &Path,
+    options: &ReplayOptions,
+) -> Result<AidedFileReport, ReplayFailure> {
+    if options.run.aiding.is_none() {
+        return Err(anyhow!("an aided replay needs the run's aiding settings").into());
+    }
+    crate::atomic::refuse_same_file(&[imu, gnss], out)?;
+    let GnssFixes {
+        fixes,
+        bad_time_tags,
+    } = gnss_file::read_fixes(gnss)?;
+    let file = crate::atomic::write(out, |w| {
+        replay_file_with_fixes::<T, _>(imu, options, &fixes, w)
+    })?;
+    Ok(AidedFileReport {
+        file,
+        fixes_read: fixes.len(),
+        bad_time_tags,
+    })
+}
+
+/// The summary lines of a replay for a terminal (as `nav replay` prints them): the file, the
+/// samples' counts, the driver's counts (with a simulated IMU), the alignment and its
+/// hand-over 1-sigma, the final solution, the log, and an aided run's filter lines.
+pub fn summary(imu: &Path, out: &Path, precision: &str, fr: &FileReport) -> String {
+    use std::fmt::Write as _;
+    let r = &fr.report;
+    let mut s = String::new();
+    let c = r.source.unwrap_or_default();
+    let a = &r.alignment;
+    let (v, p) = (a.velocity_sigma_m_s, a.position_sigma_m);
+    let f = &r.final_solution;
+    // Writing to a String cannot fail.
+    let _ = writeln!(
+        s,
+        "replay of {} ({}, {} Hz, {precision})",
+        imu.display(),
+        fr.format,
+        fr.rate_hz
+    );
+    let _ = writeln!(
+        s,
+        "samples {}: flagged {} (non-finite {}, bad interval {}), rejected {}, missed {}; navigation steps {}",
+        r.samples, r.flagged, c.non_finite, c.bad_interval, r.rejected, c.missed, r.nav_steps
+    );
+    if let Some(h) = r.driver {
+        let _ = writeln!(s, "IMU driver: {h}");
+    }
+    let _ = writeln!(
+        s,
+        "alignment ({}) over {} samples ({:.3} s: coarse {:.3} s, fine {:.3} s): roll {:.6} deg, pitch {:.6} deg, yaw {:.6} deg; 1-sigma {:.4} {:.4} {:.4} deg",
+        a.method.name(),
+        a.samples,
+        a.duration_s,
+        a.coarse_s,
+        a.fine_s,
+        a.roll_deg,
+        a.pitch_deg,
+        a.yaw_deg,
+        a.sigma_deg[0],
+        a.sigma_deg[1],
+        a.sigma_deg[2]
+    );
+    if let Some(note) = a.note {
+        let _ = writeln!(s, "  note: {note}");
+    }
+    let _ = writeln!(
+        s,
+        "  hand-over 1-sigma: velocity {:.2} {:.2} {:.2} m/s, position {:.2} {:.2} {:.2} m (N E D)",
+        v[0], v[1], v[2], p[0], p[1], p[2]
+    );
+    if let Some(aided) = &r.aided {
+        let _ = writeln!(s, "{aided}");
+    }
+    let _ = writeln!(
+        s,
+        "final at t = {:.6} s: lat {:.9} deg, lon {:.9} deg, h {:.3} m; v_NED {:.6} {:.6} {:.6} m/s; roll {:.6} pitch {:.6} yaw {:.6} deg",
+        f.t_us as f64 / 1e6,
+        f.lat_ndeg as f64 / 1e9,
+        f.lon_ndeg as f64 / 1e9,
+        f.h_m,
+        f.v_eb_n[0],
+        f.v_eb_n[1],
+        f.v_eb_n[2],
+        f.roll_deg,
+        f.pitch_deg,
+        f.yaw_deg
+    );
+    let _ = write!(s, "log: {} ({} rows)", out.display(), r.rows);
+    s
+}
+
+/// `nav replay --gnss FILE` without a given start: [`replay_aided`] in `f32` or `f64`, its
+/// summary printed ([`summary`] and the GNSS file's counts) with the speed; a failure's driver
+/// counts printed too (as the firmware logs them).
+pub fn replay_aided_cli(
+    imu: &Path,
+    gnss: &Path,
+    out: &Path,
+    options: &ReplayOptions,
+    f64_precision: bool,
+) -> Result<()> {
+    let started = std::time::Instant::now();
+    let run = if f64_precision {
+        replay_aided::<f64>(imu, gnss, out, options)
+    } else {
+        replay_aided::<f32>(imu, gnss, out, options)
+    };
+    let r = run
+        .map_err(|failure| {
+            if let Some(h) = failure.driver {
+                println!("IMU driver: {h}");
+            }
+            failure.error
+        })
+        .map_err(|e| {
+            e.context(format!(
+                "aided replay of {} into {}",
+                imu.display(),
+                out.display()
+            ))
+        })?;
+    let seconds = started.elapsed().as_secs_f64();
+    let precision = if f64_precision { "f64" } else { "f32" };
+    println!("{}", summary(imu, out, precision, &r.file));
+    println!(
+        "GNSS file {}: {} fixes ({} with a time tag off the IMU clock, left out)",
+        gnss.display(),
+        r.fixes_read,
+        r.bad_time_tags
+    );
+    println!(
+        "speed: {:.0} samples/s ({seconds:.3} s wall clock, file reading and logging included)",
+        f64::from(r.file.report.samples) / seconds.max(1e-9)
+    );
+    Ok(())
 }

@@ -904,3 +904,210 @@ fn firmware_runs_the_sway_alignment_like_the_harness() {
         assert!(err_deg < 4.0 * sigma_deg, "member {index}: {err_deg} deg");
     }
 }
+
+/// The lines of a log from `name:` to the line's end (the firmware's defmt lines and `nav
+/// replay`'s summary print the aided counts alike).
+fn lines_with<'a>(log: &'a str, names: &[&str]) -> Vec<&'a str> {
+    names
+        .iter()
+        .map(|name| {
+            log.lines()
+                .find_map(|l| l.find(name).map(|at| l[at..].trim_end()))
+                .unwrap_or_else(|| panic!("no '{name}' in:\n{log}"))
+        })
+        .collect()
+}
+
+/// The GNSS-aided phase in the firmware (`--gnss FILE`): 60 s of the demo's drive (FOG grade;
+/// 15 s of static alignment, 5 s still, then starting, turning) with 5 Hz fixes of an antenna
+/// 1.4 m from the IMU, position and velocity, from the binary fix file converted from the
+/// GNSS CSV. On a 125 MIPS core (QEMU icount shift 3) the firmware misses no sample and
+/// overruns no channel while its background task runs the filter's propagations and updates,
+/// and its solution log (the filter's 1-sigmas and status in every row) is the harness's,
+/// reading the CSV, line for line, with the same counts of the aids and fixes. A corrupt fix
+/// file and aided options without `--gnss` are refused before anything is navigated.
+#[test]
+fn firmware_navigates_aided_like_the_harness() {
+    use host_tests::gnss_sim::{self, GnssSimOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut scenario = Scenario::by_name("land-vehicle").unwrap();
+    for (key, v) in [("lat_deg", 45.0), ("lon_deg", 7.5), ("h_m", 250.0)] {
+        scenario.set(key, v).unwrap();
+    }
+    let mut opts = SimOptions::new(scenario, Grade::Fog);
+    opts.seconds = Some(60.0);
+    opts.seed = 7;
+    let sim = simulate(&opts, |_, _| {}).unwrap();
+    recording_io::write(&d.join("rec.bin"), &sim.recording).unwrap();
+    let gnss = GnssSimOptions {
+        rate_hz: 5.0,
+        sigma_ned_m: [0.5, 0.5, 1.0],
+        sigma_v_ned_m_s: Some([0.05, 0.05, 0.1]),
+        lever_arm_b_m: [0.8, -0.3, -1.1],
+        seed: 5,
+        ..GnssSimOptions::default()
+    };
+    let fixes = gnss_sim::simulate(&sim.truth, &gnss).unwrap().fixes;
+    host_tests::gnss::write_gnss_csv(&d.join("gnss.csv"), &fixes).unwrap();
+    host_tests::gnss_file::convert(&d.join("gnss.csv"), &d.join("gnss.bin")).unwrap();
+    let options = ["--imu-noise", "fog", "--gnss-lever-arm", "0.8,-0.3,-1.1"];
+    let site = ["45", "7.5", "250", "15"];
+
+    let mut args = vec!["--gnss", "gnss.bin"];
+    args.extend_from_slice(&options);
+    args.extend_from_slice(&["rec.bin", "fw.csv"]);
+    args.extend_from_slice(&site);
+    let started = std::time::Instant::now();
+    let (code, log) = run_firmware_at(d, &args, 3);
+    println!("{log}\nQEMU run: {:.2} s", started.elapsed().as_secs_f64());
+    assert_eq!(code, 0, "firmware exit code {code}; log:\n{log}");
+    assert!(
+        log.contains(
+            "GNSS-aided after the alignment: 301 fixes; antenna lever arm 0.8 -0.3 -1.1 m"
+        ),
+        "{log}"
+    );
+    assert_eq!(field(&log, "missed"), 0, "missed data-ready interrupts");
+    assert_eq!(field(&log, "channel overruns"), 0, "channel overruns");
+    for key in [
+        "instructions per covariance propagation: max",
+        "per GNSS update (position or velocity): max",
+        "amortised total",
+    ] {
+        assert!(field(&log, key) > 0, "{key}");
+    }
+
+    let mut args = vec![
+        "replay",
+        "--imu",
+        "rec.bin",
+        "--gnss",
+        "gnss.csv",
+        "--out",
+        "host.csv",
+        "--lat",
+        "45",
+        "--lon",
+        "7.5",
+        "--h",
+        "250",
+        "--align-seconds",
+        "15",
+        "--device",
+        "adis16505",
+        "--precision",
+        "f32",
+    ];
+    args.extend_from_slice(&options);
+    let o = nav(d, &args);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
+    let host = std::fs::read_to_string(d.join("host.csv")).unwrap();
+    assert!(fw.starts_with(nav_core::output::AIDED_CSV_HEADER), "{fw}");
+    // The aligned row at 15 s, a row every 0.1 s to 60 s, the end record.
+    assert_eq!(host.lines().count(), 1 + 1 + 450 + 1);
+    for (i, (a, b)) in fw.lines().zip(host.lines()).enumerate() {
+        assert_eq!(
+            a,
+            b,
+            "line {} differs:\nfirmware: {a}\nhost:     {b}",
+            i + 1
+        );
+    }
+    assert_eq!(fw.lines().count(), host.lines().count());
+    let names = [
+        "aided navigation: status",
+        "GNSS position:",
+        "GNSS velocity:",
+        "zero velocity:",
+        "zero rate:",
+        "fixes:",
+    ];
+    let fw_lines = lines_with(&log, &names);
+    let host_lines = lines_with(&stdout, &names);
+    // The host adds the status's reason: the rest is the same text.
+    assert!(host_lines[0].starts_with(fw_lines[0].split(',').next().unwrap()));
+    assert_eq!(fw_lines[1..], host_lines[1..]);
+    // 5 Hz from 15 s (during the alignment: unused) to 60 s (after the last sample: never
+    // handed over); every one in between used.
+    assert_eq!(
+        fw_lines[5],
+        "fixes: 225 received while aided, 0 out of order, 0 late; 76 before the aided phase, 0 after the data"
+    );
+    assert!(
+        fw_lines[1].starts_with("GNSS position: 225 accepted"),
+        "{}",
+        fw_lines[1]
+    );
+
+    // Refused before anything is navigated: a corrupt fix file (exit 4, naming the fix), the
+    // aided options without a fix file and the log over the fix file (bad arguments, exit 3).
+    let mut bytes = std::fs::read(d.join("gnss.bin")).unwrap();
+    bytes[32 + 112 * 200 + 40] ^= 0x04;
+    std::fs::write(d.join("corrupt.bin"), &bytes).unwrap();
+    let (code, log) = run_firmware(
+        d,
+        &[
+            "--gnss",
+            "corrupt.bin",
+            "rec.bin",
+            "out.csv",
+            "45",
+            "7.5",
+            "250",
+            "15",
+        ],
+    );
+    assert_eq!(code, 4, "{log}");
+    assert!(
+        log.contains(
+            "GNSS file corrupt.bin: GNSS byte offset 22432 (fix 200): record CRC mismatch"
+        ),
+        "{log}"
+    );
+    for (args, expect) in [
+        (
+            &[
+                "--gnss-lever-arm",
+                "1,0,0",
+                "rec.bin",
+                "out.csv",
+                "45",
+                "7.5",
+                "250",
+                "15",
+            ][..],
+            "--gnss-lever-arm and --propagation-rate need --gnss FILE",
+        ),
+        (
+            &[
+                "--gnss", "gnss.bin", "rec.bin", "gnss.bin", "45", "7.5", "250", "15",
+            ],
+            "refusing to overwrite the fixes",
+        ),
+        (
+            &[
+                "--gnss",
+                "gnss.bin",
+                "--propagation-rate",
+                "0.5",
+                "rec.bin",
+                "out.csv",
+                "45",
+                "7.5",
+                "250",
+                "15",
+            ],
+            "--propagation-rate takes a rate within 1 to 1000 Hz",
+        ),
+    ] {
+        let (code, log) = run_firmware(d, args);
+        assert_eq!(code, 3, "{args:?}: {log}");
+        assert!(
+            log.contains(expect),
+            "{args:?}: expected '{expect}' in:\n{log}"
+        );
+    }
+}

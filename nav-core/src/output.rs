@@ -111,6 +111,83 @@ impl Solution {
     }
 }
 
+/// The columns an aided run's rows add after [`CSV_HEADER`]'s: the navigation filter's 1-sigma
+/// of position north, east, down [m], velocity [m/s], roll, pitch, yaw [deg], and its status
+/// (`NAV` or `DEGRADED`, [`crate::ins_filter::FilterStatus::name`]).
+pub const FILTER_COLUMNS: &str = "sigma_n_m,sigma_e_m,sigma_d_m,sigma_vn_mps,sigma_ve_mps,\
+sigma_vd_mps,sigma_roll_deg,sigma_pitch_deg,sigma_yaw_deg,status";
+
+/// Column header of an aided run's solution CSV: [`CSV_HEADER`], then [`FILTER_COLUMNS`].
+pub const AIDED_CSV_HEADER: &str = "t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,\
+pitch_deg,yaw_deg,sigma_n_m,sigma_e_m,sigma_d_m,sigma_vn_mps,sigma_ve_mps,sigma_vd_mps,\
+sigma_roll_deg,sigma_pitch_deg,sigma_yaw_deg,status";
+
+/// The navigation filter's columns of an aided row ([`FILTER_COLUMNS`]). The 1-sigmas are kept
+/// in `f32` (seven digits are plenty for an uncertainty, and their text stays short).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterColumns {
+    /// 1-sigma of position north, east, down [m].
+    pub sigma_ned_m: [f32; 3],
+    /// 1-sigma of velocity north, east, down [m/s].
+    pub sigma_v_ned_m_s: [f32; 3],
+    /// 1-sigma of roll, pitch, yaw [deg].
+    pub sigma_att_deg: [f32; 3],
+    /// The filter's status name.
+    pub status: &'static str,
+}
+
+impl fmt::Display for FilterColumns {
+    /// The columns after a row's solution, each with its leading comma.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for v in self
+            .sigma_ned_m
+            .iter()
+            .chain(&self.sigma_v_ned_m_s)
+            .chain(&self.sigma_att_deg)
+        {
+            write!(f, ",{v}")?;
+        }
+        write!(f, ",{}", self.status)
+    }
+}
+
+/// One row of a solution log: a free-inertial solution, or an aided one with the filter's
+/// columns (an aided run writes only these, under [`AIDED_CSV_HEADER`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Row {
+    /// The solution alone ([`CSV_HEADER`]).
+    Free(Solution),
+    /// The solution and the filter's columns ([`AIDED_CSV_HEADER`]).
+    Aided(Solution, FilterColumns),
+}
+
+impl Row {
+    /// The navigation solution of the row.
+    pub fn solution(&self) -> &Solution {
+        match self {
+            Self::Free(s) | Self::Aided(s, _) => s,
+        }
+    }
+
+    /// The filter's columns, in an aided row.
+    pub fn filter(&self) -> Option<&FilterColumns> {
+        match self {
+            Self::Free(_) => None,
+            Self::Aided(_, c) => Some(c),
+        }
+    }
+}
+
+impl fmt::Display for Row {
+    /// One CSV row (no line terminator).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Free(s) => write!(f, "{s}"),
+            Self::Aided(s, c) => write!(f, "{s}{c}"),
+        }
+    }
+}
+
 /// Writes `value / 10^digits` exactly, e.g. `-0.000000500` for (-500, 9).
 fn write_decimal(f: &mut fmt::Formatter<'_>, value: i64, digits: u32) -> fmt::Result {
     let scale = 10_u64.pow(digits);
@@ -178,6 +255,44 @@ mod tests {
             "60.002500,45.123456789,-0.000000500,100.25,0.5,-0,0.0000001,1.5,-2,30"
         );
         assert_eq!(CSV_HEADER.split(',').count(), 10);
+    }
+
+    #[test]
+    fn formats_an_aided_row_under_its_header() {
+        let s = Solution {
+            t_us: 1_000_000,
+            lat_ndeg: 45_000_000_000,
+            lon_ndeg: 7_500_000_000,
+            h_m: 250.0,
+            v_eb_n: [0.0; 3],
+            roll_deg: 0.0,
+            pitch_deg: 0.0,
+            yaw_deg: 90.0,
+        };
+        let c = FilterColumns {
+            sigma_ned_m: [0.5, 0.5, 1.25],
+            sigma_v_ned_m_s: [0.01, 0.01, 0.02],
+            sigma_att_deg: [0.003, 0.003, 0.5],
+            status: "NAV",
+        };
+        let mut b = Buf([0; 256], 0);
+        fmt::Write::write_fmt(&mut b, format_args!("{}", Row::Aided(s, c))).unwrap();
+        let text = core::str::from_utf8(&b.0[..b.1]).unwrap();
+        assert_eq!(
+            text,
+            "1.000000,45.000000000,7.500000000,250,0,0,0,0,0,90,0.5,0.5,1.25,0.01,0.01,0.02,\
+             0.003,0.003,0.5,NAV"
+        );
+        assert_eq!(text.split(',').count(), AIDED_CSV_HEADER.split(',').count());
+        // The aided header is the plain one and the filter's columns.
+        let rest = AIDED_CSV_HEADER.strip_prefix(CSV_HEADER).unwrap();
+        assert_eq!(rest.strip_prefix(','), Some(FILTER_COLUMNS));
+        let mut b = Buf([0; 256], 0);
+        fmt::Write::write_fmt(&mut b, format_args!("{}", Row::Free(s))).unwrap();
+        assert_eq!(
+            core::str::from_utf8(&b.0[..b.1]).unwrap(),
+            "1.000000,45.000000000,7.500000000,250,0,0,0,0,0,90"
+        );
     }
 
     #[test]

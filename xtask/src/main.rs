@@ -6,8 +6,9 @@
 //!   prints the decoded defmt log and the navigation result.
 //! - `test`: builds the firmware, then runs every test of the workspace (the QEMU end-to-end test
 //!   included).
-//! - `bench`: the benchmark figures: guest instructions per navigation step in QEMU, host
-//!   samples per second, flash and RAM.
+//! - `bench`: the benchmark figures: guest instructions per navigation step in QEMU (free
+//!   inertial, and GNSS-aided: per covariance propagation, per update, per sample amortised),
+//!   host samples per second, flash and RAM.
 //! - `size`: release build of the firmware and its flash/RAM use.
 //! - `fuzz [CASES [RECORDING_CASES]]`: the decoder fuzz targets (`hal-adapters/tests/
 //!   fuzz_decoders.rs`: recording header, records, replay, the three drivers' decode paths) with
@@ -337,6 +338,7 @@ fn bench(root: &Path) -> Result<()> {
         "speed:",
     )?;
     let align = align_costs(&nav, &elf)?;
+    let aided = aided_costs(&elf)?;
     let mech = output(Command::new(&nav).arg("bench"))?;
     let mech_f32 = number_after(&mech, "mechanization f32:")?;
     let mech_f64 = number_after(&mech, "mechanization f64:")?;
@@ -382,6 +384,35 @@ fn bench(root: &Path) -> Result<()> {
             "| samples lost at 125 MIPS (QEMU icount shift 3), {method}, rocking bench (missed / channel overruns) | {value} |"
         );
     }
+    for a in &aided {
+        let r = a.rate_hz;
+        println!(
+            "| guest instructions per covariance propagation (21 states, f32, every 0.1 s), demo drive aided at {r} Hz (max / mean) | {:.0} / {:.0} |",
+            a.propagation.0, a.propagation.1
+        );
+        println!(
+            "| guest instructions per GNSS update, position or velocity, {r} Hz (max / mean) | {:.0} / {:.0} |",
+            a.update.0, a.update.1
+        );
+        println!(
+            "| guest instructions per stop update (zero velocity and rate), {r} Hz (max / mean) | {:.0} / {:.0} |",
+            a.stop.0, a.stop.1
+        );
+        println!(
+            "| guest instructions per 400 Hz sample, aided, amortised (mechanization, messages, propagations, updates, reports), {r} Hz fixes; target <= 21000 | {:.0} |",
+            a.amortised
+        );
+        println!(
+            "| samples lost at 125 MIPS (QEMU icount shift 3), aided, {r} Hz fixes (missed / channel overruns) | {:.0} / {:.0} |",
+            a.lost.0, a.lost.1
+        );
+    }
+    if let Some(a) = aided.first() {
+        let [f, q, c, g] = a.ram;
+        println!(
+            "| static RAM of the aided phase's parts: filter (covariance, state, settings; in the aligner's slot, none of its own) / fix queue / filter channel / GNSS reader [B] | {f:.0} / {q:.0} / {c:.0} / {g:.0} |"
+        );
+    }
     println!("| host mechanization, f32, steps/s (one thread, no I/O) | {mech_f32:.0} |");
     println!("| host mechanization, f64, steps/s (one thread, no I/O) | {mech_f64:.0} |");
     println!("| host replay, f32, samples/s (one thread, I/O included) | {f32_speed:.0} |");
@@ -401,6 +432,80 @@ fn bench(root: &Path) -> Result<()> {
     println!("| flash (text + data) [B] | {} |", text + data);
     println!("| static RAM (data + bss) [B] | {} |", data + bss);
     Ok(())
+}
+
+/// The firmware's aided phase on the demo drive at one fix rate: guest instructions (max,
+/// mean) per covariance propagation, per GNSS update, per stop update; per 400 Hz sample
+/// amortised; samples lost at 125 MIPS (missed, overruns); the aided phase's static RAM parts.
+struct AidedCost {
+    rate_hz: f64,
+    propagation: (f64, f64),
+    update: (f64, f64),
+    stop: (f64, f64),
+    amortised: f64,
+    lost: (f64, f64),
+    ram: [f64; 4],
+}
+
+/// [`AidedCost`] at 1 and 10 Hz fixes of a receiver at the IMU (0.5, 0.5, 1 m; velocity
+/// 0.05, 0.05, 0.1 m/s), simulated from the demo's truth (`host-tests` example `gnss_fixes`),
+/// the filter assuming the FOG grade the demo recording has.
+fn aided_costs(elf: &Path) -> Result<Vec<AidedCost>> {
+    let mut costs = Vec::new();
+    for rate in ["1", "10"] {
+        let dir = format!("out/demo-gnss-{rate}hz");
+        run(cargo()
+            .args(["run", "--release", "-q", "-p", "host-tests"])
+            .args([
+                "--example",
+                "gnss_fixes",
+                "--",
+                "simulate",
+                DEMO_TRUTH,
+                &dir,
+                rate,
+            ]))?;
+        let log_at = |shift: &str| -> Result<String> {
+            let mut c = Command::new("bash");
+            c.arg("firmware/qemu-run.sh")
+                .env("QEMU_ICOUNT_SHIFT", shift)
+                .arg(elf)
+                .args(["--imu-noise", "fog", "--gnss", &format!("{dir}/gnss.bin")])
+                .args([DEMO_IMU, &format!("{dir}/fw.csv")])
+                .args(DEMO_SITE)
+                .arg(DEMO_ALIGN_S);
+            output(&mut c)
+        };
+        let log = log_at("0")?;
+        let pair = |key: &str| -> Result<(f64, f64)> {
+            let at = log
+                .find(key)
+                .with_context(|| format!("no '{key}' in:\n{log}"))?;
+            let part = &log[at + key.len()..];
+            Ok((number_after(part, "max")?, number_after(part, "mean")?))
+        };
+        let ram_line = &log[log.find("aided phase static RAM").unwrap_or(0)..];
+        let slow = log_at("3")?;
+        let summary = &slow[slow.find("summary:").unwrap_or(0)..];
+        costs.push(AidedCost {
+            rate_hz: rate.parse()?,
+            propagation: pair("per covariance propagation:")?,
+            update: pair("per GNSS update (position or velocity):")?,
+            stop: pair("per stop update:")?,
+            amortised: number_after(&log, "amortised total")?,
+            lost: (
+                number_after(summary, "missed")?,
+                number_after(summary, "channel overruns")?,
+            ),
+            ram: [
+                number_after(ram_line, "filter")?,
+                number_after(ram_line, "fix queue")?,
+                number_after(ram_line, "filter channel")?,
+                number_after(ram_line, "GNSS reader")?,
+            ],
+        });
+    }
+    Ok(costs)
 }
 
 /// Host readouts per second of the oscillator estimator, `(f32, f64)`, over 20 s of a ship's

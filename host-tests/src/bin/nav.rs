@@ -696,7 +696,22 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
         })),
         _ if a.start_in_motion => AidedStart::Motion,
         _ => {
-            anyhow::bail!("with --gnss give --init-pos/--init-vel/--init-att or --start-in-motion")
+            // From the navigator's alignment (the firmware's `--gnss` run): the run
+            // configuration of a plain replay, with the aided phase after the alignment.
+            let mut options = a.options()?;
+            options.run.aiding = Some(nav_core::navigator::AidingConfig {
+                antenna_lever_arm_b_m: a.gnss_lever_arm.unwrap_or([0.0; 3]),
+                propagation_interval_s: 1.0 / a.propagation_rate,
+                scale_factors: !a.no_scale_factors,
+                ..nav_core::navigator::AidingConfig::default()
+            });
+            return host_tests::replay::replay_aided_cli(
+                &a.imu,
+                gnss,
+                &a.out,
+                &options,
+                a.precision == Precision::F64,
+            );
         }
     };
     let job = AidedReplay {

@@ -8,7 +8,9 @@
 use crate::alignment::machine::DEFAULT_LEVER_ARM_SIGMA_M;
 use crate::alignment::{AlignMethod, BaseMotion, LeverArm, SensorNoise, SettingsError};
 use crate::calibration::{CalibrationError, ImuCalibration};
+use crate::ins_filter::model::FilterNoise;
 use crate::poisson::DcmIntegrator;
+use crate::scalar::Scalar;
 use crate::strapdown::{AttitudeMethod, MechanizationConfig, NavFrame, VerticalChannel};
 use core::fmt;
 
@@ -57,6 +59,47 @@ pub const VERTICALS: [(&str, VerticalChannel); 2] = [
     ("hold", VerticalChannel::Hold),
 ];
 
+/// Default scale-factor 1-sigma of the aided phase's filter [-] (1000 ppm: the noise model
+/// has no scale-factor figure).
+pub const DEFAULT_SCALE_SIGMA: f64 = 1e-3;
+/// Default correlation time of the filter's Gauss–Markov sensor errors [s] (1 h, KF-GINS's
+/// usual `corrtime`).
+pub const DEFAULT_CORRELATION_TIME_S: f64 = 3600.0;
+/// Default cross-axis coupling (misalignment) 1-sigma of gyros and accelerometers [rad]
+/// (0.1 deg, what tactical MEMS data sheets give).
+pub const DEFAULT_CROSS_COUPLING_RAD: f64 = 1.745e-3;
+/// Default gyro g-sensitivity 1-sigma [rad/s per m/s^2] (0.01 deg/s/g).
+pub const DEFAULT_G_SENSITIVITY: f64 = 1.78e-5;
+/// Default covariance propagation interval of the aided phase [s] (10 Hz).
+pub const DEFAULT_PROPAGATION_INTERVAL_S: f64 = 0.1;
+
+/// The GNSS-aided navigation after the alignment: the closed-loop error-state filter
+/// ([`crate::ins_filter`]) started from the alignment's outcome. Its noise model is the run's
+/// ([`RunConfig::filter_noise`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AidingConfig {
+    /// The GNSS antenna's position from the IMU, body forward, right, down [m].
+    pub antenna_lever_arm_b_m: [f64; 3],
+    /// Interval between covariance propagations [s] (within (0, 1]).
+    pub propagation_interval_s: f64,
+    /// Model the sensors' scale factors (21 states) or not (15).
+    pub scale_factors: bool,
+    /// Zero-velocity and zero-rate updates at stops (the IMU-only stop detector).
+    pub zero_motion: bool,
+}
+
+impl Default for AidingConfig {
+    /// No lever arm, [`DEFAULT_PROPAGATION_INTERVAL_S`], scale factors and stop updates on.
+    fn default() -> Self {
+        Self {
+            antenna_lever_arm_b_m: [0.0; 3],
+            propagation_interval_s: DEFAULT_PROPAGATION_INTERVAL_S,
+            scale_factors: true,
+            zero_motion: true,
+        }
+    }
+}
+
 /// The value called `name` in a name table.
 pub fn by_name<V: Copy>(table: &[(&str, V)], name: &str) -> Option<V> {
     table.iter().find(|(n, _)| *n == name).map(|(_, v)| *v)
@@ -91,6 +134,9 @@ pub struct RunConfig {
     pub calibration: ImuCalibration,
     /// Frame, attitude integrator and vertical channel of the mechanization.
     pub mechanization: MechanizationChoices,
+    /// GNSS-aided navigation after the alignment (`None`: free inertial). The aided phase
+    /// navigates in the NED frame whatever [`Self::mechanization`]'s frame.
+    pub aiding: Option<AidingConfig>,
 }
 
 impl RunConfig {
@@ -120,6 +166,7 @@ impl RunConfig {
             log_every: DEFAULT_LOG_EVERY,
             calibration: ImuCalibration::default(),
             mechanization: MechanizationChoices::default(),
+            aiding: None,
         }
     }
 
@@ -154,7 +201,54 @@ impl RunConfig {
         self.calibration
             .compensation::<f64>()
             .map_err(ConfigError::Calibration)?;
+        if let Some(a) = &self.aiding {
+            let interval = a.propagation_interval_s;
+            if !(interval.is_finite() && interval > 0.0 && interval <= 1.0) {
+                return Err(ConfigError::Aiding(
+                    "the covariance propagation interval must be within (0, 1] s",
+                ));
+            }
+            let l = a.antenna_lever_arm_b_m;
+            if !(l.iter().all(|v| v.is_finite()) && l.iter().map(|v| v * v).sum::<f64>() <= 1e4) {
+                return Err(ConfigError::Aiding(
+                    "the GNSS antenna lever arm must be finite and within 100 m",
+                ));
+            }
+            let n = &self.noise;
+            let figures = [
+                n.arw_rad_per_sqrt_s,
+                n.vrw_mps_per_sqrt_s,
+                n.gyro_bias_rad_s,
+                n.accel_bias_mps2,
+            ];
+            // A zero bias 1-sigma would leave the filter a zero variance (a covariance fault).
+            if !figures.iter().all(|v| v.is_finite() && *v > 0.0) {
+                return Err(ConfigError::Aiding(
+                    "the aided filter needs positive, finite noise and bias figures",
+                ));
+            }
+        }
         Ok(())
+    }
+
+    /// The aided filter's noise model ([`FilterNoise`]): the run's white noise and bias
+    /// 1-sigmas ([`Self::noise`], not scaled by [`Self::bias_prior`], which is the
+    /// alignment's), [`DEFAULT_SCALE_SIGMA`], [`DEFAULT_CORRELATION_TIME_S`],
+    /// [`DEFAULT_CROSS_COUPLING_RAD`] and [`DEFAULT_G_SENSITIVITY`].
+    pub fn filter_noise<T: Scalar>(&self) -> FilterNoise<T> {
+        let n = &self.noise;
+        FilterNoise {
+            arw_rad_per_sqrt_s: T::c(n.arw_rad_per_sqrt_s),
+            vrw_mps_per_sqrt_s: T::c(n.vrw_mps_per_sqrt_s),
+            gyro_bias_rad_s: T::c(n.gyro_bias_rad_s),
+            accel_bias_mps2: T::c(n.accel_bias_mps2),
+            gyro_scale: T::c(DEFAULT_SCALE_SIGMA),
+            accel_scale: T::c(DEFAULT_SCALE_SIGMA),
+            correlation_time_s: T::c(DEFAULT_CORRELATION_TIME_S),
+            gyro_cross_coupling_rad: T::c(DEFAULT_CROSS_COUPLING_RAD),
+            accel_cross_coupling_rad: T::c(DEFAULT_CROSS_COUPLING_RAD),
+            gyro_g_sensitivity: T::c(DEFAULT_G_SENSITIVITY),
+        }
     }
 
     /// The noise the alignment assumes: [`Self::noise`] with its biases scaled by
@@ -169,9 +263,10 @@ impl RunConfig {
 
     /// Sets the option `--name` from its command-line `value`: `align-method NAME`,
     /// `bias-prior K`, `lever-arm X,Y,Z` (known, body FRD [m]), `lever-arm-sigma S` (unknown,
-    /// [m] per axis), `log-every N`, `frame NAME`, `attitude NAME`, `vertical NAME`. The
-    /// values are checked by [`Self::validate`] and [`Setup::new`](super::Setup::new), not
-    /// here, beyond their syntax.
+    /// [m] per axis), `log-every N`, `frame NAME`, `attitude NAME`, `vertical NAME`, and for
+    /// the aided phase (which they switch on, [`Self::aiding`]) `gnss-lever-arm X,Y,Z` (body
+    /// FRD [m]) and `propagation-rate HZ`. The values are checked by [`Self::validate`] and
+    /// [`Setup::new`](super::Setup::new), not here, beyond their syntax.
     pub fn set(&mut self, name: &str, value: &str) -> Result<(), OptionError> {
         let bad = |option: &'static str, expected: &'static str| OptionError::Invalid {
             option,
@@ -222,6 +317,22 @@ impl RunConfig {
             "vertical" => {
                 self.mechanization.vertical =
                     by_name(&VERTICALS, value).ok_or(bad("vertical", "free or hold"))?;
+            }
+            "gnss-lever-arm" => {
+                let r =
+                    parse_vector3(value).ok_or(bad("gnss-lever-arm", "X,Y,Z (three numbers)"))?;
+                self.aiding
+                    .get_or_insert_with(AidingConfig::default)
+                    .antenna_lever_arm_b_m = r;
+            }
+            "propagation-rate" => {
+                let hz = number("propagation-rate", value)?;
+                if !(1.0..=1000.0).contains(&hz) {
+                    return Err(bad("propagation-rate", "a rate within 1 to 1000 Hz"));
+                }
+                self.aiding
+                    .get_or_insert_with(AidingConfig::default)
+                    .propagation_interval_s = 1.0 / hz;
             }
             _ => return Err(OptionError::Unknown),
         }
@@ -295,6 +406,8 @@ pub enum ConfigError {
     /// The alignment settings were refused (window shorter than the method's minimum, rate,
     /// site near a pole, noise or lever arm values).
     Alignment(SettingsError),
+    /// The aided phase's settings were refused (what).
+    Aiding(&'static str),
 }
 
 impl fmt::Display for ConfigError {
@@ -313,6 +426,7 @@ impl fmt::Display for ConfigError {
             }
             Self::Calibration(e) => write!(f, "{e}"),
             Self::Alignment(e) => write!(f, "{e}"),
+            Self::Aiding(what) => write!(f, "GNSS aiding: {what}"),
         }
     }
 }
@@ -361,6 +475,17 @@ mod tests {
                 vertical: VerticalChannel::Hold,
             }
         );
+        assert_eq!(c.aiding, None);
+        c.set("gnss-lever-arm", "0.8,-0.3,-1.1").unwrap();
+        c.set("propagation-rate", "20").unwrap();
+        assert_eq!(
+            c.aiding,
+            Some(AidingConfig {
+                antenna_lever_arm_b_m: [0.8, -0.3, -1.1],
+                propagation_interval_s: 0.05,
+                ..AidingConfig::default()
+            })
+        );
         c.set("lever-arm-sigma", "2.5").unwrap();
         assert_eq!(c.lever_arm, LeverArm::Unknown { sigma_m: 2.5 });
         // The bias prior scales the biases only.
@@ -380,6 +505,9 @@ mod tests {
             ("frame", "enu"),
             ("attitude", "rk5"),
             ("vertical", "aided"),
+            ("gnss-lever-arm", "1,2"),
+            ("propagation-rate", "0.5"),
+            ("propagation-rate", "x"),
         ] {
             let e = c.set(name, value).unwrap_err();
             assert!(
@@ -452,5 +580,55 @@ mod tests {
         let mut c = config();
         c.calibration.accel.scale = [-1.0, 0.0, 0.0];
         assert!(matches!(c.validate(), Err(ConfigError::Calibration(_))));
+        // The aided phase's settings.
+        let aided = |a: AidingConfig| RunConfig {
+            aiding: Some(a),
+            ..config()
+        };
+        assert_eq!(aided(AidingConfig::default()).validate(), Ok(()));
+        for (c, msg) in [
+            (
+                aided(AidingConfig {
+                    propagation_interval_s: 0.0,
+                    ..AidingConfig::default()
+                }),
+                "GNSS aiding: the covariance propagation interval must be within (0, 1] s",
+            ),
+            (
+                aided(AidingConfig {
+                    antenna_lever_arm_b_m: [0.0, f64::NAN, 0.0],
+                    ..AidingConfig::default()
+                }),
+                "GNSS aiding: the GNSS antenna lever arm must be finite and within 100 m",
+            ),
+            (
+                aided(AidingConfig {
+                    antenna_lever_arm_b_m: [80.0, 80.0, 0.0],
+                    ..AidingConfig::default()
+                }),
+                "GNSS aiding: the GNSS antenna lever arm must be finite and within 100 m",
+            ),
+            (
+                RunConfig {
+                    noise: SensorNoise {
+                        gyro_bias_rad_s: 0.0,
+                        ..SensorNoise::seed003()
+                    },
+                    ..aided(AidingConfig::default())
+                },
+                "GNSS aiding: the aided filter needs positive, finite noise and bias figures",
+            ),
+        ] {
+            assert_eq!(c.validate().unwrap_err().to_string(), msg);
+        }
+        // Free inertial, a zero bias 1-sigma is the alignment's business (bias prior 0).
+        let free = RunConfig {
+            noise: SensorNoise {
+                gyro_bias_rad_s: 0.0,
+                ..SensorNoise::seed003()
+            },
+            ..config()
+        };
+        assert_eq!(free.validate(), Ok(()));
     }
 }

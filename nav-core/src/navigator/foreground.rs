@@ -1,16 +1,24 @@
 //! The navigator's foreground half: every sample through the gate, the calibration, the
-//! alignment hand-over and the strapdown, with the counters and the logging cadence (rules in
-//! the [module docs](super)).
+//! alignment hand-over and the strapdown (or, in an aided run, the filter's mechanization and
+//! the GNSS fixes' timing), with the counters and the logging cadence (rules in the
+//! [module docs](super)).
 
-use super::background::{Background, FromBackground, ToBackground};
+use super::background::{Background, FilterReport, FromBackground, ToBackground, initial_sigma};
 use super::setup::Setup;
 use crate::Scalar;
 use crate::alignment::{AlignFailure, AlignOutcome};
 use crate::calibration::ImuCompensation;
 use crate::increment::{ImuIncrement, InputError, InputLimits};
-use crate::output::{EndRecord, Solution};
+use crate::ins_filter::sequencer::{FixCounters, FixQueue, GnssFixInput};
+use crate::ins_filter::stationarity::StillWindow;
+use crate::ins_filter::{
+    AidedMechanization, FilterConfig, FilterError, FilterStatus, GnssVelocity, Propagation,
+    SensorErrors,
+};
+use crate::output::{EndRecord, FilterColumns, Row, Solution};
 use crate::strapdown::{MechanizationConfig, Strapdown};
 use core::fmt;
+use nalgebra::Vector3;
 
 /// One IMU sample as the navigator takes it (sources convert theirs to this).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -136,6 +144,9 @@ pub struct Counters {
     pub nav_steps: u32,
     /// Solution rows produced (the aligned row, the periodic rows, the final row).
     pub rows: u32,
+    /// GNSS fixes handed over while the run was not in its aided phase (aligning, or free
+    /// inertial): not used.
+    pub fixes_unused: u32,
 }
 
 impl Counters {
@@ -168,19 +179,25 @@ pub enum Step<T: Scalar> {
     Flagged,
     /// Refused by the input limits (counted in `rejected`).
     Rejected(InputError),
-    /// Aligning: hand `message` to the background. With `await_reply`, it was the last
-    /// alignment sample: deliver the background's answer ([`Navigator::on_background`])
-    /// before the next sample.
+    /// Aligning: hand the increment to the background ([`ToBackground::Align`]). With
+    /// `await_reply`, it was the last alignment sample: deliver the background's answer
+    /// ([`Navigator::on_background`]) before the next sample. (The increment alone, not the
+    /// message: a step stays small on the MCU's stack.)
     Forward {
-        /// The message.
-        message: ToBackground<T>,
+        /// The compensated, checked increment.
+        increment: ImuIncrement<T>,
         /// The foreground now waits for the background's answer.
         await_reply: bool,
     },
     /// Integrated; a solution row to log when the cadence says so.
     Navigated(Option<Solution>),
-    /// Not taken (and not counted): the navigator waits for the background's answer, or the
-    /// alignment failed. Deliver the answer, then push the sample again.
+    /// Integrated by the aided phase's mechanization: take the sample's work for the
+    /// background from [`Navigator::next_message`] (its row, when one is due, comes with the
+    /// background's last answer, [`Navigator::on_background`]).
+    Aided,
+    /// Not taken (and not counted): the navigator waits for the background's answer, the
+    /// previous sample's work is not all taken ([`Navigator::next_message`]), or the run
+    /// failed. Deliver the answer or take the work, then push the sample again.
     NotReady,
 }
 
@@ -211,6 +228,8 @@ pub enum NavError {
         /// What was counted.
         counters: Counters,
     },
+    /// The alignment finished but the navigation filter cannot start from its outcome.
+    Filter(FilterError),
 }
 
 impl fmt::Display for NavError {
@@ -234,6 +253,10 @@ impl fmt::Display for NavError {
                 counters.samples,
                 counters.unused()
             ),
+            Self::Filter(e) => write!(
+                f,
+                "the navigation filter cannot start from the alignment's outcome: {e}"
+            ),
         }
     }
 }
@@ -244,13 +267,17 @@ impl core::error::Error for NavError {}
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Summary<T: Scalar> {
     /// The final row to log (the last navigation step, unless it was already logged).
-    pub final_row: Option<Solution>,
+    pub final_row: Option<Row>,
     /// The last solution logged (the final row, or the last row before it).
     pub last_solution: Solution,
     /// The counters.
     pub counters: Counters,
     /// The alignment's result.
     pub alignment: AlignOutcome<T>,
+    /// The filter's last report, in an aided run.
+    pub filter: Option<FilterReport<T>>,
+    /// The GNSS fixes' counters of the aided phase.
+    pub fixes: FixCounters,
 }
 
 impl<T: Scalar> Summary<T> {
@@ -269,8 +296,78 @@ enum Phase<T: Scalar> {
     AwaitingAlignment,
     /// Navigating from the alignment's state.
     Navigating(Strapdown<T>),
+    /// Navigating from the alignment's state, aided: the filter's mechanization (its
+    /// covariance is the background's).
+    Aided(AidedMechanization<T>),
     /// The alignment failed.
     Failed(NavError),
+}
+
+/// Where a GNSS fix's updates are at the current sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum FixStage<T: Scalar> {
+    /// None under way.
+    Idle,
+    /// The position update is next (with its lag [s]).
+    Position(GnssFixInput<T>, T),
+    /// The velocity update is next (the position's correction fed back).
+    Velocity(GnssVelocity<T>, T),
+}
+
+/// When the current aided sample's row is due.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum RowStage {
+    /// No row.
+    None,
+    /// A row at this time [us] once the sample's updates are done: ask for the report.
+    Due(u64),
+    /// The report is asked for; the row at this time [us] comes with it.
+    Requested(u64),
+}
+
+/// The background work of the current aided sample, handed out one message at a time
+/// ([`Navigator::next_message`]) in [`AidedIns`](crate::ins_filter::AidedIns)'s order: the
+/// stop's updates (their partial propagation first), the full propagation interval, each due
+/// fix's position then velocity update (each after the propagation of what has accumulated),
+/// then the report for a row.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Work<T: Scalar> {
+    /// Time of the sample [us].
+    t_us: u64,
+    still: Option<StillWindow<T>>,
+    propagation: Option<Propagation<T>>,
+    /// The fix queue may hold fixes due at this sample.
+    fixes_due: bool,
+    fix: FixStage<T>,
+    row: RowStage,
+}
+
+impl<T: Scalar> Work<T> {
+    const NONE: Self = Self {
+        t_us: 0,
+        still: None,
+        propagation: None,
+        fixes_due: false,
+        fix: FixStage::Idle,
+        row: RowStage::None,
+    };
+
+    fn pending(&self) -> bool {
+        self.still.is_some()
+            || self.propagation.is_some()
+            || self.fixes_due
+            || self.fix != FixStage::Idle
+            || self.row != RowStage::None
+    }
+}
+
+/// The answer the foreground waits for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Awaiting {
+    /// An update's ([`FromBackground::Updated`]).
+    Update,
+    /// The report ([`FromBackground::Report`]).
+    Report,
 }
 
 /// The foreground half of the navigator (module docs): small, no allocation; the firmware's
@@ -288,10 +385,20 @@ pub struct Navigator<T: Scalar> {
     last_forwarded_us: u64,
     /// Time of the last navigation step [us].
     last_step_us: u64,
-    last_row: Option<Solution>,
+    last_row: Option<Row>,
     alignment: Option<AlignOutcome<T>>,
-    /// [`Self::finish`] was called.
+    /// [`Self::finish`] was called, or the aided run's final row given.
     finished: bool,
+    /// The aided phase's filter settings (`None`: free inertial after the alignment).
+    filter: Option<FilterConfig<T>>,
+    /// GNSS fixes waiting for their sample.
+    fixes: FixQueue<T>,
+    /// The current aided sample's background work.
+    work: Work<T>,
+    /// The answer awaited before anything else.
+    awaiting: Option<Awaiting>,
+    /// The filter's last report.
+    report: Option<FilterReport<T>>,
 }
 
 impl<T: Scalar> Navigator<T> {
@@ -311,12 +418,34 @@ impl<T: Scalar> Navigator<T> {
             last_row: None,
             alignment: None,
             finished: false,
+            filter: setup.filter,
+            fixes: FixQueue::new(),
+            work: Work::NONE,
+            awaiting: None,
+            report: None,
+        }
+    }
+
+    /// Hands over a GNSS fix (time order; at most a few ahead of the samples: hand each over
+    /// before the first sample at or after its time). In the aided phase it is held until
+    /// that sample and applied there ([`FixQueue`]: a fix out of order or beyond the queue is
+    /// refused and counted, one applied more than 0.1 s late dropped and counted); otherwise
+    /// it is counted in [`Counters::fixes_unused`]. Returns whether it was taken.
+    pub fn push_fix(&mut self, fix: GnssFixInput<T>) -> bool {
+        if matches!(self.phase, Phase::Aided(_)) {
+            self.fixes.push(fix)
+        } else {
+            self.counters.fixes_unused = self.counters.fixes_unused.saturating_add(1);
+            false
         }
     }
 
     /// Takes one sample (rules in the module docs).
     pub fn push(&mut self, input: &ImuInput) -> Step<T> {
-        if matches!(self.phase, Phase::AwaitingAlignment | Phase::Failed(_)) {
+        if matches!(self.phase, Phase::AwaitingAlignment | Phase::Failed(_))
+            || self.awaiting.is_some()
+            || self.work.pending()
+        {
             return Step::NotReady;
         }
         let c = &mut self.counters;
@@ -350,8 +479,10 @@ impl<T: Scalar> Navigator<T> {
                     return Step::Navigated(None);
                 }
                 let row = Solution::from_state(input.t_us, nav.state());
-                Step::Navigated(Some(self.logged(row)))
+                self.logged(Row::Free(row));
+                Step::Navigated(Some(row))
             }
+            Phase::Aided(_) => self.step_aided(input.t_us, &inc),
             _ => {
                 self.forwarded += 1;
                 self.last_forwarded_us = input.t_us;
@@ -360,37 +491,225 @@ impl<T: Scalar> Navigator<T> {
                     self.phase = Phase::AwaitingAlignment;
                 }
                 Step::Forward {
-                    message: ToBackground::Align(inc),
+                    increment: inc,
                     await_reply,
                 }
             }
         }
     }
 
-    /// Takes the background's answer. Aligned: navigation starts from the alignment's state,
-    /// and the row of that state at the time of the last alignment sample is returned (to log).
-    /// Failed: the run ends with the error.
-    pub fn on_background(
-        &mut self,
-        message: FromBackground<T>,
-    ) -> Result<Option<Solution>, NavError> {
+    /// An aided navigation step (the filter's mechanization) and its work for the background.
+    /// Not inlined into [`Self::push`]: its temporaries must not deepen the stack of a push
+    /// that preempts the background's alignment on the MCU.
+    #[inline(never)]
+    fn step_aided(&mut self, t_us: u64, inc: &ImuIncrement<T>) -> Step<T> {
+        let Phase::Aided(mech) = &mut self.phase else {
+            return Step::NotReady;
+        };
+        let events = match mech.step(inc) {
+            Ok(events) => events,
+            Err(e) => {
+                // Not reached: the mechanization checks the same limits.
+                self.counters.rejected = self.counters.rejected.saturating_add(1);
+                return Step::Rejected(e);
+            }
+        };
+        self.counters.nav_steps += 1;
+        self.last_step_us = t_us;
+        let row_due = self.counters.nav_steps.is_multiple_of(self.log_every);
+        self.work = Work {
+            t_us,
+            still: events.still,
+            propagation: events.propagation,
+            fixes_due: true,
+            fix: FixStage::Idle,
+            row: if row_due {
+                RowStage::Due(t_us)
+            } else {
+                RowStage::None
+            },
+        };
+        Step::Aided
+    }
+
+    /// Takes the background's answer; returns the row it completes, to log. Aligned:
+    /// navigation starts from the alignment's state (aided, with the filter's mechanization),
+    /// and the row of that state at the time of the last alignment sample is returned. Failed
+    /// (the alignment, or the filter's start): the run ends with the error. Updated: the
+    /// estimate is fed back. Report: the row it was asked for.
+    pub fn on_background(&mut self, message: FromBackground<T>) -> Result<Option<Row>, NavError> {
         match message {
             FromBackground::Aligned(outcome) => {
                 if !matches!(self.phase, Phase::Aligning | Phase::AwaitingAlignment) {
                     return Ok(None);
                 }
-                let nav = Strapdown::new(outcome.state, self.mechanization);
-                let row = Solution::from_state(self.last_forwarded_us, nav.state());
-                self.phase = Phase::Navigating(nav);
                 self.alignment = Some(outcome);
+                let row = match self.filter {
+                    None => {
+                        let nav = Strapdown::new(outcome.state, self.mechanization);
+                        let row = Solution::from_state(self.last_forwarded_us, nav.state());
+                        self.phase = Phase::Navigating(nav);
+                        Row::Free(row)
+                    }
+                    Some(config) => {
+                        let mech = AidedMechanization::new(
+                            outcome.state,
+                            SensorErrors::default(),
+                            &config,
+                        )
+                        .map_err(|e| self.fail(NavError::Filter(e)))?;
+                        let sigma = initial_sigma(&outcome, &config);
+                        let columns = columns(
+                            &sigma.position_ned_m,
+                            &sigma.velocity_ned_m_s,
+                            &sigma.attitude_rad,
+                            FilterStatus::Nominal,
+                        );
+                        let row = Solution::from_state(self.last_forwarded_us, mech.state());
+                        self.phase = Phase::Aided(mech);
+                        Row::Aided(row, columns)
+                    }
+                };
                 Ok(Some(self.logged(row)))
             }
             FromBackground::AlignFailed { samples, failure } => {
-                let e = NavError::Alignment { samples, failure };
-                self.phase = Phase::Failed(e);
-                Err(e)
+                Err(self.fail(NavError::Alignment { samples, failure }))
+            }
+            FromBackground::FilterFailed(e) => Err(self.fail(NavError::Filter(e))),
+            FromBackground::Updated(correction) => {
+                if self.awaiting == Some(Awaiting::Update) {
+                    self.awaiting = None;
+                    if let (Some(c), Phase::Aided(mech)) = (correction, &mut self.phase) {
+                        mech.apply(&c);
+                    }
+                }
+                Ok(None)
+            }
+            FromBackground::Report(report) => {
+                if self.awaiting != Some(Awaiting::Report) {
+                    return Ok(None);
+                }
+                self.awaiting = None;
+                self.report = Some(report);
+                let (RowStage::Requested(t_us), Phase::Aided(mech)) = (self.work.row, &self.phase)
+                else {
+                    return Ok(None);
+                };
+                self.work.row = RowStage::None;
+                let row = Row::Aided(
+                    Solution::from_state(t_us, mech.state()),
+                    report_columns(&report),
+                );
+                if t_us == self.last_step_us
+                    && !self.counters.nav_steps.is_multiple_of(self.log_every)
+                {
+                    // The final row ([`Self::end_of_data`]).
+                    self.finished = true;
+                }
+                Ok(Some(self.logged(row)))
             }
         }
+    }
+
+    /// The next message of the current aided sample's work for the background (`None`: the
+    /// sample's work is done, or an answer is awaited). Deliver the answer of a message that
+    /// [`ToBackground::is_answered`] ([`Self::on_background`]) before asking again, and take
+    /// every message before the next sample (the firmware sends them over its channel; the
+    /// harness hands them over in line, [`Self::push_inline`]).
+    pub fn next_message(&mut self) -> Option<ToBackground<T>> {
+        if self.awaiting.is_some() {
+            return None;
+        }
+        let Phase::Aided(mech) = &mut self.phase else {
+            return None;
+        };
+        let w = &mut self.work;
+        if let Some(window) = w.still {
+            if let Some(p) = mech.flush() {
+                return Some(ToBackground::Propagate(p));
+            }
+            w.still = None;
+            self.awaiting = Some(Awaiting::Update);
+            return Some(ToBackground::Still {
+                snapshot: mech.snapshot(),
+                window,
+            });
+        }
+        if let Some(p) = w.propagation.take() {
+            return Some(ToBackground::Propagate(p));
+        }
+        loop {
+            match w.fix {
+                FixStage::Idle => {
+                    if !w.fixes_due {
+                        break;
+                    }
+                    match self.fixes.pop_due(w.t_us) {
+                        Some((fix, lag)) => w.fix = FixStage::Position(fix, lag),
+                        None => w.fixes_due = false,
+                    }
+                }
+                FixStage::Position(fix, lag_s) => {
+                    // The covariance brought up to the sample first.
+                    if let Some(p) = mech.flush() {
+                        return Some(ToBackground::Propagate(p));
+                    }
+                    w.fix = match fix.velocity {
+                        Some(v) => FixStage::Velocity(v, lag_s),
+                        None => FixStage::Idle,
+                    };
+                    self.awaiting = Some(Awaiting::Update);
+                    return Some(ToBackground::Position {
+                        snapshot: mech.snapshot(),
+                        fix: fix.position,
+                        lag_s,
+                    });
+                }
+                FixStage::Velocity(fix, lag_s) => {
+                    if let Some(p) = mech.flush() {
+                        return Some(ToBackground::Propagate(p));
+                    }
+                    w.fix = FixStage::Idle;
+                    self.awaiting = Some(Awaiting::Update);
+                    return Some(ToBackground::Velocity {
+                        snapshot: mech.snapshot(),
+                        fix,
+                        lag_s,
+                    });
+                }
+            }
+        }
+        if let RowStage::Due(t_us) = w.row {
+            w.row = RowStage::Requested(t_us);
+            self.awaiting = Some(Awaiting::Report);
+            return Some(ToBackground::Report {
+                yaw_rad: mech.state().euler().2,
+            });
+        }
+        None
+    }
+
+    /// The data have ended: in an aided run whose last step was not logged, its row is due,
+    /// with the filter's report (take it from [`Self::next_message`] before
+    /// [`Self::finish`]). Nothing otherwise.
+    pub fn end_of_data(&mut self) {
+        let aided = matches!(self.phase, Phase::Aided(_));
+        let steps = self.counters.nav_steps;
+        if aided
+            && steps > 0
+            && !steps.is_multiple_of(self.log_every)
+            && !self.finished
+            && !self.work.pending()
+            && self.awaiting.is_none()
+        {
+            self.work.row = RowStage::Due(self.last_step_us);
+        }
+    }
+
+    /// Ends the run in `e` (returned).
+    fn fail(&mut self, e: NavError) -> NavError {
+        self.phase = Phase::Failed(e);
+        e
     }
 
     /// [`Self::push`] with the background run in line on what it forwards (the harness's way;
@@ -399,19 +718,37 @@ impl<T: Scalar> Navigator<T> {
         &mut self,
         background: &mut Background<T>,
         input: &ImuInput,
-    ) -> Result<Option<Solution>, NavError> {
+    ) -> Result<Option<Row>, NavError> {
         match self.push(input) {
-            Step::Forward { message, .. } => match background.handle(message) {
-                Some(answer) => self.on_background(answer),
-                None => Ok(None),
-            },
-            Step::Navigated(row) => Ok(row),
+            Step::Forward { increment, .. } => {
+                match background.handle(ToBackground::Align(increment)) {
+                    Some(answer) => self.on_background(answer),
+                    None => Ok(None),
+                }
+            }
+            Step::Navigated(row) => Ok(row.map(Row::Free)),
+            Step::Aided => self.work_inline(background),
             Step::NotReady => match self.phase {
                 Phase::Failed(e) => Err(e),
                 _ => Ok(None),
             },
             Step::Flagged | Step::Rejected(_) => Ok(None),
         }
+    }
+
+    /// Hands every message of the current work ([`Self::next_message`]) to `background` in
+    /// line and takes its answers: returns the row they complete, if any. After the last
+    /// sample, [`Self::end_of_data`] then this give an aided run's final row.
+    pub fn work_inline(&mut self, background: &mut Background<T>) -> Result<Option<Row>, NavError> {
+        let mut row = None;
+        while let Some(message) = self.next_message() {
+            if let Some(answer) = background.handle(message)
+                && let Some(r) = self.on_background(answer)?
+            {
+                row = Some(r);
+            }
+        }
+        Ok(row)
     }
 
     /// Ends the run: the final row (the last step, unless already logged, or already given by
@@ -423,8 +760,9 @@ impl<T: Scalar> Navigator<T> {
             n_align: self.n_align,
             counters: self.counters,
         };
-        let nav = match &self.phase {
-            Phase::Navigating(nav) => nav,
+        let state = match &self.phase {
+            Phase::Navigating(nav) => *nav.state(),
+            Phase::Aided(mech) => *mech.state(),
             Phase::Failed(e) => return Err(*e),
             Phase::Aligning | Phase::AwaitingAlignment => return Err(ended_during_alignment),
         };
@@ -435,18 +773,26 @@ impl<T: Scalar> Navigator<T> {
                 counters: self.counters,
             });
         }
-        let final_row = (!steps.is_multiple_of(self.log_every) && !self.finished)
-            .then(|| Solution::from_state(self.last_step_us, nav.state()));
+        let final_row = (!steps.is_multiple_of(self.log_every) && !self.finished).then(|| {
+            let solution = Solution::from_state(self.last_step_us, &state);
+            // Aided without [`Self::end_of_data`]: the filter's columns of the last row.
+            match self.last_row.as_ref().and_then(Row::filter) {
+                Some(c) => Row::Aided(solution, *c),
+                None => Row::Free(solution),
+            }
+        });
         self.finished = true;
         if let Some(row) = final_row {
             self.logged(row);
         }
         match (self.last_row, self.alignment) {
-            (Some(last_solution), Some(alignment)) => Ok(Summary {
+            (Some(last), Some(alignment)) => Ok(Summary {
                 final_row,
-                last_solution,
+                last_solution: *last.solution(),
                 counters: self.counters,
                 alignment,
+                filter: self.report,
+                fixes: *self.fixes.counters(),
             }),
             // Navigating implies both (the aligned row is logged at the hand-over).
             _ => Err(ended_during_alignment),
@@ -468,9 +814,33 @@ impl<T: Scalar> Navigator<T> {
         matches!(self.phase, Phase::Aligning | Phase::AwaitingAlignment)
     }
 
-    /// `true` once the last alignment increment is forwarded and the answer is still due.
+    /// `true` once the last alignment increment is forwarded and the answer is still due, or
+    /// while an aided update's or report's answer is due.
     pub fn awaits_background(&self) -> bool {
-        matches!(self.phase, Phase::AwaitingAlignment)
+        matches!(self.phase, Phase::AwaitingAlignment) || self.awaiting.is_some()
+    }
+
+    /// `true` in the aided phase.
+    pub fn is_aided(&self) -> bool {
+        matches!(self.phase, Phase::Aided(_))
+    }
+
+    /// The aided phase's mechanization, once navigating aided.
+    pub fn aided(&self) -> Option<&AidedMechanization<T>> {
+        match &self.phase {
+            Phase::Aided(mech) => Some(mech),
+            _ => None,
+        }
+    }
+
+    /// The filter's last report (aided phase).
+    pub fn filter_report(&self) -> Option<&FilterReport<T>> {
+        self.report.as_ref()
+    }
+
+    /// The GNSS fixes' counters of the aided phase.
+    pub fn fix_counters(&self) -> FixCounters {
+        *self.fixes.counters()
     }
 
     /// The alignment's result, once navigating.
@@ -478,17 +848,20 @@ impl<T: Scalar> Navigator<T> {
         self.alignment.as_ref()
     }
 
-    /// The navigation state, once navigating.
+    /// The navigation state, once navigating (aided or not).
     pub fn strapdown(&self) -> Option<&Strapdown<T>> {
         match &self.phase {
             Phase::Navigating(nav) => Some(nav),
+            Phase::Aided(mech) => Some(mech.strapdown()),
             _ => None,
         }
     }
 
     fn restart_increments(&mut self) {
-        if let Phase::Navigating(nav) = &mut self.phase {
-            nav.restart_increments();
+        match &mut self.phase {
+            Phase::Navigating(nav) => nav.restart_increments(),
+            Phase::Aided(mech) => mech.restart_increments(),
+            _ => {}
         }
     }
 
@@ -508,9 +881,36 @@ impl<T: Scalar> Navigator<T> {
         }
     }
 
-    fn logged(&mut self, row: Solution) -> Solution {
+    fn logged(&mut self, row: Row) -> Row {
         self.counters.rows += 1;
         self.last_row = Some(row);
         row
     }
+}
+
+/// The filter's columns of a row: 1-sigma of position [m], velocity [m/s], roll, pitch, yaw
+/// [rad] (printed in degrees) and the status.
+fn columns<T: Scalar>(
+    position: &Vector3<T>,
+    velocity: &Vector3<T>,
+    attitude_rad: &Vector3<T>,
+    status: FilterStatus,
+) -> FilterColumns {
+    let narrow = |v: &Vector3<T>, k: f64| [v.x, v.y, v.z].map(|x| (x.to_f64() * k) as f32);
+    FilterColumns {
+        sigma_ned_m: narrow(position, 1.0),
+        sigma_v_ned_m_s: narrow(velocity, 1.0),
+        sigma_att_deg: narrow(attitude_rad, 180.0 / core::f64::consts::PI),
+        status: status.name(),
+    }
+}
+
+/// [`columns`] of a report.
+fn report_columns<T: Scalar>(r: &FilterReport<T>) -> FilterColumns {
+    columns(
+        &r.sigma_ned_m,
+        &r.sigma_v_ned_m_s,
+        &r.sigma_att_rad,
+        r.status,
+    )
 }

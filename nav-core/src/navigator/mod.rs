@@ -6,10 +6,11 @@
 //!   sample gate, the calibration, the counters, the strapdown mechanization, the logging
 //!   cadence and the align -> navigate hand-over;
 //! - the BACKGROUND ([`Background`], the firmware's low-priority `align` task) does the slow
-//!   work: the alignment ([`Aligner`](crate::alignment::Aligner)) today, a navigation filter
-//!   later. They talk by messages only: the foreground returns [`ToBackground`] messages to
-//!   forward, the background answers with [`FromBackground`] messages, which the foreground
-//!   takes in [`Navigator::on_background`].
+//!   work: the alignment ([`Aligner`](crate::alignment::Aligner)), then, in an aided run, the
+//!   navigation filter's covariance ([`ErrorFilter`](crate::ins_filter::ErrorFilter)). They
+//!   talk by messages only: the foreground returns [`ToBackground`] messages to forward, the
+//!   background answers with [`FromBackground`] messages, which the foreground takes in
+//!   [`Navigator::on_background`].
 //!
 //! The firmware carries the messages over `rtic_sync` channels; the harness hands them over in
 //! line ([`Navigator::push_inline`]), in the same order, so both reach bit-identical results.
@@ -34,6 +35,34 @@
 //! - a run fails, with the counts by cause, when the data end during the alignment or when not
 //!   one navigation step follows it (every later sample flagged or rejected, or none).
 //!
+//! GNSS-aided runs ([`RunConfig::aiding`]): after the alignment the foreground runs the
+//! filter's mechanization ([`AidedMechanization`](crate::ins_filter::AidedMechanization):
+//! NED frame, the estimated sensor errors compensated) from the alignment's state, and the
+//! background the filter's covariance ([`ErrorFilter`](crate::ins_filter::ErrorFilter)),
+//! started from the alignment's 1-sigmas and the noise model's sensor errors
+//! ([`initial_sigma`]). Per navigation step, the work goes over as messages
+//! ([`Navigator::next_message`]) in the order [`AidedIns`](crate::ins_filter::AidedIns) runs
+//! it in line:
+//! - a stop's zero-velocity and zero-rate updates ([`ToBackground::Still`]), the propagation
+//!   of the increments accumulated so far first ([`ToBackground::Propagate`]);
+//! - a full propagation interval's [`ToBackground::Propagate`];
+//! - every GNSS fix due at the sample (handed over by [`Navigator::push_fix`] before the
+//!   first sample at or after its time, held and timed by
+//!   [`FixQueue`](crate::ins_filter::sequencer::FixQueue), the rule the sequencer uses too):
+//!   the propagation so far, [`ToBackground::Position`], then, with the position's estimate
+//!   fed back, [`ToBackground::Velocity`];
+//! - where a row is due, [`ToBackground::Report`]: the row is the state after the sample's
+//!   updates with the filter's 1-sigmas and status ([`crate::output::Row::Aided`], under
+//!   [`crate::output::AIDED_CSV_HEADER`]).
+//!
+//! Propagations are not answered; updates and reports are, and their answers are delivered
+//! before the next sample (the firmware's `navigate` task waits for them; the background is
+//! below it, so the work still runs at the background's priority, and the data-ready
+//! interrupt keeps filling the sample channel meanwhile). Every estimate is thus fed back at
+//! a defined sample, the same in the firmware and the harness. At the end,
+//! [`Navigator::end_of_data`] asks for the last step's row and report. Fixes handed over
+//! outside the aided phase count in [`Counters::fixes_unused`].
+//!
 //! The run's settings are one plain [`RunConfig`] (the CLI's and the firmware's arguments),
 //! checked and converted for the data's rate into a [`Setup`] from which both halves are built.
 //!
@@ -48,8 +77,10 @@ mod setup;
 #[cfg(test)]
 mod tests;
 
-pub use background::{Background, FromBackground, ToBackground};
-pub use config::{ConfigError, MechanizationChoices, OptionError, RunConfig};
+pub use background::{
+    Background, FilterReport, FromBackground, SIGMA_FLOORS, ToBackground, initial_sigma,
+};
+pub use config::{AidingConfig, ConfigError, MechanizationChoices, OptionError, RunConfig};
 pub use foreground::{
     Counters, FlaggedCounts, ImuInput, NavError, Navigator, Step, Summary, Unusable,
 };

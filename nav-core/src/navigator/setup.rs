@@ -6,8 +6,10 @@ use crate::Scalar;
 use crate::alignment::{AlignSettings, BaseMotion, LeverArm, SensorNoise};
 use crate::calibration::ImuCompensation;
 use crate::increment::InputLimits;
+use crate::ins_filter::{FilterConfig, ZeroMotionConfig};
 use crate::position::Position;
-use crate::strapdown::MechanizationConfig;
+use crate::strapdown::{MechanizationConfig, NavFrame};
+use nalgebra::Vector3;
 
 /// The settings of one run in precision `T`, validated (small and `Copy`: the firmware hands
 /// it to both of its tasks).
@@ -23,6 +25,9 @@ pub struct Setup<T: Scalar> {
     pub limits: InputLimits<T>,
     /// Navigation steps between logged solutions (>= 1).
     pub log_every: u32,
+    /// The aided phase's filter (`None`: free inertial after the alignment). Its mechanization
+    /// is [`Self::mechanization`] in the NED frame.
+    pub filter: Option<FilterConfig<T>>,
 }
 
 impl<T: Scalar> Setup<T> {
@@ -64,12 +69,25 @@ impl<T: Scalar> Setup<T> {
             compensation: ImuCompensation::default(),
             ..MechanizationConfig::default()
         };
+        let filter = config.aiding.map(|a| {
+            let mut f = FilterConfig::new(config.filter_noise());
+            f.scale_factors = a.scale_factors;
+            f.propagation_interval_s = T::c(a.propagation_interval_s);
+            f.antenna_lever_arm_b_m = Vector3::from(a.antenna_lever_arm_b_m.map(T::c));
+            f.zero_motion = a.zero_motion.then(ZeroMotionConfig::default);
+            f.mechanization = MechanizationConfig {
+                frame: NavFrame::Ned,
+                ..mechanization
+            };
+            f
+        });
         Ok(Self {
             align,
             limits: mechanization.limits,
             mechanization,
             compensation,
             log_every: config.log_every,
+            filter,
         })
     }
 

@@ -5,10 +5,13 @@
 extern crate std;
 
 use super::*;
+use crate::ImuIncrement;
 use crate::Scalar;
 use crate::alignment::{AlignMethod, SensorNoise};
 use crate::attitude::from_euler;
-use crate::output::Solution;
+use crate::ins_filter::sequencer::GnssFixInput;
+use crate::ins_filter::{FilterStatus, GnssPosition, GnssVelocity};
+use crate::output::{Row, Solution};
 use crate::{Position, earth};
 use nalgebra::{UnitQuaternion, Vector3};
 use std::collections::VecDeque;
@@ -72,13 +75,13 @@ fn run<T: Scalar>(
     let mut rows = Vec::new();
     for i in inputs {
         match nav.push_inline(&mut bg, &i) {
-            Ok(row) => rows.extend(row),
+            Ok(row) => rows.extend(row.map(|r| *r.solution())),
             Err(e) => return (rows, Err(e)),
         }
     }
     let summary = nav.finish();
     if let Ok(s) = &summary {
-        rows.extend(s.final_row);
+        rows.extend(s.final_row.map(|r| *r.solution()));
     }
     (rows, summary)
 }
@@ -117,7 +120,7 @@ fn counts_rows_and_logs_the_last_step() {
     assert_eq!(rows[0].t_us, 10_010_000);
     assert_eq!(rows[1].t_us, 10_010_000 + 40 * 10_000);
     assert_eq!(rows.last().unwrap().t_us, 20_000_000);
-    assert_eq!(s.final_row, rows.last().copied());
+    assert_eq!(s.final_row, rows.last().copied().map(Row::Free));
     assert_eq!(s.last_solution, *rows.last().unwrap());
     assert_eq!(s.alignment.times.coarse_samples, 1000);
     assert_eq!(s.end_record().to_string(), "# end: 26 rows, ok");
@@ -137,7 +140,7 @@ fn no_final_row_when_the_last_step_was_logged() {
         nav.push_inline(&mut bg, &i).unwrap();
     }
     let first = nav.finish().unwrap();
-    assert_eq!(first.final_row.map(|r| r.t_us), Some(10_400_000));
+    assert_eq!(first.final_row.map(|r| r.solution().t_us), Some(10_400_000));
     let again = nav.finish().unwrap();
     assert_eq!((again.final_row, again.counters), (None, first.counters));
     assert_eq!(s.last_solution.t_us, 10_400_000);
@@ -241,7 +244,7 @@ fn navigation_starts_from_the_aligned_state_at_the_last_alignment_sample() {
     // The 1000th: forwarded, then the foreground waits.
     let i = it.next().unwrap();
     let Step::Forward {
-        message,
+        increment,
         await_reply: true,
     } = nav.push(&i)
     else {
@@ -255,14 +258,17 @@ fn navigation_starts_from_the_aligned_state_at_the_last_alignment_sample() {
         1000,
         "a refused push is not counted"
     );
-    let answer = bg.handle(message).unwrap();
+    let answer = bg.handle(ToBackground::Align(increment)).unwrap();
     let FromBackground::Aligned(outcome) = answer else {
         panic!("{answer:?}")
     };
     let row = nav.on_background(answer).unwrap().unwrap();
-    assert_eq!(row.t_us, 10_000_000);
+    assert_eq!(row.solution().t_us, 10_000_000);
     assert_eq!(nav.strapdown().unwrap().state(), &outcome.state);
-    assert_eq!(row, Solution::from_state(10_000_000, &outcome.state));
+    assert_eq!(
+        row,
+        Row::Free(Solution::from_state(10_000_000, &outcome.state))
+    );
     assert!(matches!(nav.push(&next), Step::Navigated(None)));
 }
 
@@ -463,21 +469,22 @@ fn a_lagging_background_gives_the_inline_result() {
             }
             match nav.push(&i) {
                 Step::Forward {
-                    message,
+                    increment,
                     await_reply,
                 } => {
-                    queue.push_back(message);
+                    queue.push_back(ToBackground::Align(increment));
                     if await_reply {
                         let answer = queue.drain(..).find_map(|m| bg.handle(m)).unwrap();
                         rows.extend(nav.on_background(answer).unwrap());
                     }
                 }
-                Step::Navigated(row) => rows.extend(row),
+                Step::Navigated(row) => rows.extend(row.map(Row::Free)),
                 other => panic!("{other:?}"),
             }
         }
         let split = nav.finish().unwrap();
         rows.extend(split.final_row);
+        let rows: Vec<Solution> = rows.iter().map(|r| *r.solution()).collect();
         assert_eq!(rows, inline, "{method:?}");
         assert_eq!(split.counters, s.counters);
     }
@@ -504,4 +511,326 @@ fn setup_keeps_the_configured_values() {
             .n_align(),
         103
     );
+}
+
+/// An aided run of `config(10.0, log_every)` at 100 Hz: the site's position as GNSS fixes.
+fn aided_config(log_every: u32) -> RunConfig {
+    RunConfig {
+        aiding: Some(AidingConfig::default()),
+        ..config(10.0, log_every)
+    }
+}
+
+/// A fix of the site at `t_us` with 1-sigma `sigma_m` [m] per axis, and a zero velocity.
+fn site_fix<T: Scalar>(t_us: u64, sigma_m: f64) -> GnssFixInput<T> {
+    GnssFixInput {
+        t_us,
+        position: GnssPosition {
+            lat_rad: LAT_DEG.to_radians(),
+            lon_rad: 0.0,
+            h_m: 0.0,
+            sigma_ned_m: Vector3::repeat(T::c(sigma_m)),
+        },
+        velocity: Some(GnssVelocity {
+            v_ned_m_s: Vector3::zeros(),
+            sigma_ned_m_s: Vector3::repeat(T::c(0.05)),
+        }),
+    }
+}
+
+/// Runs `inputs` with `fixes` (each handed over before the first sample at or after its
+/// time) in line; returns the rows and the summary.
+fn run_aided<T: Scalar>(
+    config: &RunConfig,
+    inputs: impl Iterator<Item = ImuInput>,
+    fixes: &[GnssFixInput<T>],
+) -> (Vec<Row>, Summary<T>) {
+    let setup = Setup::<T>::new(config, RATE_HZ).unwrap();
+    let (mut nav, mut bg) = (Navigator::new(&setup), Background::new(&setup));
+    let mut rows = Vec::new();
+    let mut next = fixes.iter().peekable();
+    for i in inputs {
+        while let Some(f) = next.next_if(|f| f.t_us <= i.t_us) {
+            nav.push_fix(*f);
+        }
+        rows.extend(nav.push_inline(&mut bg, &i).unwrap());
+    }
+    nav.end_of_data();
+    rows.extend(nav.work_inline(&mut bg).unwrap());
+    let s = nav.finish().unwrap();
+    rows.extend(s.final_row);
+    (rows, s)
+}
+
+/// Fixes of the site every second from 1 s to `seconds`, 0.3 ms after the sample grid.
+fn site_fixes<T: Scalar>(seconds: u64) -> Vec<GnssFixInput<T>> {
+    (1..=seconds)
+        .map(|k| site_fix(k * 1_000_000 + 300, 0.5))
+        .collect()
+}
+
+#[test]
+fn an_aided_run_logs_the_filter_and_counts_the_fixes() {
+    // 10 s aligning, 30 s aided at rest; fixes of the site at 1 Hz from the start.
+    let (rows, s) = run_aided::<f64>(&aided_config(100), still(4000), &site_fixes(40));
+    // The aligned row (its columns the filter's start: the alignment's 1-sigmas), a row a
+    // second, the last step's.
+    assert_eq!(s.counters.nav_steps, 3000);
+    assert_eq!(rows.len(), 1 + 30);
+    assert_eq!(rows.len() as u32, s.counters.rows);
+    assert!(rows.iter().all(|r| r.filter().is_some()), "aided rows only");
+    let first = rows[0].filter().unwrap();
+    let a = s.alignment;
+    assert_eq!(
+        first.sigma_att_deg[2],
+        a.estimate.sigma_rad.z.to_degrees() as f32
+    );
+    assert_eq!(first.sigma_ned_m[0], a.position_sigma_m.x as f32);
+    // Fixes 1..9 came during the alignment (unused; it ended with the sample at 10 s); 10..39
+    // at their samples, 9.7 ms late for the first, 0.3 ms late for the others; 40 after the
+    // last sample.
+    assert_eq!(s.counters.fixes_unused, 9);
+    assert_eq!(s.fixes.received, 30);
+    assert_eq!((s.fixes.late, s.fixes.out_of_order), (0, 0));
+    let f = s.filter.unwrap();
+    assert_eq!(
+        (f.counters.position.accepted, f.counters.velocity.accepted),
+        (30, 30)
+    );
+    // Stops: zero-velocity and zero-rate updates from the detector.
+    assert!(f.counters.zero_velocity.accepted > 10, "{:?}", f.counters);
+    assert_eq!(f.status, FilterStatus::Nominal);
+    assert_eq!(f.covariance_faults, 0);
+    // The position converges on the fixes: 1-sigma below the fix's after 30 of them, and
+    // the solution within 3 of it.
+    let last = rows.last().unwrap();
+    let c = last.filter().unwrap();
+    assert!(c.sigma_ned_m[0] < 0.5 && c.sigma_ned_m[1] < 0.5, "{c:?}");
+    assert_eq!(c.status, "NAV");
+    let sol = last.solution();
+    let site = Position::from_degrees(LAT_DEG, 0.0, 0.0);
+    let fixed = Position::from_degrees(
+        sol.lat_ndeg as f64 * 1e-9,
+        sol.lon_ndeg as f64 * 1e-9,
+        sol.h_m,
+    );
+    let d = site.ned_to(&fixed);
+    for k in 0..3 {
+        assert!(
+            d[k].abs() < 3.0 * f64::from(c.sigma_ned_m[k]),
+            "{d:?} {c:?}"
+        );
+    }
+    assert_eq!(sol.t_us, 40_000_000);
+    // The log's text: the aided header's column count on every row.
+    let columns = crate::output::AIDED_CSV_HEADER.split(',').count();
+    for r in &rows {
+        assert_eq!(r.to_string().split(',').count(), columns, "{r}");
+    }
+}
+
+/// The navigator's aided phase is the filter run in line ([`crate::ins_filter::AidedIns`]
+/// under the [`crate::ins_filter::sequencer::Sequencer`]) started from the alignment's
+/// outcome: the same state to the last bit, in both precisions.
+#[test]
+fn the_aided_phase_is_the_sequencer_started_from_the_alignment() {
+    fn check<T: Scalar>() {
+        use crate::ins_filter::sequencer::{Sequencer, Start};
+        let q = from_euler(0.01, -0.02, 0.7);
+        // Turning and accelerating gently after the alignment.
+        let sample = |k: u32| {
+            let (w, a) = if k > 1000 {
+                let t = f64::from(k) * 0.01;
+                (
+                    Vector3::new(0.0, 0.0, 2e-3 * libm::sin(t)) * DT,
+                    Vector3::new(0.05 * libm::cos(0.5 * t), 0.0, 0.0) * DT,
+                )
+            } else {
+                (Vector3::zeros(), Vector3::zeros())
+            };
+            let (dtheta, dv) = at_rest(&q, w, a);
+            input(k, dtheta, dv)
+        };
+        let c = aided_config(7);
+        let fixes = site_fixes::<T>(30);
+        let (rows, s) = run_aided::<T>(&c, (1..=3000).map(sample), &fixes);
+        let setup = Setup::<T>::new(&c, RATE_HZ).unwrap();
+        let config = setup.filter.unwrap();
+        let sigma = initial_sigma(&s.alignment, &config);
+        let start = Start::Given {
+            state: s.alignment.state,
+            sensors: crate::ins_filter::SensorErrors::default(),
+            sigma,
+        };
+        let mut seq = Sequencer::new(config, start).unwrap();
+        let mut next = fixes.iter().filter(|f| f.t_us > 10_000_000).peekable();
+        for k in 1001..=3000 {
+            let i = sample(k);
+            while let Some(f) = next.next_if(|f| f.t_us <= i.t_us) {
+                seq.push_fix(*f);
+            }
+            let inc = ImuIncrement {
+                delta_theta_ib_b: i.increment.delta_theta_ib_b.map(T::of_f32),
+                delta_v_ib_b: i.increment.delta_v_ib_b.map(T::of_f32),
+                dt: T::of_f32(i.increment.dt),
+            };
+            seq.on_sample(i.t_us, &inc).unwrap();
+        }
+        let ins = seq.filter().unwrap();
+        let last = Solution::from_state(30_000_000, ins.state());
+        assert_eq!(*rows.last().unwrap().solution(), last);
+        let f = s.filter.unwrap();
+        assert_eq!(f.counters, *ins.counters());
+        assert_eq!(f.sigma_ned_m, ins.sigma(crate::ins_filter::POS));
+        // Every fix from 10 s to the last sample was applied (the made-up motion disagrees
+        // with some of them: the gate's path too).
+        let p = f.counters.position;
+        assert_eq!(p.accepted + p.rejected, 20, "{:?}", f.counters);
+        assert!(f.counters.propagations > 190, "{:?}", f.counters);
+    }
+    check::<f64>();
+    check::<f32>();
+}
+
+/// The firmware's way in the aided phase: propagations queue up behind the foreground,
+/// answered messages are waited for. Same rows as in line; fixes refused by the queue and
+/// bad fixes counted, never a panic.
+#[test]
+fn an_aided_split_run_gives_the_inline_result_and_counts_bad_fixes() {
+    let mut fixes = site_fixes::<f32>(25);
+    // A NaN fix, and one that repeats its predecessor's time.
+    fixes[14].position.lat_rad = f64::NAN;
+    fixes.insert(16, fixes[15]);
+    let c = aided_config(40);
+    let (inline, s) = run_aided::<f32>(&c, still(2500), &fixes);
+    let f = s.filter.unwrap();
+    assert_eq!(f.counters.position.invalid, 1, "{:?}", f.counters);
+    assert_eq!(s.fixes.out_of_order, 1);
+
+    let setup = Setup::<f32>::new(&c, RATE_HZ).unwrap();
+    let (mut nav, mut bg) = (Navigator::new(&setup), Background::new(&setup));
+    let mut queue: VecDeque<ToBackground<f32>> = VecDeque::new();
+    let mut rows = Vec::new();
+    let mut next = fixes.iter().peekable();
+    let answered = |nav: &mut Navigator<f32>,
+                    queue: &mut VecDeque<ToBackground<f32>>,
+                    bg: &mut Background<f32>,
+                    rows: &mut Vec<Row>| {
+        // The queue in order up to the awaited message's answer.
+        let answer = core::iter::from_fn(|| queue.pop_front())
+            .find_map(|m| bg.handle(m))
+            .unwrap();
+        rows.extend(nav.on_background(answer).unwrap());
+    };
+    for i in still(2500) {
+        // The background lags: one message per sample between the foreground's turns.
+        if let Some(m) = queue.pop_front() {
+            assert!(!m.is_answered());
+            assert_eq!(bg.handle(m), None);
+        }
+        while let Some(f) = next.next_if(|f| f.t_us <= i.t_us) {
+            nav.push_fix(*f);
+        }
+        match nav.push(&i) {
+            Step::Forward {
+                increment,
+                await_reply,
+            } => {
+                queue.push_back(ToBackground::Align(increment));
+                if await_reply {
+                    answered(&mut nav, &mut queue, &mut bg, &mut rows);
+                }
+            }
+            Step::Aided => {
+                while let Some(m) = nav.next_message() {
+                    let wait = m.is_answered();
+                    queue.push_back(m);
+                    if wait {
+                        assert_eq!(nav.push(&i), Step::NotReady);
+                        answered(&mut nav, &mut queue, &mut bg, &mut rows);
+                    }
+                }
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    nav.end_of_data();
+    while let Some(m) = nav.next_message() {
+        let wait = m.is_answered();
+        queue.push_back(m);
+        if wait {
+            answered(&mut nav, &mut queue, &mut bg, &mut rows);
+        }
+    }
+    let split = nav.finish().unwrap();
+    rows.extend(split.final_row);
+    assert_eq!(rows, inline);
+    assert_eq!(split.filter, s.filter);
+}
+
+#[test]
+fn fixes_are_held_and_timed_by_the_queue() {
+    // A fix 0.15 s old when handed over is late; the others apply.
+    let c = aided_config(100);
+    let setup = Setup::<f64>::new(&c, RATE_HZ).unwrap();
+    let (mut nav, mut bg) = (Navigator::new(&setup), Background::new(&setup));
+    // Before the aided phase: not taken.
+    assert!(!nav.push_fix(site_fix(5_000_000, 0.5)));
+    for i in still(1100) {
+        nav.push_inline(&mut bg, &i).unwrap();
+    }
+    assert!(nav.is_aided());
+    assert!(nav.push_fix(site_fix(10_850_000, 0.5)));
+    // Not later than the previous one: refused.
+    assert!(!nav.push_fix(site_fix(10_850_000, 0.5)));
+    for i in still(1200).skip(1100) {
+        nav.push_inline(&mut bg, &i).unwrap();
+    }
+    nav.end_of_data();
+    nav.work_inline(&mut bg).unwrap();
+    let s = nav.finish().unwrap();
+    assert_eq!(s.counters.fixes_unused, 1);
+    assert_eq!(
+        (s.fixes.received, s.fixes.out_of_order, s.fixes.late),
+        (2, 1, 1)
+    );
+    assert_eq!(s.filter.unwrap().counters.position.accepted, 0);
+    // A free-inertial run takes no fix.
+    let setup = Setup::<f64>::new(&config(10.0, 100), RATE_HZ).unwrap();
+    let (mut nav, mut bg) = (Navigator::new(&setup), Background::new(&setup));
+    for i in still(1100) {
+        nav.push_inline(&mut bg, &i).unwrap();
+    }
+    assert!(!nav.push_fix(site_fix(10_950_000, 0.5)));
+    assert_eq!(nav.counters().fixes_unused, 1);
+    assert_eq!(nav.next_message(), None);
+}
+
+#[test]
+fn an_aided_run_refuses_bad_settings_and_an_unstartable_filter() {
+    let bad = RunConfig {
+        aiding: Some(AidingConfig {
+            propagation_interval_s: 2.0,
+            ..AidingConfig::default()
+        }),
+        ..config(10.0, 40)
+    };
+    assert!(matches!(
+        Setup::<f32>::new(&bad, RATE_HZ),
+        Err(ConfigError::Aiding(_))
+    ));
+    // The filter refuses a non-finite start: the run ends with the reason.
+    let setup = Setup::<f64>::new(&aided_config(40), RATE_HZ).unwrap();
+    let mut nav = Navigator::<f64>::new(&setup);
+    let e = nav
+        .on_background(FromBackground::FilterFailed(
+            crate::ins_filter::FilterError::BadInitialSigma,
+        ))
+        .unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "the navigation filter cannot start from the alignment's outcome: an initial 1-sigma is negative or not finite"
+    );
+    assert_eq!(nav.push(&still(1).next().unwrap()), Step::NotReady);
+    assert_eq!(nav.finish().unwrap_err(), e);
 }

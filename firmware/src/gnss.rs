@@ -1,0 +1,122 @@
+//! GNSS fixes from a second host file (`--gnss FILE`): the binary fix file
+//! (`hal_adapters::gnss_record`, `docs/gnss-record-format.md`; `nav` writes it from the GNSS CSV
+//! or KF-GINS text, `host_tests::gnss_file::convert`) read through semihosting, one record
+//! at a time, and handed to the navigator before the first sample at or after each fix's time
+//! (the harness's pipeline does the same).
+//!
+//! The whole file is checked when the run starts ([`check`]: every record's CRC and flags,
+//! increasing times, the count), so a damaged file is refused before anything is navigated, as
+//! a damaged recording is.
+
+use core::ffi::CStr;
+use hal_adapters::gnss_record::{GnssReadError, GnssReader, GnssRecord};
+use hal_adapters::io::{Buffered, SemihostingError, SemihostingFile};
+use nav_core::Scalar;
+use nav_core::Vector3;
+use nav_core::ins_filter::sequencer::GnssFixInput;
+use nav_core::ins_filter::{GnssPosition, GnssVelocity};
+
+/// Bytes read from the host per semihosting call: one record (at 1-10 Hz the calls cost
+/// nothing; the buffer is static RAM, which the fine alignment's stack needs).
+const READ_CHUNK: usize = hal_adapters::gnss_record::RECORD_LEN;
+
+/// The file's reader.
+type Reader = GnssReader<Buffered<SemihostingFile, READ_CHUNK>>;
+
+/// Why the GNSS file cannot be used.
+pub enum GnssFileError {
+    /// It cannot be opened.
+    Open,
+    /// It is not a valid fix file, or reading failed (where and what).
+    Read(GnssReadError<SemihostingError>),
+}
+
+impl core::fmt::Display for GnssFileError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Open => f.write_str("cannot open the GNSS file"),
+            Self::Read(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+fn open(path: &CStr) -> Result<Reader, GnssFileError> {
+    let file = SemihostingFile::open(path).map_err(|_| GnssFileError::Open)?;
+    GnssReader::new(Buffered::new(file)).map_err(GnssFileError::Read)
+}
+
+/// Reads the whole file once, checking every rule of the format: the number of fixes.
+pub fn check(path: &CStr) -> Result<u32, GnssFileError> {
+    let mut reader = open(path)?;
+    let mut n = 0;
+    while reader.next_fix().map_err(GnssFileError::Read)?.is_some() {
+        n += 1;
+    }
+    Ok(n)
+}
+
+/// nav-core's fix of a record, in `f32` (the values rounded as the harness rounds the same
+/// file's, `Scalar::c`; the place stays `f64`).
+pub fn fix_of(r: &GnssRecord) -> GnssFixInput<f32> {
+    let v3 = |a: [f64; 3]| Vector3::new(f32::c(a[0]), f32::c(a[1]), f32::c(a[2]));
+    GnssFixInput {
+        t_us: r.t_us,
+        position: GnssPosition {
+            lat_rad: r.lat_rad,
+            lon_rad: r.lon_rad,
+            h_m: r.h_m,
+            sigma_ned_m: v3(r.sigma_ned_m),
+        },
+        velocity: r.velocity.map(|(v, s)| GnssVelocity {
+            v_ned_m_s: v3(v),
+            sigma_ned_m_s: v3(s),
+        }),
+    }
+}
+
+/// The fixes of the file in time order, one read ahead.
+pub struct Fixes {
+    reader: Reader,
+    next: Option<GnssFixInput<f32>>,
+    /// Fixes read so far.
+    pub read: u32,
+}
+
+impl Fixes {
+    /// The file's fixes from the first (checked by [`check`] before).
+    pub fn open(path: &CStr) -> Result<Self, GnssFileError> {
+        let mut fixes = Self {
+            reader: open(path)?,
+            next: None,
+            read: 0,
+        };
+        fixes.advance()?;
+        Ok(fixes)
+    }
+
+    fn advance(&mut self) -> Result<(), GnssFileError> {
+        self.next = self
+            .reader
+            .next_fix()
+            .map_err(GnssFileError::Read)?
+            .map(|r| fix_of(&r));
+        self.read += u32::from(self.next.is_some());
+        Ok(())
+    }
+
+    /// The next fix if it is due at a sample ending at `t_us` [us] (its time at or before it).
+    pub fn due(&mut self, t_us: u64) -> Result<Option<GnssFixInput<f32>>, GnssFileError> {
+        match self.next {
+            Some(f) if f.t_us <= t_us => {
+                self.advance()?;
+                Ok(Some(f))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// Fixes not handed over (after the last sample).
+    pub fn remaining(&self, total: u32) -> u32 {
+        total - self.read + u32::from(self.next.is_some())
+    }
+}

@@ -1,0 +1,243 @@
+//! GNSS fix files as the navigator takes them: the text formats ([`crate::gnss`]: the
+//! project's CSV, KF-GINS's text) and the binary fix file the firmware reads
+//! ([`hal_adapters::gnss_record`], `docs/gnss-record-format.md`), read into nav-core's
+//! [`GnssFixInput`]s on the IMU recording's clock; and the binary file written from any of
+//! them ([`write_record_file`], [`convert`]).
+//!
+//! A text fix becomes a [`GnssFixInput`] through [`crate::aided::fix_input`] (its time tag
+//! rounded to the microsecond); the binary file stores exactly that fix in `f64`, so the
+//! firmware reading it and the harness reading the text navigate the same values.
+
+use crate::aided::fix_input;
+use crate::atomic;
+use crate::gnss::{self, GnssFix};
+use anyhow::{Context, Result, anyhow, bail};
+use hal_adapters::gnss_record::{self, GnssReader, GnssRecord};
+use nav_core::Scalar;
+use nav_core::Vector3;
+use nav_core::ins_filter::sequencer::GnssFixInput;
+use nav_core::ins_filter::{GnssPosition, GnssVelocity};
+use std::io::{Read, Write};
+use std::path::Path;
+
+/// The fixes of a file, in `f64` ([`narrow`] gives them in the run's precision).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GnssFixes {
+    /// The fixes, time increasing.
+    pub fixes: Vec<GnssFixInput<f64>>,
+    /// Fixes of a text file whose time tag is not a time on the IMU clock (left out).
+    pub bad_time_tags: u32,
+}
+
+/// True when `path` starts like a binary fix file ([`gnss_record::MAGIC`]).
+pub fn is_record_file(path: &Path) -> Result<bool> {
+    let mut head = [0_u8; 8];
+    let mut file = std::fs::File::open(path)
+        .with_context(|| format!("cannot open the GNSS file {}", path.display()))?;
+    let mut n = 0;
+    while n < head.len() {
+        match file.read(&mut head[n..])? {
+            0 => break,
+            k => n += k,
+        }
+    }
+    Ok(n == head.len() && head == gnss_record::MAGIC)
+}
+
+/// Reads a GNSS file of any format: binary ([`gnss_record`]) when it starts with its magic,
+/// text otherwise ([`gnss::read_gnss`]). Errors name the file (and the line, or the byte
+/// offset and fix).
+pub fn read_fixes(path: &Path) -> Result<GnssFixes> {
+    let in_file = || format!("GNSS file {}", path.display());
+    if !is_record_file(path)? {
+        let text = gnss::read_gnss(path).with_context(in_file)?;
+        let mut out = GnssFixes::default();
+        for f in &text {
+            match fix_input::<f64>(f) {
+                Some(fix) => out.fixes.push(fix),
+                None => out.bad_time_tags += 1,
+            }
+        }
+        return Ok(out);
+    }
+    let file = std::fs::File::open(path)
+        .with_context(|| format!("cannot open the GNSS file {}", path.display()))?;
+    let bytes = hal_adapters::io::StdReader::new(std::io::BufReader::new(file));
+    let mut reader = GnssReader::new(bytes)
+        .map_err(|e| anyhow!("{e}"))
+        .with_context(in_file)?;
+    let mut out = GnssFixes::default();
+    while let Some(r) = reader
+        .next_fix()
+        .map_err(|e| anyhow!("{e}"))
+        .with_context(in_file)?
+    {
+        out.fixes.push(fix_of_record(&r));
+    }
+    Ok(out)
+}
+
+/// nav-core's fix of a binary record (the firmware's conversion, in `f64`).
+pub fn fix_of_record(r: &GnssRecord) -> GnssFixInput<f64> {
+    GnssFixInput {
+        t_us: r.t_us,
+        position: GnssPosition {
+            lat_rad: r.lat_rad,
+            lon_rad: r.lon_rad,
+            h_m: r.h_m,
+            sigma_ned_m: Vector3::from(r.sigma_ned_m),
+        },
+        velocity: r.velocity.map(|(v, s)| GnssVelocity {
+            v_ned_m_s: Vector3::from(v),
+            sigma_ned_m_s: Vector3::from(s),
+        }),
+    }
+}
+
+/// A fix in the run's precision `T` (the 1-sigmas and the velocity rounded as
+/// [`fix_input::<T>`](fix_input) rounds them; the place stays `f64`).
+pub fn narrow<T: Scalar>(f: &GnssFixInput<f64>) -> GnssFixInput<T> {
+    GnssFixInput {
+        t_us: f.t_us,
+        position: GnssPosition {
+            lat_rad: f.position.lat_rad,
+            lon_rad: f.position.lon_rad,
+            h_m: f.position.h_m,
+            sigma_ned_m: f.position.sigma_ned_m.map(T::c),
+        },
+        velocity: f.velocity.map(|v| GnssVelocity {
+            v_ned_m_s: v.v_ned_m_s.map(T::c),
+            sigma_ned_m_s: v.sigma_ned_m_s.map(T::c),
+        }),
+    }
+}
+
+/// The binary record of a fix.
+fn record_of(f: &GnssFixInput<f64>) -> GnssRecord {
+    let v3 = |v: &Vector3<f64>| [v.x, v.y, v.z];
+    GnssRecord {
+        t_us: f.t_us,
+        lat_rad: f.position.lat_rad,
+        lon_rad: f.position.lon_rad,
+        h_m: f.position.h_m,
+        sigma_ned_m: v3(&f.position.sigma_ned_m),
+        velocity: f.velocity.map(|v| (v3(&v.v_ned_m_s), v3(&v.sigma_ned_m_s))),
+    }
+}
+
+/// Writes `fixes` as a binary fix file at `path`, atomically ([`atomic::write`]). Refused: a
+/// fix whose time tag is not on the IMU clock, times that do not increase.
+pub fn write_record_file(path: &Path, fixes: &[GnssFix]) -> Result<()> {
+    let mut inputs = Vec::with_capacity(fixes.len());
+    for (i, f) in fixes.iter().enumerate() {
+        let fix = fix_input::<f64>(f).ok_or_else(|| {
+            anyhow!(
+                "fix {i}: time {} s is not a time on the IMU recording's clock",
+                f.t_s
+            )
+        })?;
+        if inputs
+            .last()
+            .is_some_and(|p: &GnssFixInput<f64>| fix.t_us <= p.t_us)
+        {
+            bail!(
+                "fix {i}: time {} s is not later than the previous fix's",
+                f.t_s
+            );
+        }
+        inputs.push(fix);
+    }
+    let count = u32::try_from(inputs.len()).context("more than 2^32 fixes")?;
+    atomic::write(path, |w| -> Result<()> {
+        w.write_all(&gnss_record::encode_header(count))?;
+        for f in &inputs {
+            w.write_all(&record_of(f).encode())?;
+        }
+        Ok(())
+    })
+    .with_context(|| format!("writing {}", path.display()))
+}
+
+/// Converts a GNSS text file (the project's CSV or KF-GINS's text) into the binary fix file
+/// the firmware reads; returns the number of fixes.
+pub fn convert(input: &Path, output: &Path) -> Result<usize> {
+    atomic::refuse_same_file(&[input], output)?;
+    let fixes = gnss::read_gnss(input).with_context(|| format!("GNSS file {}", input.display()))?;
+    write_record_file(output, &fixes)?;
+    Ok(fixes.len())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gnss::GnssVelocity as TextVelocity;
+
+    fn fixes() -> Vec<GnssFix> {
+        (1..=5)
+            .map(|k| GnssFix {
+                t_s: 1.25 * f64::from(k) + 0.000_000_4,
+                lat_rad: 45.123_456_789_f64.to_radians(),
+                lon_rad: (-7.5_f64).to_radians(),
+                h_m: 250.5 + f64::from(k),
+                sigma_ned_m: [0.5, 0.5, 1.0],
+                velocity: (k % 2 == 0).then_some(TextVelocity {
+                    v_ned_m_s: [10.0, -0.3, 0.01],
+                    sigma_ned_m_s: [0.05, 0.05, f64::NAN],
+                }),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn text_and_binary_files_give_the_same_fixes() {
+        let dir = tempfile::tempdir().unwrap();
+        let csv = dir.path().join("gnss.csv");
+        let bin = dir.path().join("gnss.bin");
+        gnss::write_gnss_csv(&csv, &fixes()).unwrap();
+        assert_eq!(convert(&csv, &bin).unwrap(), 5);
+        assert!(is_record_file(&bin).unwrap() && !is_record_file(&csv).unwrap());
+        let (a, b) = (read_fixes(&csv).unwrap(), read_fixes(&bin).unwrap());
+        assert_eq!(a.fixes.len(), 5);
+        assert_eq!(a.bad_time_tags, 0);
+        // Bit for bit (a NaN sigma included): compare the records.
+        let enc = |f: &GnssFixes| -> Vec<[u8; 112]> {
+            f.fixes.iter().map(|f| record_of(f).encode()).collect()
+        };
+        assert_eq!(enc(&a), enc(&b));
+        assert_eq!(b.fixes[0].t_us, 1_250_000);
+        assert!(b.fixes[1].velocity.is_some() && b.fixes[0].velocity.is_none());
+        // In f32 as fix_input gives them (compared as text: the NaN sigma is not equal to
+        // itself).
+        let f32_fix = narrow::<f32>(&b.fixes[1]);
+        assert_eq!(
+            format!("{:?}", Some(f32_fix)),
+            format!("{:?}", fix_input::<f32>(&fixes()[1]))
+        );
+    }
+
+    #[test]
+    fn bad_files_and_fixes_are_refused_with_the_place() {
+        let dir = tempfile::tempdir().unwrap();
+        let bin = dir.path().join("gnss.bin");
+        let mut f = fixes();
+        f[3].t_s = f[2].t_s;
+        let e = write_record_file(&bin, &f).unwrap_err();
+        assert!(format!("{e:#}").contains("fix 3: time"), "{e:#}");
+        assert!(!bin.exists());
+        write_record_file(&bin, &fixes()).unwrap();
+        let mut bytes = std::fs::read(&bin).unwrap();
+        bytes[32 + 112 * 2 + 9] ^= 0x10;
+        std::fs::write(&bin, &bytes).unwrap();
+        let e = read_fixes(&bin).unwrap_err();
+        assert_eq!(
+            format!("{e:#}"),
+            format!(
+                "GNSS file {}: GNSS byte offset 256 (fix 2): record CRC mismatch (corrupt data)",
+                bin.display()
+            )
+        );
+        std::fs::write(&bin, &bytes[..100]).unwrap();
+        let e = read_fixes(&bin).unwrap_err();
+        assert!(format!("{e:#}").contains("truncated"), "{e:#}");
+    }
+}
