@@ -16,31 +16,10 @@ use nav_core::{NavState, Position, Scalar, Vector3, attitude};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// Default scale-factor 1-sigma when the noise model has none [-] (1000 ppm).
-pub const DEFAULT_SCALE_SIGMA: f64 = 1e-3;
-/// Default gyro cross-axis coupling 1-sigma when the noise model has none [rad] (0.1 deg,
-/// the misalignment data sheets of tactical MEMS give).
-pub const DEFAULT_CROSS_COUPLING_RAD: f64 = 1.745e-3;
-/// Default gyro g-sensitivity 1-sigma when the noise model has none [rad/s per m/s^2]
-/// (0.01 deg/s/g).
-pub const DEFAULT_G_SENSITIVITY: f64 = 1.78e-5;
-/// Default correlation time of the sensor errors [s] (1 h, KF-GINS's usual `corrtime`).
-pub const DEFAULT_CORRELATION_TIME_S: f64 = 3600.0;
-
-/// The filter's noise model of a part's data-sheet figures.
+/// The filter's noise model of a part's data-sheet figures (nav-core's defaults for what a
+/// data sheet lacks: [`nav_core::navigator::config::filter_noise_of`]).
 pub fn noise_of_spec(n: &NoiseSpec) -> FilterNoise<f64> {
-    FilterNoise {
-        arw_rad_per_sqrt_s: n.gyro_arw_rad_per_sqrt_s,
-        vrw_mps_per_sqrt_s: n.accel_vrw_mps_per_sqrt_s,
-        gyro_bias_rad_s: n.gyro_bias_rad_s,
-        accel_bias_mps2: n.accel_bias_mps2,
-        gyro_scale: DEFAULT_SCALE_SIGMA,
-        accel_scale: DEFAULT_SCALE_SIGMA,
-        correlation_time_s: DEFAULT_CORRELATION_TIME_S,
-        gyro_cross_coupling_rad: DEFAULT_CROSS_COUPLING_RAD,
-        accel_cross_coupling_rad: DEFAULT_CROSS_COUPLING_RAD,
-        gyro_g_sensitivity: DEFAULT_G_SENSITIVITY,
-    }
+    nav_core::navigator::config::filter_noise_of(&crate::pipeline::sensor_noise(n))
 }
 
 /// The filter's assumptions for a grade: its white noise, and per axis the largest of the

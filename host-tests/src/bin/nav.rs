@@ -1411,62 +1411,9 @@ fn run(cli: Cli) -> Result<()> {
 }
 
 fn print_summary(imu: &Path, out: &Path, precision: Precision, fr: &FileReport) {
-    let r = &fr.report;
-    let format = fr.format;
     let p = match precision {
         Precision::F32 => "f32",
         Precision::F64 => "f64",
     };
-    println!(
-        "replay of {} ({format}, {} Hz, {p})",
-        imu.display(),
-        fr.rate_hz
-    );
-    let c = r.source.unwrap_or_default();
-    println!(
-        "samples {}: flagged {} (non-finite {}, bad interval {}), rejected {}, missed {}; navigation steps {}",
-        r.samples, r.flagged, c.non_finite, c.bad_interval, r.rejected, c.missed, r.nav_steps
-    );
-    if let Some(h) = r.driver {
-        // The firmware's line, field for field.
-        println!("IMU driver: {h}");
-    }
-    let a = &r.alignment;
-    println!(
-        "alignment ({}) over {} samples ({:.3} s: coarse {:.3} s, fine {:.3} s): roll {:.6} deg, pitch {:.6} deg, yaw {:.6} deg; 1-sigma {:.4} {:.4} {:.4} deg",
-        a.method.name(),
-        a.samples,
-        a.duration_s,
-        a.coarse_s,
-        a.fine_s,
-        a.roll_deg,
-        a.pitch_deg,
-        a.yaw_deg,
-        a.sigma_deg[0],
-        a.sigma_deg[1],
-        a.sigma_deg[2]
-    );
-    if let Some(note) = a.note {
-        println!("  note: {note}");
-    }
-    let (v, p) = (a.velocity_sigma_m_s, a.position_sigma_m);
-    println!(
-        "  hand-over 1-sigma: velocity {:.2} {:.2} {:.2} m/s, position {:.2} {:.2} {:.2} m (N E D)",
-        v[0], v[1], v[2], p[0], p[1], p[2]
-    );
-    let s = &r.final_solution;
-    println!(
-        "final at t = {:.6} s: lat {:.9} deg, lon {:.9} deg, h {:.3} m; v_NED {:.6} {:.6} {:.6} m/s; roll {:.6} pitch {:.6} yaw {:.6} deg",
-        s.t_us as f64 / 1e6,
-        s.lat_ndeg as f64 / 1e9,
-        s.lon_ndeg as f64 / 1e9,
-        s.h_m,
-        s.v_eb_n[0],
-        s.v_eb_n[1],
-        s.v_eb_n[2],
-        s.roll_deg,
-        s.pitch_deg,
-        s.yaw_deg
-    );
-    println!("log: {} ({} rows)", out.display(), r.rows);
+    println!("{}", host_tests::replay::summary(imu, out, p, fr));
 }

@@ -59,6 +59,24 @@ pub const VERTICALS: [(&str, VerticalChannel); 2] = [
     ("hold", VerticalChannel::Hold),
 ];
 
+/// The aided filter's noise model of an IMU's noise figures: its white noise and biases, the
+/// default scale-factor, correlation-time, cross-coupling and g-sensitivity figures below
+/// (the figures a data sheet's noise model lacks).
+pub fn filter_noise_of<T: Scalar>(n: &SensorNoise<f64>) -> FilterNoise<T> {
+    FilterNoise {
+        arw_rad_per_sqrt_s: T::c(n.arw_rad_per_sqrt_s),
+        vrw_mps_per_sqrt_s: T::c(n.vrw_mps_per_sqrt_s),
+        gyro_bias_rad_s: T::c(n.gyro_bias_rad_s),
+        accel_bias_mps2: T::c(n.accel_bias_mps2),
+        gyro_scale: T::c(DEFAULT_SCALE_SIGMA),
+        accel_scale: T::c(DEFAULT_SCALE_SIGMA),
+        correlation_time_s: T::c(DEFAULT_CORRELATION_TIME_S),
+        gyro_cross_coupling_rad: T::c(DEFAULT_CROSS_COUPLING_RAD),
+        accel_cross_coupling_rad: T::c(DEFAULT_CROSS_COUPLING_RAD),
+        gyro_g_sensitivity: T::c(DEFAULT_G_SENSITIVITY),
+    }
+}
+
 /// Default scale-factor 1-sigma of the aided phase's filter [-] (1000 ppm: the noise model
 /// has no scale-factor figure).
 pub const DEFAULT_SCALE_SIGMA: f64 = 1e-3;
@@ -236,19 +254,7 @@ impl RunConfig {
     /// alignment's), [`DEFAULT_SCALE_SIGMA`], [`DEFAULT_CORRELATION_TIME_S`],
     /// [`DEFAULT_CROSS_COUPLING_RAD`] and [`DEFAULT_G_SENSITIVITY`].
     pub fn filter_noise<T: Scalar>(&self) -> FilterNoise<T> {
-        let n = &self.noise;
-        FilterNoise {
-            arw_rad_per_sqrt_s: T::c(n.arw_rad_per_sqrt_s),
-            vrw_mps_per_sqrt_s: T::c(n.vrw_mps_per_sqrt_s),
-            gyro_bias_rad_s: T::c(n.gyro_bias_rad_s),
-            accel_bias_mps2: T::c(n.accel_bias_mps2),
-            gyro_scale: T::c(DEFAULT_SCALE_SIGMA),
-            accel_scale: T::c(DEFAULT_SCALE_SIGMA),
-            correlation_time_s: T::c(DEFAULT_CORRELATION_TIME_S),
-            gyro_cross_coupling_rad: T::c(DEFAULT_CROSS_COUPLING_RAD),
-            accel_cross_coupling_rad: T::c(DEFAULT_CROSS_COUPLING_RAD),
-            gyro_g_sensitivity: T::c(DEFAULT_G_SENSITIVITY),
-        }
+        filter_noise_of(&self.noise)
     }
 
     /// The noise the alignment assumes: [`Self::noise`] with its biases scaled by
