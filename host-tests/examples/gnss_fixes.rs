@@ -1,16 +1,14 @@
-//! GNSS fix files for aided runs of the firmware and the harness (until `nav` has commands for
-//! them):
+//! GNSS fix files for an existing truth file (the demo's): `nav sim --gnss-rate` simulates the
+//! receiver with the recording, `nav convert --gnss` converts a GNSS text file.
 //!
 //! ```text
 //! cargo run --release -p host-tests --example gnss_fixes -- simulate TRUTH_CSV OUT_DIR [RATE_HZ [SEED]]
-//! cargo run --release -p host-tests --example gnss_fixes -- convert GNSS_TEXT GNSS_BIN
 //! ```
 //!
 //! `simulate` writes `OUT_DIR/gnss.csv` (the project's GNSS CSV) and `OUT_DIR/gnss.bin` (the
 //! firmware's binary fix file, `docs/gnss-record-format.md`) of a receiver at the IMU
 //! (`host_tests::gnss_sim`: 0.5, 0.5, 1 m and 0.05, 0.05, 0.1 m/s 1-sigma; by default at 1 Hz
-//! with seed 1) from a truth file `nav sim` wrote; `convert` turns a GNSS text file (CSV or
-//! KF-GINS) into the binary fix file.
+//! with seed 1) from a truth file `nav sim` wrote.
 
 use anyhow::{Context, Result, bail};
 use host_tests::gnss_sim::{self, GnssSimOptions};
@@ -49,13 +47,7 @@ fn main() -> Result<()> {
                 out.display()
             );
         }
-        ["convert", input, output] => {
-            let n = gnss_file::convert(Path::new(input), Path::new(output))?;
-            println!("{n} fixes -> {output}");
-        }
-        _ => bail!(
-            "usage: gnss_fixes simulate TRUTH_CSV OUT_DIR [RATE_HZ [SEED]] | convert GNSS_TEXT GNSS_BIN"
-        ),
+        _ => bail!("usage: gnss_fixes simulate TRUTH_CSV OUT_DIR [RATE_HZ [SEED]]"),
     }
     Ok(())
 }

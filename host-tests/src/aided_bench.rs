@@ -6,6 +6,7 @@
 use crate::aided::{self, AidedSample, AidedSink};
 use crate::aided_cmd::grade_noise;
 use crate::gnss_sim::{self, GnssSimOptions};
+use crate::recording_io::Recording;
 use crate::report::interpolate;
 use crate::sensor_model::{ErrorInjector, Grade};
 use crate::simulate::{SimOptions, simulate};
@@ -18,7 +19,7 @@ use nav_core::ins_filter::{
     ATT, AidResult, AidedIns, BA, BG, FilterConfig, InitialSigma, POS, SA, SensorErrors, VEL,
 };
 use nav_core::nalgebra::{SMatrix, SVector};
-use nav_core::{NavState, Position, Vector3};
+use nav_core::{NavState, Position, Scalar, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -150,27 +151,34 @@ pub struct Prepared {
 impl Prepared {
     /// The recording's samples for [`aided::run`].
     pub fn samples(&self) -> impl FnMut() -> Result<Option<AidedSample<f64>>, String> + '_ {
-        let records = &self.sim.recording.records;
-        let mut prev_t_ns = self.sim.recording.t0_ns;
-        let mut k = 0;
-        move || {
-            let Some(r) = records.get(k) else {
-                return Ok(None);
-            };
-            k += 1;
-            let dt = (r.t_ns - prev_t_ns) as f64 * 1e-9;
-            prev_t_ns = r.t_ns;
-            Ok(Some(AidedSample {
-                t_us: r.t_ns / 1000,
-                increment: nav_core::ImuIncrement::new(
-                    r.gyro.map(f64::from),
-                    r.accel.map(f64::from),
-                    dt,
-                ),
-                unusable: false,
-                gap: false,
-            }))
-        }
+        recording_samples(&self.sim.recording)
+    }
+}
+
+/// A simulated recording's samples for [`aided::run`], in precision `T`.
+pub fn recording_samples<T: Scalar>(
+    recording: &Recording,
+) -> impl FnMut() -> Result<Option<AidedSample<T>>, String> + '_ {
+    let records = &recording.records;
+    let mut prev_t_ns = recording.t0_ns;
+    let mut k = 0;
+    move || {
+        let Some(r) = records.get(k) else {
+            return Ok(None);
+        };
+        k += 1;
+        let dt_s = (r.t_ns - prev_t_ns) as f64 * 1e-9;
+        prev_t_ns = r.t_ns;
+        Ok(Some(AidedSample {
+            t_us: r.t_ns / 1000,
+            increment: nav_core::ImuIncrement::new(
+                r.gyro.map(T::of_f32),
+                r.accel.map(T::of_f32),
+                T::c(dt_s),
+            ),
+            unusable: false,
+            gap: false,
+        }))
     }
 }
 

@@ -58,6 +58,7 @@ pub mod recording_io;
 pub mod replay;
 pub mod report;
 pub mod sensor_model;
+pub mod sigma_log;
 pub mod simulate;
 pub mod simulate_family;
 pub mod text_error;

@@ -12,11 +12,17 @@
 //! - roll, pitch and yaw differences [deg], each wrapped to [-180, 180), and the total rotation
 //!   angle of `q_true^-1 q_sol` [deg] (free of the Euler angles' singularities).
 //!
+//! An aided run's log carries the filter's own 1-sigma ([`crate::sigma_log`]): the table then
+//! adds, per quantity, the share of rows whose error is within 3 sigma and the RMS of the
+//! normalised error (1 for an honest sigma), and the plots draw the ±3-sigma envelope beside
+//! each error.
+//!
 //! A solution log ends with its end record (`# end: N rows, ok`, [`EndRecord`]), which only a
 //! run that finished writes. A CSV solution without it is still compared (the rows it has are
 //! valid), with a warning on stderr that the run was cut short; the exit status stays 0. An end
 //! record whose count differs from the rows read, or anything after it, is an error.
 
+use crate::sigma_log::{self, Sigma};
 use crate::truth::Truth;
 use crate::{kf_gins, truth_csv};
 use anyhow::{Context, Result, anyhow, bail, ensure};
@@ -63,6 +69,8 @@ pub struct ErrorSample {
     pub yaw_deg: f64,
     /// Rotation angle of `q_true^-1 q_sol` [deg], in [0, 180].
     pub rotation_deg: f64,
+    /// The solution's own 1-sigma, when its log has them (an aided run's).
+    pub sigma: Option<Sigma>,
 }
 
 /// The errors of a solution against a truth.
@@ -150,6 +158,25 @@ impl Quantity {
         }
     }
 
+    /// The solution's 1-sigma of the quantity in `e`, when it has one (not for the horizontal
+    /// distance and the rotation angle, whose distributions are not symmetric about zero).
+    pub fn sigma(self, e: &ErrorSample) -> Option<f64> {
+        let k = match self {
+            Self::North => 0,
+            Self::East => 1,
+            // The height error is minus the down error: the same 1-sigma.
+            Self::Height => 2,
+            Self::VelocityNorth => 3,
+            Self::VelocityEast => 4,
+            Self::VelocityDown => 5,
+            Self::Roll => 6,
+            Self::Pitch => 7,
+            Self::Yaw => 8,
+            Self::Horizontal | Self::Rotation => return None,
+        };
+        e.sigma.map(|s| s[k])
+    }
+
     /// The quantity's value in `e`.
     pub fn of(self, e: &ErrorSample) -> f64 {
         match self {
@@ -179,6 +206,15 @@ pub struct ErrorStats {
     pub t_max_s: f64,
 }
 
+/// A quantity's errors over the solution's 1-sigma.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalisedStats {
+    /// RMS of error / sigma (1 when the sigma is honest).
+    pub rms: f64,
+    /// Share of rows with |error| <= 3 sigma (0.997 for a Gaussian error and an honest sigma).
+    pub within_3_sigma: f64,
+}
+
 impl ErrorSeries {
     /// Statistics of `q`; `None` for an empty series.
     pub fn stats(&self, q: Quantity) -> Option<ErrorStats> {
@@ -199,6 +235,24 @@ impl ErrorSeries {
         })
     }
 
+    /// The errors of `q` over the solution's own 1-sigma, on the rows that have one (and a
+    /// positive one); `None` when none has.
+    pub fn normalised(&self, q: Quantity) -> Option<NormalisedStats> {
+        let z: Vec<f64> = self
+            .samples
+            .iter()
+            .filter_map(|e| q.sigma(e).filter(|s| *s > 0.0).map(|s| q.of(e) / s))
+            .collect();
+        if z.is_empty() {
+            return None;
+        }
+        let n = z.len() as f64;
+        Some(NormalisedStats {
+            rms: (z.iter().map(|z| z * z).sum::<f64>() / n).sqrt(),
+            within_3_sigma: z.iter().filter(|z| z.abs() <= 3.0).count() as f64 / n,
+        })
+    }
+
     /// The sample nearest in time to `t_s` [s] (the earlier one on a tie); `None` when empty.
     pub fn nearest(&self, t_s: f64) -> Option<&ErrorSample> {
         let k = self.samples.partition_point(|e| e.t_s < t_s);
@@ -214,6 +268,23 @@ impl ErrorSeries {
 /// Compares `solution` with `truth` (both in time order; see the module docs). Errors when the
 /// truth is empty or not in time order, or when no solution row lies within the truth's span.
 pub fn compare(solution: &[Truth], truth: &[Truth]) -> Result<ErrorSeries> {
+    compare_with_sigma(solution, None, truth)
+}
+
+/// [`compare`], each error with its solution row's 1-sigma from `sigma` (one per row).
+pub fn compare_with_sigma(
+    solution: &[Truth],
+    sigma: Option<&[Sigma]>,
+    truth: &[Truth],
+) -> Result<ErrorSeries> {
+    if let Some(sigma) = sigma {
+        ensure!(
+            sigma.len() == solution.len(),
+            "{} rows of 1-sigma for {} solution rows",
+            sigma.len(),
+            solution.len()
+        );
+    }
     let (Some(first), Some(last)) = (truth.first(), truth.last()) else {
         bail!("the truth has no rows");
     };
@@ -236,9 +307,12 @@ pub fn compare(solution: &[Truth], truth: &[Truth]) -> Result<ErrorSeries> {
         skipped_before: 0,
         skipped_after: 0,
     };
-    for s in solution {
+    for (k, s) in solution.iter().enumerate() {
         match interpolate(truth, s.t_s) {
-            Some(t) => series.samples.push(errors(s, &t)),
+            Some(t) => series.samples.push(ErrorSample {
+                sigma: sigma.map(|sigma| sigma[k]),
+                ..errors(s, &t)
+            }),
             None if s.t_s < t0 => series.skipped_before += 1,
             None => series.skipped_after += 1,
         }
@@ -312,6 +386,7 @@ fn errors(sol: &Truth, truth: &Truth) -> ErrorSample {
         pitch_deg: (pitch_s - pitch_t).to_degrees(),
         yaw_deg: wrap_pi(yaw_s - yaw_t).to_degrees(),
         rotation_deg: rotation.to_degrees(),
+        sigma: None,
     }
 }
 
@@ -500,6 +575,10 @@ pub fn format_table(series: &ErrorSeries, at_s: &[f64]) -> String {
         "t(max) - t0 [s]".to_owned(),
     ];
     let at_rows: Vec<Option<&ErrorSample>> = at_s.iter().map(|&t| series.nearest(t0 + t)).collect();
+    let with_sigma = series.samples.iter().any(|e| e.sigma.is_some());
+    if with_sigma {
+        header.extend(["|e| <= 3 sigma".to_owned(), "RMS e/sigma".to_owned()]);
+    }
     header.extend(at_s.iter().map(|t| format!("at t0 + {t} s")));
     let mut rows = vec![header];
     for q in Quantity::ALL {
@@ -510,6 +589,15 @@ pub fn format_table(series: &ErrorSeries, at_s: &[f64]) -> String {
             number(s.max_abs),
             format!("{:.3}", s.t_max_s - t0),
         ];
+        if with_sigma {
+            row.extend(match series.normalised(q) {
+                Some(n) => [
+                    format!("{:.1} %", 100.0 * n.within_3_sigma),
+                    format!("{:.2}", n.rms),
+                ],
+                None => ["-".to_owned(), "-".to_owned()],
+            });
+        }
         row.extend(
             at_rows
                 .iter()
@@ -575,8 +663,13 @@ pub fn report_files(
         );
         ", no end record: cut short"
     };
+    let sigma = if kf_gins {
+        None
+    } else {
+        sigma_log::read(solution)?
+    };
     let tru = read_trajectory(truth, true)?;
-    let series = compare(&sol, &tru).with_context(|| {
+    let series = compare_with_sigma(&sol, sigma.as_deref(), &tru).with_context(|| {
         format!(
             "comparing the solution {} with the truth {}",
             solution.display(),
@@ -652,8 +745,9 @@ const COLORS: [RGBColor; 4] = [
 ];
 
 /// Writes `attitude_errors.svg`, `velocity_errors.svg` and `position_errors.svg` into `dir`
-/// (created if missing): the errors against time since [`ErrorSeries::t_start_s`]. Returns the
-/// files written.
+/// (created if missing): the errors against time since [`ErrorSeries::t_start_s`], with the
+/// ±3-sigma envelope of each quantity whose 1-sigma the solution carries. Returns the files
+/// written.
 pub fn write_plots(series: &ErrorSeries, dir: &Path) -> Result<Vec<PathBuf>> {
     ensure!(!series.samples.is_empty(), "no errors to plot");
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -683,7 +777,34 @@ fn plot(path: &Path, spec: &PlotSpec, series: &ErrorSeries) -> Result<(), String
         .collect();
     let all = || lines.iter().flat_map(|(_, p)| p.iter());
     let (x_lo, x_hi) = padded_range(all().map(|p| p.0), 0.0);
-    let (y_lo, y_hi) = padded_range(all().map(|p| p.1), 0.05);
+    let (e_lo, e_hi) = padded_range(all().map(|p| p.1), 0.05);
+    // The +3-sigma line of each quantity that has one (the envelope is symmetric).
+    let envelopes: Vec<(usize, Vec<(f64, f64)>)> = spec
+        .lines
+        .iter()
+        .enumerate()
+        .filter_map(|(i, &q)| {
+            let points: Vec<(f64, f64)> = series
+                .samples
+                .iter()
+                .filter_map(|e| q.sigma(e).map(|s| (e.t_s - t0, 3.0 * s)))
+                .collect();
+            (!points.is_empty()).then(|| (i, decimate(&points, PLOT_MAX_POINTS)))
+        })
+        .collect();
+    // The envelopes widen the axis, but to at most 4 times the errors' own span: a start's
+    // large sigma must not flatten the errors (the envelope leaves the chart there).
+    let width = e_hi - e_lo;
+    let (y_lo, y_hi) =
+        envelopes
+            .iter()
+            .flat_map(|(_, p)| p.iter())
+            .fold((e_lo, e_hi), |(lo, hi), p| {
+                (
+                    lo.min((-p.1).max(e_lo - 4.0 * width)),
+                    hi.max(p.1.min(e_hi + 4.0 * width)),
+                )
+            });
 
     let e = |e: &dyn std::fmt::Display| e.to_string();
     let root = SVGBackend::new(path, (1000, 600)).into_drawing_area();
@@ -704,6 +825,20 @@ fn plot(path: &Path, spec: &PlotSpec, series: &ErrorSeries) -> Result<(), String
         .y_label_formatter(&|y| tick_label(*y, y_hi - y_lo))
         .draw()
         .map_err(|x| e(&x))?;
+    for (i, points) in envelopes {
+        let color = COLORS[i % COLORS.len()].mix(0.45);
+        let clip = |y: f64| y.clamp(y_lo, y_hi);
+        let upper: Vec<(f64, f64)> = points.iter().map(|p| (p.0, clip(p.1))).collect();
+        let lower: Vec<(f64, f64)> = points.iter().map(|p| (p.0, clip(-p.1))).collect();
+        chart
+            .draw_series(LineSeries::new(upper, color))
+            .map_err(|x| e(&x))?
+            .label(format!("±3 sigma of {}", spec.lines[i].name()))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+        chart
+            .draw_series(LineSeries::new(lower, color))
+            .map_err(|x| e(&x))?;
+    }
     for (i, (q, points)) in lines.into_iter().enumerate() {
         let color = COLORS[i % COLORS.len()];
         chart
@@ -958,6 +1093,69 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("missing.nav"), "{err}");
+    }
+
+    /// An aided log's 1-sigma: the share within 3 sigma and the RMS of the normalised error in
+    /// the table (north off by 2 m with a 0.5 m sigma on every row: 0 % and 4; east exact:
+    /// 100 % and 0), and the envelopes in the plots; a 1-sigma that is not a number is refused.
+    #[test]
+    fn an_aided_log_gets_normalised_errors_and_envelopes() {
+        let dir = tempfile::tempdir().unwrap();
+        let (sol_path, truth_path) = (dir.path().join("sol.csv"), dir.path().join("truth.csv"));
+        let t = truth();
+        truth_csv::write(&truth_path, &t).unwrap();
+        // The solution 2 m north of the truth, with the 1-sigma columns appended.
+        let north: Vec<Truth> = t
+            .iter()
+            .map(|r| Truth {
+                lat: r.lat + 2.0 / (radii(r.lat).0 + r.h),
+                ..*r
+            })
+            .collect();
+        truth_csv::write(&sol_path, &north).unwrap();
+        let plain = std::fs::read_to_string(&sol_path).unwrap();
+        let mut log = format!("{}\n", crate::aided::header());
+        for row in plain.lines().skip(1) {
+            writeln!(log, "{row},0.5,0.5,1,0.1,0.1,0.1,0.01,0.01,0.2,NAV").unwrap();
+        }
+        writeln!(log, "# end: {} rows, ok", t.len()).unwrap();
+        std::fs::write(&sol_path, &log).unwrap();
+        let plots = dir.path().join("plots");
+        let text = report_files(&sol_path, &truth_path, &[], Some(&plots)).unwrap();
+        let line = |name: &str| {
+            text.lines()
+                .find(|l| l.starts_with(name))
+                .unwrap_or_else(|| panic!("no {name} row in {text}"))
+                .split_whitespace()
+                .map(str::to_owned)
+                .collect::<Vec<_>>()
+        };
+        assert!(
+            text.contains("|e| <= 3 sigma") && text.contains("RMS e/sigma"),
+            "{text}"
+        );
+        let north = line("north");
+        assert_eq!(&north[north.len() - 3..], ["0.0", "%", "4.00"], "{text}");
+        let east = line("east");
+        assert_eq!(&east[east.len() - 3..], ["100.0", "%", "0.00"], "{text}");
+        let horizontal = line("horizontal");
+        assert_eq!(&horizontal[horizontal.len() - 2..], ["-", "-"], "{text}");
+        let svg = std::fs::read_to_string(plots.join("position_errors.svg")).unwrap();
+        assert!(svg.contains("±3 sigma of north"), "{svg}");
+        assert!(!svg.contains("±3 sigma of horizontal"));
+
+        // A 1-sigma that is not a number: refused, naming its column.
+        let cut = log.replacen(
+            ",0.5,0.5,1,0.1,0.1,0.1,0.01,0.01,0.2,NAV",
+            ",0.5,0.5,1,0.1,0.1,0.1,0.01,0.01,x,NAV",
+            1,
+        );
+        std::fs::write(&sol_path, cut).unwrap();
+        let err = format!(
+            "{:#}",
+            report_files(&sol_path, &truth_path, &[], None).unwrap_err()
+        );
+        assert!(err.contains("sigma_yaw_deg"), "{err}");
     }
 
     #[test]

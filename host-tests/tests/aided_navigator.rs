@@ -161,7 +161,7 @@ fn an_aided_drive_stays_within_the_filters_sigma() {
         seed: 3,
         ..GnssSimOptions::default()
     };
-    write_inputs(d, &sim, &gnss);
+    let fixes = write_inputs(d, &sim, &gnss);
     let (f64_log, f64_report) = aided_log::<f64>(d, lever, "f64.csv");
     let (f32_log, f32_report) = aided_log::<f32>(d, lever, "f32.csv");
     for (precision, log) in [("f64", &f64_log), ("f32", &f32_log)] {
@@ -221,7 +221,16 @@ fn an_aided_drive_stays_within_the_filters_sigma() {
     assert!(aided_m < 1.0 && free_m > 5.0, "{aided_m} {free_m}");
 
     // The command line, on the CSV and on the binary fix file: the library's log.
-    host_tests::gnss_file::convert(&d.join("gnss.csv"), &d.join("gnss.bin")).unwrap();
+    let o = nav(
+        d,
+        &["convert", "--gnss", "--in", "gnss.csv", "--out", "gnss.bin"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        said.contains(&format!("({} GNSS fixes)", fixes.len())),
+        "{said}"
+    );
     for (file, out) in [("gnss.csv", "cli.csv"), ("gnss.bin", "cli-bin.csv")] {
         let o = nav(
             d,

@@ -227,14 +227,18 @@ enum Command {
         yaw: f64,
     },
     /// Convert a recording (CSV, PSINS, KF-GINS or binary; auto-detected) to binary, or to CSV
-    /// when the output ends in .csv.
+    /// when the output ends in .csv; with --gnss, a GNSS file (the project's CSV or KF-GINS's
+    /// text) to the binary fix file the firmware's --gnss reads.
     Convert {
-        /// Input recording.
+        /// Input recording (or GNSS file, with --gnss).
         #[arg(long = "in", value_name = "FILE")]
         input: PathBuf,
         /// Output file.
         #[arg(long, value_name = "FILE")]
         out: PathBuf,
+        /// The input is a GNSS file: write docs/gnss-record-format.md's binary fix file.
+        #[arg(long)]
+        gnss: bool,
     },
     /// Run a KF-GINS configuration file as it is (its IMU and GNSS text files, start, noise and
     /// lever arm) through this project's GNSS-aided filter, writing KF-GINS's 11-column .nav
@@ -833,8 +837,9 @@ struct SimArgs {
     /// Print the scenario's parameters with their defaults and exit.
     #[arg(long)]
     list_params: bool,
-    /// Also write DIR/gnss.csv: a simulated GNSS receiver at this rate [Hz] (its interval a
-    /// whole number of truth intervals), on the truth of the run.
+    /// Also write DIR/gnss.csv and DIR/gnss.bin (the firmware's binary fix file): a simulated
+    /// GNSS receiver at this rate [Hz] (its interval a whole number of truth intervals), on the
+    /// truth of the run.
     #[arg(long, value_name = "HZ")]
     gnss_rate: Option<f64>,
     /// GNSS position 1-sigma north, east, down [m].
@@ -1060,9 +1065,12 @@ fn sim(a: SimArgs) -> Result<()> {
             host_tests::gnss_sim::simulate(&sim.truth, &g).context("simulated GNSS receiver")?;
         let path = out.join("gnss.csv");
         host_tests::gnss::write_gnss_csv(&path, &receiver.fixes)?;
+        let bin = out.join("gnss.bin");
+        host_tests::gnss_file::write_record_file(&bin, &receiver.fixes)?;
         println!(
-            "  GNSS       {} ({} fixes)",
+            "  GNSS       {} and {} ({} fixes)",
             path.display(),
+            bin.display(),
             receiver.fixes.len()
         );
         for line in receiver.describe(&g).lines() {
@@ -1361,7 +1369,24 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Convert { input, out } => {
+        Command::Convert {
+            input,
+            out,
+            gnss: true,
+        } => {
+            let n = host_tests::gnss_file::convert(&input, &out)?;
+            println!(
+                "converted {} ({n} GNSS fixes) to the binary fix file {}",
+                input.display(),
+                out.display()
+            );
+            Ok(())
+        }
+        Command::Convert {
+            input,
+            out,
+            gnss: false,
+        } => {
             // Streamed: memory independent of the file's length.
             let c = recording_io::convert(&input, &out)?;
             println!(

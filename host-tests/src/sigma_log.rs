@@ -1,0 +1,121 @@
+//! The 1-sigma columns of an aided solution log ([`crate::aided::SIGMA_COLUMNS`]), for
+//! `nav report`'s normalised errors and ±3-sigma envelopes.
+//!
+//! A log without those columns (a free-inertial or alignment run, a truth file) has none: the
+//! reader answers `None`. A log with only some of them, or with a value that is not a finite
+//! number >= 0, is refused with its line.
+
+use crate::aided::SIGMA_COLUMNS;
+use anyhow::{Context, Result, bail};
+use std::fs::File;
+use std::io::BufReader;
+use std::path::Path;
+
+/// The 1-sigma column names, in [`Sigma`]'s order (those of the writer's
+/// [`SIGMA_COLUMNS`]).
+pub fn columns() -> [&'static str; 9] {
+    let mut names = SIGMA_COLUMNS.split(',').filter(|c| c.starts_with("sigma_"));
+    core::array::from_fn(|_| names.next().unwrap_or_default())
+}
+
+/// One row's 1-sigma: position north, east, down [m], velocity north, east, down [m/s], roll,
+/// pitch, yaw [deg].
+pub type Sigma = [f64; 9];
+
+/// The 1-sigma of every row of the solution log at `path` (its end record skipped), or `None`
+/// when the log has no 1-sigma columns.
+pub fn read(path: &Path) -> Result<Option<Vec<Sigma>>> {
+    let file = File::open(path).with_context(|| format!("{}", path.display()))?;
+    let mut reader = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .from_reader(BufReader::new(file));
+    let header = reader
+        .headers()
+        .with_context(|| format!("{}: header", path.display()))?
+        .clone();
+    let names = columns();
+    let index: Vec<Option<usize>> = names
+        .iter()
+        .map(|name| header.iter().position(|h| h == *name))
+        .collect();
+    if index.iter().all(Option::is_none) {
+        return Ok(None);
+    }
+    if let Some(k) = index.iter().position(Option::is_none) {
+        bail!(
+            "{}: the header has some 1-sigma columns but not {}",
+            path.display(),
+            names[k]
+        );
+    }
+    let index: Vec<usize> = index.into_iter().flatten().collect();
+    let mut rows = Vec::new();
+    for record in reader.records() {
+        let record = record.with_context(|| format!("{}", path.display()))?;
+        let line = record.position().map_or(0, |p| p.line());
+        let mut sigma = [0.0; 9];
+        for (s, (&i, name)) in sigma.iter_mut().zip(index.iter().zip(names)) {
+            let text = record.get(i).unwrap_or("");
+            *s = match text.parse::<f64>() {
+                Ok(v) if v.is_finite() && v >= 0.0 => v,
+                _ => bail!(
+                    "{}: line {line}: {name} is {text:?}, not a finite number >= 0",
+                    path.display()
+                ),
+            };
+        }
+        rows.push(sigma);
+    }
+    Ok(Some(rows))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn file(text: &str) -> tempfile::NamedTempFile {
+        let f = tempfile::NamedTempFile::new().unwrap();
+        std::fs::write(f.path(), text).unwrap();
+        f
+    }
+
+    const HEADER: &str = "t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,pitch_deg,\
+yaw_deg,sigma_n_m,sigma_e_m,sigma_d_m,sigma_vn_mps,sigma_ve_mps,sigma_vd_mps,sigma_roll_deg,\
+sigma_pitch_deg,sigma_yaw_deg,status";
+
+    #[test]
+    fn the_columns_are_the_writers() {
+        assert_eq!(crate::aided::header(), HEADER);
+        assert!(columns().iter().all(|c| c.starts_with("sigma_")));
+    }
+
+    #[test]
+    fn reads_the_columns_and_skips_the_end_record() {
+        let f = file(&format!(
+            "{HEADER}\n1,45,7,100,0,0,0,0,0,0,1,2,3,0.1,0.2,0.3,0.01,0.02,0.5,NAV\n# end: 1 rows, ok\n"
+        ));
+        let rows = read(f.path()).unwrap().unwrap();
+        assert_eq!(rows, vec![[1.0, 2.0, 3.0, 0.1, 0.2, 0.3, 0.01, 0.02, 0.5]]);
+    }
+
+    #[test]
+    fn a_log_without_sigma_has_none() {
+        let f = file("t_s,lat_deg\n1,45\n");
+        assert_eq!(read(f.path()).unwrap(), None);
+    }
+
+    #[test]
+    fn refuses_a_partial_header_and_bad_values() {
+        let f = file("t_s,sigma_n_m\n1,2\n");
+        let e = read(f.path()).unwrap_err().to_string();
+        assert!(e.contains("not sigma_e_m"), "{e}");
+        for bad in ["-1", "NaN", "x", "inf"] {
+            let f = file(&format!(
+                "{HEADER}\n1,45,7,100,0,0,0,0,0,0,{bad},2,3,0.1,0.2,0.3,0.01,0.02,0.5,NAV\n"
+            ));
+            let e = format!("{:#}", read(f.path()).unwrap_err());
+            assert!(e.contains("line 2: sigma_n_m"), "{bad}: {e}");
+        }
+    }
+}
