@@ -4,7 +4,7 @@
 //! errors [Bar-Shalom et al., §5.4].
 
 use crate::aided::{self, AidedSample, AidedSink};
-use crate::aided_cmd::grade_noise;
+use crate::aided_cmd::{GradeFilterModel, grade_filter_model, grade_noise};
 use crate::gnss_sim::{self, GnssSimOptions};
 use crate::recording_io::Recording;
 use crate::report::interpolate;
@@ -39,6 +39,14 @@ pub struct Case {
     pub gnss: GnssSimOptions,
     /// Seed of the sensor errors, the GNSS noise and the start's errors.
     pub seed: u64,
+    /// Zero-velocity and zero-rate updates at stops. Their 1-sigma (0.02 m/s, 0.01 deg/s)
+    /// stands for a stopped vehicle's residual motion, which the simulated stops lack (they
+    /// are exactly still): with them the filter is conservative at every stop by design.
+    pub zero_motion: bool,
+    /// The filter's noise model: [`grade_filter_model`] (true: the grade's turn-on spread as
+    /// the start's uncertainty, its in-run processes alone as process noise) or
+    /// [`grade_noise`] (false: one figure per sensor for both, as `nav replay --imu-noise`).
+    pub in_run_noise: bool,
 }
 
 /// Per-epoch statistics of one run.
@@ -195,8 +203,25 @@ pub fn prepare(case: &Case) -> Result<Prepared> {
     opts.seed = case.seed;
     let sim = simulate(&opts, |_, _| {})?;
     let gnss = gnss_sim::simulate(&sim.truth, &case.gnss)?;
-    let noise = grade_noise(case.grade);
-    let mut config = FilterConfig::new(noise);
+    let model = if case.in_run_noise {
+        grade_filter_model(case.grade)
+    } else {
+        let noise = grade_noise(case.grade);
+        GradeFilterModel {
+            noise,
+            initial: [
+                noise.gyro_bias_rad_s,
+                noise.accel_bias_mps2,
+                noise.gyro_scale,
+                noise.accel_scale,
+            ]
+            .map(Vector3::repeat),
+        }
+    };
+    let mut config = FilterConfig::new(model.noise);
+    if !case.zero_motion {
+        config.zero_motion = None;
+    }
     config.antenna_lever_arm_b_m = Vector3::from(case.gnss.lever_arm_b_m);
     // A start with errors drawn from its own 1-sigma.
     let t0 = sim.truth[0];
@@ -204,10 +229,10 @@ pub fn prepare(case: &Case) -> Result<Prepared> {
         position_ned_m: Vector3::repeat(2.0),
         velocity_ned_m_s: Vector3::repeat(0.1),
         attitude_rad: Vector3::new(0.05f64, 0.05, 0.5).map(f64::to_radians),
-        gyro_bias_rad_s: Vector3::repeat(noise.gyro_bias_rad_s),
-        accel_bias_mps2: Vector3::repeat(noise.accel_bias_mps2),
-        gyro_scale: Vector3::repeat(noise.gyro_scale),
-        accel_scale: Vector3::repeat(noise.accel_scale),
+        gyro_bias_rad_s: model.initial[0],
+        accel_bias_mps2: model.initial[1],
+        gyro_scale: model.initial[2],
+        accel_scale: model.initial[3],
     };
     let mut rng = ChaCha8Rng::seed_from_u64(case.seed ^ 0x005E_ED0F_57A7);
     let mut draw = |s: &Vector3<f64>| {

@@ -44,6 +44,85 @@ pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {
     }
 }
 
+/// Correlation time of the filter's Gauss–Markov sensor-error states [s] (KF-GINS's usual
+/// `corrtime` of 1 h).
+pub const FILTER_CORRELATION_TIME_S: f64 = 3600.0;
+
+/// A simulated Gauss–Markov bias shorter than this [s] is seen by the filter as white noise
+/// (it decorrelates between a few GNSS fixes); a longer one as a drift of the bias state.
+pub const WHITE_GM_BELOW_S: f64 = 60.0;
+
+/// The filter's model of a grade with its two kinds of sensor error kept apart, as KF-GINS
+/// keeps `imunoise` (in-run) apart from `init*std` (the start's uncertainty).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GradeFilterModel {
+    /// The in-run processes ([`FilterNoise`]): white noise, and the biases' and scale factors'
+    /// Gauss–Markov processes of correlation time [`FILTER_CORRELATION_TIME_S`] whose driving
+    /// noise `2 sigma^2 / tau` equals the in-run drift the grade has.
+    pub noise: FilterNoise<f64>,
+    /// 1-sigma of the sensor errors at the start, per axis: gyro bias [rad/s], accelerometer
+    /// bias [m/s^2], gyro and accelerometer scale factors [-].
+    pub initial: [Vector3<f64>; 4],
+}
+
+/// [`GradeFilterModel`] of `grade`, from the same figures the simulator injects:
+///
+/// - the turn-on bias (a random constant per power-up), the fixed bias and the stationary
+///   1-sigma of the Gauss–Markov bias (RSS) are the start's bias uncertainty, not an in-run
+///   process: a Gauss–Markov state of 1 h driven as if the turn-on spread re-randomised every
+///   hour lets the bias wander by `sigma sqrt(2 t / tau)` (a quarter of the turn-on spread in
+///   two minutes), which makes the filter's sigma several times its error;
+/// - a Gauss–Markov bias of correlation time `T` below [`WHITE_GM_BELOW_S`] (the MEMS gyros'
+///   bias instability, `T` of a few seconds) integrates like white noise of density
+///   `2 sigma^2 T` (its spectrum at frequencies below `1 / T`, [Groves, eq. 14.80] for the
+///   density of a Gauss–Markov drive): added to the random walk; a longer one, and the rate
+///   random walk `K`, drive the bias state with `2 sigma^2 / T + K^2`;
+/// - the scale factors are constants of the grade: the start's 1-sigma the largest of them
+///   (at least 1 ppm), no in-run drift;
+/// - misalignment and g-sensitivity as in [`grade_noise`].
+pub fn grade_filter_model(grade: Grade) -> GradeFilterModel {
+    let m = grade.model();
+    let tau_f = FILTER_CORRELATION_TIME_S;
+    // (white-noise density [U/sqrt(Hz)], in-run Gauss–Markov 1-sigma [U], start 1-sigma [U]).
+    let split = |t: &crate::sensor_model::TriadErrors| {
+        let gm = t.bias_instability;
+        let (mut white2, mut drive) = (
+            t.white_noise.density().powi(2),
+            t.rate_random_walk * t.rate_random_walk,
+        );
+        if gm.sigma > 0.0 && gm.correlation_time_s.is_finite() {
+            if gm.correlation_time_s < WHITE_GM_BELOW_S {
+                white2 += 2.0 * gm.sigma * gm.sigma * gm.correlation_time_s;
+            } else {
+                drive += 2.0 * gm.sigma * gm.sigma / gm.correlation_time_s;
+            }
+        }
+        let start = t
+            .turn_on_bias_sigma
+            .map(|s| (s * s + gm.sigma * gm.sigma).sqrt())
+            + t.bias.abs();
+        (white2.sqrt(), (drive * tau_f / 2.0).sqrt(), start)
+    };
+    let (arw, gyro_in_run, gyro_start) = split(&m.gyro);
+    let (vrw, accel_in_run, accel_start) = split(&m.accel);
+    let scale = |t: &crate::sensor_model::TriadErrors| Vector3::repeat(t.scale.amax().max(1e-6));
+    GradeFilterModel {
+        noise: FilterNoise {
+            arw_rad_per_sqrt_s: arw,
+            vrw_mps_per_sqrt_s: vrw,
+            gyro_bias_rad_s: gyro_in_run,
+            accel_bias_mps2: accel_in_run,
+            gyro_scale: 0.0,
+            accel_scale: 0.0,
+            correlation_time_s: tau_f,
+            gyro_cross_coupling_rad: m.gyro.misalignment.amax(),
+            accel_cross_coupling_rad: m.accel.misalignment.amax(),
+            gyro_g_sensitivity: m.g_sensitivity_rad_s_per_m_s2.amax(),
+        },
+        initial: [gyro_start, accel_start, scale(&m.gyro), scale(&m.accel)],
+    }
+}
+
 /// `f64` settings in the working scalar.
 pub fn config_in<T: Scalar>(c: &FilterConfig<f64>) -> FilterConfig<T> {
     let n = &c.noise;

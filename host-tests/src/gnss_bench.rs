@@ -70,6 +70,8 @@ pub fn outage_case(grade: Grade, seconds: f64, seed: u64) -> Case {
         grade,
         seconds,
         imu_rate_hz: 200.0,
+        zero_motion: true,
+        in_run_noise: false,
         gnss: GnssSimOptions {
             rate_hz: 1.0,
             sigma_ned_m: [0.5, 0.5, 1.0],
@@ -161,6 +163,8 @@ pub fn outlier_case(grade: Grade, seed: u64) -> Case {
         grade,
         seconds: 1000.0,
         imu_rate_hz: 200.0,
+        zero_motion: true,
+        in_run_noise: false,
         gnss: GnssSimOptions {
             rate_hz: 1.0,
             sigma_ned_m: [0.5, 0.5, 1.0],
