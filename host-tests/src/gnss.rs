@@ -32,7 +32,7 @@
 //! or two for latitude and longitude (one deg <-> rad rounding each way).
 
 use crate::kf_gins::{
-    self, DataLines, FileKind, GNSS_COLUMNS, GNSS_VELOCITY_COLUMNS, LineError, check_time,
+    DataLines, Fields, FileKind, GNSS_COLUMNS, GNSS_VELOCITY_COLUMNS, LineError, check_time,
 };
 use crate::text_error::{Record, TextError, TextErrorKind, seconds_to_ns};
 use crate::text_stream::{CsvRecords, CutCheck, LineReader};
@@ -156,7 +156,7 @@ pub fn read_kf_gins_from<R: BufRead>(reader: R, path: &Path) -> Result<Vec<GnssF
 
 /// One KF-GINS GNSS line of 7 or 13 fields (the count is checked by [`DataLines`]).
 fn kf_gins_fix(
-    fields: &[&str],
+    fields: &Fields,
     at: LineError,
     previous_t_s: Option<f64>,
 ) -> Result<GnssFix, TextError> {
@@ -166,10 +166,10 @@ fn kf_gins_fix(
         &GNSS_VELOCITY_COLUMNS
     };
     let mut v = [0.0_f64; GNSS_VELOCITY_COLUMNS.len()];
-    for (i, (slot, text)) in v.iter_mut().zip(fields).enumerate() {
-        *slot = kf_gins::parse(text, names[i]).map_err(at)?;
+    for (i, slot) in v.iter_mut().enumerate().take(fields.len()) {
+        *slot = fields.number(i, names[i]).map_err(at)?;
     }
-    check_time(v[0], fields[0]).map_err(at)?;
+    check_time(v[0], fields.text(0)).map_err(at)?;
     check_increasing(v[0], previous_t_s, names[0], Record::Line).map_err(at)?;
     check_latitude(v[1], names[1]).map_err(at)?;
     let (sigma_ned_m, velocity) = if fields.len() == GNSS_COLUMNS.len() {

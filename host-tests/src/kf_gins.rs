@@ -222,6 +222,69 @@ fn fields(text: &str) -> impl Iterator<Item = &str> {
         .filter(|f| !f.is_empty())
 }
 
+/// The fields of a line of plain numbers, split and parsed in one pass (no `char` machinery,
+/// no second scan: 720,000-line files): each field must be one whole number as
+/// [`fast_float2::parse_partial`] reads it (the syntax of `str::parse::<f64>`), followed by a
+/// blank, a tab, a comma or the line's end. `None` for any other line (more fields than `out`
+/// holds, a field that is not a number, white space other than blanks and tabs): the caller
+/// then splits it with [`fields`] and its errors name the field.
+fn ascii_numbers<'a>(
+    text: &'a str,
+    texts: &mut [&'a str; MAX_FIELDS],
+    values: &mut [f64; MAX_FIELDS],
+) -> Option<usize> {
+    let bytes = text.as_bytes();
+    let is_separator = |b: u8| matches!(b, b' ' | b'\t' | b',');
+    let (mut n, mut i) = (0, 0);
+    loop {
+        while i < bytes.len() && is_separator(bytes[i]) {
+            i += 1;
+        }
+        if i == bytes.len() {
+            return Some(n);
+        }
+        let (value, len) = fast_float2::parse_partial::<f64, _>(&bytes[i..]).ok()?;
+        let end = i + len;
+        if len == 0 || (end < bytes.len() && !is_separator(bytes[end])) {
+            return None;
+        }
+        *texts.get_mut(n)? = text.get(i..end)?;
+        *values.get_mut(n)? = value;
+        n += 1;
+        i = end;
+    }
+}
+
+/// The fields of one data line, as a reader's row closure gets them: their text and, when the
+/// line was split by the fast path ([`ascii_numbers`]), their values.
+pub(crate) struct Fields<'a> {
+    texts: &'a [&'a str],
+    values: Option<&'a [f64]>,
+}
+
+impl<'a> Fields<'a> {
+    /// How many fields.
+    pub(crate) fn len(&self) -> usize {
+        self.texts.len()
+    }
+
+    /// Field `i` as written.
+    pub(crate) fn text(&self, i: usize) -> &'a str {
+        self.texts[i]
+    }
+
+    /// Field `i` as a number ([`parse`]; `column` names it in the error).
+    pub(crate) fn number(&self, i: usize, column: &'static str) -> Result<f64, KfGinsErrorKind> {
+        match self.values {
+            Some(values) => Ok(values[i]),
+            None => parse(self.texts[i], column),
+        }
+    }
+}
+
+/// The most fields a line is split into without a vector (every format has fewer).
+const MAX_FIELDS: usize = 16;
+
 /// A line to skip: blank or a comment.
 fn skipped(text: &str) -> bool {
     text.is_empty() || text.starts_with('#') || text.starts_with('%')
@@ -281,9 +344,9 @@ impl<R: BufRead> Iterator for ImuReader<R> {
     fn next(&mut self) -> Option<Self::Item> {
         let previous_t_s = &mut self.previous_t_s;
         self.lines.next_with(|values, at| {
-            let number = |i: usize| parse(values[i], IMU_COLUMNS[i]).map_err(at);
+            let number = |i: usize| values.number(i, IMU_COLUMNS[i]).map_err(at);
             let t_s = number(0)?;
-            check_time(t_s, values[0]).map_err(at)?;
+            check_time(t_s, values.text(0)).map_err(at)?;
             if let Some(previous) = *previous_t_s
                 && t_s <= previous
             {
@@ -343,11 +406,11 @@ impl<R: BufRead> Iterator for NavReader<R> {
         self.lines.next_with(|fields, at| {
             let mut v = [0.0_f64; NAV_COLUMNS.len()];
             for (i, slot) in v.iter_mut().enumerate() {
-                let x = parse(fields[i], NAV_COLUMNS[i]).map_err(at)?;
+                let x = fields.number(i, NAV_COLUMNS[i]).map_err(at)?;
                 if !x.is_finite() {
                     return Err(at(KfGinsErrorKind::NotFinite {
                         column: NAV_COLUMNS[i],
-                        found: fields[i].to_owned(),
+                        found: fields.text(i).to_owned(),
                     }));
                 }
                 *slot = x;
@@ -362,7 +425,7 @@ impl<R: BufRead> Iterator for NavReader<R> {
                 }
                 _ => *week0 = Some(week),
             }
-            check_time(v[SOW], fields[SOW]).map_err(at)?;
+            check_time(v[SOW], fields.text(SOW)).map_err(at)?;
             if let Some(previous) = *previous_t_s
                 && v[SOW] < previous
             {
@@ -427,7 +490,7 @@ impl<R: BufRead> DataLines<R> {
     /// `row(fields, at)` of the next data line; `at` makes an error of that line.
     pub(crate) fn next_with<T>(
         &mut self,
-        row: impl FnOnce(&[&str], LineError) -> Result<T, KfGinsError>,
+        row: impl FnOnce(&Fields, LineError) -> Result<T, KfGinsError>,
     ) -> Option<Result<T, KfGinsError>> {
         if self.done {
             return None;
@@ -439,7 +502,7 @@ impl<R: BufRead> DataLines<R> {
 
     fn next_line<T>(
         &mut self,
-        row: impl FnOnce(&[&str], LineError) -> Result<T, KfGinsError>,
+        row: impl FnOnce(&Fields, LineError) -> Result<T, KfGinsError>,
     ) -> Option<Result<T, KfGinsError>> {
         let (path, file) = (&self.path, self.file);
         loop {
@@ -466,22 +529,18 @@ impl<R: BufRead> DataLines<R> {
             if skipped(text) {
                 continue;
             }
-            // The fields in a stack array (no allocation per line: 720,000-line files), a
-            // vector only for a line longer than any format's.
-            let mut array = [""; 16];
-            let mut spilled: Option<Vec<&str>> = None;
-            let mut n = 0;
-            for f in fields(text) {
-                match (&mut spilled, array.get_mut(n)) {
-                    (None, Some(slot)) => *slot = f,
-                    (None, None) => spilled = Some(array.iter().copied().chain([f]).collect()),
-                    (Some(v), _) => v.push(f),
-                }
-                n += 1;
-            }
-            let values: &[&str] = match &spilled {
-                Some(v) => v,
-                None => &array[..n],
+            // The fields in stack arrays (no allocation per line: 720,000-line files), a
+            // vector only for a line the fast path does not take.
+            let mut array = [""; MAX_FIELDS];
+            let mut numbers = [0.0; MAX_FIELDS];
+            let fast = ascii_numbers(text, &mut array, &mut numbers);
+            let spilled: Option<Vec<&str>> = match fast {
+                Some(_) => None,
+                None => Some(fields(text).collect()),
+            };
+            let values: &[&str] = match (&spilled, fast) {
+                (Some(v), _) => v,
+                (None, n) => &array[..n.unwrap_or(0)],
             };
             if line.unterminated {
                 let n = values.len();
@@ -492,6 +551,9 @@ impl<R: BufRead> DataLines<R> {
                     let kind = KfGinsErrorKind::Truncated { line: line_no, cut };
                     return Some(Err(TextError::new(path, None, kind)));
                 }
+            } else if fast.is_some() {
+                // The fast path's fields are ASCII: their characters are their bytes.
+                self.cut.note_lengths(values.iter().map(|f| f.len()));
             } else {
                 self.cut.note(values.iter().copied());
             }
@@ -503,13 +565,18 @@ impl<R: BufRead> DataLines<R> {
                 })));
             }
             self.any = true;
-            return Some(row(values, &at));
+            let fields = Fields {
+                texts: values,
+                values: fast.map(|n| &numbers[..n]),
+            };
+            return Some(row(&fields, &at));
         }
     }
 }
 
 pub(crate) fn parse(text: &str, column: &'static str) -> Result<f64, KfGinsErrorKind> {
-    text.parse().map_err(|_| KfGinsErrorKind::NotANumber {
+    // Correctly rounded, and the syntax of `str::parse::<f64>` (checked in the tests).
+    fast_float2::parse(text).map_err(|_| KfGinsErrorKind::NotANumber {
         column,
         found: text.to_owned(),
     })
@@ -570,6 +637,67 @@ mod tests {
         let csv = r.to_imu_csv();
         assert_eq!(csv.rows[0].delta_v_ib_b[2], -0.049_042_72_f64 as f32);
         assert!(csv.rows[0].temperature_c.is_nan());
+    }
+
+    /// The fast path reads numbers as `str::parse::<f64>` does (same values to the bit, same
+    /// refusals), and hands any other line to the general split.
+    #[test]
+    fn fast_numbers_are_str_parse() {
+        for text in [
+            "456300.005000000",
+            "-5.822414095746353e-6",
+            "1e-300",
+            "4.9e-324",
+            "1.7976931348623157e308",
+            "1e309",
+            "+1.5",
+            ".5",
+            "5.",
+            "1E+5",
+            "0.1",
+            "-0",
+            "nan",
+            "NaN",
+            "-nan",
+            "inf",
+            "-inf",
+            "Infinity",
+            "123456789012345678901234567890",
+            "2.2250738585072011e-308",
+            "",
+            ".",
+            "e5",
+            "1e",
+            "1e+",
+            "--1",
+            "0x10",
+            "1_000",
+            "1.2.3",
+            "١",
+        ] {
+            let std = text.parse::<f64>();
+            let fast = fast_float2::parse::<f64, _>(text);
+            assert_eq!(std.is_ok(), fast.is_ok(), "{text:?}");
+            if let (Ok(a), Ok(b)) = (std, fast) {
+                assert!(
+                    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                    "{text:?}"
+                );
+            }
+        }
+        let (mut texts, mut values) = ([""; MAX_FIELDS], [0.0; MAX_FIELDS]);
+        assert_eq!(
+            ascii_numbers("1 -2e3,\t.5 ", &mut texts, &mut values),
+            Some(3)
+        );
+        assert_eq!((texts[1], values[1]), ("-2e3", -2000.0));
+        for other in ["1 2x 3", "1\r 2", "1 \u{a0}2", &"1 ".repeat(MAX_FIELDS + 1)] {
+            assert_eq!(
+                ascii_numbers(other, &mut texts, &mut values),
+                None,
+                "{other:?}"
+            );
+        }
     }
 
     #[test]

@@ -593,6 +593,12 @@ fn bench_filter(dir: Option<PathBuf>) -> Result<()> {
         r.seconds,
         r.samples as f64 / r.seconds
     );
+    if let Some(cpu) = r.cpu_seconds {
+        println!(
+            "the thread's CPU time: {cpu:.3} s: {:.0} samples/s per busy core (the wall clock above also counts the time other jobs on this machine held the cores)",
+            r.samples as f64 / cpu
+        );
+    }
     println!(
         "accuracy over {} truth epochs: horizontal RMS {:.4} m (target <= 0.02), max {:.4} m; yaw RMS {:.4} deg (target <= 0.06)",
         r.compared, r.horizontal_rms_m, r.horizontal_max_m, r.yaw_rms_deg
