@@ -46,8 +46,7 @@ impl AtomicFile {
             .tempfile_in(dir)?;
         let (file, tmp) = tmp.into_parts();
         Ok(Self {
-            // 1 MiB: a 128 MB trajectory in 128 writes, not 16,000.
-            out: BufWriter::with_capacity(1 << 20, file),
+            out: BufWriter::new(file),
             tmp,
             path: path.to_owned(),
         })
