@@ -298,7 +298,7 @@ pub fn sparse_product<T: Scalar>(a: &Covariance<T>, b: &Covariance<T>) -> Covari
     out
 }
 
-const _: () = assert!(N % 7 == 0);
+const _: () = assert!(N.is_multiple_of(7));
 
 /// True when no element is NaN or infinite: `x * 0` is `0` for a finite `x` and NaN for any
 /// other, summed in 7 independent lanes (21 x 21 = 63 x 7; no carried dependency of one sum
