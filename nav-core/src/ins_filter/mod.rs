@@ -4,8 +4,6 @@
 //! - [`states`]: the 21 error states and their named offsets;
 //! - [`model`]: the INS error equations (the process model) and their discretisation;
 //! - [`aiding`]: the measurements, their outcomes and counters;
-//! - [`integrity`]: the windowed innovation test and the refusal of a consistent cluster of
-//!   wrong position fixes;
 //! - [`stationarity`]: the IMU-only stop detector;
 //! - [`motion`]: the start in motion from GNSS (level from the accelerometers, heading from the
 //!   GNSS track).
@@ -28,7 +26,6 @@
 pub mod aiding;
 pub mod background;
 pub mod foreground;
-pub mod integrity;
 pub mod model;
 pub mod motion;
 pub mod sequencer;
