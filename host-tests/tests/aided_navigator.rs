@@ -141,6 +141,30 @@ fn nav(dir: &Path, args: &[&str]) -> std::process::Output {
         .expect("run nav")
 }
 
+/// `nav replay` of `imu.bin` with the GNSS file `gnss`, aligned first (FOG noise, 15 s at
+/// 45 deg N, 7.5 deg E, 250 m), with `rest` added.
+fn replay_aligned(dir: &Path, gnss: &str, rest: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "replay",
+        "--imu",
+        "imu.bin",
+        "--gnss",
+        gnss,
+        "--lat",
+        "45",
+        "--lon",
+        "7.5",
+        "--h",
+        "250",
+        "--align-seconds",
+        "15",
+        "--imu-noise",
+        "fog",
+    ];
+    args.extend_from_slice(rest);
+    nav(dir, &args)
+}
+
 /// 120 s of the demo's drive (15 s of static alignment, 5 s still, then starts, turns, stops)
 /// with 1 Hz fixes of an antenna 1.4 m from the IMU: every row's position, velocity and
 /// attitude within the filter's own 1-sigma (none beyond 5, at most 1 % of the values beyond 3:
@@ -232,24 +256,10 @@ fn an_aided_drive_stays_within_the_filters_sigma() {
         "{said}"
     );
     for (file, out) in [("gnss.csv", "cli.csv"), ("gnss.bin", "cli-bin.csv")] {
-        let o = nav(
+        let o = replay_aligned(
             d,
+            file,
             &[
-                "replay",
-                "--imu",
-                "imu.bin",
-                "--gnss",
-                file,
-                "--lat",
-                "45",
-                "--lon",
-                "7.5",
-                "--h",
-                "250",
-                "--align-seconds",
-                "15",
-                "--imu-noise",
-                "fog",
                 "--gnss-lever-arm",
                 "0.8,-0.3,-1.1",
                 "--out",
@@ -303,28 +313,7 @@ fn bad_fixes_are_counted_and_bad_files_refused() {
         ("corrupt.bin", "(fix 7): record CRC mismatch"),
         ("missing.csv", "cannot open the GNSS file"),
     ] {
-        let o = nav(
-            d,
-            &[
-                "replay",
-                "--imu",
-                "imu.bin",
-                "--gnss",
-                file,
-                "--lat",
-                "45",
-                "--lon",
-                "7.5",
-                "--h",
-                "250",
-                "--align-seconds",
-                "15",
-                "--imu-noise",
-                "fog",
-                "--out",
-                "x.csv",
-            ],
-        );
+        let o = replay_aligned(d, file, &["--out", "x.csv"]);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{stderr}");
         assert!(stderr.contains(expect) && stderr.contains(file), "{stderr}");
