@@ -293,18 +293,32 @@ fn skipped(text: &str) -> bool {
 /// `true` when the first data line of `head` (the start of a file) is a complete line of 7 or 8
 /// numbers: a KF-GINS IMU file (a `.nav` trajectory has 11, PSINS lines 6).
 pub fn looks_like_imu(head: &str) -> bool {
+    first_numbers(head).is_some_and(|f| matches!(f.len(), 7 | 8)) && !looks_like_gnss(head)
+}
+
+/// `true` when the first data line of `head` is a KF-GINS GNSS fix of 7 numbers (seconds of
+/// week, latitude and longitude [deg], height [m], 1-sigma north, east, down [m]), not an IMU
+/// line of the same width: a latitude and longitude inside their ranges, one of them beyond
+/// 1 — no IMU's angle increment reaches 1 rad in one sample — and three positive 1-sigmas.
+pub fn looks_like_gnss(head: &str) -> bool {
+    first_numbers(head).is_some_and(|f| {
+        f.len() == 7
+            && f[1].abs() <= 90.0
+            && f[2].abs() <= 180.0
+            && (f[1].abs() > 1.0 || f[2].abs() > 1.0)
+            && f[4..].iter().all(|s| *s > 0.0)
+    })
+}
+
+/// The numbers of the first complete data line of `head` (the start of a file), if all of its
+/// fields are numbers.
+fn first_numbers(head: &str) -> Option<Vec<f64>> {
     let head = head.trim_start_matches('\u{feff}');
     // Only complete lines: the last piece may be cut off.
     let mut lines: Vec<&str> = head.split('\n').collect();
     lines.pop();
-    lines
-        .into_iter()
-        .map(str::trim)
-        .find(|l| !skipped(l))
-        .is_some_and(|l| {
-            let f: Vec<&str> = fields(l).collect();
-            matches!(f.len(), 7 | 8) && f.iter().all(|x| x.parse::<f64>().is_ok())
-        })
+    let line = lines.into_iter().map(str::trim).find(|l| !skipped(l))?;
+    fields(line).map(|x| x.parse::<f64>().ok()).collect()
 }
 
 /// Reads a KF-GINS IMU file into memory (a replay streams it instead: [`ImuReader`]).
@@ -713,6 +727,19 @@ mod tests {
             "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,dv_y_mps,dv_z_mps\n"
         ));
         assert!(!looks_like_imu("456300.005 1 2 3 4 5 6"));
+    }
+
+    #[test]
+    fn tells_a_gnss_file_from_an_imu_file_of_the_same_width() {
+        let gnss = "456300.000 30.4447873 114.4718270 20.830 0.02 0.02 0.04\n";
+        assert!(looks_like_gnss(gnss));
+        assert!(!looks_like_imu(gnss));
+        assert!(looks_like_gnss(&format!("# fixes\n{gnss}")));
+        assert!(!looks_like_gnss(IMU));
+        // Near the origin of latitude and longitude, or with a zero sigma: not taken for GNSS.
+        assert!(!looks_like_gnss("456300 0.5 0.5 20 0.02 0.02 0.04\n"));
+        assert!(!looks_like_gnss("456300 30.4 114.4 20 0 0.02 0.04\n"));
+        assert!(!looks_like_gnss("456300 95 114.4 20 0.02 0.02 0.04\n"));
     }
 
     #[test]

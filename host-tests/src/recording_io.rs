@@ -59,7 +59,7 @@ impl core::fmt::Display for Format {
 /// Detects the format of `path`: by the binary magic bytes, the CSV header (`t_s,...`), a PSINS
 /// `%` comment on the first line, or a first line of 7 (or 8) numbers (KF-GINS); failing those, by
 /// the extension (`.bin`, `.csv`, `.imu`, `.txt` for KF-GINS), so a damaged file still gets the
-/// format's own error message.
+/// format's own error message. A KF-GINS GNSS file given as a recording is refused by name.
 pub fn detect(path: &Path) -> Result<Format> {
     let mut head = Vec::with_capacity(256);
     File::open(path)
@@ -75,6 +75,13 @@ pub fn detect(path: &Path) -> Result<Format> {
     }
     if first.starts_with('%') {
         return Ok(Format::Psins);
+    }
+    if kf_gins::looks_like_gnss(first) {
+        bail!(
+            "recording {}: this is a KF-GINS GNSS file (seconds of week, latitude, longitude, \
+             height, 1-sigma north, east, down), not an IMU recording: give it with --gnss",
+            path.display()
+        );
     }
     if kf_gins::looks_like_imu(first) {
         return Ok(Format::KfGins);

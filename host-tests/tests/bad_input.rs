@@ -122,6 +122,20 @@ fn bad_magic() {
 }
 
 #[test]
+fn a_gnss_file_given_as_the_recording_is_refused_by_name() {
+    // KF-GINS's GNSS text has 7 numbers per line, as its IMU text does: refused, not navigated.
+    let dir = tempfile::tempdir().unwrap();
+    let fixes = "456300.000 30.4447873 114.4718270 20.830 0.02 0.02 0.04\n\
+                 456301.000 30.4447874 114.4718271 20.831 0.02 0.02 0.04\n";
+    let path = write_bytes(dir.path(), "GNSS-RTK.txt", fixes.as_bytes());
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.contains("GNSS-RTK.txt") && msg.contains("GNSS file") && msg.contains("--gnss"),
+        "{msg}"
+    );
+}
+
+#[test]
 fn csv_with_a_non_number() {
     let dir = tempfile::tempdir().unwrap();
     let text = csv_text(30).replace(
