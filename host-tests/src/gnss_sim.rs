@@ -43,6 +43,7 @@
 use crate::gnss::{GnssFix, GnssVelocity};
 use crate::truth::Truth;
 use anyhow::{Result, bail};
+use nav_core::alignment::machine::MAX_LEVER_ARM_M;
 use nav_core::attitude::rotation_vector_of;
 use nav_core::earth::LocalEarth;
 use nav_core::{Position, Vector3};
@@ -415,34 +416,50 @@ fn effect(outlier: &Outlier, t_s: f64, mut once: impl FnMut(f64) -> bool) -> Opt
     }
 }
 
+impl GnssSimOptions {
+    /// Checks the options alone (before any truth is simulated): a positive rate, positive
+    /// finite sigmas, a lever arm within [`MAX_LEVER_ARM_M`], valid outages and outliers.
+    pub fn check(&self) -> Result<()> {
+        let o = self;
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        if !(o.rate_hz > 0.0 && o.rate_hz.is_finite()) {
+            bail!("GNSS rate {} Hz: must be a positive number", o.rate_hz);
+        }
+        // The file carries the sigmas to the filter, which refuses a fix with a zero one.
+        let sigma_ok = |s: &[f64; 3]| finite(s) && s.iter().all(|x| *x > 0.0);
+        if !sigma_ok(&o.sigma_ned_m) || !o.sigma_v_ned_m_s.as_ref().is_none_or(sigma_ok) {
+            bail!(
+                "GNSS sigmas {:?} m, {:?} m/s: must be finite and positive (the filter refuses a \
+             fix with a zero 1-sigma)",
+                o.sigma_ned_m,
+                o.sigma_v_ned_m_s
+            );
+        }
+        let arm_m = o.lever_arm_b_m.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if !(arm_m <= MAX_LEVER_ARM_M) {
+            bail!(
+                "lever arm {:?} m: must be finite and within {MAX_LEVER_ARM_M} m",
+                o.lever_arm_b_m
+            );
+        }
+        if let Some(bad) = o
+            .outages
+            .iter()
+            .find(|g| !(finite(&[g.start_s, g.length_s]) && g.length_s >= 0.0))
+        {
+            bail!("outage {bad:?}: start and length must be finite, the length >= 0");
+        }
+        if let Some(bad) = o.outliers.iter().find(|x| !x.is_valid()) {
+            bail!("outlier {bad:?}: times and offsets must be finite, lengths >= 0 (a ramp's > 0)");
+        }
+        Ok(())
+    }
+}
+
 /// The truth rows that are GNSS epochs (module docs), after checking the options.
 fn epochs(truth: &[Truth], options: &GnssSimOptions) -> Result<Vec<usize>> {
     let o = options;
-    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
-    if !(o.rate_hz > 0.0 && o.rate_hz.is_finite()) {
-        bail!("GNSS rate {} Hz: must be a positive number", o.rate_hz);
-    }
-    let sigma_ok = |s: &[f64; 3]| finite(s) && s.iter().all(|x| *x >= 0.0);
-    if !sigma_ok(&o.sigma_ned_m) || !o.sigma_v_ned_m_s.as_ref().is_none_or(sigma_ok) {
-        bail!(
-            "GNSS sigmas {:?} m, {:?} m/s: must be finite and >= 0",
-            o.sigma_ned_m,
-            o.sigma_v_ned_m_s
-        );
-    }
-    if !finite(&o.lever_arm_b_m) {
-        bail!("lever arm {:?} m: must be finite", o.lever_arm_b_m);
-    }
-    if let Some(bad) = o
-        .outages
-        .iter()
-        .find(|g| !(finite(&[g.start_s, g.length_s]) && g.length_s >= 0.0))
-    {
-        bail!("outage {bad:?}: start and length must be finite, the length >= 0");
-    }
-    if let Some(bad) = o.outliers.iter().find(|x| !x.is_valid()) {
-        bail!("outlier {bad:?}: times and offsets must be finite, lengths >= 0 (a ramp's > 0)");
-    }
+    o.check()?;
     if truth.len() < 2 {
         bail!("the truth has {} rows: at least 2 are needed", truth.len());
     }
@@ -518,6 +535,48 @@ mod tests {
         };
         let m = simulate(&truth, &bad).unwrap_err().to_string();
         assert!(m.contains("whole number of truth intervals"), "{m}");
+    }
+
+    #[test]
+    fn options_a_filter_could_not_use_are_refused_with_the_reason() {
+        let ok = GnssSimOptions::default();
+        assert!(ok.check().is_ok());
+        let cases = [
+            (
+                GnssSimOptions {
+                    sigma_ned_m: [0.5, 0.0, 1.0],
+                    ..ok.clone()
+                },
+                "positive",
+            ),
+            (
+                GnssSimOptions {
+                    sigma_v_ned_m_s: Some([0.1, f64::NAN, 0.1]),
+                    ..ok.clone()
+                },
+                "positive",
+            ),
+            (
+                GnssSimOptions {
+                    lever_arm_b_m: [80.0, 80.0, 0.0],
+                    ..ok.clone()
+                },
+                "within 100 m",
+            ),
+            (
+                GnssSimOptions {
+                    rate_hz: 0.0,
+                    ..ok.clone()
+                },
+                "positive number",
+            ),
+        ];
+        for (bad, reason) in cases {
+            let m = bad.check().unwrap_err().to_string();
+            assert!(m.contains(reason), "{m}");
+            // The same refusal before any fix is drawn.
+            assert!(simulate(&turning(2.0, 0.0), &bad).is_err());
+        }
     }
 
     #[test]

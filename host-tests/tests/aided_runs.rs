@@ -205,6 +205,29 @@ fn kf_gins_refuses_bad_input_without_a_partial_file() {
     assert!(!out.exists());
 }
 
+/// A receiver the filter could not use is refused before anything is simulated or written.
+#[test]
+fn sim_refuses_a_receiver_the_filter_could_not_use() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    for (args, reason) in [
+        (["--gnss-outages", "10,20,0"], "shorter than the period"),
+        (["--gnss-outages", "0,0,0"], "period must be positive"),
+        (["--gnss-sigma", "0,0.5,1"], "positive"),
+        (["--gnss-lever-arm", "150,0,0"], "within 100 m"),
+    ] {
+        let msg = run_err(
+            nav()
+                .args(["sim", "land-vehicle", "--seconds", "10", "--gnss-rate", "1"])
+                .args(args)
+                .arg("--out")
+                .arg(&out),
+        );
+        assert!(msg.contains(reason), "{args:?}: {msg}");
+        assert!(!out.join("imu.bin").exists(), "{args:?}: files written");
+    }
+}
+
 /// `nav sim --gnss-rate` writes the receiver's file beside the recording; `nav replay --gnss`
 /// navigates it from a given start, writes the 1-sigma and status columns, and counts the
 /// NaN fix and the jump.

@@ -469,8 +469,9 @@ fn lever_arm_matches_the_rigid_body_kinematics() {
     let noiseless = |truth: &[Truth]| {
         let options = GnssSimOptions {
             rate_hz: 10.0,
-            sigma_ned_m: [0.0; 3],
-            sigma_v_ned_m_s: Some([0.0; 3]),
+            // Practically noiseless (a zero 1-sigma is refused: the filter could not use it).
+            sigma_ned_m: [1e-12; 3],
+            sigma_v_ned_m_s: Some([1e-12; 3]),
             lever_arm_b_m: l,
             ..GnssSimOptions::default()
         };

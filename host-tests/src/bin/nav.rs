@@ -903,8 +903,20 @@ fn parse_numbers<const K: usize>(s: &str) -> Result<[f64; K], String> {
 }
 
 /// `nav sim --gnss-rate`'s receiver.
-fn gnss_options(a: &SimArgs, rate_hz: f64, seconds: f64) -> host_tests::gnss_sim::GnssSimOptions {
+fn gnss_options(
+    a: &SimArgs,
+    rate_hz: f64,
+    seconds: f64,
+) -> Result<host_tests::gnss_sim::GnssSimOptions> {
     use host_tests::gnss_sim::{GnssSimOptions, Outage, Outlier};
+    if let Some([period, length, _]) = a.gnss_outages
+        && !(period > 0.0 && (0.0..period).contains(&length))
+    {
+        anyhow::bail!(
+            "--gnss-outages {period},{length},...: the period must be positive and the outage \
+             length at least 0 and shorter than the period (else no fix is left)"
+        );
+    }
     let mut outliers = Vec::new();
     for j in &a.gnss_jump {
         outliers.push(Outlier::Jump {
@@ -929,7 +941,7 @@ fn gnss_options(a: &SimArgs, rate_hz: f64, seconds: f64) -> host_tests::gnss_sim
     for t in &a.gnss_nan {
         outliers.push(Outlier::NaN { t_s: *t });
     }
-    GnssSimOptions {
+    Ok(GnssSimOptions {
         rate_hz,
         sigma_ned_m: a.gnss_sigma,
         sigma_v_ned_m_s: a.gnss_velocity_sigma,
@@ -940,7 +952,7 @@ fn gnss_options(a: &SimArgs, rate_hz: f64, seconds: f64) -> host_tests::gnss_sim
             .unwrap_or_default(),
         outliers,
         seed: a.seed,
-    }
+    })
 }
 
 /// The `--set KEY=VALUE` pairs of `nav sim`.
@@ -1061,6 +1073,10 @@ fn sim(a: SimArgs) -> Result<()> {
             a.grade.unwrap_or(host_tests::sensor_model::Grade::Ideal),
         )
     };
+    if let Some(rate) = a.gnss_rate {
+        // The receiver's options are checked before anything is simulated or written.
+        gnss_options(&a, rate, 0.0)?.check()?;
+    }
     let bar = progress_bar();
     let sim = simulate(&opts, |done, total| {
         if let Some(b) = &bar {
@@ -1075,7 +1091,7 @@ fn sim(a: SimArgs) -> Result<()> {
     let n = sim.recording.records.len();
     if let Some(rate) = a.gnss_rate {
         let seconds = n as f64 / opts.rate_hz;
-        let g = gnss_options(&a, rate, seconds);
+        let g = gnss_options(&a, rate, seconds)?;
         let receiver =
             host_tests::gnss_sim::simulate(&sim.truth, &g).context("simulated GNSS receiver")?;
         let path = out.join("gnss.csv");
