@@ -228,6 +228,54 @@ fn sim_refuses_a_receiver_the_filter_could_not_use() {
     }
 }
 
+/// An impossible given start is refused with its reason, and no solution file is left.
+#[test]
+fn replay_refuses_an_impossible_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run_ok(
+        nav()
+            .args(["sim", "land-vehicle", "--seconds", "5", "--gnss-rate", "1"])
+            .args(["--format", "bin", "--out"])
+            .arg(d),
+    );
+    let out = d.join("sol.csv");
+    for (start, reason) in [
+        (
+            ["45,7.5,250", "0,0,0", "0,0,0", "0,0.1,1"],
+            "positive 1-sigmas",
+        ),
+        (
+            ["45,7.5,250", "0,0,0", "0,0,0", "-1,1,1"],
+            "positive 1-sigmas",
+        ),
+        (
+            ["45,7.5,2e6", "0,0,0", "0,0,0", "1,0.1,1"],
+            "initial height",
+        ),
+        (
+            ["45,7.5,250", "0,3e4,0", "0,0,0", "1,0.1,1"],
+            "initial speed",
+        ),
+        (["45,7.5,250", "0,0,0", "0,95,0", "1,0.1,1"], "pitch"),
+        (["91,7.5,250", "0,0,0", "0,0,0", "1,0.1,1"], "latitude"),
+    ] {
+        let msg = run_err(
+            nav()
+                .arg("replay")
+                .arg("--imu")
+                .arg(d.join("imu.bin"))
+                .arg("--gnss")
+                .arg(d.join("gnss.csv"))
+                .args(["--init-pos", start[0], "--init-vel", start[1]])
+                .args(["--init-att", start[2], "--init-std", start[3], "--out"])
+                .arg(&out),
+        );
+        assert!(msg.contains(reason), "{start:?}: {msg}");
+        assert!(!out.exists(), "{start:?}: a solution file was left");
+    }
+}
+
 /// `nav sim --gnss-rate` writes the receiver's file beside the recording; `nav replay --gnss`
 /// navigates it from a given start, writes the 1-sigma and status columns, and counts the
 /// NaN fix and the jump.

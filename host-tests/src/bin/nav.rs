@@ -368,8 +368,8 @@ struct ReplayArgs {
     #[arg(long, value_name = "ROLL,PITCH,YAW", requires = "init_pos", allow_hyphen_values = true, value_parser = parse_vector3)]
     init_att: Option<[f64; 3]>,
     /// 1-sigma of the initial position [m], velocity [m/s] and attitude [deg], each for all
-    /// three axes.
-    #[arg(long, value_name = "POS,VEL,ATT", requires = "init_pos", default_value = "1,0.1,1", value_parser = parse_vector3)]
+    /// three axes (positive: a zero would claim an exactly known state).
+    #[arg(long, value_name = "POS,VEL,ATT", requires = "init_pos", default_value = "1,0.1,1", allow_hyphen_values = true, value_parser = parse_positive3)]
     init_std: [f64; 3],
     /// Start the filter in motion from GNSS (level when quasi-static, heading from the track
     /// above 5 m/s): for IMUs that cannot find north (MEMS).
@@ -816,6 +816,19 @@ fn named<V: Copy + Send + Sync + 'static>(
 fn parse_vector3(s: &str) -> Result<[f64; 3], String> {
     config::parse_vector3(s)
         .ok_or_else(|| format!("expected X,Y,Z (three finite numbers), not {s:?}"))
+}
+
+/// Three positive numbers (1-sigmas).
+fn parse_positive3(s: &str) -> Result<[f64; 3], String> {
+    let v = parse_vector3(s)?;
+    if v.iter().all(|x| *x > 0.0) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "expected three positive 1-sigmas, not {s:?}: a zero claims an exactly known state \
+             (every fix that disagrees would be refused)"
+        ))
+    }
 }
 
 /// `nav sim`'s arguments.
