@@ -445,14 +445,9 @@ impl fmt::Display for TextErrorKind {
     }
 }
 
-impl std::error::Error for TextError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match &self.kind {
-            TextErrorKind::Io(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+/// No `source`: the message already carries an I/O error's text, and an error chain printed
+/// with its sources (`{:#}`) would repeat it.
+impl std::error::Error for TextError {}
 
 #[cfg(test)]
 mod tests {
@@ -479,7 +474,11 @@ mod tests {
         assert!(e.source().is_none());
         let e = TextError::io(path, io::Error::other("disk full"));
         assert_eq!(e.to_string(), "f.csv: disk full");
-        assert!(e.source().is_some());
+        assert!(e.source().is_none());
+        assert_eq!(
+            format!("{:#}", anyhow::Error::new(e).context("GNSS file")),
+            "GNSS file: f.csv: disk full"
+        );
     }
 
     #[test]
