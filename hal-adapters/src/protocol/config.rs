@@ -11,12 +11,12 @@ use super::wire::{Overflow, Reader, Writer};
 use crate::drivers::Mounting;
 use crate::drivers::noise::{self, NoiseSpec};
 use core::fmt;
-use nav_core::alignment::machine::{AlignMethod, BaseMotion, LeverArm};
 use nav_core::alignment::SensorNoise;
+use nav_core::alignment::machine::{AlignMethod, BaseMotion, LeverArm};
+use nav_core::navigator::Setup;
 use nav_core::navigator::config::{
     ATTITUDES, AidingConfig, ConfigError, FRAMES, RunConfig, VERTICALS,
 };
-use nav_core::navigator::Setup;
 
 /// The IMUs the board's drivers support.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -222,7 +222,9 @@ impl fmt::Display for ConfigRefusal {
                 f,
                 "the mounting matrix is not a rotation (orthonormal, determinant +1, within {MOUNTING_TOL})"
             ),
-            Self::HealthOff => f.write_str("health frames cannot be switched off (health-every >= 1)"),
+            Self::HealthOff => {
+                f.write_str("health frames cannot be switched off (health-every >= 1)")
+            }
             Self::Malformed(what) => write!(f, "malformed configuration payload: {what}"),
         }
     }
@@ -302,7 +304,11 @@ impl DeviceConfig {
             .get(usize::from(r.u8().ok_or(short)?))
             .ok_or(ConfigRefusal::Malformed("IMU model"))?;
         let imu_rate_hz = r.f32().ok_or(short)?;
-        let c_s_b = [r.f32s().ok_or(short)?, r.f32s().ok_or(short)?, r.f32s().ok_or(short)?];
+        let c_s_b = [
+            r.f32s().ok_or(short)?,
+            r.f32s().ok_or(short)?,
+            r.f32s().ok_or(short)?,
+        ];
         let [arw, vrw, gyro_bias, accel_bias, bias_prior] = r.f64s().ok_or(short)?;
         let align_method = pick(&AlignMethod::ALL, r.u8().ok_or(short)?, "alignment method")?;
         let align_seconds = r.f64().ok_or(short)?;

@@ -20,8 +20,8 @@
 use super::config::{DeviceConfig, ImuModel, sensor_noise};
 use crate::drivers::noise::grade;
 use core::fmt;
-use nav_core::navigator::config::AidingConfig;
 use nav_core::navigator::OptionError;
+use nav_core::navigator::config::AidingConfig;
 
 /// Why a line was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -83,7 +83,11 @@ impl DeviceConfig {
                 .filter(|v| v.is_finite())
                 .ok_or(bad("a finite number"))
         };
-        let count = || value.parse::<u16>().map_err(|_| bad("a whole number within 0 to 65535"));
+        let count = || {
+            value
+                .parse::<u16>()
+                .map_err(|_| bad("a whole number within 0 to 65535"))
+        };
         let run = &mut self.run;
         match key {
             "lat-deg" => run.lat_deg = number()?,

@@ -391,8 +391,7 @@ impl Message {
                     .ok_or(PayloadError::Field("status"))?;
                 let flags = StatusFlags::from_bits(r.u16().ok_or(short)?)
                     .ok_or(PayloadError::Field("status flags"))?;
-                let [samples, missed, overruns, bus, checksum, faults] =
-                    r.u32s().ok_or(short)?;
+                let [samples, missed, overruns, bus, checksum, faults] = r.u32s().ok_or(short)?;
                 let gyro_clips = r.u32s().ok_or(short)?;
                 let accel_clips = r.u32s().ok_or(short)?;
                 let [pa, pr, va, vr, watchdog] = r.u32s().ok_or(short)?;

@@ -172,7 +172,8 @@ impl StatusModel {
     ) -> (NavStatus, StatusFlags) {
         let flags = nav_flags(nav) | event_flags(&self.previous, health);
         self.previous = *health;
-        let failed = StatusFlags::ALIGN_FAILED | StatusFlags::DEVICE_FAULT | StatusFlags::BUS_ERRORS;
+        let failed =
+            StatusFlags::ALIGN_FAILED | StatusFlags::DEVICE_FAULT | StatusFlags::BUS_ERRORS;
         let degraded = StatusFlags::AIDING_REJECTED
             | StatusFlags::SIGMA_ABOVE_LIMIT
             | StatusFlags::COVARIANCE_FAULT;
@@ -182,9 +183,7 @@ impl StatusModel {
             match nav.stage {
                 Stage::Coarse => NavStatus::AlignCoarse,
                 Stage::Fine => NavStatus::AlignFine,
-                Stage::Aligned | Stage::Failed if flags.intersects(degraded) => {
-                    NavStatus::Degraded
-                }
+                Stage::Aligned | Stage::Failed if flags.intersects(degraded) => NavStatus::Degraded,
                 Stage::Aligned | Stage::Failed => NavStatus::Nav,
             }
         };
@@ -215,12 +214,32 @@ fn event_flags(before: &HealthCounters, now: &HealthCounters) -> StatusFlags {
     });
     let mut f = StatusFlags::empty();
     for (flag, a, b) in [
-        (StatusFlags::DEVICE_FAULT, before.device_faults, now.device_faults),
+        (
+            StatusFlags::DEVICE_FAULT,
+            before.device_faults,
+            now.device_faults,
+        ),
         (StatusFlags::BUS_ERRORS, before.bus_errors, now.bus_errors),
-        (StatusFlags::CHECKSUM_ERRORS, before.checksum_errors, now.checksum_errors),
-        (StatusFlags::MISSED_SAMPLES, before.missed_data_ready, now.missed_data_ready),
-        (StatusFlags::OVERRUNS, before.channel_overruns, now.channel_overruns),
-        (StatusFlags::WATCHDOG_RESET, before.watchdog_resets, now.watchdog_resets),
+        (
+            StatusFlags::CHECKSUM_ERRORS,
+            before.checksum_errors,
+            now.checksum_errors,
+        ),
+        (
+            StatusFlags::MISSED_SAMPLES,
+            before.missed_data_ready,
+            now.missed_data_ready,
+        ),
+        (
+            StatusFlags::OVERRUNS,
+            before.channel_overruns,
+            now.channel_overruns,
+        ),
+        (
+            StatusFlags::WATCHDOG_RESET,
+            before.watchdog_resets,
+            now.watchdog_resets,
+        ),
     ] {
         f.set(flag, grew(a, b));
     }
@@ -240,9 +259,21 @@ mod tests {
     fn stages_and_filter_map_to_the_wire_status() {
         let h = HealthCounters::default();
         let cases = [
-            (state(Stage::Coarse, None), NavStatus::AlignCoarse, StatusFlags::empty()),
-            (state(Stage::Fine, None), NavStatus::AlignFine, StatusFlags::empty()),
-            (state(Stage::Aligned, None), NavStatus::Nav, StatusFlags::FREE_INERTIAL),
+            (
+                state(Stage::Coarse, None),
+                NavStatus::AlignCoarse,
+                StatusFlags::empty(),
+            ),
+            (
+                state(Stage::Fine, None),
+                NavStatus::AlignFine,
+                StatusFlags::empty(),
+            ),
+            (
+                state(Stage::Aligned, None),
+                NavStatus::Nav,
+                StatusFlags::FREE_INERTIAL,
+            ),
             (
                 state(Stage::Aligned, Some(FilterStatus::Nominal)),
                 NavStatus::Nav,
@@ -263,10 +294,18 @@ mod tests {
                 NavStatus::Degraded,
                 StatusFlags::COVARIANCE_FAULT,
             ),
-            (state(Stage::Failed, None), NavStatus::Fault, StatusFlags::ALIGN_FAILED),
+            (
+                state(Stage::Failed, None),
+                NavStatus::Fault,
+                StatusFlags::ALIGN_FAILED,
+            ),
         ];
         for (nav, status, flags) in cases {
-            assert_eq!(StatusModel::default().update(nav, &h), (status, flags), "{nav:?}");
+            assert_eq!(
+                StatusModel::default().update(nav, &h),
+                (status, flags),
+                "{nav:?}"
+            );
         }
     }
 
@@ -287,9 +326,15 @@ mod tests {
             )
         );
         // Nothing new since: no event flags.
-        assert_eq!(model.update(nav, &h), (NavStatus::Nav, StatusFlags::empty()));
+        assert_eq!(
+            model.update(nav, &h),
+            (NavStatus::Nav, StatusFlags::empty())
+        );
         h.bus_errors = 1;
-        assert_eq!(model.update(nav, &h), (NavStatus::Fault, StatusFlags::BUS_ERRORS));
+        assert_eq!(
+            model.update(nav, &h),
+            (NavStatus::Fault, StatusFlags::BUS_ERRORS)
+        );
         h.device_faults = 1;
         let aligning = state(Stage::Coarse, None);
         assert_eq!(

@@ -41,9 +41,13 @@ pub(super) fn every_message() -> Vec<Message> {
     config.run.lat_deg = 45.0;
     config.run.align_method = AlignMethod::Fine;
     config.run.align_seconds = 300.0;
-    config.apply_line("gnss-lever-arm = 0.1, -0.2, 0.3").unwrap();
+    config
+        .apply_line("gnss-lever-arm = 0.1, -0.2, 0.3")
+        .unwrap();
     config.apply_line("lever-arm = 1,2,3").unwrap();
-    config.apply_line("mounting = 1,0,0, 0,-1,0, 0,0,-1").unwrap();
+    config
+        .apply_line("mounting = 1,0,0, 0,-1,0, 0,0,-1")
+        .unwrap();
     config.rates.raw_every = 0;
     vec_of([
         Message::NavSolution(NavSolution {
@@ -160,7 +164,11 @@ fn every_message_round_trips_with_its_declared_length() {
     let messages = every_message();
     for m in &messages {
         let mut buf = [0u8; 256];
-        assert_eq!(m.write_payload(&mut buf).unwrap(), m.id().payload_len(), "{m:?}");
+        assert_eq!(
+            m.write_payload(&mut buf).unwrap(),
+            m.id().payload_len(),
+            "{m:?}"
+        );
     }
     let bytes = stream(&messages);
     let (out, d) = decode_all(&bytes);
@@ -169,7 +177,13 @@ fn every_message_round_trips_with_its_declared_length() {
         let r = r.as_ref().unwrap();
         assert_eq!(r.seq, k as u16);
         assert!(same(&r.message, m), "{:?} vs {m:?}", r.message);
-        if !matches!(m, Message::NavSolution(NavSolution { row: Row::Free(_), .. })) {
+        if !matches!(
+            m,
+            Message::NavSolution(NavSolution {
+                row: Row::Free(_),
+                ..
+            })
+        ) {
             assert_eq!(&r.message, m); // no NaN inside: plain equality
         }
     }
@@ -220,7 +234,10 @@ fn refusals_name_their_reason_and_count_their_bytes() {
     let cases: [(Vec<u8>, Refusal); 7] = [
         (raw_frame(1, 6, 0, 4, &end, false), Refusal::Crc),
         (raw_frame(2, 6, 0, 4, &end, true), Refusal::Version(2)),
-        (raw_frame(1, 0x7f, 0, 4, &end, true), Refusal::UnknownId(0x7f)),
+        (
+            raw_frame(1, 0x7f, 0, 4, &end, true),
+            Refusal::UnknownId(0x7f),
+        ),
         (
             raw_frame(1, 6, 0, 3, &end[..3], true),
             Refusal::Length {
@@ -250,7 +267,13 @@ fn refusals_name_their_reason_and_count_their_bytes() {
     bytes.extend_from_slice(&good);
     let (out, d) = decode_all(&bytes);
     assert_eq!(out[0], Err(Refusal::TooLong));
-    assert!(matches!(out[1], Ok(Received { message: Message::EndOfRun(_), .. })));
+    assert!(matches!(
+        out[1],
+        Ok(Received {
+            message: Message::EndOfRun(_),
+            ..
+        })
+    ));
     assert_eq!(d.stats().skipped_bytes, MAX_FRAME as u64 + 11);
 }
 
@@ -345,7 +368,10 @@ fn random_bytes_never_panic_and_valid_frames_in_garbage_are_all_recovered() {
         let (out, d) = decode_all(&noise);
         let s = d.stats();
         let accepted = out.iter().filter(|r| r.is_ok()).count();
-        assert!(accepted <= 1, "case {case}: noise decoded as {accepted} frames");
+        assert!(
+            accepted <= 1,
+            "case {case}: noise decoded as {accepted} frames"
+        );
         assert_eq!(s.bytes, noise.len() as u64);
 
         // Valid frames between garbage, each garbage run ended by a zero.
@@ -463,14 +489,35 @@ fn text_lines_set_values_and_refuse_bad_ones() {
     // nav-core refuses to gyrocompass with a consumer part's gyros.
     c.apply_line("imu-model = bmi088").unwrap();
     c.apply_line("align-method = fine").unwrap();
-    assert_eq!(c.validate().map_err(|e| e.code()), Err(ReasonCode::Alignment));
+    assert_eq!(
+        c.validate().map_err(|e| e.code()),
+        Err(ReasonCode::Alignment)
+    );
     assert_eq!(c.apply_line("lat-deg 45"), Err(LineError::NoEquals));
-    assert_eq!(c.apply_line("colour = red"), Err(LineError::UnknownKey("colour")));
-    assert!(matches!(c.apply_line("lat-deg = north"), Err(LineError::Invalid { key: "lat-deg", .. })));
-    assert!(matches!(c.apply_line("imu-model = mpu6050"), Err(LineError::Invalid { .. })));
-    assert!(matches!(c.apply_line("mounting = 1,0,0"), Err(LineError::Invalid { .. })));
-    assert!(matches!(c.apply_line("raw-every = -1"), Err(LineError::Invalid { .. })));
-    assert!(matches!(c.apply_line("align-method = magic"), Err(LineError::Option(_))));
+    assert_eq!(
+        c.apply_line("colour = red"),
+        Err(LineError::UnknownKey("colour"))
+    );
+    assert!(matches!(
+        c.apply_line("lat-deg = north"),
+        Err(LineError::Invalid { key: "lat-deg", .. })
+    ));
+    assert!(matches!(
+        c.apply_line("imu-model = mpu6050"),
+        Err(LineError::Invalid { .. })
+    ));
+    assert!(matches!(
+        c.apply_line("mounting = 1,0,0"),
+        Err(LineError::Invalid { .. })
+    ));
+    assert!(matches!(
+        c.apply_line("raw-every = -1"),
+        Err(LineError::Invalid { .. })
+    ));
+    assert!(matches!(
+        c.apply_line("align-method = magic"),
+        Err(LineError::Option(_))
+    ));
 }
 
 #[test]
@@ -485,5 +532,8 @@ fn malformed_config_payloads_are_refused() {
         Message::read_payload(MessageId::Config, &bad[..n]),
         Err(PayloadError::Field("IMU model"))
     );
-    assert_eq!(Message::read_payload(MessageId::Config, &payload[..n]), Ok(m));
+    assert_eq!(
+        Message::read_payload(MessageId::Config, &payload[..n]),
+        Ok(m)
+    );
 }

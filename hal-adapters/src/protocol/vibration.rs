@@ -68,7 +68,14 @@ impl Vibration {
     /// `dt_s` [s]. Non-finite inputs or a non-positive `dt_s` are skipped (a flagged sample).
     /// Returns true when it completed a window.
     pub fn push(&mut self, f_ib_b: [f32; 3], omega_ib_b: [f32; 3], dt_s: f32) -> bool {
-        let x = [f_ib_b[0], f_ib_b[1], f_ib_b[2], omega_ib_b[0], omega_ib_b[1], omega_ib_b[2]];
+        let x = [
+            f_ib_b[0],
+            f_ib_b[1],
+            f_ib_b[2],
+            omega_ib_b[0],
+            omega_ib_b[1],
+            omega_ib_b[2],
+        ];
         if !(dt_s > 0.0 && x.iter().all(|v| v.is_finite())) {
             return false;
         }
@@ -189,16 +196,31 @@ mod tests {
             let r = reference(&samples);
             let levels = v.levels();
             for i in 0..6 {
-                let lsb = if i < 3 { ACCEL_LSB_MPS2 } else { GYRO_LSB_RAD_S };
+                let lsb = if i < 3 {
+                    ACCEL_LSB_MPS2
+                } else {
+                    GYRO_LSB_RAD_S
+                };
                 let err = (f64::from(v.rms()[i]) - r[i]).abs() / f64::from(lsb);
                 worst[usize::from(i >= 3)] = worst[usize::from(i >= 3)].max(err);
                 // The quantised value is the reference's, give or take the rounding boundary.
-                let q = if i < 3 { levels.accel_rms[i] } else { levels.gyro_rms[i - 3] };
+                let q = if i < 3 {
+                    levels.accel_rms[i]
+                } else {
+                    levels.gyro_rms[i - 3]
+                };
                 let exact = r[i] / f64::from(lsb);
-                assert!((f64::from(q) - exact).abs() <= 0.5 + err, "axis {i}: {q} vs {exact}");
+                assert!(
+                    (f64::from(q) - exact).abs() <= 0.5 + err,
+                    "axis {i}: {q} vs {exact}"
+                );
             }
         }
-        std::println!("vibration metric: worst |micromath - f64| = {:.2e} LSB (accel), {:.2e} LSB (gyro)", worst[0], worst[1]);
+        std::println!(
+            "vibration metric: worst |micromath - f64| = {:.2e} LSB (accel), {:.2e} LSB (gyro)",
+            worst[0],
+            worst[1]
+        );
         // Below a tenth of the resolution (f32 accumulation included).
         assert!(worst.iter().all(|e| *e < 0.1), "{worst:?}");
     }
