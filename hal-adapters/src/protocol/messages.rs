@@ -186,6 +186,10 @@ pub struct ConfigAck {
 }
 
 /// Any message.
+///
+/// The configuration makes it 408 bytes; boxing is not an option without an allocator, and a
+/// message lives on the stack only while it is encoded or handed over.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Message {
     /// See [`NavSolution`].

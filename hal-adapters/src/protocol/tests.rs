@@ -416,43 +416,46 @@ fn random_bytes_never_panic_and_valid_frames_in_garbage_are_all_recovered() {
     }
 }
 
+/// A change to a configuration.
+type Mutation = fn(&mut DeviceConfig);
+
 #[test]
 fn defaults_are_valid_and_each_refusal_has_its_code() {
     let base = DeviceConfig::default();
     assert_eq!(base.validate(), Ok(()));
-    let refused = |f: &dyn Fn(&mut DeviceConfig)| {
+    let refused = |f: Mutation| {
         let mut c = base;
         f(&mut c);
         c.validate().unwrap_err()
     };
-    let cases: [(&dyn Fn(&mut DeviceConfig), ReasonCode); 11] = [
-        (&|c| c.run.lat_deg = 91.0, ReasonCode::Latitude),
-        (&|c| c.run.lon_deg = 400.0, ReasonCode::Longitude),
-        (&|c| c.run.h_m = -20_000.0, ReasonCode::Height),
-        (&|c| c.run.h_m = f64::NAN, ReasonCode::NotFinite),
-        (&|c| c.run.log_every = 0, ReasonCode::SolutionRate),
-        (&|c| c.run.bias_prior = -1.0, ReasonCode::BiasPrior),
-        (&|c| c.run.align_seconds = 1.0, ReasonCode::Alignment),
-        (&|c| c.imu_rate_hz = 0.0, ReasonCode::Alignment),
+    let cases: [(Mutation, ReasonCode); 11] = [
+        (|c| c.run.lat_deg = 91.0, ReasonCode::Latitude),
+        (|c| c.run.lon_deg = 400.0, ReasonCode::Longitude),
+        (|c| c.run.h_m = -20_000.0, ReasonCode::Height),
+        (|c| c.run.h_m = f64::NAN, ReasonCode::NotFinite),
+        (|c| c.run.log_every = 0, ReasonCode::SolutionRate),
+        (|c| c.run.bias_prior = -1.0, ReasonCode::BiasPrior),
+        (|c| c.run.align_seconds = 1.0, ReasonCode::Alignment),
+        (|c| c.imu_rate_hz = 0.0, ReasonCode::Alignment),
         (
-            &|c| {
+            |c| {
                 c.apply_line("propagation-rate = 10").unwrap();
                 c.run.noise.gyro_bias_rad_s = 0.0;
             },
             ReasonCode::Aiding,
         ),
-        (&|c| c.mounting.c_s_b[0][0] = 1.01, ReasonCode::Mounting),
-        (&|c| c.rates.health_every = 0, ReasonCode::OutputRate),
+        (|c| c.mounting.c_s_b[0][0] = 1.01, ReasonCode::Mounting),
+        (|c| c.rates.health_every = 0, ReasonCode::OutputRate),
     ];
     for (k, (f, code)) in cases.iter().enumerate() {
         let r = refused(*f);
         assert_eq!(r.code(), *code, "case {k}: {r}");
     }
     // A reflection is not a rotation.
-    let r = refused(&|c| c.mounting.c_s_b[2][2] = -1.0);
+    let r = refused(|c| c.mounting.c_s_b[2][2] = -1.0);
     assert_eq!(r, ConfigRefusal::Mounting);
     // nav-core's own message comes through.
-    let r = refused(&|c| c.run.lat_deg = 91.0);
+    let r = refused(|c| c.run.lat_deg = 91.0);
     assert_eq!(r, ConfigRefusal::Run(ConfigError::Latitude(91.0)));
     assert_eq!(keys_of(&r), &["lat-deg"]);
     // Codes round trip.
