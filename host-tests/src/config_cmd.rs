@@ -37,10 +37,7 @@ pub fn parse(name: &Path, text: &str) -> Result<DeviceConfig> {
         }
     }
     if let Err(refusal) = config.validate() {
-        let line = keys_of(&refusal)
-            .iter()
-            .filter_map(|k| line_of.get(k))
-            .max();
+        let line = keys_of(&refusal).filter_map(|k| line_of.get(k)).max();
         match line {
             Some(n) => bail!(
                 "{}:{n}: refused (reason code {}): {refusal}",

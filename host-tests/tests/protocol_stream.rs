@@ -13,6 +13,8 @@ use hal_adapters::protocol::{Decoder, Encoder, MAX_FRAME, Message};
 use hal_adapters::{ImuSample, Motion, SampleFlags};
 use nav_core::ins_filter::FilterStatus;
 use nav_core::output::{FilterColumns, Row, Solution};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use std::path::Path;
 
 /// `value / 10^digits` written as a decimal, back to the integer.
@@ -62,17 +64,6 @@ fn parse_row(line: &str) -> Row {
     )
 }
 
-/// xorshift64* (seeded garbage).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-}
-
 /// The stream a board would send for `log`: each row as a solution frame, between raw and
 /// health frames, then the end of run; with `garbage`, random bytes (and a corrupted frame)
 /// between frames. Returns the stream and the garbage bytes added.
@@ -84,7 +75,7 @@ fn stream_of(log: &str, garbage: bool) -> (Vec<u8>, usize) {
         .map(parse_row)
         .collect();
     let mut enc = Encoder::new();
-    let mut rng = Rng(0x0123_4567_89ab_cdef);
+    let mut rng = ChaCha8Rng::seed_from_u64(0x0123_4567_89ab_cdef);
     let mut out = Vec::new();
     let mut added = 0;
     let mut frame = |m: &Message, out: &mut Vec<u8>| {
@@ -116,8 +107,8 @@ fn stream_of(log: &str, garbage: bool) -> (Vec<u8>, usize) {
         if garbage && k % 7 == 3 {
             // Never a zero inside (it would split the garbage into frames of its own), so
             // the decoder must skip exactly these bytes and the zero after them.
-            let n = 1 + (rng.next() % 40) as usize;
-            let junk: Vec<u8> = (0..n).map(|_| (rng.next() as u8).max(1)).collect();
+            let n: usize = rng.random_range(1..=40);
+            let junk: Vec<u8> = (0..n).map(|_| rng.random_range(1..=255u8)).collect();
             added += junk.len();
             out.extend(junk);
             out.push(0);

@@ -17,6 +17,7 @@ use nav_core::navigator::Setup;
 use nav_core::navigator::config::{
     ATTITUDES, AidingConfig, ConfigError, FRAMES, RunConfig, VERTICALS,
 };
+use nav_core::scalar::Scalar;
 
 /// The IMUs the board's drivers support.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -58,13 +59,13 @@ impl ImuModel {
     }
 }
 
-/// nav-core's noise model of a part's or grade's figures.
-pub fn sensor_noise(n: &NoiseSpec) -> SensorNoise<f64> {
+/// nav-core's noise model of a part's or grade's figures, in precision `T`.
+pub fn sensor_noise<T: Scalar>(n: &NoiseSpec) -> SensorNoise<T> {
     SensorNoise {
-        arw_rad_per_sqrt_s: n.gyro_arw_rad_per_sqrt_s,
-        vrw_mps_per_sqrt_s: n.accel_vrw_mps_per_sqrt_s,
-        gyro_bias_rad_s: n.gyro_bias_rad_s,
-        accel_bias_mps2: n.accel_bias_mps2,
+        arw_rad_per_sqrt_s: T::c(n.gyro_arw_rad_per_sqrt_s),
+        vrw_mps_per_sqrt_s: T::c(n.accel_vrw_mps_per_sqrt_s),
+        gyro_bias_rad_s: T::c(n.gyro_bias_rad_s),
+        accel_bias_mps2: T::c(n.accel_bias_mps2),
     }
 }
 

@@ -145,47 +145,47 @@ impl DeviceConfig {
     }
 }
 
+/// The keys of the IMU's noise figures.
+const NOISE_KEYS: [&str; 6] = [
+    "imu-model",
+    "imu-noise",
+    "gyro-arw-rad-per-sqrt-s",
+    "accel-vrw-mps-per-sqrt-s",
+    "gyro-bias-rad-s",
+    "accel-bias-mps2",
+];
+
 /// The text keys a refusal is about (a host names the lines that set them).
-pub fn keys_of(refusal: &super::config::ConfigRefusal) -> &'static [&'static str] {
+pub fn keys_of(
+    refusal: &super::config::ConfigRefusal,
+) -> impl Iterator<Item = &'static str> + use<> {
     use super::config::ConfigRefusal as R;
     use nav_core::navigator::ConfigError as E;
-    match refusal {
-        R::Run(E::Latitude(_)) => &["lat-deg"],
-        R::Run(E::Longitude(_)) => &["lon-deg"],
-        R::Run(E::Height(_)) => &["h-m"],
-        R::Run(E::NotFinite(_)) => &["lon-deg", "h-m", "align-seconds"],
-        R::Run(E::LogEvery) => &["log-every"],
-        R::Run(E::BiasPrior(_)) => &["bias-prior"],
-        R::Run(E::Calibration(_)) => &[],
-        R::Run(E::Alignment(_)) => &[
-            "align-method",
-            "align-seconds",
-            "imu-rate-hz",
-            "lat-deg",
-            "lever-arm",
-            "lever-arm-sigma",
-            "base-translation",
-            "imu-model",
-            "imu-noise",
-            "gyro-arw-rad-per-sqrt-s",
-            "accel-vrw-mps-per-sqrt-s",
-            "gyro-bias-rad-s",
-            "accel-bias-mps2",
-            "bias-prior",
-        ],
-        R::Run(E::Aiding(_)) => &[
-            "aiding",
-            "gnss-lever-arm",
-            "propagation-rate",
-            "imu-model",
-            "imu-noise",
-            "gyro-arw-rad-per-sqrt-s",
-            "accel-vrw-mps-per-sqrt-s",
-            "gyro-bias-rad-s",
-            "accel-bias-mps2",
-        ],
-        R::Mounting => &["mounting"],
-        R::HealthOff => &["health-every"],
-        R::Malformed(_) => &[],
-    }
+    let (own, noise): (&'static [&'static str], bool) = match refusal {
+        R::Run(E::Latitude(_)) => (&["lat-deg"], false),
+        R::Run(E::Longitude(_)) => (&["lon-deg"], false),
+        R::Run(E::Height(_)) => (&["h-m"], false),
+        R::Run(E::NotFinite(_)) => (&["lon-deg", "h-m", "align-seconds"], false),
+        R::Run(E::LogEvery) => (&["log-every"], false),
+        R::Run(E::BiasPrior(_)) => (&["bias-prior"], false),
+        R::Run(E::Alignment(_)) => (
+            &[
+                "align-method",
+                "align-seconds",
+                "imu-rate-hz",
+                "lat-deg",
+                "lever-arm",
+                "lever-arm-sigma",
+                "base-translation",
+                "bias-prior",
+            ],
+            true,
+        ),
+        R::Run(E::Aiding(_)) => (&["aiding", "gnss-lever-arm", "propagation-rate"], true),
+        R::Mounting => (&["mounting"], false),
+        R::HealthOff => (&["health-every"], false),
+        R::Run(E::Calibration(_)) | R::Malformed(_) => (&[], false),
+    };
+    let noise: &'static [&'static str] = if noise { &NOISE_KEYS } else { &[] };
+    own.iter().chain(noise).copied()
 }

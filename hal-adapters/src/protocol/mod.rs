@@ -19,7 +19,7 @@ pub mod vibration;
 mod wire;
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 pub use decoder::{DecodeStats, Decoder, Received, Refusal};
 pub use frame::{Encoder, MAX_FRAME, VERSION};

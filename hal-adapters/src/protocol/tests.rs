@@ -336,10 +336,10 @@ fn encoder_writes_to_an_embedded_io_writer() {
     assert_eq!(enc.next_seq(), 1);
 }
 
-/// xorshift64* (seeded, no dependency).
-struct Rng(u64);
+/// xorshift64* (seeded, no dependency): the protocol tests' random draws.
+pub(super) struct Rng(pub(super) u64);
 impl Rng {
-    fn next(&mut self) -> u64 {
+    pub(super) fn next(&mut self) -> u64 {
         self.0 ^= self.0 >> 12;
         self.0 ^= self.0 << 25;
         self.0 ^= self.0 >> 27;
@@ -347,6 +347,10 @@ impl Rng {
     }
     fn below(&mut self, n: usize) -> usize {
         (self.next() % n as u64) as usize
+    }
+    /// Uniform in [-1, 1).
+    pub(super) fn uniform(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 52) as f64 - 1.0
     }
 }
 
@@ -457,7 +461,7 @@ fn defaults_are_valid_and_each_refusal_has_its_code() {
     // nav-core's own message comes through.
     let r = refused(|c| c.run.lat_deg = 91.0);
     assert_eq!(r, ConfigRefusal::Run(ConfigError::Latitude(91.0)));
-    assert_eq!(keys_of(&r), &["lat-deg"]);
+    assert_eq!(keys_of(&r).collect::<Vec<_>>(), ["lat-deg"]);
     // Codes round trip.
     for c in ReasonCode::ALL {
         assert_eq!(ReasonCode::from_code(c as u8), Some(c));

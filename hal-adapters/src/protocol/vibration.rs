@@ -135,18 +135,7 @@ mod tests {
     extern crate std;
 
     use super::*;
-
-    /// xorshift64*: seeded uniform draws in [-1, 1).
-    struct Draws(u64);
-    impl Draws {
-        fn next(&mut self) -> f64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            let u = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
-            u as f64 / (1u64 << 52) as f64 - 1.0
-        }
-    }
+    use crate::protocol::tests::Rng;
 
     /// The same metric in f64 with the library square root.
     fn reference(samples: &[([f64; 6], f64)]) -> [f64; 6] {
@@ -165,13 +154,13 @@ mod tests {
 
     #[test]
     fn micromath_error_is_below_the_resolution_on_random_vibration() {
-        let mut d = Draws(0x9e37_79b9_7f4a_7c15);
+        let mut d = Rng(0x9e37_79b9_7f4a_7c15);
         let dt = 0.0025;
         let mut worst = [0.0f64; 2];
         // Amplitudes from quiet to violent: 0.05 to 50 m/s^2 and 0.005 to 5 rad/s (within the
         // u16's range).
         for case in 0..60 {
-            let scale = 10f64.powf(f64::from(case % 3) - 3.0 + d.next().abs());
+            let scale = 10f64.powf(f64::from(case % 3) - 3.0 + d.uniform().abs());
             let window = 400;
             let samples: std::vec::Vec<([f64; 6], f64)> = (0..window)
                 .map(|k| {
@@ -180,7 +169,7 @@ mod tests {
                     let x = core::array::from_fn(|i| {
                         let base = if i < 3 { 50.0 } else { 5.0 };
                         let g = if i == 2 { -9.81 } else { 0.0 };
-                        g + base * scale * (0.7 * tone + 0.3 * d.next())
+                        g + base * scale * (0.7 * tone + 0.3 * d.uniform())
                     });
                     (x, dt)
                 })
