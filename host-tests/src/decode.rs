@@ -209,3 +209,67 @@ pub fn run(args: &DecodeArgs) -> Result<()> {
     );
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use hal_adapters::protocol::messages::NavSolution;
+    use hal_adapters::protocol::status::{NavStatus, StatusFlags};
+    use hal_adapters::protocol::{Encoder, MAX_FRAME};
+    use nav_core::output::{FilterColumns, Solution};
+
+    fn frames(messages: &[Message]) -> Vec<u8> {
+        let mut enc = Encoder::new();
+        let mut out = Vec::new();
+        for m in messages {
+            let mut buf = [0u8; MAX_FRAME];
+            let n = enc.encode(m, &mut buf).unwrap();
+            out.extend_from_slice(&buf[..n]);
+        }
+        out
+    }
+
+    fn solution(row: Row) -> Message {
+        Message::NavSolution(NavSolution {
+            row,
+            status: NavStatus::Nav,
+            flags: StatusFlags::empty(),
+        })
+    }
+
+    const S: Solution = Solution {
+        t_us: 1_000_000,
+        lat_ndeg: 45_000_000_000,
+        lon_ndeg: 7_500_000_000,
+        h_m: 150.0,
+        v_eb_n: [0.0; 3],
+        roll_deg: 0.0,
+        pitch_deg: 0.0,
+        yaw_deg: 30.0,
+    };
+
+    #[test]
+    fn mixed_rows_are_refused_and_a_stream_without_rows_has_a_header_only() {
+        let aided = Row::Aided(
+            S,
+            FilterColumns {
+                sigma_ned_m: [1.0; 3],
+                sigma_v_ned_m_s: [0.1; 3],
+                sigma_att_deg: [0.5; 3],
+                status: "NAV",
+            },
+        );
+        let bytes = frames(&[solution(Row::Free(S)), solution(aided)]);
+        let e = decode(&mut bytes.as_slice(), &mut Vec::new()).unwrap_err();
+        assert!(e.to_string().contains("free-inertial and aided"), "{e}");
+
+        let bytes = frames(&[Message::EndOfRun(EndOfRun { rows: 0 })]);
+        let mut out = Vec::new();
+        let s = decode(&mut bytes.as_slice(), &mut out).unwrap();
+        assert!(s.complete());
+        assert_eq!(
+            String::from_utf8(out).unwrap(),
+            format!("{CSV_HEADER}\n# end: 0 rows, ok\n")
+        );
+    }
+}

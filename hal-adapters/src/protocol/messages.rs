@@ -8,7 +8,9 @@ use super::wire::{Overflow, Reader, Writer};
 use crate::sample::{ImuSample, Motion, SampleFlags};
 use nav_core::alignment::machine::Stage;
 use nav_core::ins_filter::FilterStatus;
+use nav_core::ins_filter::aiding::AidResult;
 use nav_core::output::{FilterColumns, Row, Solution};
+use nav_core::scalar::Scalar;
 
 /// Message identifiers (one byte).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -154,6 +156,23 @@ pub enum AidOutcome {
     Late = 3,
     /// Refused: older than the previous fix, or the queue full.
     OutOfOrder = 4,
+}
+
+impl AidingEvent {
+    /// The event of the filter's answer `result` to a fix of `aid` time-tagged `t_us` [us].
+    pub fn of<T: Scalar>(t_us: u64, aid: Aid, result: &AidResult<T>) -> Self {
+        let (outcome, nis) = match result {
+            AidResult::Accepted { nis } => (AidOutcome::Accepted, nis.to_f64() as f32),
+            AidResult::Rejected { nis } => (AidOutcome::RejectedGate, nis.to_f64() as f32),
+            AidResult::Invalid => (AidOutcome::Invalid, f32::NAN),
+        };
+        Self {
+            t_us,
+            aid,
+            outcome,
+            nis,
+        }
+    }
 }
 
 /// An aiding measurement accepted or refused.

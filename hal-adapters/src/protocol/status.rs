@@ -18,6 +18,7 @@ use crate::drivers::Health;
 use bitflags::bitflags;
 use nav_core::alignment::machine::Stage;
 use nav_core::ins_filter::FilterStatus;
+use nav_core::ins_filter::aiding::{AidCounters, FilterCounters};
 
 /// The navigator's status on the wire (one byte).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -104,6 +105,17 @@ pub struct AidCount {
     pub rejected: u32,
 }
 
+impl AidCount {
+    /// The count of the filter's counters of one aid: the gate's refusals and the invalid
+    /// measurements are both refused.
+    pub fn of(c: &AidCounters) -> Self {
+        Self {
+            accepted: c.accepted,
+            rejected: c.rejected.saturating_add(c.invalid),
+        }
+    }
+}
+
 /// The counters of the health frame, since power-up (each saturates at `u32::MAX`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -144,6 +156,15 @@ impl HealthCounters {
         self.device_faults = h.device_faults;
         self.gyro_clips = h.gyro_clips;
         self.accel_clips = h.accel_clips;
+    }
+}
+
+impl HealthCounters {
+    /// Takes the filter's GNSS position and velocity counts (refused fixes the sequencer
+    /// dropped as late or out of order are the board's to add).
+    pub fn set_aiding(&mut self, c: &FilterCounters) {
+        self.position_aiding = AidCount::of(&c.position);
+        self.velocity_aiding = AidCount::of(&c.velocity);
     }
 }
 
@@ -343,6 +364,38 @@ mod tests {
         );
         // The failure over, the status recovers.
         assert_eq!(model.update(aligning, &h).0, NavStatus::AlignCoarse);
+    }
+
+    #[test]
+    fn aiding_counts_take_invalid_fixes_as_refused() {
+        let c = FilterCounters {
+            position: AidCounters {
+                accepted: 10,
+                rejected: 2,
+                invalid: 1,
+                consecutive_rejected: 0,
+            },
+            velocity: AidCounters {
+                accepted: 4,
+                ..AidCounters::default()
+            },
+            ..FilterCounters::default()
+        };
+        let mut h = HealthCounters::default();
+        h.set_aiding(&c);
+        assert_eq!(
+            (h.position_aiding, h.velocity_aiding),
+            (
+                AidCount {
+                    accepted: 10,
+                    rejected: 3
+                },
+                AidCount {
+                    accepted: 4,
+                    rejected: 0
+                }
+            )
+        );
     }
 
     #[test]

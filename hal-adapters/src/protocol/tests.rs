@@ -600,3 +600,18 @@ mod properties {
         }
     }
 }
+
+#[test]
+fn aiding_events_of_the_filter_answers() {
+    use nav_core::ins_filter::aiding::AidResult;
+    let e = AidingEvent::of(5, Aid::Position, &AidResult::Accepted { nis: 2.5f64 });
+    assert_eq!((e.outcome, e.nis), (AidOutcome::Accepted, 2.5));
+    let e = AidingEvent::of(5, Aid::Velocity, &AidResult::Rejected { nis: 40.0f32 });
+    assert_eq!(
+        (e.aid, e.outcome, e.nis),
+        (Aid::Velocity, AidOutcome::RejectedGate, 40.0)
+    );
+    let e = AidingEvent::of(5, Aid::Position, &AidResult::<f64>::Invalid);
+    assert_eq!(e.outcome, AidOutcome::Invalid);
+    assert!(e.nis.is_nan());
+}
