@@ -6,7 +6,7 @@
 mod common;
 
 use common::{nav, output_text};
-use hal_adapters::protocol::messages::{EndOfRun, Health, NavSolution, RawIncrements};
+use hal_adapters::protocol::messages::{EndOfRun, HealthReport, NavSolution, RawIncrements};
 use hal_adapters::protocol::status::{HealthCounters, NavStatus, StatusFlags};
 use hal_adapters::protocol::vibration::VibrationLevels;
 use hal_adapters::protocol::{Decoder, Encoder, MAX_FRAME, Message};
@@ -96,7 +96,7 @@ fn stream_of(log: &str, garbage: bool) -> (Vec<u8>, usize) {
             flags: SampleFlags::empty(),
         },
     });
-    let health = Message::Health(Health {
+    let health = Message::Health(HealthReport {
         t_us: 1,
         status: NavStatus::Nav,
         flags: StatusFlags::empty(),

@@ -20,7 +20,7 @@ pub enum MessageId {
     NavSolution = 0x01,
     /// [`RawIncrements`].
     RawIncrements = 0x02,
-    /// [`Health`].
+    /// [`HealthReport`].
     Health = 0x03,
     /// [`AlignProgress`].
     AlignProgress = 0x04,
@@ -106,7 +106,7 @@ pub struct RawIncrements {
 
 /// Health and status.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Health {
+pub struct HealthReport {
     /// Time [us].
     pub t_us: u64,
     /// The wire status.
@@ -215,8 +215,8 @@ pub enum Message {
     NavSolution(NavSolution),
     /// See [`RawIncrements`].
     RawIncrements(RawIncrements),
-    /// See [`Health`].
-    Health(Health),
+    /// See [`HealthReport`].
+    Health(HealthReport),
     /// See [`AlignProgress`].
     AlignProgress(AlignProgress),
     /// See [`AidingEvent`].
@@ -422,7 +422,7 @@ impl Message {
                 for v in &mut vib {
                     *v = r.u16().ok_or(short)?;
                 }
-                Self::Health(Health {
+                Self::Health(HealthReport {
                     t_us,
                     status,
                     flags,

@@ -73,7 +73,7 @@ pub(super) fn every_message() -> Vec<Message> {
                 flags: SampleFlags::STALE,
             },
         }),
-        Message::Health(Health {
+        Message::Health(HealthReport {
             t_us: 1_000_000,
             status: NavStatus::Fault,
             flags: StatusFlags::BUS_ERRORS | StatusFlags::DEVICE_FAULT,
@@ -614,4 +614,35 @@ fn aiding_events_of_the_filter_answers() {
     let e = AidingEvent::of(5, Aid::Position, &AidResult::<f64>::Invalid);
     assert_eq!(e.outcome, AidOutcome::Invalid);
     assert!(e.nis.is_nan());
+}
+
+/// Frames shorter than 254 bytes take exactly one COBS byte and the delimiter more than the
+/// raw frame: the wire sizes `docs/protocol.md` gives for the bandwidth, printed.
+#[test]
+fn wire_sizes_are_payload_plus_twelve() {
+    let mut total_at_defaults = 0;
+    for m in every_message() {
+        let mut buf = [0u8; MAX_FRAME];
+        let n = Encoder::new().encode(&m, &mut buf).unwrap();
+        assert_eq!(n, m.id().payload_len() + 6 + 4 + 2, "{:?}", m.id());
+        // Default rates at 400 Hz: raw every sample, a solution every 40, health every 400.
+        total_at_defaults += match m.id() {
+            MessageId::RawIncrements => 400 * n,
+            MessageId::NavSolution
+                if matches!(
+                    m,
+                    Message::NavSolution(NavSolution {
+                        row: Row::Aided(..),
+                        ..
+                    })
+                ) =>
+            {
+                10 * n
+            }
+            MessageId::Health => n,
+            _ => 0,
+        };
+    }
+    std::println!("stream at the default rates: {total_at_defaults} bytes/s");
+    assert_eq!(total_at_defaults, 400 * 58 + 10 * 132 + 103);
 }
