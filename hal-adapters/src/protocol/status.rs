@@ -8,7 +8,8 @@
 //! - else ALIGN_COARSE / ALIGN_FINE while the alignment is in its coarse / fine stage;
 //! - else DEGRADED when the filter reports anything but nominal (fixes refused beyond its
 //!   limit, horizontal 1-sigma above its limit, covariance fault:
-//!   [`nav_core::ins_filter::FilterStatus`]);
+//!   [`nav_core::ins_filter::FilterStatus`]), or when the aided phase has had no fix accepted
+//!   for longer than its timeout ([`DEFAULT_AIDING_TIMEOUT_S`]: aiding lost);
 //! - else NAV (aided and nominal, or free inertial, flagged [`StatusFlags::FREE_INERTIAL`]).
 //!
 //! The flags say why, and report what did not change the status: checksum errors, clipped
@@ -92,6 +93,8 @@ bitflags! {
         const OVERRUNS = 1 << 10;
         /// The watchdog reset the board.
         const WATCHDOG_RESET = 1 << 11;
+        /// No fix accepted for longer than the aiding timeout (aided phase).
+        const AIDING_LOST = 1 << 12;
     }
 }
 
@@ -177,25 +180,56 @@ pub struct NavigatorState {
     pub filter: Option<FilterStatus>,
 }
 
-/// The status rule with the counters of its previous evaluation (to see what happened since).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// How long the aided phase may go without an accepted fix before it is DEGRADED, by default
+/// [s] (five fixes missed at 1 Hz).
+pub const DEFAULT_AIDING_TIMEOUT_S: f64 = 5.0;
+
+/// The status rule with the counters of its previous evaluation (to see what happened since)
+/// and the time of the last accepted fix.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StatusModel {
     previous: HealthCounters,
+    aiding_timeout_us: u64,
+    /// Time of the last accepted fix (or of the start of the aided phase) [us].
+    last_fix_us: Option<u64>,
+}
+
+impl Default for StatusModel {
+    /// With [`DEFAULT_AIDING_TIMEOUT_S`].
+    fn default() -> Self {
+        Self::new(DEFAULT_AIDING_TIMEOUT_S)
+    }
 }
 
 impl StatusModel {
-    /// The status and flags of `nav` and `health` (the module's rule); remembers `health` for
-    /// the next evaluation.
+    /// A model that calls the aided phase DEGRADED after `aiding_timeout_s` [s] without an
+    /// accepted fix.
+    pub fn new(aiding_timeout_s: f64) -> Self {
+        Self {
+            previous: HealthCounters::default(),
+            aiding_timeout_us: (aiding_timeout_s.max(0.0) * 1e6) as u64,
+            last_fix_us: None,
+        }
+    }
+
+    /// The status and flags at time `t_us` [us] of `nav` and `health` (the module's rule);
+    /// remembers `health` for the next evaluation.
     pub fn update(
         &mut self,
+        t_us: u64,
         nav: NavigatorState,
         health: &HealthCounters,
     ) -> (NavStatus, StatusFlags) {
-        let flags = nav_flags(nav) | event_flags(&self.previous, health);
+        let mut flags = nav_flags(nav) | event_flags(&self.previous, health);
+        flags.set(
+            StatusFlags::AIDING_LOST,
+            self.aiding_lost(t_us, nav, health),
+        );
         self.previous = *health;
         let failed =
             StatusFlags::ALIGN_FAILED | StatusFlags::DEVICE_FAULT | StatusFlags::BUS_ERRORS;
         let degraded = StatusFlags::AIDING_REJECTED
+            | StatusFlags::AIDING_LOST
             | StatusFlags::SIGMA_ABOVE_LIMIT
             | StatusFlags::COVARIANCE_FAULT;
         let status = if flags.intersects(failed) {
@@ -209,6 +243,25 @@ impl StatusModel {
             }
         };
         (status, flags)
+    }
+
+    /// The aided phase has gone longer than the timeout without an accepted fix (its clock
+    /// starts with the aided phase, and again at every accepted fix).
+    fn aiding_lost(&mut self, t_us: u64, nav: NavigatorState, health: &HealthCounters) -> bool {
+        if nav.filter.is_none() {
+            self.last_fix_us = None;
+            return false;
+        }
+        let accepted = |h: &HealthCounters| {
+            h.position_aiding
+                .accepted
+                .saturating_add(h.velocity_aiding.accepted)
+        };
+        let last = self.last_fix_us.get_or_insert(t_us);
+        if accepted(health) > accepted(&self.previous) {
+            *last = t_us;
+        }
+        t_us.saturating_sub(*last) > self.aiding_timeout_us
     }
 }
 
@@ -323,7 +376,7 @@ mod tests {
         ];
         for (nav, status, flags) in cases {
             assert_eq!(
-                StatusModel::default().update(nav, &h),
+                StatusModel::default().update(0, nav, &h),
                 (status, flags),
                 "{nav:?}"
             );
@@ -335,12 +388,12 @@ mod tests {
         let nav = state(Stage::Aligned, Some(FilterStatus::Nominal));
         let mut model = StatusModel::default();
         let mut h = HealthCounters::default();
-        assert_eq!(model.update(nav, &h).0, NavStatus::Nav);
+        assert_eq!(model.update(0, nav, &h).0, NavStatus::Nav);
         h.checksum_errors = 1;
         h.accel_clips[2] = 4;
         h.channel_overruns = 1;
         assert_eq!(
-            model.update(nav, &h),
+            model.update(0, nav, &h),
             (
                 NavStatus::Nav,
                 StatusFlags::CHECKSUM_ERRORS | StatusFlags::CLIPPING | StatusFlags::OVERRUNS
@@ -348,22 +401,47 @@ mod tests {
         );
         // Nothing new since: no event flags.
         assert_eq!(
-            model.update(nav, &h),
+            model.update(0, nav, &h),
             (NavStatus::Nav, StatusFlags::empty())
         );
         h.bus_errors = 1;
         assert_eq!(
-            model.update(nav, &h),
+            model.update(0, nav, &h),
             (NavStatus::Fault, StatusFlags::BUS_ERRORS)
         );
         h.device_faults = 1;
         let aligning = state(Stage::Coarse, None);
         assert_eq!(
-            model.update(aligning, &h),
+            model.update(0, aligning, &h),
             (NavStatus::Fault, StatusFlags::DEVICE_FAULT)
         );
         // The failure over, the status recovers.
-        assert_eq!(model.update(aligning, &h).0, NavStatus::AlignCoarse);
+        assert_eq!(model.update(0, aligning, &h).0, NavStatus::AlignCoarse);
+    }
+
+    #[test]
+    fn aiding_lost_after_the_timeout_without_an_accepted_fix() {
+        let aided = state(Stage::Aligned, Some(FilterStatus::Nominal));
+        let mut model = StatusModel::new(5.0);
+        let mut h = HealthCounters::default();
+        let s = |m: &mut StatusModel, t_s: f64, h: &HealthCounters| {
+            m.update((t_s * 1e6) as u64, aided, h)
+        };
+        // The clock starts with the aided phase.
+        assert_eq!(s(&mut model, 100.0, &h).0, NavStatus::Nav);
+        assert_eq!(s(&mut model, 105.0, &h).0, NavStatus::Nav);
+        assert_eq!(
+            s(&mut model, 105.5, &h),
+            (NavStatus::Degraded, StatusFlags::AIDING_LOST)
+        );
+        // A fix accepted: back to NAV, and the clock restarts.
+        h.position_aiding.accepted = 1;
+        assert_eq!(s(&mut model, 106.0, &h).0, NavStatus::Nav);
+        assert_eq!(s(&mut model, 110.9, &h).0, NavStatus::Nav);
+        assert_eq!(s(&mut model, 111.1, &h).0, NavStatus::Degraded);
+        // Free inertial: no aiding expected, never lost.
+        let free = state(Stage::Aligned, None);
+        assert_eq!(model.update(200_000_000, free, &h).0, NavStatus::Nav);
     }
 
     #[test]
