@@ -8,7 +8,7 @@ use crate::atomic;
 use anyhow::{Context, Result, bail};
 use hal_adapters::protocol::config::DeviceConfig;
 use hal_adapters::protocol::config_text::{key_of, keys_of};
-use hal_adapters::protocol::{Encoder, MAX_FRAME, Message};
+use hal_adapters::protocol::{Encoder, Message};
 use std::collections::HashMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -60,11 +60,11 @@ pub fn encode_file(file: &Path, out: &Path) -> Result<DeviceConfig> {
     let text =
         std::fs::read_to_string(file).with_context(|| format!("cannot read {}", file.display()))?;
     let config = parse(file, &text)?;
-    let mut frame = [0u8; MAX_FRAME];
-    let n = Encoder::new()
-        .encode(&Message::Config(config), &mut frame)
+    let mut frame = Vec::new();
+    Encoder::new()
+        .append(&Message::Config(config), &mut frame)
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-    atomic::write(out, |w| w.write_all(&frame[..n]))
+    atomic::write(out, |w| w.write_all(&frame))
         .with_context(|| format!("cannot write {}", out.display()))?;
     Ok(config)
 }

@@ -213,18 +213,16 @@ pub fn run(args: &DecodeArgs) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use hal_adapters::protocol::Encoder;
     use hal_adapters::protocol::messages::NavSolution;
     use hal_adapters::protocol::status::{NavStatus, StatusFlags};
-    use hal_adapters::protocol::{Encoder, MAX_FRAME};
     use nav_core::output::{FilterColumns, Solution};
 
     fn frames(messages: &[Message]) -> Vec<u8> {
         let mut enc = Encoder::new();
         let mut out = Vec::new();
         for m in messages {
-            let mut buf = [0u8; MAX_FRAME];
-            let n = enc.encode(m, &mut buf).unwrap();
-            out.extend_from_slice(&buf[..n]);
+            enc.append(m, &mut out).unwrap();
         }
         out
     }

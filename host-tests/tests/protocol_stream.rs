@@ -9,7 +9,7 @@ use common::{nav, output_text};
 use hal_adapters::protocol::messages::{EndOfRun, HealthReport, NavSolution, RawIncrements};
 use hal_adapters::protocol::status::{HealthCounters, NavStatus, StatusFlags};
 use hal_adapters::protocol::vibration::VibrationLevels;
-use hal_adapters::protocol::{Decoder, Encoder, MAX_FRAME, Message};
+use hal_adapters::protocol::{Decoder, Encoder, Message};
 use hal_adapters::{ImuSample, Motion, SampleFlags};
 use nav_core::ins_filter::FilterStatus;
 use nav_core::output::{FilterColumns, Row, Solution};
@@ -79,9 +79,7 @@ fn stream_of(log: &str, garbage: bool) -> (Vec<u8>, usize) {
     let mut out = Vec::new();
     let mut added = 0;
     let mut frame = |m: &Message, out: &mut Vec<u8>| {
-        let mut buf = [0u8; MAX_FRAME];
-        let n = enc.encode(m, &mut buf).unwrap();
-        out.extend_from_slice(&buf[..n]);
+        enc.append(m, out).unwrap();
     };
     let raw = Message::RawIncrements(RawIncrements {
         sample: ImuSample {

@@ -10,6 +10,8 @@
 //! middle of a stream, or after garbage, resynchronises at the next zero.
 
 use super::messages::{EncodeError, Message};
+#[cfg(any(test, feature = "std"))]
+extern crate std;
 
 /// The protocol's version: the first byte of every frame.
 pub const VERSION: u8 = 1;
@@ -76,6 +78,19 @@ impl Encoder {
         *out.get_mut(n).ok_or(EncodeError::BufferTooSmall)? = 0;
         self.seq = self.seq.wrapping_add(1);
         Ok(n + 1)
+    }
+
+    /// Appends the frame of `message` to `out` (host side); returns its length.
+    #[cfg(any(test, feature = "std"))]
+    pub fn append(
+        &mut self,
+        message: &Message,
+        out: &mut std::vec::Vec<u8>,
+    ) -> Result<usize, EncodeError> {
+        let mut buf = [0u8; MAX_FRAME];
+        let n = self.encode(message, &mut buf)?;
+        out.extend_from_slice(&buf[..n]);
+        Ok(n)
     }
 
     /// Encodes `message` and writes the frame to `w` (a UART, a file).

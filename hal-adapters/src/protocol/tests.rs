@@ -135,9 +135,7 @@ pub(super) fn stream(messages: &[Message]) -> Vec<u8> {
     let mut enc = Encoder::new();
     let mut out = Vec::new();
     for m in messages {
-        let mut buf = [0u8; MAX_FRAME];
-        let n = enc.encode(m, &mut buf).unwrap();
-        out.extend_from_slice(&buf[..n]);
+        enc.append(m, &mut out).unwrap();
     }
     out
 }
@@ -387,9 +385,7 @@ fn random_bytes_never_panic_and_valid_frames_in_garbage_are_all_recovered() {
         for m in &picks {
             bytes.extend(garbage(&mut rng, 80));
             bytes.push(0);
-            let mut buf = [0u8; MAX_FRAME];
-            let n = enc.encode(m, &mut buf).unwrap();
-            bytes.extend_from_slice(&buf[..n]);
+            enc.append(m, &mut bytes).unwrap();
         }
         let (out, _) = decode_all(&bytes);
         let got: Vec<&Received> = out.iter().filter_map(|r| r.as_ref().ok()).collect();
@@ -583,9 +579,7 @@ mod properties {
                     junk += garbage.len() as u64 + 1;
                 }
                 let m = messages[pick % messages.len()];
-                let mut buf = [0u8; MAX_FRAME];
-                let n = enc.encode(&m, &mut buf).unwrap();
-                bytes.extend_from_slice(&buf[..n]);
+                enc.append(&m, &mut bytes).unwrap();
                 sent.push(m);
             }
             let (out, d) = decode_all(&bytes);
