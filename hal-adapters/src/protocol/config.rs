@@ -7,7 +7,7 @@
 //! [`ReasonCode`]. Its byte layout is in `docs/protocol.md`. The sensor calibration is not
 //! part of it (identity: the board's calibration is its own file).
 
-use super::wire::{Overflow, Reader, Writer};
+use super::wire::{Overflow, Reader, Writer, pick};
 use crate::drivers::Mounting;
 use crate::drivers::noise::{self, NoiseSpec};
 use core::fmt;
@@ -301,9 +301,7 @@ impl DeviceConfig {
     pub(crate) fn read(r: &mut Reader<'_>) -> Result<Self, ConfigRefusal> {
         let short = ConfigRefusal::Malformed("payload too short");
         let [lat_deg, lon_deg, h_m] = r.f64s().ok_or(short)?;
-        let imu_model = *ImuModel::ALL
-            .get(usize::from(r.u8().ok_or(short)?))
-            .ok_or(ConfigRefusal::Malformed("IMU model"))?;
+        let imu_model = field(&ImuModel::ALL, r.u8().ok_or(short)?, "IMU model")?;
         let imu_rate_hz = r.f32().ok_or(short)?;
         let c_s_b = [
             r.f32s().ok_or(short)?,
@@ -311,7 +309,7 @@ impl DeviceConfig {
             r.f32s().ok_or(short)?,
         ];
         let [arw, vrw, gyro_bias, accel_bias, bias_prior] = r.f64s().ok_or(short)?;
-        let align_method = pick(&AlignMethod::ALL, r.u8().ok_or(short)?, "alignment method")?;
+        let align_method = field(&AlignMethod::ALL, r.u8().ok_or(short)?, "alignment method")?;
         let align_seconds = r.f64().ok_or(short)?;
         let kind = r.u8().ok_or(short)?;
         let [x, y, z] = r.f64s().ok_or(short)?;
@@ -321,9 +319,9 @@ impl DeviceConfig {
             _ => return Err(ConfigRefusal::Malformed("lever arm kind")),
         };
         let [position_sigma_m, translation_sigma_m] = r.f64s().ok_or(short)?;
-        let frame = pick(&FRAMES, r.u8().ok_or(short)?, "navigation frame")?.1;
-        let attitude = pick(&ATTITUDES, r.u8().ok_or(short)?, "attitude method")?.1;
-        let vertical = pick(&VERTICALS, r.u8().ok_or(short)?, "vertical channel")?.1;
+        let frame = field(&FRAMES, r.u8().ok_or(short)?, "navigation frame")?.1;
+        let attitude = field(&ATTITUDES, r.u8().ok_or(short)?, "attitude method")?.1;
+        let vertical = field(&VERTICALS, r.u8().ok_or(short)?, "vertical channel")?.1;
         let log_every = r.u32().ok_or(short)?;
         let bits = r.u8().ok_or(short)?;
         if bits & !0b111 != 0 {
@@ -401,8 +399,6 @@ fn index_of<V: PartialEq>(table: &[(&str, V)], v: &V) -> u8 {
 }
 
 /// The entry of wire code `code` in `all`, or a refusal naming `what`.
-fn pick<V: Copy>(all: &[V], code: u8, what: &'static str) -> Result<V, ConfigRefusal> {
-    all.get(usize::from(code))
-        .copied()
-        .ok_or(ConfigRefusal::Malformed(what))
+fn field<V: Copy>(all: &[V], code: u8, what: &'static str) -> Result<V, ConfigRefusal> {
+    pick(all, code).ok_or(ConfigRefusal::Malformed(what))
 }

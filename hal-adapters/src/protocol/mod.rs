@@ -13,6 +13,7 @@ pub mod config_text;
 pub mod decoder;
 pub mod frame;
 pub mod messages;
+mod payload;
 pub mod rate;
 pub mod status;
 pub mod vibration;

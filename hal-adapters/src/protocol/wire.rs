@@ -129,3 +129,8 @@ impl<'a> Reader<'a> {
         Some(out)
     }
 }
+
+/// The entry of wire code `code` in the table `all` of an enumeration's values.
+pub(crate) fn pick<V: Copy>(all: &[V], code: u8) -> Option<V> {
+    all.get(usize::from(code)).copied()
+}
