@@ -12,8 +12,11 @@
 //!   `embedded-hal` 1.0.
 //! - [`sim`]: simulated IMUs on the bus, answering from a sample source, so the drivers run
 //!   without hardware (in QEMU and on the host).
+//! - [`protocol`]: the board's binary output protocol (frames, decoder, status model, health
+//!   and vibration metric, device configuration).
 //!
-//! `no_std`, no allocation; it does not depend on `nav-core`.
+//! `no_std`, no allocation. Only [`protocol`] uses `nav-core`: its solution frame carries
+//! nav-core's output rows and its configuration is validated by nav-core's run checks.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![deny(unsafe_code)]
 // Units are written `[m/s]` in docs (project convention), which rustdoc would read as links.
@@ -23,6 +26,7 @@
 pub mod drivers;
 pub mod gnss_record;
 pub mod io;
+pub mod protocol;
 pub mod recording;
 pub mod sample;
 pub mod sim;

@@ -18,6 +18,8 @@
 //! - [`gnss_file`]: GNSS fix files as the navigator takes them (text or the firmware's binary
 //!   fix file) and the binary file's writer.
 //! - [`bench`]: the mechanization's host benchmark (`nav bench`).
+//! - [`decode`]: the board's binary output stream back to the solution CSV (`nav decode`).
+//! - [`config_cmd`]: a configuration frame from its text form (`nav config`).
 //! - [`truth`]: exactly known trajectories and their exact increments (physics tests).
 //! - [`oscillator`]: the isotropic-oscillator sensor simulator ([Oscillator INS]) and its `osc.csv`
 //!   readout file.
@@ -38,6 +40,8 @@ pub mod aided_cmd;
 pub mod align_bench;
 pub mod atomic;
 pub mod bench;
+pub mod config_cmd;
+pub mod decode;
 pub mod emulate;
 pub mod filter_bench;
 pub mod generate;

@@ -10,9 +10,9 @@
 //! (its `Display`) per line and the end record ([`nav_core::output::EndRecord`]), and reports
 //! in output units.
 
-use hal_adapters::drivers::{Health, NoiseSpec};
+use hal_adapters::drivers::Health;
 use hal_adapters::{Imu, ImuSample, SampleFlags};
-use nav_core::alignment::{AlignMethod, AlignNote, AlignOutcome, SensorNoise};
+use nav_core::alignment::{AlignMethod, AlignNote, AlignOutcome};
 use nav_core::ins_filter::sequencer::{FixCounters, GnssFixInput};
 use nav_core::ins_filter::{FilterCounters, FilterStatus};
 use nav_core::navigator::{
@@ -27,15 +27,9 @@ use std::io::{self, Write};
 pub use nav_core::navigator::RunConfig;
 pub use nav_core::navigator::config::{DEFAULT_LOG_EVERY, MechanizationChoices};
 
-/// nav-core's noise model of a part's (or grade's) figures.
-pub fn sensor_noise<T: Scalar>(n: &NoiseSpec) -> SensorNoise<T> {
-    SensorNoise {
-        arw_rad_per_sqrt_s: T::c(n.gyro_arw_rad_per_sqrt_s),
-        vrw_mps_per_sqrt_s: T::c(n.accel_vrw_mps_per_sqrt_s),
-        gyro_bias_rad_s: T::c(n.gyro_bias_rad_s),
-        accel_bias_mps2: T::c(n.accel_bias_mps2),
-    }
-}
+/// nav-core's noise model of a part's (or grade's) figures (one definition, the protocol's
+/// configuration uses it too).
+pub use hal_adapters::protocol::config::sensor_noise;
 
 /// The navigator's input of a source's sample: its increments, and why it is not usable / after
 /// a gap from its flags (as the firmware converts them).

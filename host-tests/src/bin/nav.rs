@@ -19,6 +19,8 @@
 //!              [--align-method static|inertial|fine|sway] [--imu-noise GRADE]
 //!              [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S]
 //! nav report   --solution FILE --truth FILE [--at 60,300] [--plots DIR]
+//! nav decode   STREAM --out FILE
+//! nav config   FILE.txt --out FILE
 //! nav emulate  --truth FILE --out FILE [--preset none|seed004-rlg] [--errors FILE]
 //!              [--set 'KEY = V1 V2 V3']... [--vertical aided|free] [--errors-out FILE]
 //! ```
@@ -261,6 +263,12 @@ enum Command {
     /// Align and navigate over a recording (any format), writing the solution log as CSV.
     #[command(allow_negative_numbers = true)]
     Replay(ReplayArgs),
+    /// Decode the board's binary output stream (docs/protocol.md) back to the solution CSV;
+    /// report skipped bytes, CRC failures and frames by type on stderr.
+    Decode(host_tests::decode::DecodeArgs),
+    /// Encode a configuration frame from its text form (`key = value` lines), refusing bad
+    /// values with their line and reason.
+    Config(host_tests::config_cmd::ConfigArgs),
     /// Compare a solution log with a truth trajectory: RMS, max and chosen-time errors of
     /// position, velocity and attitude, and optional SVG plots.
     Report {
@@ -1455,6 +1463,8 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Replay(args) => replay(args),
+        Command::Decode(args) => host_tests::decode::run(&args),
+        Command::Config(args) => host_tests::config_cmd::run(&args),
         Command::KfGins { config, out } => {
             let started = std::time::Instant::now();
             let run = host_tests::kf_gins_run::run(&config, out.as_deref())

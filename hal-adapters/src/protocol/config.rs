@@ -1,0 +1,404 @@
+//! The device configuration the host sends in a configuration frame: the run configuration
+//! nav-core navigates with ([`RunConfig`]: site, alignment method and window, IMU noise, lever
+//! arms, mechanization, aiding, solution rate), the IMU model and rate, the mounting rotation
+//! and the other output rates. Compiled-in defaults ([`DeviceConfig::default`]); validation
+//! ([`DeviceConfig::validate`]) is nav-core's own check of a run ([`Setup::new`]) plus the
+//! checks of what nav-core does not see (mounting, output rates), each refusal with a
+//! [`ReasonCode`]. Its byte layout is in `docs/protocol.md`. The sensor calibration is not
+//! part of it (identity: the board's calibration is its own file).
+
+use super::wire::{Overflow, Reader, Writer, pick};
+use crate::drivers::Mounting;
+use crate::drivers::noise::{self, NoiseSpec};
+use core::fmt;
+use nav_core::alignment::SensorNoise;
+use nav_core::alignment::machine::{AlignMethod, BaseMotion, LeverArm};
+use nav_core::navigator::Setup;
+use nav_core::navigator::config::{
+    ATTITUDES, AidingConfig, ConfigError, FRAMES, RunConfig, VERTICALS,
+};
+use nav_core::scalar::Scalar;
+
+/// The IMUs the board's drivers support.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum ImuModel {
+    /// Analog Devices ADIS16505-2.
+    Adis16505 = 0,
+    /// TDK ICM-42688-P.
+    Icm42688 = 1,
+    /// Bosch BMI088.
+    Bmi088 = 2,
+}
+
+impl ImuModel {
+    /// Every model, in code order.
+    pub const ALL: [Self; 3] = [Self::Adis16505, Self::Icm42688, Self::Bmi088];
+
+    /// Name in configuration files and on command lines.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Adis16505 => "adis16505",
+            Self::Icm42688 => "icm42688",
+            Self::Bmi088 => "bmi088",
+        }
+    }
+
+    /// The model called `name`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// The part's datasheet noise.
+    pub fn noise(self) -> NoiseSpec {
+        match self {
+            Self::Adis16505 => noise::ADIS16505,
+            Self::Icm42688 => noise::ICM42688,
+            Self::Bmi088 => noise::BMI088,
+        }
+    }
+}
+
+/// nav-core's noise model of a part's or grade's figures, in precision `T`.
+pub fn sensor_noise<T: Scalar>(n: &NoiseSpec) -> SensorNoise<T> {
+    SensorNoise {
+        arw_rad_per_sqrt_s: T::c(n.gyro_arw_rad_per_sqrt_s),
+        vrw_mps_per_sqrt_s: T::c(n.accel_vrw_mps_per_sqrt_s),
+        gyro_bias_rad_s: T::c(n.gyro_bias_rad_s),
+        accel_bias_mps2: T::c(n.accel_bias_mps2),
+    }
+}
+
+/// Output rates other than the solution's ([`RunConfig::log_every`]), in IMU samples between
+/// frames (0: off).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct OutputRates {
+    /// Raw increment frames (1: every sample, 400 Hz at 400 Hz).
+    pub raw_every: u16,
+    /// Health frames (at least 1: the host must see the status).
+    pub health_every: u16,
+    /// Alignment progress frames while aligning.
+    pub align_progress_every: u16,
+}
+
+impl Default for OutputRates {
+    /// Raw increments at every sample, health every 400 samples (1 Hz at 400 Hz), alignment
+    /// progress every 40 (10 Hz).
+    fn default() -> Self {
+        Self {
+            raw_every: 1,
+            health_every: 400,
+            align_progress_every: 40,
+        }
+    }
+}
+
+/// What the host configures.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DeviceConfig {
+    /// The run configuration (its calibration is not carried: identity).
+    pub run: RunConfig,
+    /// The IMU on the bus.
+    pub imu_model: ImuModel,
+    /// The IMU's output rate [Hz].
+    pub imu_rate_hz: f32,
+    /// Sensor axes to body axes.
+    pub mounting: Mounting,
+    /// Output rates of the other frames.
+    pub rates: OutputRates,
+}
+
+impl Default for DeviceConfig {
+    /// The compiled-in defaults: an ADIS16505 at 400 Hz mounted with its axes the body's, its
+    /// datasheet noise, a 60 s static alignment at latitude 0, longitude 0, height 0 (the
+    /// host sends the site), nav-core's defaults for the rest, [`OutputRates::default`].
+    fn default() -> Self {
+        let model = ImuModel::Adis16505;
+        Self {
+            run: RunConfig::new(0.0, 0.0, 0.0, 60.0, sensor_noise(&model.noise())),
+            imu_model: model,
+            imu_rate_hz: 400.0,
+            mounting: Mounting::IDENTITY,
+            rates: OutputRates::default(),
+        }
+    }
+}
+
+/// Why a configuration was refused, as the acknowledgement frame reports it (one byte).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum ReasonCode {
+    /// Latitude not within [-90, 90] deg.
+    Latitude = 1,
+    /// Longitude not within [-180, 180] deg.
+    Longitude = 2,
+    /// Height outside the Earth model's range.
+    Height = 3,
+    /// A value that must be finite is not.
+    NotFinite = 4,
+    /// Solution rate: `log_every` is 0.
+    SolutionRate = 5,
+    /// Bias-prior scale negative or not finite.
+    BiasPrior = 6,
+    /// Calibration not invertible.
+    Calibration = 7,
+    /// Alignment settings refused (window, rate, site near a pole, noise, lever arm).
+    Alignment = 8,
+    /// Aided phase settings refused (propagation interval, antenna lever arm, noise).
+    Aiding = 9,
+    /// The mounting is not a rotation.
+    Mounting = 10,
+    /// An output rate refused (health frames off).
+    OutputRate = 11,
+    /// The payload does not decode (an enumeration value out of range).
+    Malformed = 12,
+}
+
+impl ReasonCode {
+    /// Every code, in order.
+    pub const ALL: [Self; 12] = [
+        Self::Latitude,
+        Self::Longitude,
+        Self::Height,
+        Self::NotFinite,
+        Self::SolutionRate,
+        Self::BiasPrior,
+        Self::Calibration,
+        Self::Alignment,
+        Self::Aiding,
+        Self::Mounting,
+        Self::OutputRate,
+        Self::Malformed,
+    ];
+
+    /// The reason of a wire code.
+    pub fn from_code(code: u8) -> Option<Self> {
+        Self::ALL.into_iter().find(|r| *r as u8 == code)
+    }
+}
+
+/// A refused configuration: its reason, and nav-core's error where the check was nav-core's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ConfigRefusal {
+    /// nav-core refused the run ([`Setup::new`]).
+    Run(ConfigError),
+    /// The mounting matrix is not orthonormal with determinant +1 (within [`MOUNTING_TOL`]).
+    Mounting,
+    /// Health frames switched off.
+    HealthOff,
+    /// A field of the payload is out of range (its name).
+    Malformed(&'static str),
+}
+
+/// Tolerance of the mounting's orthonormality and determinant [-].
+pub const MOUNTING_TOL: f32 = 1e-4;
+
+impl ConfigRefusal {
+    /// The wire reason code.
+    pub fn code(&self) -> ReasonCode {
+        match self {
+            Self::Run(e) => match e {
+                ConfigError::Latitude(_) => ReasonCode::Latitude,
+                ConfigError::Longitude(_) => ReasonCode::Longitude,
+                ConfigError::Height(_) => ReasonCode::Height,
+                ConfigError::NotFinite(_) => ReasonCode::NotFinite,
+                ConfigError::LogEvery => ReasonCode::SolutionRate,
+                ConfigError::BiasPrior(_) => ReasonCode::BiasPrior,
+                ConfigError::Calibration(_) => ReasonCode::Calibration,
+                ConfigError::Alignment(_) => ReasonCode::Alignment,
+                ConfigError::Aiding(_) => ReasonCode::Aiding,
+            },
+            Self::Mounting => ReasonCode::Mounting,
+            Self::HealthOff => ReasonCode::OutputRate,
+            Self::Malformed(_) => ReasonCode::Malformed,
+        }
+    }
+}
+
+impl fmt::Display for ConfigRefusal {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Run(e) => write!(f, "{e}"),
+            Self::Mounting => write!(
+                f,
+                "the mounting matrix is not a rotation (orthonormal, determinant +1, within {MOUNTING_TOL})"
+            ),
+            Self::HealthOff => {
+                f.write_str("health frames cannot be switched off (health-every >= 1)")
+            }
+            Self::Malformed(what) => write!(f, "malformed configuration payload: {what}"),
+        }
+    }
+}
+
+impl core::error::Error for ConfigRefusal {}
+
+/// Payload length of a configuration frame [bytes].
+pub const CONFIG_LEN: usize = 201;
+
+impl DeviceConfig {
+    /// Checks the configuration: nav-core's checks of the run at the IMU's rate
+    /// ([`Setup::new`], the same as every run's), then the mounting and the output rates.
+    pub fn validate(&self) -> Result<(), ConfigRefusal> {
+        Setup::<f64>::new(&self.run, f64::from(self.imu_rate_hz)).map_err(ConfigRefusal::Run)?;
+        if !is_rotation(&self.mounting.c_s_b) {
+            return Err(ConfigRefusal::Mounting);
+        }
+        if self.rates.health_every == 0 {
+            return Err(ConfigRefusal::HealthOff);
+        }
+        Ok(())
+    }
+
+    /// Writes the payload (`docs/protocol.md`, [`CONFIG_LEN`] bytes).
+    pub(crate) fn write(&self, w: &mut Writer<'_>) -> Result<(), Overflow> {
+        let r = &self.run;
+        w.f64s(&[r.lat_deg, r.lon_deg, r.h_m])?;
+        w.u8(self.imu_model as u8)?;
+        w.f32(self.imu_rate_hz)?;
+        for row in &self.mounting.c_s_b {
+            w.f32s(row)?;
+        }
+        let n = &r.noise;
+        w.f64s(&[
+            n.arw_rad_per_sqrt_s,
+            n.vrw_mps_per_sqrt_s,
+            n.gyro_bias_rad_s,
+            n.accel_bias_mps2,
+            r.bias_prior,
+        ])?;
+        w.u8(index(&AlignMethod::ALL, &r.align_method))?;
+        w.f64(r.align_seconds)?;
+        match r.lever_arm {
+            LeverArm::Known(v) => {
+                w.u8(0)?;
+                w.f64s(&[v[0], v[1], v[2]])?;
+            }
+            LeverArm::Unknown { sigma_m } => {
+                w.u8(1)?;
+                w.f64s(&[sigma_m, 0.0, 0.0])?;
+            }
+        }
+        w.f64s(&[r.base.position_sigma_m, r.base.translation_sigma_m])?;
+        let m = &r.mechanization;
+        w.u8(index_of(&FRAMES, &m.frame))?;
+        w.u8(index_of(&ATTITUDES, &m.attitude))?;
+        w.u8(index_of(&VERTICALS, &m.vertical))?;
+        w.u32(r.log_every)?;
+        let a = r.aiding.unwrap_or_default();
+        let bits = u8::from(r.aiding.is_some())
+            | u8::from(a.scale_factors) << 1
+            | u8::from(a.zero_motion) << 2;
+        w.u8(bits)?;
+        w.f64s(&a.antenna_lever_arm_b_m)?;
+        w.f64(a.propagation_interval_s)?;
+        w.u16(self.rates.raw_every)?;
+        w.u16(self.rates.health_every)?;
+        w.u16(self.rates.align_progress_every)
+    }
+
+    /// Reads a payload written by [`Self::write`] (not validated: [`Self::validate`] does).
+    pub(crate) fn read(r: &mut Reader<'_>) -> Result<Self, ConfigRefusal> {
+        let short = ConfigRefusal::Malformed("payload too short");
+        let [lat_deg, lon_deg, h_m] = r.f64s().ok_or(short)?;
+        let imu_model = field(&ImuModel::ALL, r.u8().ok_or(short)?, "IMU model")?;
+        let imu_rate_hz = r.f32().ok_or(short)?;
+        let c_s_b = [
+            r.f32s().ok_or(short)?,
+            r.f32s().ok_or(short)?,
+            r.f32s().ok_or(short)?,
+        ];
+        let [arw, vrw, gyro_bias, accel_bias, bias_prior] = r.f64s().ok_or(short)?;
+        let align_method = field(&AlignMethod::ALL, r.u8().ok_or(short)?, "alignment method")?;
+        let align_seconds = r.f64().ok_or(short)?;
+        let kind = r.u8().ok_or(short)?;
+        let [x, y, z] = r.f64s().ok_or(short)?;
+        let lever_arm = match kind {
+            0 => LeverArm::Known([x, y, z].into()),
+            1 => LeverArm::Unknown { sigma_m: x },
+            _ => return Err(ConfigRefusal::Malformed("lever arm kind")),
+        };
+        let [position_sigma_m, translation_sigma_m] = r.f64s().ok_or(short)?;
+        let frame = field(&FRAMES, r.u8().ok_or(short)?, "navigation frame")?.1;
+        let attitude = field(&ATTITUDES, r.u8().ok_or(short)?, "attitude method")?.1;
+        let vertical = field(&VERTICALS, r.u8().ok_or(short)?, "vertical channel")?.1;
+        let log_every = r.u32().ok_or(short)?;
+        let bits = r.u8().ok_or(short)?;
+        if bits & !0b111 != 0 {
+            return Err(ConfigRefusal::Malformed("aiding bits"));
+        }
+        let antenna_lever_arm_b_m = r.f64s().ok_or(short)?;
+        let propagation_interval_s = r.f64().ok_or(short)?;
+        let rates = OutputRates {
+            raw_every: r.u16().ok_or(short)?,
+            health_every: r.u16().ok_or(short)?,
+            align_progress_every: r.u16().ok_or(short)?,
+        };
+        let mut run = RunConfig::new(
+            lat_deg,
+            lon_deg,
+            h_m,
+            align_seconds,
+            SensorNoise {
+                arw_rad_per_sqrt_s: arw,
+                vrw_mps_per_sqrt_s: vrw,
+                gyro_bias_rad_s: gyro_bias,
+                accel_bias_mps2: accel_bias,
+            },
+        );
+        run.align_method = align_method;
+        run.bias_prior = bias_prior;
+        run.lever_arm = lever_arm;
+        run.base = BaseMotion {
+            position_sigma_m,
+            translation_sigma_m,
+        };
+        run.mechanization.frame = frame;
+        run.mechanization.attitude = attitude;
+        run.mechanization.vertical = vertical;
+        run.log_every = log_every;
+        run.aiding = (bits & 1 != 0).then_some(AidingConfig {
+            antenna_lever_arm_b_m,
+            propagation_interval_s,
+            scale_factors: bits & 2 != 0,
+            zero_motion: bits & 4 != 0,
+        });
+        Ok(Self {
+            run,
+            imu_model,
+            imu_rate_hz,
+            mounting: Mounting { c_s_b },
+            rates,
+        })
+    }
+}
+
+/// `c` is orthonormal with determinant +1, within [`MOUNTING_TOL`] (NaN refused).
+fn is_rotation(c: &[[f32; 3]; 3]) -> bool {
+    let dot = |i: usize, j: usize| (0..3).map(|k| c[i][k] * c[j][k]).sum::<f32>();
+    let orthonormal = (0..3).all(|i| {
+        (0..3).all(|j| {
+            let want = if i == j { 1.0 } else { 0.0 };
+            (dot(i, j) - want).abs() <= MOUNTING_TOL
+        })
+    });
+    let det = c[0][0] * (c[1][1] * c[2][2] - c[1][2] * c[2][1])
+        - c[0][1] * (c[1][0] * c[2][2] - c[1][2] * c[2][0])
+        + c[0][2] * (c[1][0] * c[2][1] - c[1][1] * c[2][0]);
+    orthonormal && (det - 1.0).abs() <= MOUNTING_TOL
+}
+
+/// Position of `v` in `all` (the wire code of an enumeration listed in a table).
+fn index<V: PartialEq>(all: &[V], v: &V) -> u8 {
+    all.iter().position(|x| x == v).unwrap_or(0) as u8
+}
+
+/// Position of `v` in a name table.
+fn index_of<V: PartialEq>(table: &[(&str, V)], v: &V) -> u8 {
+    table.iter().position(|(_, x)| x == v).unwrap_or(0) as u8
+}
+
+/// The entry of wire code `code` in `all`, or a refusal naming `what`.
+fn field<V: Copy>(all: &[V], code: u8, what: &'static str) -> Result<V, ConfigRefusal> {
+    pick(all, code).ok_or(ConfigRefusal::Malformed(what))
+}

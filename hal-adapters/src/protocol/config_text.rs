@@ -1,0 +1,191 @@
+//! The configuration's text form: `key = value` lines, `#` comments and blank lines ignored,
+//! each line applied to a [`DeviceConfig`] starting from the compiled-in defaults. Units are in
+//! the key names or below; the keys that nav-core's run options already define are passed to
+//! [`RunConfig::set`](nav_core::navigator::RunConfig::set) with the same names and value
+//! syntax as `nav replay`'s options.
+//!
+//! | key | value |
+//! | --- | --- |
+//! | `lat-deg`, `lon-deg`, `h-m` | site latitude, longitude [deg], ellipsoidal height [m] |
+//! | `imu-model` | `adis16505`, `icm42688` or `bmi088` (also sets the noise to the part's datasheet figures) |
+//! | `imu-rate-hz` | IMU output rate [Hz] |
+//! | `imu-noise` | a grade's figures instead: `fog`, `rlg`, `mems-tactical`, `mems-consumer` |
+//! | `gyro-arw-rad-per-sqrt-s`, `accel-vrw-mps-per-sqrt-s`, `gyro-bias-rad-s`, `accel-bias-mps2` | one noise figure |
+//! | `mounting` | sensor-to-body rotation `c_s_b`, 9 numbers row by row, comma-separated |
+//! | `align-seconds` | alignment window [s] |
+//! | `raw-every`, `health-every`, `align-progress-every` | output rates [IMU samples between frames], 0: off |
+//! | `aiding` | `on` or `off` (GNSS-aided phase) |
+//! | `align-method`, `bias-prior`, `lever-arm` (X,Y,Z [m]), `lever-arm-sigma` [m], `base-translation` [m], `log-every` (solution rate, [navigation steps]), `frame`, `attitude`, `vertical`, `gnss-lever-arm` (X,Y,Z [m]), `propagation-rate` [Hz] | as `nav replay`'s options |
+
+use super::config::{DeviceConfig, ImuModel, sensor_noise};
+use crate::drivers::noise::grade;
+use core::fmt;
+use nav_core::navigator::OptionError;
+use nav_core::navigator::config::AidingConfig;
+
+/// Why a line was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LineError<'a> {
+    /// No `=` on the line.
+    NoEquals,
+    /// A key no configuration has (the key).
+    UnknownKey(&'a str),
+    /// The value does not parse (the key, what it takes).
+    Invalid {
+        /// The key.
+        key: &'a str,
+        /// What it takes.
+        expected: &'static str,
+    },
+    /// nav-core's option parser refused it.
+    Option(OptionError),
+}
+
+impl fmt::Display for LineError<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::NoEquals => f.write_str("expected 'key = value'"),
+            Self::UnknownKey(k) => write!(f, "unknown key '{k}'"),
+            Self::Invalid { key, expected } => write!(f, "{key} takes {expected}"),
+            Self::Option(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+/// The `key` of a line (trimmed), `None` for a blank or comment line.
+pub fn key_of(line: &str) -> Option<&str> {
+    let line = line.trim();
+    if line.is_empty() || line.starts_with('#') {
+        return None;
+    }
+    Some(line.split_once('=').map_or(line, |(k, _)| k).trim())
+}
+
+impl DeviceConfig {
+    /// Applies one line of the text form (module docs); blank and comment lines do nothing.
+    /// Values are checked for syntax here and by [`Self::validate`] for sense.
+    pub fn apply_line<'a>(&mut self, line: &'a str) -> Result<(), LineError<'a>> {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            return Ok(());
+        }
+        let (key, value) = line.split_once('=').ok_or(LineError::NoEquals)?;
+        self.set(key.trim(), value.trim())
+    }
+
+    /// Sets `key` to `value` (module docs).
+    pub fn set<'a>(&mut self, key: &'a str, value: &'a str) -> Result<(), LineError<'a>> {
+        let bad = |expected| LineError::Invalid { key, expected };
+        let number = || {
+            value
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or(bad("a finite number"))
+        };
+        let count = || {
+            value
+                .parse::<u16>()
+                .map_err(|_| bad("a whole number within 0 to 65535"))
+        };
+        let run = &mut self.run;
+        match key {
+            "lat-deg" => run.lat_deg = number()?,
+            "lon-deg" => run.lon_deg = number()?,
+            "h-m" => run.h_m = number()?,
+            "align-seconds" => run.align_seconds = number()?,
+            "imu-rate-hz" => self.imu_rate_hz = number()? as f32,
+            "imu-model" => {
+                self.imu_model =
+                    ImuModel::from_name(value).ok_or(bad("adis16505, icm42688 or bmi088"))?;
+                run.noise = sensor_noise(&self.imu_model.noise());
+            }
+            "imu-noise" => {
+                run.noise = sensor_noise(
+                    &grade::by_name(value)
+                        .ok_or(bad("fog, rlg, mems-tactical or mems-consumer"))?,
+                );
+            }
+            "gyro-arw-rad-per-sqrt-s" => run.noise.arw_rad_per_sqrt_s = number()?,
+            "accel-vrw-mps-per-sqrt-s" => run.noise.vrw_mps_per_sqrt_s = number()?,
+            "gyro-bias-rad-s" => run.noise.gyro_bias_rad_s = number()?,
+            "accel-bias-mps2" => run.noise.accel_bias_mps2 = number()?,
+            "mounting" => {
+                let mut c = [[0.0f32; 3]; 3];
+                let mut parts = value.split(',');
+                for v in c.iter_mut().flatten() {
+                    *v = parts
+                        .next()
+                        .and_then(|p| p.trim().parse::<f32>().ok())
+                        .filter(|x| x.is_finite())
+                        .ok_or(bad("9 numbers, row by row, comma-separated"))?;
+                }
+                if parts.next().is_some() {
+                    return Err(bad("9 numbers, row by row, comma-separated"));
+                }
+                self.mounting.c_s_b = c;
+            }
+            "raw-every" => self.rates.raw_every = count()?,
+            "health-every" => self.rates.health_every = count()?,
+            "align-progress-every" => self.rates.align_progress_every = count()?,
+            "aiding" => match value {
+                "on" => {
+                    run.aiding.get_or_insert_with(AidingConfig::default);
+                }
+                "off" => run.aiding = None,
+                _ => return Err(bad("on or off")),
+            },
+            _ => match run.set(key, value) {
+                Ok(()) => {}
+                Err(OptionError::Unknown) => return Err(LineError::UnknownKey(key)),
+                Err(e) => return Err(LineError::Option(e)),
+            },
+        }
+        Ok(())
+    }
+}
+
+/// The keys of the IMU's noise figures.
+const NOISE_KEYS: [&str; 6] = [
+    "imu-model",
+    "imu-noise",
+    "gyro-arw-rad-per-sqrt-s",
+    "accel-vrw-mps-per-sqrt-s",
+    "gyro-bias-rad-s",
+    "accel-bias-mps2",
+];
+
+/// The text keys a refusal is about (a host names the lines that set them).
+pub fn keys_of(
+    refusal: &super::config::ConfigRefusal,
+) -> impl Iterator<Item = &'static str> + use<> {
+    use super::config::ConfigRefusal as R;
+    use nav_core::navigator::ConfigError as E;
+    let (own, noise): (&'static [&'static str], bool) = match refusal {
+        R::Run(E::Latitude(_)) => (&["lat-deg"], false),
+        R::Run(E::Longitude(_)) => (&["lon-deg"], false),
+        R::Run(E::Height(_)) => (&["h-m"], false),
+        R::Run(E::NotFinite(_)) => (&["lon-deg", "h-m", "align-seconds"], false),
+        R::Run(E::LogEvery) => (&["log-every"], false),
+        R::Run(E::BiasPrior(_)) => (&["bias-prior"], false),
+        R::Run(E::Alignment(_)) => (
+            &[
+                "align-method",
+                "align-seconds",
+                "imu-rate-hz",
+                "lat-deg",
+                "lever-arm",
+                "lever-arm-sigma",
+                "base-translation",
+                "bias-prior",
+            ],
+            true,
+        ),
+        R::Run(E::Aiding(_)) => (&["aiding", "gnss-lever-arm", "propagation-rate"], true),
+        R::Mounting => (&["mounting"], false),
+        R::HealthOff => (&["health-every"], false),
+        R::Run(E::Calibration(_)) | R::Malformed(_) => (&[], false),
+    };
+    let noise: &'static [&'static str] = if noise { &NOISE_KEYS } else { &[] };
+    own.iter().chain(noise).copied()
+}

@@ -1,0 +1,642 @@
+//! Round trips of every message, the decoder's refusals and resynchronisation, the validator's
+//! refusals and the text form.
+
+extern crate std;
+
+use super::config::{ConfigRefusal, DeviceConfig, ReasonCode};
+use super::config_text::{LineError, keys_of};
+use super::decoder::{Decoder, Received, Refusal};
+use super::frame::{CRC, Encoder, MAX_FRAME};
+use super::messages::*;
+use super::status::{AidCount, HealthCounters, NavStatus, StatusFlags};
+use super::vibration::VibrationLevels;
+use crate::sample::{ImuSample, Motion, SampleFlags};
+use nav_core::alignment::machine::{AlignMethod, Stage};
+use nav_core::navigator::ConfigError;
+use nav_core::output::{FilterColumns, Row, Solution};
+use std::vec::Vec;
+
+fn solution() -> Solution {
+    Solution {
+        t_us: 60_002_500,
+        lat_ndeg: 45_123_456_789,
+        lon_ndeg: -7_500_000_123,
+        h_m: 150.123_456_789_012_3,
+        v_eb_n: [0.1 + 0.2, -1e-300, f64::MIN_POSITIVE],
+        roll_deg: 1.5,
+        pitch_deg: -2.000_000_000_000_1,
+        yaw_deg: 179.999_999_999_999_97,
+    }
+}
+
+/// One of every message.
+pub(super) fn every_message() -> Vec<Message> {
+    let aided = FilterColumns {
+        sigma_ned_m: [0.5, 0.25, 1.125],
+        sigma_v_ned_m_s: [0.01, 0.02, 0.03],
+        sigma_att_deg: [0.003, 0.004, 0.5],
+        status: "DEGRADED",
+    };
+    let mut config = DeviceConfig::default();
+    config.run.lat_deg = 45.0;
+    config.run.align_method = AlignMethod::Fine;
+    config.run.align_seconds = 300.0;
+    config
+        .apply_line("gnss-lever-arm = 0.1, -0.2, 0.3")
+        .unwrap();
+    config.apply_line("lever-arm = 1,2,3").unwrap();
+    config
+        .apply_line("mounting = 1,0,0, 0,-1,0, 0,0,-1")
+        .unwrap();
+    config.rates.raw_every = 0;
+    vec_of([
+        Message::NavSolution(NavSolution {
+            row: Row::Free(solution()),
+            status: NavStatus::Nav,
+            flags: StatusFlags::FREE_INERTIAL,
+        }),
+        Message::NavSolution(NavSolution {
+            row: Row::Aided(solution(), aided),
+            status: NavStatus::Degraded,
+            flags: StatusFlags::AIDING_REJECTED | StatusFlags::CLIPPING,
+        }),
+        Message::RawIncrements(RawIncrements {
+            sample: ImuSample {
+                t_us: u64::MAX - 7,
+                seq: 123_456,
+                dt_s: 0.0025,
+                motion: Motion::Increments {
+                    delta_theta_ib_b: [1e-6, -2e-6, 3e-9],
+                    delta_v_ib_b: [0.001, -0.002, -0.024_516],
+                },
+                temperature_c: 31.5,
+                flags: SampleFlags::STALE,
+            },
+        }),
+        Message::Health(HealthReport {
+            t_us: 1_000_000,
+            status: NavStatus::Fault,
+            flags: StatusFlags::BUS_ERRORS | StatusFlags::DEVICE_FAULT,
+            counters: HealthCounters {
+                samples: 400_000,
+                missed_data_ready: 2,
+                channel_overruns: 3,
+                bus_errors: 4,
+                checksum_errors: 5,
+                device_faults: 6,
+                gyro_clips: [7, 8, 9],
+                accel_clips: [10, 11, 12],
+                position_aiding: AidCount {
+                    accepted: 13,
+                    rejected: 14,
+                },
+                velocity_aiding: AidCount {
+                    accepted: 15,
+                    rejected: 16,
+                },
+                watchdog_resets: 17,
+            },
+            vibration: VibrationLevels {
+                accel_rms: [18, 19, u16::MAX],
+                gyro_rms: [0, 21, 22],
+            },
+        }),
+        Message::AlignProgress(AlignProgress {
+            t_us: 5_000_000,
+            stage: Stage::Fine,
+            samples: 2000,
+            samples_total: 120_000,
+        }),
+        Message::AidingEvent(AidingEvent {
+            t_us: 7,
+            aid: Aid::Velocity,
+            outcome: AidOutcome::RejectedGate,
+            nis: 42.5,
+        }),
+        Message::EndOfRun(EndOfRun { rows: 102 }),
+        Message::Config(config),
+        Message::ConfigAck(ConfigAck {
+            config_seq: 9,
+            refused: Some(ReasonCode::Mounting),
+        }),
+        Message::ConfigAck(ConfigAck {
+            config_seq: 10,
+            refused: None,
+        }),
+    ])
+}
+
+fn vec_of<const N: usize>(m: [Message; N]) -> Vec<Message> {
+    m.into_iter().collect()
+}
+
+/// The frames of `messages`, one after the other.
+pub(super) fn stream(messages: &[Message]) -> Vec<u8> {
+    let mut enc = Encoder::new();
+    let mut out = Vec::new();
+    for m in messages {
+        enc.append(m, &mut out).unwrap();
+    }
+    out
+}
+
+fn decode_all(bytes: &[u8]) -> (Vec<Result<Received, Refusal>>, Decoder) {
+    let mut d = Decoder::new();
+    let mut out = Vec::new();
+    d.push(bytes, |r| out.push(r));
+    d.finish();
+    (out, d)
+}
+
+/// Equality that sees NaN payloads as equal (bitwise compare of the encoded payloads).
+fn same(a: &Message, b: &Message) -> bool {
+    let mut x = [0u8; 256];
+    let mut y = [0u8; 256];
+    let n = a.write_payload(&mut x).unwrap();
+    let m = b.write_payload(&mut y).unwrap();
+    a.id() == b.id() && x[..n] == y[..m]
+}
+
+#[test]
+fn every_message_round_trips_with_its_declared_length() {
+    let messages = every_message();
+    for m in &messages {
+        let mut buf = [0u8; 256];
+        assert_eq!(
+            m.write_payload(&mut buf).unwrap(),
+            m.id().payload_len(),
+            "{m:?}"
+        );
+    }
+    let bytes = stream(&messages);
+    let (out, d) = decode_all(&bytes);
+    assert_eq!(out.len(), messages.len());
+    for (k, (r, m)) in out.iter().zip(&messages).enumerate() {
+        let r = r.as_ref().unwrap();
+        assert_eq!(r.seq, k as u16);
+        assert!(same(&r.message, m), "{:?} vs {m:?}", r.message);
+        if !matches!(
+            m,
+            Message::NavSolution(NavSolution {
+                row: Row::Free(_),
+                ..
+            })
+        ) {
+            assert_eq!(&r.message, m); // no NaN inside: plain equality
+        }
+    }
+    let s = d.stats();
+    assert_eq!((s.skipped_bytes, s.crc_failures, s.frames_lost), (0, 0, 0));
+    assert_eq!(s.frames_total() as usize, messages.len());
+    assert_eq!(s.frames[MessageId::NavSolution.index()], 2);
+    // A zero only ends a frame.
+    let zeros = bytes.iter().filter(|b| **b == 0).count();
+    assert_eq!(zeros, messages.len());
+}
+
+#[test]
+fn solution_rows_print_identically_after_the_trip() {
+    let messages = every_message();
+    let (out, _) = decode_all(&stream(&messages[..2]));
+    for (r, m) in out.iter().zip(&messages) {
+        let (Message::NavSolution(a), Message::NavSolution(b)) = (&r.as_ref().unwrap().message, m)
+        else {
+            panic!()
+        };
+        assert_eq!(std::format!("{}", a.row), std::format!("{}", b.row));
+    }
+}
+
+/// A raw frame with the given header fields and payload, its CRC, COBS and delimiter.
+fn raw_frame(version: u8, id: u8, seq: u16, len: u16, payload: &[u8], crc_ok: bool) -> Vec<u8> {
+    let mut raw = vec_u8(&[version, id]);
+    raw.extend_from_slice(&seq.to_le_bytes());
+    raw.extend_from_slice(&len.to_le_bytes());
+    raw.extend_from_slice(payload);
+    let crc = CRC.checksum(&raw) ^ u32::from(!crc_ok);
+    raw.extend_from_slice(&crc.to_le_bytes());
+    let mut out = std::vec![0u8; cobs::max_encoding_length(raw.len()) + 1];
+    let n = cobs::encode(&raw, &mut out);
+    out.truncate(n);
+    out.push(0);
+    out
+}
+
+fn vec_u8(b: &[u8]) -> Vec<u8> {
+    b.to_vec()
+}
+
+#[test]
+fn refusals_name_their_reason_and_count_their_bytes() {
+    let end = [5u8, 0, 0, 0];
+    let cases: [(Vec<u8>, Refusal); 7] = [
+        (raw_frame(1, 6, 0, 4, &end, false), Refusal::Crc),
+        (raw_frame(2, 6, 0, 4, &end, true), Refusal::Version(2)),
+        (
+            raw_frame(1, 0x7f, 0, 4, &end, true),
+            Refusal::UnknownId(0x7f),
+        ),
+        (
+            raw_frame(1, 6, 0, 3, &end[..3], true),
+            Refusal::Length {
+                id: MessageId::EndOfRun,
+                len: 3,
+            },
+        ),
+        (
+            raw_frame(1, 0x11, 0, 3, &[0, 0, 99], true),
+            Refusal::Payload(PayloadError::Field("reason code")),
+        ),
+        (std::vec![1, 1, 1, 0], Refusal::TooShort),
+        (std::vec![5, 1, 0], Refusal::Cobs),
+    ];
+    for (bytes, want) in cases {
+        let (out, d) = decode_all(&bytes);
+        assert_eq!(out, std::vec![Err(want)], "{bytes:?}");
+        assert_eq!(d.stats().skipped_bytes, bytes.len() as u64);
+        assert_eq!(d.stats().crc_failures, u32::from(want == Refusal::Crc));
+        // Every refusal has a message.
+        assert!(!std::format!("{want}").is_empty());
+    }
+    // Too long: bounded, then ready again.
+    let mut bytes = std::vec![0x55u8; MAX_FRAME + 10];
+    bytes.push(0);
+    let good = stream(&every_message()[6..7]);
+    bytes.extend_from_slice(&good);
+    let (out, d) = decode_all(&bytes);
+    assert_eq!(out[0], Err(Refusal::TooLong));
+    assert!(matches!(
+        out[1],
+        Ok(Received {
+            message: Message::EndOfRun(_),
+            ..
+        })
+    ));
+    assert_eq!(d.stats().skipped_bytes, MAX_FRAME as u64 + 11);
+}
+
+#[test]
+fn sequence_gaps_and_cut_off_frames_are_counted() {
+    let messages = every_message();
+    let frames: Vec<Vec<u8>> = {
+        let mut enc = Encoder::new();
+        messages
+            .iter()
+            .map(|m| {
+                let mut buf = [0u8; MAX_FRAME];
+                let n = enc.encode(m, &mut buf).unwrap();
+                buf[..n].to_vec()
+            })
+            .collect()
+    };
+    // Frames 2 and 3 lost, the last cut off.
+    let mut bytes: Vec<u8> = [&frames[0][..], &frames[1][..], &frames[4][..]].concat();
+    let last = &frames[5];
+    bytes.extend_from_slice(&last[..last.len() - 3]);
+    let (out, d) = decode_all(&bytes);
+    assert_eq!(out.len(), 3);
+    assert_eq!(d.stats().frames_lost, 2);
+    assert_eq!(d.stats().skipped_bytes, last.len() as u64 - 3);
+}
+
+#[test]
+fn encoder_refuses_a_small_buffer_and_unknown_filter_names() {
+    let m = &every_message()[0];
+    let mut small = [0u8; 20];
+    assert_eq!(
+        Encoder::new().encode(m, &mut small),
+        Err(EncodeError::BufferTooSmall)
+    );
+    let Message::NavSolution(mut s) = every_message()[1] else {
+        panic!()
+    };
+    if let Row::Aided(_, c) = &mut s.row {
+        c.status = "SOMETHING";
+    }
+    let mut buf = [0u8; MAX_FRAME];
+    assert_eq!(
+        Encoder::new().encode(&Message::NavSolution(s), &mut buf),
+        Err(EncodeError::UnknownFilterStatus)
+    );
+}
+
+#[test]
+fn encoder_writes_to_an_embedded_io_writer() {
+    let m = every_message();
+    let mut out = [0u8; 2 * MAX_FRAME];
+    let mut w: &mut [u8] = &mut out;
+    let mut enc = Encoder::new();
+    enc.write(&m[6], &mut w).unwrap();
+    let left = w.len();
+    let n = out.len() - left;
+    let (dec, _) = decode_all(&out[..n]);
+    assert_eq!(dec[0].as_ref().unwrap().message, m[6]);
+    assert_eq!(enc.next_seq(), 1);
+}
+
+/// xorshift64* (seeded, no dependency): the protocol tests' random draws.
+pub(super) struct Rng(pub(super) u64);
+impl Rng {
+    pub(super) fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+    /// Uniform in [-1, 1).
+    pub(super) fn uniform(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+}
+
+/// Garbage without a zero, so it can only be skipped as whole frames: it is cut off by the
+/// zero of the valid frame that follows, which that frame's own bytes do not include... so
+/// garbage is always followed by a zero before a valid frame.
+fn garbage(rng: &mut Rng, max: usize) -> Vec<u8> {
+    let n = rng.below(max);
+    (0..n).map(|_| rng.next() as u8).collect()
+}
+
+#[test]
+fn random_bytes_never_panic_and_valid_frames_in_garbage_are_all_recovered() {
+    let messages = every_message();
+    let mut rng = Rng(0x5eed_1234_abcd_ef01);
+    for case in 0..3000 {
+        // Pure noise: never a panic, every byte accounted for.
+        let noise = garbage(&mut rng, 600);
+        let (out, d) = decode_all(&noise);
+        let s = d.stats();
+        let accepted = out.iter().filter(|r| r.is_ok()).count();
+        assert!(
+            accepted <= 1,
+            "case {case}: noise decoded as {accepted} frames"
+        );
+        assert_eq!(s.bytes, noise.len() as u64);
+
+        // Valid frames between garbage, each garbage run ended by a zero.
+        let picks: Vec<Message> = (0..1 + rng.below(6))
+            .map(|_| messages[rng.below(messages.len())])
+            .collect();
+        let mut enc = Encoder::new();
+        let mut bytes = Vec::new();
+        for m in &picks {
+            bytes.extend(garbage(&mut rng, 80));
+            bytes.push(0);
+            enc.append(m, &mut bytes).unwrap();
+        }
+        let (out, _) = decode_all(&bytes);
+        let got: Vec<&Received> = out.iter().filter_map(|r| r.as_ref().ok()).collect();
+        assert_eq!(got.len(), picks.len(), "case {case}");
+        for (r, m) in got.iter().zip(&picks) {
+            assert!(same(&r.message, m));
+        }
+
+        // Mutations of a valid stream: flipped, dropped, inserted bytes. No panic; frames
+        // untouched by a mutation still decode.
+        let mut mutated = stream(&picks);
+        for _ in 0..1 + rng.below(4) {
+            let at = rng.below(mutated.len());
+            match rng.below(3) {
+                0 => mutated[at] ^= 1 << rng.below(8),
+                1 => {
+                    mutated.remove(at);
+                }
+                _ => mutated.insert(at, rng.next() as u8),
+            }
+            if mutated.is_empty() {
+                break;
+            }
+        }
+        let (out, d) = decode_all(&mutated);
+        assert!(out.len() <= mutated.len());
+        assert_eq!(d.stats().bytes, mutated.len() as u64);
+    }
+}
+
+/// A change to a configuration.
+type Mutation = fn(&mut DeviceConfig);
+
+#[test]
+fn defaults_are_valid_and_each_refusal_has_its_code() {
+    let base = DeviceConfig::default();
+    assert_eq!(base.validate(), Ok(()));
+    let refused = |f: Mutation| {
+        let mut c = base;
+        f(&mut c);
+        c.validate().unwrap_err()
+    };
+    let cases: [(Mutation, ReasonCode); 11] = [
+        (|c| c.run.lat_deg = 91.0, ReasonCode::Latitude),
+        (|c| c.run.lon_deg = 400.0, ReasonCode::Longitude),
+        (|c| c.run.h_m = -20_000.0, ReasonCode::Height),
+        (|c| c.run.h_m = f64::NAN, ReasonCode::NotFinite),
+        (|c| c.run.log_every = 0, ReasonCode::SolutionRate),
+        (|c| c.run.bias_prior = -1.0, ReasonCode::BiasPrior),
+        (|c| c.run.align_seconds = 1.0, ReasonCode::Alignment),
+        (|c| c.imu_rate_hz = 0.0, ReasonCode::Alignment),
+        (
+            |c| {
+                c.apply_line("propagation-rate = 10").unwrap();
+                c.run.noise.gyro_bias_rad_s = 0.0;
+            },
+            ReasonCode::Aiding,
+        ),
+        (|c| c.mounting.c_s_b[0][0] = 1.01, ReasonCode::Mounting),
+        (|c| c.rates.health_every = 0, ReasonCode::OutputRate),
+    ];
+    for (k, (f, code)) in cases.iter().enumerate() {
+        let r = refused(*f);
+        assert_eq!(r.code(), *code, "case {k}: {r}");
+    }
+    // A reflection is not a rotation.
+    let r = refused(|c| c.mounting.c_s_b[2][2] = -1.0);
+    assert_eq!(r, ConfigRefusal::Mounting);
+    // nav-core's own message comes through.
+    let r = refused(|c| c.run.lat_deg = 91.0);
+    assert_eq!(r, ConfigRefusal::Run(ConfigError::Latitude(91.0)));
+    assert_eq!(keys_of(&r).collect::<Vec<_>>(), ["lat-deg"]);
+    // Codes round trip.
+    for c in ReasonCode::ALL {
+        assert_eq!(ReasonCode::from_code(c as u8), Some(c));
+    }
+    assert_eq!(ReasonCode::from_code(0), None);
+}
+
+#[test]
+fn text_lines_set_values_and_refuse_bad_ones() {
+    let mut c = DeviceConfig::default();
+    for line in [
+        "# a comment",
+        "",
+        "lat-deg = 45.5",
+        "lon-deg=7.25",
+        "imu-model = icm42688",
+        "align-method = inertial",
+        "align-seconds = 300",
+        "log-every = 4",
+        "aiding = on",
+        "raw-every = 0",
+    ] {
+        c.apply_line(line).unwrap();
+    }
+    assert_eq!((c.run.lat_deg, c.run.lon_deg), (45.5, 7.25));
+    assert_eq!(c.imu_model, super::config::ImuModel::Icm42688);
+    assert_eq!(c.run.align_method, AlignMethod::Inertial);
+    assert_eq!(c.run.log_every, 4);
+    assert!(c.run.aiding.is_some());
+    assert_eq!(c.rates.raw_every, 0);
+    assert_eq!(c.validate(), Ok(()));
+    // nav-core refuses to gyrocompass with a consumer part's gyros.
+    c.apply_line("imu-model = bmi088").unwrap();
+    c.apply_line("align-method = fine").unwrap();
+    assert_eq!(
+        c.validate().map_err(|e| e.code()),
+        Err(ReasonCode::Alignment)
+    );
+    assert_eq!(c.apply_line("lat-deg 45"), Err(LineError::NoEquals));
+    assert_eq!(
+        c.apply_line("colour = red"),
+        Err(LineError::UnknownKey("colour"))
+    );
+    assert!(matches!(
+        c.apply_line("lat-deg = north"),
+        Err(LineError::Invalid { key: "lat-deg", .. })
+    ));
+    assert!(matches!(
+        c.apply_line("imu-model = mpu6050"),
+        Err(LineError::Invalid { .. })
+    ));
+    assert!(matches!(
+        c.apply_line("mounting = 1,0,0"),
+        Err(LineError::Invalid { .. })
+    ));
+    assert!(matches!(
+        c.apply_line("raw-every = -1"),
+        Err(LineError::Invalid { .. })
+    ));
+    assert!(matches!(
+        c.apply_line("align-method = magic"),
+        Err(LineError::Option(_))
+    ));
+}
+
+#[test]
+fn malformed_config_payloads_are_refused() {
+    let m = Message::Config(DeviceConfig::default());
+    let mut payload = [0u8; 256];
+    let n = m.write_payload(&mut payload).unwrap();
+    // The IMU model byte (after lat, lon, h).
+    let mut bad = payload;
+    bad[24] = 9;
+    assert_eq!(
+        Message::read_payload(MessageId::Config, &bad[..n]),
+        Err(PayloadError::Field("IMU model"))
+    );
+    assert_eq!(
+        Message::read_payload(MessageId::Config, &payload[..n]),
+        Ok(m)
+    );
+}
+
+mod properties {
+    use super::*;
+    use proptest::collection::vec;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(4000))]
+
+        /// No byte sequence panics the decoder; every byte is counted, and what it refuses
+        /// is at most what it was given.
+        #[test]
+        fn any_bytes_decode_without_panic(bytes in vec(any::<u8>(), 0..1500)) {
+            let (out, d) = decode_all(&bytes);
+            let s = d.stats();
+            prop_assert_eq!(s.bytes, bytes.len() as u64);
+            prop_assert!(s.skipped_bytes <= s.bytes);
+            let refused = out.iter().filter(|r| r.is_err()).count() as u32;
+            prop_assert_eq!(refused, s.crc_failures + s.other_refusals);
+        }
+
+        /// Valid frames between runs of garbage (each ended by a zero) are all recovered, in
+        /// order, and exactly the garbage is skipped.
+        #[test]
+        fn frames_in_garbage_are_recovered(
+            parts in vec((vec(1u8..=255, 0..120), 0usize..10), 1..8),
+        ) {
+            let messages = every_message();
+            let mut enc = Encoder::new();
+            let mut bytes = Vec::new();
+            let mut junk = 0u64;
+            let mut sent = Vec::new();
+            for (garbage, pick) in &parts {
+                if !garbage.is_empty() {
+                    bytes.extend_from_slice(garbage);
+                    bytes.push(0);
+                    junk += garbage.len() as u64 + 1;
+                }
+                let m = messages[pick % messages.len()];
+                enc.append(&m, &mut bytes).unwrap();
+                sent.push(m);
+            }
+            let (out, d) = decode_all(&bytes);
+            let got: Vec<&Received> = out.iter().filter_map(|r| r.as_ref().ok()).collect();
+            // Garbage may decode as a frame only with a CRC match (2^-32 per run): none here.
+            prop_assert_eq!(got.len(), sent.len());
+            for (r, m) in got.iter().zip(&sent) {
+                prop_assert!(same(&r.message, m));
+            }
+            prop_assert_eq!(d.stats().skipped_bytes, junk);
+            prop_assert_eq!(d.stats().frames_lost, 0);
+        }
+    }
+}
+
+#[test]
+fn aiding_events_of_the_filter_answers() {
+    use nav_core::ins_filter::aiding::AidResult;
+    let e = AidingEvent::of(5, Aid::Position, &AidResult::Accepted { nis: 2.5f64 });
+    assert_eq!((e.outcome, e.nis), (AidOutcome::Accepted, 2.5));
+    let e = AidingEvent::of(5, Aid::Velocity, &AidResult::Rejected { nis: 40.0f32 });
+    assert_eq!(
+        (e.aid, e.outcome, e.nis),
+        (Aid::Velocity, AidOutcome::RejectedGate, 40.0)
+    );
+    let e = AidingEvent::of(5, Aid::Position, &AidResult::<f64>::Invalid);
+    assert_eq!(e.outcome, AidOutcome::Invalid);
+    assert!(e.nis.is_nan());
+}
+
+/// Frames shorter than 254 bytes take exactly one COBS byte and the delimiter more than the
+/// raw frame: the wire sizes `docs/protocol.md` gives for the bandwidth, printed.
+#[test]
+fn wire_sizes_are_payload_plus_twelve() {
+    let mut total_at_defaults = 0;
+    for m in every_message() {
+        let mut buf = [0u8; MAX_FRAME];
+        let n = Encoder::new().encode(&m, &mut buf).unwrap();
+        assert_eq!(n, m.id().payload_len() + 6 + 4 + 2, "{:?}", m.id());
+        // Default rates at 400 Hz: raw every sample, a solution every 40, health every 400.
+        total_at_defaults += match m.id() {
+            MessageId::RawIncrements => 400 * n,
+            MessageId::NavSolution
+                if matches!(
+                    m,
+                    Message::NavSolution(NavSolution {
+                        row: Row::Aided(..),
+                        ..
+                    })
+                ) =>
+            {
+                10 * n
+            }
+            MessageId::Health => n,
+            _ => 0,
+        };
+    }
+    std::println!("stream at the default rates: {total_at_defaults} bytes/s");
+    assert_eq!(total_at_defaults, 400 * 58 + 10 * 132 + 103);
+}

@@ -1,0 +1,81 @@
+//! `nav config FILE.txt --out config.bin`: a configuration frame
+//! ([`hal_adapters::protocol::config`]) from its text form (`key = value` lines,
+//! [`hal_adapters::protocol::config_text`]), refused with the file, line and reason when a
+//! line does not parse or the configuration is not valid (nav-core's checks of a run and the
+//! protocol's own). The frame is written atomically.
+
+use crate::atomic;
+use anyhow::{Context, Result, bail};
+use hal_adapters::protocol::config::DeviceConfig;
+use hal_adapters::protocol::config_text::{key_of, keys_of};
+use hal_adapters::protocol::{Encoder, Message};
+use std::collections::HashMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// `nav config`'s arguments.
+#[derive(clap::Args, Debug)]
+pub struct ConfigArgs {
+    /// The configuration's text form (`key = value` lines; see docs/protocol.md).
+    pub file: PathBuf,
+    /// The configuration frame to write (send it to the board as is).
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+}
+
+/// The configuration of the text `text` (from `name`, for messages), validated.
+pub fn parse(name: &Path, text: &str) -> Result<DeviceConfig> {
+    let mut config = DeviceConfig::default();
+    let mut line_of: HashMap<&str, usize> = HashMap::new();
+    for (k, line) in text.lines().enumerate() {
+        let n = k + 1;
+        config
+            .apply_line(line)
+            .map_err(|e| anyhow::anyhow!("{}:{n}: {e}", name.display()))?;
+        if let Some(key) = key_of(line) {
+            line_of.insert(key, n);
+        }
+    }
+    if let Err(refusal) = config.validate() {
+        let line = keys_of(&refusal).filter_map(|k| line_of.get(k)).max();
+        match line {
+            Some(n) => bail!(
+                "{}:{n}: refused (reason code {}): {refusal}",
+                name.display(),
+                refusal.code() as u8
+            ),
+            None => bail!(
+                "{}: refused (reason code {}, by the defaults of keys not in the file): {refusal}",
+                name.display(),
+                refusal.code() as u8
+            ),
+        }
+    }
+    Ok(config)
+}
+
+/// Encodes the configuration of the text file `file` as a frame into `out`.
+pub fn encode_file(file: &Path, out: &Path) -> Result<DeviceConfig> {
+    atomic::refuse_same_file(&[file], out).with_context(|| format!("output {}", out.display()))?;
+    let text =
+        std::fs::read_to_string(file).with_context(|| format!("cannot read {}", file.display()))?;
+    let config = parse(file, &text)?;
+    let mut frame = Vec::new();
+    Encoder::new()
+        .append(&Message::Config(config), &mut frame)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    atomic::write(out, |w| w.write_all(&frame))
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    Ok(config)
+}
+
+/// `nav config`.
+pub fn run(args: &ConfigArgs) -> Result<()> {
+    encode_file(&args.file, &args.out)?;
+    println!(
+        "configuration {} valid: frame written to {}",
+        args.file.display(),
+        args.out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,273 @@
+//! `nav decode STREAM --out solution.csv`: the board's binary output stream
+//! ([`hal_adapters::protocol`]) back to the solution CSV, with the header and row formatting
+//! of the harness's and the firmware's logs (nav-core's [`Row`] `Display`, the same code).
+//!
+//! The log ends with its end record only when the stream's end-of-run frame came and its row
+//! count equals the rows decoded: a stream cut short, or one that lost solution frames, gives
+//! a log without it (incomplete, as the project's logs say). The CSV is written atomically
+//! ([`crate::atomic`]). What the decoder skipped and refused, and the frames by type, are
+//! reported ([`DecodeSummary`]'s `Display`).
+
+use crate::atomic::AtomicFile;
+use anyhow::{Context, Result, bail};
+use hal_adapters::protocol::messages::EndOfRun;
+use hal_adapters::protocol::{DecodeStats, Decoder, Message, MessageId, Refusal};
+use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, EndRecord, Row};
+use std::fmt;
+use std::fs::File;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+
+/// `nav decode`'s arguments.
+#[derive(clap::Args, Debug)]
+pub struct DecodeArgs {
+    /// The binary stream (frames of `docs/protocol.md`).
+    pub stream: PathBuf,
+    /// The solution CSV to write.
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+}
+
+/// What a decoded stream held.
+#[derive(Clone, Debug, Default)]
+pub struct DecodeSummary {
+    /// The decoder's counters.
+    pub stats: DecodeStats,
+    /// Solution rows written.
+    pub rows: u32,
+    /// The end-of-run frame, if one came (the last one).
+    pub end: Option<EndOfRun>,
+    /// Bytes of a last frame cut off by the end of the stream.
+    pub cut_off_bytes: usize,
+    /// The first refusals (up to [`MAX_LISTED`]), with the byte offset after the frame.
+    pub refusals: Vec<(u64, Refusal)>,
+}
+
+/// Refusals listed in a summary.
+pub const MAX_LISTED: usize = 10;
+
+impl DecodeSummary {
+    /// The log is complete: an end-of-run frame whose row count is the rows decoded.
+    pub fn complete(&self) -> bool {
+        self.end.is_some_and(|e| e.rows == self.rows)
+    }
+}
+
+impl fmt::Display for DecodeSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = &self.stats;
+        writeln!(
+            f,
+            "{} bytes: {} frames, {} skipped bytes, {} CRC failures, {} other refusals, {} frames lost (sequence gaps)",
+            s.bytes,
+            s.frames_total(),
+            s.skipped_bytes,
+            s.crc_failures,
+            s.other_refusals,
+            s.frames_lost
+        )?;
+        let by_type: Vec<String> = MessageId::ALL
+            .iter()
+            .map(|m| format!("{} {}", m.name(), s.frames[m.index()]))
+            .collect();
+        writeln!(f, "frames by type: {}", by_type.join(", "))?;
+        for (offset, r) in &self.refusals {
+            writeln!(f, "refused frame ending at byte {offset}: {r}")?;
+        }
+        if self.cut_off_bytes > 0 {
+            writeln!(f, "last frame cut off: {} bytes", self.cut_off_bytes)?;
+        }
+        match self.end {
+            Some(e) if e.rows == self.rows => write!(f, "{} rows, end of run: complete", self.rows),
+            Some(e) => write!(
+                f,
+                "{} rows, but the end-of-run frame says {}: incomplete (no end record written)",
+                self.rows, e.rows
+            ),
+            None => write!(
+                f,
+                "{} rows, no end-of-run frame: incomplete (no end record written)",
+                self.rows
+            ),
+        }
+    }
+}
+
+/// Decodes the stream file `stream` into the solution CSV `out` (module docs).
+pub fn decode_file(stream: &Path, out: &Path) -> Result<DecodeSummary> {
+    crate::atomic::refuse_same_file(&[stream], out)
+        .with_context(|| format!("output {}", out.display()))?;
+    let mut input =
+        File::open(stream).with_context(|| format!("cannot open {}", stream.display()))?;
+    let mut file =
+        AtomicFile::create(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let summary = decode(&mut input, file.writer())
+        .with_context(|| format!("stream {}", stream.display()))?;
+    file.commit()
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    Ok(summary)
+}
+
+/// Decodes `input` and writes the solution CSV to `out` (module docs). Refuses a stream with
+/// no frame at all, and one that mixes free-inertial and aided rows.
+pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSummary> {
+    let mut decoder = Decoder::new();
+    let mut summary = DecodeSummary::default();
+    let mut aided: Option<bool> = None;
+    let mut buf = vec![0u8; 1 << 16];
+    let mut failure: Option<anyhow::Error> = None;
+    loop {
+        let n = match input.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e).context("read error"),
+        };
+        for &b in &buf[..n] {
+            let Some(result) = decoder.feed(b) else {
+                continue;
+            };
+            let received = match result {
+                Ok(r) => r,
+                Err(e) => {
+                    if summary.refusals.len() < MAX_LISTED {
+                        summary.refusals.push((decoder.stats().bytes, e));
+                    }
+                    continue;
+                }
+            };
+            match received.message {
+                Message::NavSolution(s) => {
+                    let is_aided = matches!(s.row, Row::Aided(..));
+                    match aided {
+                        None => {
+                            let header = if is_aided {
+                                AIDED_CSV_HEADER
+                            } else {
+                                CSV_HEADER
+                            };
+                            writeln!(out, "{header}")?;
+                            aided = Some(is_aided);
+                        }
+                        Some(a) if a != is_aided => {
+                            failure.get_or_insert_with(|| {
+                                anyhow::anyhow!(
+                                    "free-inertial and aided solution rows in one stream (row {})",
+                                    summary.rows + 1
+                                )
+                            });
+                            continue;
+                        }
+                        Some(_) => {}
+                    }
+                    writeln!(out, "{}", s.row)?;
+                    summary.rows += 1;
+                    // Rows after an end of run: a new run, not complete.
+                    summary.end = None;
+                }
+                Message::EndOfRun(e) => summary.end = Some(e),
+                _ => {}
+            }
+        }
+        if let Some(e) = failure.take() {
+            return Err(e);
+        }
+    }
+    summary.cut_off_bytes = decoder.finish();
+    summary.stats = *decoder.stats();
+    if summary.stats.frames_total() == 0 {
+        bail!(
+            "no valid frame in {} bytes ({} CRC failures): not a protocol stream?",
+            summary.stats.bytes,
+            summary.stats.crc_failures
+        );
+    }
+    if aided.is_none() {
+        writeln!(out, "{CSV_HEADER}")?;
+    }
+    if summary.complete() {
+        writeln!(out, "{}", EndRecord { rows: summary.rows })?;
+    }
+    out.flush()?;
+    Ok(summary)
+}
+
+/// `nav decode`: decodes, prints the summary to stderr and where the CSV went to stdout.
+pub fn run(args: &DecodeArgs) -> Result<()> {
+    let summary = decode_file(&args.stream, &args.out)?;
+    eprintln!("{summary}");
+    println!(
+        "decoded {} to {} ({} rows{})",
+        args.stream.display(),
+        args.out.display(),
+        summary.rows,
+        if summary.complete() {
+            ""
+        } else {
+            ", incomplete"
+        }
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use hal_adapters::protocol::Encoder;
+    use hal_adapters::protocol::messages::NavSolution;
+    use hal_adapters::protocol::status::{NavStatus, StatusFlags};
+    use nav_core::output::{FilterColumns, Solution};
+
+    fn frames(messages: &[Message]) -> Vec<u8> {
+        let mut enc = Encoder::new();
+        let mut out = Vec::new();
+        for m in messages {
+            enc.append(m, &mut out).unwrap();
+        }
+        out
+    }
+
+    fn solution(row: Row) -> Message {
+        Message::NavSolution(NavSolution {
+            row,
+            status: NavStatus::Nav,
+            flags: StatusFlags::empty(),
+        })
+    }
+
+    const S: Solution = Solution {
+        t_us: 1_000_000,
+        lat_ndeg: 45_000_000_000,
+        lon_ndeg: 7_500_000_000,
+        h_m: 150.0,
+        v_eb_n: [0.0; 3],
+        roll_deg: 0.0,
+        pitch_deg: 0.0,
+        yaw_deg: 30.0,
+    };
+
+    #[test]
+    fn mixed_rows_are_refused_and_a_stream_without_rows_has_a_header_only() {
+        let aided = Row::Aided(
+            S,
+            FilterColumns {
+                sigma_ned_m: [1.0; 3],
+                sigma_v_ned_m_s: [0.1; 3],
+                sigma_att_deg: [0.5; 3],
+                status: "NAV",
+            },
+        );
+        let bytes = frames(&[solution(Row::Free(S)), solution(aided)]);
+        let e = decode(&mut bytes.as_slice(), &mut Vec::new()).unwrap_err();
+        assert!(e.to_string().contains("free-inertial and aided"), "{e}");
+
+        let bytes = frames(&[Message::EndOfRun(EndOfRun { rows: 0 })]);
+        let mut out = Vec::new();
+        let s = decode(&mut bytes.as_slice(), &mut out).unwrap();
+        assert!(s.complete());
+        assert_eq!(
+            String::from_utf8(out).unwrap(),
+            format!("{CSV_HEADER}\n# end: 0 rows, ok\n")
+        );
+    }
+}

@@ -1,0 +1,413 @@
+//! The output protocol end to end on the host: solution logs of real replays (free inertial
+//! and GNSS-aided) sent as frames among other frames and garbage, and `nav decode` giving the
+//! same log back byte for byte; cut-off, garbage-only and missing streams; `nav config` on good
+//! and bad files.
+
+mod common;
+
+use common::{nav, output_text};
+use hal_adapters::protocol::messages::{EndOfRun, HealthReport, NavSolution, RawIncrements};
+use hal_adapters::protocol::status::{HealthCounters, NavStatus, StatusFlags};
+use hal_adapters::protocol::vibration::VibrationLevels;
+use hal_adapters::protocol::{Decoder, Encoder, Message};
+use hal_adapters::{ImuSample, Motion, SampleFlags};
+use nav_core::ins_filter::FilterStatus;
+use nav_core::output::{FilterColumns, Row, Solution};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::path::Path;
+
+/// `value / 10^digits` written as a decimal, back to the integer.
+fn decimal(text: &str, digits: usize) -> i64 {
+    let (neg, mag) = match text.strip_prefix('-') {
+        Some(m) => (true, m),
+        None => (false, text),
+    };
+    let (int, frac) = mag.split_once('.').unwrap();
+    assert_eq!(frac.len(), digits, "{text}");
+    let v: i64 = format!("{int}{frac}").parse().unwrap();
+    if neg { -v } else { v }
+}
+
+/// A solution log's row back to nav-core's row (every printed value round-trips exactly:
+/// integers as decimals, floats in their shortest round-trip form).
+fn parse_row(line: &str) -> Row {
+    let f: Vec<&str> = line.split(',').collect();
+    let x = |i: usize| f[i].parse::<f64>().unwrap();
+    let s = Solution {
+        t_us: decimal(f[0], 6) as u64,
+        lat_ndeg: decimal(f[1], 9),
+        lon_ndeg: decimal(f[2], 9),
+        h_m: x(3),
+        v_eb_n: [x(4), x(5), x(6)],
+        roll_deg: x(7),
+        pitch_deg: x(8),
+        yaw_deg: x(9),
+    };
+    if f.len() == 10 {
+        return Row::Free(s);
+    }
+    let y = |i: usize| f[i].parse::<f32>().unwrap();
+    let status = [FilterStatus::Nominal, FilterStatus::AidingRejected]
+        .into_iter()
+        .map(FilterStatus::name)
+        .find(|n| *n == f[19])
+        .unwrap();
+    Row::Aided(
+        s,
+        FilterColumns {
+            sigma_ned_m: [y(10), y(11), y(12)],
+            sigma_v_ned_m_s: [y(13), y(14), y(15)],
+            sigma_att_deg: [y(16), y(17), y(18)],
+            status,
+        },
+    )
+}
+
+/// The stream a board would send for `log`: each row as a solution frame, between raw and
+/// health frames, then the end of run; with `garbage`, random bytes (and a corrupted frame)
+/// between frames. Returns the stream and the garbage bytes added.
+fn stream_of(log: &str, garbage: bool) -> (Vec<u8>, usize) {
+    let mut lines = log.lines();
+    lines.next(); // header
+    let rows: Vec<Row> = lines
+        .filter(|l| !l.starts_with('#'))
+        .map(parse_row)
+        .collect();
+    let mut enc = Encoder::new();
+    let mut rng = ChaCha8Rng::seed_from_u64(0x0123_4567_89ab_cdef);
+    let mut out = Vec::new();
+    let mut added = 0;
+    let mut frame = |m: &Message, out: &mut Vec<u8>| {
+        enc.append(m, out).unwrap();
+    };
+    let raw = Message::RawIncrements(RawIncrements {
+        sample: ImuSample {
+            t_us: 1,
+            seq: 1,
+            dt_s: 0.0025,
+            motion: Motion::Increments {
+                delta_theta_ib_b: [0.0; 3],
+                delta_v_ib_b: [0.0, 0.0, -0.0245],
+            },
+            temperature_c: 25.0,
+            flags: SampleFlags::empty(),
+        },
+    });
+    let health = Message::Health(HealthReport {
+        t_us: 1,
+        status: NavStatus::Nav,
+        flags: StatusFlags::empty(),
+        counters: HealthCounters::default(),
+        vibration: VibrationLevels::default(),
+    });
+    for (k, row) in rows.iter().enumerate() {
+        if garbage && k % 7 == 3 {
+            // Never a zero inside (it would split the garbage into frames of its own), so
+            // the decoder must skip exactly these bytes and the zero after them.
+            let n: usize = rng.random_range(1..=40);
+            let junk: Vec<u8> = (0..n).map(|_| rng.random_range(1..=255u8)).collect();
+            added += junk.len();
+            out.extend(junk);
+            out.push(0);
+            added += 1;
+        }
+        frame(&raw, &mut out);
+        let m = Message::NavSolution(NavSolution {
+            row: *row,
+            status: NavStatus::Nav,
+            flags: StatusFlags::empty(),
+        });
+        frame(&m, &mut out);
+        if k % 10 == 0 {
+            frame(&health, &mut out);
+        }
+    }
+    frame(
+        &Message::EndOfRun(EndOfRun {
+            rows: rows.len() as u32,
+        }),
+        &mut out,
+    );
+    (out, added)
+}
+
+fn run_ok(args: &[&str]) -> String {
+    let o = nav(args);
+    let text = output_text(&o);
+    assert!(o.status.success(), "nav {args:?}: {text}");
+    text
+}
+
+fn run_err(args: &[&str]) -> String {
+    let o = nav(args);
+    let text = output_text(&o);
+    assert!(!o.status.success(), "nav {args:?} should fail: {text}");
+    text
+}
+
+/// Sends `log` through the stream and `nav decode`, and checks the decoded log is the same
+/// text; returns the decoder's report.
+fn decode_round_trip(dir: &Path, name: &str, log: &str) -> String {
+    let (stream, garbage) = stream_of(log, true);
+    let path = dir.join(format!("{name}.bin"));
+    std::fs::write(&path, &stream).unwrap();
+    let out = dir.join(format!("{name}.decoded.csv"));
+    let report = run_ok(&[
+        "decode",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let decoded = std::fs::read_to_string(&out).unwrap();
+    assert!(decoded == log, "{name}: decoded log differs\n{report}");
+    // Every garbage byte skipped, the frames all counted.
+    assert!(
+        report.contains(&format!("{garbage} skipped bytes")),
+        "{report}"
+    );
+    assert!(
+        report.contains("frames lost") && report.contains("complete"),
+        "{report}"
+    );
+    report
+}
+
+#[test]
+fn replayed_logs_come_back_byte_for_byte_through_garbage() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Free inertial: a stationary recording, a row every step.
+    let imu = d.join("still.bin");
+    run_ok(&[
+        "generate",
+        "--out",
+        imu.to_str().unwrap(),
+        "--seconds",
+        "30",
+    ]);
+    let free = d.join("free.csv");
+    run_ok(&[
+        "replay",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--out",
+        free.to_str().unwrap(),
+        "--lat",
+        "45",
+        "--lon",
+        "7.5",
+        "--h",
+        "150",
+        "--align-seconds",
+        "10",
+        "--log-every",
+        "1",
+    ]);
+    let log = std::fs::read_to_string(&free).unwrap();
+    assert!(log.lines().count() > 7000);
+    decode_round_trip(d, "free", &log);
+
+    // GNSS-aided after the navigator's alignment (the firmware's `--gnss` run): a simulated
+    // land vehicle, the filter's 1-sigma and status columns.
+    let sim = d.join("sim");
+    run_ok(&[
+        "sim",
+        "land-vehicle",
+        "--grade",
+        "fog",
+        "--seconds",
+        "60",
+        "--gnss-rate",
+        "2",
+        "--format",
+        "bin",
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    let aided = d.join("aided.csv");
+    run_ok(&[
+        "replay",
+        "--imu",
+        sim.join("imu.bin").to_str().unwrap(),
+        "--gnss",
+        sim.join("gnss.csv").to_str().unwrap(),
+        "--imu-noise",
+        "fog",
+        "--lat",
+        "45",
+        "--lon",
+        "7.5",
+        "--h",
+        "250",
+        "--align-seconds",
+        "10",
+        "--log-every",
+        "4",
+        "--out",
+        aided.to_str().unwrap(),
+    ]);
+    let log = std::fs::read_to_string(&aided).unwrap();
+    assert!(log.lines().next().unwrap().ends_with(",status"));
+    assert!(log.lines().count() > 1000);
+    let report = decode_round_trip(d, "aided", &log);
+    assert!(report.contains("nav-solution"), "{report}");
+}
+
+#[test]
+fn cut_off_garbage_and_missing_streams() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let log = "t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,pitch_deg,yaw_deg\n\
+               1.000000,45.000000000,7.500000000,150,0,0,0,0.5,-0.25,30\n\
+               1.100000,45.000000001,7.500000000,150.000001,0.001,0,0,0.5,-0.25,30.000001\n\
+               # end: 2 rows, ok\n";
+    let (stream, _) = stream_of(log, false);
+    let out = d.join("out.csv");
+    let out_s = out.to_str().unwrap();
+
+    // Whole: the same log.
+    let full = d.join("full.bin");
+    std::fs::write(&full, &stream).unwrap();
+    run_ok(&["decode", full.to_str().unwrap(), "--out", out_s]);
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), log);
+
+    // Cut before its end-of-run frame: the rows, no end record, and said so.
+    let cut = d.join("cut.bin");
+    std::fs::write(&cut, &stream[..stream.len() - 5]).unwrap();
+    let report = run_ok(&["decode", cut.to_str().unwrap(), "--out", out_s]);
+    assert!(
+        report.contains("incomplete") && report.contains("cut off"),
+        "{report}"
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(text.lines().count(), 3);
+    assert!(!text.contains("# end"));
+
+    // A flipped bit: one CRC failure reported, its row lost, no end record.
+    let mut bad = stream.clone();
+    let mid = bad.len() / 2;
+    bad[mid] ^= 0x10;
+    let flipped = d.join("flipped.bin");
+    std::fs::write(&flipped, &bad).unwrap();
+    let report = run_ok(&["decode", flipped.to_str().unwrap(), "--out", out_s]);
+    assert!(
+        report.contains("1 CRC failures") || report.contains("1 other refusals"),
+        "{report}"
+    );
+
+    // Garbage only, or no file: an error, and the earlier output untouched.
+    let before = std::fs::read_to_string(&out).unwrap();
+    let junk = d.join("junk.bin");
+    std::fs::write(
+        &junk,
+        (0..5000u32).map(|i| (i * 7 + 1) as u8).collect::<Vec<u8>>(),
+    )
+    .unwrap();
+    let e = run_err(&["decode", junk.to_str().unwrap(), "--out", out_s]);
+    assert!(e.contains("no valid frame"), "{e}");
+    let e = run_err(&[
+        "decode",
+        d.join("none.bin").to_str().unwrap(),
+        "--out",
+        out_s,
+    ]);
+    assert!(e.contains("cannot open"), "{e}");
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), before);
+}
+
+#[test]
+fn config_files_encode_or_are_refused_with_line_and_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let good = "# the board on the roof\n\
+                lat-deg = 45.5\n\
+                lon-deg = 7.25\n\
+                h-m = 250\n\
+                imu-model = adis16505\n\
+                imu-noise = fog\n\
+                mounting = 1,0,0, 0,-1,0, 0,0,-1\n\
+                align-method = fine\n\
+                align-seconds = 300\n\
+                aiding = on\n\
+                gnss-lever-arm = 0.5, 0, -1\n\
+                log-every = 40\n\
+                health-every = 400\n";
+    let file = d.join("good.txt");
+    std::fs::write(&file, good).unwrap();
+    let bin = d.join("config.bin");
+    run_ok(&[
+        "config",
+        file.to_str().unwrap(),
+        "--out",
+        bin.to_str().unwrap(),
+    ]);
+    // The frame decodes to the configuration the text says.
+    let bytes = std::fs::read(&bin).unwrap();
+    let mut decoder = Decoder::new();
+    let mut got = Vec::new();
+    decoder.push(&bytes, |r| got.push(r));
+    let [Ok(r)] = got.as_slice() else {
+        panic!("{got:?}")
+    };
+    let Message::Config(c) = r.message else {
+        panic!("{:?}", r.message)
+    };
+    assert_eq!(
+        (c.run.lat_deg, c.run.lon_deg, c.run.h_m),
+        (45.5, 7.25, 250.0)
+    );
+    assert_eq!(c.mounting.c_s_b[2], [0.0, 0.0, -1.0]);
+    assert_eq!(
+        c.run.aiding.unwrap().antenna_lever_arm_b_m,
+        [0.5, 0.0, -1.0]
+    );
+
+    for (name, text, want) in [
+        (
+            "syntax",
+            "lat-deg = 45\nlon-deg = east\n",
+            "bad-syntax.txt:2: lon-deg takes a finite number",
+        ),
+        (
+            "key",
+            "lat-deg = 45\n\ncolour = red\n",
+            "bad-key.txt:3: unknown key 'colour'",
+        ),
+        (
+            "lat",
+            "lat-deg = 95\nlon-deg = 7\n",
+            "bad-lat.txt:1: refused (reason code 1): latitude 95",
+        ),
+        (
+            "mount",
+            "mounting = 1,0,0,0,1,0,0,0,-1\n",
+            "bad-mount.txt:1: refused (reason code 10)",
+        ),
+        (
+            "align",
+            "align-method = fine\nimu-model = bmi088\n",
+            "refused (reason code 8)",
+        ),
+        (
+            "health",
+            "# quiet\nhealth-every = 0\n",
+            "bad-health.txt:2: refused (reason code 11)",
+        ),
+    ] {
+        let f = d.join(format!("bad-{name}.txt"));
+        std::fs::write(&f, text).unwrap();
+        let out = d.join(format!("bad-{name}.bin"));
+        let e = run_err(&[
+            "config",
+            f.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(e.contains(want), "{name}: {e}");
+        assert!(
+            !out.exists(),
+            "{name}: a refused configuration wrote its output"
+        );
+    }
+}
