@@ -85,7 +85,7 @@ pub fn gnss(fixes: u32, run: &RunConfig, filter_cap: usize) {
         size_of::<ErrorFilter<f32>>(),
         size_of::<FixQueue<f32>>(),
         filter_cap * size_of::<ToBackground<f32>>(),
-        size_of::<crate::gnss::Fixes>()
+        size_of::<crate::board::Fixes>()
     );
     let l = a.antenna_lever_arm_b_m;
     defmt::info!(
