@@ -20,7 +20,8 @@
 //!   replay` (`host-tests/tests/mutated_recordings.rs`) with `RECORDING_CASES` per format
 //!   (default 1000); release builds; each target prints its count and wall time.
 //! - `lint`: `cargo fmt --check`, clippy with `-D warnings` for the host crates and for the
-//!   no_std crates and the firmware on the thumb target, and the docs with `-D warnings`.
+//!   no_std crates and the firmware (both boards) on the thumb target, and the docs with
+//!   `-D warnings`.
 
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
@@ -833,7 +834,16 @@ fn lint() -> Result<()> {
         "--features",
         "semihosting,defmt",
     ];
-    for selection in [&host[..], &thumb, &thumb_features] {
+    let board = [
+        "--target",
+        THUMB,
+        "-p",
+        "firmware",
+        "--no-default-features",
+        "--features",
+        "stm32f405",
+    ];
+    for selection in [&host[..], &thumb, &thumb_features, &board] {
         run(cargo()
             .arg("clippy")
             .args(selection)
