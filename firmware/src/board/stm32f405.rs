@@ -28,7 +28,7 @@ use nav_core::navigator::{RunConfig, Setup};
 use rtic_monotonics::stm32::prelude::*;
 use stm32f4xx_hal::dma::config::DmaConfig;
 use stm32f4xx_hal::dma::{
-    MemoryToPeripheral, PeripheralToMemory, Stream2, Stream7, StreamsTuple, Transfer,
+    DMAError, MemoryToPeripheral, PeripheralToMemory, Stream2, Stream7, StreamsTuple, Transfer,
 };
 use stm32f4xx_hal::gpio::{Edge, ExtiPin, Input, Output as Pin, PA4, PB0};
 use stm32f4xx_hal::prelude::*;
@@ -261,7 +261,8 @@ unsafe impl ReadBuffer for Chunk {
 
 /// The output stream: USART1 TX through DMA, two buffers (one on the wire, one filling).
 /// Bytes written while a transfer runs wait in the filling buffer and leave with the next
-/// write after it ends; what does not fit is dropped and counted.
+/// write after it ends. A write that does not fit is dropped whole, counted and logged (a
+/// stream has no end record to lose; the host sees the gap in the rows' times).
 pub struct Output {
     tx: TxTransfer,
     pending: Option<Chunk>,
@@ -270,37 +271,40 @@ pub struct Output {
 }
 
 impl Output {
-    /// Queues `bytes` and starts a transfer if none runs; `Err` when they do not fit (dropped,
-    /// counted).
+    /// Queues `bytes` and starts a transfer if none runs; `Err` when the DMA refuses one.
     pub fn write(&mut self, bytes: &[u8]) -> Result<(), OutputError> {
-        let Some(chunk) = self.pending.as_mut() else {
-            return Err(OutputError);
-        };
-        let fits = chunk.len + bytes.len() <= TX_LEN;
-        if fits {
+        use stm32f4xx_hal::dma::traits::StreamISR as _;
+        let chunk = self.pending.as_mut().ok_or(OutputError)?;
+        if chunk.len + bytes.len() <= TX_LEN {
             chunk.buf[chunk.len..chunk.len + bytes.len()].copy_from_slice(bytes);
             chunk.len += bytes.len();
         } else {
             self.dropped += 1;
-        }
-        use stm32f4xx_hal::dma::traits::StreamISR as _;
-        if self.busy && !self.tx.is_transfer_complete() {
-            return if fits { Ok(()) } else { Err(OutputError) };
-        }
-        if let Some(next) = self.pending.take() {
-            match self.tx.next_transfer(next) {
-                Ok((mut sent, _)) => {
-                    sent.len = 0;
-                    self.pending = Some(sent);
-                    self.busy = true;
-                }
-                Err(e) => {
-                    defmt::error!("output DMA refused a transfer");
-                    let _ = e;
-                }
+            let n = self.dropped;
+            if n <= 10 || n.is_multiple_of(1000) {
+                defmt::warn!("output stream full: a write dropped ({=u32} so far)", n);
             }
         }
-        if fits { Ok(()) } else { Err(OutputError) }
+        if self.busy && !self.tx.is_transfer_complete() {
+            return Ok(());
+        }
+        let next = self.pending.take().ok_or(OutputError)?;
+        match self.tx.next_transfer(next) {
+            Ok((mut sent, _)) => {
+                sent.len = 0;
+                self.pending = Some(sent);
+                self.busy = true;
+                Ok(())
+            }
+            Err(
+                DMAError::NotReady(back) | DMAError::SmallBuffer(back) | DMAError::Overrun(back),
+            ) => {
+                // The bytes stay queued for the next write.
+                self.pending = Some(back);
+                defmt::error!("output DMA refused a transfer");
+                Err(OutputError)
+            }
+        }
     }
 
     /// Writes that did not fit and were dropped.
@@ -340,7 +344,12 @@ impl ConfigInput {
                 self.spare = Some(full);
                 n
             }
-            Err(_) => 0,
+            Err(
+                DMAError::NotReady(back) | DMAError::SmallBuffer(back) | DMAError::Overrun(back),
+            ) => {
+                self.spare = Some(back);
+                0
+            }
         }
     }
 }
