@@ -466,7 +466,7 @@ mod app {
     /// static RAM stays small (the stack's peak is what counts; the qemu board reports it).
     /// Idle sleeps (`wfi`) when no message waits.
     #[idle(local = [setup, from_navigate_align, from_navigate, to_navigate], shared = [costs])]
-    fn idle(mut cx: idle::Context) -> ! {
+    fn align(mut cx: align::Context) -> ! {
         let mut slot = None;
         let background = start_background(&mut slot, cx.local.setup);
         let (from_navigate_align, from_navigate, to_navigate) = (

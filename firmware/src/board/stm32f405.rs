@@ -130,7 +130,7 @@ pub fn init(mut core: cortex_m::Peripherals, dp: pac::Peripherals, _slot: &mut I
     let dma = DmaConfig::default().memory_increment(true);
     let tx = Transfer::init_memory_to_peripheral(dma2.7, tx, Chunk { buf: a, len: 0 }, None, dma);
     let mut rx = Transfer::init_peripheral_to_memory(dma2.2, rx, rx_a, None, dma);
-    rx.start(|rx| rx.listen_idle());
+    rx.start(|_| {});
 
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
     watchdog.start(WATCHDOG_MS.millis());
@@ -318,7 +318,8 @@ impl Output {
 pub struct OutputError;
 
 /// Configuration bytes from the host: USART1 RX through DMA, a buffer handed over when the
-/// line goes idle (the end of the host's frame).
+/// line goes idle (the end of the host's frame; a frame longer than the buffer, [`RX_LEN`],
+/// may lose the bytes that arrive while the buffers are swapped).
 pub struct ConfigInput {
     rx: RxTransfer,
     spare: Option<&'static mut [u8; RX_LEN]>,
