@@ -11,7 +11,7 @@
 //!   host samples per second, flash and RAM.
 //! - `size`: release build of the firmware and its flash/RAM use, the largest statics.
 //! - `build-board`: the STM32F405 board's firmware (`--features stm32f405`, profile `board`:
-//!   release optimised for size, linked through `flip-link` when it is installed), its flash
+//!   the release settings, linked through `flip-link` when it is installed), its flash
 //!   and static RAM and the largest statics; fails above the board's targets
 //!   ([`BOARD_FLASH_MAX`], [`BOARD_RAM_MAX`]).
 //! - `fuzz [CASES [RECORDING_CASES]]`: the decoder fuzz targets (`hal-adapters/tests/
