@@ -348,6 +348,8 @@ fn bench(root: &Path) -> Result<()> {
     let max = number_after(step, "instructions per navigation step: max")?;
     let mean = number_after(step, "mean")?;
     let adis = imu_costs(&log)?;
+    // The qemu board paints the stack at start and logs its high-water mark at the end.
+    let peak_stack = number_after(&log, "peak stack:")?;
     // The ICM-42688-P and BMI088 paths: their gyros cannot gyrocompass, so the runs end at the
     // alignment (exit 5) after logging the driver's costs.
     let icm = device_costs(&elf, "icm42688")?;
@@ -453,6 +455,9 @@ fn bench(root: &Path) -> Result<()> {
     );
     println!("| flash (text + data) [B] | {} |", text + data);
     println!("| static RAM (data + bss) [B] | {} |", data + bss);
+    println!(
+        "| peak stack, demo run (static alignment, free inertial; the aligner on the stack) [B] | {peak_stack:.0} |"
+    );
     Ok(())
 }
 
