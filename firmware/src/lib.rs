@@ -1,20 +1,30 @@
-//! Board-independent support for the navigation firmware: exit codes, the panic and HardFault
-//! handlers (knurling app-template style), the arguments, the IMU, the defmt summaries, and small
-//! output helpers.
+//! Support for the navigation firmware: the board layer (`board`: one module per board,
+//! chosen by cargo feature), exit codes, the panic and HardFault handlers (knurling
+//! app-template style), the arguments, the IMU, the defmt summaries, and small output helpers.
 //!
 //! Navigation math lives in `nav-core`; sensor sources in `hal-adapters`; the RTIC app in
-//! `main.rs` only wires them together.
+//! `main.rs` holds the tasks and only wires them together.
 #![no_std]
 #![warn(missing_docs)]
 
 use core::fmt::Write as _;
-use defmt_semihosting as _; // global defmt logger over semihosting stdout
 
+pub mod board;
 pub mod config;
+#[cfg(feature = "qemu")]
 pub mod gnss;
 pub mod imu;
 pub mod log;
-pub mod osc_bench;
+
+pub use board::exit;
+
+/// Samples queued from the data-ready interrupt to `navigate`.
+pub const SAMPLE_CAP: usize = 16;
+/// Alignment increments queued for `align` (its fine stage's fits lag behind).
+pub const ALIGN_CAP: usize = 32;
+/// The aided phase's messages queued for `align`: propagations, then an update or report
+/// `navigate` waits for (a separate channel: its messages are 6 times an increment's size).
+pub const FILTER_CAP: usize = 2;
 
 /// Process exit codes: every failure has its own, so CI and scripts can tell them apart.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
@@ -39,13 +49,6 @@ pub enum ExitCode {
     /// Aligned, but not one navigation step followed: every later sample was flagged or
     /// refused, or there was none (the counts by cause in the defmt log).
     NothingNavigated = 7,
-}
-
-/// Ends the program (QEMU: with this exit status; a real board stops in a breakpoint loop when
-/// no debugger answers semihosting, so only call this under a debugger or QEMU).
-pub fn exit(code: ExitCode) -> ! {
-    defmt::flush();
-    semihosting::process::exit(code as i32)
 }
 
 #[panic_handler]

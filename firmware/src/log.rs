@@ -71,8 +71,8 @@ pub fn aligned(r: &AlignOutcome<f32>) {
 
 /// Logs the aided phase's settings and the GNSS file's fix count, and the static RAM of its
 /// largest parts: the filter (covariance, error state, settings; it takes the aligner's place
-/// in the `align` task's slot), the fix queue, the channel of `filter_cap` messages to the
-/// background and the GNSS file's reader [B].
+/// in the background, on the `align` task's stack), the fix queue, the channel of
+/// `filter_cap` messages to the background and the GNSS file's reader [B].
 #[inline(never)]
 pub fn gnss(fixes: u32, run: &RunConfig, filter_cap: usize) {
     use core::mem::size_of;
@@ -85,7 +85,7 @@ pub fn gnss(fixes: u32, run: &RunConfig, filter_cap: usize) {
         size_of::<ErrorFilter<f32>>(),
         size_of::<FixQueue<f32>>(),
         filter_cap * size_of::<ToBackground<f32>>(),
-        size_of::<crate::gnss::Fixes>()
+        size_of::<crate::board::Fixes>()
     );
     let l = a.antenna_lever_arm_b_m;
     defmt::info!(

@@ -1,113 +1,49 @@
-//! The navigation firmware: an RTIC 2 app for an STM32F405 IMU board (QEMU netduinoplus2 for now).
+//! The navigation firmware: an RTIC 2 app for an STM32F405 IMU board, its tasks written once
+//! against the board layer (`firmware::board`: `qemu`, QEMU's netduinoplus2, or `stm32f405`, a
+//! real board, chosen by cargo feature).
 //!
 //! A sample's way: data-ready interrupt (`data_ready`, highest priority) -> `rtic_sync` channel ->
 //! `navigate` (nav-core's navigator: gate, calibration, strapdown; writes the solution log) ->
 //! what it forwards to `align` (lowest priority: the navigator's background, the alignment) ->
-//! the answer back to `navigate`, which starts navigating from the aligned state. With `--gnss
-//! FILE` the navigation after the alignment is aided: `navigate` reads the fixes from the host
-//! file (`firmware::gnss`), hands each to the navigator before the first sample at or after its
-//! time, runs the filter's mechanization, and forwards the filter's work (covariance
-//! propagations, GNSS and stop updates, reports for rows) to `align`, which runs the filter's
-//! covariance; `navigate` waits for each update's answer before its next sample (the sample
-//! channel fills meanwhile). The rules are all in `nav_core::navigator`; these tasks only carry
-//! samples, fixes, messages and rows.
+//! the answer back to `navigate`, which starts navigating from the aligned state. With GNSS
+//! fixes (`--gnss FILE` on the qemu board) the navigation after the alignment is aided:
+//! `navigate` hands each fix to the navigator before the first sample at or after its time,
+//! runs the filter's mechanization, and forwards the filter's work (covariance propagations,
+//! GNSS and stop updates, reports for rows) to `align`, which runs the filter's covariance;
+//! `navigate` waits for each update's answer before its next sample (the sample channel fills
+//! meanwhile). The rules are all in `nav_core::navigator`; these tasks only carry samples,
+//! fixes, messages and rows.
 //!
-//! On the `qemu` board the IMU's data-ready line is emulated: the `pace` task pends `EXTI0` (the
-//! line a real data-ready pin uses) every 2.5 ms of SysTick time, and `data_ready` reads the next
-//! sample of a recording through semihosting. Under QEMU's `-icount shift=0` one guest instruction
-//! takes exactly 1 ns of virtual time, so SysTick timing is exact and the instruction counts this
-//! firmware prints are repeatable.
+//! The data-ready line is `EXTI0` on both boards: a pin on the real board, pended every 2.5 ms
+//! by the `pace` task (`board::emulate_data_ready`) on the qemu board.
 #![no_std]
 #![no_main]
 #![deny(unsafe_code)]
 
-#[cfg(not(feature = "qemu"))]
-compile_error!(
-    "only the `qemu` board exists until the SPI IMU drivers land; build with --features qemu"
-);
-
 use firmware as _; // logger, panic and HardFault handlers
 
-defmt::timestamp!("{=u64:us}", app::now_us());
-
-#[rtic::app(device = stm32f4::stm32f405, peripherals = true, dispatchers = [USART1, USART2, USART3])]
+#[rtic::app(device = firmware::board::pac, peripherals = true, dispatchers = [USART2, USART3, UART4])]
 mod app {
-    use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
-    use cortex_m::peripheral::{NVIC, SYST};
-    use embedded_io::Write as _;
-    use firmware::gnss::{self, Fixes};
-    use firmware::imu::{BoardImu, nav_input};
-    use firmware::{
-        ExitCode, FilterCosts, StepCost,
-        config::{Args, USAGE},
-        exit, line, log,
+    use core::sync::atomic::{AtomicU32, Ordering};
+    use firmware::board::{
+        self, ConfigInput, DataReady, Fixes, Imu, ImuSlot, Output, Watchdog, instructions_since,
     };
-    use hal_adapters::ImuSample;
-    use hal_adapters::drivers::{Error as ImuError, Health};
-    use hal_adapters::io::{Buffered, SemihostingFile};
-    use hal_adapters::recording::Replay;
-    use hal_adapters::sim::{SimBmi088, SimError, health_at_end};
+    use firmware::imu::nav_input;
+    use firmware::{
+        ALIGN_CAP, ExitCode, FILTER_CAP, FilterCosts, SAMPLE_CAP, StepCost, exit, line, log,
+    };
+    use hal_adapters::drivers::Health;
     use nav_core::ImuIncrement;
     use nav_core::alignment::{AlignOutcome, Stage};
-    use nav_core::calibration::ImuCalibration;
     use nav_core::navigator::{
         Background, FromBackground, NavError, Navigator, Setup, Step, Summary, ToBackground,
     };
     use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, Solution};
-    use rtic_monotonics::systick::prelude::*;
     use rtic_sync::channel::{Receiver, Sender};
     use rtic_sync::make_channel;
-    use stm32f4::stm32f405::Interrupt;
-
-    /// Core clock [Hz]: 168 MHz on the real board and in QEMU's netduinoplus2.
-    const SYSCLK_HZ: u32 = 168_000_000;
-    /// SysTick monotonic rate [Hz]: one tick (and one SysTick interrupt) per data-ready period;
-    /// finer times read the SysTick counter (`systick_counts`). Under QEMU every timer interrupt
-    /// costs host time, so fewer ticks make the replay 2.5x faster than 2 kHz ticks did.
-    const TICK_HZ: u32 = 400;
-    systick_monotonic!(Mono, 400);
-    /// SysTick counts per monotonic tick.
-    const COUNTS_PER_TICK: u64 = (SYSCLK_HZ / TICK_HZ) as u64;
-    /// The IMU's data-ready period: 400 Hz.
-    const DATA_READY_TICKS: u64 = (TICK_HZ / 400) as u64;
-    /// A duration in monotonic ticks.
-    type MonoDuration = fugit::Duration<u64, 1, 400>;
-
-    const SAMPLE_CAP: usize = 16;
-    /// Alignment increments queued for `align` (its fine stage's fits lag behind).
-    const ALIGN_CAP: usize = 32;
-    /// The aided phase's messages queued for `align`: propagations, then an update or report
-    /// `navigate` waits for (a separate channel: its messages are 6 times an increment's
-    /// size).
-    const FILTER_CAP: usize = 2;
-    /// Bytes read from the host per semihosting call.
-    const READ_CHUNK: usize = 512;
-
-    /// The recording the simulated IMU answers from.
-    type Recording = Replay<Buffered<SemihostingFile, READ_CHUNK>>;
-
-    /// What the data-ready interrupt hands to navigation.
-    pub enum DataReady {
-        /// A sample, its data-ready time on the board's clock [us], and the guest instructions
-        /// of its bus transaction and of its decoding.
-        Sample {
-            sample: ImuSample,
-            t_ready_us: u64,
-            bus_instr: u32,
-            decode_instr: u32,
-        },
-        /// The recording ended; the driver's final counters.
-        End { health: Health },
-        /// The source failed (already logged).
-        SourceError,
-    }
 
     /// Samples lost because the channel to `navigate` was full.
     static OVERRUNS: AtomicU32 = AtomicU32::new(0);
-    /// Data-ready edges lost because the previous one was still pending.
-    static MISSED: AtomicU32 = AtomicU32::new(0);
-    /// Set once the end of the recording has been delivered: the pacer stops.
-    static STOP: AtomicBool = AtomicBool::new(false);
 
     #[shared]
     struct Shared {
@@ -118,96 +54,48 @@ mod app {
 
     #[local]
     struct Local {
-        imu: BoardImu<Recording>,
+        imu: Imu,
         samples_tx: Sender<'static, DataReady, SAMPLE_CAP>,
         /// The navigator's foreground, for `navigate`.
         navigator: Navigator<f32>,
-        /// The solution log, for `navigate`.
-        out: SemihostingFile,
+        /// The output stream (the solution log), for `navigate`.
+        out: Output,
+        /// The watchdog, fed by `navigate`.
+        watchdog: Watchdog,
+        /// Configuration bytes from the host, for `navigate`.
+        config_in: ConfigInput,
         /// The GNSS fixes and their number, for `navigate` (an aided run).
         gnss: Option<(Fixes, u32)>,
         /// The run's settings, for `align` (which builds the background from them).
         setup: Setup<f32>,
+        /// The alignment increments from `navigate`, for `align`.
+        from_navigate_align: Receiver<'static, ImuIncrement<f32>, ALIGN_CAP>,
+        /// The aided phase's filter work from `navigate`, for `align`.
+        from_navigate: Receiver<'static, ToBackground<f32>, FILTER_CAP>,
+        /// The background's answers, from `align`.
+        to_navigate: Sender<'static, FromBackground<f32>, 1>,
     }
 
-    #[init(local = [bmi_sim: Option<SimBmi088<Recording>> = None])]
+    #[init(local = [imu_slot: ImuSlot = board::IMU_SLOT])]
     fn init(cx: init::Context) -> (Shared, Local) {
-        // The qemu board has no RCC model: clock set-up would hang, so it is skipped and the
-        // core runs at QEMU's fixed 168 MHz.
-        Mono::start(cx.core.SYST, SYSCLK_HZ);
-        let mut args = read_args();
-        if let Err(e) = args.run.validate() {
-            bad_config(&e)
-        }
-        args.run.calibration = read_calibration(&args);
-        let run = args.run;
-        log::config(&run);
-        let file = SemihostingFile::open(args.imu_cstr()).unwrap_or_else(|_| {
-            defmt::error!(
-                "cannot open the recording {=[u8]:a}",
-                args.imu_path.as_slice()
-            );
-            exit(ExitCode::Recording)
-        });
-        let source = Replay::new(Buffered::new(file)).unwrap_or_else(|e| {
-            defmt::error!(
-                "recording {=[u8]:a}: {}",
-                args.imu_path.as_slice(),
-                defmt::Display2Format(&e)
-            );
-            exit(ExitCode::Recording)
-        });
-        let header = *source.header();
-        defmt::info!(
-            "recording: {=u32} samples at {=f64} Hz",
-            header.sample_count,
-            header.rate_hz
+        let board = board::init(cx.core, cx.device, cx.local.imu_slot);
+        let mut out = board.out;
+        write_line(
+            &mut out,
+            if board.aided {
+                AIDED_CSV_HEADER
+            } else {
+                CSV_HEADER
+            },
         );
-        let setup = Setup::<f32>::new(&run, header.rate_hz).unwrap_or_else(|e| bad_config(&e));
-        let device = args.device;
-        let imu = BoardImu::new(device, source, cx.local.bmi_sim).unwrap_or_else(|e| {
-            defmt::error!("IMU {} init failed: {}", device, e);
-            exit(ExitCode::Recording)
-        });
-        defmt::info!("IMU: {} over a simulated SPI device", device);
-        let mut out = SemihostingFile::create(args.out_cstr()).unwrap_or_else(|_| {
-            defmt::error!(
-                "cannot create the solution log {=[u8]:a}",
-                args.out_path.as_slice()
-            );
-            exit(ExitCode::Output)
-        });
-        let gnss = args.gnss_cstr().map(|path| {
-            let fail = |e: &dyn core::fmt::Display| -> ! {
-                let name = args.gnss_path.as_deref().unwrap_or_default();
-                let name = name.strip_suffix(&[0]).unwrap_or(name);
-                defmt::error!(
-                    "GNSS file {=str}: {}",
-                    core::str::from_utf8(name).unwrap_or("(not UTF-8)"),
-                    defmt::Display2Format(e)
-                );
-                exit(ExitCode::Recording)
-            };
-            // Checked whole before anything is navigated, then read as the samples come.
-            let count = gnss::check(path).unwrap_or_else(|e| fail(&e));
-            let fixes = Fixes::open(path).unwrap_or_else(|e| fail(&e));
-            log::gnss(count, &run, FILTER_CAP);
-            (fixes, count)
-        });
-        let header = if run.aiding.is_some() {
-            AIDED_CSV_HEADER
-        } else {
-            CSV_HEADER
-        };
-        write_line(&mut out, header);
+        let setup = board.setup;
 
         let (samples_tx, samples_rx) = make_channel!(DataReady, SAMPLE_CAP);
         let (to_align, from_navigate_align) = make_channel!(ImuIncrement<f32>, ALIGN_CAP);
         let (to_filter, from_navigate) = make_channel!(ToBackground<f32>, FILTER_CAP);
         let (to_navigate, from_background) = make_channel!(FromBackground<f32>, 1);
         if navigate::spawn(samples_rx, to_align, to_filter, from_background).is_err()
-            || align::spawn(from_navigate_align, from_navigate, to_navigate).is_err()
-            || pace::spawn().is_err()
+            || spawn_pace().is_err()
         {
             defmt::panic!("task spawn failed");
         }
@@ -217,178 +105,55 @@ mod app {
                 costs: FilterCosts::default(),
             },
             Local {
-                imu,
+                imu: board.imu,
                 samples_tx,
                 navigator,
                 out,
-                gnss,
+                watchdog: board.watchdog,
+                config_in: board.config_in,
+                gnss: board.gnss,
                 setup,
+                from_navigate_align,
+                from_navigate,
+                to_navigate,
             },
         )
     }
 
-    /// Sleeps between interrupts (under QEMU's `sleep=off` the idle time then costs no host time).
-    #[idle]
-    fn idle(_: idle::Context) -> ! {
-        loop {
-            cortex_m::asm::wfi();
-        }
+    /// The qemu board's emulated data-ready line.
+    #[cfg(feature = "qemu")]
+    fn spawn_pace() -> Result<(), ()> {
+        pace::spawn()
     }
 
-    /// Parses the semihosting command line into the firmware's [`Args`]; exits with
-    /// [`ExitCode::Config`] on error.
-    fn read_args() -> Args {
-        let args = semihosting::experimental::env::args::<512>().unwrap_or_else(|_| {
-            defmt::error!("no semihosting command line: run through firmware/qemu-run.sh");
-            exit(ExitCode::Config)
-        });
-        let mut words = (&args).map(|a| a.unwrap_or("")).skip(1).peekable();
-        // Diagnostics: `--crash panic|hardfault` checks that failures reach the exit status.
-        if words.peek() == Some(&"--crash") {
-            match words.nth(1) {
-                Some("panic") => panic!("crash test requested"),
-                Some("hardfault") => cortex_m::asm::udf(),
-                _ => {}
-            }
-        }
-        // Benchmark: the gyro-free oscillator estimator ([Oscillator INS]) on synthetic readouts.
-        if words.peek() == Some(&"--osc-bench") {
-            firmware::osc_bench::run();
-            exit(ExitCode::Success)
-        }
-        Args::parse(words).unwrap_or_else(|e| {
-            defmt::error!(
-                "bad arguments ({}); usage: {=str}",
-                defmt::Display2Format(&e),
-                USAGE
-            );
-            exit(ExitCode::Config)
-        })
+    /// A real board's data-ready line is a pin: nothing to spawn.
+    #[cfg(not(feature = "qemu"))]
+    fn spawn_pace() -> Result<(), ()> {
+        Ok(())
     }
 
-    /// Logs a refused run configuration and exits with [`ExitCode::Config`].
-    fn bad_config(e: &dyn core::fmt::Display) -> ! {
-        defmt::error!("invalid configuration: {}", defmt::Display2Format(e));
-        exit(ExitCode::Config)
-    }
-
-    /// Loads the sensor calibration (identity without a file); exits with
-    /// [`ExitCode::Config`] when it cannot be read or parsed.
-    fn read_calibration(args: &Args) -> ImuCalibration {
-        let Some(path) = args.cal_cstr() else {
-            return ImuCalibration::default();
-        };
-        let fail = |what: &dyn core::fmt::Display| -> ! {
-            defmt::error!(
-                "calibration {=[u8]:a}: {}",
-                args.cal_path.as_deref().unwrap_or_default(),
-                defmt::Display2Format(what)
-            );
-            exit(ExitCode::Config)
-        };
-        let mut file = SemihostingFile::open(path).unwrap_or_else(|_| fail(&"cannot open"));
-        let mut text = [0_u8; 2048];
-        let mut len = 0;
-        loop {
-            match embedded_io::Read::read(&mut file, &mut text[len..]) {
-                Ok(0) => break,
-                Ok(n) => len += n,
-                Err(_) => fail(&"read error"),
-            }
-            if len == text.len() {
-                fail(&"longer than 2048 bytes");
-            }
-        }
-        let text = core::str::from_utf8(&text[..len]).unwrap_or_else(|_| fail(&"not UTF-8 text"));
-        let calibration = ImuCalibration::parse(text).unwrap_or_else(|e| fail(&e));
-        if let Err(e) = calibration.compensation::<f32>() {
-            fail(&e)
-        }
-        defmt::info!("calibration loaded: {=usize} bytes", len);
-        calibration
-    }
-
-    /// SysTick counts since start (monotonic ticks plus the counter's progress in this tick).
-    fn systick_counts() -> u64 {
-        loop {
-            let before = Mono::now().as_ticks();
-            let current = u64::from(SYST::get_current());
-            if Mono::now().as_ticks() == before {
-                return before * COUNTS_PER_TICK + (COUNTS_PER_TICK - 1 - current);
-            }
-        }
-    }
-
-    /// Board time since start [us] (also the defmt timestamp).
-    pub fn now_us() -> u64 {
-        systick_counts() / u64::from(SYSCLK_HZ / 1_000_000)
-    }
-
-    /// Guest instructions in `counts` SysTick counts: 1 ns per instruction under QEMU's
-    /// `-icount shift=0`, 168 counts per us.
-    fn counts_to_instructions(counts: u64) -> u64 {
-        counts * 1_000_000_000 / u64::from(SYSCLK_HZ)
-    }
-
-    /// Emulated data-ready line: pends `EXTI0` every 2.5 ms, exactly.
+    /// The qemu board's data-ready line: `EXTI0` pended every 2.5 ms.
+    #[cfg(feature = "qemu")]
     #[task(priority = 3)]
     async fn pace(_: pace::Context) {
-        let mut next = Mono::now();
-        while !STOP.load(Ordering::Relaxed) {
-            next += MonoDuration::from_ticks(DATA_READY_TICKS);
-            Mono::delay_until(next).await;
-            if NVIC::is_pending(Interrupt::EXTI0) {
-                MISSED.fetch_add(1, Ordering::Relaxed);
-            }
-            rtic::pend(Interrupt::EXTI0);
-        }
+        board::emulate_data_ready().await
     }
 
     /// IMU data ready: timestamp, read one sample through the driver, hand it on. Never blocks.
     #[task(binds = EXTI0, priority = 4, local = [imu, samples_tx, done: bool = false])]
     fn data_ready(cx: data_ready::Context) {
-        let t_ready_us = now_us();
+        let t_ready_us = board::now_us();
         if *cx.local.done {
             return;
         }
-        let imu = cx.local.imu;
-        let read = imu.read(t_ready_us, systick_counts);
-        let (msg, last) = match read.result {
-            Ok(sample) => (
-                DataReady::Sample {
-                    sample,
-                    t_ready_us,
-                    bus_instr: counts_to_instructions(read.bus_counts) as u32,
-                    decode_instr: counts_to_instructions(read.decode_counts) as u32,
-                },
-                false,
-            ),
-            Err(ImuError::Spi(SimError::End)) => {
-                // The simulated device ends the recording by failing the bus: not a bus error.
-                let health = health_at_end(imu.health());
-                (DataReady::End { health }, true)
-            }
-            Err(ImuError::Spi(SimError::Source(e))) => {
-                defmt::error!("recording: {}", defmt::Display2Format(&e));
-                (DataReady::SourceError, true)
-            }
-            Err(e) if e.is_transient() => {
-                // A corrupt frame: counted in the driver's health, nothing to navigate.
-                let n = imu.health().checksum_errors;
-                if n <= 10 || n.is_multiple_of(1000) {
-                    defmt::warn!("IMU frame rejected: {} ({=u32} so far)", e, n);
-                }
-                return;
-            }
-            Err(e) => {
-                defmt::error!("IMU failed: {}", e);
-                (DataReady::SourceError, true)
-            }
+        let Some(msg) = cx.local.imu.read(t_ready_us) else {
+            return;
         };
+        let last = msg.is_last();
         match cx.local.samples_tx.try_send(msg) {
             Ok(()) if last => {
                 *cx.local.done = true;
-                STOP.store(true, Ordering::Relaxed);
+                cx.local.imu.ended();
             }
             Ok(()) => {}
             // A lost end marker is sent again at the next data-ready (the source stays ended).
@@ -417,7 +182,7 @@ mod app {
     /// Navigation: carries every sample (and, aided, every GNSS fix) through nav-core's
     /// navigator, forwards what it asks to the background (`align`), hands it the answers, and
     /// writes the rows it produces.
-    #[task(priority = 2, local = [navigator, out, gnss], shared = [costs])]
+    #[task(priority = 2, local = [navigator, out, watchdog, config_in, gnss], shared = [costs])]
     async fn navigate(
         mut cx: navigate::Context,
         mut samples_rx: Receiver<'static, DataReady, SAMPLE_CAP>,
@@ -427,6 +192,8 @@ mod app {
     ) {
         let navigator = cx.local.navigator;
         let out = cx.local.out;
+        let watchdog = cx.local.watchdog;
+        let config_in = cx.local.config_in;
         // By reference: the task's future holds no second copy of the reader.
         let gnss = cx.local.gnss;
         // Steps without a row, and steps with one (the row's f64 output conversion included).
@@ -438,6 +205,8 @@ mod app {
             let Ok(msg) = samples_rx.recv().await else {
                 defmt::panic!("sample channel closed");
             };
+            watchdog.feed();
+            take_config(config_in);
             let (sample, t_ready_us) = match msg {
                 DataReady::Sample {
                     sample,
@@ -477,9 +246,9 @@ mod app {
                     }
                 }
             }
-            let start = systick_counts();
+            let start = board::counts();
             let step = navigator.push(&nav_input(&sample));
-            let spent = counts_to_instructions(systick_counts() - start);
+            let spent = instructions_since(start);
             match step {
                 Step::Navigated(None) => cost.add(spent),
                 Step::Navigated(Some(row)) => {
@@ -545,7 +314,7 @@ mod app {
             defmt::Display2Format(&c.flagged_by),
             c.rejected,
             c.nav_steps,
-            MISSED.load(Ordering::Relaxed),
+            board::missed_data_ready(),
             OVERRUNS.load(Ordering::Relaxed),
             last_ready_us
         );
@@ -565,6 +334,19 @@ mod app {
         exit(ExitCode::Success)
     }
 
+    /// Takes the configuration bytes the host sent (the configuration frame's decoder plugs in
+    /// here; until then they are counted and refused in the log).
+    fn take_config(config_in: &mut ConfigInput) {
+        let mut buf = [0_u8; 64];
+        let n = config_in.read(&mut buf);
+        if n > 0 {
+            defmt::warn!(
+                "{=usize} configuration bytes received: no configuration decoder yet, ignored",
+                n
+            );
+        }
+    }
+
     /// Forwards the navigator's work for the background ([`Navigator::next_message`]) and
     /// waits for each answered message's answer, writing the row an answer completes; returns
     /// the foreground's instructions in it (the waits for the background not counted).
@@ -572,14 +354,14 @@ mod app {
         navigator: &mut Navigator<f32>,
         to_background: &mut Sender<'static, ToBackground<f32>, FILTER_CAP>,
         from_background: &mut Receiver<'static, FromBackground<f32>, 1>,
-        out: &mut SemihostingFile,
+        out: &mut Output,
         imu: &ImuStats,
     ) -> u64 {
         let mut spent = 0;
         loop {
-            let start = systick_counts();
+            let start = board::counts();
             let message = navigator.next_message();
-            spent += counts_to_instructions(systick_counts() - start);
+            spent += instructions_since(start);
             let Some(message) = message else {
                 return spent;
             };
@@ -593,9 +375,9 @@ mod app {
             let Ok(answer) = from_background.recv().await else {
                 defmt::panic!("background answer channel closed");
             };
-            let start = systick_counts();
+            let start = board::counts();
             let row = navigator.on_background(answer);
-            spent += counts_to_instructions(systick_counts() - start);
+            spent += instructions_since(start);
             match row {
                 Ok(Some(row)) => write_line(out, row),
                 Ok(None) => {}
@@ -644,7 +426,7 @@ mod app {
     fn answer_from_background(
         navigator: &mut Navigator<f32>,
         answer: FromBackground<f32>,
-        out: &mut SemihostingFile,
+        out: &mut Output,
         imu: &ImuStats,
     ) {
         match navigator.on_background(answer) {
@@ -674,21 +456,24 @@ mod app {
         })
     }
 
-    /// Alignment, below navigation: the navigator's background on the forwarded increments;
-    /// logs its stage changes and cost, and answers.
-    /// The background (the alignment filters, some 45 KB in `f32`) lives in the task's static
-    /// slot, not on its stack; the fine stage's filters (`sway` included) are started there in
-    /// place (`nav_core::alignment::fine::Blank`), never built on the stack.
+    /// Alignment, below navigation (RTIC's idle, the lowest priority): the navigator's
+    /// background on the forwarded increments; logs its stage changes and cost, and answers.
     /// After the alignment, in an aided run, the navigation filter's covariance: propagations
     /// and updates, their costs kept for `navigate`'s summary.
-    #[task(priority = 1, local = [setup, background: Option<Background<f32>> = None], shared = [costs])]
-    async fn align(
-        mut cx: align::Context,
-        mut from_navigate_align: Receiver<'static, ImuIncrement<f32>, ALIGN_CAP>,
-        mut from_navigate: Receiver<'static, ToBackground<f32>, FILTER_CAP>,
-        mut to_navigate: Sender<'static, FromBackground<f32>, 1>,
-    ) {
-        let background = start_background(cx.local.background, cx.local.setup);
+    ///
+    /// The background (the alignment filters, some 55 KB in `f32`) lives on this task's
+    /// stack: idle never returns, so its frame is as permanent as a static, and the board's
+    /// static RAM stays small (the stack's peak is what counts; the qemu board reports it).
+    /// Idle sleeps (`wfi`) when no message waits.
+    #[idle(local = [setup, from_navigate_align, from_navigate, to_navigate], shared = [costs])]
+    fn align(mut cx: align::Context) -> ! {
+        let mut slot = None;
+        let background = start_background(&mut slot, cx.local.setup);
+        let (from_navigate_align, from_navigate, to_navigate) = (
+            cx.local.from_navigate_align,
+            cx.local.from_navigate,
+            cx.local.to_navigate,
+        );
         let settings = *background.settings();
         defmt::info!(
             "aligning: {=str}, {=u32} samples; stage COARSE",
@@ -697,10 +482,11 @@ mod app {
         );
         let mut stage = background.stage();
         let mut cost = StepCost::default();
-        while let Ok(inc) = from_navigate_align.recv().await {
-            let start = systick_counts();
+        loop {
+            let inc = receive(from_navigate_align);
+            let start = board::counts();
             let answer = background.handle(ToBackground::Align(inc));
-            cost.add(counts_to_instructions(systick_counts() - start));
+            cost.add(instructions_since(start));
             if background.stage() != stage {
                 stage = background.stage();
                 if stage == Stage::Fine {
@@ -719,31 +505,69 @@ mod app {
                 cost.mean()
             );
             let aligned = matches!(answer, FromBackground::Aligned(_));
-            if to_navigate.send(answer).await.is_err() {
-                defmt::panic!("alignment result channel closed");
-            }
+            answer_navigate(to_navigate, answer);
             if aligned {
                 break;
             }
         }
         // An aided run: the navigation filter's covariance, on the aided phase's messages.
-        while let Ok(message) = from_navigate.recv().await {
+        loop {
+            let message = receive(from_navigate);
             let kind = FilterCosts::kind(&message);
-            let start = systick_counts();
+            let start = board::counts();
             let answer = background.handle(message);
-            let spent = counts_to_instructions(systick_counts() - start);
+            let spent = instructions_since(start);
             cx.shared.costs.lock(|c| kind(c).add(spent));
-            if let Some(answer) = answer
-                && to_navigate.send(answer).await.is_err()
-            {
-                defmt::panic!("background answer channel closed");
+            if let Some(answer) = answer {
+                answer_navigate(to_navigate, answer);
             }
         }
     }
 
-    /// Builds the background in the `align` task's static slot. Not inlined: building it
-    /// takes a temporary of some 19 KB, which must not stay in the task's frame under the fine
-    /// alignment's deepest path (there it left 3 KB of the stack free).
+    /// The next message on `rx`, sleeping until an interrupt while there is none. The check
+    /// and the `wfi` run with interrupts masked, so a message sent in between cannot be
+    /// missed: a pending interrupt wakes `wfi` even when masked, and runs once they are
+    /// unmasked.
+    fn receive<T, const N: usize>(rx: &mut Receiver<'static, T, N>) -> T {
+        loop {
+            match rx.try_recv() {
+                Ok(value) => return value,
+                Err(rtic_sync::channel::ReceiveError::Empty) => {
+                    cortex_m::interrupt::free(|_| {
+                        if rx.is_empty() {
+                            cortex_m::asm::wfi();
+                        }
+                    });
+                }
+                Err(_) => defmt::panic!("background channel closed"),
+            }
+        }
+    }
+
+    /// Hands `answer` to `navigate`, sleeping while its one-message channel is full.
+    fn answer_navigate(
+        to_navigate: &mut Sender<'static, FromBackground<f32>, 1>,
+        mut answer: FromBackground<f32>,
+    ) {
+        loop {
+            match to_navigate.try_send(answer) {
+                Ok(()) => return,
+                Err(rtic_sync::channel::TrySendError::Full(back)) => {
+                    answer = back;
+                    cortex_m::interrupt::free(|_| {
+                        if to_navigate.is_full() {
+                            cortex_m::asm::wfi();
+                        }
+                    });
+                }
+                Err(_) => defmt::panic!("background answer channel closed"),
+            }
+        }
+    }
+
+    /// Builds the background in `slot` (idle's stack). Not inlined: building it takes a
+    /// temporary of some 19 KB, which must not stay in idle's frame under the fine
+    /// alignment's deepest path.
     #[inline(never)]
     fn start_background<'a>(
         slot: &'a mut Option<Background<f32>>,
@@ -753,8 +577,8 @@ mod app {
     }
 
     #[inline(never)]
-    fn write_line(out: &mut SemihostingFile, value: impl core::fmt::Display) {
-        let ok = line(value).is_some_and(|l| out.write_all(l.as_bytes()).is_ok());
+    fn write_line(out: &mut Output, value: impl core::fmt::Display) {
+        let ok = line(value).is_some_and(|l| out.write(l.as_bytes()).is_ok());
         if !ok {
             defmt::error!("cannot write the solution log");
             exit(ExitCode::Output);

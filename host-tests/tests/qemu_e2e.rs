@@ -55,19 +55,30 @@ fn run_firmware(dir: &Path, args: &[&str]) -> (i32, String) {
     run_firmware_at(dir, args, 0)
 }
 
+/// Runs the qemu board's diagnostic binary `name` (`crash`, `osc_bench`: built beside the
+/// firmware, `firmware/src/bin/`) in QEMU on `args` (from `dir`); returns (exit code, decoded
+/// defmt log).
+fn run_diagnostic(dir: &Path, name: &str, args: &[&str]) -> (i32, String) {
+    run_elf_at(&firmware_elf().with_file_name(name), dir, args, 0)
+}
+
 /// [`run_firmware`] with each guest instruction taking `2^shift` ns of virtual time
 /// (`QEMU_ICOUNT_SHIFT`: 3 is a 125 MIPS core, slower than the real 168 MHz part with its flash
 /// wait states; the timers keep virtual time, so a firmware that keeps up there keeps up on the
 /// board).
 fn run_firmware_at(dir: &Path, args: &[&str], shift: u32) -> (i32, String) {
+    run_elf_at(&firmware_elf(), dir, args, shift)
+}
+
+/// [`run_firmware_at`] for the ELF `elf`.
+fn run_elf_at(elf: &Path, dir: &Path, args: &[&str], shift: u32) -> (i32, String) {
     require("qemu-system-arm");
     require("defmt-print");
-    let elf = firmware_elf();
     let script = workspace_root().join("firmware/qemu-run.sh");
     let out: Output = Command::new("bash")
         .env("QEMU_ICOUNT_SHIFT", shift.to_string())
         .arg(script)
-        .arg(&elf)
+        .arg(elf)
         .args(args)
         .current_dir(dir)
         .output()
@@ -584,7 +595,7 @@ fn firmware_runs_the_mems_drivers_and_refuses_a_blind_gyrocompass() {
     assert!(log.contains("unknown alignment method magic"), "{log}");
 }
 
-/// The gyro-free oscillator estimator ([Oscillator INS]) runs on the MCU in f32 (`--osc-bench`,
+/// The gyro-free oscillator estimator ([Oscillator INS]) runs on the MCU in f32 (`osc_bench`,
 /// synthetic readouts of a body spinning at 0.5 rad/s): it locks, gives an epoch every period after
 /// that, and its worst attitude error is within f32 rounding of the exact answer. The rotation
 /// compensation makes a constant spin exact, so what is left is rounding: readouts of
@@ -594,7 +605,7 @@ fn firmware_runs_the_mems_drivers_and_refuses_a_blind_gyrocompass() {
 #[test]
 fn firmware_runs_the_oscillator_estimator_in_f32() {
     let dir = tempfile::tempdir().unwrap();
-    let (code, log) = run_firmware(dir.path(), &["--osc-bench"]);
+    let (code, log) = run_diagnostic(dir.path(), "osc_bench", &[]);
     assert_eq!(code, 0, "{log}");
     println!("{log}");
     let after = |key: &str| -> f64 {
@@ -625,13 +636,13 @@ fn firmware_runs_the_oscillator_estimator_in_f32() {
 #[test]
 fn firmware_panic_and_hardfault_exit_nonzero() {
     let dir = tempfile::tempdir().unwrap();
-    let (code, log) = run_firmware(dir.path(), &["--crash", "panic"]);
+    let (code, log) = run_diagnostic(dir.path(), "crash", &["panic"]);
     assert_eq!(code, 1, "panic exit code; log:\n{log}");
     assert!(
         log.contains("panic") && log.contains("crash test requested"),
         "{log}"
     );
-    let (code, log) = run_firmware(dir.path(), &["--crash", "hardfault"]);
+    let (code, log) = run_diagnostic(dir.path(), "crash", &["hardfault"]);
     assert_eq!(code, 2, "HardFault exit code; log:\n{log}");
     assert!(log.contains("HardFault at pc="), "{log}");
 }

@@ -9,20 +9,30 @@
 //! - `bench`: the benchmark figures: guest instructions per navigation step in QEMU (free
 //!   inertial, and GNSS-aided: per covariance propagation, per update, per sample amortised),
 //!   host samples per second, flash and RAM.
-//! - `size`: release build of the firmware and its flash/RAM use.
+//! - `size`: release build of the firmware and its flash/RAM use, the largest statics.
+//! - `build-board`: the STM32F405 board's firmware (`--features stm32f405`, profile `board`:
+//!   the release settings, linked through `flip-link` when it is installed), its flash
+//!   and static RAM and the largest statics; fails above the board's targets
+//!   ([`BOARD_FLASH_MAX`], [`BOARD_RAM_MAX`]).
 //! - `fuzz [CASES [RECORDING_CASES]]`: the decoder fuzz targets (`hal-adapters/tests/
 //!   fuzz_decoders.rs`: recording header, records, replay, the three drivers' decode paths) with
 //!   `CASES` cases each (default 100 000), then the mutated-recording properties through `nav
 //!   replay` (`host-tests/tests/mutated_recordings.rs`) with `RECORDING_CASES` per format
 //!   (default 1000); release builds; each target prints its count and wall time.
 //! - `lint`: `cargo fmt --check`, clippy with `-D warnings` for the host crates and for the
-//!   no_std crates and the firmware on the thumb target, and the docs with `-D warnings`.
+//!   no_std crates and the firmware (both boards) on the thumb target, and the docs with
+//!   `-D warnings`.
 
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 const THUMB: &str = "thumbv7em-none-eabihf";
+/// The board build's flash target [B].
+const BOARD_FLASH_MAX: u64 = 128 * 1024;
+/// The board build's static RAM target [B] (`.data`, `.bss`, `.uninit`; the stack takes the
+/// rest of the 128 KiB).
+const BOARD_RAM_MAX: u64 = 32 * 1024;
 
 /// The demo: `nav sim land-vehicle` with the `fog` grade at 45 deg N, 7.5 deg E, 250 m: the car
 /// stands still for 20 s (15 s of static alignment), then drives (starts, turns, stops) for
@@ -44,11 +54,12 @@ fn main() -> Result<()> {
         Some("demo") => demo(&root),
         Some("test") => test(&root),
         Some("size") => size(&root).map(|_| ()),
+        Some("build-board") => build_board(&root, true),
         Some("bench") => bench(&root),
         Some("lint") => lint(),
         Some("fuzz") => fuzz(&args[1..]),
         _ => {
-            eprintln!("usage: cargo xtask <setup|demo|test|bench|size|lint|fuzz>");
+            eprintln!("usage: cargo xtask <setup|demo|test|bench|size|build-board|lint|fuzz>");
             std::process::exit(2)
         }
     }
@@ -126,8 +137,20 @@ fn setup() -> Result<()> {
         eprintln!("setup: defmt-print is missing; installing it (about 3 minutes)");
         run(cargo().args(["install", "defmt-print", "--locked"]))?;
     }
-    eprintln!("setup: rustup target {THUMB}, qemu-system-arm and defmt-print are present");
+    if !on_path("flip-link") {
+        eprintln!("setup: flip-link is missing; installing it (the board build's linker)");
+        run(cargo().args(["install", "flip-link", "--locked"]))?;
+    }
+    eprintln!(
+        "setup: rustup target {THUMB}, qemu-system-arm, defmt-print and flip-link are present"
+    );
     Ok(())
+}
+
+/// True when `tool` is an executable file in a directory of `PATH`.
+fn on_path(tool: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|path| std::env::split_paths(&path).any(|dir| dir.join(tool).is_file()))
 }
 
 fn is_root() -> bool {
@@ -325,6 +348,8 @@ fn bench(root: &Path) -> Result<()> {
     let max = number_after(step, "instructions per navigation step: max")?;
     let mean = number_after(step, "mean")?;
     let adis = imu_costs(&log)?;
+    // The qemu board paints the stack at start and logs its high-water mark at the end.
+    let peak_stack = number_after(&log, "peak stack:")?;
     // The ICM-42688-P and BMI088 paths: their gyros cannot gyrocompass, so the runs end at the
     // alignment (exit 5) after logging the driver's costs.
     let icm = device_costs(&elf, "icm42688")?;
@@ -346,8 +371,7 @@ fn bench(root: &Path) -> Result<()> {
     let osc_log = output(
         Command::new("bash")
             .arg("firmware/qemu-run.sh")
-            .arg(&elf)
-            .arg("--osc-bench"),
+            .arg(elf.with_file_name("osc_bench")),
     )?;
     let line = &osc_log[osc_log
         .find("instructions per oscillator readout")
@@ -431,6 +455,9 @@ fn bench(root: &Path) -> Result<()> {
     );
     println!("| flash (text + data) [B] | {} |", text + data);
     println!("| static RAM (data + bss) [B] | {} |", data + bss);
+    println!(
+        "| peak stack, demo run (static alignment, free inertial; the aligner on the stack) [B] | {peak_stack:.0} |"
+    );
     Ok(())
 }
 
@@ -602,7 +629,116 @@ fn test(root: &Path) -> Result<()> {
     let elf = build_firmware(root)?;
     run(cargo()
         .args(["test", "--workspace", "--exclude", "firmware"])
-        .env("FIRMWARE_ELF", &elf))
+        .env("FIRMWARE_ELF", &elf))?;
+    // The board build: its static RAM target enforced; its flash reported, not enforced here,
+    // while the board's firmware is above the flash target (`cargo xtask build-board` fails on
+    // both).
+    build_board(root, false)
+}
+
+/// Builds the STM32F405 board's firmware (profile `board`), prints its flash, static RAM and
+/// largest statics; fails above [`BOARD_RAM_MAX`], and with `enforce_flash` above
+/// [`BOARD_FLASH_MAX`] too.
+/// Linked through `flip-link` (stack-overflow protection: the stack below the statics) when
+/// it is installed (`cargo xtask setup` installs it).
+fn build_board(root: &Path, enforce_flash: bool) -> Result<()> {
+    let mut build = cargo();
+    build.args([
+        "build",
+        "-p",
+        "firmware",
+        "--target",
+        THUMB,
+        "--profile",
+        "board",
+    ]);
+    build.args(["--no-default-features", "--features", "stm32f405"]);
+    if on_path("flip-link") {
+        build.args([
+            "--config",
+            "target.thumbv7em-none-eabihf.linker='flip-link'",
+        ]);
+    } else {
+        eprintln!(
+            "build-board: flip-link is not installed: linked without stack-overflow protection \
+             (cargo install flip-link)"
+        );
+    }
+    run(&mut build)?;
+    let elf = root
+        .join("target")
+        .join(THUMB)
+        .join("board")
+        .join("firmware");
+    let data = std::fs::read(&elf).with_context(|| format!("read {}", elf.display()))?;
+    let (text, data_sz, bss) = section_sizes(&data)?;
+    let (flash, ram) = (text + data_sz, data_sz + bss);
+    println!(
+        "board firmware (STM32F405, {}): flash {flash} B (target <= {BOARD_FLASH_MAX}), static RAM {ram} B (target <= {BOARD_RAM_MAX})",
+        elf.display()
+    );
+    print_statics(&data)?;
+    if ram > BOARD_RAM_MAX {
+        bail!("board firmware: static RAM {ram} B > {BOARD_RAM_MAX} B");
+    }
+    if flash <= BOARD_FLASH_MAX {
+        println!("board firmware: within its flash and static RAM targets");
+    } else if enforce_flash {
+        bail!("board firmware: flash {flash} B > {BOARD_FLASH_MAX} B");
+    } else {
+        println!(
+            "board firmware: flash ABOVE its target ({flash} B > {BOARD_FLASH_MAX} B); not enforced by `cargo xtask test`"
+        );
+    }
+    Ok(())
+}
+
+/// Prints the ten largest statics (symbols in `.data`, `.bss`, `.uninit`) of an ELF.
+fn print_statics(elf: &[u8]) -> Result<()> {
+    use object::{Object as _, ObjectSection as _, ObjectSymbol as _};
+    let file = object::File::parse(elf).context("not an ELF")?;
+    let mut statics: Vec<(u64, String)> = file
+        .symbols()
+        .filter_map(|sym| {
+            let section = file.section_by_index(sym.section_index()?).ok()?;
+            let name = section.name().ok()?;
+            let ram = [".data", ".bss", ".uninit"]
+                .iter()
+                .any(|s| name == *s || name.starts_with(&format!("{s}.")));
+            (ram && sym.size() > 0).then(|| (sym.size(), demangle(sym.name().unwrap_or("?"))))
+        })
+        .collect();
+    statics.sort_unstable_by(|a, b| b.cmp(a));
+    println!("largest statics [B]:");
+    for (size, name) in statics.iter().take(10) {
+        println!("  {size:>6}  {name}");
+    }
+    Ok(())
+}
+
+/// A legacy-mangled Rust symbol (`_ZN` length-prefixed parts, hash last) as `a::b::c`.
+fn demangle(name: &str) -> String {
+    let Some(mut rest) = name.strip_prefix("_ZN") else {
+        return name.to_owned();
+    };
+    let mut parts = Vec::new();
+    while let Some(len_end) = rest.find(|c: char| !c.is_ascii_digit()) {
+        let Ok(len) = rest[..len_end].parse::<usize>() else {
+            break;
+        };
+        let Some(part) = rest.get(len_end..len_end + len) else {
+            break;
+        };
+        parts.push(part);
+        rest = &rest[len_end + len..];
+    }
+    if parts
+        .last()
+        .is_some_and(|p| p.starts_with('h') && p.len() == 17)
+    {
+        parts.pop();
+    }
+    parts.join("::").replace("$LT$", "<").replace("$GT$", ">")
 }
 
 /// The decoder fuzz targets with `args[0]` cases each (default 100 000), then the
@@ -647,6 +783,7 @@ fn size(root: &Path) -> Result<(u64, u64, u64)> {
         text + data_sz,
         data_sz + bss
     );
+    print_statics(&data)?;
     Ok((text, data_sz, bss))
 }
 
@@ -697,7 +834,16 @@ fn lint() -> Result<()> {
         "--features",
         "semihosting,defmt",
     ];
-    for selection in [&host[..], &thumb, &thumb_features] {
+    let board = [
+        "--target",
+        THUMB,
+        "-p",
+        "firmware",
+        "--no-default-features",
+        "--features",
+        "stm32f405",
+    ];
+    for selection in [&host[..], &thumb, &thumb_features, &board] {
         run(cargo()
             .arg("clippy")
             .args(selection)

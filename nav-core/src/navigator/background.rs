@@ -146,8 +146,9 @@ pub fn initial_sigma<T: Scalar>(
 }
 
 /// What the background holds: the aligner, then the filter in its place (the two are never
-/// needed together, and on the MCU the aligner's static slot is the largest piece of RAM: the
-/// filter costs none of its own). The size difference is the point: no boxing.
+/// needed together, and on the MCU the aligner is the largest piece of RAM, kept on the
+/// `align` task's stack: the filter costs none of its own). The size difference is the point:
+/// no boxing.
 #[allow(clippy::large_enum_variant)]
 enum Work<T: Scalar> {
     /// Aligning (or the alignment answered, free inertial).

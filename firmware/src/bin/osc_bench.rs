@@ -1,4 +1,4 @@
-//! `--osc-bench`: the gyro-free oscillator estimator ([Oscillator INS], `nav_core::oscillator`) in
+//! Benchmark binary of the QEMU board: the gyro-free oscillator estimator ([Oscillator INS], `nav_core::oscillator`) in
 //! `f32` on the MCU, timed per readout.
 //!
 //! The board has no oscillator sensor, so the readouts are made on the target: the exact
@@ -9,9 +9,14 @@
 //! `-icount shift=0`), separately for ordinary readouts and for the readouts that end a period
 //! (where the fit, the frame and the loop run). The worst attitude error after lock is printed
 //! against the closed form, a check that the f32 build is the estimator the host tests cover.
+//! Run through `firmware/qemu-run.sh ELF`; exits 0 after logging its figures.
+#![no_std]
+#![no_main]
+#![deny(unsafe_code)]
 
-use crate::StepCost;
 use cortex_m::peripheral::SYST;
+use cortex_m::peripheral::syst::SystClkSource;
+use firmware::{ExitCode, StepCost, exit};
 use nav_core::Scalar;
 use nav_core::nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 use nav_core::oscillator::{OscillatorConfig, OscillatorEstimator};
@@ -30,8 +35,22 @@ fn instructions(counts: u64) -> u64 {
     counts * 1_000_000_000 / SYSCLK_HZ
 }
 
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    let Some(mut core) = cortex_m::Peripherals::take() else {
+        exit(ExitCode::Panic)
+    };
+    // SysTick free-running at the core clock over its whole 24-bit range.
+    core.SYST.set_clock_source(SystClkSource::Core);
+    core.SYST.set_reload(0x00ff_ffff);
+    core.SYST.clear_current();
+    core.SYST.enable_counter();
+    run();
+    exit(ExitCode::Success)
+}
+
 /// Runs the benchmark and logs its figures.
-pub fn run() {
+fn run() {
     let reload = u64::from(SYST::get_reload()) + 1;
     let Ok(mut est) = OscillatorEstimator::<f32>::new(OscillatorConfig::new(RATE_HZ, F0_HZ)) else {
         defmt::error!("oscillator bench: bad configuration");

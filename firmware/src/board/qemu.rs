@@ -1,0 +1,396 @@
+//! The `qemu` board: QEMU's netduinoplus2 (an STM32F405 without an RCC model).
+//!
+//! - No clock set-up (it would hang on a ready bit QEMU never sets): the core runs at QEMU's
+//!   fixed 168 MHz and SysTick is the monotonic.
+//! - The IMU's data-ready line is emulated: [`emulate_data_ready`] pends `EXTI0` (the line a real
+//!   data-ready pin uses) every 2.5 ms of SysTick time, and the IMU is a real driver over a
+//!   simulated SPI device answering from a recording (`crate::imu`), read through semihosting.
+//! - The configuration is the semihosting command line (`crate::config`), the calibration and
+//!   the GNSS fixes host files, the output stream a host file, defmt over semihosting stdout,
+//!   and [`exit`] QEMU's exit status.
+//!
+//! Under QEMU's `-icount shift=0` one guest instruction takes exactly 1 ns of virtual time, so
+//! SysTick timing is exact and the instruction counts the firmware prints are repeatable.
+
+use super::{Board, DataReady, pac::Interrupt};
+use crate::config::{Args, USAGE};
+use crate::imu::BoardImu;
+use crate::{ExitCode, log};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use cortex_m::peripheral::{NVIC, SYST};
+use defmt_semihosting as _; // global defmt logger over semihosting stdout
+use hal_adapters::drivers::{Error as ImuError, Health};
+use hal_adapters::io::{Buffered, SemihostingFile};
+use hal_adapters::recording::Replay;
+use hal_adapters::sim::{SimBmi088, SimError, health_at_end};
+use nav_core::calibration::ImuCalibration;
+use nav_core::navigator::Setup;
+use rtic_monotonics::systick::prelude::*;
+
+pub use crate::gnss::Fixes;
+
+/// Core clock [Hz]: QEMU's netduinoplus2 runs at 168 MHz, as the real part does.
+const SYSCLK_HZ: u32 = 168_000_000;
+/// SysTick monotonic rate [Hz]: one tick (and one SysTick interrupt) per data-ready period;
+/// finer times read the SysTick counter ([`counts`]). Under QEMU every timer interrupt costs
+/// host time, so fewer ticks make the replay 2.5x faster than 2 kHz ticks did.
+const TICK_HZ: u32 = 400;
+systick_monotonic!(Mono, 400);
+/// SysTick counts per monotonic tick.
+const COUNTS_PER_TICK: u64 = (SYSCLK_HZ / TICK_HZ) as u64;
+/// The IMU's data-ready period: 400 Hz.
+const DATA_READY_TICKS: u64 = (TICK_HZ / 400) as u64;
+/// A duration in monotonic ticks.
+type MonoDuration = fugit::Duration<u64, 1, 400>;
+/// Bytes read from the host per semihosting call.
+const READ_CHUNK: usize = 512;
+
+/// The recording the simulated IMU answers from.
+type Recording = Replay<Buffered<SemihostingFile, READ_CHUNK>>;
+
+/// Where the BMI088's simulated device lives (shared by its two chip selects).
+pub type ImuSlot = Option<SimBmi088<Recording>>;
+/// The empty [`ImuSlot`].
+pub const IMU_SLOT: ImuSlot = None;
+
+/// Data-ready edges lost because the previous one was still pending.
+static MISSED: AtomicU32 = AtomicU32::new(0);
+/// Set once the end of the recording has been delivered: the pacer stops.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+/// Brings the board up: the monotonic, the command line, the calibration, the recording and
+/// the IMU over it, the solution log and the GNSS file. Exits with the matching
+/// [`ExitCode`] when any of them is refused.
+pub fn init(
+    core: cortex_m::Peripherals,
+    _device: super::pac::Peripherals,
+    slot: &'static mut ImuSlot,
+) -> Board {
+    paint_stack();
+    Mono::start(core.SYST, SYSCLK_HZ);
+    let mut args = read_args();
+    if let Err(e) = args.run.validate() {
+        bad_config(&e)
+    }
+    args.run.calibration = read_calibration(&args);
+    let run = args.run;
+    log::config(&run);
+    let file = SemihostingFile::open(args.imu_cstr()).unwrap_or_else(|_| {
+        defmt::error!(
+            "cannot open the recording {=[u8]:a}",
+            args.imu_path.as_slice()
+        );
+        exit(ExitCode::Recording)
+    });
+    let source = Replay::new(Buffered::new(file)).unwrap_or_else(|e| {
+        defmt::error!(
+            "recording {=[u8]:a}: {}",
+            args.imu_path.as_slice(),
+            defmt::Display2Format(&e)
+        );
+        exit(ExitCode::Recording)
+    });
+    let header = *source.header();
+    defmt::info!(
+        "recording: {=u32} samples at {=f64} Hz",
+        header.sample_count,
+        header.rate_hz
+    );
+    let setup = Setup::<f32>::new(&run, header.rate_hz).unwrap_or_else(|e| bad_config(&e));
+    let device = args.device;
+    let imu = BoardImu::new(device, source, slot).unwrap_or_else(|e| {
+        defmt::error!("IMU {} init failed: {}", device, e);
+        exit(ExitCode::Recording)
+    });
+    defmt::info!("IMU: {} over a simulated SPI device", device);
+    let out = SemihostingFile::create(args.out_cstr()).unwrap_or_else(|_| {
+        defmt::error!(
+            "cannot create the solution log {=[u8]:a}",
+            args.out_path.as_slice()
+        );
+        exit(ExitCode::Output)
+    });
+    let gnss = args.gnss_cstr().map(|path| {
+        let fail = |e: &dyn core::fmt::Display| -> ! {
+            let name = args.gnss_path.as_deref().unwrap_or_default();
+            let name = name.strip_suffix(&[0]).unwrap_or(name);
+            defmt::error!(
+                "GNSS file {=str}: {}",
+                core::str::from_utf8(name).unwrap_or("(not UTF-8)"),
+                defmt::Display2Format(e)
+            );
+            exit(ExitCode::Recording)
+        };
+        // Checked whole before anything is navigated, then read as the samples come.
+        let count = crate::gnss::check(path).unwrap_or_else(|e| fail(&e));
+        let fixes = Fixes::open(path).unwrap_or_else(|e| fail(&e));
+        log::gnss(count, &run, crate::FILTER_CAP);
+        (fixes, count)
+    });
+    Board {
+        imu: Imu(imu),
+        out: Output(out),
+        config_in: ConfigInput,
+        watchdog: Watchdog,
+        gnss,
+        setup,
+        aided: run.aiding.is_some(),
+    }
+}
+
+/// Parses the semihosting command line into the firmware's [`Args`]; exits with
+/// [`ExitCode::Config`] on error.
+fn read_args() -> Args {
+    let args = semihosting::experimental::env::args::<512>().unwrap_or_else(|_| {
+        defmt::error!("no semihosting command line: run through firmware/qemu-run.sh");
+        exit(ExitCode::Config)
+    });
+    let words = (&args).map(|a| a.unwrap_or("")).skip(1);
+    Args::parse(words).unwrap_or_else(|e| {
+        defmt::error!(
+            "bad arguments ({}); usage: {=str}",
+            defmt::Display2Format(&e),
+            USAGE
+        );
+        exit(ExitCode::Config)
+    })
+}
+
+/// Logs a refused run configuration and exits with [`ExitCode::Config`].
+fn bad_config(e: &dyn core::fmt::Display) -> ! {
+    defmt::error!("invalid configuration: {}", defmt::Display2Format(e));
+    exit(ExitCode::Config)
+}
+
+/// Loads the sensor calibration (identity without a file); exits with [`ExitCode::Config`]
+/// when it cannot be read or parsed.
+fn read_calibration(args: &Args) -> ImuCalibration {
+    let Some(path) = args.cal_cstr() else {
+        return ImuCalibration::default();
+    };
+    let fail = |what: &dyn core::fmt::Display| -> ! {
+        defmt::error!(
+            "calibration {=[u8]:a}: {}",
+            args.cal_path.as_deref().unwrap_or_default(),
+            defmt::Display2Format(what)
+        );
+        exit(ExitCode::Config)
+    };
+    let mut file = SemihostingFile::open(path).unwrap_or_else(|_| fail(&"cannot open"));
+    let mut text = [0_u8; 2048];
+    let mut len = 0;
+    loop {
+        match embedded_io::Read::read(&mut file, &mut text[len..]) {
+            Ok(0) => break,
+            Ok(n) => len += n,
+            Err(_) => fail(&"read error"),
+        }
+        if len == text.len() {
+            fail(&"longer than 2048 bytes");
+        }
+    }
+    let text = core::str::from_utf8(&text[..len]).unwrap_or_else(|_| fail(&"not UTF-8 text"));
+    let calibration = ImuCalibration::parse(text).unwrap_or_else(|e| fail(&e));
+    if let Err(e) = calibration.compensation::<f32>() {
+        fail(&e)
+    }
+    defmt::info!("calibration loaded: {=usize} bytes", len);
+    calibration
+}
+
+/// SysTick counts since start (monotonic ticks plus the counter's progress in this tick).
+pub fn counts() -> u64 {
+    loop {
+        let before = Mono::now().as_ticks();
+        let current = u64::from(SYST::get_current());
+        if Mono::now().as_ticks() == before {
+            return before * COUNTS_PER_TICK + (COUNTS_PER_TICK - 1 - current);
+        }
+    }
+}
+
+/// Board time since start [us] (also the defmt timestamp).
+pub fn now_us() -> u64 {
+    counts() / u64::from(SYSCLK_HZ / 1_000_000)
+}
+
+/// Guest instructions since the [`counts`] reading `start`: 1 ns per instruction under QEMU's
+/// `-icount shift=0`, 168 counts per us.
+pub fn instructions_since(start: u64) -> u64 {
+    (counts() - start) * 1_000_000_000 / u64::from(SYSCLK_HZ)
+}
+
+/// Data-ready edges lost because the previous one was still pending.
+pub fn missed_data_ready() -> u32 {
+    MISSED.load(Ordering::Relaxed)
+}
+
+/// The emulated data-ready line (run by the app's `pace` task): pends `EXTI0` every 2.5 ms,
+/// exactly, until the recording's end has been delivered.
+pub async fn emulate_data_ready() {
+    let mut next = Mono::now();
+    while !STOP.load(Ordering::Relaxed) {
+        next += MonoDuration::from_ticks(DATA_READY_TICKS);
+        Mono::delay_until(next).await;
+        if NVIC::is_pending(Interrupt::EXTI0) {
+            MISSED.fetch_add(1, Ordering::Relaxed);
+        }
+        rtic::pend(Interrupt::EXTI0);
+    }
+}
+
+/// The IMU: a real driver over a simulated SPI device fed by the recording.
+pub struct Imu(BoardImu<Recording>);
+
+impl Imu {
+    /// Reads one sample at data-ready time `t_ready_us` [us]; `None` when there is nothing to
+    /// hand on (a corrupt frame, counted in the driver's health and logged).
+    pub fn read(&mut self, t_ready_us: u64) -> Option<DataReady> {
+        let imu = &mut self.0;
+        let read = imu.read(t_ready_us, counts);
+        let to_instructions = |c: u64| (c * 1_000_000_000 / u64::from(SYSCLK_HZ)) as u32;
+        Some(match read.result {
+            Ok(sample) => DataReady::Sample {
+                sample,
+                t_ready_us,
+                bus_instr: to_instructions(read.bus_counts),
+                decode_instr: to_instructions(read.decode_counts),
+            },
+            Err(ImuError::Spi(SimError::End)) => {
+                // The simulated device ends the recording by failing the bus: not a bus error.
+                DataReady::End {
+                    health: health_at_end(imu.health()),
+                }
+            }
+            Err(ImuError::Spi(SimError::Source(e))) => {
+                defmt::error!("recording: {}", defmt::Display2Format(&e));
+                DataReady::SourceError
+            }
+            Err(e) if e.is_transient() => {
+                // A corrupt frame: counted in the driver's health, nothing to navigate.
+                let n = imu.health().checksum_errors;
+                if n <= 10 || n.is_multiple_of(1000) {
+                    defmt::warn!("IMU frame rejected: {} ({=u32} so far)", e, n);
+                }
+                return None;
+            }
+            Err(e) => {
+                defmt::error!("IMU failed: {}", e);
+                DataReady::SourceError
+            }
+        })
+    }
+
+    /// Called once the source's last message has been handed on: the pacer stops.
+    pub fn ended(&mut self) {
+        STOP.store(true, Ordering::Relaxed);
+    }
+
+    /// The driver's counters.
+    pub fn health(&self) -> Health {
+        self.0.health()
+    }
+}
+
+/// The output stream: the solution log, a host file.
+pub struct Output(SemihostingFile);
+
+impl Output {
+    /// Writes all of `bytes`; `Err` when the host refuses them.
+    pub fn write(&mut self, bytes: &[u8]) -> Result<(), OutputError> {
+        embedded_io::Write::write_all(&mut self.0, bytes).map_err(|_| OutputError)
+    }
+}
+
+/// The output stream refused bytes.
+#[derive(Debug, defmt::Format)]
+pub struct OutputError;
+
+/// Configuration input: none besides the command line on this board.
+pub struct ConfigInput;
+
+impl ConfigInput {
+    /// Configuration bytes received since the last call (never any here).
+    pub fn read(&mut self, _buf: &mut [u8]) -> usize {
+        0
+    }
+}
+
+/// No watchdog in QEMU.
+pub struct Watchdog;
+
+impl Watchdog {
+    /// Nothing to feed.
+    pub fn feed(&mut self) {}
+}
+
+use stack::{paint_stack, peak_stack};
+
+/// The stack's high-water mark: painted at start, read at the end.
+mod stack {
+    #![allow(unsafe_code)]
+    use core::sync::atomic::{AtomicBool, Ordering};
+
+    /// The stack's paint: a word no stack frame is likely to hold.
+    const PAINT: u32 = 0x5AC4_C0DE;
+    /// Set once the stack is painted.
+    static PAINTED: AtomicBool = AtomicBool::new(false);
+
+    // The RAM's free region, from cortex-m-rt's `link.x`: the end of the static RAM
+    // (`__sheap`, after `.data`, `.bss` and `.uninit`) and the top of the stack.
+    unsafe extern "C" {
+        static __sheap: u32;
+        static _stack_start: u32;
+    }
+
+    /// The stack's region [address]: from the end of the static RAM to the top of the RAM.
+    fn stack_region() -> (usize, usize) {
+        (
+            (&raw const __sheap) as usize,
+            (&raw const _stack_start) as usize,
+        )
+    }
+
+    /// Paints the free stack (below the current frame) with [`PAINT`], so that [`peak_stack`] can
+    /// find the deepest word the run wrote.
+    pub fn paint_stack() {
+        let (low, _) = stack_region();
+        let below_sp = cortex_m::register::msp::read() as usize - 256;
+        let mut p = low;
+        while p < below_sp {
+            // SAFETY: `[low, below_sp)` is RAM no static and no live stack frame uses (the linker
+            // script's free region, below this frame), word-aligned (`__sheap` is).
+            unsafe { core::ptr::write_volatile(p as *mut u32, PAINT) };
+            p += 4;
+        }
+        PAINTED.store(true, Ordering::Relaxed);
+    }
+
+    /// The run's peak stack and the stack's size [B], if it was painted: the deepest word no
+    /// longer holding the paint.
+    pub fn peak_stack() -> Option<(usize, usize)> {
+        if !PAINTED.load(Ordering::Relaxed) {
+            return None;
+        }
+        let (low, top) = stack_region();
+        let mut p = low;
+        // SAFETY: reads of word-aligned RAM inside the stack region.
+        while p < top && unsafe { core::ptr::read_volatile(p as *const u32) } == PAINT {
+            p += 4;
+        }
+        Some((top - p, top - low))
+    }
+}
+
+/// Ends the program with this exit status of QEMU (the peak stack logged first).
+pub fn exit(code: ExitCode) -> ! {
+    if let Some((peak, size)) = peak_stack() {
+        defmt::info!(
+            "peak stack: {=usize} B of the {=usize} B the static RAM leaves",
+            peak,
+            size
+        );
+    }
+    defmt::flush();
+    semihosting::process::exit(code as i32)
+}
