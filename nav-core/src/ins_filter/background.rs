@@ -161,9 +161,8 @@ impl<T: Scalar> ErrorFilter<T> {
     /// reset to its diagonal (the correlations are lost, the variances kept or floored).
     fn check_covariance(&mut self) {
         let last = self.last_state();
-        // One sum finds any NaN or infinity (cheaper than testing 441 values).
         let bad = (0..last).any(|i| !(self.p[(i, i)].finite() && self.p[(i, i)] > T::zero()))
-            || !self.p.iter().fold(T::zero(), |a, v| a + *v).finite();
+            || !model::all_finite(&self.p);
         if bad {
             self.covariance_faults = self.covariance_faults.saturating_add(1);
             self.fault_latched = true;

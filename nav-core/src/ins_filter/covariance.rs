@@ -45,30 +45,28 @@ impl<T: Scalar> Transition<T> {
         debug_assert!(sensor_rows_are_diagonal(f));
         let a = f * dt;
         let half = T::c(0.5);
-        // (F dt)^2 over the navigation rows: row i, column j sums a[i, k] a[k, j] over the
-        // navigation states k, and for a sensor column j the one term a[i, j] a[j, j].
-        let mut sq = SMatrix::<T, NAV, N>::zeros();
-        for j in 0..N {
-            for k in 0..NAV {
-                let a_kj = a[(k, j)];
+        let cols = columns(&a);
+        let mut nav_rows_t = SMatrix::<T, N, NAV>::zeros();
+        for (j, a_j) in cols.iter().enumerate() {
+            // Column j of (F dt)^2 over the navigation rows: a[:, k] a[k, j] over the
+            // navigation states k, and for a sensor column j the one term a[:, j] a[j, j].
+            let mut sq = [T::zero(); NAV];
+            for (a_k, &a_kj) in cols.iter().zip(&a_j[..NAV]) {
                 if a_kj == T::zero() {
                     continue;
                 }
-                for i in 0..NAV {
-                    sq[(i, j)] += a[(i, k)] * a_kj;
+                for (s, &a_ik) in sq.iter_mut().zip(&a_k[..NAV]) {
+                    *s += a_ik * a_kj;
                 }
             }
             if j >= NAV {
-                let a_jj = a[(j, j)];
-                for i in 0..NAV {
-                    sq[(i, j)] += a[(i, j)] * a_jj;
+                let a_jj = a_j[j];
+                for (s, &a_ij) in sq.iter_mut().zip(&a_j[..NAV]) {
+                    *s += a_ij * a_jj;
                 }
             }
-        }
-        let mut nav_rows_t = SMatrix::<T, N, NAV>::zeros();
-        for i in 0..NAV {
-            for j in 0..N {
-                let mut v = sq[(i, j)] * half + a[(i, j)];
+            for (i, (&s, &a_ij)) in sq.iter().zip(&a_j[..NAV]).enumerate() {
+                let mut v = s * half + a_ij;
                 if i == j {
                     v += T::one();
                 }
@@ -97,6 +95,11 @@ impl<T: Scalar> Transition<T> {
     }
 }
 
+/// The columns of a matrix of `N` rows, as arrays (loops of a known length).
+fn columns<T: Scalar, const C: usize>(m: &SMatrix<T, N, C>) -> &[[T; N]] {
+    m.as_slice().as_chunks::<N>().0
+}
+
 /// True when the sensor rows of `f` hold nothing off the diagonal (the structure
 /// [`Transition`] relies on).
 pub fn sensor_rows_are_diagonal<T: Scalar>(f: &Covariance<T>) -> bool {
@@ -119,19 +122,16 @@ pub fn propagate<T: Scalar>(
     // W = P Phi_n^T: column i gathers the columns k of P weighted by Phi[i, k].
     let mut w = SMatrix::<T, N, NAV>::zeros();
     {
-        let p_cols = p.as_slice();
-        let phi_rows = phi.nav_rows_t.as_slice();
-        for (w_i, phi_i) in w
-            .as_mut_slice()
-            .chunks_exact_mut(N)
-            .zip(phi_rows.chunks_exact(N))
-        {
-            for (p_k, &phi_ik) in p_cols.chunks_exact(N).zip(phi_i) {
+        let p_cols = columns(p);
+        let phi_rows = columns(&phi.nav_rows_t);
+        let (w_cols, _) = w.as_mut_slice().as_chunks_mut::<N>();
+        for (w_i, phi_i) in w_cols.iter_mut().zip(phi_rows) {
+            for (p_k, &phi_ik) in p_cols.iter().zip(phi_i) {
                 if phi_ik == T::zero() {
                     continue;
                 }
-                for (w_ki, &p_lk) in w_i.iter_mut().zip(p_k) {
-                    *w_ki += p_lk * phi_ik;
+                for (w_li, &p_lk) in w_i.iter_mut().zip(p_k) {
+                    *w_li += p_lk * phi_ik;
                 }
             }
         }
@@ -154,10 +154,13 @@ pub fn propagate<T: Scalar>(
         }
     }
     // Navigation block: Phi_n W, the lower triangle mirrored.
-    for j in 0..NAV {
-        let w_j = w.column(j);
-        for i in j..NAV {
-            let v = phi.nav_rows_t.column(i).dot(&w_j);
+    let (w_cols, phi_rows) = (columns(&w), columns(&phi.nav_rows_t));
+    for (j, w_j) in w_cols.iter().enumerate() {
+        for (i, phi_i) in phi_rows.iter().enumerate().skip(j) {
+            let mut v = T::zero();
+            for (&phi_il, &w_lj) in phi_i.iter().zip(w_j) {
+                v += phi_il * w_lj;
+            }
             p[(i, j)] = v;
             p[(j, i)] = v;
         }
