@@ -3,7 +3,7 @@
 //! through `nav kf-gins` ([`crate::kf_gins_run`]): IMU samples per second (text parsing and
 //! `.nav` writing included) and the accuracy against the truth.
 
-use crate::aided_cmd::grade_noise;
+use crate::aided_cmd::grade_filter_model;
 use crate::gnss::GnssFix;
 use crate::gnss_sim::{self, GnssSimOptions};
 use crate::kf_gins::read_truth;
@@ -14,7 +14,7 @@ use crate::sensor_model::Grade;
 use crate::trajectory::scenarios::Scenario;
 use crate::truth::horizontal_distance_m;
 use anyhow::{Context, Result, anyhow, ensure};
-use nav_core::nalgebra::Matrix3;
+use nav_core::nalgebra::{Matrix3, Vector3};
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -138,29 +138,19 @@ pub fn generate(dir: &Path, o: &FilterBenchOptions) -> Result<DataSet> {
     }
     tw.finish()?;
     // The configuration: the start at the truth (KF-GINS users give the reference's), the
-    // grade's noise in KF-GINS's units.
+    // grade's noise in KF-GINS's units, as the filter models the simulated sensor
+    // ([`grade_filter_model`]): KF-GINS's `imunoise` is the in-run part (white noise, the
+    // gyros' few-second bias instability folded into it, the bias drift as `gbstd`/`abstd`
+    // over `corrtime`; the scale factors are constants, no drift) and `init*std` the start's
+    // (turn-on biases, scale factors).
     let s = sim.truth[0];
     let (roll, pitch, yaw) = nav_core::attitude::euler(&s.q_b_ned);
-    let n = grade_noise(o.grade);
-    // KF-GINS's bias model: a Gauss-Markov process of 1-sigma `gbstd`/`abstd` over `corrtime`
-    // (its drift), started from `initbgstd`/`initbastd` (its turn-on value). The simulated
-    // sensor's drift is its bias instability and rate random walk (`K`: the Gauss-Markov
-    // process of the same short-term random walk has sigma `K sqrt(tau / 2)`); its turn-on
-    // bias is a constant. Declaring the turn-on 1-sigma as the drift would tell the filter
-    // that the bias wanders by 0.05 deg/s within the hour.
-    let tau = n.correlation_time_s;
-    let sensor = o.grade.model();
-    let drift = |t: &crate::sensor_model::TriadErrors| {
-        t.bias_instability
-            .sigma
-            .hypot(t.rate_random_walk * (tau / 2.0).sqrt())
-    };
-    let start = |t: &crate::sensor_model::TriadErrors, drift: f64| {
-        (t.bias.amax() + t.turn_on_bias_sigma.amax()).hypot(drift)
-    };
-    let (gyro_drift, accel_drift) = (drift(&sensor.gyro), drift(&sensor.accel));
+    let model = grade_filter_model(o.grade);
+    let n = &model.noise;
+    let [init_bg, init_ba, init_sg, init_sa] = model.initial;
     let deg = f64::to_degrees;
     let three = |v: f64| format!("[{v:e}, {v:e}, {v:e}]");
+    let each = |v: Vector3<f64>| format!("[{:e}, {:e}, {:e}]", v.x, v.y, v.z);
     let out = dir.join("result.nav");
     let mut yaml = String::new();
     writeln!(
@@ -201,14 +191,20 @@ pub fn generate(dir: &Path, o: &FilterBenchOptions) -> Result<DataSet> {
     writeln!(
         yaml,
         "initbgstd: {}\ninitbastd: {}",
-        three(deg(start(&sensor.gyro, gyro_drift)) * 3600.0),
-        three(start(&sensor.accel, accel_drift) * 1e5)
+        each(init_bg.map(|v| deg(v) * 3600.0)),
+        each(init_ba * 1e5)
+    )?;
+    writeln!(
+        yaml,
+        "initsgstd: {}\ninitsastd: {}",
+        each(init_sg * 1e6),
+        each(init_sa * 1e6)
     )?;
     writeln!(yaml, "imunoise:")?;
     writeln!(yaml, "  arw: {}", three(deg(n.arw_rad_per_sqrt_s) * 60.0))?;
     writeln!(yaml, "  vrw: {}", three(n.vrw_mps_per_sqrt_s * 60.0))?;
-    writeln!(yaml, "  gbstd: {}", three(deg(gyro_drift) * 3600.0))?;
-    writeln!(yaml, "  abstd: {}", three(accel_drift * 1e5))?;
+    writeln!(yaml, "  gbstd: {}", three(deg(n.gyro_bias_rad_s) * 3600.0))?;
+    writeln!(yaml, "  abstd: {}", three(n.accel_bias_mps2 * 1e5))?;
     writeln!(yaml, "  gsstd: {}", three(n.gyro_scale * 1e6))?;
     writeln!(yaml, "  asstd: {}", three(n.accel_scale * 1e6))?;
     writeln!(yaml, "  corrtime: {}", n.correlation_time_s / 3600.0)?;
@@ -239,6 +235,8 @@ pub struct FilterBenchReport {
     pub cpu_seconds: Option<f64>,
     /// Horizontal position error RMS [m].
     pub horizontal_rms_m: f64,
+    /// Vertical position error RMS [m].
+    pub vertical_rms_m: f64,
     /// Yaw error RMS [deg].
     pub yaw_rms_deg: f64,
     /// Largest horizontal error [m].
@@ -259,7 +257,7 @@ pub fn run(data: &DataSet) -> Result<FilterBenchReport> {
     let solution = read_truth(&data.out)?;
     let truth = read_truth(&data.truth)?;
     let (mut k, mut n) = (0, 0usize);
-    let (mut h2, mut y2, mut hmax) = (0.0, 0.0, 0.0_f64);
+    let (mut h2, mut v2, mut y2, mut hmax) = (0.0, 0.0, 0.0, 0.0_f64);
     for t in &truth {
         while k < solution.len() && solution[k].t_s < t.t_s - 1e-6 {
             k += 1;
@@ -274,6 +272,7 @@ pub fn run(data: &DataSet) -> Result<FilterBenchReport> {
         let mut dy = (ys - yt).to_degrees();
         dy -= 360.0 * (dy / 360.0).round();
         h2 += h * h;
+        v2 += (s.h - t.h).powi(2);
         y2 += dy * dy;
         hmax = hmax.max(h);
         n += 1;
@@ -284,6 +283,7 @@ pub fn run(data: &DataSet) -> Result<FilterBenchReport> {
         seconds,
         cpu_seconds,
         horizontal_rms_m: (h2 / n as f64).sqrt(),
+        vertical_rms_m: (v2 / n as f64).sqrt(),
         yaw_rms_deg: (y2 / n as f64).sqrt(),
         horizontal_max_m: hmax,
         compared: n,

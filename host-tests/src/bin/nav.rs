@@ -608,8 +608,8 @@ fn bench_filter(dir: Option<PathBuf>) -> Result<()> {
         );
     }
     println!(
-        "accuracy over {} truth epochs: horizontal RMS {:.4} m (target <= 0.02), max {:.4} m; yaw RMS {:.4} deg (target <= 0.06)",
-        r.compared, r.horizontal_rms_m, r.horizontal_max_m, r.yaw_rms_deg
+        "accuracy over {} truth epochs: horizontal RMS {:.4} m (target <= 0.02), max {:.4} m; vertical RMS {:.4} m; yaw RMS {:.4} deg (target <= 0.06)",
+        r.compared, r.horizontal_rms_m, r.horizontal_max_m, r.vertical_rms_m, r.yaw_rms_deg
     );
     Ok(())
 }

@@ -3,6 +3,7 @@
 //! with the [`Correction`] the foreground feeds back.
 
 use super::aiding::{AidCounters, AidResult, FilterCounters, GnssPosition, GnssVelocity};
+use super::covariance::{self, Transition};
 use super::foreground::Propagation;
 use super::model;
 use super::stationarity::StillWindow;
@@ -144,12 +145,13 @@ impl<T: Scalar> ErrorFilter<T> {
         if self.config.scale_factors { N } else { SG }
     }
 
-    /// `P <- Phi P Phi^T + Q_d` over the propagation ([`model`]).
+    /// `P <- Phi P Phi^T + Q_d` over the propagation ([`model`], computed by its blocks:
+    /// [`covariance`]).
     pub fn propagate(&mut self, prop: &Propagation<T>) {
         let f = model::system_matrix(&prop.lin, &self.config.noise, self.config.scale_factors);
-        let phi = model::transition(&f, prop.dt);
+        let phi = Transition::new(&f, prop.dt);
         let q = model::noise_density(&self.config.noise, self.config.scale_factors, &prop.lin);
-        model::propagate_covariance(&mut self.p, &phi, &q, prop.dt);
+        covariance::propagate(&mut self.p, &phi, &q, prop.dt);
         self.counters.propagations = self.counters.propagations.wrapping_add(1);
         self.check_covariance();
     }
@@ -159,9 +161,8 @@ impl<T: Scalar> ErrorFilter<T> {
     /// reset to its diagonal (the correlations are lost, the variances kept or floored).
     fn check_covariance(&mut self) {
         let last = self.last_state();
-        // One sum finds any NaN or infinity (cheaper than testing 441 values).
         let bad = (0..last).any(|i| !(self.p[(i, i)].finite() && self.p[(i, i)] > T::zero()))
-            || !self.p.iter().fold(T::zero(), |a, v| a + *v).finite();
+            || !model::all_finite(&self.p);
         if bad {
             self.covariance_faults = self.covariance_faults.saturating_add(1);
             self.fault_latched = true;

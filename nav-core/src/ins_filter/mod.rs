@@ -3,6 +3,7 @@
 //!
 //! - [`states`]: the 21 error states and their named offsets;
 //! - [`model`]: the INS error equations (the process model) and their discretisation;
+//! - [`covariance`]: the covariance propagation over the transition matrix's blocks;
 //! - [`aiding`]: the measurements, their outcomes and counters;
 //! - [`stationarity`]: the IMU-only stop detector;
 //! - [`motion`]: the start in motion from GNSS (level from the accelerometers, heading from the
@@ -25,6 +26,7 @@
 
 pub mod aiding;
 pub mod background;
+pub mod covariance;
 pub mod foreground;
 pub mod model;
 pub mod motion;

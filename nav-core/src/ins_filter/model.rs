@@ -27,7 +27,8 @@
 //! Discretisation over the propagation interval `dt` (the increments accumulated in between):
 //! `Phi = I + F dt + (F dt)^2 / 2` (second order; F at the interval's end, the specific force
 //! and rate its means), `Q_d = (Phi Q_c Phi^T + Q_c) dt / 2` (trapezoidal, Groves eq. 3.46).
-//! Both products skip the zeros of the (sparse) transition matrix.
+//! Both products skip the zeros of the (sparse) transition matrix; the filter computes the
+//! propagation over the blocks of `Phi` instead ([`super::covariance`]).
 
 use super::states::{ATT, BA, BG, Covariance, N, POS, SA, SG, StateVector, VEL};
 use crate::Scalar;
@@ -303,7 +304,7 @@ const _: () = assert!(N.is_multiple_of(7));
 /// True when no element is NaN or infinite: `x * 0` is `0` for a finite `x` and NaN for any
 /// other, summed in 7 independent lanes (21 x 21 = 63 x 7; no carried dependency of one sum
 /// over 441 additions, no overflow).
-fn all_finite<T: Scalar>(m: &Covariance<T>) -> bool {
+pub(crate) fn all_finite<T: Scalar>(m: &Covariance<T>) -> bool {
     let mut lanes = [T::zero(); 7];
     for chunk in m.as_slice().chunks_exact(7) {
         for (lane, x) in lanes.iter_mut().zip(chunk) {
