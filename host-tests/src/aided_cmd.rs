@@ -26,7 +26,10 @@ pub fn noise_of_spec(n: &NoiseSpec) -> FilterNoise<f64> {
 /// The filter's assumptions for a grade: its white noise, and per axis the largest of the
 /// fixed bias, the turn-on 1-sigma and the Gauss–Markov 1-sigma (as the alignment's);
 /// scale factors: the largest fixed scale error; cross-axis coupling: the largest
-/// misalignment; correlation time 1 h.
+/// misalignment; correlation time 1 h. The start's sensor 1-sigma is the same figure, the
+/// process's stationary one, so its covariance does not decay; conservative (the turn-on
+/// spread is let wander in-run as well), used by `nav replay --imu-noise`, whose starts in
+/// motion and from the alignment take the sensor 1-sigma from the noise model alone.
 pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {
     let m = grade.model();
     let spec = grade.noise_spec();
@@ -45,9 +48,16 @@ pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {
     }
 }
 
-/// Correlation time of the filter's Gauss–Markov sensor-error states [s] (KF-GINS's usual
-/// `corrtime` of 1 h).
-pub const FILTER_CORRELATION_TIME_S: f64 = 3600.0;
+/// Correlation time of the filter's Gauss–Markov sensor-error states in
+/// [`grade_filter_model`] [s]: 100 h, far beyond a run, because the grades' biases and scale
+/// factors are random constants (turn-on, fixed) plus a slow in-run drift. The filter's
+/// state decays as `-x / tau` ([Groves, eq. 14.80]) in its covariance, not in its estimate
+/// (the feedback holds that): started at the turn-on spread, an unobserved variance loses
+/// `1 - exp(-2 t / tau)` of itself, 86 % in an hour with KF-GINS's usual `corrtime` of 1 h,
+/// while the true constant stays. That made the bias blocks' NEES grow 7-fold over 1 h runs
+/// (fog, rlg) and the attitude overconfident with them. With 100 h it loses 2 % in an hour;
+/// the drive `2 sigma^2 / tau` stays the grade's in-run drift (sigma follows tau).
+pub const FILTER_CORRELATION_TIME_S: f64 = 360_000.0;
 
 /// A simulated Gauss–Markov bias shorter than this [s] is seen by the filter as white noise
 /// (it decorrelates between a few GNSS fixes); a longer one as a drift of the bias state.
@@ -80,7 +90,8 @@ pub struct GradeFilterModel {
 ///   random walk `K`, drive the bias state with `2 sigma^2 / T + K^2`;
 /// - the scale factors are constants of the grade: the start's 1-sigma the largest of them
 ///   (at least 1 ppm), no in-run drift;
-/// - misalignment and g-sensitivity as in [`grade_noise`].
+/// - misalignment and g-sensitivity as in [`grade_noise`]: the process model covers what the
+///   bias states cannot hold of them ([`nav_core::ins_filter::model::CrossCoupling`]).
 pub fn grade_filter_model(grade: Grade) -> GradeFilterModel {
     let m = grade.model();
     let tau_f = FILTER_CORRELATION_TIME_S;
@@ -397,4 +408,33 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
         ),
     ]
     .join("\n")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The grades' turn-on biases are random constants: the filter's model of them must not
+    /// forget them in an hour (a Gauss–Markov state of correlation time `tau` loses
+    /// `1 - exp(-2 t / tau)` of an unobserved variance; with `tau` = 1 h that was 86 %, and the
+    /// bias blocks' NEES grew 7-fold over a 1 h run).
+    #[test]
+    fn the_turn_on_bias_is_not_forgotten_in_an_hour() {
+        for grade in [
+            Grade::Fog,
+            Grade::Rlg,
+            Grade::MemsTactical,
+            Grade::MemsConsumer,
+        ] {
+            let m = grade_filter_model(grade);
+            let kept = (-2.0 * 3600.0 / m.noise.correlation_time_s).exp();
+            assert!(kept > 0.95, "{grade}: {kept}");
+            assert!(m.noise.is_valid(), "{grade}");
+            // The in-run drive is the grade's, whatever the correlation time: for the gyros
+            // the rate random walk (their Gauss–Markov parts are short, counted as white).
+            let drive = 2.0 * m.noise.gyro_bias_rad_s.powi(2) / m.noise.correlation_time_s;
+            let rrw = grade.model().gyro.rate_random_walk;
+            assert!((drive.sqrt() - rrw).abs() <= 1e-9 * rrw, "{grade}");
+        }
+    }
 }

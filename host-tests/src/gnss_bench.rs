@@ -72,6 +72,7 @@ pub fn outage_case(grade: Grade, seconds: f64, seed: u64) -> Case {
         imu_rate_hz: 200.0,
         zero_motion: true,
         in_run_noise: false,
+        without: Vec::new(),
         gnss: GnssSimOptions {
             rate_hz: 1.0,
             sigma_ned_m: [0.5, 0.5, 1.0],
@@ -165,6 +166,7 @@ pub fn outlier_case(grade: Grade, seed: u64) -> Case {
         imu_rate_hz: 200.0,
         zero_motion: true,
         in_run_noise: false,
+        without: Vec::new(),
         gnss: GnssSimOptions {
             rate_hz: 1.0,
             sigma_ned_m: [0.5, 0.5, 1.0],

@@ -71,6 +71,7 @@ fn a_small_family_is_consistent() {
             seed: 1,
             zero_motion: false,
             in_run_noise: true,
+            without: Vec::new(),
         };
         let r = consistency_cell(&case, runs, 1).unwrap();
         let cell = format!("{scenario} {grade}: {r:?}");
@@ -84,6 +85,11 @@ fn a_small_family_is_consistent() {
         assert!(r.bias_z_rms.0.powi(2) <= hi, "{cell}");
         assert!(r.bias_z_rms.1.powi(2) <= hi, "{cell}");
         assert!(r.bias_z_max < 4.0, "{cell}");
+        // Every sensor error (bias and scale factor) within 3 sigma of what the filter can
+        // see of it: 36 normals per block, 0.1 expected outside; at most 3 allowed.
+        for f in r.sensor_within_3_sigma {
+            assert!(f >= 33.0 / 36.0, "{cell}");
+        }
     }
 }
 

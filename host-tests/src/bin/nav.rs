@@ -202,6 +202,18 @@ enum Command {
         /// design).
         #[arg(long)]
         zero_motion: bool,
+        /// Sensor errors the simulator leaves out, comma-separated (consistency; diagnostics):
+        /// misalignment (gyro-misalignment, accel-misalignment), g-sensitivity, scale, bias,
+        /// bias-instability, rate-random-walk,
+        /// white-noise, quantisation.
+        #[arg(long, value_delimiter = ',')]
+        without: Vec<host_tests::sensor_model::ErrorSource>,
+        /// Only these cells of the table, 1-based, comma-separated (consistency) [default: all].
+        #[arg(long, value_delimiter = ',')]
+        cells: Vec<usize>,
+        /// Print each block's mean NEES per tenth of the run (consistency).
+        #[arg(long)]
+        blocks: bool,
     },
     /// Write a synthetic recording of a body at rest on the Earth (exact inputs).
     #[command(allow_negative_numbers = true)]
@@ -614,8 +626,24 @@ fn bench_filter(dir: Option<PathBuf>) -> Result<()> {
     Ok(())
 }
 
+/// `nav bench consistency`'s diagnostic choices.
+struct ConsistencyChoice {
+    /// Sensor errors left out of the simulation.
+    without: Vec<host_tests::sensor_model::ErrorSource>,
+    /// 1-based cells to run (empty: all).
+    cells: Vec<usize>,
+    /// Print the blocks' NEES over time.
+    blocks: bool,
+}
+
 /// `nav bench consistency`.
-fn bench_consistency(runs: usize, threads: usize, seconds: f64, zero_motion: bool) -> Result<()> {
+fn bench_consistency(
+    runs: usize,
+    threads: usize,
+    seconds: f64,
+    zero_motion: bool,
+    choice: &ConsistencyChoice,
+) -> Result<()> {
     use host_tests::aided_bench::{Case, average_chi2_bounds, consistency_cell};
     use host_tests::gnss_sim::GnssSimOptions;
     use host_tests::sensor_model::Grade;
@@ -628,10 +656,11 @@ fn bench_consistency(runs: usize, threads: usize, seconds: f64, zero_motion: boo
         if zero_motion { "on" } else { "off" }
     );
     println!(
-        "| scenario | grade | GNSS | epochs | NEES inside | mean NEES (pos/vel/att) | NIS inside | mean NIS | bias z RMS gyro/accel | max |bias z| | gated |"
+        "| scenario | grade | GNSS | epochs | NEES inside | mean NEES (pos/vel/att) | NIS inside | mean NIS | bias z RMS gyro/accel | max |bias z| | within 3 sigma b_g/b_a/s_g/s_a | gated |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
-    for (scenario, grade, rate, sigma, vel) in [
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let mut block_tables = Vec::new();
+    for (cell, (scenario, grade, rate, sigma, vel)) in [
         ("land-vehicle", Grade::Fog, 1.0, [0.5, 0.5, 1.0], None),
         (
             "land-vehicle",
@@ -655,7 +684,13 @@ fn bench_consistency(runs: usize, threads: usize, seconds: f64, zero_motion: boo
             Some([0.05, 0.05, 0.1]),
         ),
         ("flight", Grade::MemsTactical, 2.0, [1.0, 1.0, 2.0], None),
-    ] {
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        if !(choice.cells.is_empty() || choice.cells.contains(&(cell + 1))) {
+            continue;
+        }
         let case = Case {
             scenario: scenario.into(),
             grade,
@@ -671,10 +706,11 @@ fn bench_consistency(runs: usize, threads: usize, seconds: f64, zero_motion: boo
             seed: 1,
             zero_motion,
             in_run_noise: true,
+            without: choice.without.clone(),
         };
         let r = consistency_cell(&case, runs, threads)?;
         println!(
-            "| {scenario} | {grade} | {rate} Hz | {} | {:.0} % | {:.2} ({:.2}/{:.2}/{:.2}) | {:.0} % | {:.2} | {:.2} / {:.2} | {:.2} | {}/{} |",
+            "| {scenario} | {grade} | {rate} Hz | {} | {:.0} % | {:.2} ({:.2}/{:.2}/{:.2}) | {:.0} % | {:.2} | {:.2} / {:.2} | {:.2} | {} | {}/{} |",
             r.epochs,
             100.0 * r.nees_inside,
             r.nees_mean,
@@ -686,9 +722,26 @@ fn bench_consistency(runs: usize, threads: usize, seconds: f64, zero_motion: boo
             r.bias_z_rms.0,
             r.bias_z_rms.1,
             r.bias_z_max,
+            r.sensor_within_3_sigma
+                .map(|f| format!("{:.0} %", 100.0 * f))
+                .join(" / "),
             r.rejected.0,
             r.rejected.1
         );
+        block_tables.push((format!("{scenario} {grade}"), r.blocks_over_time));
+    }
+    if choice.blocks {
+        use host_tests::aided_bench::NEES_BLOCKS;
+        for (name, rows) in block_tables {
+            println!(
+                "\n{name}: mean NEES per block (3 dof each; 95 % of one epoch's average inside [{lo3:.2}, {hi3:.2}])"
+            );
+            println!("| until [s] | {} |", NEES_BLOCKS.join(" | "));
+            for (t, m) in rows {
+                let cells: Vec<String> = m.iter().map(|x| format!("{x:.2}")).collect();
+                println!("| {t:.0} | {} |", cells.join(" | "));
+            }
+        }
     }
     Ok(())
 }
@@ -1389,8 +1442,21 @@ fn run(cli: Cli) -> Result<()> {
             threads,
             seconds,
             zero_motion,
+            without,
+            cells,
+            blocks,
             ..
-        } => bench_consistency(runs, threads, seconds, zero_motion),
+        } => bench_consistency(
+            runs,
+            threads,
+            seconds,
+            zero_motion,
+            &ConsistencyChoice {
+                without,
+                cells,
+                blocks,
+            },
+        ),
         Command::Bench {
             what: BenchKind::Filter,
             dir,

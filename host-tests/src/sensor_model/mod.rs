@@ -100,6 +100,6 @@ pub mod units;
 pub use allan::{AllanFit, AllanPoint, FitError};
 pub use grades::{Grade, UnknownGrade};
 pub use injector::{ErrorInjector, InjectorCounters, TriadState};
-pub use model::ImuErrorModel;
+pub use model::{ErrorSource, ImuErrorModel};
 pub use quantizer::IntegratingQuantizer;
 pub use triad::{GaussMarkov, InvalidModel, TriadErrors, WhiteNoise};

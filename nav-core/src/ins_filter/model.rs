@@ -53,14 +53,16 @@ pub struct FilterNoise<T: Scalar> {
     /// Correlation time of the Gauss–Markov bias and scale-factor processes [s].
     pub correlation_time_s: T,
     /// Gyro cross-axis coupling (misalignment), 1-sigma [rad]: not a state; its error
-    /// `M omega` is covered by attitude process noise while the body turns (see
-    /// [`noise_density`]).
+    /// `M omega` is covered by process noise on attitude and gyro bias while the body turns
+    /// (see [`noise_density`]).
     pub gyro_cross_coupling_rad: T,
-    /// Accelerometer cross-axis coupling (misalignment), 1-sigma [rad]: on gravity it is a
-    /// bias; on the motion's acceleration it is covered by velocity process noise.
+    /// Accelerometer cross-axis coupling (misalignment), 1-sigma [rad]: at rest a part of the
+    /// bias; as the specific force leaves its value at rest, covered by process noise on
+    /// velocity and accelerometer bias.
     pub accel_cross_coupling_rad: T,
-    /// Gyro g-sensitivity, 1-sigma [rad/s per m/s^2]: on gravity a bias; on the motion's
-    /// acceleration covered by attitude process noise.
+    /// Gyro g-sensitivity, 1-sigma [rad/s per m/s^2]: at rest a part of the bias; as the
+    /// specific force leaves its value at rest, covered by process noise on attitude and gyro
+    /// bias.
     pub gyro_g_sensitivity: T,
 }
 
@@ -207,20 +209,70 @@ pub fn system_matrix<T: Scalar>(
     f
 }
 
-/// How long a turn's cross-coupling error builds up before the body turns back or the aiding
-/// sees it [s] (the correlation time of the cross-coupling noise).
+/// The time that splits a cross-coupling error into a short one, covered as white noise on
+/// the integrated state, and a lasting one, covered as a random walk of the bias state [s].
 pub const CROSS_COUPLING_TIME_S: f64 = 10.0;
+
+/// The sensor errors that are not states, [Groves, §4.4.6]: `M_g omega_ib_b` and
+/// `G_g f_ib_b` on the gyros, `M_a f_ib_b` on the accelerometers, each a fixed unknown matrix
+/// times a quantity the IMU measures. At rest in the nominal attitude (body z down)
+/// `f_ib_b = (0, 0, -g)` and `omega_ib_b` is Earth rate: there they are constants the bias
+/// states absorb. What the bias states cannot hold is their change as the body moves, by
+/// `d = omega_ib_b` for `M_g` (Earth rate left in: a part of 1e-5 of a car's turn) and
+/// `d = f_ib_b - (0, 0, -g)` for `G_g`, `M_a` (a turn, a climb, a bank).
+///
+/// Per body axis `i` the error's variance is `m^2 (|d|^2 - d_i^2)` for a misalignment (its
+/// row couples the two other axes, each element of 1-sigma `m`) and `k^2 |d|^2` for the
+/// g-sensitivity (a full row of 1-sigma `k`): a car's yaw rate tilts, it does not turn the
+/// heading. That change is covered two ways, so that a motion of any length is: over a
+/// motion shorter than `T_c` ([`CROSS_COUPLING_TIME_S`]) the error `e` integrates into the
+/// attitude or velocity, whose white noise `e^2 T_c` gives a variance `e^2 T_c t` at least the
+/// error's `(e t)^2` for `t <= T_c`; over a longer motion it is a new bias, reached by the
+/// bias state's random walk `e^2 / T_c`, whose variance `e^2 t / T_c` is at least the
+/// change's `e^2` for `t >= T_c`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CrossCoupling<T: Scalar> {
+    /// Gyro error variance per body axis [(rad/s)^2].
+    pub gyro_b: Vector3<T>,
+    /// Accelerometer error variance per body axis [(m/s^2)^2].
+    pub accel_b: Vector3<T>,
+}
+
+impl<T: Scalar> CrossCoupling<T> {
+    /// The variances at the linearisation point (type docs).
+    pub fn at(noise: &FilterNoise<T>, lin: &Linearisation<T>) -> Self {
+        // The specific force's departure from its value at rest in the nominal attitude.
+        let mut d_f = lin.f_ib_b;
+        d_f.z += lin.earth.g;
+        let w = &lin.omega_ib_b;
+        let (w2, f2) = (w.norm_squared(), d_f.norm_squared());
+        let (m_g2, m_a2) = (
+            noise.gyro_cross_coupling_rad * noise.gyro_cross_coupling_rad,
+            noise.accel_cross_coupling_rad * noise.accel_cross_coupling_rad,
+        );
+        let k2 = noise.gyro_g_sensitivity * noise.gyro_g_sensitivity;
+        Self {
+            gyro_b: Vector3::from_fn(|i, _| m_g2 * (w2 - w[i] * w[i]) + k2 * f2),
+            accel_b: Vector3::from_fn(|i, _| m_a2 * (f2 - d_f[i] * d_f[i])),
+        }
+    }
+}
+
+/// A diagonal bound in the NED frame of the body-frame diagonal covariance `diag(q_b)`:
+/// `Q = C_b_n diag(q_b) C_b_n^T` less its off-diagonal terms would not bound it, so each row's
+/// absolute sum is taken (the difference is then diagonally dominant, so positive
+/// semi-definite); for a level body and `q_x = q_y` it is `Q` itself.
+fn diagonal_bound_ned<T: Scalar>(c_b_n: &Matrix3<T>, q_b: &Vector3<T>) -> Vector3<T> {
+    let q = c_b_n * Matrix3::from_diagonal(q_b) * c_b_n.transpose();
+    Vector3::from_fn(|k, _| (0..3).fold(T::zero(), |sum, j| sum + q[(k, j)].abs()))
+}
 
 /// Spectral densities of the driving white noise, per state (diagonal of `G Q G^T`):
 /// `vrw^2` on velocity, `arw^2` on attitude (isotropic, so the rotation `C_b_n` drops out),
-/// `2 sigma^2 / tau` on each Gauss–Markov state. The sensor errors that are not states add
-/// white noise while the body moves: the gyros' cross-axis coupling `M omega` (6
-/// misalignments) adds `(m |omega|)^2 T_c` on attitude, `T_c` = [`CROSS_COUPLING_TIME_S`]
-/// (over a turn of length `T_c` its variance equals the coupling's `(m |omega| T_c)^2`;
-/// shorter turns are over-covered, longer ones under-), the gyros' g-sensitivity
-/// `(k_g |a|)^2 T_c` on attitude and the accelerometers' coupling `(m_a |a|)^2 T_c` on
-/// velocity, `a` the motion's acceleration (specific force less gravity's reaction; on
-/// gravity alone both act as biases, which are states).
+/// `2 sigma^2 / tau` on each Gauss–Markov state ([Groves, eq. 14.80]), and the cross-coupling
+/// errors that are not states ([`CrossCoupling`]): `e^2 T_c` on attitude (gyro) or velocity
+/// (accelerometer), resolved in NED (a diagonal bound), and `e^2 / T_c` on the gyro or
+/// accelerometer bias, per body axis.
 pub fn noise_density<T: Scalar>(
     noise: &FilterNoise<T>,
     scale_factors: bool,
@@ -230,21 +282,16 @@ pub fn noise_density<T: Scalar>(
     let two_over_tau = T::c(2.0) / noise.correlation_time_s;
     let gm = |sigma: T| sigma * sigma * two_over_tau;
     let t_c = T::c(CROSS_COUPLING_TIME_S);
-    // The motion's acceleration: f_n + g_n (gravity down).
-    let mut a_n = lin.c_b_n * lin.f_ib_b;
-    a_n.z += lin.earth.g;
-    let a = a_n.norm();
-    let gyro = noise.gyro_cross_coupling_rad * lin.omega_ib_b.norm();
-    let g_sens = noise.gyro_g_sensitivity * a;
-    let accel = noise.accel_cross_coupling_rad * a;
-    let arw2 =
-        noise.arw_rad_per_sqrt_s * noise.arw_rad_per_sqrt_s + (gyro * gyro + g_sens * g_sens) * t_c;
-    let vrw2 = noise.vrw_mps_per_sqrt_s * noise.vrw_mps_per_sqrt_s + accel * accel * t_c;
+    let c = CrossCoupling::at(noise, lin);
+    let att = diagonal_bound_ned(&lin.c_b_n, &c.gyro_b);
+    let vel = diagonal_bound_ned(&lin.c_b_n, &c.accel_b);
+    let arw2 = noise.arw_rad_per_sqrt_s * noise.arw_rad_per_sqrt_s;
+    let vrw2 = noise.vrw_mps_per_sqrt_s * noise.vrw_mps_per_sqrt_s;
     for k in 0..3 {
-        q[VEL + k] = vrw2;
-        q[ATT + k] = arw2;
-        q[BG + k] = gm(noise.gyro_bias_rad_s);
-        q[BA + k] = gm(noise.accel_bias_mps2);
+        q[VEL + k] = vrw2 + vel[k] * t_c;
+        q[ATT + k] = arw2 + att[k] * t_c;
+        q[BG + k] = gm(noise.gyro_bias_rad_s) + c.gyro_b[k] / t_c;
+        q[BA + k] = gm(noise.accel_bias_mps2) + c.accel_b[k] / t_c;
         if scale_factors {
             q[SG + k] = gm(noise.gyro_scale);
             q[SA + k] = gm(noise.accel_scale);
@@ -528,6 +575,73 @@ mod tests {
             for (f, s) in fast.iter().zip(slow.iter()) {
                 assert_eq!(f.to_bits(), s.to_bits());
             }
+        }
+    }
+
+    /// The cross-coupling noise is zero at rest in the nominal attitude (where the errors are
+    /// biases the states hold) and, in a 30 deg bank, is sized by the specific force's
+    /// departure from `(0, 0, -g)`: white noise `e^2 T_c` on attitude and velocity, a random
+    /// walk `e^2 / T_c` on the biases.
+    #[test]
+    fn cross_coupling_noise_follows_the_departure_from_rest() {
+        let mut n = noise();
+        n.gyro_cross_coupling_rad = 2e-3;
+        n.accel_cross_coupling_rad = 1e-3;
+        n.gyro_g_sensitivity = 1e-4;
+        let earth = LocalEarth::new(0.5, 0.0);
+        let g = earth.g;
+        let rest = Linearisation {
+            earth,
+            v_eb_n: Vector3::zeros(),
+            c_b_n: Matrix3::identity(),
+            f_ib_b: Vector3::new(0.0, 0.0, -g),
+            omega_ib_b: Vector3::zeros(),
+        };
+        let base = noise_density(&noise(), true, &rest);
+        assert_eq!(noise_density(&n, true, &rest), base);
+        let bank = 30f64.to_radians();
+        let turn = Linearisation {
+            f_ib_b: Vector3::new(0.0, 0.0, -g / bank.cos()),
+            omega_ib_b: Vector3::new(0.0, 0.0, 0.1),
+            ..rest
+        };
+        let d_f = g / bank.cos() - g;
+        let c = CrossCoupling::at(&n, &turn);
+        // Yaw rate couples into x and y, the vertical departure into x and y (misalignment)
+        // and into every gyro (g-sensitivity).
+        let k2 = (1e-4 * d_f).powi(2);
+        let gyro = Vector3::new(
+            (2e-3f64 * 0.1).powi(2) + k2,
+            (2e-3f64 * 0.1).powi(2) + k2,
+            k2,
+        );
+        let accel = Vector3::new((1e-3 * d_f).powi(2), (1e-3 * d_f).powi(2), 0.0);
+        assert!((c.gyro_b - gyro).amax() < 1e-20, "{c:?}");
+        assert!((c.accel_b - accel).amax() < 1e-20, "{c:?}");
+        let q = noise_density(&n, true, &turn);
+        let t_c = CROSS_COUPLING_TIME_S;
+        let rel = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs() + 1e-30;
+        for k in 0..3 {
+            // Level body: the NED diagonal is the body one.
+            assert!(rel(q[ATT + k] - base[ATT + k], gyro[k] * t_c), "{k}");
+            assert!(rel(q[VEL + k] - base[VEL + k], accel[k] * t_c), "{k}");
+            assert!(rel(q[BG + k] - base[BG + k], gyro[k] / t_c), "{k}");
+            assert!(rel(q[BA + k] - base[BA + k], accel[k] / t_c), "{k}");
+        }
+    }
+
+    /// The NED diagonal bounds the rotated body covariance: `D - C diag(q) C^T` is positive
+    /// semi-definite for any attitude.
+    #[test]
+    fn the_ned_diagonal_bounds_the_rotated_covariance() {
+        let q_b = Vector3::new(1.0, 4.0, 0.5);
+        for (r, p, y) in [(0.1, -0.05, 1.0), (0.8, 0.4, -2.0), (1.5, -1.2, 0.3)] {
+            let c = *nalgebra::Rotation3::from_euler_angles(r, p, y).matrix();
+            let d = diagonal_bound_ned(&c, &q_b);
+            let q = c * Matrix3::from_diagonal(&q_b) * c.transpose();
+            let diff = Matrix3::from_diagonal(&d) - q;
+            let eig = diff.symmetric_eigenvalues();
+            assert!(eig.min() > -1e-12, "{eig}");
         }
     }
 
