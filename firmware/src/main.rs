@@ -29,16 +29,22 @@ mod app {
         self, ConfigInput, DataReady, Fixes, Imu, ImuSlot, Output, Watchdog, instructions_since,
     };
     use firmware::imu::nav_input;
+    use firmware::stream::{BoardCounters, Telemetry};
     use firmware::{
         ALIGN_CAP, ExitCode, FILTER_CAP, FilterCosts, SAMPLE_CAP, StepCost, exit, line, log,
     };
     use hal_adapters::drivers::Health;
+    use hal_adapters::protocol::config::DeviceConfig;
+    use hal_adapters::protocol::messages::ConfigAck;
+    use hal_adapters::protocol::status::NavigatorState;
+    use hal_adapters::protocol::{Decoder, Message, Received};
     use nav_core::ImuIncrement;
     use nav_core::alignment::{AlignOutcome, Stage};
+    use nav_core::ins_filter::FilterStatus;
     use nav_core::navigator::{
         Background, FromBackground, NavError, Navigator, Setup, Step, Summary, ToBackground,
     };
-    use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, Solution};
+    use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, Row, Solution};
     use rtic_sync::channel::{Receiver, Sender};
     use rtic_sync::make_channel;
 
@@ -50,6 +56,30 @@ mod app {
         /// The background's filter work costs (written by `align`, read by `navigate` at the
         /// end).
         costs: FilterCosts,
+        /// The alignment's stage and samples used (written by `align`, read by `navigate`
+        /// for the status and the progress frames).
+        alignment: (Stage, u32),
+        /// The IMU driver's counters (written by `data_ready`, read by `navigate` for the
+        /// health frames).
+        driver_health: Health,
+    }
+
+    /// The outputs of `navigate`: the board's output (the solution log, where the board
+    /// keeps one, and the protocol stream) and the stream's state.
+    pub struct Outputs {
+        out: Output,
+        tele: Telemetry,
+    }
+
+    impl Outputs {
+        /// A solution row: to the solution log and as a solution frame.
+        #[inline(never)]
+        fn row(&mut self, row: Row) {
+            if board::CSV_LOG {
+                write_line(&mut self.out, row);
+            }
+            self.tele.row(&mut self.out, row);
+        }
     }
 
     #[local]
@@ -58,8 +88,10 @@ mod app {
         samples_tx: Sender<'static, DataReady, SAMPLE_CAP>,
         /// The navigator's foreground, for `navigate`.
         navigator: Navigator<f32>,
-        /// The output stream (the solution log), for `navigate`.
-        out: Output,
+        /// The outputs, for `navigate`.
+        out: Outputs,
+        /// The configuration frames' decoder, for `navigate`.
+        config_decoder: Decoder,
         /// The watchdog, fed by `navigate`.
         watchdog: Watchdog,
         /// Configuration bytes from the host, for `navigate`.
@@ -100,15 +132,19 @@ mod app {
             defmt::panic!("task spawn failed");
         }
         let navigator = Navigator::new(&setup);
+        let tele = Telemetry::new(&DeviceConfig::default().rates);
         (
             Shared {
                 costs: FilterCosts::default(),
+                alignment: (Stage::Coarse, 0),
+                driver_health: Health::default(),
             },
             Local {
                 imu: board.imu,
                 samples_tx,
                 navigator,
-                out,
+                out: Outputs { out, tele },
+                config_decoder: Decoder::new(),
                 watchdog: board.watchdog,
                 config_in: board.config_in,
                 gnss: board.gnss,
@@ -140,8 +176,8 @@ mod app {
     }
 
     /// IMU data ready: timestamp, read one sample through the driver, hand it on. Never blocks.
-    #[task(binds = EXTI0, priority = 4, local = [imu, samples_tx, done: bool = false])]
-    fn data_ready(cx: data_ready::Context) {
+    #[task(binds = EXTI0, priority = 4, local = [imu, samples_tx, done: bool = false], shared = [driver_health])]
+    fn data_ready(mut cx: data_ready::Context) {
         let t_ready_us = board::now_us();
         if *cx.local.done {
             return;
@@ -150,6 +186,8 @@ mod app {
             return;
         };
         let last = msg.is_last();
+        let health = cx.local.imu.health();
+        cx.shared.driver_health.lock(|h| *h = health);
         match cx.local.samples_tx.try_send(msg) {
             Ok(()) if last => {
                 *cx.local.done = true;
@@ -182,7 +220,7 @@ mod app {
     /// Navigation: carries every sample (and, aided, every GNSS fix) through nav-core's
     /// navigator, forwards what it asks to the background (`align`), hands it the answers, and
     /// writes the rows it produces.
-    #[task(priority = 2, local = [navigator, out, watchdog, config_in, gnss], shared = [costs])]
+    #[task(priority = 2, local = [navigator, out, watchdog, config_in, config_decoder, gnss], shared = [costs, alignment, driver_health])]
     async fn navigate(
         mut cx: navigate::Context,
         mut samples_rx: Receiver<'static, DataReady, SAMPLE_CAP>,
@@ -194,6 +232,9 @@ mod app {
         let out = cx.local.out;
         let watchdog = cx.local.watchdog;
         let config_in = cx.local.config_in;
+        let config_decoder = cx.local.config_decoder;
+        // The time of the latest fix handed to the navigator [us] (its aiding events' time).
+        let mut last_fix_us = 0_u64;
         // By reference: the task's future holds no second copy of the reader.
         let gnss = cx.local.gnss;
         // Steps without a row, and steps with one (the row's f64 output conversion included).
@@ -206,7 +247,7 @@ mod app {
                 defmt::panic!("sample channel closed");
             };
             watchdog.feed();
-            take_config(config_in);
+            take_config(config_in, config_decoder, out);
             let (sample, t_ready_us) = match msg {
                 DataReady::Sample {
                     sample,
@@ -236,6 +277,7 @@ mod app {
                 loop {
                     match fixes.due(sample.t_us) {
                         Ok(Some(fix)) => {
+                            last_fix_us = fix.t_us;
                             navigator.push_fix(fix);
                         }
                         Ok(None) => break,
@@ -253,7 +295,7 @@ mod app {
                 Step::Navigated(None) => cost.add(spent),
                 Step::Navigated(Some(row)) => {
                     row_cost.add(spent);
-                    write_line(out, row);
+                    out.row(Row::Free(row));
                 }
                 Step::Forward {
                     increment,
@@ -287,11 +329,23 @@ mod app {
                         background_work(navigator, &mut to_filter, &mut from_background, out, &imu)
                             .await;
                     aided.messages.add(work);
+                    if let Some(report) = navigator.filter_report() {
+                        out.tele.aiding(&mut out.out, last_fix_us, &report.counters);
+                    }
                 }
                 Step::Rejected(_) => {}
                 // Not reached: every answer is awaited before the next sample.
                 Step::NotReady => defmt::panic!("navigator not ready"),
             }
+            let nav = nav_state(navigator, &mut cx.shared.alignment);
+            let align = navigator
+                .is_aligning()
+                .then(|| (cx.shared.alignment.lock(|a| a.1), navigator.n_align()));
+            let health = &mut cx.shared.driver_health;
+            out.tele.sample(&mut out.out, &sample, nav, align, || {
+                let filter = navigator.filter_report().map(|r| r.counters);
+                (health.lock(|h| *h), board_counters(), filter)
+            });
         }
 
         // End of the recording: the last row (aided: with the filter's report), then the end
@@ -303,9 +357,37 @@ mod app {
             failed(&e, &imu)
         });
         if let Some(row) = summary.final_row {
-            write_line(out, row);
+            out.row(row);
         }
-        write_line(out, summary.end_record());
+        if board::CSV_LOG {
+            write_line(&mut out.out, summary.end_record());
+        }
+        // The run's last health frame: the final counters (the summary's), then the end.
+        let nav = nav_state(navigator, &mut cx.shared.alignment);
+        let filter = summary.filter.as_ref().map(|f| f.counters);
+        if let Some(f) = &filter {
+            out.tele.aiding(&mut out.out, last_fix_us, f);
+        }
+        out.tele.health_frame(
+            &mut out.out,
+            last_ready_us,
+            nav,
+            &imu.health,
+            board_counters(),
+            filter.as_ref(),
+        );
+        out.tele.end(&mut out.out, summary.counters.rows);
+        if out.out.flush().is_err() {
+            defmt::error!("cannot write the output stream");
+            exit(ExitCode::Output);
+        }
+        let (frames, bytes) = out.tele.sent();
+        defmt::info!(
+            "stream: {=u32} frames, {=u64} bytes; health counters {}",
+            frames,
+            bytes,
+            out.tele.counters()
+        );
         let c = summary.counters;
         defmt::info!(
             "summary: samples {=u32}, flagged {=u32} ({}), rejected {=u32}, navigated {=u32}, missed {=u32}, channel overruns {=u32}, last data-ready at {=u64} us",
@@ -334,16 +416,84 @@ mod app {
         exit(ExitCode::Success)
     }
 
-    /// Takes the configuration bytes the host sent (the configuration frame's decoder plugs in
-    /// here; until then they are counted and refused in the log).
-    fn take_config(config_in: &mut ConfigInput) {
+    /// The navigator's state for the status model: the alignment's stage (from `align`)
+    /// while aligning, then aligned; in the aided phase the filter's last reported status
+    /// (nominal, as the filter starts, until its first report).
+    fn nav_state(
+        navigator: &Navigator<f32>,
+        alignment: &mut impl rtic::Mutex<T = (Stage, u32)>,
+    ) -> NavigatorState {
+        let stage = if navigator.is_aligning() {
+            alignment.lock(|a| a.0)
+        } else {
+            Stage::Aligned
+        };
+        NavigatorState {
+            stage,
+            filter: navigator.is_aided().then(|| {
+                navigator
+                    .filter_report()
+                    .map_or(FilterStatus::Nominal, |r| r.status)
+            }),
+        }
+    }
+
+    /// The board's own counters.
+    fn board_counters() -> BoardCounters {
+        BoardCounters {
+            missed_data_ready: board::missed_data_ready(),
+            channel_overruns: OVERRUNS.load(Ordering::Relaxed),
+        }
+    }
+
+    /// Takes the configuration bytes the host sent, through the protocol's decoder: a
+    /// configuration frame is validated and answered with an acknowledgement (accepted, or
+    /// refused with its reason code). An accepted configuration's output rates apply at once;
+    /// its run configuration is not applied to a run in progress (logged).
+    #[inline(never)]
+    fn take_config(config_in: &mut ConfigInput, decoder: &mut Decoder, out: &mut Outputs) {
         let mut buf = [0_u8; 64];
-        let n = config_in.read(&mut buf);
-        if n > 0 {
-            defmt::warn!(
-                "{=usize} configuration bytes received: no configuration decoder yet, ignored",
-                n
-            );
+        loop {
+            let n = config_in.read(&mut buf);
+            if n == 0 {
+                return;
+            }
+            decoder.push(&buf[..n], |frame| match frame {
+                Ok(Received {
+                    seq,
+                    message: Message::Config(config),
+                }) => {
+                    let refused = config.validate().err();
+                    match &refused {
+                        None => {
+                            out.tele.set_rates(&config.rates);
+                            defmt::info!(
+                                "configuration frame {=u16} accepted: output rates applied; its run configuration is not applied to a run in progress",
+                                seq
+                            );
+                        }
+                        Some(e) => defmt::warn!(
+                            "configuration frame {=u16} refused (reason {=u8}): {}",
+                            seq,
+                            e.code() as u8,
+                            defmt::Display2Format(e)
+                        ),
+                    }
+                    let ack = ConfigAck {
+                        config_seq: seq,
+                        refused: refused.map(|e| e.code()),
+                    };
+                    out.tele.config_ack(&mut out.out, ack);
+                }
+                Ok(other) => defmt::warn!(
+                    "{=str} frame on the configuration input ignored",
+                    other.message.id().name()
+                ),
+                Err(e) => defmt::warn!(
+                    "configuration input: frame refused: {}",
+                    defmt::Display2Format(&e)
+                ),
+            });
         }
     }
 
@@ -354,7 +504,7 @@ mod app {
         navigator: &mut Navigator<f32>,
         to_background: &mut Sender<'static, ToBackground<f32>, FILTER_CAP>,
         from_background: &mut Receiver<'static, FromBackground<f32>, 1>,
-        out: &mut Output,
+        out: &mut Outputs,
         imu: &ImuStats,
     ) -> u64 {
         let mut spent = 0;
@@ -379,7 +529,7 @@ mod app {
             let row = navigator.on_background(answer);
             spent += instructions_since(start);
             match row {
-                Ok(Some(row)) => write_line(out, row),
+                Ok(Some(row)) => out.row(row),
                 Ok(None) => {}
                 Err(e) => failed(&e, imu),
             }
@@ -426,7 +576,7 @@ mod app {
     fn answer_from_background(
         navigator: &mut Navigator<f32>,
         answer: FromBackground<f32>,
-        out: &mut Output,
+        out: &mut Outputs,
         imu: &ImuStats,
     ) {
         match navigator.on_background(answer) {
@@ -434,7 +584,7 @@ mod app {
                 if let Some(outcome) = navigator.alignment() {
                     log::aligned(outcome);
                 }
-                write_line(out, row);
+                out.row(row);
             }
             Ok(None) => {}
             Err(e) => failed(&e, imu),
@@ -465,7 +615,7 @@ mod app {
     /// stack: idle never returns, so its frame is as permanent as a static, and the board's
     /// static RAM stays small (the stack's peak is what counts; the qemu board reports it).
     /// Idle sleeps (`wfi`) when no message waits.
-    #[idle(local = [setup, from_navigate_align, from_navigate, to_navigate], shared = [costs])]
+    #[idle(local = [setup, from_navigate_align, from_navigate, to_navigate], shared = [costs, alignment])]
     fn align(mut cx: align::Context) -> ! {
         let mut slot = None;
         let background = start_background(&mut slot, cx.local.setup);
@@ -487,6 +637,8 @@ mod app {
             let start = board::counts();
             let answer = background.handle(ToBackground::Align(inc));
             cost.add(instructions_since(start));
+            let progress = (background.stage(), background.samples());
+            cx.shared.alignment.lock(|a| *a = progress);
             if background.stage() != stage {
                 stage = background.stage();
                 if stage == Stage::Fine {

@@ -270,9 +270,23 @@ pub struct Output {
     dropped: u32,
 }
 
+/// No solution log on this board: the solution leaves as the protocol's frames.
+pub const CSV_LOG: bool = false;
+
 impl Output {
-    /// Queues `bytes` and starts a transfer if none runs; `Err` when the DMA refuses one.
-    pub fn write(&mut self, bytes: &[u8]) -> Result<(), OutputError> {
+    /// The solution log: none on this board ([`CSV_LOG`]); the bytes are not sent.
+    pub fn write(&mut self, _bytes: &[u8]) -> Result<(), OutputError> {
+        Ok(())
+    }
+
+    /// Sends what is queued (the queue leaves with each write; nothing to wait for).
+    pub fn flush(&mut self) -> Result<(), OutputError> {
+        self.write_frame(&[])
+    }
+
+    /// Queues the frame `bytes` and starts a transfer if none runs; `Err` when the DMA refuses
+    /// one.
+    pub fn write_frame(&mut self, bytes: &[u8]) -> Result<(), OutputError> {
         use stm32f4xx_hal::dma::traits::StreamISR as _;
         let chunk = self.pending.as_mut().ok_or(OutputError)?;
         if chunk.len + bytes.len() <= TX_LEN {
