@@ -4,7 +4,8 @@
 //!   qemu-system-arm, defmt-print).
 //! - `demo`: the main job: generates the demo recording, builds the firmware, runs it in QEMU and
 //!   prints the decoded defmt log and the navigation result.
-//! - `test`: builds the firmware, then runs every test of the workspace (the QEMU end-to-end test
+//! - `test`: builds the firmware, runs the tests on the target (`target_tests` in QEMU: the
+//!   protocol's checks), then every test of the workspace (the QEMU end-to-end test
 //!   included).
 //! - `bench`: the benchmark figures: guest instructions per navigation step in QEMU (free
 //!   inertial, and GNSS-aided: per covariance propagation, per update, per sample amortised),
@@ -627,6 +628,7 @@ fn align_costs(nav: &Path, elf: &Path) -> Result<Vec<AlignCost>> {
 fn test(root: &Path) -> Result<()> {
     setup()?;
     let elf = build_firmware(root)?;
+    target_tests(&elf)?;
     run(cargo()
         .args(["test", "--workspace", "--exclude", "firmware"])
         .env("FIRMWARE_ELF", &elf))?;
@@ -634,6 +636,21 @@ fn test(root: &Path) -> Result<()> {
     // while the board's firmware is above the flash target (`cargo xtask build-board` fails on
     // both).
     build_board(root, false)
+}
+
+/// The tests on the target: `target_tests` (beside the firmware `elf`) in QEMU; fails when
+/// any of them fails (its exit status).
+fn target_tests(elf: &Path) -> Result<()> {
+    let log = output(
+        Command::new("bash")
+            .arg("firmware/qemu-run.sh")
+            .arg(elf.with_file_name("target_tests")),
+    )?;
+    print!("{log}");
+    if !log.contains("target tests:") || !log.contains(", 0 failed") {
+        bail!("target tests: no summary of a passing run in the log");
+    }
+    Ok(())
 }
 
 /// Builds the STM32F405 board's firmware (profile `board`), prints its flash, static RAM and
