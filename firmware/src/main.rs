@@ -5,7 +5,10 @@
 //! A sample's way: data-ready interrupt (`data_ready`, highest priority) -> `rtic_sync` channel ->
 //! `navigate` (nav-core's navigator: gate, calibration, strapdown; writes the solution log) ->
 //! what it forwards to `align` (lowest priority: the navigator's background, the alignment) ->
-//! the answer back to `navigate`, which starts navigating from the aligned state. With GNSS
+//! the answer back to `navigate`, which starts navigating from the aligned state. `navigate`
+//! also sends the output protocol's stream (`firmware::stream`: raw increments, alignment
+//! progress, health with the protocol's status model, solution rows, aiding events, the end of
+//! run) and answers configuration frames from the board's configuration input. With GNSS
 //! fixes (`--gnss FILE` on the qemu board) the navigation after the alignment is aided:
 //! `navigate` hands each fix to the navigator before the first sample at or after its time,
 //! runs the filter's mechanization, and forwards the filter's work (covariance propagations,
@@ -50,6 +53,9 @@ mod app {
 
     /// Samples lost because the channel to `navigate` was full.
     static OVERRUNS: AtomicU32 = AtomicU32::new(0);
+    /// The longest time from the data-ready line to the sample queued for `navigate`
+    /// [instructions] (boards that can measure it: `board::since_data_ready`).
+    static READY_LATENCY_MAX: AtomicU32 = AtomicU32::new(0);
 
     #[shared]
     struct Shared {
@@ -69,6 +75,10 @@ mod app {
     pub struct Outputs {
         out: Output,
         tele: Telemetry,
+        /// Instructions of the stream's work per sample (raw, progress and health frames,
+        /// the vibration metric), and of the solution rows' frames.
+        cost: StepCost,
+        row_cost: StepCost,
     }
 
     impl Outputs {
@@ -78,7 +88,9 @@ mod app {
             if board::CSV_LOG {
                 write_line(&mut self.out, row);
             }
+            let start = board::counts();
             self.tele.row(&mut self.out, row);
+            self.row_cost.add(instructions_since(start));
         }
     }
 
@@ -143,7 +155,12 @@ mod app {
                 imu: board.imu,
                 samples_tx,
                 navigator,
-                out: Outputs { out, tele },
+                out: Outputs {
+                    out,
+                    tele,
+                    cost: StepCost::default(),
+                    row_cost: StepCost::default(),
+                },
                 config_decoder: Decoder::new(),
                 watchdog: board.watchdog,
                 config_in: board.config_in,
@@ -193,7 +210,11 @@ mod app {
                 *cx.local.done = true;
                 cx.local.imu.ended();
             }
-            Ok(()) => {}
+            Ok(()) => {
+                if let Some(latency) = board::since_data_ready() {
+                    READY_LATENCY_MAX.fetch_max(latency, Ordering::Relaxed);
+                }
+            }
             // A lost end marker is sent again at the next data-ready (the source stays ended).
             Err(_) => {
                 OVERRUNS.fetch_add(1, Ordering::Relaxed);
@@ -342,10 +363,12 @@ mod app {
                 .is_aligning()
                 .then(|| (cx.shared.alignment.lock(|a| a.1), navigator.n_align()));
             let health = &mut cx.shared.driver_health;
+            let start = board::counts();
             out.tele.sample(&mut out.out, &sample, nav, align, || {
                 let filter = navigator.filter_report().map(|r| r.counters);
                 (health.lock(|h| *h), board_counters(), filter)
             });
+            out.cost.add(instructions_since(start));
         }
 
         // End of the recording: the last row (aided: with the filter's report), then the end
@@ -400,12 +423,14 @@ mod app {
             OVERRUNS.load(Ordering::Relaxed),
             last_ready_us
         );
+        let mut aided_per_sample = None;
         if let Some(filter) = &summary.filter {
             let after_data = gnss.as_ref().map_or(0, |(f, n)| f.remaining(*n));
             log::filter(filter, &summary.fixes, c.fixes_unused, after_data);
             let costs = cx.shared.costs.lock(|c| *c);
-            log_aided_costs(&aided, &costs, &summary);
+            aided_per_sample = Some(log_aided_costs(&aided, &costs, &summary));
         }
+        log_cycle(&cost, &row_cost, aided_per_sample, &imu, out);
         report(
             &cost,
             &row_cost,
@@ -538,8 +563,9 @@ mod app {
 
     /// Logs the aided phase's costs: per propagation and update (the background), and the
     /// total per sample amortised over the aided samples.
+    /// Returns the amortised instructions per aided sample.
     #[inline(never)]
-    fn log_aided_costs(aided: &AidedCosts, costs: &FilterCosts, summary: &Summary<f32>) {
+    fn log_aided_costs(aided: &AidedCosts, costs: &FilterCosts, summary: &Summary<f32>) -> u64 {
         let steps = aided.step.n.max(1);
         let background =
             costs.propagation.sum + costs.gnss.sum + costs.zero_motion.sum + costs.report.sum;
@@ -568,6 +594,7 @@ mod app {
             steps,
             summary.counters.rows
         );
+        total / steps
     }
 
     /// Hands the background's `answer` to the navigator: the aligned row is logged; a failure
@@ -735,6 +762,45 @@ mod app {
             defmt::error!("cannot write the solution log");
             exit(ExitCode::Output);
         }
+    }
+
+    /// Logs the instructions of one 400 Hz cycle: the data-ready latency, the output stream's
+    /// work per sample, and the mean cycle (IMU read, navigation step with its rows, output
+    /// stream with the rows' frames amortised) against the budget: 5 % of a 168 MHz core at
+    /// 400 Hz, 21,000 instructions (one instruction taken as one cycle). The navigation of an
+    /// aided run is its aided phase's amortised total (`aided_per_sample`: mechanization and
+    /// filter), else the free-inertial step's mean.
+    #[inline(never)]
+    fn log_cycle(
+        cost: &StepCost,
+        row_cost: &StepCost,
+        aided_per_sample: Option<u64>,
+        imu: &ImuStats,
+        out: &Outputs,
+    ) {
+        let samples = out.cost.n.max(1);
+        let stream = (out.cost.sum + out.row_cost.sum) / samples;
+        let nav_steps = (cost.n + row_cost.n).max(1);
+        let nav = aided_per_sample.unwrap_or((cost.sum + row_cost.sum) / nav_steps);
+        let read = imu.bus.mean() + imu.decode.mean();
+        defmt::info!(
+            "data-ready latency (line to sample queued, the bus transaction included): max {=u32} instructions",
+            READY_LATENCY_MAX.load(Ordering::Relaxed)
+        );
+        defmt::info!(
+            "instructions per sample of the output stream: max {=u64}, mean {=u64}; per solution row frame: max {=u64}, mean {=u64}",
+            out.cost.max,
+            out.cost.mean(),
+            out.row_cost.max,
+            out.row_cost.mean()
+        );
+        defmt::info!(
+            "instructions per 400 Hz cycle (mean): IMU read {=u64} + navigation {=u64} + output stream {=u64} = {=u64} of 21000 (5 % of 168 MHz)",
+            read,
+            nav,
+            stream,
+            read + nav + stream
+        );
     }
 
     #[inline(never)]

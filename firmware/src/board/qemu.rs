@@ -56,6 +56,8 @@ pub const IMU_SLOT: ImuSlot = None;
 
 /// Data-ready edges lost because the previous one was still pending.
 static MISSED: AtomicU32 = AtomicU32::new(0);
+/// The [`counts`] reading (low 32 bits) when the pacer last pended the data-ready line.
+static PENDED_AT: AtomicU32 = AtomicU32::new(0);
 /// Set once the end of the recording has been delivered: the pacer stops.
 static STOP: AtomicBool = AtomicBool::new(false);
 
@@ -240,6 +242,13 @@ pub fn instructions_since(start: u64) -> u64 {
     (counts() - start) * 1_000_000_000 / u64::from(SYSCLK_HZ)
 }
 
+/// Guest instructions since the data-ready line was last pended (the data-ready task's
+/// latency when read as it queues the sample).
+pub fn since_data_ready() -> Option<u32> {
+    let counts = (counts() as u32).wrapping_sub(PENDED_AT.load(Ordering::Relaxed));
+    Some((u64::from(counts) * 1_000_000_000 / u64::from(SYSCLK_HZ)) as u32)
+}
+
 /// Data-ready edges lost because the previous one was still pending.
 pub fn missed_data_ready() -> u32 {
     MISSED.load(Ordering::Relaxed)
@@ -255,6 +264,7 @@ pub async fn emulate_data_ready() {
         if NVIC::is_pending(Interrupt::EXTI0) {
             MISSED.fetch_add(1, Ordering::Relaxed);
         }
+        PENDED_AT.store(counts() as u32, Ordering::Relaxed);
         rtic::pend(Interrupt::EXTI0);
     }
 }
