@@ -12,8 +12,11 @@
 //! | watchdog | IWDG, [`WATCHDOG_MS`], fed by `navigate` at every sample | - |
 //! | cost figures | DWT cycle counter (core cycles) | - |
 //!
-//! The run's configuration is compiled in ([`default_run`]) until the configuration frame
-//! arrives over the USART ([`ConfigInput`] is its seam); defmt goes out over RTT (probe-rs).
+//! The run's configuration is compiled in ([`default_run`]). Configuration frames arriving
+//! over the USART ([`ConfigInput`]) are decoded, validated and acknowledged by `navigate`; an
+//! accepted one's output rates apply at once, its run configuration is not yet applied (no
+//! storage across a restart). The output protocol's frames leave on the USART ([`Output`]);
+//! defmt goes out over RTT (probe-rs).
 
 use super::{Board, DataReady, pac};
 use crate::ExitCode;
