@@ -5,7 +5,9 @@
 //! its option names and value syntax ([`RunConfig::set`]); only the files, the device and the
 //! noise grade are the firmware's own. `--gnss FILE` (a binary fix file,
 //! `hal_adapters::gnss_record`) switches the GNSS-aided phase on ([`RunConfig::aiding`]);
-//! `--gnss-lever-arm X,Y,Z` and `--propagation-rate HZ` tune it and need it.
+//! `--gnss-lever-arm X,Y,Z` and `--propagation-rate HZ` tune it and need it. `--stream FILE`
+//! writes the output protocol's byte stream beside the solution log; `--config-frame FILE`
+//! feeds a file's bytes (`nav config`'s frame) to the configuration input before the run.
 
 use crate::imu::Device;
 use core::ffi::CStr;
@@ -29,6 +31,11 @@ pub struct Args {
     pub cal_path: Option<heapless::Vec<u8, MAX_PATH>>,
     /// GNSS fixes (binary fix file), NUL-terminated; none: free inertial after the alignment.
     pub gnss_path: Option<heapless::Vec<u8, MAX_PATH>>,
+    /// The output protocol's byte stream to write beside the solution log, NUL-terminated.
+    pub stream_path: Option<heapless::Vec<u8, MAX_PATH>>,
+    /// Bytes the host sends on the configuration input before the run (a configuration frame
+    /// from `nav config`), NUL-terminated.
+    pub config_frame_path: Option<heapless::Vec<u8, MAX_PATH>>,
     /// The IMU on the bus.
     pub device: Device,
     /// The run configuration (the calibration is loaded into it from [`Self::cal_path`]).
@@ -64,6 +71,10 @@ pub enum ArgError<'a> {
     GnssSameFile,
     /// `--gnss FILE` is not a valid path.
     BadGnssPath,
+    /// `--stream FILE` or `--config-frame FILE` is not a valid path (the option).
+    BadPath(&'static str),
+    /// The stream would overwrite the solution log or an input.
+    StreamSameFile,
     /// An aided phase's option without `--gnss FILE`.
     AidingWithoutGnss,
 }
@@ -100,6 +111,10 @@ impl fmt::Display for ArgError<'_> {
                 f.write_str("OUT_FILE is the GNSS file: refusing to overwrite the fixes")
             }
             Self::BadGnssPath => f.write_str("--gnss FILE is not a valid path"),
+            Self::BadPath(option) => write!(f, "{option} FILE is not a valid path"),
+            Self::StreamSameFile => f.write_str(
+                "--stream FILE is an input or the solution log: refusing to overwrite it",
+            ),
             Self::AidingWithoutGnss => {
                 f.write_str("--gnss-lever-arm and --propagation-rate need --gnss FILE")
             }
@@ -119,7 +134,7 @@ const NAMES: [&str; 8] = [
 ];
 
 /// The usage line for error messages.
-pub const USAGE: &str = "firmware [--device adis16505|icm42688|bmi088] [--align-method static|inertial|fine|sway] [--imu-noise fog|rlg|mems-tactical|mems-consumer] [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S] [--base-translation M] [--frame wander|ned] [--attitude NAME] [--vertical free|hold] [--gnss FILE [--gnss-lever-arm X,Y,Z] [--propagation-rate HZ]] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
+pub const USAGE: &str = "firmware [--device adis16505|icm42688|bmi088] [--align-method static|inertial|fine|sway] [--imu-noise fog|rlg|mems-tactical|mems-consumer] [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S] [--base-translation M] [--frame wander|ned] [--attitude NAME] [--vertical free|hold] [--gnss FILE [--gnss-lever-arm X,Y,Z] [--propagation-rate HZ]] [--stream FILE] [--config-frame FILE] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
 
 /// nav-core's noise model of a part's or grade's figures.
 pub fn sensor_noise(n: &NoiseSpec) -> SensorNoise<f64> {
@@ -141,6 +156,8 @@ impl Args {
         let mut noise: Option<NoiseSpec> = None;
         let mut lever_arm_given = (false, false);
         let mut gnss_path = None;
+        let mut stream_path: Option<heapless::Vec<u8, MAX_PATH>> = None;
+        let mut config_frame_path = None;
         // The run configuration's values wait for the positional site and window.
         let mut run = RunConfig::new(0.0, 0.0, 0.0, 0.0, SensorNoise::seed003());
         while let Some(name) = args.peek().and_then(|w| w.strip_prefix("--")) {
@@ -156,6 +173,13 @@ impl Args {
                         AlignMethod::from_name(value).ok_or(ArgError::UnknownMethod(value))?;
                 }
                 "gnss" => gnss_path = Some(c_path(value).ok_or(ArgError::BadGnssPath)?),
+                "stream" => {
+                    stream_path = Some(c_path(value).ok_or(ArgError::BadPath("--stream"))?);
+                }
+                "config-frame" => {
+                    config_frame_path =
+                        Some(c_path(value).ok_or(ArgError::BadPath("--config-frame"))?);
+                }
                 _ => {
                     match name {
                         "lever-arm" => lever_arm_given.0 = true,
@@ -201,6 +225,18 @@ impl Args {
         if gnss_path.as_ref() == Some(&out_path) {
             return Err(ArgError::GnssSameFile);
         }
+        if let Some(stream) = &stream_path
+            && [
+                Some(&imu_path),
+                Some(&out_path),
+                gnss_path.as_ref(),
+                cal_path.as_ref(),
+                config_frame_path.as_ref(),
+            ]
+            .contains(&Some(stream))
+        {
+            return Err(ArgError::StreamSameFile);
+        }
         match (&gnss_path, &mut run.aiding) {
             (None, Some(_)) => return Err(ArgError::AidingWithoutGnss),
             (Some(_), aiding) => {
@@ -215,6 +251,8 @@ impl Args {
             out_path,
             cal_path,
             gnss_path,
+            stream_path,
+            config_frame_path,
             device,
             run,
         })
@@ -235,6 +273,20 @@ impl Args {
     /// The GNSS fix file's path as a C string, if one was given.
     pub fn gnss_cstr(&self) -> Option<&CStr> {
         self.gnss_path
+            .as_ref()
+            .map(|p| CStr::from_bytes_with_nul(p).unwrap_or(c""))
+    }
+
+    /// The stream's path as a C string, if one was given.
+    pub fn stream_cstr(&self) -> Option<&CStr> {
+        self.stream_path
+            .as_ref()
+            .map(|p| CStr::from_bytes_with_nul(p).unwrap_or(c""))
+    }
+
+    /// The configuration frame file's path as a C string, if one was given.
+    pub fn config_frame_cstr(&self) -> Option<&CStr> {
+        self.config_frame_path
             .as_ref()
             .map(|p| CStr::from_bytes_with_nul(p).unwrap_or(c""))
     }

@@ -15,6 +15,7 @@ pub mod config;
 pub mod gnss;
 pub mod imu;
 pub mod log;
+pub mod stream;
 
 pub use board::exit;
 

@@ -5,7 +5,10 @@
 //! A sample's way: data-ready interrupt (`data_ready`, highest priority) -> `rtic_sync` channel ->
 //! `navigate` (nav-core's navigator: gate, calibration, strapdown; writes the solution log) ->
 //! what it forwards to `align` (lowest priority: the navigator's background, the alignment) ->
-//! the answer back to `navigate`, which starts navigating from the aligned state. With GNSS
+//! the answer back to `navigate`, which starts navigating from the aligned state. `navigate`
+//! also sends the output protocol's stream (`firmware::stream`: raw increments, alignment
+//! progress, health with the protocol's status model, solution rows, aiding events, the end of
+//! run) and answers configuration frames from the board's configuration input. With GNSS
 //! fixes (`--gnss FILE` on the qemu board) the navigation after the alignment is aided:
 //! `navigate` hands each fix to the navigator before the first sample at or after its time,
 //! runs the filter's mechanization, and forwards the filter's work (covariance propagations,
@@ -29,27 +32,66 @@ mod app {
         self, ConfigInput, DataReady, Fixes, Imu, ImuSlot, Output, Watchdog, instructions_since,
     };
     use firmware::imu::nav_input;
+    use firmware::stream::{BoardCounters, Telemetry};
     use firmware::{
         ALIGN_CAP, ExitCode, FILTER_CAP, FilterCosts, SAMPLE_CAP, StepCost, exit, line, log,
     };
     use hal_adapters::drivers::Health;
+    use hal_adapters::protocol::config::DeviceConfig;
+    use hal_adapters::protocol::messages::ConfigAck;
+    use hal_adapters::protocol::status::NavigatorState;
+    use hal_adapters::protocol::{Decoder, Message, Received};
     use nav_core::ImuIncrement;
     use nav_core::alignment::{AlignOutcome, Stage};
+    use nav_core::ins_filter::FilterStatus;
     use nav_core::navigator::{
         Background, FromBackground, NavError, Navigator, Setup, Step, Summary, ToBackground,
     };
-    use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, Solution};
+    use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, Row, Solution};
     use rtic_sync::channel::{Receiver, Sender};
     use rtic_sync::make_channel;
 
     /// Samples lost because the channel to `navigate` was full.
     static OVERRUNS: AtomicU32 = AtomicU32::new(0);
+    /// The longest time from the data-ready line to the sample queued for `navigate`
+    /// [instructions] (boards that can measure it: `board::since_data_ready`).
+    static READY_LATENCY_MAX: AtomicU32 = AtomicU32::new(0);
 
     #[shared]
     struct Shared {
         /// The background's filter work costs (written by `align`, read by `navigate` at the
         /// end).
         costs: FilterCosts,
+        /// The alignment's stage and samples used (written by `align`, read by `navigate`
+        /// for the status and the progress frames).
+        alignment: (Stage, u32),
+        /// The IMU driver's counters (written by `data_ready`, read by `navigate` for the
+        /// health frames).
+        driver_health: Health,
+    }
+
+    /// The outputs of `navigate`: the board's output (the solution log, where the board
+    /// keeps one, and the protocol stream) and the stream's state.
+    pub struct Outputs {
+        out: Output,
+        tele: Telemetry,
+        /// Instructions of the stream's work per sample (raw, progress and health frames,
+        /// the vibration metric), and of the solution rows' frames.
+        cost: StepCost,
+        row_cost: StepCost,
+    }
+
+    impl Outputs {
+        /// A solution row: to the solution log and as a solution frame.
+        #[inline(never)]
+        fn row(&mut self, row: Row) {
+            if board::CSV_LOG {
+                write_line(&mut self.out, row);
+            }
+            let start = board::counts();
+            self.tele.row(&mut self.out, row);
+            self.row_cost.add(instructions_since(start));
+        }
     }
 
     #[local]
@@ -58,8 +100,10 @@ mod app {
         samples_tx: Sender<'static, DataReady, SAMPLE_CAP>,
         /// The navigator's foreground, for `navigate`.
         navigator: Navigator<f32>,
-        /// The output stream (the solution log), for `navigate`.
-        out: Output,
+        /// The outputs, for `navigate`.
+        out: Outputs,
+        /// The configuration frames' decoder, for `navigate`.
+        config_decoder: Decoder,
         /// The watchdog, fed by `navigate`.
         watchdog: Watchdog,
         /// Configuration bytes from the host, for `navigate`.
@@ -100,15 +144,24 @@ mod app {
             defmt::panic!("task spawn failed");
         }
         let navigator = Navigator::new(&setup);
+        let tele = Telemetry::new(&DeviceConfig::default().rates);
         (
             Shared {
                 costs: FilterCosts::default(),
+                alignment: (Stage::Coarse, 0),
+                driver_health: Health::default(),
             },
             Local {
                 imu: board.imu,
                 samples_tx,
                 navigator,
-                out,
+                out: Outputs {
+                    out,
+                    tele,
+                    cost: StepCost::default(),
+                    row_cost: StepCost::default(),
+                },
+                config_decoder: Decoder::new(),
                 watchdog: board.watchdog,
                 config_in: board.config_in,
                 gnss: board.gnss,
@@ -140,8 +193,8 @@ mod app {
     }
 
     /// IMU data ready: timestamp, read one sample through the driver, hand it on. Never blocks.
-    #[task(binds = EXTI0, priority = 4, local = [imu, samples_tx, done: bool = false])]
-    fn data_ready(cx: data_ready::Context) {
+    #[task(binds = EXTI0, priority = 4, local = [imu, samples_tx, done: bool = false], shared = [driver_health])]
+    fn data_ready(mut cx: data_ready::Context) {
         let t_ready_us = board::now_us();
         if *cx.local.done {
             return;
@@ -150,12 +203,18 @@ mod app {
             return;
         };
         let last = msg.is_last();
+        let health = cx.local.imu.health();
+        cx.shared.driver_health.lock(|h| *h = health);
         match cx.local.samples_tx.try_send(msg) {
             Ok(()) if last => {
                 *cx.local.done = true;
                 cx.local.imu.ended();
             }
-            Ok(()) => {}
+            Ok(()) => {
+                if let Some(latency) = board::since_data_ready() {
+                    READY_LATENCY_MAX.fetch_max(latency, Ordering::Relaxed);
+                }
+            }
             // A lost end marker is sent again at the next data-ready (the source stays ended).
             Err(_) => {
                 OVERRUNS.fetch_add(1, Ordering::Relaxed);
@@ -182,7 +241,7 @@ mod app {
     /// Navigation: carries every sample (and, aided, every GNSS fix) through nav-core's
     /// navigator, forwards what it asks to the background (`align`), hands it the answers, and
     /// writes the rows it produces.
-    #[task(priority = 2, local = [navigator, out, watchdog, config_in, gnss], shared = [costs])]
+    #[task(priority = 2, local = [navigator, out, watchdog, config_in, config_decoder, gnss], shared = [costs, alignment, driver_health])]
     async fn navigate(
         mut cx: navigate::Context,
         mut samples_rx: Receiver<'static, DataReady, SAMPLE_CAP>,
@@ -194,6 +253,9 @@ mod app {
         let out = cx.local.out;
         let watchdog = cx.local.watchdog;
         let config_in = cx.local.config_in;
+        let config_decoder = cx.local.config_decoder;
+        // The time of the latest fix handed to the navigator [us] (its aiding events' time).
+        let mut last_fix_us = 0_u64;
         // By reference: the task's future holds no second copy of the reader.
         let gnss = cx.local.gnss;
         // Steps without a row, and steps with one (the row's f64 output conversion included).
@@ -206,7 +268,7 @@ mod app {
                 defmt::panic!("sample channel closed");
             };
             watchdog.feed();
-            take_config(config_in);
+            take_config(config_in, config_decoder, out);
             let (sample, t_ready_us) = match msg {
                 DataReady::Sample {
                     sample,
@@ -236,6 +298,7 @@ mod app {
                 loop {
                     match fixes.due(sample.t_us) {
                         Ok(Some(fix)) => {
+                            last_fix_us = fix.t_us;
                             navigator.push_fix(fix);
                         }
                         Ok(None) => break,
@@ -253,7 +316,7 @@ mod app {
                 Step::Navigated(None) => cost.add(spent),
                 Step::Navigated(Some(row)) => {
                     row_cost.add(spent);
-                    write_line(out, row);
+                    out.row(Row::Free(row));
                 }
                 Step::Forward {
                     increment,
@@ -287,11 +350,25 @@ mod app {
                         background_work(navigator, &mut to_filter, &mut from_background, out, &imu)
                             .await;
                     aided.messages.add(work);
+                    if let Some(report) = navigator.filter_report() {
+                        out.tele.aiding(&mut out.out, last_fix_us, &report.counters);
+                    }
                 }
                 Step::Rejected(_) => {}
                 // Not reached: every answer is awaited before the next sample.
                 Step::NotReady => defmt::panic!("navigator not ready"),
             }
+            let nav = nav_state(navigator, &mut cx.shared.alignment);
+            let align = navigator
+                .is_aligning()
+                .then(|| (cx.shared.alignment.lock(|a| a.1), navigator.n_align()));
+            let health = &mut cx.shared.driver_health;
+            let start = board::counts();
+            out.tele.sample(&mut out.out, &sample, nav, align, || {
+                let filter = navigator.filter_report().map(|r| r.counters);
+                (health.lock(|h| *h), board_counters(), filter)
+            });
+            out.cost.add(instructions_since(start));
         }
 
         // End of the recording: the last row (aided: with the filter's report), then the end
@@ -303,9 +380,37 @@ mod app {
             failed(&e, &imu)
         });
         if let Some(row) = summary.final_row {
-            write_line(out, row);
+            out.row(row);
         }
-        write_line(out, summary.end_record());
+        if board::CSV_LOG {
+            write_line(&mut out.out, summary.end_record());
+        }
+        // The run's last health frame: the final counters (the summary's), then the end.
+        let nav = nav_state(navigator, &mut cx.shared.alignment);
+        let filter = summary.filter.as_ref().map(|f| f.counters);
+        if let Some(f) = &filter {
+            out.tele.aiding(&mut out.out, last_fix_us, f);
+        }
+        out.tele.health_frame(
+            &mut out.out,
+            last_ready_us,
+            nav,
+            &imu.health,
+            board_counters(),
+            filter.as_ref(),
+        );
+        out.tele.end(&mut out.out, summary.counters.rows);
+        if out.out.flush().is_err() {
+            defmt::error!("cannot write the output stream");
+            exit(ExitCode::Output);
+        }
+        let (frames, bytes) = out.tele.sent();
+        defmt::info!(
+            "stream: {=u32} frames, {=u64} bytes; health counters {}",
+            frames,
+            bytes,
+            out.tele.counters()
+        );
         let c = summary.counters;
         defmt::info!(
             "summary: samples {=u32}, flagged {=u32} ({}), rejected {=u32}, navigated {=u32}, missed {=u32}, channel overruns {=u32}, last data-ready at {=u64} us",
@@ -318,12 +423,14 @@ mod app {
             OVERRUNS.load(Ordering::Relaxed),
             last_ready_us
         );
+        let mut aided_per_sample = None;
         if let Some(filter) = &summary.filter {
             let after_data = gnss.as_ref().map_or(0, |(f, n)| f.remaining(*n));
             log::filter(filter, &summary.fixes, c.fixes_unused, after_data);
             let costs = cx.shared.costs.lock(|c| *c);
-            log_aided_costs(&aided, &costs, &summary);
+            aided_per_sample = Some(log_aided_costs(&aided, &costs, &summary));
         }
+        log_cycle(&cost, &row_cost, aided_per_sample, &imu, out);
         report(
             &cost,
             &row_cost,
@@ -334,16 +441,84 @@ mod app {
         exit(ExitCode::Success)
     }
 
-    /// Takes the configuration bytes the host sent (the configuration frame's decoder plugs in
-    /// here; until then they are counted and refused in the log).
-    fn take_config(config_in: &mut ConfigInput) {
+    /// The navigator's state for the status model: the alignment's stage (from `align`)
+    /// while aligning, then aligned; in the aided phase the filter's last reported status
+    /// (nominal, as the filter starts, until its first report).
+    fn nav_state(
+        navigator: &Navigator<f32>,
+        alignment: &mut impl rtic::Mutex<T = (Stage, u32)>,
+    ) -> NavigatorState {
+        let stage = if navigator.is_aligning() {
+            alignment.lock(|a| a.0)
+        } else {
+            Stage::Aligned
+        };
+        NavigatorState {
+            stage,
+            filter: navigator.is_aided().then(|| {
+                navigator
+                    .filter_report()
+                    .map_or(FilterStatus::Nominal, |r| r.status)
+            }),
+        }
+    }
+
+    /// The board's own counters.
+    fn board_counters() -> BoardCounters {
+        BoardCounters {
+            missed_data_ready: board::missed_data_ready(),
+            channel_overruns: OVERRUNS.load(Ordering::Relaxed),
+        }
+    }
+
+    /// Takes the configuration bytes the host sent, through the protocol's decoder: a
+    /// configuration frame is validated and answered with an acknowledgement (accepted, or
+    /// refused with its reason code). An accepted configuration's output rates apply at once;
+    /// its run configuration is not applied to a run in progress (logged).
+    #[inline(never)]
+    fn take_config(config_in: &mut ConfigInput, decoder: &mut Decoder, out: &mut Outputs) {
         let mut buf = [0_u8; 64];
-        let n = config_in.read(&mut buf);
-        if n > 0 {
-            defmt::warn!(
-                "{=usize} configuration bytes received: no configuration decoder yet, ignored",
-                n
-            );
+        loop {
+            let n = config_in.read(&mut buf);
+            if n == 0 {
+                return;
+            }
+            decoder.push(&buf[..n], |frame| match frame {
+                Ok(Received {
+                    seq,
+                    message: Message::Config(config),
+                }) => {
+                    let refused = config.validate().err();
+                    match &refused {
+                        None => {
+                            out.tele.set_rates(&config.rates);
+                            defmt::info!(
+                                "configuration frame {=u16} accepted: output rates applied; its run configuration is not applied to a run in progress",
+                                seq
+                            );
+                        }
+                        Some(e) => defmt::warn!(
+                            "configuration frame {=u16} refused (reason {=u8}): {}",
+                            seq,
+                            e.code() as u8,
+                            defmt::Display2Format(e)
+                        ),
+                    }
+                    let ack = ConfigAck {
+                        config_seq: seq,
+                        refused: refused.map(|e| e.code()),
+                    };
+                    out.tele.config_ack(&mut out.out, ack);
+                }
+                Ok(other) => defmt::warn!(
+                    "{=str} frame on the configuration input ignored",
+                    other.message.id().name()
+                ),
+                Err(e) => defmt::warn!(
+                    "configuration input: frame refused: {}",
+                    defmt::Display2Format(&e)
+                ),
+            });
         }
     }
 
@@ -354,7 +529,7 @@ mod app {
         navigator: &mut Navigator<f32>,
         to_background: &mut Sender<'static, ToBackground<f32>, FILTER_CAP>,
         from_background: &mut Receiver<'static, FromBackground<f32>, 1>,
-        out: &mut Output,
+        out: &mut Outputs,
         imu: &ImuStats,
     ) -> u64 {
         let mut spent = 0;
@@ -379,7 +554,7 @@ mod app {
             let row = navigator.on_background(answer);
             spent += instructions_since(start);
             match row {
-                Ok(Some(row)) => write_line(out, row),
+                Ok(Some(row)) => out.row(row),
                 Ok(None) => {}
                 Err(e) => failed(&e, imu),
             }
@@ -388,8 +563,9 @@ mod app {
 
     /// Logs the aided phase's costs: per propagation and update (the background), and the
     /// total per sample amortised over the aided samples.
+    /// Returns the amortised instructions per aided sample.
     #[inline(never)]
-    fn log_aided_costs(aided: &AidedCosts, costs: &FilterCosts, summary: &Summary<f32>) {
+    fn log_aided_costs(aided: &AidedCosts, costs: &FilterCosts, summary: &Summary<f32>) -> u64 {
         let steps = aided.step.n.max(1);
         let background =
             costs.propagation.sum + costs.gnss.sum + costs.zero_motion.sum + costs.report.sum;
@@ -418,6 +594,7 @@ mod app {
             steps,
             summary.counters.rows
         );
+        total / steps
     }
 
     /// Hands the background's `answer` to the navigator: the aligned row is logged; a failure
@@ -426,7 +603,7 @@ mod app {
     fn answer_from_background(
         navigator: &mut Navigator<f32>,
         answer: FromBackground<f32>,
-        out: &mut Output,
+        out: &mut Outputs,
         imu: &ImuStats,
     ) {
         match navigator.on_background(answer) {
@@ -434,7 +611,7 @@ mod app {
                 if let Some(outcome) = navigator.alignment() {
                     log::aligned(outcome);
                 }
-                write_line(out, row);
+                out.row(row);
             }
             Ok(None) => {}
             Err(e) => failed(&e, imu),
@@ -465,7 +642,7 @@ mod app {
     /// stack: idle never returns, so its frame is as permanent as a static, and the board's
     /// static RAM stays small (the stack's peak is what counts; the qemu board reports it).
     /// Idle sleeps (`wfi`) when no message waits.
-    #[idle(local = [setup, from_navigate_align, from_navigate, to_navigate], shared = [costs])]
+    #[idle(local = [setup, from_navigate_align, from_navigate, to_navigate], shared = [costs, alignment])]
     fn align(mut cx: align::Context) -> ! {
         let mut slot = None;
         let background = start_background(&mut slot, cx.local.setup);
@@ -487,6 +664,8 @@ mod app {
             let start = board::counts();
             let answer = background.handle(ToBackground::Align(inc));
             cost.add(instructions_since(start));
+            let progress = (background.stage(), background.samples());
+            cx.shared.alignment.lock(|a| *a = progress);
             if background.stage() != stage {
                 stage = background.stage();
                 if stage == Stage::Fine {
@@ -583,6 +762,45 @@ mod app {
             defmt::error!("cannot write the solution log");
             exit(ExitCode::Output);
         }
+    }
+
+    /// Logs the instructions of one 400 Hz cycle: the data-ready latency, the output stream's
+    /// work per sample, and the mean cycle (IMU read, navigation step with its rows, output
+    /// stream with the rows' frames amortised) against the budget: 5 % of a 168 MHz core at
+    /// 400 Hz, 21,000 instructions (one instruction taken as one cycle). The navigation of an
+    /// aided run is its aided phase's amortised total (`aided_per_sample`: mechanization and
+    /// filter), else the free-inertial step's mean.
+    #[inline(never)]
+    fn log_cycle(
+        cost: &StepCost,
+        row_cost: &StepCost,
+        aided_per_sample: Option<u64>,
+        imu: &ImuStats,
+        out: &Outputs,
+    ) {
+        let samples = out.cost.n.max(1);
+        let stream = (out.cost.sum + out.row_cost.sum) / samples;
+        let nav_steps = (cost.n + row_cost.n).max(1);
+        let nav = aided_per_sample.unwrap_or((cost.sum + row_cost.sum) / nav_steps);
+        let read = imu.bus.mean() + imu.decode.mean();
+        defmt::info!(
+            "data-ready latency (line to sample queued, the bus transaction included): max {=u32} instructions",
+            READY_LATENCY_MAX.load(Ordering::Relaxed)
+        );
+        defmt::info!(
+            "instructions per sample of the output stream: max {=u64}, mean {=u64}; per solution row frame: max {=u64}, mean {=u64}",
+            out.cost.max,
+            out.cost.mean(),
+            out.row_cost.max,
+            out.row_cost.mean()
+        );
+        defmt::info!(
+            "instructions per 400 Hz cycle (mean): IMU read {=u64} + navigation {=u64} + output stream {=u64} = {=u64} of 21000 (5 % of 168 MHz)",
+            read,
+            nav,
+            stream,
+            read + nav + stream
+        );
     }
 
     #[inline(never)]

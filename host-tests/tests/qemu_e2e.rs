@@ -6,6 +6,10 @@
 //! `FIRMWARE_ELF`; without it this test builds the firmware into `target/e2e` (a separate target
 //! directory, because the running `cargo test` holds the lock on the main one).
 
+use hal_adapters::protocol::config::{DeviceConfig, ReasonCode};
+use hal_adapters::protocol::messages::{AidOutcome, ConfigAck, HealthReport};
+use hal_adapters::protocol::status::{NavStatus, StatusFlags};
+use hal_adapters::protocol::{Decoder, Encoder, MAX_FRAME, Message};
 use host_tests::recording_io::{self, Recording};
 use host_tests::sensor_model::Grade;
 use host_tests::simulate::{SimOptions, simulate};
@@ -97,6 +101,48 @@ fn nav(dir: &Path, args: &[&str]) -> Output {
         .current_dir(dir)
         .output()
         .expect("run nav")
+}
+
+/// `nav decode STREAM --out CSV` in `dir`; its report.
+fn decode_stream(dir: &Path, stream: &str, csv: &str) -> String {
+    let o = nav(dir, &["decode", stream, "--out", csv]);
+    let report = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(o.status.success(), "nav decode {stream}: {report}");
+    report
+}
+
+/// Every frame of the stream file `path`, through the protocol's decoder: none refused, none
+/// cut off.
+fn stream_messages(path: &Path) -> Vec<Message> {
+    let bytes = std::fs::read(path).unwrap();
+    let mut decoder = Decoder::new();
+    let mut messages = Vec::new();
+    decoder.push(&bytes, |r| {
+        messages.push(r.expect("a frame refused").message)
+    });
+    assert_eq!(decoder.finish(), 0, "the stream's last frame is cut off");
+    assert_eq!(decoder.stats().frames_lost, 0, "frames missing");
+    messages
+}
+
+/// The health frames of a stream.
+fn health_frames(messages: &[Message]) -> Vec<HealthReport> {
+    messages
+        .iter()
+        .filter_map(|m| match m {
+            Message::Health(h) => Some(*h),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Frames of the message `id` in a stream.
+fn count_of(messages: &[Message], id: hal_adapters::protocol::MessageId) -> usize {
+    messages.iter().filter(|m| m.id() == id).count()
 }
 
 /// The number after `key` in the defmt log's summary (from its `summary:` line on), e.g.
@@ -210,10 +256,42 @@ fn firmware_in_qemu_matches_host_replay() {
     // to the alignment as to the navigation.
     std::fs::write(d.join("imu.cal"), CALIBRATION).unwrap();
 
+    // What the host sends before the run: a configuration from `nav config` (alignment
+    // progress every 80 samples instead of 40), then one with an impossible latitude.
+    std::fs::write(
+        d.join("config.txt"),
+        format!("lat-deg = {lat}\nlon-deg = {lon}\nh-m = {h}\nalign-progress-every = 80\n"),
+    )
+    .unwrap();
+    let o = nav(d, &["config", "config.txt", "--out", "config.bin"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut frames = std::fs::read(d.join("config.bin")).unwrap();
+    let mut bad = DeviceConfig::default();
+    bad.run.lat_deg = 95.0;
+    let mut encoder = Encoder::new();
+    encoder
+        .encode(&Message::Config(bad), &mut [0; MAX_FRAME])
+        .unwrap(); // sequence number 1
+    encoder.append(&Message::Config(bad), &mut frames).unwrap();
+    std::fs::write(d.join("config.bin"), &frames).unwrap();
+
     let started = std::time::Instant::now();
     let (code, log) = run_firmware(
         d,
-        &["rec.bin", "fw.csv", &lat, &lon, &h, "10", "40", "imu.cal"],
+        &[
+            "--stream",
+            "fw.bin",
+            "--config-frame",
+            "config.bin",
+            "rec.bin",
+            "fw.csv",
+            &lat,
+            &lon,
+            &h,
+            "10",
+            "40",
+            "imu.cal",
+        ],
     );
     println!("{log}\nQEMU run: {:.2} s", started.elapsed().as_secs_f64());
     assert_eq!(code, 0, "firmware exit code {code}; log:\n{log}");
@@ -305,6 +383,78 @@ fn firmware_in_qemu_matches_host_replay() {
             i + 1
         );
     }
+    // The protocol stream: `nav decode` gives the firmware's log back, equal to the harness's.
+    let report = decode_stream(d, "fw.bin", "decoded.csv");
+    println!("nav decode: {report}");
+    let decoded = std::fs::read_to_string(d.join("decoded.csv")).unwrap();
+    assert!(
+        decoded == host,
+        "the decoded stream differs from the host's log\n{report}"
+    );
+    assert!(
+        decoded == fw,
+        "the decoded stream differs from the firmware's log"
+    );
+    let messages = stream_messages(&d.join("fw.bin"));
+    use hal_adapters::protocol::MessageId as Id;
+    let samples = field(&log, "summary: samples");
+    assert_eq!(count_of(&messages, Id::RawIncrements) as u64, samples);
+    // A health frame every 400 samples from the first, and the final one.
+    let health = health_frames(&messages);
+    assert_eq!(health.len() as u64, samples.div_ceil(400) + 1);
+    // The final health frame's counters are the run's: the driver's (as the summary gives
+    // them: 7999 frames, the NaN record's checksum error, 2 device samples missed) and the
+    // board's (no missed data-ready, no overrun).
+    let last = health.last().unwrap();
+    assert_eq!(last.counters.samples, 7999);
+    assert_eq!(last.counters.checksum_errors, 1);
+    assert_eq!(last.counters.bus_errors, 0);
+    assert_eq!(
+        u64::from(last.counters.missed_data_ready),
+        2 + field(&log, "missed")
+    );
+    assert_eq!(
+        u64::from(last.counters.channel_overruns),
+        field(&log, "channel overruns")
+    );
+    assert_eq!(last.t_us, 8000 * 2500);
+    assert_eq!(last.status, NavStatus::Nav);
+    assert!(last.flags.contains(StatusFlags::FREE_INERTIAL), "{last:?}");
+    // Aligning from COARSE, then NAV from the aligned row on.
+    assert_eq!(health[0].status, NavStatus::AlignCoarse);
+    assert!(log.contains("status NAV"), "{log}");
+    // The configuration frames: the good one accepted (its progress rate applied: some 4000
+    // alignment samples every 80, not 40), the bad one refused for its latitude.
+    let acks: Vec<ConfigAck> = messages
+        .iter()
+        .filter_map(|m| match m {
+            Message::ConfigAck(a) => Some(*a),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        acks,
+        [
+            ConfigAck {
+                config_seq: 0,
+                refused: None
+            },
+            ConfigAck {
+                config_seq: 1,
+                refused: Some(ReasonCode::Latitude)
+            }
+        ]
+    );
+    let progress = count_of(&messages, Id::AlignProgress);
+    assert!((49..=51).contains(&progress), "{progress} progress frames");
+    let bytes = std::fs::metadata(d.join("fw.bin")).unwrap().len();
+    println!(
+        "stream: {} frames, {bytes} bytes over {} s of data: {:.0} bytes/s",
+        messages.len(),
+        samples / 400,
+        bytes as f64 / (samples as f64 / 400.0)
+    );
+
     // The calibration reaches the alignment: without it the biases tilt the levelling
     // (b_a / g ~ 0.3 deg) and turn the gyrocompass (east gyro bias over the horizontal Earth
     // rate ~ 6 deg); with it what is left is the FOG grade's own errors.
@@ -965,7 +1115,7 @@ fn firmware_navigates_aided_like_the_harness() {
     let options = ["--imu-noise", "fog", "--gnss-lever-arm", "0.8,-0.3,-1.1"];
     let site = ["45", "7.5", "250", "15"];
 
-    let mut args = vec!["--gnss", "gnss.bin"];
+    let mut args = vec!["--gnss", "gnss.bin", "--stream", "fw.bin"];
     args.extend_from_slice(&options);
     args.extend_from_slice(&["rec.bin", "fw.csv"]);
     args.extend_from_slice(&site);
@@ -1028,6 +1178,43 @@ fn firmware_navigates_aided_like_the_harness() {
         );
     }
     assert_eq!(fw.lines().count(), host.lines().count());
+    // The stream gives the same log back, and an aiding event per fix the filter counted.
+    let report = decode_stream(d, "fw.bin", "decoded.csv");
+    let decoded = std::fs::read_to_string(d.join("decoded.csv")).unwrap();
+    assert!(
+        decoded == host,
+        "the decoded stream differs from the host's log\n{report}"
+    );
+    let messages = stream_messages(&d.join("fw.bin"));
+    let last = *health_frames(&messages).last().unwrap();
+    let events = |aid, outcome| {
+        messages
+            .iter()
+            .filter(
+                |m| matches!(m, Message::AidingEvent(e) if e.aid == aid && e.outcome == outcome),
+            )
+            .count() as u32
+    };
+    use hal_adapters::protocol::messages::Aid;
+    let pos = last.counters.position_aiding;
+    assert_eq!(pos.accepted, 225, "{last:?}");
+    assert_eq!(events(Aid::Position, AidOutcome::Accepted), pos.accepted);
+    assert_eq!(
+        events(Aid::Position, AidOutcome::RejectedGate)
+            + events(Aid::Position, AidOutcome::Invalid),
+        pos.rejected
+    );
+    let vel = last.counters.velocity_aiding;
+    assert_eq!(events(Aid::Velocity, AidOutcome::Accepted), vel.accepted);
+    assert!(
+        matches!(last.status, NavStatus::Nav | NavStatus::Degraded),
+        "{last:?}"
+    );
+    assert!(!last.flags.contains(StatusFlags::FREE_INERTIAL));
+    assert!(
+        log.contains("status NAV at 15002500 us (flags 0x0)"),
+        "the aided phase must start NAV, not free inertial: {log}"
+    );
     let names = [
         "aided navigation: status",
         "GNSS position:",

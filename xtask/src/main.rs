@@ -4,7 +4,8 @@
 //!   qemu-system-arm, defmt-print).
 //! - `demo`: the main job: generates the demo recording, builds the firmware, runs it in QEMU and
 //!   prints the decoded defmt log and the navigation result.
-//! - `test`: builds the firmware, then runs every test of the workspace (the QEMU end-to-end test
+//! - `test`: builds the firmware, runs the tests on the target (`target_tests` in QEMU: the
+//!   protocol's checks), then every test of the workspace (the QEMU end-to-end test
 //!   included).
 //! - `bench`: the benchmark figures: guest instructions per navigation step in QEMU (free
 //!   inertial, and GNSS-aided: per covariance propagation, per update, per sample amortised),
@@ -348,6 +349,17 @@ fn bench(root: &Path) -> Result<()> {
     let max = number_after(step, "instructions per navigation step: max")?;
     let mean = number_after(step, "mean")?;
     let adis = imu_costs(&log)?;
+    // The data-ready latency and the 400 Hz cycle with the output stream's framing.
+    let latency = number_after(&log[log.find("data-ready latency").unwrap_or(0)..], "max")?;
+    let stream_at = log.find("per sample of the output stream").unwrap_or(0);
+    let stream = (
+        number_after(&log[stream_at..], "max")?,
+        number_after(&log[stream_at..], "mean")?,
+    );
+    let cycle = number_after(
+        &log[log.find("per 400 Hz cycle (mean)").unwrap_or(0)..],
+        "=",
+    )?;
     // The qemu board paints the stack at start and logs its high-water mark at the end.
     let peak_stack = number_after(&log, "peak stack:")?;
     // The ICM-42688-P and BMI088 paths: their gyros cannot gyrocompass, so the runs end at the
@@ -437,6 +449,16 @@ fn bench(root: &Path) -> Result<()> {
             "| static RAM of the aided phase's parts: filter (covariance, state, settings; in the aligner's slot, none of its own) / fix queue / filter channel / GNSS reader [B] | {f:.0} / {q:.0} / {c:.0} / {g:.0} |"
         );
     }
+    println!(
+        "| data-ready latency, line pended to sample queued (the simulated SPI transaction included), demo run, max [guest instructions] | {latency:.0} |"
+    );
+    println!(
+        "| guest instructions per sample of the output stream (raw increments, progress and health frames, vibration metric; max / mean) | {:.0} / {:.0} |",
+        stream.0, stream.1
+    );
+    println!(
+        "| guest instructions per 400 Hz cycle, free inertial (IMU read + navigation + output stream with the rows' frames), mean; target <= 21000 | {cycle:.0} |"
+    );
     println!("| host mechanization, f32, steps/s (one thread, no I/O) | {mech_f32:.0} |");
     println!("| host mechanization, f64, steps/s (one thread, no I/O) | {mech_f64:.0} |");
     println!("| host replay, f32, samples/s (one thread, I/O included) | {f32_speed:.0} |");
@@ -627,6 +649,7 @@ fn align_costs(nav: &Path, elf: &Path) -> Result<Vec<AlignCost>> {
 fn test(root: &Path) -> Result<()> {
     setup()?;
     let elf = build_firmware(root)?;
+    target_tests(&elf)?;
     run(cargo()
         .args(["test", "--workspace", "--exclude", "firmware"])
         .env("FIRMWARE_ELF", &elf))?;
@@ -634,6 +657,21 @@ fn test(root: &Path) -> Result<()> {
     // while the board's firmware is above the flash target (`cargo xtask build-board` fails on
     // both).
     build_board(root, false)
+}
+
+/// The tests on the target: `target_tests` (beside the firmware `elf`) in QEMU; fails when
+/// any of them fails (its exit status).
+fn target_tests(elf: &Path) -> Result<()> {
+    let log = output(
+        Command::new("bash")
+            .arg("firmware/qemu-run.sh")
+            .arg(elf.with_file_name("target_tests")),
+    )?;
+    print!("{log}");
+    if !log.contains("target tests:") || !log.contains(", 0 failed") {
+        bail!("target tests: no summary of a passing run in the log");
+    }
+    Ok(())
 }
 
 /// Builds the STM32F405 board's firmware (profile `board`), prints its flash, static RAM and

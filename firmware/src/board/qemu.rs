@@ -6,7 +6,8 @@
 //!   data-ready pin uses) every 2.5 ms of SysTick time, and the IMU is a real driver over a
 //!   simulated SPI device answering from a recording (`crate::imu`), read through semihosting.
 //! - The configuration is the semihosting command line (`crate::config`), the calibration and
-//!   the GNSS fixes host files, the output stream a host file, defmt over semihosting stdout,
+//!   the GNSS fixes host files, the solution log and the protocol stream (`--stream`) host
+//!   files, a configuration frame (`--config-frame`) a host file, defmt over semihosting stdout,
 //!   and [`exit`] QEMU's exit status.
 //!
 //! Under QEMU's `-icount shift=0` one guest instruction takes exactly 1 ns of virtual time, so
@@ -55,6 +56,8 @@ pub const IMU_SLOT: ImuSlot = None;
 
 /// Data-ready edges lost because the previous one was still pending.
 static MISSED: AtomicU32 = AtomicU32::new(0);
+/// The [`counts`] reading (low 32 bits) when the pacer last pended the data-ready line.
+static PENDED_AT: AtomicU32 = AtomicU32::new(0);
 /// Set once the end of the recording has been delivered: the pacer stops.
 static STOP: AtomicBool = AtomicBool::new(false);
 
@@ -127,10 +130,29 @@ pub fn init(
         log::gnss(count, &run, crate::FILTER_CAP);
         (fixes, count)
     });
+    let stream = args.stream_cstr().map(|path| {
+        let file = SemihostingFile::create(path).unwrap_or_else(|_| {
+            defmt::error!(
+                "cannot create the stream {=[u8]:a}",
+                args.stream_path.as_deref().unwrap_or_default()
+            );
+            exit(ExitCode::Output)
+        });
+        (file, heapless::Vec::new())
+    });
+    let config_in = ConfigInput(args.config_frame_cstr().map(|path| {
+        SemihostingFile::open(path).unwrap_or_else(|_| {
+            defmt::error!(
+                "cannot open the configuration frame {=[u8]:a}",
+                args.config_frame_path.as_deref().unwrap_or_default()
+            );
+            exit(ExitCode::Config)
+        })
+    }));
     Board {
         imu: Imu(imu),
-        out: Output(out),
-        config_in: ConfigInput,
+        out: Output { log: out, stream },
+        config_in,
         watchdog: Watchdog,
         gnss,
         setup,
@@ -220,6 +242,13 @@ pub fn instructions_since(start: u64) -> u64 {
     (counts() - start) * 1_000_000_000 / u64::from(SYSCLK_HZ)
 }
 
+/// Guest instructions since the data-ready line was last pended (the data-ready task's
+/// latency when read as it queues the sample).
+pub fn since_data_ready() -> Option<u32> {
+    let counts = (counts() as u32).wrapping_sub(PENDED_AT.load(Ordering::Relaxed));
+    Some((u64::from(counts) * 1_000_000_000 / u64::from(SYSCLK_HZ)) as u32)
+}
+
 /// Data-ready edges lost because the previous one was still pending.
 pub fn missed_data_ready() -> u32 {
     MISSED.load(Ordering::Relaxed)
@@ -235,6 +264,7 @@ pub async fn emulate_data_ready() {
         if NVIC::is_pending(Interrupt::EXTI0) {
             MISSED.fetch_add(1, Ordering::Relaxed);
         }
+        PENDED_AT.store(counts() as u32, Ordering::Relaxed);
         rtic::pend(Interrupt::EXTI0);
     }
 }
@@ -292,13 +322,48 @@ impl Imu {
     }
 }
 
-/// The output stream: the solution log, a host file.
-pub struct Output(SemihostingFile);
+/// The board keeps the solution log (CSV text) beside the stream.
+pub const CSV_LOG: bool = true;
+
+/// Stream bytes gathered per semihosting write.
+const STREAM_CHUNK: usize = 1024;
+
+/// The outputs: the solution log (a host file) and, with `--stream FILE`, the output
+/// protocol's byte stream (a host file, written in chunks of [`STREAM_CHUNK`] bytes).
+pub struct Output {
+    log: SemihostingFile,
+    stream: Option<(SemihostingFile, heapless::Vec<u8, STREAM_CHUNK>)>,
+}
 
 impl Output {
-    /// Writes all of `bytes`; `Err` when the host refuses them.
+    /// Writes all of `bytes` to the solution log; `Err` when the host refuses them.
     pub fn write(&mut self, bytes: &[u8]) -> Result<(), OutputError> {
-        embedded_io::Write::write_all(&mut self.0, bytes).map_err(|_| OutputError)
+        embedded_io::Write::write_all(&mut self.log, bytes).map_err(|_| OutputError)
+    }
+
+    /// Queues the frame `bytes` on the stream (nothing without `--stream`); `Err` when the
+    /// host refuses a chunk.
+    pub fn write_frame(&mut self, bytes: &[u8]) -> Result<(), OutputError> {
+        let Some((file, buf)) = &mut self.stream else {
+            return Ok(());
+        };
+        if buf.extend_from_slice(bytes).is_err() {
+            embedded_io::Write::write_all(file, buf).map_err(|_| OutputError)?;
+            buf.clear();
+            // A frame is shorter than a chunk (`MAX_FRAME`).
+            buf.extend_from_slice(bytes).map_err(|_| OutputError)?;
+        }
+        Ok(())
+    }
+
+    /// Writes the queued stream bytes out (at the end of the run).
+    pub fn flush(&mut self) -> Result<(), OutputError> {
+        let Some((file, buf)) = &mut self.stream else {
+            return Ok(());
+        };
+        embedded_io::Write::write_all(file, buf).map_err(|_| OutputError)?;
+        buf.clear();
+        Ok(())
     }
 }
 
@@ -306,13 +371,22 @@ impl Output {
 #[derive(Debug, defmt::Format)]
 pub struct OutputError;
 
-/// Configuration input: none besides the command line on this board.
-pub struct ConfigInput;
+/// Configuration input: with `--config-frame FILE`, the file's bytes, as if the host had
+/// sent them before the run; else none.
+pub struct ConfigInput(Option<SemihostingFile>);
 
 impl ConfigInput {
-    /// Configuration bytes received since the last call (never any here).
-    pub fn read(&mut self, _buf: &mut [u8]) -> usize {
-        0
+    /// Configuration bytes received since the last call, into `buf`: their number (0 once
+    /// the file is read).
+    pub fn read(&mut self, buf: &mut [u8]) -> usize {
+        let Some(file) = &mut self.0 else { return 0 };
+        match embedded_io::Read::read(file, buf) {
+            Ok(n) => n,
+            Err(_) => {
+                defmt::error!("cannot read the configuration frame file");
+                exit(ExitCode::Config)
+            }
+        }
     }
 }
 

@@ -12,8 +12,11 @@
 //! | watchdog | IWDG, [`WATCHDOG_MS`], fed by `navigate` at every sample | - |
 //! | cost figures | DWT cycle counter (core cycles) | - |
 //!
-//! The run's configuration is compiled in ([`default_run`]) until the configuration frame
-//! arrives over the USART ([`ConfigInput`] is its seam); defmt goes out over RTT (probe-rs).
+//! The run's configuration is compiled in ([`default_run`]). Configuration frames arriving
+//! over the USART ([`ConfigInput`]) are decoded, validated and acknowledged by `navigate`; an
+//! accepted one's output rates apply at once, its run configuration is not yet applied (no
+//! storage across a restart). The output protocol's frames leave on the USART ([`Output`]);
+//! defmt goes out over RTT (probe-rs).
 
 use super::{Board, DataReady, pac};
 use crate::ExitCode;
@@ -164,6 +167,12 @@ pub fn init(mut core: cortex_m::Peripherals, dp: pac::Peripherals, _slot: &mut I
     }
 }
 
+/// The data-ready task's latency: not measured on this board (the pin's edge has no time
+/// stamp before the task runs; the qemu board measures it from its pacer).
+pub fn since_data_ready() -> Option<u32> {
+    None
+}
+
 /// Board time since start [us]: the TIM2 monotonic.
 pub fn now_us() -> u64 {
     Mono::now().as_ticks()
@@ -270,9 +279,23 @@ pub struct Output {
     dropped: u32,
 }
 
+/// No solution log on this board: the solution leaves as the protocol's frames.
+pub const CSV_LOG: bool = false;
+
 impl Output {
-    /// Queues `bytes` and starts a transfer if none runs; `Err` when the DMA refuses one.
-    pub fn write(&mut self, bytes: &[u8]) -> Result<(), OutputError> {
+    /// The solution log: none on this board ([`CSV_LOG`]); the bytes are not sent.
+    pub fn write(&mut self, _bytes: &[u8]) -> Result<(), OutputError> {
+        Ok(())
+    }
+
+    /// Sends what is queued (the queue leaves with each write; nothing to wait for).
+    pub fn flush(&mut self) -> Result<(), OutputError> {
+        self.write_frame(&[])
+    }
+
+    /// Queues the frame `bytes` and starts a transfer if none runs; `Err` when the DMA refuses
+    /// one.
+    pub fn write_frame(&mut self, bytes: &[u8]) -> Result<(), OutputError> {
         use stm32f4xx_hal::dma::traits::StreamISR as _;
         let chunk = self.pending.as_mut().ok_or(OutputError)?;
         if chunk.len + bytes.len() <= TX_LEN {

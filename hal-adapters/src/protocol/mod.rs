@@ -15,6 +15,8 @@ pub mod frame;
 pub mod messages;
 mod payload;
 pub mod rate;
+#[cfg(any(test, feature = "selftest"))]
+pub mod selftest;
 pub mod status;
 pub mod vibration;
 mod wire;

@@ -8,126 +8,14 @@ use super::config_text::{LineError, keys_of};
 use super::decoder::{Decoder, Received, Refusal};
 use super::frame::{CRC, Encoder, MAX_FRAME};
 use super::messages::*;
-use super::status::{AidCount, HealthCounters, NavStatus, StatusFlags};
-use super::vibration::VibrationLevels;
-use crate::sample::{ImuSample, Motion, SampleFlags};
-use nav_core::alignment::machine::{AlignMethod, Stage};
+use nav_core::alignment::machine::AlignMethod;
 use nav_core::navigator::ConfigError;
-use nav_core::output::{FilterColumns, Row, Solution};
+use nav_core::output::Row;
 use std::vec::Vec;
 
-fn solution() -> Solution {
-    Solution {
-        t_us: 60_002_500,
-        lat_ndeg: 45_123_456_789,
-        lon_ndeg: -7_500_000_123,
-        h_m: 150.123_456_789_012_3,
-        v_eb_n: [0.1 + 0.2, -1e-300, f64::MIN_POSITIVE],
-        roll_deg: 1.5,
-        pitch_deg: -2.000_000_000_000_1,
-        yaw_deg: 179.999_999_999_999_97,
-    }
-}
-
-/// One of every message.
+/// One of every message (the target's self-test's list).
 pub(super) fn every_message() -> Vec<Message> {
-    let aided = FilterColumns {
-        sigma_ned_m: [0.5, 0.25, 1.125],
-        sigma_v_ned_m_s: [0.01, 0.02, 0.03],
-        sigma_att_deg: [0.003, 0.004, 0.5],
-        status: "DEGRADED",
-    };
-    let mut config = DeviceConfig::default();
-    config.run.lat_deg = 45.0;
-    config.run.align_method = AlignMethod::Fine;
-    config.run.align_seconds = 300.0;
-    config
-        .apply_line("gnss-lever-arm = 0.1, -0.2, 0.3")
-        .unwrap();
-    config.apply_line("lever-arm = 1,2,3").unwrap();
-    config
-        .apply_line("mounting = 1,0,0, 0,-1,0, 0,0,-1")
-        .unwrap();
-    config.rates.raw_every = 0;
-    vec_of([
-        Message::NavSolution(NavSolution {
-            row: Row::Free(solution()),
-            status: NavStatus::Nav,
-            flags: StatusFlags::FREE_INERTIAL,
-        }),
-        Message::NavSolution(NavSolution {
-            row: Row::Aided(solution(), aided),
-            status: NavStatus::Degraded,
-            flags: StatusFlags::AIDING_REJECTED | StatusFlags::CLIPPING,
-        }),
-        Message::RawIncrements(RawIncrements {
-            sample: ImuSample {
-                t_us: u64::MAX - 7,
-                seq: 123_456,
-                dt_s: 0.0025,
-                motion: Motion::Increments {
-                    delta_theta_ib_b: [1e-6, -2e-6, 3e-9],
-                    delta_v_ib_b: [0.001, -0.002, -0.024_516],
-                },
-                temperature_c: 31.5,
-                flags: SampleFlags::STALE,
-            },
-        }),
-        Message::Health(HealthReport {
-            t_us: 1_000_000,
-            status: NavStatus::Fault,
-            flags: StatusFlags::BUS_ERRORS | StatusFlags::DEVICE_FAULT,
-            counters: HealthCounters {
-                samples: 400_000,
-                missed_data_ready: 2,
-                channel_overruns: 3,
-                bus_errors: 4,
-                checksum_errors: 5,
-                device_faults: 6,
-                gyro_clips: [7, 8, 9],
-                accel_clips: [10, 11, 12],
-                position_aiding: AidCount {
-                    accepted: 13,
-                    rejected: 14,
-                },
-                velocity_aiding: AidCount {
-                    accepted: 15,
-                    rejected: 16,
-                },
-                watchdog_resets: 17,
-            },
-            vibration: VibrationLevels {
-                accel_rms: [18, 19, u16::MAX],
-                gyro_rms: [0, 21, 22],
-            },
-        }),
-        Message::AlignProgress(AlignProgress {
-            t_us: 5_000_000,
-            stage: Stage::Fine,
-            samples: 2000,
-            samples_total: 120_000,
-        }),
-        Message::AidingEvent(AidingEvent {
-            t_us: 7,
-            aid: Aid::Velocity,
-            outcome: AidOutcome::RejectedGate,
-            nis: 42.5,
-        }),
-        Message::EndOfRun(EndOfRun { rows: 102 }),
-        Message::Config(config),
-        Message::ConfigAck(ConfigAck {
-            config_seq: 9,
-            refused: Some(ReasonCode::Mounting),
-        }),
-        Message::ConfigAck(ConfigAck {
-            config_seq: 10,
-            refused: None,
-        }),
-    ])
-}
-
-fn vec_of<const N: usize>(m: [Message; N]) -> Vec<Message> {
-    m.into_iter().collect()
+    super::selftest::every_message().to_vec()
 }
 
 /// The frames of `messages`, one after the other.
@@ -416,37 +304,16 @@ fn random_bytes_never_panic_and_valid_frames_in_garbage_are_all_recovered() {
     }
 }
 
-/// A change to a configuration.
-type Mutation = fn(&mut DeviceConfig);
-
 #[test]
 fn defaults_are_valid_and_each_refusal_has_its_code() {
     let base = DeviceConfig::default();
     assert_eq!(base.validate(), Ok(()));
-    let refused = |f: Mutation| {
+    let refused = |f: fn(&mut DeviceConfig)| {
         let mut c = base;
         f(&mut c);
         c.validate().unwrap_err()
     };
-    let cases: [(Mutation, ReasonCode); 11] = [
-        (|c| c.run.lat_deg = 91.0, ReasonCode::Latitude),
-        (|c| c.run.lon_deg = 400.0, ReasonCode::Longitude),
-        (|c| c.run.h_m = -20_000.0, ReasonCode::Height),
-        (|c| c.run.h_m = f64::NAN, ReasonCode::NotFinite),
-        (|c| c.run.log_every = 0, ReasonCode::SolutionRate),
-        (|c| c.run.bias_prior = -1.0, ReasonCode::BiasPrior),
-        (|c| c.run.align_seconds = 1.0, ReasonCode::Alignment),
-        (|c| c.imu_rate_hz = 0.0, ReasonCode::Alignment),
-        (
-            |c| {
-                c.apply_line("propagation-rate = 10").unwrap();
-                c.run.noise.gyro_bias_rad_s = 0.0;
-            },
-            ReasonCode::Aiding,
-        ),
-        (|c| c.mounting.c_s_b[0][0] = 1.01, ReasonCode::Mounting),
-        (|c| c.rates.health_every = 0, ReasonCode::OutputRate),
-    ];
+    let cases = super::selftest::refusal_cases();
     for (k, (f, code)) in cases.iter().enumerate() {
         let r = refused(*f);
         assert_eq!(r.code(), *code, "case {k}: {r}");
@@ -639,4 +506,13 @@ fn wire_sizes_are_payload_plus_twelve() {
     }
     std::println!("stream at the default rates: {total_at_defaults} bytes/s");
     assert_eq!(total_at_defaults, 400 * 58 + 10 * 132 + 103);
+}
+
+#[test]
+fn the_target_self_checks_pass_on_the_host() {
+    for (name, check) in super::selftest::CHECKS {
+        if let Err(e) = check() {
+            panic!("{name}: {e}");
+        }
+    }
 }
