@@ -716,6 +716,7 @@ fn build_board(root: &Path, enforce_flash: bool) -> Result<()> {
         elf.display()
     );
     print_statics(&data)?;
+    print_code_by_module(&data)?;
     if ram > BOARD_RAM_MAX {
         bail!("board firmware: static RAM {ram} B > {BOARD_RAM_MAX} B");
     }
@@ -733,25 +734,89 @@ fn build_board(root: &Path, enforce_flash: bool) -> Result<()> {
 
 /// Prints the ten largest statics (symbols in `.data`, `.bss`, `.uninit`) of an ELF.
 fn print_statics(elf: &[u8]) -> Result<()> {
-    use object::{Object as _, ObjectSection as _, ObjectSymbol as _};
-    let file = object::File::parse(elf).context("not an ELF")?;
-    let mut statics: Vec<(u64, String)> = file
-        .symbols()
-        .filter_map(|sym| {
-            let section = file.section_by_index(sym.section_index()?).ok()?;
-            let name = section.name().ok()?;
-            let ram = [".data", ".bss", ".uninit"]
-                .iter()
-                .any(|s| name == *s || name.starts_with(&format!("{s}.")));
-            (ram && sym.size() > 0).then(|| (sym.size(), demangle(sym.name().unwrap_or("?"))))
-        })
-        .collect();
+    let mut statics = sized_symbols(elf, &[".data", ".bss", ".uninit"])?;
     statics.sort_unstable_by(|a, b| b.cmp(a));
     println!("largest statics [B]:");
     for (size, name) in statics.iter().take(10) {
         println!("  {size:>6}  {name}");
     }
     Ok(())
+}
+
+/// Prints the flash taken by code and constants (symbols in `.text`, `.rodata`) grouped by
+/// module: `crate::module::item` for the workspace's crates, `crate::module` for the others
+/// (what to cut when the board's flash is above its target).
+fn print_code_by_module(elf: &[u8]) -> Result<()> {
+    let mut groups = std::collections::BTreeMap::<String, u64>::new();
+    for (size, name) in sized_symbols(elf, &[".text", ".rodata"])? {
+        *groups.entry(module_of(&name)).or_default() += size;
+    }
+    let mut groups: Vec<(u64, String)> = groups.into_iter().map(|(m, s)| (s, m)).collect();
+    groups.sort_unstable_by(|a, b| b.cmp(a));
+    println!("largest code by module (.text, .rodata) [B]:");
+    for (size, module) in groups.iter().take(15) {
+        println!("  {size:>6}  {module}");
+    }
+    Ok(())
+}
+
+/// The sized symbols of an ELF in the named sections (or their `.name.*` parts), demangled.
+fn sized_symbols(elf: &[u8], sections: &[&str]) -> Result<Vec<(u64, String)>> {
+    use object::{Object as _, ObjectSection as _, ObjectSymbol as _};
+    let file = object::File::parse(elf).context("not an ELF")?;
+    Ok(file
+        .symbols()
+        .filter_map(|sym| {
+            let section = file.section_by_index(sym.section_index()?).ok()?;
+            let name = section.name().ok()?;
+            let wanted = sections
+                .iter()
+                .any(|s| name == *s || name.starts_with(&format!("{s}.")));
+            (wanted && sym.size() > 0).then(|| (sym.size(), demangle(sym.name().unwrap_or("?"))))
+        })
+        .collect())
+}
+
+/// The module a demangled symbol belongs to: an impl's (`<a..b..T as ..>::f`) by its type's
+/// path; three parts deep for the workspace's crates, two for the others.
+fn module_of(name: &str) -> String {
+    if let Some(path) = v0_path(name) {
+        return module_of(&path);
+    }
+    let path = name.trim_start_matches(['_', '<']).replace("..", "::");
+    let mut words = path.split("$u20$");
+    let own = words.next().unwrap_or_default();
+    // `<&T as Trait>::f`: the trait's module.
+    let path = match (own.starts_with("$RF$"), words.nth(1)) {
+        (true, Some(tr)) => tr,
+        _ => own,
+    };
+    let parts: Vec<&str> = path
+        .split("::")
+        .map(|p| p.split(['$', '<', '>']).next().unwrap_or_default())
+        .filter(|p| !p.is_empty())
+        .collect();
+    let ours = matches!(
+        parts.first(),
+        Some(&("nav_core" | "firmware" | "hal_adapters"))
+    );
+    parts[..parts.len().min(if ours { 3 } else { 2 })].join("::")
+}
+
+/// The identifiers of a v0-mangled symbol's path (`_R`...: core's, as shipped), joined by
+/// `::` (its crate first; enough to group by module, not a full demangler).
+fn v0_path(name: &str) -> Option<String> {
+    let rest = name.strip_prefix("_R")?;
+    let crate_at = rest.find("Cs")? + 2;
+    let mut rest = &rest[crate_at + rest[crate_at..].find('_')? + 1..];
+    let mut parts = Vec::new();
+    while let Some(end) = rest.find(|c: char| !c.is_ascii_digit()).filter(|&e| e > 0) {
+        let len: usize = rest[..end].parse().ok()?;
+        parts.push(rest.get(end..end + len)?);
+        // Skip the namespace tags between identifiers (`Nv`, `Nt`, ...).
+        rest = rest[end + len..].trim_start_matches(|c: char| c.is_ascii_alphabetic());
+    }
+    (!parts.is_empty()).then(|| parts.join("::"))
 }
 
 /// A legacy-mangled Rust symbol (`_ZN` length-prefixed parts, hash last) as `a::b::c`.

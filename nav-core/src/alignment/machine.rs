@@ -26,7 +26,9 @@ use super::fine::model::FINE_STATES;
 use super::fine::{Blank, FineConfig, FineRefusal, NoExtension};
 use super::inertial::{InertialAlignError, InertialAlignment, SensorNoise};
 use super::stillness::{Scatter, Stillness};
-use super::sway::{SwayAlignment, SwayConfig};
+use super::sway::SwayAlignment;
+#[cfg(feature = "align-sway")]
+use super::sway::SwayConfig;
 use crate::{ImuIncrement, InputLimits, NavState, Position, Scalar, earth};
 use nalgebra::{UnitQuaternion, Vector3};
 
@@ -67,6 +69,17 @@ impl AlignMethod {
     /// The method called `name`, if any.
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// Whether the method is in this build: the fine and sway filters are nav-core's
+    /// features `align-fine` and `align-sway` (a small board's firmware leaves them out of
+    /// its flash); the static and inertial methods are always in.
+    pub const fn compiled_in(self) -> bool {
+        match self {
+            Self::Static | Self::Inertial => true,
+            Self::Fine => cfg!(feature = "align-fine"),
+            Self::Sway => cfg!(feature = "align-sway"),
+        }
     }
 
     /// The shortest window the method accepts [s].
@@ -148,6 +161,9 @@ pub enum AlignFailure {
         /// The method's minimum [s].
         min_s: f64,
     },
+    /// The method is not in this build ([`AlignMethod::compiled_in`]; settings built through
+    /// [`AlignSettings::new`] refuse it before any sample).
+    NotCompiledIn(AlignMethod),
 }
 
 impl core::fmt::Display for AlignFailure {
@@ -165,6 +181,7 @@ impl core::fmt::Display for AlignFailure {
                 f,
                 "the data cover {seconds:.3} s, less than the method's minimum of {min_s} s"
             ),
+            Self::NotCompiledIn(method) => not_compiled_in(f, *method),
         }
     }
 }
@@ -205,6 +222,7 @@ impl AlignFailure {
             },
             Self::BaseMoving(_) => "base not still",
             Self::WindowTooShort { .. } => "window too short",
+            Self::NotCompiledIn(_) => "method not in this build",
         }
     }
 }
@@ -289,6 +307,7 @@ fn start_fine<T: Scalar>(
 /// Starts the sway filters in `slot`, in place ([`Blank::BLANK`] once, then
 /// [`SwayAlignment::init_in`]; not inlined, as [`start_fine`]).
 #[inline(never)]
+#[cfg(feature = "align-sway")]
 fn start_sway<T: Scalar>(
     slot: &mut Option<SwayAlignment<T>>,
     q_b_c: UnitQuaternion<T>,
@@ -346,6 +365,8 @@ pub enum SettingsError {
         /// The 1-sigma per axis [m].
         sigma_m: f64,
     },
+    /// The method is not in this build ([`AlignMethod::compiled_in`]).
+    NotCompiledIn(AlignMethod),
     /// [`AlignMethod::Sway`] with the lever arm not given: on the alignment family its
     /// heading 1-sigma is not true then (an unknown lever arm's estimate and the sway model
     /// share the roll and pitch signal), so it is not offered.
@@ -377,6 +398,7 @@ impl core::fmt::Display for SettingsError {
             ),
             Self::BadRate(r) => write!(f, "sampling rate {r} Hz is not a positive number"),
             Self::NearPole => f.write_str("latitude not finite or too close to a pole to align"),
+            Self::NotCompiledIn(method) => not_compiled_in(f, *method),
             Self::BadValue(what) => write!(f, "{what} must be finite and not negative"),
             Self::LeverArmTooLong { length_m } => write!(
                 f,
@@ -415,6 +437,7 @@ impl SettingsError {
             Self::WindowTooShort { .. } => "window too short",
             Self::BadRate(_) => "bad sampling rate",
             Self::NearPole => "near a pole",
+            Self::NotCompiledIn(_) => "method not in this build",
             Self::BadValue(_) => "bad value",
             Self::SwayNeedsLeverArm => "sway needs the lever arm",
             Self::GyrosTooCoarse { .. } => "gyros too coarse to find north",
@@ -426,6 +449,16 @@ impl SettingsError {
 }
 
 impl core::error::Error for SettingsError {}
+
+/// The refusal of a method left out of the build, naming the feature that has it.
+fn not_compiled_in(f: &mut core::fmt::Formatter<'_>, method: AlignMethod) -> core::fmt::Result {
+    write!(
+        f,
+        "the {} alignment is not in this build (nav-core feature `align-{}`); use static or inertial",
+        method.name(),
+        method.name()
+    )
+}
 
 /// What to run, where.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -525,6 +558,9 @@ impl<T: Scalar> AlignSettings<T> {
 
     /// [`Self::validate`] without the lever-arm case (the lever arm is set after [`Self::new`]).
     fn validate_values(&self) -> Result<(), SettingsError> {
+        if !self.method.compiled_in() {
+            return Err(SettingsError::NotCompiledIn(self.method));
+        }
         if !(self.rate_hz.is_finite() && self.rate_hz > 0.0) {
             return Err(SettingsError::BadRate(self.rate_hz));
         }
@@ -688,6 +724,9 @@ pub struct Aligner<T: Scalar> {
     /// what an MCU task's stack can hold twice). The sway method runs the general bank beside
     /// its own: its answer when the sway model is off or refuted.
     kalman: Option<Bank<T, FINE_STATES, NoExtension>>,
+    /// Only in a build with the sway method: its filters would take their 30 KB of the
+    /// (stack-held) machine in every run otherwise.
+    #[cfg(feature = "align-sway")]
     sway: Option<SwayAlignment<T>>,
     stage: Stage,
     times: StageTimes,
@@ -701,8 +740,11 @@ pub struct Aligner<T: Scalar> {
 }
 
 impl<T: Scalar> Aligner<T> {
-    /// A machine at the start of the coarse stage.
+    /// A machine at the start of the coarse stage ([`Stage::Failed`] at once, with
+    /// [`AlignFailure::NotCompiledIn`], for a method not in this build: settings made past
+    /// [`AlignSettings::new`]'s check).
     pub fn new(settings: AlignSettings<T>) -> Self {
+        let missing = !settings.method.compiled_in();
         let lat = settings.position.lat::<T>();
         let h = settings.position.h::<T>();
         let coarse = match settings.method {
@@ -728,10 +770,15 @@ impl<T: Scalar> Aligner<T> {
             limits: InputLimits::default(),
             coarse,
             kalman: None,
+            #[cfg(feature = "align-sway")]
             sway: None,
-            stage: Stage::Coarse,
+            stage: if missing {
+                Stage::Failed
+            } else {
+                Stage::Coarse
+            },
             times: StageTimes::default(),
-            failure: None,
+            failure: missing.then_some(AlignFailure::NotCompiledIn(settings.method)),
             outcome: None,
             refused: 0,
             last_rate: Vector3::zeros(),
@@ -762,8 +809,27 @@ impl<T: Scalar> Aligner<T> {
 
     /// The sway stage, once [`AlignMethod::Sway`]'s has started (for inspection; no longer
     /// fed once no filter applies its model, [`SwayAlignment::model_in_use`]).
+    #[cfg(feature = "align-sway")]
     pub fn sway(&self) -> Option<&SwayAlignment<T>> {
         self.sway.as_ref()
+    }
+
+    /// The sway stage: never in a build without the sway method.
+    #[cfg(not(feature = "align-sway"))]
+    pub fn sway(&self) -> Option<&SwayAlignment<T>> {
+        None
+    }
+
+    /// [`Self::sway`], to feed it.
+    #[cfg(feature = "align-sway")]
+    fn sway_mut(&mut self) -> Option<&mut SwayAlignment<T>> {
+        self.sway.as_mut()
+    }
+
+    /// [`Self::sway`], to feed it: never in a build without the sway method.
+    #[cfg(not(feature = "align-sway"))]
+    fn sway_mut(&mut self) -> Option<&mut SwayAlignment<T>> {
+        None
     }
 
     /// Increments refused by the input limits (not counted as alignment samples).
@@ -838,13 +904,18 @@ impl<T: Scalar> Aligner<T> {
     /// start ([`start_sway`]).
     #[inline(never)]
     fn step_fine(&mut self, inc: &ImuIncrement<T>, dt: f64) {
+        // The filters' code is linked only where their features are on (`cfg!` folds to a
+        // constant: the calls are dead code without them, and the stage never starts).
+        if !cfg!(feature = "align-fine") {
+            return;
+        }
         // Checked above with the filters' default limits: cannot be refused.
         if let Some(f) = &mut self.kalman {
             let _ = f.add(inc);
         }
         // With its model off in every filter the sway bank is the general one: not run
         // twice.
-        if let Some(f) = self.sway.as_mut().filter(|f| f.model_in_use()) {
+        if let Some(f) = self.sway_mut().filter(|f| f.model_in_use()) {
             let _ = f.add(inc);
         }
         self.times.fine_samples += 1;
@@ -859,6 +930,10 @@ impl<T: Scalar> Aligner<T> {
         let Coarse::Inertial(a) = &self.coarse else {
             return;
         };
+        // Not reached without the feature (the settings refuse the method): its code left out.
+        if !cfg!(feature = "align-fine") {
+            return;
+        }
         let position = self.settings.position;
         // A mean specific force a factor off gravity is the data's scale (rate, timestamps,
         // units), not the base's motion: refused here with the numbers, not later as an
@@ -889,6 +964,7 @@ impl<T: Scalar> Aligner<T> {
             },
             ..FineConfig::default()
         };
+        #[cfg(feature = "align-sway")]
         if self.settings.method == AlignMethod::Sway {
             start_sway(&mut self.sway, q_b_c, self.last_rate, position, fine);
         }
@@ -903,7 +979,7 @@ impl<T: Scalar> Aligner<T> {
         };
         // The sway model's answer where it holds; else the general filter's, with a note
         // (its refusal where it refuses too: the data support no answer).
-        let (result, note) = match &self.sway {
+        let (result, note) = match self.sway() {
             None => (general.outcome(), None),
             Some(f) => match f.model_off() {
                 Some(a) => (
@@ -1162,6 +1238,39 @@ mod tests {
             delta_v_ib_b: q_n_b * Vector3::new(0.0, 0.0, -g) * DT,
             dt: DT,
         }
+    }
+
+    /// A method left out of the build (nav-core without `align-fine`/`align-sway`, as the
+    /// STM32F405 board's firmware) is refused by the settings with a reason naming the
+    /// feature, and a machine made past that check fails at once instead of running another
+    /// method. `cargo test -p nav-core --no-default-features --lib not_compiled_in`.
+    #[test]
+    fn a_method_not_compiled_in_is_refused_with_its_feature() {
+        let position = Position::from_degrees(45.0, 7.5, 100.0);
+        let noise = settings(AlignMethod::Static, 60.0).noise;
+        for method in AlignMethod::ALL {
+            let made = AlignSettings::new(method, position, 60.0, 1.0 / DT, noise);
+            if method.compiled_in() {
+                assert!(made.is_ok(), "{method:?}: {made:?}");
+                continue;
+            }
+            assert_eq!(made, Err(SettingsError::NotCompiledIn(method)));
+            let text = std::format!("{}", SettingsError::NotCompiledIn(method));
+            assert!(
+                text.contains(&std::format!("align-{}", method.name())),
+                "{text}"
+            );
+            let forced = AlignSettings {
+                method,
+                ..settings(AlignMethod::Inertial, 60.0)
+            };
+            let machine = Aligner::new(forced);
+            assert_eq!(machine.stage(), Stage::Failed);
+            assert_eq!(machine.failure(), Some(AlignFailure::NotCompiledIn(method)));
+        }
+        // The default build has every method.
+        let all = cfg!(feature = "align-fine") && cfg!(feature = "align-sway");
+        assert_eq!(AlignMethod::ALL.iter().all(|m| m.compiled_in()), all);
     }
 
     #[test]

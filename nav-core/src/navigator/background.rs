@@ -2,6 +2,7 @@
 //! firmware's `align` task), driven by messages from the foreground: the alignment, then, in
 //! an aided run, the navigation filter's covariance ([`ErrorFilter`]: propagation and updates).
 
+use super::config::AIDED_COMPILED_IN;
 use super::setup::Setup;
 use crate::Scalar;
 use crate::alignment::{AlignFailure, AlignOutcome, AlignSettings, Aligner, Progress, Stage};
@@ -199,8 +200,9 @@ impl<T: Scalar> Background<T> {
     #[inline(never)]
     fn filter_work(&mut self, message: ToBackground<T>) -> Option<FromBackground<T>> {
         let filter = match &mut self.work {
-            Work::Filtering { filter, .. } => Some(filter),
-            Work::Aligning(_) => None,
+            // Not entered without the aided filter: the constant leaves its work out.
+            Work::Filtering { filter, .. } if AIDED_COMPILED_IN => Some(filter),
+            Work::Filtering { .. } | Work::Aligning(_) => None,
         };
         match message {
             ToBackground::Align(inc) => self.align(&inc),
@@ -260,7 +262,7 @@ impl<T: Scalar> Background<T> {
     /// to [`Self::align`]'s frame, under the fine stage's deepest path.
     #[inline(never)]
     fn start_filter(&mut self, outcome: AlignOutcome<T>) -> FromBackground<T> {
-        let Some(config) = self.filter_config else {
+        let Some(config) = self.filter_config.filter(|_| AIDED_COMPILED_IN) else {
             return FromBackground::Aligned(outcome);
         };
         let yaw = outcome.state.euler().2;

@@ -17,6 +17,11 @@ use core::fmt;
 /// Default number of navigation steps between logged solutions (10 Hz at 400 Hz).
 pub const DEFAULT_LOG_EVERY: u32 = 40;
 
+/// Whether the GNSS-aided filter is in this build (nav-core's feature `aided`; a small board's
+/// firmware without a receiver leaves it out of its flash). The navigator's aided paths test
+/// it, so that without the feature they fold away.
+pub const AIDED_COMPILED_IN: bool = cfg!(feature = "aided");
+
 /// The selectable parts of the mechanization (nav-core's defaults: wander azimuth, rotation
 /// vector, free vertical channel).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -220,6 +225,11 @@ impl RunConfig {
             .compensation::<f64>()
             .map_err(ConfigError::Calibration)?;
         if let Some(a) = &self.aiding {
+            if !AIDED_COMPILED_IN {
+                return Err(ConfigError::Aiding(
+                    "the GNSS-aided filter is not in this build (nav-core feature `aided`)",
+                ));
+            }
             let interval = a.propagation_interval_s;
             if !(interval.is_finite() && interval > 0.0 && interval <= 1.0) {
                 return Err(ConfigError::Aiding(
@@ -448,6 +458,25 @@ mod tests {
 
     fn config() -> RunConfig {
         RunConfig::new(45.0, 7.5, 150.0, 10.0, SensorNoise::seed003())
+    }
+
+    /// Without the aided filter (nav-core's `aided` off, as the STM32F405 board's firmware) a
+    /// configuration asking for aiding is refused with a reason naming the feature; with it,
+    /// accepted. `cargo test -p nav-core --no-default-features --lib not_compiled_in`.
+    #[test]
+    fn aiding_not_compiled_in_is_refused_with_its_feature() {
+        let c = RunConfig {
+            aiding: Some(AidingConfig::default()),
+            ..config()
+        };
+        if AIDED_COMPILED_IN {
+            assert_eq!(c.validate(), Ok(()));
+        } else {
+            let e = c.validate().unwrap_err();
+            assert!(matches!(e, ConfigError::Aiding(_)), "{e:?}");
+            assert!(e.to_string().contains("feature `aided`"), "{e}");
+        }
+        assert_eq!(config().validate(), Ok(()));
     }
 
     #[test]

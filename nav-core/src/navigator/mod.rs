@@ -80,7 +80,9 @@ mod tests;
 pub use background::{
     Background, FilterReport, FromBackground, SIGMA_FLOORS, ToBackground, initial_sigma,
 };
-pub use config::{AidingConfig, ConfigError, MechanizationChoices, OptionError, RunConfig};
+pub use config::{
+    AIDED_COMPILED_IN, AidingConfig, ConfigError, MechanizationChoices, OptionError, RunConfig,
+};
 pub use foreground::{
     Counters, FlaggedCounts, ImuInput, NavError, Navigator, Step, Summary, Unusable,
 };
