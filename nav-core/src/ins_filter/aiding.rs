@@ -79,6 +79,12 @@ pub struct AidCounters {
     pub invalid: u32,
     /// Gate refusals since the last accepted one.
     pub consecutive_rejected: u32,
+    /// Of the refused, refused by the windowed innovation test although each passed the
+    /// per-fix gate ([`super::integrity`]; GNSS position only).
+    pub window_rejected: u32,
+    /// Of the refused, refused as members of a consistent cluster refused before, although
+    /// each passed the per-fix gate ([`super::integrity`]; GNSS position only).
+    pub cluster_rejected: u32,
 }
 
 impl AidCounters {

@@ -1,10 +1,13 @@
 //! The filter's background half: the covariance, its propagation and the measurement updates.
 //! It sees the navigation solution only through [`Snapshot`]s and answers each accepted update
-//! with the [`Correction`] the foreground feeds back.
+//! with the [`Correction`] the foreground feeds back. Position fixes pass the per-fix
+//! chi-square gate and then the tests of [`super::integrity`] (a windowed innovation test for
+//! slow faults, the refusal of a consistent cluster refused before).
 
 use super::aiding::{AidCounters, AidResult, FilterCounters, GnssPosition, GnssVelocity};
 use super::covariance::{self, Transition};
 use super::foreground::Propagation;
+use super::integrity::{InnovationWindow, RefusedCluster, WindowVerdict, whiten};
 use super::model;
 use super::stationarity::StillWindow;
 use super::{
@@ -42,6 +45,13 @@ pub struct Correction<T: Scalar> {
     pub x: StateVector<T>,
 }
 
+/// A measurement `z = H x + v`, `v ~ N(0, diag(r))`, `z` predicted minus measured.
+struct Measurement<T: Scalar, const M: usize> {
+    z: SVector<T, M>,
+    h: SMatrix<T, M, N>,
+    r: SVector<T, M>,
+}
+
 /// The background half (module docs).
 #[derive(Clone, Debug)]
 pub struct ErrorFilter<T: Scalar> {
@@ -51,6 +61,10 @@ pub struct ErrorFilter<T: Scalar> {
     counters: FilterCounters,
     covariance_faults: u32,
     fault_latched: bool,
+    window: InnovationWindow<T>,
+    cluster: Option<RefusedCluster<T>>,
+    /// Propagated time since the last position fix [s].
+    since_fix_s: T,
 }
 
 impl<T: Scalar> ErrorFilter<T> {
@@ -77,6 +91,9 @@ impl<T: Scalar> ErrorFilter<T> {
             counters: FilterCounters::default(),
             covariance_faults: 0,
             fault_latched: false,
+            window: InnovationWindow::default(),
+            cluster: None,
+            since_fix_s: T::zero(),
         })
     }
 
@@ -153,6 +170,7 @@ impl<T: Scalar> ErrorFilter<T> {
         let q = model::noise_density(&self.config.noise, self.config.scale_factors, &prop.lin);
         covariance::propagate(&mut self.p, &phi, &q, prop.dt);
         self.counters.propagations = self.counters.propagations.wrapping_add(1);
+        self.since_fix_s += prop.dt;
         self.check_covariance();
     }
 
@@ -219,39 +237,52 @@ impl<T: Scalar> ErrorFilter<T> {
         true
     }
 
+    /// The innovation covariance `S = H P H^T + diag(r)` and the normalised innovation
+    /// squared `z^T S^-1 z` of a measurement; `None` when `S` is singular or the NIS not
+    /// finite.
+    fn innovation<const M: usize>(&self, m: &Measurement<T, M>) -> Option<(SMatrix<T, M, M>, T)> {
+        let mut s = m.h * self.p * m.h.transpose();
+        for i in 0..M {
+            s[(i, i)] += m.r[i];
+        }
+        let s_inv = s.try_inverse()?;
+        let nis = (m.z.transpose() * s_inv * m.z)[(0, 0)];
+        (nis.finite() && nis >= T::zero()).then_some((s, nis))
+    }
+
     /// A vector measurement `z = H x + v`, `v ~ N(0, diag(r))`, `z` "predicted minus
     /// measured": the chi-square gate on the whole vector, then scalar Joseph updates in
     /// sequence [Groves, eq. 3.58], and the estimate handed out for the feedback.
     fn update<const M: usize>(
         &mut self,
-        z: &SVector<T, M>,
-        h: &SMatrix<T, M, N>,
-        r: &SVector<T, M>,
+        m: &Measurement<T, M>,
     ) -> (AidResult<T>, Option<Correction<T>>) {
-        let ph = self.p * h.transpose();
-        let mut s = h * ph;
-        for i in 0..M {
-            s[(i, i)] += r[i];
-        }
-        let Some(s_inv) = s.try_inverse() else {
+        let Some((s, nis)) = self.innovation(m) else {
             return (AidResult::Invalid, None);
         };
-        let nis = (z.transpose() * s_inv * z)[(0, 0)];
-        if !(nis.finite() && nis >= T::zero()) {
-            return (AidResult::Invalid, None);
-        }
         if nis > self.config.gate_nis {
             return (AidResult::Rejected { nis }, None);
         }
+        self.apply(m, &s, nis)
+    }
+
+    /// The scalar Joseph updates of a measurement that passed its tests, with innovation
+    /// covariance `s`.
+    fn apply<const M: usize>(
+        &mut self,
+        m: &Measurement<T, M>,
+        s: &SMatrix<T, M, M>,
+        nis: T,
+    ) -> (AidResult<T>, Option<Correction<T>>) {
         for i in 0..M {
-            let hi = h.row(i).transpose();
-            let innovation = z[i] - hi.dot(&self.x);
+            let hi = m.h.row(i).transpose();
+            let innovation = m.z[i] - hi.dot(&self.x);
             // Re-acquisition after a gap: one fix may not shrink the predicted variance more
             // than MAX_SHRINK times (its noise variance is raised to the prediction's share):
             // a fix far inside a wide prediction can still be an outlier the gate cannot see,
             // and the next fixes must be able to pull the solution back.
-            let predicted = s[(i, i)] - r[i];
-            let r_eff = r[i].max(predicted / T::c(MAX_SHRINK - 1.0));
+            let predicted = s[(i, i)] - m.r[i];
+            let r_eff = m.r[i].max(predicted / T::c(MAX_SHRINK - 1.0));
             if update_scalar(&mut self.x, &mut self.p, &hi, innovation, r_eff, T::c(1e15))
                 != ScalarUpdate::Accepted
             {
@@ -273,31 +304,92 @@ impl<T: Scalar> ErrorFilter<T> {
         out
     }
 
-    /// A GNSS position fix of the antenna taken `lag_s` [s] before the snapshot's sample.
+    /// A GNSS position fix of the antenna taken `lag_s` [s] before the snapshot's sample: the
+    /// per-fix gate, then the refused-cluster rule and the windowed innovation test
+    /// ([`super::integrity`]).
     pub fn position(
         &mut self,
         snap: &Snapshot<T>,
         fix: &GnssPosition<T>,
         lag_s: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
-        let out = self.position_update(snap, fix, lag_s);
+        let out = match self.position_measurement(snap, fix, lag_s) {
+            Some(m) => self.screened_position_update(&m),
+            None => (AidResult::Invalid, None),
+        };
         Self::counted(&mut self.counters.position, out)
     }
 
-    fn position_update(
+    /// The position update with the integrity tests of [`super::integrity`].
+    fn screened_position_update(
         &mut self,
+        m: &Measurement<T, 3>,
+    ) -> (AidResult<T>, Option<Correction<T>>) {
+        let Some((s, nis)) = self.innovation(m) else {
+            return (AidResult::Invalid, None);
+        };
+        let gate = self.config.gate_nis;
+        // Time since the previous fix (the cluster's last member, if refused) [s].
+        let dt = core::mem::replace(&mut self.since_fix_s, T::zero());
+        let refused = RefusedCluster {
+            z_ned_m: m.z,
+            r_ned_m2: m.r,
+        };
+        if nis > gate {
+            self.cluster = Some(refused);
+            return (AidResult::Rejected { nis }, None);
+        }
+        // A member of the cluster refused before.
+        let drift_var = Vector3::new(
+            self.p[(VEL, VEL)],
+            self.p[(VEL + 1, VEL + 1)],
+            self.p[(VEL + 2, VEL + 2)],
+        ) * (dt * dt);
+        if let Some(c) = &self.cluster
+            && c.contains(&m.z, &m.r, &drift_var, gate)
+            && !c.is_typical(&s)
+        {
+            self.cluster = Some(refused);
+            let n = &mut self.counters.position.cluster_rejected;
+            *n = n.saturating_add(1);
+            return (AidResult::Rejected { nis }, None);
+        }
+        let Some(w) = whiten(&s, &m.z) else {
+            return (AidResult::Invalid, None);
+        };
+        self.window.push(w);
+        if self.window.verdict(gate) != WindowVerdict::Consistent {
+            // What the window's earlier fixes pulled the filter by is now doubtful.
+            let d = self.window.take_corrections();
+            self.p += d * d.transpose();
+            self.check_covariance();
+            let n = &mut self.counters.position.window_rejected;
+            *n = n.saturating_add(1);
+            return (AidResult::Rejected { nis }, None);
+        }
+        self.cluster = None;
+        let out = self.apply(m, &s, nis);
+        if let Some(c) = &out.1 {
+            self.window.set_last_correction(&c.x);
+        }
+        out
+    }
+
+    /// The measurement of a position fix: predicted minus measured, the INS position's NED
+    /// offset from the fix (metres, at the fix) plus the lever arm, moved back to the fix
+    /// time; `None` for an invalid fix.
+    fn position_measurement(
+        &self,
         snap: &Snapshot<T>,
         fix: &GnssPosition<T>,
         lag_s: T,
-    ) -> (AidResult<T>, Option<Correction<T>>) {
+    ) -> Option<Measurement<T, 3>> {
         if !(fix.is_valid() && lag_s.finite()) {
-            return (AidResult::Invalid, None);
+            return None;
         }
         let st = &snap.state;
         let c_b_n = st.q_b_n.to_rotation_matrix().into_inner();
         let l_n = c_b_n * self.config.antenna_lever_arm_b_m;
-        // Predicted minus measured: the INS position's NED offset from the fix (metres, at the
-        // fix), plus the lever arm, moved back to the fix time.
         let measured = Position::from_radians(fix.lat_rad, fix.lon_rad, fix.h_m);
         let d = measured.ned_to(&st.position);
         let z = Vector3::new(T::c(d[0]), T::c(d[1]), T::c(d[2])) + l_n - st.v_eb_n * lag_s;
@@ -308,7 +400,7 @@ impl<T: Scalar> ErrorFilter<T> {
         h.fixed_view_mut::<3, 3>(0, ATT)
             .copy_from(&model::skew(&l_n));
         let r = fix.sigma_ned_m.component_mul(&fix.sigma_ned_m);
-        self.update(&z, &h, &r)
+        Some(Measurement { z, h, r })
     }
 
     /// A GNSS velocity of the antenna taken `lag_s` [s] before the snapshot's sample.
@@ -318,26 +410,30 @@ impl<T: Scalar> ErrorFilter<T> {
         fix: &GnssVelocity<T>,
         lag_s: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
-        let out = self.velocity_update(snap, fix, lag_s);
+        let out = match self.velocity_measurement(snap, fix, lag_s) {
+            Some(m) => self.update(&m),
+            None => (AidResult::Invalid, None),
+        };
         Self::counted(&mut self.counters.velocity, out)
     }
 
-    fn velocity_update(
-        &mut self,
+    /// The measurement of a velocity fix: `v_ant = v + C (omega_ib_b x l) - omega_ie_n x (C l)`
+    /// (the lever arm's velocity relative to the Earth) minus the fix, moved back to the fix
+    /// time; `None` for an invalid fix.
+    fn velocity_measurement(
+        &self,
         snap: &Snapshot<T>,
         fix: &GnssVelocity<T>,
         lag_s: T,
-    ) -> (AidResult<T>, Option<Correction<T>>) {
+    ) -> Option<Measurement<T, 3>> {
         if !(fix.is_valid() && lag_s.finite()) {
-            return (AidResult::Invalid, None);
+            return None;
         }
         let st = &snap.state;
         let c_b_n = st.q_b_n.to_rotation_matrix().into_inner();
         let l_b = self.config.antenna_lever_arm_b_m;
         let l_n = c_b_n * l_b;
         let omega_ie_n = snap.earth.omega_ie_n();
-        // v_ant = v + C (omega_ib_b x l) - omega_ie_n x (C l): the lever arm's velocity
-        // relative to the Earth.
         let rot_n = c_b_n * snap.omega_ib_b.cross(&l_b);
         let v_ant = st.v_eb_n + rot_n - omega_ie_n.cross(&l_n) - snap.a_eb_n * lag_s;
         let z = v_ant - fix.v_ned_m_s;
@@ -354,7 +450,7 @@ impl<T: Scalar> ErrorFilter<T> {
                 .copy_from(&(c_l * Matrix3::from_diagonal(&snap.omega_ib_b)));
         }
         let r = fix.sigma_ned_m_s.component_mul(&fix.sigma_ned_m_s);
-        self.update(&z, &h, &r)
+        Some(Measurement { z, h, r })
     }
 
     /// Zero-velocity and zero-rate updates over a still window: both results and the
@@ -377,7 +473,7 @@ impl<T: Scalar> ErrorFilter<T> {
         h.fixed_view_mut::<3, 3>(0, VEL)
             .copy_from(&Matrix3::identity());
         let r = Vector3::repeat(zm.velocity_sigma_m_s * zm.velocity_sigma_m_s);
-        let (rv, cv) = self.update(&z, &h, &r);
+        let (rv, cv) = self.update(&Measurement { z, h, r });
         self.counters.zero_velocity.count(&rv);
         // The rate only at a stop the velocity confirms: a gentle curve driven at constant
         // speed also passes the detector, and its rate taken for a gyro bias would turn the
@@ -403,7 +499,8 @@ impl<T: Scalar> ErrorFilter<T> {
             .copy_from(&Matrix3::identity());
         let arw = self.config.noise.arw_rad_per_sqrt_s;
         let var = arw * arw / w.duration_s + zm.rate_sigma_rad_s * zm.rate_sigma_rad_s;
-        let (rr, cr) = self.update(&z, &h, &Vector3::repeat(var));
+        let r = Vector3::repeat(var);
+        let (rr, cr) = self.update(&Measurement { z, h, r });
         self.counters.zero_rate.count(&rr);
         let c = match (cv, cr) {
             (Some(a), Some(b)) => Some(Correction { x: a.x + b.x }),

@@ -5,6 +5,8 @@
 //! - [`model`]: the INS error equations (the process model) and their discretisation;
 //! - [`covariance`]: the covariance propagation over the transition matrix's blocks;
 //! - [`aiding`]: the measurements, their outcomes and counters;
+//! - [`integrity`]: the windowed innovation test and the refusal of a consistent cluster of
+//!   wrong position fixes;
 //! - [`stationarity`]: the IMU-only stop detector;
 //! - [`motion`]: the start in motion from GNSS (level from the accelerometers, heading from the
 //!   GNSS track).
@@ -28,6 +30,7 @@ pub mod aiding;
 pub mod background;
 pub mod covariance;
 pub mod foreground;
+pub mod integrity;
 pub mod model;
 pub mod motion;
 pub mod sequencer;
