@@ -369,12 +369,7 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
 /// The report's lines for the terminal.
 pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
     let c = &r.counters;
-    let line = |name: &str, a: &nav_core::ins_filter::AidCounters| {
-        format!(
-            "{name}: {} accepted, {} rejected by the gate, {} invalid",
-            a.accepted, a.rejected, a.invalid
-        )
-    };
+    let line = |name: &str, a: &nav_core::ins_filter::AidCounters| format!("{name}: {a}");
     [
         format!(
             "{}: {} samples ({} flagged, {} refused), {} rows -> {}",

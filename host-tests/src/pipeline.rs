@@ -159,11 +159,7 @@ impl fmt::Display for AidedOutcome {
         let c = &self.counters;
         let aid =
             |f: &mut fmt::Formatter<'_>, name: &str, a: &nav_core::ins_filter::AidCounters| {
-                writeln!(
-                    f,
-                    "  {name}: {} accepted, {} rejected by the gate, {} invalid",
-                    a.accepted, a.rejected, a.invalid
-                )
+                writeln!(f, "  {name}: {a}")
             };
         writeln!(
             f,

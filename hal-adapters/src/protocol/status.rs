@@ -451,7 +451,7 @@ mod tests {
                 accepted: 10,
                 rejected: 2,
                 invalid: 1,
-                consecutive_rejected: 0,
+                ..AidCounters::default()
             },
             velocity: AidCounters {
                 accepted: 4,

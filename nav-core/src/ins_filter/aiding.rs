@@ -103,6 +103,21 @@ impl AidCounters {
     }
 }
 
+impl core::fmt::Display for AidCounters {
+    /// `A accepted, R rejected (W by the window test, C as a refused cluster), I invalid`.
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{} accepted, {} rejected", self.accepted, self.rejected)?;
+        if self.window_rejected > 0 || self.cluster_rejected > 0 {
+            write!(
+                f,
+                " ({} by the window test, {} as a refused cluster)",
+                self.window_rejected, self.cluster_rejected
+            )?;
+        }
+        write!(f, ", {} invalid", self.invalid)
+    }
+}
+
 /// The counters of every aid.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FilterCounters {
