@@ -117,13 +117,26 @@ pub fn filter(r: &FilterReport<f32>, fixes: &FixCounters, unused: u32, after_dat
         ("zero velocity", &c.zero_velocity),
         ("zero rate", &c.zero_rate),
     ] {
-        defmt::info!(
-            "  {=str}: {=u32} accepted, {=u32} rejected by the gate, {=u32} invalid",
-            name,
-            a.accepted,
-            a.rejected,
-            a.invalid
-        );
+        // The words of `AidCounters`' Display, which the harness prints.
+        if a.window_rejected > 0 || a.cluster_rejected > 0 {
+            defmt::info!(
+                "  {=str}: {=u32} accepted, {=u32} rejected ({=u32} by the window test, {=u32} as a refused cluster), {=u32} invalid",
+                name,
+                a.accepted,
+                a.rejected,
+                a.window_rejected,
+                a.cluster_rejected,
+                a.invalid
+            );
+        } else {
+            defmt::info!(
+                "  {=str}: {=u32} accepted, {=u32} rejected, {=u32} invalid",
+                name,
+                a.accepted,
+                a.rejected,
+                a.invalid
+            );
+        }
     }
     defmt::info!(
         "  fixes: {=u32} received while aided, {=u32} out of order, {=u32} late; {=u32} before the aided phase, {=u32} after the data",
