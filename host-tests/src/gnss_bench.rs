@@ -165,7 +165,7 @@ pub fn outlier_case(grade: Grade, seed: u64) -> Case {
         seconds: 1000.0,
         imu_rate_hz: 200.0,
         zero_motion: true,
-        in_run_noise: false,
+        in_run_noise: true,
         without: Vec::new(),
         gnss: GnssSimOptions {
             rate_hz: 1.0,
