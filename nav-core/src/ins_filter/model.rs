@@ -27,8 +27,8 @@
 //! Discretisation over the propagation interval `dt` (the increments accumulated in between):
 //! `Phi = I + F dt + (F dt)^2 / 2` (second order; F at the interval's end, the specific force
 //! and rate its means), `Q_d = (Phi Q_c Phi^T + Q_c) dt / 2` (trapezoidal, Groves eq. 3.46).
-//! Both products skip the zeros of the (sparse) transition matrix; the filter computes the
-//! propagation over the blocks of `Phi` instead ([`super::covariance`]).
+//! The filter computes both over the blocks of `Phi` ([`super::covariance`], whose tests hold
+//! them to these dense formulas).
 
 use super::states::{ATT, BA, BG, Covariance, N, POS, SA, SG, StateVector, VEL};
 use crate::Scalar;
@@ -300,52 +300,6 @@ pub fn noise_density<T: Scalar>(
     q
 }
 
-/// `Phi = I + F dt + (F dt)^2 / 2`.
-pub fn transition<T: Scalar>(f: &Covariance<T>, dt: T) -> Covariance<T> {
-    let a = f * dt;
-    let mut phi = sparse_product(&a, &a) * T::c(0.5);
-    phi += a;
-    for i in 0..N {
-        phi[(i, i)] += T::one();
-    }
-    phi
-}
-
-/// `a b`, skipping the zeros of `a` and of `b`.
-///
-/// With both matrices finite (the filter's case) the product runs column by column: column
-/// `j` of the result gathers `a[:, k] b[k, j]` over the `k` with `b[k, j] != 0`, each over
-/// the rows of column `k` of `a` that can be nonzero (the span of its off-diagonal nonzeros,
-/// and its diagonal): contiguous loops, no test per element. Every element still sums its
-/// terms in increasing `k`, and a skipped term is an exact zero that would not change the
-/// sum (it starts at `+0` and never becomes `-0`), so the result is the same to the bit as the
-/// plain triple loop over the nonzeros of `a` ([`sparse_product_reference`]), which serves
-/// the matrices holding a NaN or an infinity (where `0 * inf` would spread).
-pub fn sparse_product<T: Scalar>(a: &Covariance<T>, b: &Covariance<T>) -> Covariance<T> {
-    if !(all_finite(a) && all_finite(b)) {
-        return sparse_product_reference(a, b);
-    }
-    let spans = column_spans(a);
-    let mut out = Covariance::<T>::zeros();
-    let (a, b) = (a.as_slice(), b.as_slice());
-    for (j, out_j) in out.as_mut_slice().chunks_exact_mut(N).enumerate() {
-        let b_j = &b[j * N..(j + 1) * N];
-        for (k, (&b_kj, &(lo, hi))) in b_j.iter().zip(&spans).enumerate() {
-            if b_kj == T::zero() {
-                continue;
-            }
-            let a_k = &a[k * N..(k + 1) * N];
-            for (o, &a_ik) in out_j[lo..hi].iter_mut().zip(&a_k[lo..hi]) {
-                *o += a_ik * b_kj;
-            }
-            if !(lo..hi).contains(&k) && a_k[k] != T::zero() {
-                out_j[k] += a_k[k] * b_kj;
-            }
-        }
-    }
-    out
-}
-
 const _: () = assert!(N.is_multiple_of(7));
 
 /// True when no element is NaN or infinite: `x * 0` is `0` for a finite `x` and NaN for any
@@ -361,85 +315,10 @@ pub(crate) fn all_finite<T: Scalar>(m: &Covariance<T>) -> bool {
     lanes.iter().all(|lane| *lane == T::zero())
 }
 
-/// Per column `k` of `a`: the rows `[lo, hi)` from its first to its last nonzero off the
-/// diagonal (empty when there is none).
-fn column_spans<T: Scalar>(a: &Covariance<T>) -> [(usize, usize); N] {
-    let mut spans = [(0, 0); N];
-    for (k, (span, col)) in spans
-        .iter_mut()
-        .zip(a.as_slice().chunks_exact(N))
-        .enumerate()
-    {
-        let nonzero = |i: &usize| *i != k && col[*i] != T::zero();
-        if let (Some(lo), Some(hi)) = ((0..N).find(nonzero), (0..N).rev().find(nonzero)) {
-            *span = (lo, hi + 1);
-        }
-    }
-    spans
-}
-
-/// `a b` by the plain triple loop over the nonzeros of `a`: the definition
-/// [`sparse_product`] keeps to the bit.
-pub fn sparse_product_reference<T: Scalar>(a: &Covariance<T>, b: &Covariance<T>) -> Covariance<T> {
-    let mut out = Covariance::<T>::zeros();
-    for k in 0..N {
-        for i in 0..N {
-            let aik = a[(i, k)];
-            if aik != T::zero() {
-                for j in 0..N {
-                    out[(i, j)] += aik * b[(k, j)];
-                }
-            }
-        }
-    }
-    out
-}
-
-/// `P <- Phi P Phi^T + (Phi Q_c Phi^T + Q_c) dt / 2` in place, skipping the zeros of `Phi`;
-/// symmetric by construction (the upper triangle is mirrored).
-pub fn propagate_covariance<T: Scalar>(
-    p: &mut Covariance<T>,
-    phi: &Covariance<T>,
-    q_c: &StateVector<T>,
-    dt: T,
-) {
-    let half_dt = dt * T::c(0.5);
-    // M = Phi P + (Phi Q_c) dt / 2, then P' = M Phi^T + Q_c dt / 2: the two products of the
-    // module docs in one pass.
-    let mut m = sparse_product(phi, p);
-    for k in 0..N {
-        let qk = q_c[k] * half_dt;
-        if qk != T::zero() {
-            for i in 0..N {
-                m[(i, k)] += phi[(i, k)] * qk;
-            }
-        }
-    }
-    // P'_ij = sum_k M_ik Phi_jk for j >= i.
-    p.fill(T::zero());
-    for j in 0..N {
-        for k in 0..N {
-            let pjk = phi[(j, k)];
-            if pjk != T::zero() {
-                for i in 0..=j {
-                    p[(i, j)] += m[(i, k)] * pjk;
-                }
-            }
-        }
-    }
-    for i in 0..N {
-        p[(i, i)] += q_c[i] * half_dt;
-        for j in (i + 1)..N {
-            p[(j, i)] = p[(i, j)];
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::ins_filter::states::N;
-    use nalgebra::SMatrix;
 
     fn noise() -> FilterNoise<f64> {
         FilterNoise {
@@ -525,57 +404,6 @@ mod tests {
         let a = f[(VEL, ATT + 1)] * f[(ATT + 1, VEL)];
         let period_min = 2.0 * core::f64::consts::PI / (-a).sqrt() / 60.0;
         assert!((period_min - 84.4).abs() < 0.3, "{period_min}");
-    }
-
-    #[test]
-    fn sparse_propagation_equals_the_dense_formula() {
-        let l = lin(0.3, Vector3::new(20.0, 5.0, -1.0));
-        let f = system_matrix(&l, &noise(), true);
-        let dt = 0.05;
-        let phi = transition(&f, dt);
-        let dense_phi = SMatrix::<f64, N, N>::identity() + f * dt + f * f * (dt * dt / 2.0);
-        assert!((phi - dense_phi).amax() < 1e-15);
-        let mut p = SMatrix::<f64, N, N>::identity() * 0.01;
-        p[(0, 3)] = 0.001;
-        p[(3, 0)] = 0.001;
-        let q = noise_density(&noise(), true, &l);
-        let qm = SMatrix::<f64, N, N>::from_diagonal(&q);
-        let dense = phi * p * phi.transpose() + (phi * qm * phi.transpose() + qm) * (dt / 2.0);
-        propagate_covariance(&mut p, &phi, &q, dt);
-        assert!((p - dense).amax() < 1e-15, "{}", (p - dense).amax());
-    }
-
-    /// The column-wise product equals the plain loop to the bit, on the filter's matrices
-    /// (sparse `F dt` times itself, `Phi` times a dense covariance) and with a NaN.
-    #[test]
-    fn sparse_product_is_the_reference_to_the_bit() {
-        let l = lin(0.3, Vector3::new(20.0, 5.0, -1.0));
-        for scale_factors in [true, false] {
-            let a = system_matrix(&l, &noise(), scale_factors) * 0.1;
-            let phi = transition(&a, 1.0);
-            let mut p = SMatrix::<f64, N, N>::identity() * 0.01;
-            for i in 0..N {
-                for j in 0..N {
-                    if i != j {
-                        p[(i, j)] = 1e-3 * ((i * 7 + j * 3) as f64).sin();
-                    }
-                }
-            }
-            p[(4, 4)] = -0.0;
-            for (x, y) in [(&a, &a), (&phi, &p), (&p, &phi)] {
-                let fast = sparse_product(x, y);
-                let slow = sparse_product_reference(x, y);
-                for (f, s) in fast.iter().zip(slow.iter()) {
-                    assert_eq!(f.to_bits(), s.to_bits());
-                }
-            }
-            p[(2, 5)] = f64::NAN;
-            let fast = sparse_product(&phi, &p);
-            let slow = sparse_product_reference(&phi, &p);
-            for (f, s) in fast.iter().zip(slow.iter()) {
-                assert_eq!(f.to_bits(), s.to_bits());
-            }
-        }
     }
 
     /// The cross-coupling noise is zero at rest in the nominal attitude (where the errors are
