@@ -9,12 +9,16 @@ use hal_adapters::drivers::adis16505::{self as adis, Adis16505, Model};
 use hal_adapters::drivers::bmi088::{self as bmi, Bmi088};
 use hal_adapters::drivers::icm42688::{self as icm, Icm42688};
 use hal_adapters::drivers::{Error, Health, Mounting};
+use hal_adapters::protocol::config::ImuModel;
 use hal_adapters::sim::{
     NoDelay, SimAdis16505, SimBmi088, SimBmi088Accel, SimBmi088Gyro, SimError, SimIcm42688,
     SimulatedBus, flag_unrepresentable,
 };
 use hal_adapters::{Imu, ImuSample, SampleFlags};
 use nav_core::navigator::{ImuInput, Unusable};
+
+/// The simulated IMUs' mounting: their axes are the body's.
+pub const MOUNTING: Mounting = Mounting::IDENTITY;
 
 /// Which device sits on the bus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
@@ -41,6 +45,15 @@ impl Device {
 
     /// The ADIS model the board carries.
     pub const ADIS_MODEL: Model = Model::BOARD;
+
+    /// The protocol's name of the device (a configuration frame's IMU model).
+    pub fn model(self) -> ImuModel {
+        match self {
+            Self::Adis16505 => ImuModel::Adis16505,
+            Self::Icm42688 => ImuModel::Icm42688,
+            Self::Bmi088 => ImuModel::Bmi088,
+        }
+    }
 
     /// The part's datasheet noise, which the alignment assumes.
     pub fn noise(self) -> hal_adapters::drivers::NoiseSpec {
@@ -84,7 +97,7 @@ impl<S: Imu + 'static> BoardImu<S> {
         source: S,
         bmi_slot: &'static mut Option<SimBmi088<S>>,
     ) -> Result<Self, ImuError<S>> {
-        let mounting = Mounting::IDENTITY;
+        let mounting = MOUNTING;
         Ok(match device {
             Device::Adis16505 => {
                 let config = adis::Config::new(Device::ADIS_MODEL).with_mounting(mounting);

@@ -11,10 +11,12 @@ use core::fmt::Write as _;
 
 pub mod board;
 pub mod config;
+pub mod errors;
 #[cfg(feature = "qemu")]
 pub mod gnss;
 pub mod imu;
 pub mod log;
+pub mod run_config;
 pub mod stream;
 
 pub use board::exit;
@@ -52,9 +54,28 @@ pub enum ExitCode {
     NothingNavigated = 7,
 }
 
+/// Logs the panic and ends the run. The qemu board formats the message's arguments (core's
+/// formatting, float included); a real board logs the message when it has none, else its
+/// place, which keeps the formatting out of its flash.
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
-    defmt::error!("panic: {}", defmt::Display2Format(info));
+    if cfg!(feature = "qemu") {
+        defmt::error!("panic: {}", defmt::Display2Format(info));
+    } else {
+        let message = info
+            .message()
+            .as_str()
+            .unwrap_or("(message with arguments)");
+        match info.location() {
+            Some(l) => defmt::error!(
+                "panic at {=str}:{=u32}: {=str}",
+                l.file(),
+                l.line(),
+                message
+            ),
+            None => defmt::error!("panic: {=str}", message),
+        }
+    }
     exit(ExitCode::Panic)
 }
 

@@ -2,7 +2,7 @@
 //! health and the final solution.
 
 use hal_adapters::drivers::Health;
-use nav_core::alignment::{AlignOutcome, LeverArm};
+use nav_core::alignment::{AlignMethod, AlignOutcome, LeverArm};
 use nav_core::ins_filter::sequencer::FixCounters;
 use nav_core::navigator::{FilterReport, RunConfig};
 use nav_core::output::Solution;
@@ -64,8 +64,13 @@ pub fn aligned(r: &AlignOutcome<f32>) {
     );
     // How the result was reached, in `nav replay`'s words (sway: the general filter's answer
     // where the sway model is off or refuted).
+    // Only the sway method notes: its text (with figures) where the method is in the build.
     if let Some(note) = &r.note {
-        defmt::info!("note: {}", defmt::Display2Format(note));
+        if const { AlignMethod::Sway.compiled_in() } {
+            defmt::info!("note: {}", defmt::Display2Format(note));
+        } else {
+            defmt::info!("note: {=str}", note.reason());
+        }
     }
 }
 
@@ -164,7 +169,7 @@ pub fn filter(r: &FilterReport<f32>, fixes: &FixCounters, unused: u32, after_dat
 /// Logs the IMU driver's counters (their `Display`, which `nav replay --device` prints too).
 #[inline(never)]
 pub fn health(h: &Health) {
-    defmt::info!("IMU driver: {}", defmt::Display2Format(h));
+    defmt::info!("IMU driver: {}", crate::errors::DriverHealth(h));
 }
 
 /// Logs the alignment's attitude and the last solution.

@@ -2,6 +2,11 @@
 //! against the board layer (`firmware::board`: `qemu`, QEMU's netduinoplus2, or `stm32f405`, a
 //! real board, chosen by cargo feature).
 //!
+//! At start `navigate` is in standby until the run's configuration is decided
+//! (`firmware::run_config`: the host's configuration frame, or the compiled-in configuration
+//! when none comes in the board's standby window); then it builds the navigator and hands the
+//! run's settings to `align`, which waits for them to build the background.
+//!
 //! A sample's way: data-ready interrupt (`data_ready`, highest priority) -> `rtic_sync` channel ->
 //! `navigate` (nav-core's navigator: gate, calibration, strapdown; writes the solution log) ->
 //! what it forwards to `align` (lowest priority: the navigator's background, the alignment) ->
@@ -25,6 +30,12 @@
 
 use firmware as _; // logger, panic and HardFault handlers
 
+// The firmware's aided phase (its awaits) is there exactly when nav-core's filter is.
+const _: () = assert!(
+    nav_core::navigator::AIDED_COMPILED_IN == cfg!(feature = "aided"),
+    "firmware feature `aided` and nav-core's `aided` differ"
+);
+
 #[rtic::app(device = firmware::board::pac, peripherals = true, dispatchers = [USART2, USART3, UART4])]
 mod app {
     use core::sync::atomic::{AtomicU32, Ordering};
@@ -32,20 +43,22 @@ mod app {
         self, ConfigInput, DataReady, Fixes, Imu, ImuSlot, Output, Watchdog, instructions_since,
     };
     use firmware::imu::nav_input;
+    use firmware::run_config::RunState;
     use firmware::stream::{BoardCounters, Telemetry};
     use firmware::{
-        ALIGN_CAP, ExitCode, FILTER_CAP, FilterCosts, SAMPLE_CAP, StepCost, exit, line, log,
+        ALIGN_CAP, ExitCode, FILTER_CAP, FilterCosts, SAMPLE_CAP, StepCost, errors, exit, line, log,
     };
     use hal_adapters::drivers::Health;
     use hal_adapters::protocol::config::DeviceConfig;
     use hal_adapters::protocol::messages::ConfigAck;
-    use hal_adapters::protocol::status::NavigatorState;
+    use hal_adapters::protocol::status::{NavigatorState, RunSource};
     use hal_adapters::protocol::{Decoder, Message, Received};
     use nav_core::ImuIncrement;
     use nav_core::alignment::{AlignOutcome, Stage};
     use nav_core::ins_filter::FilterStatus;
     use nav_core::navigator::{
-        Background, FromBackground, NavError, Navigator, Setup, Step, Summary, ToBackground,
+        AIDED_COMPILED_IN, Background, FromBackground, NavError, Navigator, Setup, Step, Summary,
+        ToBackground,
     };
     use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, Row, Solution};
     use rtic_sync::channel::{Receiver, Sender};
@@ -98,8 +111,11 @@ mod app {
     struct Local {
         imu: Imu,
         samples_tx: Sender<'static, DataReady, SAMPLE_CAP>,
-        /// The navigator's foreground, for `navigate`.
-        navigator: Navigator<f32>,
+        /// The navigator's foreground, for `navigate` (built once the run's configuration is
+        /// decided).
+        navigator: Option<Navigator<f32>>,
+        /// The run's configuration (standby, then decided), for `navigate`.
+        run: RunState,
         /// The outputs, for `navigate`.
         out: Outputs,
         /// The configuration frames' decoder, for `navigate`.
@@ -110,8 +126,9 @@ mod app {
         config_in: ConfigInput,
         /// The GNSS fixes and their number, for `navigate` (an aided run).
         gnss: Option<(Fixes, u32)>,
-        /// The run's settings, for `align` (which builds the background from them).
-        setup: Setup<f32>,
+        /// The run's settings from `navigate` once decided, for `align` (which builds the
+        /// background from them).
+        setup_rx: Receiver<'static, Setup<f32>, 1>,
         /// The alignment increments from `navigate`, for `align`.
         from_navigate_align: Receiver<'static, ImuIncrement<f32>, ALIGN_CAP>,
         /// The aided phase's filter work from `navigate`, for `align`.
@@ -123,27 +140,18 @@ mod app {
     #[init(local = [imu_slot: ImuSlot = board::IMU_SLOT])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let board = board::init(cx.core, cx.device, cx.local.imu_slot);
-        let mut out = board.out;
-        write_line(
-            &mut out,
-            if board.aided {
-                AIDED_CSV_HEADER
-            } else {
-                CSV_HEADER
-            },
-        );
-        let setup = board.setup;
+        let out = board.out;
 
         let (samples_tx, samples_rx) = make_channel!(DataReady, SAMPLE_CAP);
         let (to_align, from_navigate_align) = make_channel!(ImuIncrement<f32>, ALIGN_CAP);
         let (to_filter, from_navigate) = make_channel!(ToBackground<f32>, FILTER_CAP);
         let (to_navigate, from_background) = make_channel!(FromBackground<f32>, 1);
-        if navigate::spawn(samples_rx, to_align, to_filter, from_background).is_err()
+        let (setup_tx, setup_rx) = make_channel!(Setup<f32>, 1);
+        if navigate::spawn(samples_rx, to_align, to_filter, from_background, setup_tx).is_err()
             || spawn_pace().is_err()
         {
             defmt::panic!("task spawn failed");
         }
-        let navigator = Navigator::new(&setup);
         let tele = Telemetry::new(&DeviceConfig::default().rates);
         (
             Shared {
@@ -154,7 +162,8 @@ mod app {
             Local {
                 imu: board.imu,
                 samples_tx,
-                navigator,
+                navigator: None,
+                run: RunState::new(board.run, board.identity),
                 out: Outputs {
                     out,
                     tele,
@@ -165,7 +174,7 @@ mod app {
                 watchdog: board.watchdog,
                 config_in: board.config_in,
                 gnss: board.gnss,
-                setup,
+                setup_rx,
                 from_navigate_align,
                 from_navigate,
                 to_navigate,
@@ -238,22 +247,43 @@ mod app {
         messages: StepCost,
     }
 
-    /// Navigation: carries every sample (and, aided, every GNSS fix) through nav-core's
-    /// navigator, forwards what it asks to the background (`align`), hands it the answers, and
-    /// writes the rows it produces.
-    #[task(priority = 2, local = [navigator, out, watchdog, config_in, config_decoder, gnss], shared = [costs, alignment, driver_health])]
+    /// Navigation: in standby until the run's configuration is decided ([`standby`]), then
+    /// carries every sample (and, aided, every GNSS fix) through nav-core's navigator,
+    /// forwards what it asks to the background (`align`), hands it the answers, and writes the
+    /// rows it produces.
+    #[task(priority = 2, local = [navigator, run, out, watchdog, config_in, config_decoder, gnss], shared = [costs, alignment, driver_health])]
     async fn navigate(
         mut cx: navigate::Context,
         mut samples_rx: Receiver<'static, DataReady, SAMPLE_CAP>,
         mut to_align: Sender<'static, ImuIncrement<f32>, ALIGN_CAP>,
+        #[cfg_attr(not(feature = "aided"), allow(unused_variables, unused_mut))]
         mut to_filter: Sender<'static, ToBackground<f32>, FILTER_CAP>,
         mut from_background: Receiver<'static, FromBackground<f32>, 1>,
+        mut setup_tx: Sender<'static, Setup<f32>, 1>,
     ) {
-        let navigator = cx.local.navigator;
         let out = cx.local.out;
         let watchdog = cx.local.watchdog;
         let config_in = cx.local.config_in;
         let config_decoder = cx.local.config_decoder;
+        let run_state = cx.local.run;
+        let in_standby = standby(
+            &mut samples_rx,
+            watchdog,
+            config_in,
+            config_decoder,
+            out,
+            run_state,
+            &mut cx.shared.driver_health,
+        )
+        .await;
+        let navigator = start_run(
+            run_state,
+            in_standby,
+            out,
+            cx.local.navigator,
+            &mut setup_tx,
+        );
+        let source = run_state.source();
         // The time of the latest fix handed to the navigator [us] (its aiding events' time).
         let mut last_fix_us = 0_u64;
         // By reference: the task's future holds no second copy of the reader.
@@ -268,7 +298,7 @@ mod app {
                 defmt::panic!("sample channel closed");
             };
             watchdog.feed();
-            take_config(config_in, config_decoder, out);
+            take_config(config_in, config_decoder, out, run_state);
             let (sample, t_ready_us) = match msg {
                 DataReady::Sample {
                     sample,
@@ -344,12 +374,15 @@ mod app {
                         );
                     }
                 }
+                // The aided phase's work (a board without nav-core's filter never has it; its
+                // awaits are left out of the task's state machine there, `cfg`).
                 Step::Aided => {
                     aided.step.add(spent);
-                    let work =
+                    #[cfg(feature = "aided")]
+                    aided.messages.add(
                         background_work(navigator, &mut to_filter, &mut from_background, out, &imu)
-                            .await;
-                    aided.messages.add(work);
+                            .await,
+                    );
                     if let Some(report) = navigator.filter_report() {
                         out.tele.aiding(&mut out.out, last_fix_us, &report.counters);
                     }
@@ -358,7 +391,7 @@ mod app {
                 // Not reached: every answer is awaited before the next sample.
                 Step::NotReady => defmt::panic!("navigator not ready"),
             }
-            let nav = nav_state(navigator, &mut cx.shared.alignment);
+            let nav = nav_state(navigator, source, &mut cx.shared.alignment);
             let align = navigator
                 .is_aligning()
                 .then(|| (cx.shared.alignment.lock(|a| a.1), navigator.n_align()));
@@ -374,6 +407,7 @@ mod app {
         // End of the recording: the last row (aided: with the filter's report), then the end
         // record (only a complete run has it).
         navigator.end_of_data();
+        #[cfg(feature = "aided")]
         background_work(navigator, &mut to_filter, &mut from_background, out, &imu).await;
         let summary = navigator.finish().unwrap_or_else(|e| {
             log::health(&imu.health);
@@ -386,7 +420,7 @@ mod app {
             write_line(&mut out.out, summary.end_record());
         }
         // The run's last health frame: the final counters (the summary's), then the end.
-        let nav = nav_state(navigator, &mut cx.shared.alignment);
+        let nav = nav_state(navigator, source, &mut cx.shared.alignment);
         let filter = summary.filter.as_ref().map(|f| f.counters);
         if let Some(f) = &filter {
             out.tele.aiding(&mut out.out, last_fix_us, f);
@@ -416,7 +450,7 @@ mod app {
             "summary: samples {=u32}, flagged {=u32} ({}), rejected {=u32}, navigated {=u32}, missed {=u32}, channel overruns {=u32}, last data-ready at {=u64} us",
             c.samples,
             c.flagged,
-            defmt::Display2Format(&c.flagged_by),
+            errors::Flagged(&c.flagged_by),
             c.rejected,
             c.nav_steps,
             board::missed_data_ready(),
@@ -424,7 +458,7 @@ mod app {
             last_ready_us
         );
         let mut aided_per_sample = None;
-        if let Some(filter) = &summary.filter {
+        if AIDED_COMPILED_IN && let Some(filter) = &summary.filter {
             let after_data = gnss.as_ref().map_or(0, |(f, n)| f.remaining(*n));
             log::filter(filter, &summary.fixes, c.fixes_unused, after_data);
             let costs = cx.shared.costs.lock(|c| *c);
@@ -446,6 +480,7 @@ mod app {
     /// (nominal, as the filter starts, until its first report).
     fn nav_state(
         navigator: &Navigator<f32>,
+        config: RunSource,
         alignment: &mut impl rtic::Mutex<T = (Stage, u32)>,
     ) -> NavigatorState {
         let stage = if navigator.is_aligning() {
@@ -460,6 +495,7 @@ mod app {
                     .filter_report()
                     .map_or(FilterStatus::Nominal, |r| r.status)
             }),
+            config,
         }
     }
 
@@ -471,42 +507,150 @@ mod app {
         }
     }
 
-    /// Takes the configuration bytes the host sent, through the protocol's decoder: a
-    /// configuration frame is validated and answered with an acknowledgement (accepted, or
-    /// refused with its reason code). An accepted configuration's output rates apply at once;
-    /// its run configuration is not applied to a run in progress (logged).
+    /// Standby: takes the host's configuration frames and counts the samples (sent as raw
+    /// increments and health frames with the status STANDBY, not navigated) until a frame is
+    /// accepted or the board's standby window ([`board::STANDBY_US`], from the task's start)
+    /// ends, when the compiled-in configuration runs. Returns the samples that arrived in
+    /// standby.
+    async fn standby(
+        samples_rx: &mut Receiver<'static, DataReady, SAMPLE_CAP>,
+        watchdog: &mut Watchdog,
+        config_in: &mut ConfigInput,
+        decoder: &mut Decoder,
+        out: &mut Outputs,
+        run: &mut RunState,
+        health: &mut impl rtic::Mutex<T = Health>,
+    ) -> u32 {
+        let end_us = board::now_us().saturating_add(board::STANDBY_US);
+        let mut samples = 0_u32;
+        loop {
+            take_config(config_in, decoder, out, run);
+            if run.running().is_some() {
+                return samples;
+            }
+            if board::now_us() >= end_us {
+                run.use_default();
+                return samples;
+            }
+            let Ok(msg) = samples_rx.recv().await else {
+                defmt::panic!("sample channel closed");
+            };
+            watchdog.feed();
+            match msg {
+                DataReady::Sample { sample, .. } => {
+                    samples += 1;
+                    let nav = NavigatorState {
+                        stage: Stage::Coarse,
+                        filter: None,
+                        config: RunSource::Waiting,
+                    };
+                    out.tele.sample(&mut out.out, &sample, nav, None, || {
+                        (health.lock(|h| *h), board_counters(), None)
+                    });
+                }
+                DataReady::SourceError => exit(ExitCode::Recording),
+                DataReady::End { .. } => {
+                    defmt::error!(
+                        "the IMU data ended in standby, before the run's configuration ({=u32} samples)",
+                        samples
+                    );
+                    exit(ExitCode::Alignment)
+                }
+            }
+        }
+    }
+
+    /// Starts the run on its decided configuration: logs where it came from (loudly when the
+    /// compiled-in one runs) and what it is, builds the navigator in `slot`, hands the settings
+    /// to `align` and writes the solution log's header.
     #[inline(never)]
-    fn take_config(config_in: &mut ConfigInput, decoder: &mut Decoder, out: &mut Outputs) {
+    fn start_run<'a>(
+        run: &RunState,
+        in_standby: u32,
+        out: &mut Outputs,
+        slot: &'a mut Option<Navigator<f32>>,
+        setup_tx: &mut Sender<'static, Setup<f32>, 1>,
+    ) -> &'a mut Navigator<f32> {
+        let Some((config, source)) = run.running() else {
+            defmt::panic!("the run's configuration is not decided");
+        };
+        if *source == RunSource::Host {
+            defmt::info!(
+                "run configuration: the host's configuration frame ({=u32} samples in standby, not navigated)",
+                in_standby
+            );
+        } else {
+            defmt::warn!(
+                "no configuration frame in the {=u64} ms standby window: the compiled-in run configuration runs (status flag DEFAULT_CONFIG; {=u32} samples in standby, not navigated)",
+                board::STANDBY_US / 1000,
+                in_standby
+            );
+        }
+        log::config(config);
+        let setup = Setup::<f32>::new(config, run.identity().imu_rate_hz).unwrap_or_else(|e| {
+            defmt::error!("invalid configuration: {}", errors::Config(&e));
+            exit(ExitCode::Config)
+        });
+        if board::CSV_LOG {
+            let header = if config.aiding.is_some() {
+                AIDED_CSV_HEADER
+            } else {
+                CSV_HEADER
+            };
+            write_line(&mut out.out, header);
+        }
+        if setup_tx.try_send(setup).is_err() {
+            defmt::panic!("settings channel closed");
+        }
+        slot.insert(Navigator::new(&setup))
+    }
+
+    /// Takes the configuration bytes the host sent, through the protocol's decoder: a
+    /// configuration frame is checked ([`RunState::take`]) and answered with an
+    /// acknowledgement (accepted, or refused with its reason code). An accepted frame's output
+    /// rates apply at once; in standby its run configuration becomes the run's, during a run
+    /// it must be the running one (refused otherwise: run in progress).
+    #[inline(never)]
+    fn take_config(
+        config_in: &mut ConfigInput,
+        decoder: &mut Decoder,
+        out: &mut Outputs,
+        run: &mut RunState,
+    ) {
         let mut buf = [0_u8; 64];
         loop {
             let n = config_in.read(&mut buf);
             if n == 0 {
                 return;
             }
-            decoder.push(&buf[..n], |frame| match frame {
+            decoder.push_config(&buf[..n], |frame| match frame {
                 Ok(Received {
                     seq,
                     message: Message::Config(config),
                 }) => {
-                    let refused = config.validate().err();
-                    match &refused {
-                        None => {
-                            out.tele.set_rates(&config.rates);
-                            defmt::info!(
-                                "configuration frame {=u16} accepted: output rates applied; its run configuration is not applied to a run in progress",
-                                seq
-                            );
-                        }
-                        Some(e) => defmt::warn!(
+                    let taken = run.take(&config);
+                    if taken.is_ok() {
+                        out.tele.set_rates(&config.rates);
+                    }
+                    match &taken {
+                        Ok(true) => defmt::info!(
+                            "configuration frame {=u16} accepted: the run's configuration and output rates",
+                            seq
+                        ),
+                        Ok(false) => defmt::info!(
+                            "configuration frame {=u16} accepted: output rates applied (the run's configuration unchanged)",
+                            seq
+                        ),
+                        Err(e) => defmt::warn!(
                             "configuration frame {=u16} refused (reason {=u8}): {}",
                             seq,
                             e.code() as u8,
-                            defmt::Display2Format(e)
+                            errors::Refusal(e)
                         ),
                     }
                     let ack = ConfigAck {
                         config_seq: seq,
-                        refused: refused.map(|e| e.code()),
+                        refused: taken.err().map(|e| e.code()),
                     };
                     out.tele.config_ack(&mut out.out, ack);
                 }
@@ -514,10 +658,7 @@ mod app {
                     "{=str} frame on the configuration input ignored",
                     other.message.id().name()
                 ),
-                Err(e) => defmt::warn!(
-                    "configuration input: frame refused: {}",
-                    defmt::Display2Format(&e)
-                ),
+                Err(e) => defmt::warn!("configuration input: frame refused: {}", e),
             });
         }
     }
@@ -525,6 +666,7 @@ mod app {
     /// Forwards the navigator's work for the background ([`Navigator::next_message`]) and
     /// waits for each answered message's answer, writing the row an answer completes; returns
     /// the foreground's instructions in it (the waits for the background not counted).
+    #[cfg(feature = "aided")]
     async fn background_work(
         navigator: &mut Navigator<f32>,
         to_background: &mut Sender<'static, ToBackground<f32>, FILTER_CAP>,
@@ -623,7 +765,7 @@ mod app {
     /// without its end record.
     #[inline(never)]
     fn failed(e: &NavError, imu: &ImuStats) -> ! {
-        defmt::error!("{}", defmt::Display2Format(e));
+        defmt::error!("{}", errors::Nav(e));
         log_imu_costs(imu);
         exit(match e {
             NavError::NothingNavigated { .. } => ExitCode::NothingNavigated,
@@ -642,10 +784,12 @@ mod app {
     /// stack: idle never returns, so its frame is as permanent as a static, and the board's
     /// static RAM stays small (the stack's peak is what counts; the qemu board reports it).
     /// Idle sleeps (`wfi`) when no message waits.
-    #[idle(local = [setup, from_navigate_align, from_navigate, to_navigate], shared = [costs, alignment])]
+    #[idle(local = [setup_rx, from_navigate_align, from_navigate, to_navigate], shared = [costs, alignment])]
     fn align(mut cx: align::Context) -> ! {
+        // The run's settings, once `navigate` has decided them (standby).
+        let setup = receive(cx.local.setup_rx);
         let mut slot = None;
-        let background = start_background(&mut slot, cx.local.setup);
+        let background = start_background(&mut slot, &setup);
         let (from_navigate_align, from_navigate, to_navigate) = (
             cx.local.from_navigate_align,
             cx.local.from_navigate,
@@ -689,7 +833,13 @@ mod app {
                 break;
             }
         }
-        // An aided run: the navigation filter's covariance, on the aided phase's messages.
+        // An aided run: the navigation filter's covariance, on the aided phase's messages
+        // (none without nav-core's filter: nothing left to do).
+        if !AIDED_COMPILED_IN {
+            loop {
+                cortex_m::asm::wfi();
+            }
+        }
         loop {
             let message = receive(from_navigate);
             let kind = FilterCosts::kind(&message);

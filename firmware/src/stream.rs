@@ -94,11 +94,7 @@ impl Telemetry {
         let n = match self.encoder.encode(message, &mut buf) {
             Ok(n) => n,
             Err(e) => {
-                defmt::error!(
-                    "{=str} frame not sent: {}",
-                    message.id().name(),
-                    defmt::Display2Format(&e)
-                );
+                defmt::error!("{=str} frame not sent: {}", message.id().name(), e);
                 return;
             }
         };

@@ -140,6 +140,17 @@ fn health_frames(messages: &[Message]) -> Vec<HealthReport> {
         .collect()
 }
 
+/// The configuration acknowledgements in a stream.
+fn config_acks(messages: &[Message]) -> Vec<ConfigAck> {
+    messages
+        .iter()
+        .filter_map(|m| match m {
+            Message::ConfigAck(a) => Some(*a),
+            _ => None,
+        })
+        .collect()
+}
+
 /// Frames of the message `id` in a stream.
 fn count_of(messages: &[Message], id: hal_adapters::protocol::MessageId) -> usize {
     messages.iter().filter(|m| m.id() == id).count()
@@ -256,11 +267,14 @@ fn firmware_in_qemu_matches_host_replay() {
     // to the alignment as to the navigation.
     std::fs::write(d.join("imu.cal"), CALIBRATION).unwrap();
 
-    // What the host sends before the run: a configuration from `nav config` (alignment
-    // progress every 80 samples instead of 40), then one with an impossible latitude.
+    // What the host sends before the run: a configuration from `nav config` (the command
+    // line's run, which it replaces; alignment progress every 80 samples instead of 40), then
+    // one with an impossible latitude.
     std::fs::write(
         d.join("config.txt"),
-        format!("lat-deg = {lat}\nlon-deg = {lon}\nh-m = {h}\nalign-progress-every = 80\n"),
+        format!(
+            "lat-deg = {lat}\nlon-deg = {lon}\nh-m = {h}\nalign-seconds = 10\nalign-progress-every = 80\n"
+        ),
     )
     .unwrap();
     let o = nav(d, &["config", "config.txt", "--out", "config.bin"]);
@@ -425,15 +439,8 @@ fn firmware_in_qemu_matches_host_replay() {
     assert!(log.contains("status NAV"), "{log}");
     // The configuration frames: the good one accepted (its progress rate applied: some 4000
     // alignment samples every 80, not 40), the bad one refused for its latitude.
-    let acks: Vec<ConfigAck> = messages
-        .iter()
-        .filter_map(|m| match m {
-            Message::ConfigAck(a) => Some(*a),
-            _ => None,
-        })
-        .collect();
     assert_eq!(
-        acks,
+        config_acks(&messages),
         [
             ConfigAck {
                 config_seq: 0,
@@ -465,6 +472,152 @@ fn firmware_in_qemu_matches_host_replay() {
         "alignment errors with the calibration: tilt {tilt:.4} deg, heading {heading:.3} deg; without: {tilt_raw:.4} deg, {heading_raw:.3} deg"
     );
     assert!(tilt < tilt_raw / 2.0 && heading < heading_raw / 2.0);
+}
+
+/// The run's configuration from the host (`docs/protocol.md`, standby): with `--config-frame`
+/// the frame's run configuration replaces the command line's. A frame with the recording's
+/// site, a 12 s window, a known lever arm and a row every 20 steps, sent to a firmware whose
+/// command line names another site (1 deg off), a 10 s window, no lever arm and a row every
+/// 40, gives the same solution log as the command line with the frame's values; only the
+/// latter run is flagged DEFAULT_CONFIG (no frame in the standby window). The frames after the
+/// accepted one arrive with the run decided: the same run with other output rates is accepted
+/// (raw increments every 2nd sample from then on), another site is refused as a run in
+/// progress, an impossible latitude for its latitude; the acknowledgements say so.
+#[test]
+fn firmware_takes_its_run_configuration_from_the_host() {
+    use hal_adapters::protocol::MessageId as Id;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    recording_io::write(&d.join("rec.bin"), &static_recording(13.0, Grade::Fog)).unwrap();
+    let s = Static::default();
+    let (lat, lon, h) = (
+        s.lat_deg.to_string(),
+        s.lon_deg.to_string(),
+        s.h_m.to_string(),
+    );
+    let text = format!(
+        "lat-deg = {lat}\nlon-deg = {lon}\nh-m = {h}\nalign-seconds = 12\nlever-arm = 0.5, -0.2, 0.1\nlog-every = 20\n"
+    );
+    std::fs::write(d.join("run.txt"), &text).unwrap();
+    let o = nav(d, &["config", "run.txt", "--out", "frames.bin"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut frames = std::fs::read(d.join("frames.bin")).unwrap();
+    let mut config = DeviceConfig::default();
+    for line in text.lines() {
+        config.apply_line(line).unwrap();
+    }
+    let mut rates = config;
+    rates.rates.raw_every = 2;
+    let mut other_site = config;
+    other_site.run.lat_deg += 1.0;
+    let mut bad = config;
+    bad.run.lat_deg = 95.0;
+    let mut encoder = Encoder::new();
+    encoder
+        .encode(&Message::Config(config), &mut [0; MAX_FRAME])
+        .unwrap(); // sequence number 0: the frame of `nav config`
+    for c in [rates, other_site, bad] {
+        encoder.append(&Message::Config(c), &mut frames).unwrap();
+    }
+    std::fs::write(d.join("frames.bin"), &frames).unwrap();
+
+    let (lat_off, lon_off) = ((s.lat_deg - 1.0).to_string(), (s.lon_deg + 1.0).to_string());
+    let (code, log) = run_firmware(
+        d,
+        &[
+            "--stream",
+            "framed.bin",
+            "--config-frame",
+            "frames.bin",
+            "rec.bin",
+            "framed.csv",
+            &lat_off,
+            &lon_off,
+            &h,
+            "10",
+        ],
+    );
+    assert_eq!(code, 0, "run with the frame: exit code {code}; log:\n{log}");
+    for expect in [
+        "configuration frame 0 accepted: the run's configuration and output rates",
+        "run configuration: the host's configuration frame (0 samples in standby, not navigated)",
+        "lever arm known: 0.5 -0.2 0.1 m",
+        "configuration frame 1 accepted: output rates applied (the run's configuration unchanged)",
+        "configuration frame 2 refused (reason 13)",
+        "configuration frame 3 refused (reason 1)",
+    ] {
+        assert!(log.contains(expect), "no '{expect}' in:\n{log}");
+    }
+    let (code, cli_log) = run_firmware(
+        d,
+        &[
+            "--stream",
+            "cli.bin",
+            "--lever-arm",
+            "0.5,-0.2,0.1",
+            "rec.bin",
+            "cli.csv",
+            &lat,
+            &lon,
+            &h,
+            "12",
+            "20",
+        ],
+    );
+    assert_eq!(
+        code, 0,
+        "run on the command line: exit code {code}; log:\n{cli_log}"
+    );
+    assert!(
+        cli_log.contains("no configuration frame in the 0 ms standby window"),
+        "{cli_log}"
+    );
+    let framed = std::fs::read_to_string(d.join("framed.csv")).unwrap();
+    let cli = std::fs::read_to_string(d.join("cli.csv")).unwrap();
+    // The aligned row at 12 s, 399 steps logged every 20 (19 rows) and the last one.
+    assert_eq!(cli.lines().last(), Some("# end: 21 rows, ok"));
+    assert!(
+        framed == cli,
+        "the frame's run differs from the command line's"
+    );
+
+    let framed_messages = stream_messages(&d.join("framed.bin"));
+    let acks = config_acks(&framed_messages);
+    let ack = |config_seq, refused| ConfigAck {
+        config_seq,
+        refused,
+    };
+    assert_eq!(
+        acks,
+        [
+            ack(0, None),
+            ack(1, None),
+            ack(2, Some(ReasonCode::RunInProgress)),
+            ack(3, Some(ReasonCode::Latitude)),
+        ]
+    );
+    let samples = field(&log, "summary: samples");
+    assert_eq!(
+        count_of(&framed_messages, Id::RawIncrements) as u64,
+        samples.div_ceil(2),
+        "raw increments at the accepted frame's rate"
+    );
+    let cli_health = health_frames(&stream_messages(&d.join("cli.bin")));
+    let framed_health = health_frames(&framed_messages);
+    assert!(!cli_health.is_empty() && !framed_health.is_empty());
+    assert!(
+        cli_health
+            .iter()
+            .all(|f| f.flags.contains(StatusFlags::DEFAULT_CONFIG)),
+        "{cli_health:?}"
+    );
+    assert!(
+        framed_health
+            .iter()
+            .all(|f| !f.flags.contains(StatusFlags::DEFAULT_CONFIG)
+                && f.status != NavStatus::Standby),
+        "{framed_health:?}"
+    );
 }
 
 /// Recordings that navigate nothing: every sample NaN (the alignment never gets one), NaN after
@@ -1211,8 +1364,9 @@ fn firmware_navigates_aided_like_the_harness() {
         "{last:?}"
     );
     assert!(!last.flags.contains(StatusFlags::FREE_INERTIAL));
+    // Flags: DEFAULT_CONFIG only (0x2000: the command line's run, no configuration frame).
     assert!(
-        log.contains("status NAV at 15002500 us (flags 0x0)"),
+        log.contains("status NAV at 15002500 us (flags 0x2000)"),
         "the aided phase must start NAV, not free inertial: {log}"
     );
     let names = [

@@ -3,7 +3,9 @@
 //!
 //! Every board module provides the same items, which the tasks use and nothing else:
 //! - `init(core, device, slot) -> Board`: clocks, pins, buses, the IMU initialised, the
-//!   monotonic started, the run's configuration ([`Board`]);
+//!   monotonic started, the compiled-in run configuration and what the board is ([`Board`]);
+//! - `STANDBY_US`: how long the board waits for the host's configuration frame at start
+//!   before the compiled-in run configuration runs (`crate::run_config`);
 //! - `Mono`: the RTIC monotonic (its interrupt registered by the board);
 //! - `now_us()`: the board's time since start [us] (also defmt's timestamp);
 //! - `counts()` and `instructions_since(start)`: a free-running counter and the instructions
@@ -41,7 +43,8 @@ pub use stm32f405::*;
 
 use hal_adapters::ImuSample;
 use hal_adapters::drivers::Health;
-use nav_core::navigator::Setup;
+use hal_adapters::protocol::config::BoardIdentity;
+use nav_core::navigator::RunConfig;
 
 /// The device (PAC) the RTIC app runs on: the STM32F405's on both boards.
 pub use stm32f4::stm32f405 as pac;
@@ -90,8 +93,9 @@ pub struct Board {
     pub watchdog: Watchdog,
     /// The GNSS fixes and their number (an aided run).
     pub gnss: Option<(Fixes, u32)>,
-    /// The run's settings, checked for the IMU's rate.
-    pub setup: Setup<f32>,
-    /// True for a GNSS-aided run (the solution log's header differs).
-    pub aided: bool,
+    /// The compiled-in run configuration (checked at the IMU's rate): the run's unless the
+    /// host's configuration frame comes in the standby window ([`STANDBY_US`]).
+    pub run: RunConfig,
+    /// What the board is built with (a configuration frame must name the same).
+    pub identity: BoardIdentity,
 }

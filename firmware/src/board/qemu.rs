@@ -5,10 +5,12 @@
 //! - The IMU's data-ready line is emulated: [`emulate_data_ready`] pends `EXTI0` (the line a real
 //!   data-ready pin uses) every 2.5 ms of SysTick time, and the IMU is a real driver over a
 //!   simulated SPI device answering from a recording (`crate::imu`), read through semihosting.
-//! - The configuration is the semihosting command line (`crate::config`), the calibration and
-//!   the GNSS fixes host files, the solution log and the protocol stream (`--stream`) host
-//!   files, a configuration frame (`--config-frame`) a host file, defmt over semihosting stdout,
-//!   and [`exit`] QEMU's exit status.
+//! - The compiled-in configuration is the semihosting command line (`crate::config`), the
+//!   calibration and the GNSS fixes host files, the solution log and the protocol stream
+//!   (`--stream`) host files, the host's configuration input a host file (`--config-frame`:
+//!   its bytes are there at once, so the standby window is 0, [`STANDBY_US`]: a frame in it
+//!   gives the run's configuration, replacing the command line's), defmt over semihosting
+//!   stdout, and [`exit`] QEMU's exit status.
 //!
 //! Under QEMU's `-icount shift=0` one guest instruction takes exactly 1 ns of virtual time, so
 //! SysTick timing is exact and the instruction counts the firmware prints are repeatable.
@@ -22,6 +24,7 @@ use cortex_m::peripheral::{NVIC, SYST};
 use defmt_semihosting as _; // global defmt logger over semihosting stdout
 use hal_adapters::drivers::{Error as ImuError, Health};
 use hal_adapters::io::{Buffered, SemihostingFile};
+use hal_adapters::protocol::config::BoardIdentity;
 use hal_adapters::recording::Replay;
 use hal_adapters::sim::{SimBmi088, SimError, health_at_end};
 use nav_core::calibration::ImuCalibration;
@@ -45,6 +48,9 @@ const DATA_READY_TICKS: u64 = (TICK_HZ / 400) as u64;
 type MonoDuration = fugit::Duration<u64, 1, 400>;
 /// Bytes read from the host per semihosting call.
 const READ_CHUNK: usize = 512;
+/// The standby window [us]: none, the configuration frame's file is read before the first
+/// sample (a frame in it decides the run; without one the command line's configuration runs).
+pub const STANDBY_US: u64 = 0;
 
 /// The recording the simulated IMU answers from.
 type Recording = Replay<Buffered<SemihostingFile, READ_CHUNK>>;
@@ -77,7 +83,6 @@ pub fn init(
     }
     args.run.calibration = read_calibration(&args);
     let run = args.run;
-    log::config(&run);
     let file = SemihostingFile::open(args.imu_cstr()).unwrap_or_else(|_| {
         defmt::error!(
             "cannot open the recording {=[u8]:a}",
@@ -99,7 +104,9 @@ pub fn init(
         header.sample_count,
         header.rate_hz
     );
-    let setup = Setup::<f32>::new(&run, header.rate_hz).unwrap_or_else(|e| bad_config(&e));
+    if let Err(e) = Setup::<f32>::new(&run, header.rate_hz) {
+        bad_config(&e)
+    }
     let device = args.device;
     let imu = BoardImu::new(device, source, slot).unwrap_or_else(|e| {
         defmt::error!("IMU {} init failed: {}", device, e);
@@ -154,9 +161,14 @@ pub fn init(
         out: Output { log: out, stream },
         config_in,
         watchdog: Watchdog,
+        identity: BoardIdentity {
+            imu_model: device.model(),
+            imu_rate_hz: header.rate_hz,
+            mounting: crate::imu::MOUNTING,
+            gnss: gnss.is_some(),
+        },
         gnss,
-        setup,
-        aided: run.aiding.is_some(),
+        run,
     }
 }
 

@@ -12,11 +12,11 @@
 //! | watchdog | IWDG, [`WATCHDOG_MS`], fed by `navigate` at every sample | - |
 //! | cost figures | DWT cycle counter (core cycles) | - |
 //!
-//! The run's configuration is compiled in ([`default_run`]). Configuration frames arriving
-//! over the USART ([`ConfigInput`]) are decoded, validated and acknowledged by `navigate`; an
-//! accepted one's output rates apply at once, its run configuration is not yet applied (no
-//! storage across a restart). The output protocol's frames leave on the USART ([`Output`]);
-//! defmt goes out over RTT (probe-rs).
+//! At start the board is in standby for [`STANDBY_US`]: a configuration frame from the host
+//! over the USART ([`ConfigInput`]), decoded, checked and acknowledged by `navigate`, gives the
+//! run's configuration; without one the compiled-in run ([`default_run`]) runs, flagged to the
+//! host (`DEFAULT_CONFIG`). The configuration is not stored across a restart. The output
+//! protocol's frames leave on the USART ([`Output`]); defmt goes out over RTT (probe-rs).
 
 use super::{Board, DataReady, pac};
 use crate::ExitCode;
@@ -27,6 +27,7 @@ use embedded_dma::ReadBuffer;
 use embedded_hal_bus::spi::ExclusiveDevice;
 use hal_adapters::drivers::adis16505::{self as adis, Adis16505};
 use hal_adapters::drivers::{Health, Mounting};
+use hal_adapters::protocol::config::{BoardIdentity, ImuModel};
 use nav_core::navigator::{RunConfig, Setup};
 use rtic_monotonics::stm32::prelude::*;
 use stm32f4xx_hal::dma::config::DmaConfig;
@@ -45,6 +46,8 @@ stm32_tim2_monotonic!(Mono, 1_000_000);
 
 /// The IMU's output rate [Hz] (the ADIS16505 decimated to 400 Hz by its driver's `init`).
 const IMU_RATE_HZ: f64 = 400.0;
+/// The IMU's mounting: its axes are the body's.
+const MOUNTING: Mounting = Mounting::IDENTITY;
 /// The watchdog's period [ms]: longer than `navigate`'s longest wait for the background (the
 /// alignment's answer after its queued increments).
 pub const WATCHDOG_MS: u32 = 500;
@@ -60,8 +63,12 @@ pub type ImuSlot = ();
 /// The empty [`ImuSlot`].
 pub const IMU_SLOT: ImuSlot = ();
 
+/// How long the board waits for the host's configuration frame at start [us] (5 s): time for
+/// a host that resets the board to send its frame.
+pub const STANDBY_US: u64 = 5_000_000;
+
 /// The board's compiled-in run: a static alignment of 60 s at the site below, the ADIS16505's
-/// datasheet noise. The configuration frame (USART, [`ConfigInput`]) will replace it.
+/// datasheet noise. The host's configuration frame in the standby window replaces it.
 pub fn default_run() -> RunConfig {
     let noise = crate::config::sensor_noise(&Device::Adis16505.noise());
     RunConfig::new(45.0, 7.5, 250.0, 60.0, noise)
@@ -97,11 +104,11 @@ pub fn init(mut core: cortex_m::Peripherals, dp: pac::Peripherals, _slot: &mut I
     let stall = dp.TIM5.delay_us(&mut rcc);
     // A GPIO chip select cannot fail.
     let Ok(bus) = ExclusiveDevice::new(spi, cs, stall);
-    let config = adis::Config::new(Device::ADIS_MODEL).with_mounting(Mounting::IDENTITY);
+    let config = adis::Config::new(Device::ADIS_MODEL).with_mounting(MOUNTING);
     let mut driver = Adis16505::new(bus, config);
     let mut delay = dp.TIM3.delay_us(&mut rcc);
     if let Err(e) = driver.init(&mut delay) {
-        defmt::error!("IMU ADIS16505 init failed: {}", defmt::Debug2Format(&e));
+        defmt::error!("IMU ADIS16505 init failed: {}", without_bus(&e));
         exit(ExitCode::Recording)
     }
     defmt::info!("IMU: ADIS16505 on SPI1");
@@ -139,11 +146,10 @@ pub fn init(mut core: cortex_m::Peripherals, dp: pac::Peripherals, _slot: &mut I
     watchdog.start(WATCHDOG_MS.millis());
 
     let run = default_run();
-    crate::log::config(&run);
-    let setup = Setup::<f32>::new(&run, IMU_RATE_HZ).unwrap_or_else(|e| {
-        defmt::error!("invalid configuration: {}", defmt::Display2Format(&e));
+    if let Err(e) = Setup::<f32>::new(&run, IMU_RATE_HZ) {
+        defmt::error!("invalid configuration: {}", crate::errors::Config(&e));
         exit(ExitCode::Config)
-    });
+    }
     Board {
         imu: Imu {
             driver,
@@ -162,8 +168,13 @@ pub fn init(mut core: cortex_m::Peripherals, dp: pac::Peripherals, _slot: &mut I
         },
         watchdog: Watchdog(watchdog),
         gnss: None,
-        setup,
-        aided: false,
+        run,
+        identity: BoardIdentity {
+            imu_model: ImuModel::Adis16505,
+            imu_rate_hz: IMU_RATE_HZ,
+            mounting: MOUNTING,
+            gnss: false,
+        },
     }
 }
 
@@ -228,16 +239,12 @@ impl Imu {
             Err(e) if e.is_transient() => {
                 let n = self.driver.health().checksum_errors;
                 if n <= 10 || n.is_multiple_of(1000) {
-                    defmt::warn!(
-                        "IMU frame rejected: {} ({=u32} so far)",
-                        defmt::Debug2Format(&e),
-                        n
-                    );
+                    defmt::warn!("IMU frame rejected: {} ({=u32} so far)", without_bus(&e), n);
                 }
                 None
             }
             Err(e) => {
-                defmt::error!("IMU failed: {}", defmt::Debug2Format(&e));
+                defmt::error!("IMU failed: {}", without_bus(&e));
                 Some(DataReady::SourceError)
             }
         }
@@ -249,6 +256,23 @@ impl Imu {
     /// The driver's counters.
     pub fn health(&self) -> Health {
         self.driver.health()
+    }
+}
+
+/// The driver's error with the bus's error left out (the SPI peripheral's error has no defmt
+/// format; a bus failure's kind is all the log needs).
+fn without_bus<B>(e: &hal_adapters::drivers::Error<B>) -> hal_adapters::drivers::Error<()> {
+    use hal_adapters::drivers::Error as E;
+    match *e {
+        E::Spi(_) => E::Spi(()),
+        E::WrongId { expected, found } => E::WrongId { expected, found },
+        E::Checksum { received, computed } => E::Checksum { received, computed },
+        E::ZeroFrame => E::ZeroFrame,
+        E::BadFrame => E::BadFrame,
+        E::NotReady => E::NotReady,
+        E::DeviceFault(code) => E::DeviceFault(code),
+        E::FifoOverflow => E::FifoOverflow,
+        E::Timeout => E::Timeout,
     }
 }
 

@@ -13,6 +13,7 @@ use crate::drivers::noise::{self, NoiseSpec};
 use core::fmt;
 use nav_core::alignment::SensorNoise;
 use nav_core::alignment::machine::{AlignMethod, BaseMotion, LeverArm};
+use nav_core::calibration::ImuCalibration;
 use nav_core::navigator::Setup;
 use nav_core::navigator::config::{
     ATTITUDES, AidingConfig, ConfigError, FRAMES, RunConfig, VERTICALS,
@@ -152,11 +153,16 @@ pub enum ReasonCode {
     OutputRate = 11,
     /// The payload does not decode (an enumeration value out of range).
     Malformed = 12,
+    /// A run is in progress with another run configuration (only output rates change during
+    /// a run).
+    RunInProgress = 13,
+    /// The IMU model, its rate, the mounting or the GNSS aiding is not what the board has.
+    NotThisBoard = 14,
 }
 
 impl ReasonCode {
     /// Every code, in order.
-    pub const ALL: [Self; 12] = [
+    pub const ALL: [Self; 14] = [
         Self::Latitude,
         Self::Longitude,
         Self::Height,
@@ -169,6 +175,8 @@ impl ReasonCode {
         Self::Mounting,
         Self::OutputRate,
         Self::Malformed,
+        Self::RunInProgress,
+        Self::NotThisBoard,
     ];
 
     /// The reason of a wire code.
@@ -188,6 +196,10 @@ pub enum ConfigRefusal {
     HealthOff,
     /// A field of the payload is out of range (its name).
     Malformed(&'static str),
+    /// A run is in progress with another run configuration.
+    RunInProgress,
+    /// What the board does not have (its name: IMU model, IMU rate, mounting, GNSS aiding).
+    NotThisBoard(&'static str),
 }
 
 /// Tolerance of the mounting's orthonormality and determinant [-].
@@ -211,6 +223,8 @@ impl ConfigRefusal {
             Self::Mounting => ReasonCode::Mounting,
             Self::HealthOff => ReasonCode::OutputRate,
             Self::Malformed(_) => ReasonCode::Malformed,
+            Self::RunInProgress => ReasonCode::RunInProgress,
+            Self::NotThisBoard(_) => ReasonCode::NotThisBoard,
         }
     }
 }
@@ -227,11 +241,52 @@ impl fmt::Display for ConfigRefusal {
                 f.write_str("health frames cannot be switched off (health-every >= 1)")
             }
             Self::Malformed(what) => write!(f, "malformed configuration payload: {what}"),
+            Self::RunInProgress => f.write_str(
+                "a run is in progress with another run configuration: only the output rates apply (restart the board to change it)",
+            ),
+            Self::NotThisBoard(what) => write!(f, "{what} is not the board's"),
         }
     }
 }
 
 impl core::error::Error for ConfigRefusal {}
+
+/// What a board is built with: a configuration frame must name the same (the board cannot
+/// change them at run time).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoardIdentity {
+    /// The IMU on the bus.
+    pub imu_model: ImuModel,
+    /// The IMU's output rate [Hz].
+    pub imu_rate_hz: f64,
+    /// Sensor axes to body axes, as the driver applies them.
+    pub mounting: Mounting,
+    /// A GNSS source is connected (an aided run needs one; a board with one runs aided).
+    pub gnss: bool,
+}
+
+/// Relative tolerance of a frame's IMU rate against the board's [-] (the frame's is an `f32`).
+pub const RATE_TOL: f64 = 1e-6;
+
+impl BoardIdentity {
+    /// `Err` naming the first item of `config` the board does not have.
+    pub fn check(&self, config: &DeviceConfig) -> Result<(), ConfigRefusal> {
+        let rate_off = (f64::from(config.imu_rate_hz) - self.imu_rate_hz).abs()
+            > RATE_TOL * self.imu_rate_hz.abs();
+        let what = if config.imu_model != self.imu_model {
+            "the IMU model"
+        } else if rate_off {
+            "the IMU rate"
+        } else if config.mounting != self.mounting {
+            "the mounting"
+        } else if config.run.aiding.is_some() != self.gnss {
+            "GNSS aiding (on or off)"
+        } else {
+            return Ok(());
+        };
+        Err(ConfigRefusal::NotThisBoard(what))
+    }
+}
 
 /// Payload length of a configuration frame [bytes].
 pub const CONFIG_LEN: usize = 201;
@@ -239,8 +294,10 @@ pub const CONFIG_LEN: usize = 201;
 impl DeviceConfig {
     /// Checks the configuration: nav-core's checks of the run at the IMU's rate
     /// ([`Setup::new`], the same as every run's), then the mounting and the output rates.
+    /// The run is checked in `f32`, the precision the board navigates in: the check its run's
+    /// start makes (and no `f64` copy of the setup's code in the board's flash).
     pub fn validate(&self) -> Result<(), ConfigRefusal> {
-        Setup::<f64>::new(&self.run, f64::from(self.imu_rate_hz)).map_err(ConfigRefusal::Run)?;
+        Setup::<f32>::new(&self.run, f64::from(self.imu_rate_hz)).map_err(ConfigRefusal::Run)?;
         if !is_rotation(&self.mounting.c_s_b) {
             return Err(ConfigRefusal::Mounting);
         }
@@ -248,6 +305,37 @@ impl DeviceConfig {
             return Err(ConfigRefusal::HealthOff);
         }
         Ok(())
+    }
+
+    /// Checks a frame the board received: [`Self::validate`], then against the `board`
+    /// ([`BoardIdentity::check`]), then, with a run in progress on `running`, that its run
+    /// configuration is the running one (the calibration aside: the board's own, not carried),
+    /// so that only its output rates change.
+    pub fn check_on(
+        &self,
+        board: &BoardIdentity,
+        running: Option<&RunConfig>,
+    ) -> Result<(), ConfigRefusal> {
+        self.validate()?;
+        board.check(self)?;
+        if let Some(running) = running {
+            let run = RunConfig {
+                calibration: running.calibration,
+                ..self.run
+            };
+            if run != *running {
+                return Err(ConfigRefusal::RunInProgress);
+            }
+        }
+        Ok(())
+    }
+
+    /// The run configuration to navigate with: the frame's, with the board's `calibration`.
+    pub fn run_with(&self, calibration: ImuCalibration) -> RunConfig {
+        RunConfig {
+            calibration,
+            ..self.run
+        }
     }
 
     /// Writes the payload (`docs/protocol.md`, [`CONFIG_LEN`] bytes).

@@ -184,7 +184,8 @@ pub fn keys_of(
         R::Run(E::Aiding(_)) => (&["aiding", "gnss-lever-arm", "propagation-rate"], true),
         R::Mounting => (&["mounting"], false),
         R::HealthOff => (&["health-every"], false),
-        R::Run(E::Calibration(_)) | R::Malformed(_) => (&[], false),
+        R::NotThisBoard(_) => (&["imu-model", "imu-rate-hz", "mounting", "aiding"], false),
+        R::Run(E::Calibration(_)) | R::Malformed(_) | R::RunInProgress => (&[], false),
     };
     let noise: &'static [&'static str] = if noise { &NOISE_KEYS } else { &[] };
     own.iter().chain(noise).copied()

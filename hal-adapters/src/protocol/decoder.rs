@@ -14,6 +14,7 @@ use core::fmt;
 
 /// Why a frame was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Refusal {
     /// Longer than any frame ([`MAX_FRAME`]).
     TooLong,
@@ -57,6 +58,9 @@ impl fmt::Display for Refusal {
         }
     }
 }
+
+/// Reads a message's payload (its id and length checked).
+type PayloadReader = fn(MessageId, &[u8]) -> Result<Message, PayloadError>;
 
 /// A frame accepted.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -134,6 +138,11 @@ impl Decoder {
 
     /// Feeds one byte: a message or a refusal when it ended a frame.
     pub fn feed(&mut self, byte: u8) -> Option<Result<Received, Refusal>> {
+        self.feed_with(byte, Message::read_payload)
+    }
+
+    /// [`Self::feed`] with the payload read by `read`.
+    fn feed_with(&mut self, byte: u8, read: PayloadReader) -> Option<Result<Received, Refusal>> {
         self.stats.bytes += 1;
         if byte != 0 {
             if self.len < MAX_FRAME {
@@ -151,7 +160,7 @@ impl Decoder {
         let result = if self.overflowed {
             Err(Refusal::TooLong)
         } else {
-            self.frame()
+            self.frame(read)
         };
         match &result {
             Ok(r) => {
@@ -188,6 +197,17 @@ impl Decoder {
         }
     }
 
+    /// [`Self::push`] for a board's configuration input: the payloads of configuration
+    /// frames only are read; a valid frame of another message is refused
+    /// ([`PayloadError::NotTaken`]), and no other message's reader is linked in.
+    pub fn push_config(&mut self, bytes: &[u8], mut on: impl FnMut(Result<Received, Refusal>)) {
+        for b in bytes {
+            if let Some(r) = self.feed_with(*b, Message::read_config_only) {
+                on(r);
+            }
+        }
+    }
+
     /// The end of the stream: bytes of a frame without its delimiter (cut off) are counted as
     /// skipped. Returns how many there were.
     pub fn finish(&mut self) -> usize {
@@ -198,8 +218,8 @@ impl Decoder {
         n
     }
 
-    /// Checks and decodes the gathered frame (module docs' order).
-    fn frame(&mut self) -> Result<Received, Refusal> {
+    /// Checks and decodes the gathered frame (module docs' order), its payload by `read`.
+    fn frame(&mut self, read: PayloadReader) -> Result<Received, Refusal> {
         let n = cobs::decode_in_place(&mut self.buf[..self.len]).map_err(|_| Refusal::Cobs)?;
         let raw = &self.buf[..n];
         if n < HEADER_LEN + CRC_LEN {
@@ -220,7 +240,7 @@ impl Decoder {
         if usize::from(len) != id.payload_len() || payload.len() != usize::from(len) {
             return Err(Refusal::Length { id, len });
         }
-        let message = Message::read_payload(id, payload).map_err(Refusal::Payload)?;
+        let message = read(id, payload).map_err(Refusal::Payload)?;
         Ok(Received { seq, message })
     }
 }

@@ -13,6 +13,7 @@ use nav_core::scalar::Scalar;
 
 /// Message identifiers (one byte).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[repr(u8)]
 pub enum MessageId {
     /// [`NavSolution`].
@@ -230,21 +231,27 @@ pub enum Message {
 
 /// Why a payload was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum PayloadError {
     /// A field holds a value outside its enumeration (its name).
     Field(&'static str),
+    /// A message this receiver does not take (a board's configuration input takes
+    /// configuration frames only).
+    NotTaken(MessageId),
 }
 
 impl core::fmt::Display for PayloadError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Self::Field(what) => write!(f, "{what} out of range"),
+            Self::NotTaken(id) => write!(f, "a {} frame is not taken here", id.name()),
         }
     }
 }
 
 /// Why a message cannot be encoded.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum EncodeError {
     /// The output buffer is too small.
     BufferTooSmall,

@@ -104,6 +104,31 @@ impl Message {
         Ok(w.len())
     }
 
+    /// Reads a configuration payload ([`DeviceConfig::read`]).
+    pub(crate) fn read_config(payload: &[u8]) -> Result<Self, PayloadError> {
+        let short = PayloadError::Field("payload length");
+        let mut r = Reader::new(payload);
+        let config = DeviceConfig::read(&mut r).map_err(|e| match e {
+            ConfigRefusal::Malformed(what) => PayloadError::Field(what),
+            _ => short,
+        })?;
+        if r.is_done() {
+            Ok(Self::Config(config))
+        } else {
+            Err(short)
+        }
+    }
+
+    /// Reads the payload of `id` when it is a configuration, refuses any other
+    /// ([`PayloadError::NotTaken`]): a board's configuration input, whose flash then holds no
+    /// other message's reader.
+    pub(crate) fn read_config_only(id: MessageId, payload: &[u8]) -> Result<Self, PayloadError> {
+        match id {
+            MessageId::Config => Self::read_config(payload),
+            other => Err(PayloadError::NotTaken(other)),
+        }
+    }
+
     /// Reads the payload of message `id` (its length already checked).
     pub fn read_payload(id: MessageId, payload: &[u8]) -> Result<Self, PayloadError> {
         let mut r = Reader::new(payload);
@@ -193,10 +218,7 @@ impl Message {
             MessageId::EndOfRun => Self::EndOfRun(EndOfRun {
                 rows: r.u32().ok_or(short)?,
             }),
-            MessageId::Config => Self::Config(DeviceConfig::read(&mut r).map_err(|e| match e {
-                ConfigRefusal::Malformed(what) => PayloadError::Field(what),
-                _ => short,
-            })?),
+            MessageId::Config => return Self::read_config(payload),
             MessageId::ConfigAck => {
                 let config_seq = r.u16().ok_or(short)?;
                 let code = r.u8().ok_or(short)?;

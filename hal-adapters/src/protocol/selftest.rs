@@ -1,15 +1,16 @@
 //! Checks of the protocol that run on the target as well as on the host: the encoder and
 //! decoder round trip of every message (with resynchronisation after garbage and a CRC
-//! refusal), the configuration validator (a refusal per reason code) and the status rule.
+//! refusal), the configuration validator (a refusal per reason code, a frame during a run,
+//! a frame for another board) and the status rule.
 //! No allocation, no std: the firmware's `target_tests` binary runs [`CHECKS`] on the
 //! Cortex-M in QEMU, and the host's unit test runs the same list.
 
-use super::config::{DeviceConfig, ReasonCode};
+use super::config::{BoardIdentity, DeviceConfig, ImuModel, ReasonCode};
 use super::decoder::Decoder;
 use super::frame::{Encoder, MAX_FRAME};
 use super::messages::*;
 use super::status::{
-    AidCount, HealthCounters, NavStatus, NavigatorState, StatusFlags, StatusModel,
+    AidCount, HealthCounters, NavStatus, NavigatorState, RunSource, StatusFlags, StatusModel,
 };
 use super::vibration::VibrationLevels;
 use crate::sample::{ImuSample, Motion, SampleFlags};
@@ -21,7 +22,7 @@ use nav_core::output::{FilterColumns, Row, Solution};
 pub type Check = fn() -> Result<(), &'static str>;
 
 /// Every check, by name.
-pub const CHECKS: [(&str, Check); 4] = [
+pub const CHECKS: [(&str, Check); 5] = [
     (
         "every message round-trips through the encoder and the decoder",
         round_trip,
@@ -33,6 +34,10 @@ pub const CHECKS: [(&str, Check); 4] = [
     (
         "the validator refuses each bad value with its reason code",
         config_refusals,
+    ),
+    (
+        "a frame during a run changes the output rates only; a frame for another board is refused",
+        config_on_board,
     ),
     ("the status rule", status_rule),
 ];
@@ -294,13 +299,121 @@ fn config_refusals() -> Result<(), &'static str> {
     )
 }
 
+/// The board the configuration checks run against: the defaults' IMU, rate and mounting, no
+/// GNSS.
+pub fn default_board() -> BoardIdentity {
+    let d = DeviceConfig::default();
+    BoardIdentity {
+        imu_model: d.imu_model,
+        imu_rate_hz: f64::from(d.imu_rate_hz),
+        mounting: d.mounting,
+        gnss: false,
+    }
+}
+
+/// Changes of the default configuration that the default board refuses as not its own.
+pub fn other_board_cases() -> [Mutation; 4] {
+    [
+        |c| c.imu_model = ImuModel::Icm42688,
+        |c| c.imu_rate_hz = 200.0,
+        |c| c.mounting.c_s_b = [[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        |c| {
+            let _ = c.apply_line("aiding = on");
+        },
+    ]
+}
+
+/// Standby (no run): the defaults accepted, another board's refused (`NotThisBoard`). During
+/// a run on the defaults: the same run with other output rates accepted; another site, window
+/// or lever arm refused (`RunInProgress`), a bad value still refused for its own reason; the
+/// board's calibration is its own (a running calibration does not make the frame differ).
+fn config_on_board() -> Result<(), &'static str> {
+    let board = core::hint::black_box(default_board());
+    let base = DeviceConfig::default();
+    ensure(base.check_on(&board, None).is_ok(), "defaults refused")?;
+    for mutate in other_board_cases() {
+        let mut c = base;
+        mutate(&mut c);
+        ensure(
+            c.validate().is_ok(),
+            "another board's case does not validate",
+        )?;
+        ensure(
+            c.check_on(&board, None)
+                .is_err_and(|e| e.code() == ReasonCode::NotThisBoard),
+            "another board's frame not refused as such",
+        )?;
+    }
+    let mut running = base.run;
+    running.calibration.gyro.bias = [1e-6, 0.0, 0.0];
+    let mut rates = base;
+    rates.rates.raw_every = 0;
+    rates.rates.health_every = 40;
+    ensure(
+        rates.check_on(&board, Some(&running)).is_ok(),
+        "new output rates refused during a run",
+    )?;
+    let changes: [Mutation; 3] = [
+        |c| c.run.lat_deg = 45.0,
+        |c| c.run.align_seconds = 120.0,
+        |c| {
+            let _ = c.apply_line("lever-arm = 0.1, 0.2, 0.3");
+        },
+    ];
+    for change in changes {
+        let mut c = base;
+        change(&mut c);
+        ensure(
+            c.check_on(&board, Some(&running))
+                .is_err_and(|e| e.code() == ReasonCode::RunInProgress),
+            "another run configuration accepted during a run",
+        )?;
+    }
+    let mut bad = base;
+    bad.run.lat_deg = 95.0;
+    ensure(
+        bad.check_on(&board, Some(&running))
+            .is_err_and(|e| e.code() == ReasonCode::Latitude),
+        "a bad value during a run refused for another reason",
+    )?;
+    ensure(
+        base.run_with(running.calibration) == running,
+        "the frame's run does not take the board's calibration",
+    )
+}
+
 /// Alignment stages, free inertial, a sensor fault for one evaluation, aiding refused, aiding
-/// lost after the timeout and regained, a failed alignment.
+/// lost after the timeout and regained, a failed alignment; standby and the default
+/// configuration's flag.
 fn status_rule() -> Result<(), &'static str> {
     // Opaque inputs: the rule runs, not its value folded at compile time.
-    let state = |stage, filter| core::hint::black_box(NavigatorState { stage, filter });
+    let state = |stage, filter| {
+        core::hint::black_box(NavigatorState {
+            stage,
+            filter,
+            config: RunSource::Host,
+        })
+    };
     let mut model = core::hint::black_box(StatusModel::new(5.0));
     let mut c = HealthCounters::default();
+    let standby = NavigatorState {
+        config: RunSource::Waiting,
+        ..state(Stage::Coarse, None)
+    };
+    let s = model.update(0, standby, &c);
+    ensure(s == (NavStatus::Standby, StatusFlags::empty()), "standby")?;
+    let on_default = NavigatorState {
+        config: RunSource::Default,
+        ..state(Stage::Aligned, None)
+    };
+    let s = model.update(0, on_default, &c);
+    ensure(
+        s == (
+            NavStatus::Nav,
+            StatusFlags::FREE_INERTIAL | StatusFlags::DEFAULT_CONFIG,
+        ),
+        "the compiled-in configuration's flag",
+    )?;
     let s = model.update(0, state(Stage::Coarse, None), &c);
     ensure(
         s == (NavStatus::AlignCoarse, StatusFlags::empty()),

@@ -5,6 +5,7 @@
 //! **The rule** ([`StatusModel::update`], the one place it lives; the firmware only feeds it):
 //! - FAULT: the alignment failed, or since the previous evaluation the sensor reported a
 //!   device fault or a bus error (sensor failure);
+//! - else STANDBY while the board waits for the host's configuration (no navigation);
 //! - else ALIGN_COARSE / ALIGN_FINE while the alignment is in its coarse / fine stage;
 //! - else DEGRADED when the filter reports anything but nominal (fixes refused beyond its
 //!   limit, horizontal 1-sigma above its limit, covariance fault:
@@ -13,7 +14,8 @@
 //! - else NAV (aided and nominal, or free inertial, flagged [`StatusFlags::FREE_INERTIAL`]).
 //!
 //! The flags say why, and report what did not change the status: checksum errors, clipped
-//! axes, missed data-ready, channel overruns and watchdog resets since the previous evaluation.
+//! axes, missed data-ready, channel overruns and watchdog resets since the previous evaluation,
+//! and a run on the compiled-in configuration (no configuration frame in the standby window).
 
 use crate::drivers::Health;
 use bitflags::bitflags;
@@ -36,16 +38,19 @@ pub enum NavStatus {
     Degraded = 3,
     /// Sensor failure or failed alignment: the solution is not to be used.
     Fault = 4,
+    /// Waiting for the host's configuration frame (the standby window): no navigation.
+    Standby = 5,
 }
 
 impl NavStatus {
     /// Every status, in code order.
-    pub const ALL: [Self; 5] = [
+    pub const ALL: [Self; 6] = [
         Self::AlignCoarse,
         Self::AlignFine,
         Self::Nav,
         Self::Degraded,
         Self::Fault,
+        Self::Standby,
     ];
 
     /// The status of a wire code.
@@ -61,6 +66,7 @@ impl NavStatus {
             Self::Nav => "NAV",
             Self::Degraded => "DEGRADED",
             Self::Fault => "FAULT",
+            Self::Standby => "STANDBY",
         }
     }
 }
@@ -95,6 +101,9 @@ bitflags! {
         const WATCHDOG_RESET = 1 << 11;
         /// No fix accepted for longer than the aiding timeout (aided phase).
         const AIDING_LOST = 1 << 12;
+        /// The run's configuration is the compiled-in one: no configuration frame was
+        /// accepted in the standby window.
+        const DEFAULT_CONFIG = 1 << 13;
     }
 }
 
@@ -171,6 +180,18 @@ impl HealthCounters {
     }
 }
 
+/// Where the run's configuration comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RunSource {
+    /// Not decided: the board waits for the host's configuration frame (standby).
+    Waiting,
+    /// The host's configuration frame.
+    Host,
+    /// The compiled-in configuration: no frame came in the standby window.
+    Default,
+}
+
 /// What the status rule reads of the navigator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct NavigatorState {
@@ -178,6 +199,8 @@ pub struct NavigatorState {
     pub stage: Stage,
     /// The aided filter's status (`None`: no filter, free inertial or still aligning).
     pub filter: Option<FilterStatus>,
+    /// Where the run's configuration comes from.
+    pub config: RunSource,
 }
 
 /// How long the aided phase may go without an accepted fix before it is DEGRADED, by default
@@ -236,6 +259,7 @@ impl StatusModel {
             NavStatus::Fault
         } else {
             match nav.stage {
+                _ if nav.config == RunSource::Waiting => NavStatus::Standby,
                 Stage::Coarse => NavStatus::AlignCoarse,
                 Stage::Fine => NavStatus::AlignFine,
                 Stage::Aligned | Stage::Failed if flags.intersects(degraded) => NavStatus::Degraded,
@@ -269,6 +293,10 @@ impl StatusModel {
 fn nav_flags(nav: NavigatorState) -> StatusFlags {
     let mut f = StatusFlags::empty();
     f.set(StatusFlags::ALIGN_FAILED, nav.stage == Stage::Failed);
+    f.set(
+        StatusFlags::DEFAULT_CONFIG,
+        nav.config == RunSource::Default,
+    );
     match nav.filter {
         None => f.set(StatusFlags::FREE_INERTIAL, nav.stage == Stage::Aligned),
         Some(FilterStatus::Nominal) => {}
@@ -326,7 +354,11 @@ mod tests {
     use super::*;
 
     fn state(stage: Stage, filter: Option<FilterStatus>) -> NavigatorState {
-        NavigatorState { stage, filter }
+        NavigatorState {
+            stage,
+            filter,
+            config: RunSource::Host,
+        }
     }
 
     #[test]
@@ -481,6 +513,6 @@ mod tests {
         for s in NavStatus::ALL {
             assert_eq!(NavStatus::from_code(s as u8), Some(s));
         }
-        assert_eq!(NavStatus::from_code(5), None);
+        assert_eq!(NavStatus::from_code(6), None);
     }
 }
