@@ -402,7 +402,33 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
             c.propagations, r.covariance_faults
         ),
     ]
+    .into_iter()
+    .chain(aiding_warnings(r))
+    .collect::<Vec<_>>()
     .join("\n")
+}
+
+/// Warnings for a run whose GNSS aiding did not work as the user meant: no position fix used
+/// (the solution is free-inertial), or more fixes refused than used (the filter's noise model,
+/// the lever arm or the fixes' 1-sigma do not match the data).
+pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
+    let p = &r.counters.position;
+    let mut out = Vec::new();
+    if r.start_s.is_some() && p.accepted == 0 {
+        out.push(format!(
+            "WARNING: no GNSS position fix was used ({} refused, {} invalid, {} before/after the \
+             IMU data, {} bad time tags): the solution is free-inertial",
+            p.rejected, p.invalid, r.outside_imu_data, r.bad_time_tags
+        ));
+    } else if p.rejected + p.invalid > p.accepted {
+        out.push(format!(
+            "WARNING: more GNSS position fixes refused ({}) or invalid ({}) than used ({}): the \
+             filter's IMU noise (--imu-noise, imunoise), the antenna lever arm or the fixes' \
+             1-sigma do not match the data, and the solution may be far off",
+            p.rejected, p.invalid, p.accepted
+        ));
+    }
+    out
 }
 
 #[cfg(test)]

@@ -161,6 +161,15 @@ pub fn write_record_file(path: &Path, fixes: &[GnssFix]) -> Result<()> {
 /// Converts a GNSS text file (the project's CSV or KF-GINS's text) into the binary fix file
 /// the firmware reads; returns the number of fixes.
 pub fn convert(input: &Path, output: &Path) -> Result<usize> {
+    // The output is binary: a text file's name would hide it.
+    if let Some(ext) = output.extension().and_then(|e| e.to_str())
+        && ["csv", "txt", "pos"].contains(&ext.to_ascii_lowercase().as_str())
+    {
+        bail!(
+            "{}: the binary fix file would carry a text file's name (.{ext}); name it .bin",
+            output.display()
+        );
+    }
     atomic::refuse_same_file(&[input], output)?;
     let fixes = gnss::read_gnss(input).with_context(|| format!("GNSS file {}", input.display()))?;
     write_record_file(output, &fixes)?;
@@ -171,6 +180,16 @@ pub fn convert(input: &Path, output: &Path) -> Result<usize> {
 mod tests {
     use super::*;
     use crate::gnss::GnssVelocity as TextVelocity;
+
+    #[test]
+    fn a_text_name_for_the_binary_file_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("gnss.csv");
+        let out = dir.path().join("fixes.CSV");
+        let e = convert(&input, &out).unwrap_err().to_string();
+        assert!(e.contains("name it .bin"), "{e}");
+        assert!(!out.exists());
+    }
 
     fn fixes() -> Vec<GnssFix> {
         (1..=5)

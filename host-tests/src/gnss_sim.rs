@@ -129,8 +129,20 @@ impl Outlier {
     }
 
     /// Its times and offsets are finite, its lengths not negative.
+    /// When it starts [s].
+    pub fn start_s(&self) -> f64 {
+        match *self {
+            Self::Jump { t_s, .. } | Self::Spike { t_s, .. } | Self::NaN { t_s } => t_s,
+            Self::Ramp { start_s, .. } => start_s,
+        }
+    }
+
     fn is_valid(&self) -> bool {
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        // An event before the first fix would land on it.
+        if !(self.start_s() >= 0.0) {
+            return false;
+        }
         match self {
             Self::Jump {
                 t_s,
@@ -146,6 +158,16 @@ impl Outlier {
             Self::NaN { t_s } => t_s.is_finite(),
         }
     }
+}
+
+/// Largest GNSS position 1-sigma `nav sim` writes [m]: a fix that poor is no fix.
+pub const MAX_SIGMA_M: f64 = 1000.0;
+/// Largest GNSS velocity 1-sigma `nav sim` writes [m/s].
+pub const MAX_SIGMA_V_M_S: f64 = 100.0;
+
+/// `a,b,c` as typed on the command line.
+fn list(v: &[f64; 3]) -> String {
+    format!("{},{},{}", v[0], v[1], v[2])
 }
 
 /// The simulated receiver.
@@ -426,13 +448,22 @@ impl GnssSimOptions {
             bail!("GNSS rate {} Hz: must be a positive number", o.rate_hz);
         }
         // The file carries the sigmas to the filter, which refuses a fix with a zero one.
-        let sigma_ok = |s: &[f64; 3]| finite(s) && s.iter().all(|x| *x > 0.0);
-        if !sigma_ok(&o.sigma_ned_m) || !o.sigma_v_ned_m_s.as_ref().is_none_or(sigma_ok) {
+        // ... and a receiver's noise beyond these would put its fixes off the Earth model.
+        let within = |s: &[f64; 3], max: f64| s.iter().all(|x| *x > 0.0 && *x <= max);
+        if !within(&o.sigma_ned_m, MAX_SIGMA_M) {
             bail!(
-                "GNSS sigmas {:?} m, {:?} m/s: must be finite and positive (the filter refuses a \
-             fix with a zero 1-sigma)",
-                o.sigma_ned_m,
-                o.sigma_v_ned_m_s
+                "GNSS position 1-sigma {} m: each must be positive and at most {MAX_SIGMA_M} m \
+                 (the filter refuses a fix with a zero 1-sigma)",
+                list(&o.sigma_ned_m)
+            );
+        }
+        if let Some(v) = &o.sigma_v_ned_m_s
+            && !within(v, MAX_SIGMA_V_M_S)
+        {
+            bail!(
+                "GNSS velocity 1-sigma {} m/s: each must be positive and at most \
+                 {MAX_SIGMA_V_M_S} m/s",
+                list(v)
             );
         }
         let arm_m = o.lever_arm_b_m.iter().map(|x| x * x).sum::<f64>().sqrt();
@@ -445,12 +476,21 @@ impl GnssSimOptions {
         if let Some(bad) = o
             .outages
             .iter()
-            .find(|g| !(finite(&[g.start_s, g.length_s]) && g.length_s >= 0.0))
+            .find(|g| !(finite(&[g.start_s, g.length_s]) && g.start_s >= 0.0 && g.length_s >= 0.0))
         {
-            bail!("outage {bad:?}: start and length must be finite, the length >= 0");
+            bail!(
+                "GNSS outage at {} s for {} s: start and length must be finite and >= 0",
+                bad.start_s,
+                bad.length_s
+            );
         }
         if let Some(bad) = o.outliers.iter().find(|x| !x.is_valid()) {
-            bail!("outlier {bad:?}: times and offsets must be finite, lengths >= 0 (a ramp's > 0)");
+            bail!(
+                "GNSS {} at {} s: times must be >= 0 and finite, offsets finite, lengths >= 0 \
+                 (a ramp's > 0)",
+                bad.name(),
+                bad.start_s()
+            );
         }
         Ok(())
     }

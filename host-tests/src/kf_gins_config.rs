@@ -300,9 +300,9 @@ pub fn parse(text: &str, path: &Path, dir: &Path) -> Result<(KfGinsConfig, Vec<S
         init_accel_bias_m_s2: scaled(c.array3("initaccbias", raw.initaccbias, "[mGal]")?, MGAL),
         init_gyro_scale: scaled(c.array3("initgyrscale", raw.initgyrscale, "[ppm]")?, PPM),
         init_accel_scale: scaled(c.array3("initaccscale", raw.initaccscale, "[ppm]")?, PPM),
-        init_pos_std_ned_m: c.std3("initposstd", raw.initposstd, "m", 1.0)?,
-        init_vel_std_ned_m_s: c.std3("initvelstd", raw.initvelstd, "m/s", 1.0)?,
-        init_att_std_rad: c.std3("initattstd", raw.initattstd, "deg", 1f64.to_radians())?,
+        init_pos_std_ned_m: c.start_std3("initposstd", raw.initposstd, "m", 1.0)?,
+        init_vel_std_ned_m_s: c.start_std3("initvelstd", raw.initvelstd, "m/s", 1.0)?,
+        init_att_std_rad: c.start_std3("initattstd", raw.initattstd, "deg", 1f64.to_radians())?,
         init_gyro_bias_std_rad_s: match raw.initbgstd {
             None => imu_noise.gyro_bias_std_rad_s,
             v => c.std3("initbgstd", v, "deg/h", DEG_PER_H)?,
@@ -379,6 +379,29 @@ impl Check<'_> {
             ));
         }
         Ok(v.map(|x| x * to_si))
+    }
+
+    /// Three positive standard deviations of the start's state ([`Self::std3`], a zero
+    /// refused: it would claim an exactly known state, which no fix could then correct).
+    fn start_std3(
+        &self,
+        key: &str,
+        value: Option<Vec<f64>>,
+        unit: &str,
+        to_si: f64,
+    ) -> Result<[f64; 3]> {
+        let v = self.std3(key, value, unit, to_si)?;
+        if let Some(i) = v.iter().position(|x| *x == 0.0) {
+            bail!(self.key(
+                key,
+                format!(
+                    "value {} is 0 {unit}: the start's 1-sigma must be positive (a zero claims \
+                     an exactly known state)",
+                    i + 1
+                )
+            ));
+        }
+        Ok(v)
     }
 
     /// A path, resolved as KF-GINS would find it, else beside the configuration file.
@@ -543,6 +566,11 @@ odolever: [ 1, 2, 3 ]
                 "initposstd: [ 0.005, 0.004, 0.008 ]",
                 "initposstd: [ 0.005, -0.004, 0.008 ]",
                 "key 'initposstd': value 2 (-0.004 m) is negative",
+            ),
+            (
+                "initattstd: [ 0.003, 0.003, 0.023 ]",
+                "initattstd: [ 0.003, 0, 0.023 ]",
+                "key 'initattstd': value 2 is 0 deg",
             ),
             (
                 "arw: [0.003, 0.003, 0.003]",

@@ -126,6 +126,8 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
     let (t_start, t_end) = (c.start_time_s, c.end_time_s.unwrap_or(f64::INFINITY));
     let mut prev_t: Option<f64> = None;
     let mut outside_window = 0_u64;
+    // Intervals off `imudatarate` by more than half its interval, of all intervals.
+    let (mut off_rate, mut intervals) = (0_u64, 0_u64);
     let samples = || -> Result<Option<AidedSample<f64>>> {
         loop {
             let Some(row) = rows.next() else {
@@ -133,6 +135,10 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
             };
             let row = row?;
             let dt = prev_t.map_or(nominal_dt, |p| row.t_s - p);
+            if prev_t.is_some() {
+                intervals += 1;
+                off_rate += u64::from((dt - nominal_dt).abs() > 0.5 * nominal_dt);
+            }
             prev_t = Some(row.t_s);
             // KF-GINS starts at the first epoch at or after `starttime`.
             if row.t_s < t_start {
@@ -160,6 +166,16 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
             "no IMU epoch between starttime {} s and endtime {} s in {}",
             t_start,
             t_end,
+            c.imu_path.display()
+        );
+    }
+    // A wrong `imudatarate` marks every epoch a gap (or none): refused before the
+    // trajectory is written.
+    if intervals > 0 && off_rate * 10 > intervals {
+        bail!(
+            "imudatarate {} Hz does not match {}: {off_rate} of its {intervals} epoch intervals \
+             differ from {nominal_dt} s by more than half",
+            c.imu_rate_hz,
             c.imu_path.display()
         );
     }

@@ -291,9 +291,15 @@ pub fn compare_with_sigma(
     let Some(start) = solution.first() else {
         bail!("the solution has no rows");
     };
-    if let Some(k) = truth.windows(2).position(|w| w[1].t_s < w[0].t_s) {
+    // Interpolation between truth rows needs their times strictly increasing.
+    if let Some(k) = truth.windows(2).position(|w| w[1].t_s <= w[0].t_s) {
+        let how = if truth[k + 1].t_s == truth[k].t_s {
+            "repeats"
+        } else {
+            "goes backwards"
+        };
         bail!(
-            "truth time goes backwards at row {}: {} s after {} s",
+            "truth time {how} at row {}: {} s after {} s",
             k + 2,
             truth[k + 1].t_s,
             truth[k].t_s
@@ -977,6 +983,19 @@ mod tests {
         }
         let s = series.stats(Quantity::Yaw).unwrap();
         assert!((s.rms - 1.0).abs() < 1e-9 && (s.max_abs - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_truth_whose_time_repeats_or_goes_back_is_refused() {
+        let t = truth();
+        let mut twice = t.clone();
+        twice[2].t_s = twice[1].t_s;
+        let e = compare(&t, &twice).unwrap_err().to_string();
+        assert!(e.contains("truth time repeats at row 3"), "{e}");
+        let mut back = t.clone();
+        back[2].t_s = back[1].t_s - 0.5;
+        let e = compare(&t, &back).unwrap_err().to_string();
+        assert!(e.contains("goes backwards at row 3"), "{e}");
     }
 
     #[test]

@@ -198,6 +198,11 @@ fn kf_gins_refuses_bad_input_without_a_partial_file() {
     let e = run_err(nav().arg("kf-gins").arg(&bad).arg("--out").arg(&out));
     assert!(e.contains("imudatarate"), "{e}");
     assert!(!out.exists());
+    // A rate the IMU file does not have (200 Hz data).
+    std::fs::write(&bad, text.replace("imudatarate: 200", "imudatarate: 1000")).unwrap();
+    let e = run_err(nav().arg("kf-gins").arg(&bad).arg("--out").arg(&out));
+    assert!(e.contains("imudatarate 1000 Hz does not match"), "{e}");
+    assert!(!out.exists());
     // A corrupt GNSS file.
     let gnss = dir.path().join("gnss.txt");
     let mut g = std::fs::read_to_string(&gnss).unwrap();
@@ -228,6 +233,9 @@ fn sim_refuses_a_receiver_the_filter_could_not_use() {
         (["--gnss-outages", "0,0,0"], "period must be positive"),
         (["--gnss-sigma", "0,0.5,1"], "positive"),
         (["--gnss-lever-arm", "150,0,0"], "within 100 m"),
+        // Fixes off the Earth model; an event before the first fix.
+        (["--gnss-sigma", "1e300,1,1"], "at most 1000 m"),
+        (["--gnss-nan=-3", "--gnss-sigma=0.5,0.5,1"], "must be >= 0"),
     ] {
         let msg = run_err(
             nav()
@@ -286,6 +294,33 @@ fn replay_refuses_an_impossible_start() {
         );
         assert!(msg.contains(reason), "{start:?}: {msg}");
         assert!(!out.exists(), "{start:?}: a solution file was left");
+    }
+    // Options of the alignment's run, which a given start does not use, are refused by name
+    // rather than ignored.
+    for extra in [
+        ["--calibration", "/nonexistent"],
+        ["--align-method", "sway"],
+        ["--lat", "10"],
+        ["--lever-arm", "1,1,1"],
+    ] {
+        let msg = run_err(
+            nav()
+                .arg("replay")
+                .arg("--imu")
+                .arg(d.join("imu.bin"))
+                .arg("--gnss")
+                .arg(d.join("gnss.csv"))
+                .args(["--init-pos", "45,7.5,250", "--init-vel", "0,0,0"])
+                .args(["--init-att", "0,0,0"])
+                .args(extra)
+                .arg("--out")
+                .arg(&out),
+        );
+        assert!(
+            msg.contains(extra[0]) && msg.contains("cannot be used with"),
+            "{extra:?}: {msg}"
+        );
+        assert!(!out.exists(), "{extra:?}: a solution file was left");
     }
 }
 

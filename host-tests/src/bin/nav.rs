@@ -358,17 +358,17 @@ struct ReplayArgs {
     #[arg(long, value_name = "FILE")]
     imu: PathBuf,
     /// Latitude of the site [deg].
-    #[arg(long, required_unless_present_any = ["init_pos", "start_in_motion"])]
+    #[arg(long, required_unless_present_any = ["init_pos", "start_in_motion"], conflicts_with_all = ["init_pos", "start_in_motion"])]
     lat: Option<f64>,
     /// Longitude of the site [deg].
-    #[arg(long, required_unless_present_any = ["init_pos", "start_in_motion"])]
+    #[arg(long, required_unless_present_any = ["init_pos", "start_in_motion"], conflicts_with_all = ["init_pos", "start_in_motion"])]
     lon: Option<f64>,
     /// Ellipsoidal height of the site [m].
-    #[arg(long, required_unless_present_any = ["init_pos", "start_in_motion"])]
+    #[arg(long, required_unless_present_any = ["init_pos", "start_in_motion"], conflicts_with_all = ["init_pos", "start_in_motion"])]
     h: Option<f64>,
     /// Length of the alignment window at the start [s] (at least the method's minimum: 10 s
     /// for static and inertial, 20 s for fine, 40 s for sway).
-    #[arg(long, required_unless_present_any = ["init_pos", "start_in_motion"])]
+    #[arg(long, required_unless_present_any = ["init_pos", "start_in_motion"], conflicts_with_all = ["init_pos", "start_in_motion"])]
     align_seconds: Option<f64>,
     /// GNSS fixes: CSV with units in the header (t_s,lat_deg,lon_deg,h_m,sigma_n_m,...) or
     /// KF-GINS's text (7 columns, or 13 with velocity). Navigates with the GNSS-aided filter,
@@ -412,46 +412,47 @@ struct ReplayArgs {
     precision: Precision,
     /// Sensor calibration file (nav-core's text form: biases, scale factors,
     /// misalignments), applied before the alignment and the navigation; identity without it.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["init_pos", "start_in_motion"])]
     calibration: Option<PathBuf>,
     /// The sample path: the recording as it is, or a simulated IMU on an SPI bus read by its
     /// real driver (the firmware's path on the `qemu` board is `adis16505`).
     #[arg(long, value_enum, default_value_t = ImuDevice::Recording)]
     device: ImuDevice,
     /// Navigation frame of the mechanization, wander or ned (outputs are NED either way).
-    #[arg(long, default_value = "wander", value_parser = named(&config::FRAMES))]
+    #[arg(long, default_value = "wander", value_parser = named(&config::FRAMES), conflicts_with_all = ["init_pos", "start_in_motion"])]
     frame: NavFrame,
     /// Attitude integration: rotation-vector (quaternion), or Poisson's DCM equation with
     /// euler, heun, rk4 or abm4.
-    #[arg(long, default_value = "rotation-vector", value_parser = named(&config::ATTITUDES))]
+    #[arg(long, default_value = "rotation-vector", value_parser = named(&config::ATTITUDES), conflicts_with_all = ["init_pos", "start_in_motion"])]
     attitude: AttitudeMethod,
     /// Vertical channel: free (integrated) or hold (held at the start height).
-    #[arg(long, default_value = "free", value_parser = named(&config::VERTICALS))]
+    #[arg(long, default_value = "free", value_parser = named(&config::VERTICALS), conflicts_with_all = ["init_pos", "start_in_motion"])]
     vertical: VerticalChannel,
     /// Alignment method: static (analytic, still base), inertial (inertial-frame coarse:
     /// rocking base, no initial heading), fine (inertial coarse, then the
     /// position-aided Kalman filter [Vavilova et al.]), sway (inertial coarse, then the swaying-base model).
-    #[arg(long, default_value = "static", value_parser = parse_align_method)]
+    #[arg(long, default_value = "static", value_parser = parse_align_method, conflicts_with_all = ["init_pos", "start_in_motion"])]
     align_method: AlignMethod,
-    /// IMU noise assumed by the alignment, as a simulator grade (fog, rlg, mems-tactical,
-    /// mems-consumer); default: the device's datasheet (the board's ADIS16505 for a plain
-    /// recording).
+    /// IMU noise assumed by the alignment and by the GNSS-aided filter, as a simulator grade
+    /// (fog, rlg, mems-tactical, mems-consumer); default: the device's datasheet (the board's
+    /// ADIS16505 for a plain recording). A filter that assumes a better IMU than the
+    /// recording's refuses the fixes it should use: give the grade of the sensor.
     #[arg(long, value_name = "GRADE")]
     imu_noise: Option<host_tests::sensor_model::Grade>,
     /// Scale of the assumed noise's bias 1-sigmas (0: biases compensated).
-    #[arg(long, value_name = "K", default_value_t = 1.0)]
+    #[arg(long, value_name = "K", default_value_t = 1.0, conflicts_with_all = ["init_pos", "start_in_motion"])]
     bias_prior: f64,
     /// The IMU's lever arm from the base's centre of rotation, body forward,right,down [m]
     /// (known: a ship's deck), e.g. -5.9,0.6,-7.5.
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse_vector3)]
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse_vector3, conflicts_with_all = ["init_pos", "start_in_motion"])]
     lever_arm: Option<[f64; 3]>,
     /// Without --lever-arm: the unknown lever arm's prior, 1-sigma per body axis [m].
-    #[arg(long, value_name = "S", conflicts_with = "lever_arm",
+    #[arg(long, value_name = "S", conflicts_with_all = ["lever_arm", "init_pos", "start_in_motion"],
           default_value_t = nav_core::alignment::machine::DEFAULT_LEVER_ARM_SIGMA_M)]
     lever_arm_sigma: f64,
     /// The base's horizontal translation (waves' surge and sway of its centre), stationary
     /// 1-sigma per axis [m]; 0 for a base that only turns (a motion table).
-    #[arg(long, value_name = "M", default_value_t = BaseMotion::<f64>::default().translation_sigma_m)]
+    #[arg(long, value_name = "M", default_value_t = BaseMotion::<f64>::default().translation_sigma_m, conflicts_with_all = ["init_pos", "start_in_motion"])]
     base_translation: f64,
 }
 
