@@ -41,15 +41,57 @@ pub struct DecodeSummary {
     pub cut_off_bytes: usize,
     /// The first refusals (up to [`MAX_LISTED`]), with the byte offset after the frame.
     pub refusals: Vec<(u64, Refusal)>,
+    /// Solution frames refused for their content ([`implausible`]): not written, so the log
+    /// is incomplete.
+    pub implausible: u32,
+    /// The first of them (up to [`MAX_LISTED`]), with the byte offset after the frame.
+    pub refused_rows: Vec<(u64, String)>,
+}
+
+/// Why a solution row that passed its frame's checks is not a navigator's: time not after the
+/// previous row's, latitude or longitude out of range, a value that is not finite, a negative
+/// 1-sigma.
+pub fn implausible(row: &Row, previous_t_us: Option<u64>) -> Option<String> {
+    let s = row.solution();
+    if let Some(p) = previous_t_us
+        && s.t_us <= p
+    {
+        return Some(format!(
+            "time {} us not after the previous row's {p} us",
+            s.t_us
+        ));
+    }
+    if s.lat_ndeg.unsigned_abs() > 90_000_000_000 || s.lon_ndeg.unsigned_abs() > 180_000_000_000 {
+        return Some(format!(
+            "latitude {} / longitude {} ndeg out of range",
+            s.lat_ndeg, s.lon_ndeg
+        ));
+    }
+    let values = [s.h_m, s.roll_deg, s.pitch_deg, s.yaw_deg];
+    if !values.iter().chain(&s.v_eb_n).all(|x| x.is_finite()) {
+        return Some("height, velocity or attitude not finite".into());
+    }
+    if let Row::Aided(_, c) = row {
+        let sigmas = c
+            .sigma_ned_m
+            .iter()
+            .chain(&c.sigma_v_ned_m_s)
+            .chain(&c.sigma_att_deg);
+        if !sigmas.clone().all(|x| x.is_finite() && *x >= 0.0) {
+            return Some("a 1-sigma negative or not finite".into());
+        }
+    }
+    None
 }
 
 /// Refusals listed in a summary.
 pub const MAX_LISTED: usize = 10;
 
 impl DecodeSummary {
-    /// The log is complete: an end-of-run frame whose row count is the rows decoded.
+    /// The log is complete: an end-of-run frame whose row count is the rows decoded, and no
+    /// solution frame refused for its content.
     pub fn complete(&self) -> bool {
-        self.end.is_some_and(|e| e.rows == self.rows)
+        self.implausible == 0 && self.end.is_some_and(|e| e.rows == self.rows)
     }
 }
 
@@ -74,11 +116,27 @@ impl fmt::Display for DecodeSummary {
         for (offset, r) in &self.refusals {
             writeln!(f, "refused frame ending at byte {offset}: {r}")?;
         }
+        if self.implausible > 0 {
+            writeln!(
+                f,
+                "{} solution frames refused for their content (not written)",
+                self.implausible
+            )?;
+        }
+        for (offset, why) in &self.refused_rows {
+            writeln!(f, "refused solution frame ending at byte {offset}: {why}")?;
+        }
         if self.cut_off_bytes > 0 {
             writeln!(f, "last frame cut off: {} bytes", self.cut_off_bytes)?;
         }
         match self.end {
-            Some(e) if e.rows == self.rows => write!(f, "{} rows, end of run: complete", self.rows),
+            Some(e) if self.complete() => {
+                write!(
+                    f,
+                    "{} rows, end of run: complete ({} rows)",
+                    self.rows, e.rows
+                )
+            }
             Some(e) => write!(
                 f,
                 "{} rows, but the end-of-run frame says {}: incomplete (no end record written)",
@@ -116,6 +174,7 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
     let mut aided: Option<bool> = None;
     let mut buf = vec![0u8; 1 << 16];
     let mut failure: Option<anyhow::Error> = None;
+    let mut last_t_us: Option<u64> = None;
     loop {
         let n = match input.read(&mut buf) {
             Ok(0) => break,
@@ -138,6 +197,15 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
             };
             match received.message {
                 Message::NavSolution(s) => {
+                    // A frame whose CRC holds but whose content no navigator writes.
+                    if let Some(why) = implausible(&s.row, last_t_us) {
+                        summary.implausible += 1;
+                        if summary.refused_rows.len() < MAX_LISTED {
+                            summary.refused_rows.push((decoder.stats().bytes, why));
+                        }
+                        continue;
+                    }
+                    last_t_us = Some(s.row.solution().t_us);
                     let is_aided = matches!(s.row, Row::Aided(..));
                     match aided {
                         None => {
@@ -248,8 +316,12 @@ mod tests {
 
     #[test]
     fn mixed_rows_are_refused_and_a_stream_without_rows_has_a_header_only() {
+        let later = Solution {
+            t_us: S.t_us + 2500,
+            ..S
+        };
         let aided = Row::Aided(
-            S,
+            later,
             FilterColumns {
                 sigma_ned_m: [1.0; 3],
                 sigma_v_ned_m_s: [0.1; 3],
@@ -269,5 +341,52 @@ mod tests {
             String::from_utf8(out).unwrap(),
             format!("{CSV_HEADER}\n# end: 0 rows, ok\n")
         );
+    }
+
+    /// Frames whose CRC holds but whose content no navigator writes are refused, counted,
+    /// not written, and the log is not marked complete.
+    #[test]
+    fn implausible_solution_frames_are_refused_and_the_log_left_incomplete() {
+        let at = |k: u64| Solution {
+            t_us: S.t_us + k * 2500,
+            ..S
+        };
+        let bad = [
+            Solution {
+                lat_ndeg: 1000_000_000_000,
+                ..at(1)
+            },
+            Solution {
+                h_m: f64::NAN,
+                ..at(1)
+            },
+            // Back in time.
+            at(0),
+        ];
+        for b in bad {
+            let messages = [
+                solution(Row::Free(at(0))),
+                solution(Row::Free(b)),
+                Message::EndOfRun(EndOfRun { rows: 2 }),
+            ];
+            let mut out = Vec::new();
+            let s = decode(&mut frames(&messages).as_slice(), &mut out).unwrap();
+            assert_eq!((s.rows, s.implausible), (1, 1), "{b:?}");
+            assert!(!s.complete(), "{b:?}");
+            let text = String::from_utf8(out).unwrap();
+            assert!(!text.contains("# end"), "{text}");
+            assert!(s.to_string().contains("refused solution frame"), "{s}");
+        }
+        let sigma = Row::Aided(
+            at(1),
+            FilterColumns {
+                sigma_ned_m: [1.0, -1.0, 1.0],
+                sigma_v_ned_m_s: [0.1; 3],
+                sigma_att_deg: [0.5; 3],
+                status: "NAV",
+            },
+        );
+        assert!(implausible(&sigma, None).is_some());
+        assert!(implausible(&Row::Free(at(1)), Some(at(0).t_us)).is_none());
     }
 }
