@@ -12,7 +12,9 @@ use defmt::{Format, Formatter, write};
 use hal_adapters::drivers::Health;
 use hal_adapters::protocol::config::{ConfigRefusal, MOUNTING_TOL};
 use nav_core::alignment::fine::FineRefusal;
-use nav_core::alignment::machine::{AlignFailure, AlignMethod, MAX_LEVER_ARM_M, SettingsError};
+use nav_core::alignment::machine::{
+    AlignFailure, AlignMethod, MAX_LEVER_ARM_M, MAX_RATE_HZ, MAX_WINDOW_S, SettingsError,
+};
 use nav_core::alignment::sway::MAX_YAW_SWAY_RAD;
 use nav_core::alignment::{AlignError, GravityMismatch, InertialAlignError};
 use nav_core::calibration::CalibrationError;
@@ -332,9 +334,16 @@ impl Format for Settings<'_> {
                 method.name(),
                 min_s
             ),
-            SettingsError::BadRate(r) => {
-                write!(f, "sampling rate {=f64} Hz is not a positive number", r)
-            }
+            SettingsError::BadRate(r) => write!(
+                f,
+                "sampling rate {=f64} Hz is not a positive number up to {=f64} Hz",
+                r, MAX_RATE_HZ
+            ),
+            SettingsError::WindowTooLong { seconds } => write!(
+                f,
+                "alignment window {=f64} s is longer than {=f64} s (a day)",
+                seconds, MAX_WINDOW_S
+            ),
             SettingsError::NearPole => {
                 write!(f, "latitude not finite or too close to a pole to align")
             }

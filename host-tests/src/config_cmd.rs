@@ -37,14 +37,32 @@ pub fn parse(name: &Path, text: &str) -> Result<DeviceConfig> {
         }
     }
     if let Err(refusal) = config.validate() {
-        let line = keys_of(&refusal).filter_map(|k| line_of.get(k)).max();
-        match line {
-            Some(n) => bail!(
+        // The lines of the file's keys the refusal is about, in file order.
+        let mut lines: Vec<(usize, &str)> = keys_of(&refusal)
+            .filter_map(|k| line_of.get(k).map(|n| (*n, k)))
+            .collect();
+        lines.sort_unstable();
+        match lines.as_slice() {
+            [(n, _)] => bail!(
                 "{}:{n}: refused (reason code {}): {refusal}",
                 name.display(),
                 refusal.code() as u8
             ),
-            None => bail!(
+            [_, ..] => {
+                let numbers: Vec<String> = lines.iter().map(|(n, _)| n.to_string()).collect();
+                let keys: Vec<String> = lines
+                    .iter()
+                    .map(|(n, k)| format!("{k} (line {n})"))
+                    .collect();
+                bail!(
+                    "{}:{}: refused (reason code {}): {refusal} (keys {})",
+                    name.display(),
+                    numbers.join(","),
+                    refusal.code() as u8,
+                    keys.join(", ")
+                )
+            }
+            [] => bail!(
                 "{}: refused (reason code {}, by the defaults of keys not in the file): {refusal}",
                 name.display(),
                 refusal.code() as u8

@@ -394,6 +394,28 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
             "# quiet\nhealth-every = 0\n",
             "bad-health.txt:2: refused (reason code 11)",
         ),
+        // A refusal about several keys names each one's line.
+        (
+            "window",
+            "align-seconds = 5\n# c\n\nlat-deg = 45\nlon-deg = 7\n",
+            "(keys align-seconds (line 1), lat-deg (line 4))",
+        ),
+        (
+            "window2",
+            "align-seconds = 5\n# c\n\nlat-deg = 45\nlon-deg = 7\n",
+            "bad-window2.txt:1,4: refused (reason code 8): alignment window 5 s",
+        ),
+        // A comment after a value; a rate no IMU has.
+        (
+            "inline",
+            "lat-deg = 95 # the site\n",
+            "bad-inline.txt:1: refused (reason code 1): latitude 95",
+        ),
+        (
+            "rate",
+            "imu-rate-hz = 1e12\n",
+            "not a positive number up to 40000 Hz",
+        ),
     ] {
         let f = d.join(format!("bad-{name}.txt"));
         std::fs::write(&f, text).unwrap();

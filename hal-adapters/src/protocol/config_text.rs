@@ -65,8 +65,12 @@ impl DeviceConfig {
     /// Applies one line of the text form (module docs); blank and comment lines do nothing.
     /// Values are checked for syntax here and by [`Self::validate`] for sense.
     pub fn apply_line<'a>(&mut self, line: &'a str) -> Result<(), LineError<'a>> {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
+        // A `#` starts a comment, on its own line or after a value.
+        let line = line
+            .split_once('#')
+            .map_or(line, |(before, _)| before)
+            .trim();
+        if line.is_empty() {
             return Ok(());
         }
         let (key, value) = line.split_once('=').ok_or(LineError::NoEquals)?;

@@ -336,6 +336,15 @@ fn start_sway<T: Scalar>(
 /// it); beyond that the value is a typing or unit error, not a base.
 pub const MAX_LEVER_ARM_M: f64 = 100.0;
 
+/// Highest IMU sampling rate an alignment accepts [Hz] (no IMU samples faster; a rate
+/// beyond it is a unit or typing error). A day's window at this rate still fits the sample
+/// counter.
+pub const MAX_RATE_HZ: f64 = 40_000.0;
+/// Longest alignment window [s] (a day: longer is a unit or typing error, and its sample
+/// count would not fit the counters).
+pub const MAX_WINDOW_S: f64 = 86_400.0;
+const _: () = assert!(MAX_WINDOW_S * MAX_RATE_HZ < u32::MAX as f64);
+
 /// Why alignment settings were refused before any sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SettingsError {
@@ -348,8 +357,13 @@ pub enum SettingsError {
         /// The method's minimum [s].
         min_s: f64,
     },
-    /// The sampling rate is not a positive finite number [Hz].
+    /// The sampling rate is not a positive finite number up to [`MAX_RATE_HZ`] [Hz].
     BadRate(f64),
+    /// The window is longer than [`MAX_WINDOW_S`] [s].
+    WindowTooLong {
+        /// The window asked for [s].
+        seconds: f64,
+    },
     /// The latitude is not finite or within ~1 deg of a pole (gyrocompassing needs the
     /// horizontal Earth rate).
     NearPole,
@@ -396,7 +410,14 @@ impl core::fmt::Display for SettingsError {
                 "alignment window {seconds} s is shorter than the {} method's minimum of {min_s} s",
                 method.name()
             ),
-            Self::BadRate(r) => write!(f, "sampling rate {r} Hz is not a positive number"),
+            Self::BadRate(r) => write!(
+                f,
+                "sampling rate {r} Hz is not a positive number up to {MAX_RATE_HZ} Hz"
+            ),
+            Self::WindowTooLong { seconds } => write!(
+                f,
+                "alignment window {seconds} s is longer than {MAX_WINDOW_S} s (a day)"
+            ),
             Self::NearPole => f.write_str("latitude not finite or too close to a pole to align"),
             Self::NotCompiledIn(method) => not_compiled_in(f, *method),
             Self::BadValue(what) => write!(f, "{what} must be finite and not negative"),
@@ -436,6 +457,7 @@ impl SettingsError {
         match self {
             Self::WindowTooShort { .. } => "window too short",
             Self::BadRate(_) => "bad sampling rate",
+            Self::WindowTooLong { .. } => "window too long",
             Self::NearPole => "near a pole",
             Self::NotCompiledIn(_) => "method not in this build",
             Self::BadValue(_) => "bad value",
@@ -494,8 +516,11 @@ impl<T: Scalar> AlignSettings<T> {
         rate_hz: f64,
         noise: SensorNoise<T>,
     ) -> Result<Self, SettingsError> {
-        if !(rate_hz.is_finite() && rate_hz > 0.0) {
+        if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= MAX_RATE_HZ) {
             return Err(SettingsError::BadRate(rate_hz));
+        }
+        if seconds > MAX_WINDOW_S {
+            return Err(SettingsError::WindowTooLong { seconds });
         }
         let samples = super::samples_for(seconds, rate_hz);
         let coarse_samples = match method {
@@ -561,8 +586,13 @@ impl<T: Scalar> AlignSettings<T> {
         if !self.method.compiled_in() {
             return Err(SettingsError::NotCompiledIn(self.method));
         }
-        if !(self.rate_hz.is_finite() && self.rate_hz > 0.0) {
+        if !(self.rate_hz.is_finite() && self.rate_hz > 0.0 && self.rate_hz <= MAX_RATE_HZ) {
             return Err(SettingsError::BadRate(self.rate_hz));
+        }
+        if self.seconds() > MAX_WINDOW_S {
+            return Err(SettingsError::WindowTooLong {
+                seconds: self.seconds(),
+            });
         }
         let min_s = self.method.min_seconds();
         // Rounding of the sample count (a window of exactly the minimum is accepted).
@@ -1338,6 +1368,22 @@ mod tests {
             Progress::Failed(AlignFailure::Static(AlignError::BaseRotating))
         );
         assert_eq!(a.stage(), Stage::Failed);
+        // A window or a rate beyond any IMU's: refused (their sample count would be clamped
+        // to the counter's range, and the window reported as something else).
+        let site = Position::from_degrees(45.0, 7.5, 100.0);
+        let noise = settings(AlignMethod::Static, 60.0).noise;
+        let long = AlignSettings::new(AlignMethod::Static, site, 1e300, 400.0, noise);
+        assert!(
+            matches!(long, Err(SettingsError::WindowTooLong { .. })),
+            "{long:?}"
+        );
+        for rate in [1e12, 0.0, f64::NAN] {
+            let fast = AlignSettings::new(AlignMethod::Static, site, 60.0, rate, noise);
+            assert!(matches!(fast, Err(SettingsError::BadRate(_))), "{rate}");
+        }
+        assert!(
+            AlignSettings::new(AlignMethod::Static, site, MAX_WINDOW_S, MAX_RATE_HZ, noise).is_ok()
+        );
         // A window shorter than the method's minimum: refused by the settings, and by the
         // machine from the increments' own intervals when the settings were built by hand.
         for method in AlignMethod::ALL {
