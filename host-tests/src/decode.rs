@@ -353,7 +353,7 @@ mod tests {
         };
         let bad = [
             Solution {
-                lat_ndeg: 1000_000_000_000,
+                lat_ndeg: 1_000_000_000_000,
                 ..at(1)
             },
             Solution {

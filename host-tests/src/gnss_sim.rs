@@ -140,7 +140,7 @@ impl Outlier {
     fn is_valid(&self) -> bool {
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         // An event before the first fix would land on it.
-        if !(self.start_s() >= 0.0) {
+        if self.start_s().is_nan() || self.start_s() < 0.0 {
             return false;
         }
         match self {

@@ -26,7 +26,6 @@ use crate::atomic::AtomicFile;
 use crate::text_error::TextError;
 use crate::truth::Truth;
 use nav_core::attitude::euler;
-use std::f64::consts::TAU;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -69,11 +68,11 @@ impl NavRow {
 
 /// Appends `row` to `line` as one `.nav` line, `\n` included.
 pub fn format_row(row: &NavRow, line: &mut Vec<u8>) {
-    let yaw_rad = if row.euler_rad[2] < 0.0 {
-        row.euler_rad[2] + TAU
-    } else {
-        row.euler_rad[2]
-    };
+    // In [0, 360) as written: a yaw a hair below 0 (or 360) is written 0, not 360.000000000.
+    let mut yaw_deg = row.euler_rad[2].to_degrees().rem_euclid(360.0);
+    if yaw_deg >= 360.0 - 0.5e-9 {
+        yaw_deg = 0.0;
+    }
     let v = &row.v_eb_n_m_s;
     append_fields(
         &[
@@ -87,7 +86,7 @@ pub fn format_row(row: &NavRow, line: &mut Vec<u8>) {
             v[2],
             row.euler_rad[0].to_degrees(),
             row.euler_rad[1].to_degrees(),
-            yaw_rad.to_degrees(),
+            yaw_deg,
         ],
         line,
     );
@@ -390,5 +389,16 @@ mod tests {
         );
         assert!(text.ends_with("270.000000000   \n"), "{text}");
         assert_eq!(text.len(), 11 * 16 + 1);
+        // Just below north: 0, not 360.
+        let mut line = Vec::new();
+        format_row(
+            &NavRow {
+                euler_rad: [0.0, 0.0, -1e-13],
+                ..row
+            },
+            &mut line,
+        );
+        let text = String::from_utf8(line).unwrap();
+        assert!(text.ends_with(" 0.000000000     \n"), "{text}");
     }
 }
