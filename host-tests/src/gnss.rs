@@ -131,6 +131,18 @@ pub fn detect(path: &Path) -> Result<GnssFormat, TextError> {
 
 /// Reads a GNSS file of either format ([`detect`]).
 pub fn read_gnss(path: &Path) -> anyhow::Result<Vec<GnssFix>> {
+    // The firmware's binary fix file is not a text this reads: say what it is.
+    let mut magic = [0u8; 8];
+    let head = File::open(path)
+        .and_then(|mut f| std::io::Read::read(&mut f, &mut magic))
+        .map_err(|e| TextError::io(path, e))?;
+    if head == magic.len() && magic == hal_adapters::gnss_record::MAGIC {
+        anyhow::bail!(
+            "{}: this is the binary fix file the firmware reads (docs/gnss-record-format.md); \
+             give the GNSS text it was converted from (the project's CSV or KF-GINS's text)",
+            path.display()
+        );
+    }
     let format = detect(path)?;
     let file = File::open(path).map_err(|e| TextError::io(path, e))?;
     let reader = BufReader::new(file);
@@ -395,6 +407,17 @@ pub fn write_csv_to<W: Write>(mut out: W, fixes: &[GnssFix]) -> io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_binary_fix_file_is_named_not_parsed() {
+        let dir = tempfile::tempdir().unwrap();
+        let bin = dir.path().join("gnss.bin");
+        let mut bytes = hal_adapters::gnss_record::MAGIC.to_vec();
+        bytes.extend_from_slice(&[0u8; 40]);
+        std::fs::write(&bin, bytes).unwrap();
+        let e = read_gnss(&bin).unwrap_err().to_string();
+        assert!(e.contains("binary fix file the firmware reads"), "{e}");
+    }
 
     fn csv(text: &str) -> Result<Vec<GnssFix>, TextError> {
         read_csv_from(text.as_bytes(), Path::new("mem.csv"))
