@@ -351,6 +351,35 @@ pub struct Converted {
     pub format: Format,
     /// The header of the recording written (the count, rate, `t0` and kind).
     pub header: Header,
+    /// Records carried over as they are although a replay flags them: time not after the
+    /// previous record's.
+    pub time_not_increasing: u64,
+    /// ... and a gyro or accelerometer value that is not finite.
+    pub not_finite: u64,
+}
+
+impl Converted {
+    /// A warning for the records a replay will flag, if any.
+    pub fn warning(&self) -> Option<String> {
+        (self.time_not_increasing + self.not_finite > 0).then(|| {
+            format!(
+                "WARNING: {} records with a time not after the previous one's and {} with a \
+                 value that is not finite were converted as they are; a replay flags them and \
+                 does not navigate them",
+                self.time_not_increasing, self.not_finite
+            )
+        })
+    }
+
+    /// Counts `r` into the warnings; `previous_t_ns` is the previous record's time.
+    fn check(&mut self, r: &Record, previous_t_ns: Option<u64>) {
+        if previous_t_ns.is_some_and(|p| r.t_ns <= p) {
+            self.time_not_increasing += 1;
+        }
+        if !r.gyro.iter().chain(&r.accel).all(|x| x.is_finite()) {
+            self.not_finite += 1;
+        }
+    }
 }
 
 /// Converts the recording `input` (any format, [`detect`]) to `out`: CSV when its name ends in
@@ -373,19 +402,34 @@ pub fn convert(input: &Path, out: &Path) -> Result<Converted> {
             out.display()
         );
     }
+    let mut converted = Converted {
+        format,
+        header,
+        time_not_increasing: 0,
+        not_finite: 0,
+    };
     crate::atomic::write(out, |w| -> Result<()> {
         let mut records = RecordStream::open(input, format)?;
         let mut written = 0_u64;
+        let mut previous_t_ns = None;
+        let mut next = |records: &mut RecordStream| -> Result<Option<Record>> {
+            let r = records.next_record()?;
+            if let Some(r) = &r {
+                converted.check(r, previous_t_ns);
+                previous_t_ns = Some(r.t_ns);
+            }
+            Ok(r)
+        };
         if to_csv {
             let mut csv = imu_csv::CsvWriter::new(&mut *w, scanned.has_temperature)?;
-            while let Some(r) = records.next_record()? {
+            while let Some(r) = next(&mut records)? {
                 csv.write_row(&csv_row(&r))?;
                 written += 1;
             }
             csv.finish()?;
         } else {
             w.write_all(&header.encode())?;
-            while let Some(r) = records.next_record()? {
+            while let Some(r) = next(&mut records)? {
                 w.write_all(&r.encode())?;
                 written += 1;
             }
@@ -400,7 +444,7 @@ pub fn convert(input: &Path, out: &Path) -> Result<Converted> {
         Ok(())
     })
     .with_context(writing)?;
-    Ok(Converted { format, header })
+    Ok(converted)
 }
 
 /// `true` when `path`'s name ends in `.csv` (any case).

@@ -223,3 +223,29 @@ fn a_failed_convert_leaves_the_output_untouched() {
     let e = recording_io::convert(&d.join("out.bin"), &d.join(".").join("out.bin")).unwrap_err();
     assert!(e.to_string().contains("is the input"), "{e}");
 }
+
+/// Records a replay will flag (time repeated or going back, a NaN) are converted as they are,
+/// counted and warned about; a clean recording gives no warning.
+#[test]
+fn convert_warns_about_records_a_replay_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let generated = Stationary {
+        seconds: 2.0,
+        ..Stationary::default()
+    }
+    .recording()
+    .unwrap();
+    let clean = dir.path().join("clean.bin");
+    recording_io::write(&clean, &generated).unwrap();
+    let c = recording_io::convert(&clean, &dir.path().join("clean.csv")).unwrap();
+    assert_eq!(c.warning(), None);
+    let mut bad = generated.clone();
+    bad.records[5].t_ns = bad.records[4].t_ns;
+    bad.records[9].t_ns = bad.records[7].t_ns;
+    bad.records[12].gyro[1] = f32::NAN;
+    let input = dir.path().join("bad.bin");
+    recording_io::write(&input, &bad).unwrap();
+    let c = recording_io::convert(&input, &dir.path().join("bad.csv")).unwrap();
+    assert_eq!((c.time_not_increasing, c.not_finite), (2, 1));
+    assert!(c.warning().unwrap().contains("WARNING: 2 records"));
+}

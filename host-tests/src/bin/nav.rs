@@ -1517,6 +1517,9 @@ fn run(cli: Cli) -> Result<()> {
                 c.header.rate_hz,
                 out.display()
             );
+            if let Some(w) = c.warning() {
+                eprintln!("{w}");
+            }
             Ok(())
         }
         Command::Report {
