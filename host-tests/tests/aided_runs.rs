@@ -261,6 +261,20 @@ fn replay_refuses_an_impossible_start() {
             .arg(d),
     );
     let out = d.join("sol.csv");
+    // `nav replay` of the simulated run from a given start, `args` added; its error text.
+    let replay_given = |args: &[&str]| {
+        run_err(
+            nav()
+                .arg("replay")
+                .arg("--imu")
+                .arg(d.join("imu.bin"))
+                .arg("--gnss")
+                .arg(d.join("gnss.csv"))
+                .args(args)
+                .arg("--out")
+                .arg(&out),
+        )
+    };
     for (start, reason) in [
         (
             ["45,7.5,250", "0,0,0", "0,0,0", "0,0.1,1"],
@@ -281,17 +295,16 @@ fn replay_refuses_an_impossible_start() {
         (["45,7.5,250", "0,0,0", "0,95,0", "1,0.1,1"], "pitch"),
         (["91,7.5,250", "0,0,0", "0,0,0", "1,0.1,1"], "latitude"),
     ] {
-        let msg = run_err(
-            nav()
-                .arg("replay")
-                .arg("--imu")
-                .arg(d.join("imu.bin"))
-                .arg("--gnss")
-                .arg(d.join("gnss.csv"))
-                .args(["--init-pos", start[0], "--init-vel", start[1]])
-                .args(["--init-att", start[2], "--init-std", start[3], "--out"])
-                .arg(&out),
-        );
+        let msg = replay_given(&[
+            "--init-pos",
+            start[0],
+            "--init-vel",
+            start[1],
+            "--init-att",
+            start[2],
+            "--init-std",
+            start[3],
+        ]);
         assert!(msg.contains(reason), "{start:?}: {msg}");
         assert!(!out.exists(), "{start:?}: a solution file was left");
     }
@@ -303,19 +316,15 @@ fn replay_refuses_an_impossible_start() {
         ["--lat", "10"],
         ["--lever-arm", "1,1,1"],
     ] {
-        let msg = run_err(
-            nav()
-                .arg("replay")
-                .arg("--imu")
-                .arg(d.join("imu.bin"))
-                .arg("--gnss")
-                .arg(d.join("gnss.csv"))
-                .args(["--init-pos", "45,7.5,250", "--init-vel", "0,0,0"])
-                .args(["--init-att", "0,0,0"])
-                .args(extra)
-                .arg("--out")
-                .arg(&out),
-        );
+        let start = [
+            "--init-pos",
+            "45,7.5,250",
+            "--init-vel",
+            "0,0,0",
+            "--init-att",
+            "0,0,0",
+        ];
+        let msg = replay_given(&[&start[..], &extra[..]].concat());
         assert!(
             msg.contains(extra[0]) && msg.contains("cannot be used with"),
             "{extra:?}: {msg}"
