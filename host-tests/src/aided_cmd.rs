@@ -42,8 +42,8 @@ pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {
         gyro_scale: scale(&m.gyro),
         accel_scale: scale(&m.accel),
         correlation_time_s: 3600.0,
-        gyro_cross_coupling_rad: m.gyro.misalignment.amax(),
-        accel_cross_coupling_rad: m.accel.misalignment.amax(),
+        gyro_cross_coupling_rad: off_diagonal_rms(&m.gyro.misalignment),
+        accel_cross_coupling_rad: off_diagonal_rms(&m.accel.misalignment),
         gyro_g_sensitivity: m.g_sensitivity_rad_s_per_m_s2.amax(),
     }
 }
@@ -127,12 +127,19 @@ pub fn grade_filter_model(grade: Grade) -> GradeFilterModel {
             gyro_scale: 0.0,
             accel_scale: 0.0,
             correlation_time_s: tau_f,
-            gyro_cross_coupling_rad: m.gyro.misalignment.amax(),
-            accel_cross_coupling_rad: m.accel.misalignment.amax(),
+            gyro_cross_coupling_rad: off_diagonal_rms(&m.gyro.misalignment),
+            accel_cross_coupling_rad: off_diagonal_rms(&m.accel.misalignment),
             gyro_g_sensitivity: m.g_sensitivity_rad_s_per_m_s2.amax(),
         },
         initial: [gyro_start, accel_start, scale(&m.gyro), scale(&m.accel)],
     }
+}
+
+/// The 1-sigma of a misalignment matrix's elements (the filter's `*_cross_coupling_rad`):
+/// the RMS of its six off-diagonals [rad].
+fn off_diagonal_rms(m: &nav_core::nalgebra::Matrix3<f64>) -> f64 {
+    let sum2 = m.norm_squared() - m.diagonal().norm_squared();
+    (sum2.max(0.0) / 6.0).sqrt()
 }
 
 /// `f64` settings in the working scalar.

@@ -71,7 +71,7 @@ pub fn outage_case(grade: Grade, seconds: f64, seed: u64) -> Case {
         seconds,
         imu_rate_hz: 200.0,
         zero_motion: true,
-        in_run_noise: false,
+        in_run_noise: true,
         without: Vec::new(),
         gnss: GnssSimOptions {
             rate_hz: 1.0,

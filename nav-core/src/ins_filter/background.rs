@@ -65,6 +65,8 @@ pub struct ErrorFilter<T: Scalar> {
     cluster: Option<RefusedCluster<T>>,
     /// Propagated time since the last position fix [s].
     since_fix_s: T,
+    /// The lasting part of the motion, for the cross-coupling noise ([`model::SustainedMotion`]).
+    sustained: model::SustainedMotion<T>,
 }
 
 impl<T: Scalar> ErrorFilter<T> {
@@ -94,6 +96,7 @@ impl<T: Scalar> ErrorFilter<T> {
             window: InnovationWindow::default(),
             cluster: None,
             since_fix_s: T::zero(),
+            sustained: model::SustainedMotion::default(),
         })
     }
 
@@ -167,7 +170,13 @@ impl<T: Scalar> ErrorFilter<T> {
     pub fn propagate(&mut self, prop: &Propagation<T>) {
         let f = model::system_matrix(&prop.lin, &self.config.noise, self.config.scale_factors);
         let phi = Transition::new(&f, prop.dt);
-        let q = model::noise_density(&self.config.noise, self.config.scale_factors, &prop.lin);
+        self.sustained.add(&prop.lin, prop.dt);
+        let q = model::noise_density(
+            &self.config.noise,
+            self.config.scale_factors,
+            &prop.lin,
+            &self.sustained,
+        );
         covariance::propagate(&mut self.p, &phi, &q, prop.dt);
         self.counters.propagations = self.counters.propagations.wrapping_add(1);
         self.since_fix_s += prop.dt;

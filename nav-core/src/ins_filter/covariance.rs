@@ -229,7 +229,7 @@ mod tests {
     fn structured_propagation_is_the_dense_formula() {
         for scale_factors in [true, false] {
             let f = model::system_matrix(&lin(), &noise(), scale_factors);
-            let q = model::noise_density(&noise(), scale_factors, &lin());
+            let q = model::noise_density(&noise(), scale_factors, &lin(), &Default::default());
             for dt in [0.005, 0.1, 1.0] {
                 let dense_phi = Covariance::<f64>::identity() + f * dt + f * f * (dt * dt / 2.0);
                 let phi = Transition::new(&f, dt);
@@ -250,7 +250,7 @@ mod tests {
     #[test]
     fn unmodelled_states_stay_zero() {
         let f = model::system_matrix(&lin(), &noise(), false);
-        let q = model::noise_density(&noise(), false, &lin());
+        let q = model::noise_density(&noise(), false, &lin(), &Default::default());
         let mut p = covariance();
         p.fixed_view_mut::<6, N>(SG, 0).fill(0.0);
         p.fixed_view_mut::<N, 6>(0, SG).fill(0.0);

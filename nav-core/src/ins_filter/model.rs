@@ -227,9 +227,11 @@ pub const CROSS_COUPLING_TIME_S: f64 = 10.0;
 /// heading. That change is covered two ways, so that a motion of any length is: over a
 /// motion shorter than `T_c` ([`CROSS_COUPLING_TIME_S`]) the error `e` integrates into the
 /// attitude or velocity, whose white noise `e^2 T_c` gives a variance `e^2 T_c t` at least the
-/// error's `(e t)^2` for `t <= T_c`; over a longer motion it is a new bias, reached by the
-/// bias state's random walk `e^2 / T_c`, whose variance `e^2 t / T_c` is at least the
-/// change's `e^2` for `t >= T_c`.
+/// error's `(e t)^2` for `t <= T_c`; a motion that lasts longer makes a new bias, reached by
+/// the bias state's random walk `e_s^2 / T_c`, where `e_s` is the same error of the motion's
+/// lasting part ([`SustainedMotion`]: `d` low-passed over `T_c`). The error of a short
+/// motion (a car's turn, a braking) ends with the motion: it is not a bias, and giving it to
+/// the bias states as one would keep its variance after the motion has gone.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CrossCoupling<T: Scalar> {
     /// Gyro error variance per body axis [(rad/s)^2].
@@ -241,10 +243,13 @@ pub struct CrossCoupling<T: Scalar> {
 impl<T: Scalar> CrossCoupling<T> {
     /// The variances at the linearisation point (type docs).
     pub fn at(noise: &FilterNoise<T>, lin: &Linearisation<T>) -> Self {
-        // The specific force's departure from its value at rest in the nominal attitude.
-        let mut d_f = lin.f_ib_b;
-        d_f.z += lin.earth.g;
-        let w = &lin.omega_ib_b;
+        Self::of(noise, &lin.omega_ib_b, &departure_from_rest(lin))
+    }
+
+    /// The variances of a body rate `omega_ib_b` [rad/s] and a specific-force departure from
+    /// rest `d_f_b` [m/s^2] (type docs).
+    pub fn of(noise: &FilterNoise<T>, omega_ib_b: &Vector3<T>, d_f_b: &Vector3<T>) -> Self {
+        let (w, d_f) = (omega_ib_b, d_f_b);
         let (w2, f2) = (w.norm_squared(), d_f.norm_squared());
         let (m_g2, m_a2) = (
             noise.gyro_cross_coupling_rad * noise.gyro_cross_coupling_rad,
@@ -255,6 +260,50 @@ impl<T: Scalar> CrossCoupling<T> {
             gyro_b: Vector3::from_fn(|i, _| m_g2 * (w2 - w[i] * w[i]) + k2 * f2),
             accel_b: Vector3::from_fn(|i, _| m_a2 * (f2 - d_f[i] * d_f[i])),
         }
+    }
+}
+
+/// The specific force's departure from its value at rest in the nominal attitude,
+/// `f_ib_b - (0, 0, -g)` [m/s^2].
+fn departure_from_rest<T: Scalar>(lin: &Linearisation<T>) -> Vector3<T> {
+    let mut d_f = lin.f_ib_b;
+    d_f.z += lin.earth.g;
+    d_f
+}
+
+/// The lasting part of the motion that the cross-coupling errors follow: the body rate and
+/// the specific force's departure from rest, each low-passed over [`CROSS_COUPLING_TIME_S`]
+/// (first order, `x <- x + (d - x) dt / (T_c + dt)`, stable for any interval). A motion much
+/// shorter than `T_c` leaves it near zero; one that lasts several `T_c` brings it to the
+/// motion's value ([`CrossCoupling`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SustainedMotion<T: Scalar> {
+    /// Low-passed body rate `omega_ib_b` [rad/s].
+    pub omega_ib_b: Vector3<T>,
+    /// Low-passed departure of `f_ib_b` from rest [m/s^2].
+    pub d_f_b: Vector3<T>,
+}
+
+impl<T: Scalar> Default for SustainedMotion<T> {
+    fn default() -> Self {
+        Self {
+            omega_ib_b: Vector3::zeros(),
+            d_f_b: Vector3::zeros(),
+        }
+    }
+}
+
+impl<T: Scalar> SustainedMotion<T> {
+    /// Adds a propagation interval `dt` [s] whose mean motion `lin` gives.
+    pub fn add(&mut self, lin: &Linearisation<T>, dt: T) {
+        let a = dt / (T::c(CROSS_COUPLING_TIME_S) + dt);
+        self.omega_ib_b += (lin.omega_ib_b - self.omega_ib_b) * a;
+        self.d_f_b += (departure_from_rest(lin) - self.d_f_b) * a;
+    }
+
+    /// The cross-coupling variances of this lasting motion.
+    pub fn cross_coupling(&self, noise: &FilterNoise<T>) -> CrossCoupling<T> {
+        CrossCoupling::of(noise, &self.omega_ib_b, &self.d_f_b)
     }
 }
 
@@ -271,18 +320,20 @@ fn diagonal_bound_ned<T: Scalar>(c_b_n: &Matrix3<T>, q_b: &Vector3<T>) -> Vector
 /// `vrw^2` on velocity, `arw^2` on attitude (isotropic, so the rotation `C_b_n` drops out),
 /// `2 sigma^2 / tau` on each Gauss–Markov state ([Groves, eq. 14.80]), and the cross-coupling
 /// errors that are not states ([`CrossCoupling`]): `e^2 T_c` on attitude (gyro) or velocity
-/// (accelerometer), resolved in NED (a diagonal bound), and `e^2 / T_c` on the gyro or
-/// accelerometer bias, per body axis.
+/// (accelerometer), resolved in NED (a diagonal bound), and `e_s^2 / T_c` of the lasting
+/// motion `sustained` on the gyro or accelerometer bias, per body axis.
 pub fn noise_density<T: Scalar>(
     noise: &FilterNoise<T>,
     scale_factors: bool,
     lin: &Linearisation<T>,
+    sustained: &SustainedMotion<T>,
 ) -> StateVector<T> {
     let mut q = StateVector::<T>::zeros();
     let two_over_tau = T::c(2.0) / noise.correlation_time_s;
     let gm = |sigma: T| sigma * sigma * two_over_tau;
     let t_c = T::c(CROSS_COUPLING_TIME_S);
     let c = CrossCoupling::at(noise, lin);
+    let lasting = sustained.cross_coupling(noise);
     let att = diagonal_bound_ned(&lin.c_b_n, &c.gyro_b);
     let vel = diagonal_bound_ned(&lin.c_b_n, &c.accel_b);
     let arw2 = noise.arw_rad_per_sqrt_s * noise.arw_rad_per_sqrt_s;
@@ -290,8 +341,8 @@ pub fn noise_density<T: Scalar>(
     for k in 0..3 {
         q[VEL + k] = vrw2 + vel[k] * t_c;
         q[ATT + k] = arw2 + att[k] * t_c;
-        q[BG + k] = gm(noise.gyro_bias_rad_s) + c.gyro_b[k] / t_c;
-        q[BA + k] = gm(noise.accel_bias_mps2) + c.accel_b[k] / t_c;
+        q[BG + k] = gm(noise.gyro_bias_rad_s) + lasting.gyro_b[k] / t_c;
+        q[BA + k] = gm(noise.accel_bias_mps2) + lasting.accel_b[k] / t_c;
         if scale_factors {
             q[SG + k] = gm(noise.gyro_scale);
             q[SA + k] = gm(noise.accel_scale);
@@ -408,8 +459,9 @@ mod tests {
 
     /// The cross-coupling noise is zero at rest in the nominal attitude (where the errors are
     /// biases the states hold) and, in a 30 deg bank, is sized by the specific force's
-    /// departure from `(0, 0, -g)`: white noise `e^2 T_c` on attitude and velocity, a random
-    /// walk `e^2 / T_c` on the biases.
+    /// departure from `(0, 0, -g)`: white noise `e^2 T_c` on attitude and velocity at once, a
+    /// random walk on the biases only as the bank lasts (`e^2 / T_c` once it has lasted many
+    /// `T_c`, a part of 1e-3 of that after one second).
     #[test]
     fn cross_coupling_noise_follows_the_departure_from_rest() {
         let mut n = noise();
@@ -425,8 +477,9 @@ mod tests {
             f_ib_b: Vector3::new(0.0, 0.0, -g),
             omega_ib_b: Vector3::zeros(),
         };
-        let base = noise_density(&noise(), true, &rest);
-        assert_eq!(noise_density(&n, true, &rest), base);
+        let still = SustainedMotion::default();
+        let base = noise_density(&noise(), true, &rest, &still);
+        assert_eq!(noise_density(&n, true, &rest, &still), base);
         let bank = 30f64.to_radians();
         let turn = Linearisation {
             f_ib_b: Vector3::new(0.0, 0.0, -g / bank.cos()),
@@ -446,15 +499,37 @@ mod tests {
         let accel = Vector3::new((1e-3 * d_f).powi(2), (1e-3 * d_f).powi(2), 0.0);
         assert!((c.gyro_b - gyro).amax() < 1e-20, "{c:?}");
         assert!((c.accel_b - accel).amax() < 1e-20, "{c:?}");
-        let q = noise_density(&n, true, &turn);
         let t_c = CROSS_COUPLING_TIME_S;
-        let rel = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs() + 1e-30;
+        let rel = |a: f64, b: f64, tol: f64| (a - b).abs() <= tol * b.abs() + 1e-30;
+        // One second into the bank, then twenty time constants.
+        let (mut brief, mut lasting) = (still, still);
+        for _ in 0..10 {
+            brief.add(&turn, 0.1);
+        }
+        for _ in 0..(200.0 * t_c) as usize {
+            lasting.add(&turn, 0.1);
+        }
+        let q = noise_density(&n, true, &turn, &lasting);
+        let q_brief = noise_density(&n, true, &turn, &brief);
         for k in 0..3 {
             // Level body: the NED diagonal is the body one.
-            assert!(rel(q[ATT + k] - base[ATT + k], gyro[k] * t_c), "{k}");
-            assert!(rel(q[VEL + k] - base[VEL + k], accel[k] * t_c), "{k}");
-            assert!(rel(q[BG + k] - base[BG + k], gyro[k] / t_c), "{k}");
-            assert!(rel(q[BA + k] - base[BA + k], accel[k] / t_c), "{k}");
+            assert!(rel(q[ATT + k] - base[ATT + k], gyro[k] * t_c, 1e-12), "{k}");
+            assert!(
+                rel(q[VEL + k] - base[VEL + k], accel[k] * t_c, 1e-12),
+                "{k}"
+            );
+            assert_eq!(q_brief[ATT + k], q[ATT + k]);
+            assert!(rel(q[BG + k] - base[BG + k], gyro[k] / t_c, 1e-6), "{k}");
+            assert!(rel(q[BA + k] - base[BA + k], accel[k] / t_c, 1e-6), "{k}");
+            // (1 - e^(-1 s / T_c))^2 of the lasting walk, about 1/110.
+            assert!(
+                q_brief[BG + k] - base[BG + k] <= gyro[k] / t_c / 100.0,
+                "{k}"
+            );
+            assert!(
+                q_brief[BA + k] - base[BA + k] <= accel[k] / t_c / 100.0,
+                "{k}"
+            );
         }
     }
 
@@ -480,7 +555,12 @@ mod tests {
             assert!(f.row(i).iter().all(|x| *x == 0.0));
             assert!(f.column(i).iter().all(|x| *x == 0.0));
         }
-        let q = noise_density(&noise(), false, &lin(0.3, Vector3::zeros()));
+        let q = noise_density(
+            &noise(),
+            false,
+            &lin(0.3, Vector3::zeros()),
+            &SustainedMotion::default(),
+        );
         assert!(q.rows(SG, 6).iter().all(|x| *x == 0.0));
     }
 }
