@@ -12,8 +12,9 @@
 use crate::imu::Device;
 use core::ffi::CStr;
 use core::fmt;
-use hal_adapters::drivers::NoiseSpec;
 use hal_adapters::drivers::noise::grade;
+use hal_adapters::drivers::{Mounting, NoiseSpec};
+use hal_adapters::protocol::config::MOUNTING_TOL;
 use nav_core::alignment::{AlignMethod, SensorNoise};
 use nav_core::navigator::{AidingConfig, OptionError, RunConfig};
 
@@ -38,6 +39,10 @@ pub struct Args {
     pub config_frame_path: Option<heapless::Vec<u8, MAX_PATH>>,
     /// The IMU on the bus.
     pub device: Device,
+    /// How the simulated IMU is installed (`--imu-mounting`, `c_s_b`): the recording's body axes
+    /// reach the driver turned into these sensor axes. The driver applies the board's
+    /// [`crate::imu::MOUNTING`]; a configuration frame's mounting is the run's.
+    pub imu_mounting: Mounting,
     /// The run configuration (the calibration is loaded into it from [`Self::cal_path`]).
     pub run: RunConfig,
 }
@@ -77,6 +82,8 @@ pub enum ArgError<'a> {
     StreamSameFile,
     /// An aided phase's option without `--gnss FILE`.
     AidingWithoutGnss,
+    /// `--imu-mounting` is not 9 numbers of a rotation.
+    BadMounting,
 }
 
 impl fmt::Display for ArgError<'_> {
@@ -98,6 +105,10 @@ impl fmt::Display for ArgError<'_> {
                 )
             }
             Self::UnknownOption(name) => write!(f, "unknown option --{name}"),
+            Self::BadMounting => write!(
+                f,
+                "--imu-mounting is not a rotation: 9 numbers, row by row, comma-separated"
+            ),
             Self::LeverArmTwice => f.write_str(
                 "--lever-arm (known) and --lever-arm-sigma (unknown) exclude each other",
             ),
@@ -134,7 +145,7 @@ const NAMES: [&str; 8] = [
 ];
 
 /// The usage line for error messages.
-pub const USAGE: &str = "firmware [--device adis16505|icm42688|bmi088] [--align-method static|inertial|fine|sway] [--imu-noise fog|rlg|mems-tactical|mems-consumer] [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S] [--base-translation M] [--frame wander|ned] [--attitude NAME] [--vertical free|hold] [--gnss FILE [--gnss-lever-arm X,Y,Z] [--propagation-rate HZ]] [--stream FILE] [--config-frame FILE] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
+pub const USAGE: &str = "firmware [--device adis16505|icm42688|bmi088] [--imu-mounting R11,R12,..,R33] [--align-method static|inertial|fine|sway] [--imu-noise fog|rlg|mems-tactical|mems-consumer] [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S] [--base-translation M] [--frame wander|ned] [--attitude NAME] [--vertical free|hold] [--gnss FILE [--gnss-lever-arm X,Y,Z] [--propagation-rate HZ]] [--stream FILE] [--config-frame FILE] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
 
 /// nav-core's noise model of a part's or grade's figures.
 pub fn sensor_noise(n: &NoiseSpec) -> SensorNoise<f64> {
@@ -153,6 +164,7 @@ impl Args {
     pub fn parse<'a>(args: impl Iterator<Item = &'a str>) -> Result<Self, ArgError<'a>> {
         let mut args = args.peekable();
         let mut device = Device::Adis16505;
+        let mut imu_mounting = Mounting::IDENTITY;
         let mut noise: Option<NoiseSpec> = None;
         let mut lever_arm_given = (false, false);
         let mut gnss_path = None;
@@ -165,6 +177,11 @@ impl Args {
             let value = args.next().ok_or(ArgError::NoValue(name))?;
             match name {
                 "device" => device = Device::parse(value).ok_or(ArgError::UnknownDevice(value))?,
+                "imu-mounting" => {
+                    imu_mounting = Mounting::parse_rows(value)
+                        .filter(|m| m.is_rotation(MOUNTING_TOL))
+                        .ok_or(ArgError::BadMounting)?;
+                }
                 "imu-noise" => {
                     noise = Some(grade::by_name(value).ok_or(ArgError::UnknownGrade(value))?);
                 }
@@ -254,6 +271,7 @@ impl Args {
             stream_path,
             config_frame_path,
             device,
+            imu_mounting,
             run,
         })
     }

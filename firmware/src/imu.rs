@@ -90,10 +90,12 @@ pub struct Read<S: Imu + 'static> {
 }
 
 impl<S: Imu + 'static> BoardImu<S> {
-    /// The driver for `device` over a simulated device answering from `source`, initialised.
-    /// The BMI088's device is shared by its two chip selects and lives in `bmi_slot`.
+    /// The driver for `device` over a simulated device answering from `source`, installed as
+    /// `installed` (sensor to body), initialised; the driver applies [`MOUNTING`]. The
+    /// BMI088's device is shared by its two chip selects and lives in `bmi_slot`.
     pub fn new(
         device: Device,
+        installed: Mounting,
         source: S,
         bmi_slot: &'static mut Option<SimBmi088<S>>,
     ) -> Result<Self, ImuError<S>> {
@@ -101,20 +103,20 @@ impl<S: Imu + 'static> BoardImu<S> {
         Ok(match device {
             Device::Adis16505 => {
                 let config = adis::Config::new(Device::ADIS_MODEL).with_mounting(mounting);
-                let bus = SimAdis16505::new(source, config.model).with_mounting(mounting);
+                let bus = SimAdis16505::new(source, config.model).with_mounting(installed);
                 let mut driver = Adis16505::new(bus, config);
                 driver.init(&mut NoDelay)?;
                 Self::Adis(driver)
             }
             Device::Icm42688 => {
-                let bus = SimIcm42688::new(source).with_mounting(mounting);
+                let bus = SimIcm42688::new(source).with_mounting(installed);
                 let mut driver = Icm42688::new(bus, icm::Config { mounting });
                 driver.init(&mut NoDelay)?;
                 Self::Icm(driver)
             }
             Device::Bmi088 => {
                 let sim: &'static SimBmi088<S> =
-                    bmi_slot.insert(SimBmi088::new(source).with_mounting(mounting));
+                    bmi_slot.insert(SimBmi088::new(source).with_mounting(installed));
                 let config = bmi::Config {
                     mounting,
                     ..bmi::Config::default()

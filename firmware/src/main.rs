@@ -340,6 +340,10 @@ mod app {
                 }
             }
             let start = board::counts();
+            let sample = match run_state.remount() {
+                Some(r) => sample.remounted(r),
+                None => sample,
+            };
             let step = navigator.push(&nav_input(&sample));
             let spent = instructions_since(start);
             match step {
@@ -587,6 +591,9 @@ mod app {
             );
         }
         log::config(config);
+        if run.remount().is_some() {
+            defmt::info!("mounting: the host's (each sample turned from the driver's axes)");
+        }
         let setup = Setup::<f32>::new(config, run.identity().imu_rate_hz).unwrap_or_else(|e| {
             defmt::error!("invalid configuration: {}", errors::Config(&e));
             exit(ExitCode::Config)

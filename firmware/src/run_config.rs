@@ -4,8 +4,10 @@
 //! compiled-in one does (the qemu board's: its command line), flagged to the host
 //! ([`RunSource::Default`]: the status flag `DEFAULT_CONFIG`). Once decided it stays for the
 //! run: a later frame may change the output rates only; another run configuration is refused
-//! ([`ConfigRefusal::RunInProgress`]).
+//! ([`ConfigRefusal::RunInProgress`]). A frame's mounting is the installation's: the run's
+//! samples are turned from the driver's mounting to it ([`RunState::remount`]).
 
+use hal_adapters::drivers::Mounting;
 use hal_adapters::protocol::config::{BoardIdentity, ConfigRefusal, DeviceConfig};
 use hal_adapters::protocol::status::RunSource;
 use nav_core::navigator::RunConfig;
@@ -16,6 +18,10 @@ pub struct RunState {
     default: RunConfig,
     identity: BoardIdentity,
     running: Option<(RunConfig, RunSource)>,
+    /// The run's mounting (the board's until a frame gives one).
+    mounting: Mounting,
+    /// From the driver's axes to the run's mounting; `None` when they are the same.
+    remount: Option<Mounting>,
 }
 
 impl RunState {
@@ -24,8 +30,10 @@ impl RunState {
     pub fn new(default: RunConfig, identity: BoardIdentity) -> Self {
         Self {
             default,
+            mounting: identity.mounting,
             identity,
             running: None,
+            remount: None,
         }
     }
 
@@ -39,6 +47,12 @@ impl RunState {
         self.running.as_ref()
     }
 
+    /// The rotation that turns the driver's samples into the run's body axes, when the run's
+    /// mounting (a frame's) is not the one the driver applies ([`Mounting::relative_to`]).
+    pub fn remount(&self) -> Option<&Mounting> {
+        self.remount.as_ref()
+    }
+
     /// Where the run's configuration comes from ([`RunSource::Waiting`] in standby).
     pub fn source(&self) -> RunSource {
         self.running
@@ -47,14 +61,18 @@ impl RunState {
 
     /// Takes a configuration frame: checked ([`DeviceConfig::check_on`]: its values, the
     /// board, the run in progress); in standby an accepted frame's run configuration (with the
-    /// board's calibration) becomes the run's. `Ok(true)` when it did.
+    /// board's calibration) and mounting become the run's. `Ok(true)` when they did.
     pub fn take(&mut self, config: &DeviceConfig) -> Result<bool, ConfigRefusal> {
-        config.check_on(&self.identity, self.running.as_ref().map(|(run, _)| run))?;
+        let running = self.running.as_ref().map(|(run, _)| (run, &self.mounting));
+        config.check_on(&self.identity, running)?;
         if self.running.is_some() {
             return Ok(false);
         }
         let run = config.run_with(self.default.calibration);
         self.running = Some((run, RunSource::Host));
+        self.mounting = config.mounting;
+        self.remount = (config.mounting != self.identity.mounting)
+            .then(|| config.mounting.relative_to(&self.identity.mounting));
         Ok(true)
     }
 

@@ -104,6 +104,25 @@ pub struct ImuSample {
 }
 
 impl ImuSample {
+    /// The sample with its motion turned by `r` (`v' = r v`, both vectors): from the axes of
+    /// the driver's mounting to the run's ([`crate::drivers::Mounting::relative_to`]).
+    pub fn remounted(&self, r: &crate::drivers::Mounting) -> ImuSample {
+        let motion = match self.motion {
+            Motion::Increments {
+                delta_theta_ib_b,
+                delta_v_ib_b,
+            } => Motion::Increments {
+                delta_theta_ib_b: r.to_body(delta_theta_ib_b),
+                delta_v_ib_b: r.to_body(delta_v_ib_b),
+            },
+            Motion::Rates { omega_ib_b, f_ib_b } => Motion::Rates {
+                omega_ib_b: r.to_body(omega_ib_b),
+                f_ib_b: r.to_body(f_ib_b),
+            },
+        };
+        ImuSample { motion, ..*self }
+    }
+
     /// Angle [rad] and velocity [m/s] increments over the interval (rates are multiplied by
     /// `dt_s`).
     pub fn increments(&self) -> ([f32; 3], [f32; 3]) {
@@ -122,7 +141,48 @@ impl ImuSample {
 
 #[cfg(test)]
 mod tests {
-    use super::SampleFlags;
+    use super::{ImuSample, Motion, SampleFlags};
+    use crate::drivers::Mounting;
+
+    /// Both kinds of motion are turned, both vectors; the rest of the sample is kept.
+    #[test]
+    fn remounting_turns_the_motion_only() {
+        let r = Mounting::FLU_TO_FRD;
+        let s = ImuSample {
+            t_us: 7,
+            seq: 3,
+            dt_s: 0.0025,
+            motion: Motion::Rates {
+                omega_ib_b: [1.0, 2.0, 3.0],
+                f_ib_b: [4.0, 5.0, 6.0],
+            },
+            temperature_c: 25.0,
+            flags: SampleFlags::GAP,
+        };
+        let turned = s.remounted(&r);
+        assert_eq!(
+            turned.motion,
+            Motion::Rates {
+                omega_ib_b: [1.0, -2.0, -3.0],
+                f_ib_b: [4.0, -5.0, -6.0],
+            }
+        );
+        assert_eq!(
+            (turned.t_us, turned.seq, turned.flags),
+            (7, 3, SampleFlags::GAP)
+        );
+        let inc = ImuSample {
+            motion: Motion::Increments {
+                delta_theta_ib_b: [1.0, 2.0, 3.0],
+                delta_v_ib_b: [4.0, 5.0, 6.0],
+            },
+            ..s
+        };
+        assert_eq!(
+            inc.remounted(&r).increments(),
+            ([1.0, -2.0, -3.0], [4.0, -5.0, -6.0])
+        );
+    }
 
     #[test]
     fn one_cause_per_unusable_sample() {

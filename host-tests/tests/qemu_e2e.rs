@@ -482,9 +482,14 @@ fn firmware_in_qemu_matches_host_replay() {
 /// latter run is flagged DEFAULT_CONFIG (no frame in the standby window). The frames after the
 /// accepted one arrive with the run decided: the same run with other output rates is accepted
 /// (raw increments every 2nd sample from then on), another site is refused as a run in
-/// progress, an impossible latitude for its latitude; the acknowledgements say so.
+/// progress, an impossible latitude for its latitude, another mounting as a run in progress;
+/// the acknowledgements say so. The frame's mounting is the installation's: the simulated IMU
+/// is installed turned, and the log is still the command line's of an IMU on the body axes.
 #[test]
 fn firmware_takes_its_run_configuration_from_the_host() {
+    // The IMU installed turned 90 deg about down (`--imu-mounting`: the board's driver does not
+    // know it); the frame's mounting says so, and the run is the command line's untouched one.
+    const TURNED: &str = "0,1,0,-1,0,0,0,0,1";
     use hal_adapters::protocol::MessageId as Id;
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
@@ -496,7 +501,7 @@ fn firmware_takes_its_run_configuration_from_the_host() {
         s.h_m.to_string(),
     );
     let text = format!(
-        "lat-deg = {lat}\nlon-deg = {lon}\nh-m = {h}\nalign-seconds = 12\nlever-arm = 0.5, -0.2, 0.1\nlog-every = 20\n"
+        "lat-deg = {lat}\nlon-deg = {lon}\nh-m = {h}\nalign-seconds = 12\nlever-arm = 0.5, -0.2, 0.1\nlog-every = 20\nmounting = {TURNED}\n"
     );
     std::fs::write(d.join("run.txt"), &text).unwrap();
     let o = nav(d, &["config", "run.txt", "--out", "frames.bin"]);
@@ -512,11 +517,13 @@ fn firmware_takes_its_run_configuration_from_the_host() {
     other_site.run.lat_deg += 1.0;
     let mut bad = config;
     bad.run.lat_deg = 95.0;
+    let mut other_mounting = config;
+    other_mounting.mounting = hal_adapters::drivers::Mounting::IDENTITY;
     let mut encoder = Encoder::new();
     encoder
         .encode(&Message::Config(config), &mut [0; MAX_FRAME])
         .unwrap(); // sequence number 0: the frame of `nav config`
-    for c in [rates, other_site, bad] {
+    for c in [rates, other_site, bad, other_mounting] {
         encoder.append(&Message::Config(c), &mut frames).unwrap();
     }
     std::fs::write(d.join("frames.bin"), &frames).unwrap();
@@ -529,6 +536,8 @@ fn firmware_takes_its_run_configuration_from_the_host() {
             "framed.bin",
             "--config-frame",
             "frames.bin",
+            "--imu-mounting",
+            TURNED,
             "rec.bin",
             "framed.csv",
             &lat_off,
@@ -545,6 +554,8 @@ fn firmware_takes_its_run_configuration_from_the_host() {
         "configuration frame 1 accepted: output rates applied (the run's configuration unchanged)",
         "configuration frame 2 refused (reason 13)",
         "configuration frame 3 refused (reason 1)",
+        "mounting: the host's",
+        "configuration frame 4 refused (reason 13)",
     ] {
         assert!(log.contains(expect), "no '{expect}' in:\n{log}");
     }
@@ -594,6 +605,7 @@ fn firmware_takes_its_run_configuration_from_the_host() {
             ack(1, None),
             ack(2, Some(ReasonCode::RunInProgress)),
             ack(3, Some(ReasonCode::Latitude)),
+            ack(4, Some(ReasonCode::RunInProgress)),
         ]
     );
     let samples = field(&log, "summary: samples");

@@ -108,7 +108,7 @@ pub fn init(
         bad_config(&e)
     }
     let device = args.device;
-    let imu = BoardImu::new(device, source, slot).unwrap_or_else(|e| {
+    let imu = BoardImu::new(device, args.imu_mounting, source, slot).unwrap_or_else(|e| {
         defmt::error!("IMU {} init failed: {}", device, e);
         exit(ExitCode::Recording)
     });

@@ -97,6 +97,45 @@ impl Mounting {
         [0, 1, 2].map(|j| c[0][j] * v_b[0] + c[1][j] * v_b[1] + c[2][j] * v_b[2])
     }
 
+    /// The rotation from the body axes of a driver mounted by `applied` to those of `self`:
+    /// `c_s_b c_applied^T`, for a run whose installation (`self`, e.g. a configuration frame's)
+    /// is not the one the driver applies. Exact for signed axis permutations.
+    pub fn relative_to(&self, applied: &Mounting) -> Mounting {
+        let (a, b) = (&self.c_s_b, &applied.c_s_b);
+        Mounting {
+            c_s_b: [0, 1, 2].map(|i| {
+                [0, 1, 2].map(|j| a[i][0] * b[j][0] + a[i][1] * b[j][1] + a[i][2] * b[j][2])
+            }),
+        }
+    }
+
+    /// Nine numbers, row by row, comma-separated (`c_s_b`); `None` unless there are exactly
+    /// nine and every one is finite. Not checked for a rotation: [`Self::is_rotation`].
+    pub fn parse_rows(text: &str) -> Option<Mounting> {
+        let mut c_s_b = [[0.0f32; 3]; 3];
+        let mut parts = text.split(',');
+        for v in c_s_b.iter_mut().flatten() {
+            *v = parts
+                .next()
+                .and_then(|p| p.trim().parse::<f32>().ok())
+                .filter(|x| x.is_finite())?;
+        }
+        parts.next().is_none().then_some(Mounting { c_s_b })
+    }
+
+    /// True when `c_s_b` is orthonormal with determinant +1, each within `tol` (NaN refused).
+    pub fn is_rotation(&self, tol: f32) -> bool {
+        let c = &self.c_s_b;
+        let dot = |i: usize, j: usize| (0..3).map(|k| c[i][k] * c[j][k]).sum::<f32>();
+        let orthonormal = (0..3).all(|i| {
+            (0..3).all(|j| {
+                let want = if i == j { 1.0 } else { 0.0 };
+                (dot(i, j) - want).abs() <= tol
+            })
+        });
+        orthonormal && (self.determinant() - 1.0).abs() <= tol
+    }
+
     fn determinant(&self) -> f32 {
         let c = &self.c_s_b;
         c[0][0] * (c[1][1] * c[2][2] - c[1][2] * c[2][1])
@@ -150,6 +189,29 @@ mod tests {
         // Repeated axis, mirror.
         assert!(Mounting::from_axes([PlusX, PlusX, PlusZ]).is_none());
         assert!(Mounting::from_axes([PlusX, PlusY, MinusZ]).is_none());
+    }
+
+    /// A sensor installed as `m` read by a driver that applies `applied`: turning its output by
+    /// `m.relative_to(applied)` gives the body vector back, exactly for axis permutations and
+    /// within rounding for a general rotation.
+    #[test]
+    fn a_run_mounting_undoes_the_drivers() {
+        use SignedAxis::*;
+        let m = Mounting::from_axes([PlusY, MinusX, PlusZ]).unwrap();
+        let v_b = [0.25, -1.5, 9.75];
+        for applied in [Mounting::IDENTITY, Mounting::FLU_TO_FRD, m] {
+            let read = applied.to_body(m.to_sensor(v_b));
+            assert_eq!(m.relative_to(&applied).to_body(read), v_b);
+        }
+        assert_eq!(m.relative_to(&m), Mounting::IDENTITY);
+        let (s, c) = 0.3f32.sin_cos();
+        let tilted = Mounting::from_matrix([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]);
+        let back = tilted
+            .relative_to(&Mounting::FLU_TO_FRD)
+            .to_body(Mounting::FLU_TO_FRD.to_body(tilted.to_sensor(v_b)));
+        for (a, b) in back.iter().zip(v_b) {
+            assert!((a - b).abs() < 1e-5, "{back:?}");
+        }
     }
 
     #[test]

@@ -259,7 +259,8 @@ pub struct BoardIdentity {
     pub imu_model: ImuModel,
     /// The IMU's output rate [Hz].
     pub imu_rate_hz: f64,
-    /// Sensor axes to body axes, as the driver applies them.
+    /// Sensor axes to body axes, as the driver applies them (the board's compiled-in
+    /// mounting; a frame's replaces it for the run: [`Mounting::relative_to`]).
     pub mounting: Mounting,
     /// A GNSS source is connected (an aided run needs one; a board with one runs aided).
     pub gnss: bool,
@@ -277,8 +278,6 @@ impl BoardIdentity {
             "the IMU model"
         } else if rate_off {
             "the IMU rate"
-        } else if config.mounting != self.mounting {
-            "the mounting"
         } else if config.run.aiding.is_some() != self.gnss {
             "GNSS aiding (on or off)"
         } else {
@@ -298,7 +297,7 @@ impl DeviceConfig {
     /// start makes (and no `f64` copy of the setup's code in the board's flash).
     pub fn validate(&self) -> Result<(), ConfigRefusal> {
         Setup::<f32>::new(&self.run, f64::from(self.imu_rate_hz)).map_err(ConfigRefusal::Run)?;
-        if !is_rotation(&self.mounting.c_s_b) {
+        if !self.mounting.is_rotation(MOUNTING_TOL) {
             return Err(ConfigRefusal::Mounting);
         }
         if self.rates.health_every == 0 {
@@ -308,22 +307,23 @@ impl DeviceConfig {
     }
 
     /// Checks a frame the board received: [`Self::validate`], then against the `board`
-    /// ([`BoardIdentity::check`]), then, with a run in progress on `running`, that its run
-    /// configuration is the running one (the calibration aside: the board's own, not carried),
-    /// so that only its output rates change.
+    /// ([`BoardIdentity::check`]), then, with a run in progress on `running` (its run
+    /// configuration and mounting), that its run configuration (the calibration aside: the
+    /// board's own, not carried) and mounting are the running ones, so that only its output
+    /// rates change.
     pub fn check_on(
         &self,
         board: &BoardIdentity,
-        running: Option<&RunConfig>,
+        running: Option<(&RunConfig, &Mounting)>,
     ) -> Result<(), ConfigRefusal> {
         self.validate()?;
         board.check(self)?;
-        if let Some(running) = running {
+        if let Some((running, mounting)) = running {
             let run = RunConfig {
                 calibration: running.calibration,
                 ..self.run
             };
-            if run != *running {
+            if run != *running || self.mounting != *mounting {
                 return Err(ConfigRefusal::RunInProgress);
             }
         }
@@ -459,21 +459,6 @@ impl DeviceConfig {
             rates,
         })
     }
-}
-
-/// `c` is orthonormal with determinant +1, within [`MOUNTING_TOL`] (NaN refused).
-fn is_rotation(c: &[[f32; 3]; 3]) -> bool {
-    let dot = |i: usize, j: usize| (0..3).map(|k| c[i][k] * c[j][k]).sum::<f32>();
-    let orthonormal = (0..3).all(|i| {
-        (0..3).all(|j| {
-            let want = if i == j { 1.0 } else { 0.0 };
-            (dot(i, j) - want).abs() <= MOUNTING_TOL
-        })
-    });
-    let det = c[0][0] * (c[1][1] * c[2][2] - c[1][2] * c[2][1])
-        - c[0][1] * (c[1][0] * c[2][2] - c[1][2] * c[2][0])
-        + c[0][2] * (c[1][0] * c[2][1] - c[1][1] * c[2][0]);
-    orthonormal && (det - 1.0).abs() <= MOUNTING_TOL
 }
 
 /// Position of `v` in `all` (the wire code of an enumeration listed in a table).

@@ -18,6 +18,7 @@
 //! | `align-method`, `bias-prior`, `lever-arm` (X,Y,Z [m]), `lever-arm-sigma` [m], `base-translation` [m], `log-every` (solution rate, [navigation steps]), `frame`, `attitude`, `vertical`, `gnss-lever-arm` (X,Y,Z [m]), `propagation-rate` [Hz] | as `nav replay`'s options |
 
 use super::config::{DeviceConfig, ImuModel, sensor_noise};
+use crate::drivers::Mounting;
 use crate::drivers::noise::grade;
 use core::fmt;
 use nav_core::navigator::OptionError;
@@ -115,19 +116,8 @@ impl DeviceConfig {
             "gyro-bias-rad-s" => run.noise.gyro_bias_rad_s = number()?,
             "accel-bias-mps2" => run.noise.accel_bias_mps2 = number()?,
             "mounting" => {
-                let mut c = [[0.0f32; 3]; 3];
-                let mut parts = value.split(',');
-                for v in c.iter_mut().flatten() {
-                    *v = parts
-                        .next()
-                        .and_then(|p| p.trim().parse::<f32>().ok())
-                        .filter(|x| x.is_finite())
-                        .ok_or(bad("9 numbers, row by row, comma-separated"))?;
-                }
-                if parts.next().is_some() {
-                    return Err(bad("9 numbers, row by row, comma-separated"));
-                }
-                self.mounting.c_s_b = c;
+                self.mounting = Mounting::parse_rows(value)
+                    .ok_or(bad("9 numbers, row by row, comma-separated"))?;
             }
             "raw-every" => self.rates.raw_every = count()?,
             "health-every" => self.rates.health_every = count()?,
@@ -188,7 +178,7 @@ pub fn keys_of(
         R::Run(E::Aiding(_)) => (&["aiding", "gnss-lever-arm", "propagation-rate"], true),
         R::Mounting => (&["mounting"], false),
         R::HealthOff => (&["health-every"], false),
-        R::NotThisBoard(_) => (&["imu-model", "imu-rate-hz", "mounting", "aiding"], false),
+        R::NotThisBoard(_) => (&["imu-model", "imu-rate-hz", "aiding"], false),
         R::Run(E::Calibration(_)) | R::Malformed(_) | R::RunInProgress => (&[], false),
     };
     let noise: &'static [&'static str] = if noise { &NOISE_KEYS } else { &[] };

@@ -13,6 +13,7 @@ use super::status::{
     AidCount, HealthCounters, NavStatus, NavigatorState, RunSource, StatusFlags, StatusModel,
 };
 use super::vibration::VibrationLevels;
+use crate::drivers::Mounting;
 use crate::sample::{ImuSample, Motion, SampleFlags};
 use nav_core::alignment::machine::{AlignMethod, Stage};
 use nav_core::ins_filter::FilterStatus;
@@ -311,26 +312,36 @@ pub fn default_board() -> BoardIdentity {
     }
 }
 
+/// A mounting turned 90 deg about the body's down axis.
+const TURNED: Mounting =
+    Mounting::from_matrix([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]);
+
 /// Changes of the default configuration that the default board refuses as not its own.
-pub fn other_board_cases() -> [Mutation; 4] {
+pub fn other_board_cases() -> [Mutation; 3] {
     [
         |c| c.imu_model = ImuModel::Icm42688,
         |c| c.imu_rate_hz = 200.0,
-        |c| c.mounting.c_s_b = [[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
         |c| {
             let _ = c.apply_line("aiding = on");
         },
     ]
 }
 
-/// Standby (no run): the defaults accepted, another board's refused (`NotThisBoard`). During
-/// a run on the defaults: the same run with other output rates accepted; another site, window
-/// or lever arm refused (`RunInProgress`), a bad value still refused for its own reason; the
-/// board's calibration is its own (a running calibration does not make the frame differ).
+/// Standby (no run): the defaults accepted, another mounting accepted (the installation's:
+/// the run's), another board's refused (`NotThisBoard`). During a run on the defaults: the
+/// same run with other output rates accepted; another site, window, lever arm or mounting
+/// refused (`RunInProgress`), a bad value still refused for its own reason; the board's
+/// calibration is its own (a running calibration does not make the frame differ).
 fn config_on_board() -> Result<(), &'static str> {
     let board = core::hint::black_box(default_board());
     let base = DeviceConfig::default();
     ensure(base.check_on(&board, None).is_ok(), "defaults refused")?;
+    let mut turned = base;
+    turned.mounting = TURNED;
+    ensure(
+        turned.check_on(&board, None).is_ok(),
+        "another mounting refused in standby",
+    )?;
     for mutate in other_board_cases() {
         let mut c = base;
         mutate(&mut c);
@@ -350,21 +361,24 @@ fn config_on_board() -> Result<(), &'static str> {
     rates.rates.raw_every = 0;
     rates.rates.health_every = 40;
     ensure(
-        rates.check_on(&board, Some(&running)).is_ok(),
+        rates
+            .check_on(&board, Some((&running, &base.mounting)))
+            .is_ok(),
         "new output rates refused during a run",
     )?;
-    let changes: [Mutation; 3] = [
+    let changes: [Mutation; 4] = [
         |c| c.run.lat_deg = 45.0,
         |c| c.run.align_seconds = 120.0,
         |c| {
             let _ = c.apply_line("lever-arm = 0.1, 0.2, 0.3");
         },
+        |c| c.mounting = TURNED,
     ];
     for change in changes {
         let mut c = base;
         change(&mut c);
         ensure(
-            c.check_on(&board, Some(&running))
+            c.check_on(&board, Some((&running, &base.mounting)))
                 .is_err_and(|e| e.code() == ReasonCode::RunInProgress),
             "another run configuration accepted during a run",
         )?;
@@ -372,7 +386,7 @@ fn config_on_board() -> Result<(), &'static str> {
     let mut bad = base;
     bad.run.lat_deg = 95.0;
     ensure(
-        bad.check_on(&board, Some(&running))
+        bad.check_on(&board, Some((&running, &base.mounting)))
             .is_err_and(|e| e.code() == ReasonCode::Latitude),
         "a bad value during a run refused for another reason",
     )?;
