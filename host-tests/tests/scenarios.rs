@@ -246,3 +246,41 @@ fn scenario_parameters_are_checked() {
     f.set("to_lon_deg", 43.9).unwrap();
     assert!(f.build().err().unwrap().to_string().contains("too close"));
 }
+
+/// `nav sim` with an unknown name lists every name it takes, from the same list it accepts:
+/// each listed name is accepted (its parameters print) and the family is among them.
+#[test]
+fn nav_sim_lists_the_scenarios_it_accepts() {
+    let nav = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+            .args(args)
+            .output()
+            .expect("run nav");
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        (o.status.success(), text)
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (ok, text) = nav(&["sim", "nonsense", "--out", dir.path().to_str().unwrap()]);
+    assert!(!ok, "{text}");
+    let listed: Vec<&str> = text
+        .split_once("nav sim takes ")
+        .unwrap_or_else(|| panic!("no list of scenarios: {text}"))
+        .1
+        .trim()
+        .split(", ")
+        .collect();
+    assert_eq!(
+        listed,
+        host_tests::simulate_family::sim_scenario_names(),
+        "{text}"
+    );
+    assert!(listed.contains(&"family"), "{text}");
+    for name in listed {
+        let (ok, text) = nav(&["sim", name, "--list-params"]);
+        assert!(ok && text.contains("parameters"), "{name}: {text}");
+    }
+}

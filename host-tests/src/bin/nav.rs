@@ -1119,9 +1119,17 @@ fn sim_family(a: SimArgs) -> Result<()> {
 
 fn sim(a: SimArgs) -> Result<()> {
     use host_tests::simulate::{SimOptions, simulate, write};
+    use host_tests::simulate_family::{SCENARIO_NAME, sim_scenario_names};
     use host_tests::trajectory::scenarios::Scenario;
-    if a.scenario == "family" {
+    if a.scenario == SCENARIO_NAME {
         return sim_family(a);
+    }
+    if !Scenario::NAMES.contains(&a.scenario.as_str()) {
+        anyhow::bail!(
+            "unknown scenario '{}'; nav sim takes {}",
+            a.scenario,
+            sim_scenario_names().join(", ")
+        );
     }
     let mut scenario = Scenario::by_name(&a.scenario)?;
     for (k, v) in key_values(&a.set)? {
