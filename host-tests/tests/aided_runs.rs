@@ -241,7 +241,10 @@ fn sim_refuses_a_receiver_the_filter_could_not_use() {
         (["--gnss-outages", "10,20,0"], "shorter than the period"),
         (["--gnss-outages", "0,0,0"], "period must be positive"),
         (["--gnss-sigma", "0,0.5,1"], "positive"),
-        (["--gnss-lever-arm", "150,0,0"], "within 100 m"),
+        (
+            ["--gnss-lever-arm", "150,0,0"],
+            "lever arm 150,0,0 m: must be finite and within 100 m",
+        ),
         // Fixes off the Earth model; an event before the first fix.
         (["--gnss-sigma", "1e300,1,1"], "at most 1000 m"),
         (["--gnss-nan=-3", "--gnss-sigma=0.5,0.5,1"], "must be >= 0"),
