@@ -284,3 +284,60 @@ fn nav_sim_lists_the_scenarios_it_accepts() {
         assert!(ok && text.contains("parameters"), "{name}: {text}");
     }
 }
+
+/// `nav sim land-vehicle`'s replay hint runs as written: its alignment window ends before the
+/// car first moves, and scenario.txt gives the recording's length, not the scenario's default;
+/// a recording too short to align and navigate says so instead of a command that would fail.
+#[test]
+fn the_land_vehicle_replay_hint_runs() {
+    let nav = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+            .args(args)
+            .output()
+            .expect("run nav");
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        (o.status.success(), text)
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let sim = |seconds: &str, name: &str| {
+        let out = dir.path().join(name);
+        let out_s = out.to_str().unwrap();
+        let args = ["sim", "land-vehicle", "--seconds", seconds];
+        let (ok, text) = nav(&[&args[..], &["--format", "bin", "--out", out_s]].concat());
+        assert!(ok, "{text}");
+        std::fs::read_to_string(out.join("scenario.txt")).unwrap()
+    };
+    let text = sim("100", "long");
+    assert!(
+        text.contains("\nseconds = 100  # length [s] (--seconds; the scenario's own is 600)"),
+        "{text}"
+    );
+    let line = text
+        .lines()
+        .find_map(|l| l.strip_prefix("# replay: nav "))
+        .unwrap_or_else(|| panic!("no replay line in\n{text}"));
+    // The car moves from 20 s: a window ending before it.
+    assert!(line.contains("--align-seconds 15 "), "{line}");
+    let solution = dir.path().join("solution.csv");
+    let args: Vec<String> = line
+        .split_whitespace()
+        .map(|a| match a {
+            "solution.csv" => solution.to_str().unwrap().to_owned(),
+            _ => a.to_owned(),
+        })
+        .collect();
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (ok, out) = nav(&args);
+    assert!(ok, "{line}\n{out}");
+    assert!(solution.exists());
+
+    let text = sim("10", "short");
+    assert!(
+        text.contains("# replay: none: 10.0 s leave a 0 s alignment window"),
+        "{text}"
+    );
+}
