@@ -35,8 +35,11 @@ pub struct DecodeSummary {
     pub stats: DecodeStats,
     /// Solution rows written.
     pub rows: u32,
-    /// The end-of-run frame, if one came (the last one).
+    /// The end-of-run frame, if one came after the last solution frame.
     pub end: Option<EndOfRun>,
+    /// An end-of-run frame that solution frames followed (the first such), and how many
+    /// solution frames came after it: the log is incomplete.
+    pub early_end: Option<(EndOfRun, u32)>,
     /// Bytes of a last frame cut off by the end of the stream.
     pub cut_off_bytes: usize,
     /// The first refusals (up to [`MAX_LISTED`]), with the byte offset after the frame.
@@ -88,10 +91,13 @@ pub fn implausible(row: &Row, previous_t_us: Option<u64>) -> Option<String> {
 pub const MAX_LISTED: usize = 10;
 
 impl DecodeSummary {
-    /// The log is complete: an end-of-run frame whose row count is the rows decoded, and no
-    /// solution frame refused for its content.
+    /// The log is complete: an end-of-run frame after the last solution frame whose row count
+    /// is the rows decoded, no end-of-run frame before it, and no solution frame refused for
+    /// its content.
     pub fn complete(&self) -> bool {
-        self.implausible == 0 && self.end.is_some_and(|e| e.rows == self.rows)
+        self.implausible == 0
+            && self.early_end.is_none()
+            && self.end.is_some_and(|e| e.rows == self.rows)
     }
 }
 
@@ -100,13 +106,14 @@ impl fmt::Display for DecodeSummary {
         let s = &self.stats;
         writeln!(
             f,
-            "{} bytes: {} frames, {} skipped bytes, {} CRC failures, {} other refusals, {} frames lost (sequence gaps)",
+            "{} bytes: {} frames, {} skipped bytes, {} CRC failures, {} other refusals, {} frames lost (sequence gaps), {} frames out of order (sequence number repeated or going back)",
             s.bytes,
             s.frames_total(),
             s.skipped_bytes,
             s.crc_failures,
             s.other_refusals,
-            s.frames_lost
+            s.frames_lost,
+            s.frames_out_of_order
         )?;
         let by_type: Vec<String> = MessageId::ALL
             .iter()
@@ -129,20 +136,26 @@ impl fmt::Display for DecodeSummary {
         if self.cut_off_bytes > 0 {
             writeln!(f, "last frame cut off: {} bytes", self.cut_off_bytes)?;
         }
-        match self.end {
-            Some(e) if self.complete() => {
+        match (self.end, self.early_end) {
+            (_, Some((e, after))) => write!(
+                f,
+                "{} rows, but the end-of-run frame (saying {} rows) came before the end of the \
+                 stream, {after} solution frames follow it: incomplete (no end record written)",
+                self.rows, e.rows
+            ),
+            (Some(e), None) if self.complete() => {
                 write!(
                     f,
                     "{} rows, end of run: complete ({} rows)",
                     self.rows, e.rows
                 )
             }
-            Some(e) => write!(
+            (Some(e), None) => write!(
                 f,
                 "{} rows, but the end-of-run frame says {}: incomplete (no end record written)",
                 self.rows, e.rows
             ),
-            None => write!(
+            (None, None) => write!(
                 f,
                 "{} rows, no end-of-run frame: incomplete (no end record written)",
                 self.rows
@@ -230,8 +243,13 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
                     }
                     writeln!(out, "{}", s.row)?;
                     summary.rows += 1;
-                    // Rows after an end of run: a new run, not complete.
-                    summary.end = None;
+                    // Rows after an end of run: the log is not complete.
+                    if let Some(e) = summary.end.take() {
+                        summary.early_end.get_or_insert((e, 0));
+                    }
+                    if let Some((_, after)) = &mut summary.early_end {
+                        *after += 1;
+                    }
                 }
                 Message::EndOfRun(e) => summary.end = Some(e),
                 _ => {}

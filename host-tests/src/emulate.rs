@@ -383,6 +383,16 @@ pub enum Vertical {
     Free,
 }
 
+impl Vertical {
+    /// Its name on the command line (`--vertical`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Aided => "aided",
+            Self::Free => "free",
+        }
+    }
+}
+
 /// Emulator options.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmulatorOptions {
@@ -1037,13 +1047,13 @@ impl EmulateJob<'_> {
         .with_context(|| format!("writing {}", self.out.display()))?;
         let (first, last) = (&out.errors[0], &out.errors[out.errors.len() - 1]);
         let mut s = format!(
-            "emulated {} rows ({} s to {} s) of {} into {} (vertical {:?})\nerrors:\n{}",
+            "emulated {} rows ({} s to {} s) of {} into {} (vertical {})\nerrors:\n{}",
             out.displayed.len(),
             first.t_s,
             last.t_s,
             self.truth.display(),
             self.out.display(),
-            self.options.vertical,
+            self.options.vertical.name(),
             errors.to_text()
         );
         s += &format!(
@@ -1093,4 +1103,18 @@ pub fn write_errors_csv(path: &Path, errors: &[ErrorSample]) -> anyhow::Result<(
         w.flush()
     };
     crate::atomic::write(path, write).with_context(|| format!("writing {}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Vertical;
+    use clap::ValueEnum;
+
+    /// The summary names the vertical channel as `--vertical` takes it.
+    #[test]
+    fn vertical_names_are_the_command_line_values() {
+        for v in Vertical::value_variants() {
+            assert_eq!(Vertical::from_str(v.name(), false), Ok(*v));
+        }
+    }
 }

@@ -469,8 +469,8 @@ impl GnssSimOptions {
         let arm_m = o.lever_arm_b_m.iter().map(|x| x * x).sum::<f64>().sqrt();
         if arm_m.is_nan() || arm_m > MAX_LEVER_ARM_M {
             bail!(
-                "lever arm {:?} m: must be finite and within {MAX_LEVER_ARM_M} m",
-                o.lever_arm_b_m
+                "lever arm {} m: must be finite and within {MAX_LEVER_ARM_M} m",
+                list(&o.lever_arm_b_m)
             );
         }
         if let Some(bad) = o

@@ -28,6 +28,7 @@ use hal_adapters::recording::{
     ReplayStats,
 };
 use hal_adapters::{Imu, ImuSample};
+use nav_core::increment::InputLimits;
 use std::fs::File;
 use std::io::{BufReader, Read, Write};
 use std::path::Path;
@@ -356,29 +357,66 @@ pub struct Converted {
     pub time_not_increasing: u64,
     /// ... and a gyro or accelerometer value that is not finite.
     pub not_finite: u64,
+    /// ... and a rate or specific force beyond nav-core's plausibility limits
+    /// ([`InputLimits`]: beyond any IMU's full scale).
+    pub out_of_range: u64,
 }
 
 impl Converted {
     /// A warning for the records a replay will flag, if any.
     pub fn warning(&self) -> Option<String> {
-        (self.time_not_increasing + self.not_finite > 0).then(|| {
+        (self.time_not_increasing + self.not_finite + self.out_of_range > 0).then(|| {
+            let limits = InputLimits::<f64>::default();
             format!(
-                "WARNING: {} records with a time not after the previous one's and {} with a \
-                 value that is not finite were converted as they are; a replay flags them and \
-                 does not navigate them",
-                self.time_not_increasing, self.not_finite
+                "WARNING: {} records with a time not after the previous one's, {} with a \
+                 value that is not finite and {} with a rate beyond {:.0} deg/s or a specific \
+                 force beyond {:.0} m/s^2 (beyond any IMU's full scale) were converted as they \
+                 are; a replay flags or refuses them and does not navigate them",
+                self.time_not_increasing,
+                self.not_finite,
+                self.out_of_range,
+                limits.max_rate.to_degrees(),
+                limits.max_specific_force
             )
         })
     }
 
-    /// Counts `r` into the warnings; `previous_t_ns` is the previous record's time.
+    /// Counts `r` into the warnings; `previous_t_ns` is the previous record's time (`None` for
+    /// the first record, whose interval starts at the header's `t0_ns`).
     fn check(&mut self, r: &Record, previous_t_ns: Option<u64>) {
         if previous_t_ns.is_some_and(|p| r.t_ns <= p) {
             self.time_not_increasing += 1;
         }
         if !r.gyro.iter().chain(&r.accel).all(|x| x.is_finite()) {
             self.not_finite += 1;
+        } else if self.beyond_limits(r, previous_t_ns) {
+            self.out_of_range += 1;
         }
+    }
+
+    /// `true` when `r`'s rate or specific force exceeds [`InputLimits`]' default on any axis.
+    /// An increment is divided by its measured interval, or by the nominal one when the
+    /// measured interval is not positive.
+    fn beyond_limits(&self, r: &Record, previous_t_ns: Option<u64>) -> bool {
+        let limits = InputLimits::<f64>::default();
+        let interval_s = match self.header.kind {
+            Kind::Rates => 1.0,
+            Kind::Increments => {
+                let start_ns = previous_t_ns.unwrap_or(self.header.t0_ns);
+                let measured_s = r.t_ns.saturating_sub(start_ns) as f64 * 1e-9;
+                if measured_s > 0.0 {
+                    measured_s
+                } else {
+                    1.0 / self.header.rate_hz
+                }
+            }
+        };
+        let beyond = |values: &[f32; 3], limit: f64| {
+            values
+                .iter()
+                .any(|&x| f64::from(x).abs() > limit * interval_s)
+        };
+        beyond(&r.gyro, limits.max_rate) || beyond(&r.accel, limits.max_specific_force)
     }
 }
 
@@ -407,6 +445,7 @@ pub fn convert(input: &Path, out: &Path) -> Result<Converted> {
         header,
         time_not_increasing: 0,
         not_finite: 0,
+        out_of_range: 0,
     };
     crate::atomic::write(out, |w| -> Result<()> {
         let mut records = RecordStream::open(input, format)?;

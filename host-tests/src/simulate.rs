@@ -14,12 +14,14 @@
 
 use crate::recording_io::{self, Recording};
 use crate::sensor_model::{ErrorInjector, Grade, InjectorCounters};
-use crate::trajectory::scenarios::Scenario;
+use crate::simulate_family::NAVIGATE_AFTER_S;
+use crate::trajectory::scenarios::{LandVehicle, Scenario};
 use crate::trajectory::{Sampling, generate};
 use crate::truth::Truth;
 use crate::{generate::TEMPERATURE_C, imu_csv, truth_csv};
 use anyhow::{Context, Result, bail, ensure};
 use hal_adapters::recording::{Kind, Record};
+use nav_core::alignment::AlignMethod;
 use nav_core::number::Number;
 use std::fmt::Write as _;
 use std::fs;
@@ -272,8 +274,16 @@ pub fn describe(opts: &SimOptions, sim: &Simulated, imu: &Path) -> Result<String
     writeln!(s, "gyro_saturated_samples = {}", c.gyro_saturated)?;
     writeln!(s, "accel_saturated_samples = {}", c.accel_saturated)?;
     writeln!(s, "# parameters")?;
+    let seconds = samples as f64 / opts.rate_hz;
     for (key, value, doc) in scenario.describe() {
-        writeln!(s, "{key} = {value}  # {doc}")?;
+        match opts.seconds {
+            // The recording's length, not the scenario's default.
+            Some(given) if key == "seconds" => writeln!(
+                s,
+                "{key} = {given}  # {doc} (--seconds; the scenario's own is {value})"
+            )?,
+            _ => writeln!(s, "{key} = {value}  # {doc}")?,
+        }
     }
     writeln!(s, "# start (truth at t = 0)")?;
     writeln!(s, "start_lat_deg = {}", start.lat.to_degrees())?;
@@ -282,27 +292,109 @@ pub fn describe(opts: &SimOptions, sim: &Simulated, imu: &Path) -> Result<String
     writeln!(s, "start_roll_deg = {}", roll.to_degrees())?;
     writeln!(s, "start_pitch_deg = {}", pitch.to_degrees())?;
     writeln!(s, "start_yaw_deg = {}", yaw.to_degrees())?;
-    writeln!(
-        s,
-        "# replay: nav replay --imu {} --lat {} --lon {} --h {} --align-seconds 60{} --out solution.csv",
-        imu.display(),
-        start.lat.to_degrees(),
-        start.lon.to_degrees(),
-        start.h,
-        replay_alignment(&opts.scenario)
-    )?;
+    let hint = ReplayHint::of(&opts.scenario, opts.grade);
+    let window_s = hint.window_s(&opts.scenario, seconds);
+    if window_s >= hint.shortest_s {
+        writeln!(
+            s,
+            "# replay: nav replay --imu {} --lat {} --lon {} --h {} --align-seconds {window_s}{} --out solution.csv",
+            imu.display(),
+            start.lat.to_degrees(),
+            start.lon.to_degrees(),
+            start.h,
+            hint.options
+        )?;
+    } else {
+        writeln!(
+            s,
+            "# replay: none: {seconds:.1} s leave a {window_s} s alignment window ({}{NAVIGATE_AFTER_S} s kept to navigate), shorter than the {} s the {} method needs here",
+            match still_at_start_s(&opts.scenario) {
+                Some(still_s) => format!("at rest for the first {still_s} s, "),
+                None => String::new(),
+            },
+            hint.shortest_s,
+            hint.method.name()
+        )?;
+    }
     Ok(s)
 }
 
-/// The `nav replay` alignment options that suit `scenario`: a rocking base needs the
-/// inertial-frame method, and on a ship its lever arm.
-fn replay_alignment(scenario: &Scenario) -> String {
+/// Rest kept between a replay hint's alignment window and the first motion [s].
+pub const REST_MARGIN_S: f64 = 5.0;
+
+/// How long `scenario` is at rest from its start [s] before it moves (`None`: at rest, or in
+/// a motion its hint's method aligns in, throughout).
+fn still_at_start_s(scenario: &Scenario) -> Option<f64> {
     match scenario {
-        Scenario::ShipRocking(r) => {
-            let [x, y, z] = r.lever_arm_m;
-            format!(" --align-method inertial --lever-arm {x},{y},{z}")
+        Scenario::LandVehicle(_) => Some(LandVehicle::START_S),
+        Scenario::Flight(f) => Some(f.still_s),
+        Scenario::Static(_) | Scenario::ShipRocking(_) | Scenario::AuvBench(_) => None,
+    }
+}
+
+/// The alignment of a scenario's `nav replay` hint.
+struct ReplayHint {
+    method: AlignMethod,
+    /// The options after `--align-seconds`.
+    options: String,
+    /// Longest window [s].
+    longest_s: f64,
+    /// Shortest window that aligns on this scenario [s].
+    shortest_s: f64,
+}
+
+impl ReplayHint {
+    /// The method that suits `scenario`: a rocking ship needs the inertial-frame method, its
+    /// lever arm and 120 s (shorter windows leak too much heading through the heave); the AUV
+    /// bench the fine method, whose north finding needs gyros of the grade's (an ideal
+    /// sensor's noise assumed as FOG's: the default, the board's ADIS16505, is too coarse).
+    fn of(scenario: &Scenario, grade: Grade) -> Self {
+        let (method, mut options, longest_s, shortest_s) = match scenario {
+            Scenario::ShipRocking(r) => {
+                let [x, y, z] = r.lever_arm_m;
+                (
+                    AlignMethod::Inertial,
+                    format!(" --align-method inertial --lever-arm {x},{y},{z}"),
+                    120.0,
+                    120.0,
+                )
+            }
+            Scenario::AuvBench(_) => (
+                AlignMethod::Fine,
+                " --align-method fine".to_owned(),
+                60.0,
+                AlignMethod::Fine.min_seconds(),
+            ),
+            _ => (
+                AlignMethod::Static,
+                String::new(),
+                60.0,
+                AlignMethod::Static.min_seconds(),
+            ),
+        };
+        match grade {
+            // A zero noise model refuses every real scatter: the device default instead.
+            Grade::Ideal if method == AlignMethod::Fine => options += " --imu-noise fog",
+            Grade::Ideal => {}
+            g => options += &format!(" --imu-noise {g}"),
         }
-        Scenario::AuvBench(_) => " --align-method fine".to_owned(),
-        _ => String::new(),
+        Self {
+            method,
+            options,
+            longest_s,
+            shortest_s,
+        }
+    }
+
+    /// The window for a recording of `seconds` [s] of `scenario`, whole seconds: at most
+    /// `longest_s`, ending [`REST_MARGIN_S`] before the first motion (a static alignment
+    /// refuses a moving base), with [`NAVIGATE_AFTER_S`] left to navigate.
+    fn window_s(&self, scenario: &Scenario, seconds: f64) -> f64 {
+        let rest_s = still_at_start_s(scenario).map_or(f64::INFINITY, |s| s - REST_MARGIN_S);
+        self.longest_s
+            .min(rest_s)
+            .min(seconds - NAVIGATE_AFTER_S)
+            .floor()
+            .max(0.0)
     }
 }

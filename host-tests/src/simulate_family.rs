@@ -16,6 +16,17 @@ use nav_core::alignment::AlignMethod;
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// The scenario name `nav sim` takes for a member of the alignment family.
+pub const SCENARIO_NAME: &str = "family";
+
+/// Every scenario name `nav sim` takes: the trajectory scenarios'
+/// ([`crate::trajectory::scenarios::Scenario::NAMES`]) and the family's ([`SCENARIO_NAME`]).
+pub fn sim_scenario_names() -> Vec<&'static str> {
+    let mut names = crate::trajectory::scenarios::Scenario::NAMES.to_vec();
+    names.push(SCENARIO_NAME);
+    names
+}
+
 /// What to write of a member.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FamilySimOptions {

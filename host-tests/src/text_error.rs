@@ -290,12 +290,19 @@ impl TextError {
     /// A CSV reader's error in `path`: I/O or syntax, at the line the reader reports.
     pub fn from_csv(path: &Path, e: csv::Error) -> Self {
         let line = e.position().map(|p| p.line());
+        let text = e.to_string();
         let kind = match e.into_kind() {
             csv::ErrorKind::Io(e) => TextErrorKind::Io(e),
             csv::ErrorKind::Utf8 { err, .. } => {
                 TextErrorKind::Syntax(format!("invalid UTF-8: {err}"))
             }
-            other => TextErrorKind::Syntax(format!("{other:?}")),
+            csv::ErrorKind::UnequalLengths {
+                expected_len, len, ..
+            } => TextErrorKind::Syntax(format!(
+                "a row of {len} fields where the previous row has {expected_len}"
+            )),
+            // The remaining kinds (seek, serialisation) are not a reader's: the error's text.
+            _ => TextErrorKind::Syntax(text),
         };
         Self::new(path, line, kind)
     }
@@ -478,6 +485,23 @@ mod tests {
         assert_eq!(
             format!("{:#}", anyhow::Error::new(e).context("GNSS file")),
             "GNSS file: f.csv: disk full"
+        );
+    }
+
+    /// A CSV reader's error is told in words, not as the csv crate's Debug dump.
+    #[test]
+    fn a_csv_row_of_the_wrong_length_is_told_in_words() {
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .from_reader("1,2,3\n4,5\n".as_bytes());
+        let e = reader
+            .records()
+            .find_map(|r| r.err())
+            .expect("a row of the wrong length");
+        let text = TextError::from_csv(Path::new("f.csv"), e).to_string();
+        assert_eq!(
+            text,
+            "f.csv: line 2: malformed CSV: a row of 2 fields where the previous row has 3"
         );
     }
 

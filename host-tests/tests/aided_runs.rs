@@ -241,10 +241,22 @@ fn sim_refuses_a_receiver_the_filter_could_not_use() {
         (["--gnss-outages", "10,20,0"], "shorter than the period"),
         (["--gnss-outages", "0,0,0"], "period must be positive"),
         (["--gnss-sigma", "0,0.5,1"], "positive"),
-        (["--gnss-lever-arm", "150,0,0"], "within 100 m"),
+        (
+            ["--gnss-lever-arm", "150,0,0"],
+            "lever arm 150,0,0 m: must be finite and within 100 m",
+        ),
         // Fixes off the Earth model; an event before the first fix.
         (["--gnss-sigma", "1e300,1,1"], "at most 1000 m"),
         (["--gnss-nan=-3", "--gnss-sigma=0.5,0.5,1"], "must be >= 0"),
+        // A negative first value reaches the option's own check (not clap's "unexpected
+        // argument").
+        (["--gnss-sigma", "-1,1,1"], "each must be positive"),
+        (
+            ["--gnss-velocity-sigma", "-0.1,0.1,0.1"],
+            "each must be positive",
+        ),
+        (["--gnss-outages", "-5,1,1"], "period must be positive"),
+        (["--gnss-jump", "-3,1,0,0,0"], "times must be >= 0"),
     ] {
         let msg = run_err(
             nav()
@@ -256,6 +268,21 @@ fn sim_refuses_a_receiver_the_filter_could_not_use() {
         assert!(msg.contains(reason), "{args:?}: {msg}");
         assert!(!out.join("imu.bin").exists(), "{args:?}: files written");
     }
+}
+
+/// Comma-separated options whose first value is negative: lever arms and offsets are taken.
+#[test]
+fn sim_takes_negative_lever_arms_and_offsets() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = run_ok(
+        nav()
+            .args(["sim", "land-vehicle", "--seconds", "3", "--gnss-rate", "1"])
+            .args(["--gnss-lever-arm", "-0.3,0.1,0.2"])
+            .args(["--gnss-spike", "1,-2,0.5,0"])
+            .args(["--format", "bin", "--out"])
+            .arg(dir.path()),
+    );
+    assert!(dir.path().join("gnss.bin").exists(), "{text}");
 }
 
 /// An impossible given start is refused with its reason, and no solution file is left.

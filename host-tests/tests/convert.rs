@@ -249,3 +249,33 @@ fn convert_warns_about_records_a_replay_flags() {
     assert_eq!((c.time_not_increasing, c.not_finite), (2, 1));
     assert!(c.warning().unwrap().contains("WARNING: 2 records"));
 }
+
+/// A record with an increment beyond any IMU's full scale (1e30 rad, or a velocity increment
+/// of 2000 m/s^2 beyond the limit) is converted as it is, counted and named in the warning;
+/// increments just inside the limits are not.
+#[test]
+fn convert_warns_about_increments_beyond_full_scale() {
+    let dir = tempfile::tempdir().unwrap();
+    let generated = Stationary {
+        seconds: 2.0,
+        ..Stationary::default()
+    }
+    .recording()
+    .unwrap();
+    let limits = nav_core::increment::InputLimits::<f64>::default();
+    let dt_s = 1.0 / generated.rate_hz;
+    let mut bad = generated.clone();
+    bad.records[3].gyro[0] = 1e30;
+    bad.records[6].accel[2] = (-1.01 * limits.max_specific_force * dt_s) as f32;
+    bad.records[8].gyro[2] = (0.99 * limits.max_rate * dt_s) as f32;
+    let input = dir.path().join("bad.bin");
+    recording_io::write(&input, &bad).unwrap();
+    let c = recording_io::convert(&input, &dir.path().join("bad.csv")).unwrap();
+    assert_eq!(
+        (c.time_not_increasing, c.not_finite, c.out_of_range),
+        (0, 0, 2)
+    );
+    let w = c.warning().unwrap();
+    assert!(w.contains("2 with a rate beyond 2000 deg/s"), "{w}");
+    assert!(w.contains("490 m/s^2"), "{w}");
+}

@@ -316,6 +316,70 @@ fn cut_off_garbage_and_missing_streams() {
     assert_eq!(std::fs::read_to_string(&out).unwrap(), before);
 }
 
+/// An end-of-run frame followed by solution frames is named as such and the log left
+/// incomplete; a repeated frame (its sequence number again) is counted out of order, not as
+/// 65535 frames lost.
+#[test]
+fn early_end_of_run_and_repeated_frames_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("out.csv");
+    let out_s = out.to_str().unwrap();
+    let solution = |k: u64| {
+        Message::NavSolution(NavSolution {
+            row: Row::Free(Solution {
+                t_us: 1_000_000 + k * 2500,
+                lat_ndeg: 45_000_000_000,
+                lon_ndeg: 7_500_000_000,
+                h_m: 150.0,
+                v_eb_n: [0.0; 3],
+                roll_deg: 0.0,
+                pitch_deg: 0.0,
+                yaw_deg: 30.0,
+            }),
+            status: NavStatus::Nav,
+            flags: StatusFlags::empty(),
+        })
+    };
+    let end = Message::EndOfRun(EndOfRun { rows: 2 });
+    let encode = |messages: &[&Message]| -> Vec<Vec<u8>> {
+        let mut enc = Encoder::new();
+        messages
+            .iter()
+            .map(|m| {
+                let mut frame = Vec::new();
+                enc.append(m, &mut frame).unwrap();
+                frame
+            })
+            .collect()
+    };
+
+    // The end of run first, then the solutions.
+    let early = d.join("early.bin");
+    std::fs::write(&early, encode(&[&end, &solution(0), &solution(1)]).concat()).unwrap();
+    let report = run_ok(&["decode", early.to_str().unwrap(), "--out", out_s]);
+    assert!(
+        report.contains("end-of-run frame (saying 2 rows) came before the end of the stream")
+            && report.contains("2 solution frames follow it")
+            && report.contains("incomplete"),
+        "{report}"
+    );
+    assert!(!report.contains("no end-of-run frame"), "{report}");
+    assert!(!std::fs::read_to_string(&out).unwrap().contains("# end"));
+
+    // The end-of-run frame sent twice (the same sequence number): one frame out of order,
+    // none lost, the log complete.
+    let frames = encode(&[&solution(0), &solution(1), &end]);
+    let repeated = d.join("repeated.bin");
+    std::fs::write(&repeated, [frames.concat(), frames[2].clone()].concat()).unwrap();
+    let report = run_ok(&["decode", repeated.to_str().unwrap(), "--out", out_s]);
+    assert!(
+        report.contains("0 frames lost") && report.contains("1 frames out of order"),
+        "{report}"
+    );
+    assert!(report.contains("complete (2 rows)"), "{report}");
+}
+
 #[test]
 fn config_files_encode_or_are_refused_with_line_and_reason() {
     let dir = tempfile::tempdir().unwrap();
@@ -415,6 +479,17 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
             "rate",
             "imu-rate-hz = 1e12\n",
             "not a positive number up to 40000 Hz",
+        ),
+        // Noise densities of zero (an overconfident filter) or beyond any IMU's.
+        (
+            "arw0",
+            "lat-deg = 45\ngyro-arw-rad-per-sqrt-s = 0\n",
+            "bad-arw0.txt:2: refused (reason code 8): the gyro ARW (gyro-arw-rad-per-sqrt-s: above 0",
+        ),
+        (
+            "vrw",
+            "accel-vrw-mps-per-sqrt-s = 1e9\n",
+            "bad-vrw.txt:1: refused (reason code 8): the accelerometer VRW",
         ),
     ] {
         let f = d.join(format!("bad-{name}.txt"));

@@ -246,3 +246,98 @@ fn scenario_parameters_are_checked() {
     f.set("to_lon_deg", 43.9).unwrap();
     assert!(f.build().err().unwrap().to_string().contains("too close"));
 }
+
+/// `nav sim` with an unknown name lists every name it takes, from the same list it accepts:
+/// each listed name is accepted (its parameters print) and the family is among them.
+#[test]
+fn nav_sim_lists_the_scenarios_it_accepts() {
+    let nav = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+            .args(args)
+            .output()
+            .expect("run nav");
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        (o.status.success(), text)
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (ok, text) = nav(&["sim", "nonsense", "--out", dir.path().to_str().unwrap()]);
+    assert!(!ok, "{text}");
+    let listed: Vec<&str> = text
+        .split_once("nav sim takes ")
+        .unwrap_or_else(|| panic!("no list of scenarios: {text}"))
+        .1
+        .trim()
+        .split(", ")
+        .collect();
+    assert_eq!(
+        listed,
+        host_tests::simulate_family::sim_scenario_names(),
+        "{text}"
+    );
+    assert!(listed.contains(&"family"), "{text}");
+    for name in listed {
+        let (ok, text) = nav(&["sim", name, "--list-params"]);
+        assert!(ok && text.contains("parameters"), "{name}: {text}");
+    }
+}
+
+/// `nav sim land-vehicle`'s replay hint runs as written: its alignment window ends before the
+/// car first moves, and scenario.txt gives the recording's length, not the scenario's default;
+/// a recording too short to align and navigate says so instead of a command that would fail.
+#[test]
+fn the_land_vehicle_replay_hint_runs() {
+    let nav = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+            .args(args)
+            .output()
+            .expect("run nav");
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        (o.status.success(), text)
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let sim = |seconds: &str, name: &str| {
+        let out = dir.path().join(name);
+        let out_s = out.to_str().unwrap();
+        let args = ["sim", "land-vehicle", "--seconds", seconds];
+        let (ok, text) = nav(&[&args[..], &["--format", "bin", "--out", out_s]].concat());
+        assert!(ok, "{text}");
+        std::fs::read_to_string(out.join("scenario.txt")).unwrap()
+    };
+    let text = sim("100", "long");
+    assert!(
+        text.contains("\nseconds = 100  # length [s] (--seconds; the scenario's own is 600)"),
+        "{text}"
+    );
+    let line = text
+        .lines()
+        .find_map(|l| l.strip_prefix("# replay: nav "))
+        .unwrap_or_else(|| panic!("no replay line in\n{text}"));
+    // The car moves from 20 s: a window ending before it.
+    assert!(line.contains("--align-seconds 15 "), "{line}");
+    let solution = dir.path().join("solution.csv");
+    let args: Vec<String> = line
+        .split_whitespace()
+        .map(|a| match a {
+            "solution.csv" => solution.to_str().unwrap().to_owned(),
+            _ => a.to_owned(),
+        })
+        .collect();
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (ok, out) = nav(&args);
+    assert!(ok, "{line}\n{out}");
+    assert!(solution.exists());
+
+    let text = sim("10", "short");
+    assert!(
+        text.contains("# replay: none: 10.0 s leave a 0 s alignment window"),
+        "{text}"
+    );
+}

@@ -12,7 +12,7 @@ use crate::drivers::Mounting;
 use crate::drivers::noise::{self, NoiseSpec};
 use core::fmt;
 use nav_core::alignment::SensorNoise;
-use nav_core::alignment::machine::{AlignMethod, BaseMotion, LeverArm};
+use nav_core::alignment::machine::{AlignMethod, BaseMotion, LeverArm, SettingsError};
 use nav_core::calibration::ImuCalibration;
 use nav_core::navigator::Setup;
 use nav_core::navigator::config::{
@@ -287,15 +287,52 @@ impl BoardIdentity {
     }
 }
 
+/// Largest gyro angle random walk accepted [rad/sqrt(s)] (0.1 rad/sqrt(s), about 340
+/// deg/sqrt(h): hundreds of times a consumer MEMS gyro's; a larger figure is a typing error).
+pub const MAX_ARW_RAD_PER_SQRT_S: f64 = 0.1;
+
+/// Largest accelerometer velocity random walk accepted [m/s/sqrt(s)] (10 m/s/sqrt(s), about
+/// 1 g/sqrt(Hz): thousands of times a consumer MEMS accelerometer's).
+pub const MAX_VRW_MPS_PER_SQRT_S: f64 = 10.0;
+
+/// What a gyro ARW out of range is called in its refusal
+/// ([`SettingsError::BadValue`], reason [`ReasonCode::Alignment`]).
+pub const ARW_OUT_OF_RANGE: &str = "the gyro ARW (gyro-arw-rad-per-sqrt-s: above 0, since zero \
+     makes the filters overconfident, and up to 0.1 rad/sqrt(s), beyond any IMU's)";
+
+/// What an accelerometer VRW out of range is called in its refusal.
+pub const VRW_OUT_OF_RANGE: &str = "the accelerometer VRW (accel-vrw-mps-per-sqrt-s: above 0, \
+     since zero makes the filters overconfident, and up to 10 m/s/sqrt(s), beyond any IMU's)";
+
+/// `Err` when the white noise densities of `noise` are not above zero (a zero density makes
+/// the filters overconfident) and within [`MAX_ARW_RAD_PER_SQRT_S`] and
+/// [`MAX_VRW_MPS_PER_SQRT_S`]; the refusal is the alignment's noise refusal.
+fn check_noise_densities(noise: &SensorNoise<f64>) -> Result<(), ConfigRefusal> {
+    // NaN fails both comparisons.
+    let within = |v: f64, max: f64| v > 0.0 && v <= max;
+    let what = if !within(noise.arw_rad_per_sqrt_s, MAX_ARW_RAD_PER_SQRT_S) {
+        ARW_OUT_OF_RANGE
+    } else if !within(noise.vrw_mps_per_sqrt_s, MAX_VRW_MPS_PER_SQRT_S) {
+        VRW_OUT_OF_RANGE
+    } else {
+        return Ok(());
+    };
+    Err(ConfigRefusal::Run(ConfigError::Alignment(
+        SettingsError::BadValue(what),
+    )))
+}
+
 /// Payload length of a configuration frame [bytes].
 pub const CONFIG_LEN: usize = 201;
 
 impl DeviceConfig {
-    /// Checks the configuration: nav-core's checks of the run at the IMU's rate
-    /// ([`Setup::new`], the same as every run's), then the mounting and the output rates.
+    /// Checks the configuration: the white noise densities (above zero, within an IMU's
+    /// range), nav-core's checks of the run at the IMU's rate ([`Setup::new`], the same as
+    /// every run's), then the mounting and the output rates.
     /// The run is checked in `f32`, the precision the board navigates in: the check its run's
     /// start makes (and no `f64` copy of the setup's code in the board's flash).
     pub fn validate(&self) -> Result<(), ConfigRefusal> {
+        check_noise_densities(&self.run.noise)?;
         Setup::<f32>::new(&self.run, f64::from(self.imu_rate_hz)).map_err(ConfigRefusal::Run)?;
         if !self.mounting.is_rotation(MOUNTING_TOL) {
             return Err(ConfigRefusal::Mounting);

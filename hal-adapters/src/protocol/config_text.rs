@@ -154,6 +154,8 @@ pub fn keys_of(
     refusal: &super::config::ConfigRefusal,
 ) -> impl Iterator<Item = &'static str> + use<> {
     use super::config::ConfigRefusal as R;
+    use super::config::{ARW_OUT_OF_RANGE, VRW_OUT_OF_RANGE};
+    use nav_core::alignment::machine::SettingsError;
     use nav_core::navigator::ConfigError as E;
     let (own, noise): (&'static [&'static str], bool) = match refusal {
         R::Run(E::Latitude(_)) => (&["lat-deg"], false),
@@ -162,6 +164,14 @@ pub fn keys_of(
         R::Run(E::NotFinite(_)) => (&["lon-deg", "h-m", "align-seconds"], false),
         R::Run(E::LogEvery) => (&["log-every"], false),
         R::Run(E::BiasPrior(_)) => (&["bias-prior"], false),
+        R::Run(E::Alignment(SettingsError::BadValue(what))) if *what == ARW_OUT_OF_RANGE => (
+            &["gyro-arw-rad-per-sqrt-s", "imu-model", "imu-noise"],
+            false,
+        ),
+        R::Run(E::Alignment(SettingsError::BadValue(what))) if *what == VRW_OUT_OF_RANGE => (
+            &["accel-vrw-mps-per-sqrt-s", "imu-model", "imu-noise"],
+            false,
+        ),
         R::Run(E::Alignment(_)) => (
             &[
                 "align-method",

@@ -59,6 +59,9 @@ impl fmt::Display for Refusal {
     }
 }
 
+/// A sequence step of half the 16-bit range or more is read as going back, not as a gap.
+const SEQ_HALF_RANGE: u16 = 1 << 15;
+
 /// Reads a message's payload (its id and length checked).
 type PayloadReader = fn(MessageId, &[u8]) -> Result<Message, PayloadError>;
 
@@ -86,6 +89,9 @@ pub struct DecodeStats {
     pub frames: [u32; MessageId::ALL.len()],
     /// Frames missing between accepted ones (gaps in the sequence numbers).
     pub frames_lost: u32,
+    /// Frames whose sequence number repeats the previous frame's or goes back (by less than
+    /// half the 16-bit range): counted here, not as a loss of nearly 65536 frames.
+    pub frames_out_of_order: u32,
 }
 
 impl DecodeStats {
@@ -127,6 +133,7 @@ impl Decoder {
                 other_refusals: 0,
                 frames: [0; MessageId::ALL.len()],
                 frames_lost: 0,
+                frames_out_of_order: 0,
             },
         }
     }
@@ -167,8 +174,14 @@ impl Decoder {
                 let m = r.message.id().index();
                 self.stats.frames[m] = self.stats.frames[m].saturating_add(1);
                 if let Some(last) = self.last_seq {
-                    let gap = r.seq.wrapping_sub(last).wrapping_sub(1);
-                    self.stats.frames_lost = self.stats.frames_lost.saturating_add(u32::from(gap));
+                    let step = r.seq.wrapping_sub(last);
+                    if step == 0 || step >= SEQ_HALF_RANGE {
+                        self.stats.frames_out_of_order =
+                            self.stats.frames_out_of_order.saturating_add(1);
+                    } else {
+                        let gap = u32::from(step - 1);
+                        self.stats.frames_lost = self.stats.frames_lost.saturating_add(gap);
+                    }
                 }
                 self.last_seq = Some(r.seq);
             }

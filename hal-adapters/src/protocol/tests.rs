@@ -187,6 +187,32 @@ fn sequence_gaps_and_cut_off_frames_are_counted() {
     assert_eq!(d.stats().skipped_bytes, last.len() as u64 - 3);
 }
 
+/// A repeated sequence number, and one going back, are counted as out of order, not as a
+/// loss of 65535 frames; the frames after them are counted from the latest number.
+#[test]
+fn repeated_and_going_back_sequence_numbers_are_out_of_order_not_lost() {
+    // End-of-run frames (id 6, 4 bytes) with chosen sequence numbers.
+    let frames = |seqs: &[u16]| -> Vec<u8> {
+        seqs.iter()
+            .flat_map(|&seq| raw_frame(1, 6, seq, 4, &[5, 0, 0, 0], true))
+            .collect()
+    };
+    let (out, d) = decode_all(&frames(&[0, 1, 1, 2, 0, 1, 4]));
+    assert_eq!(out.len(), 7);
+    assert!(out.iter().all(|r| r.is_ok()));
+    // 1 repeated, 0 going back; then 4 after 1: frames 2 and 3 lost.
+    assert_eq!(
+        (d.stats().frames_out_of_order, d.stats().frames_lost),
+        (2, 2)
+    );
+    // Wrapping at 65536 is a step forward, not going back.
+    let (_, d) = decode_all(&frames(&[65534, 65535, 0, 2]));
+    assert_eq!(
+        (d.stats().frames_out_of_order, d.stats().frames_lost),
+        (0, 1)
+    );
+}
+
 #[test]
 fn encoder_refuses_a_small_buffer_and_unknown_filter_names() {
     let m = &every_message()[0];
@@ -330,6 +356,42 @@ fn defaults_are_valid_and_each_refusal_has_its_code() {
         assert_eq!(ReasonCode::from_code(c as u8), Some(c));
     }
     assert_eq!(ReasonCode::from_code(0), None);
+}
+
+/// A zero, negative or absurd gyro ARW or accelerometer VRW is refused with the alignment's
+/// reason and a message naming the figure and its range; the grades' and parts' figures pass.
+#[test]
+fn noise_densities_zero_negative_or_beyond_an_imu_are_refused() {
+    for line in [
+        "gyro-arw-rad-per-sqrt-s = 0",
+        "gyro-arw-rad-per-sqrt-s = -1e-4",
+        "gyro-arw-rad-per-sqrt-s = 1e9",
+        "accel-vrw-mps-per-sqrt-s = 0",
+        "accel-vrw-mps-per-sqrt-s = 1e9",
+    ] {
+        let mut c = DeviceConfig::default();
+        c.apply_line(line).unwrap();
+        let r = c.validate().unwrap_err();
+        assert_eq!(r.code(), ReasonCode::Alignment, "{line}: {r}");
+        let key = line.split(' ').next().unwrap();
+        let text = std::format!("{r}");
+        assert!(
+            text.contains(key) && text.contains("overconfident"),
+            "{line}: {text}"
+        );
+        assert!(keys_of(&r).any(|k| k == key), "{line}");
+    }
+    for line in [
+        "imu-noise = mems-consumer",
+        "imu-noise = fog",
+        "imu-model = bmi088",
+        "gyro-arw-rad-per-sqrt-s = 0.1",
+        "accel-vrw-mps-per-sqrt-s = 10",
+    ] {
+        let mut c = DeviceConfig::default();
+        c.apply_line(line).unwrap();
+        assert_eq!(c.validate(), Ok(()), "{line}");
+    }
 }
 
 #[test]

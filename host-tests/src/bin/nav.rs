@@ -106,7 +106,7 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         family_seed: u64,
         /// Alignment windows [s] (family).
-        #[arg(long, value_name = "S,...", value_delimiter = ',', default_values_t = host_tests::align_bench::family::WINDOWS_S)]
+        #[arg(long, value_name = "S,...", value_delimiter = ',', allow_hyphen_values = true, default_values_t = host_tests::align_bench::family::WINDOWS_S)]
         seconds: Vec<f64>,
         /// Only this member, every method's numbers (family).
         #[arg(long, value_name = "K")]
@@ -209,7 +209,7 @@ enum Command {
         #[arg(long, value_delimiter = ',')]
         without: Vec<host_tests::sensor_model::ErrorSource>,
         /// Only these cells of the table, 1-based, comma-separated (consistency) [default: all].
-        #[arg(long, value_delimiter = ',')]
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
         cells: Vec<usize>,
         /// Print each block's mean NEES per tenth of the run (consistency).
         #[arg(long)]
@@ -933,17 +933,17 @@ struct SimArgs {
     #[arg(long, value_name = "HZ")]
     gnss_rate: Option<f64>,
     /// GNSS position 1-sigma north, east, down [m].
-    #[arg(long, value_name = "N,E,D", default_value = "0.5,0.5,1", value_parser = parse_vector3, requires = "gnss_rate")]
+    #[arg(long, value_name = "N,E,D", default_value = "0.5,0.5,1", allow_hyphen_values = true, value_parser = parse_vector3, requires = "gnss_rate")]
     gnss_sigma: [f64; 3],
     /// GNSS velocity 1-sigma north, east, down [m/s] (without it: position only).
-    #[arg(long, value_name = "N,E,D", value_parser = parse_vector3, requires = "gnss_rate")]
+    #[arg(long, value_name = "N,E,D", allow_hyphen_values = true, value_parser = parse_vector3, requires = "gnss_rate")]
     gnss_velocity_sigma: Option<[f64; 3]>,
     /// The antenna's position from the IMU, body forward,right,down [m].
     #[arg(long, value_name = "X,Y,Z", default_value = "0,0,0", allow_hyphen_values = true, value_parser = parse_vector3, requires = "gnss_rate")]
     gnss_lever_arm: [f64; 3],
     /// Outages: PERIOD,LENGTH,FIRST [s] (e.g. 180,60,300: 60 s without fixes every 180 s
     /// from 300 s).
-    #[arg(long, value_name = "PERIOD,LENGTH,FIRST", value_parser = parse_vector3, requires = "gnss_rate")]
+    #[arg(long, value_name = "PERIOD,LENGTH,FIRST", allow_hyphen_values = true, value_parser = parse_vector3, requires = "gnss_rate")]
     gnss_outages: Option<[f64; 3]>,
     /// A position jump T,LENGTH,N,E,D [s, s, m] (repeatable).
     #[arg(long, value_name = "T,LEN,N,E,D", allow_hyphen_values = true, value_parser = parse_numbers::<5>, requires = "gnss_rate")]
@@ -1119,9 +1119,17 @@ fn sim_family(a: SimArgs) -> Result<()> {
 
 fn sim(a: SimArgs) -> Result<()> {
     use host_tests::simulate::{SimOptions, simulate, write};
+    use host_tests::simulate_family::{SCENARIO_NAME, sim_scenario_names};
     use host_tests::trajectory::scenarios::Scenario;
-    if a.scenario == "family" {
+    if a.scenario == SCENARIO_NAME {
         return sim_family(a);
+    }
+    if !Scenario::NAMES.contains(&a.scenario.as_str()) {
+        anyhow::bail!(
+            "unknown scenario '{}'; nav sim takes {}",
+            a.scenario,
+            sim_scenario_names().join(", ")
+        );
     }
     let mut scenario = Scenario::by_name(&a.scenario)?;
     for (k, v) in key_values(&a.set)? {

@@ -1096,6 +1096,9 @@ pub struct Drive {
 }
 
 impl LandVehicle {
+    /// Time at rest before the car first moves [s].
+    pub const START_S: f64 = 20.0;
+
     /// Plans the route over `seconds`.
     pub fn build(&self) -> Result<Drive> {
         check_lat(self.lat_deg)?;
@@ -1115,7 +1118,7 @@ impl LandVehicle {
         let v = self.speed_mps;
         let mut speed = Profile::new(0.0);
         let mut heading = Profile::new(self.heading_deg.to_radians());
-        let mut t = 20.0;
+        let mut t = Self::START_S;
         // One lap: (what, duration [s], target); turns in deg, speeds as a factor of `v`.
         enum Leg {
             Speed(f64),
