@@ -247,22 +247,24 @@ fn scenario_parameters_are_checked() {
     assert!(f.build().err().unwrap().to_string().contains("too close"));
 }
 
+/// Runs `nav` on `args`: (success, stdout and stderr).
+fn nav(args: &[&str]) -> (bool, String) {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+        .args(args)
+        .output()
+        .expect("run nav");
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    (o.status.success(), text)
+}
+
 /// `nav sim` with an unknown name lists every name it takes, from the same list it accepts:
 /// each listed name is accepted (its parameters print) and the family is among them.
 #[test]
 fn nav_sim_lists_the_scenarios_it_accepts() {
-    let nav = |args: &[&str]| {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
-            .args(args)
-            .output()
-            .expect("run nav");
-        let text = format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        );
-        (o.status.success(), text)
-    };
     let dir = tempfile::tempdir().unwrap();
     let (ok, text) = nav(&["sim", "nonsense", "--out", dir.path().to_str().unwrap()]);
     assert!(!ok, "{text}");
@@ -290,18 +292,6 @@ fn nav_sim_lists_the_scenarios_it_accepts() {
 /// a recording too short to align and navigate says so instead of a command that would fail.
 #[test]
 fn the_land_vehicle_replay_hint_runs() {
-    let nav = |args: &[&str]| {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
-            .args(args)
-            .output()
-            .expect("run nav");
-        let text = format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        );
-        (o.status.success(), text)
-    };
     let dir = tempfile::tempdir().unwrap();
     let sim = |seconds: &str, name: &str| {
         let out = dir.path().join(name);
