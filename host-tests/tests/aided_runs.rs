@@ -194,6 +194,40 @@ fn kf_gins_runs_a_configuration_as_it_is() {
     assert!(dir.path().join("KF_GINS_Navresult.nav").exists());
 }
 
+/// A configuration whose accelerometer white noise is a quarter of the sensor's: the filter
+/// is overconfident, its windowed test refuses good RTK fixes while it drifts, and must not
+/// go on refusing them for its own drift (it ran away to metres).
+#[test]
+fn an_optimistic_noise_model_does_not_run_away_from_rtk_fixes() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = data_set(dir.path(), 900.0);
+    let text = std::fs::read_to_string(&data.config).unwrap();
+    let quarter = |key: &str, text: &str| {
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with(key))
+            .unwrap()
+            .to_owned();
+        let v: f64 = line
+            .split(['[', ','])
+            .nth(1)
+            .unwrap()
+            .trim()
+            .parse()
+            .unwrap();
+        let q = v / 4.0;
+        text.replace(&line, &format!("  {key} [{q}, {q}, {q}]"))
+    };
+    let optimistic = quarter("vrw:", &text);
+    assert_ne!(optimistic, text);
+    let config = dir.path().join("optimistic.yaml");
+    std::fs::write(&config, optimistic).unwrap();
+    let r = host_tests::filter_bench::run(&host_tests::filter_bench::DataSet { config, ..data })
+        .unwrap();
+    // Within 3 times the fixes' horizontal 2.8 cm, as with the right noise.
+    assert!(r.horizontal_rms_m < 0.085, "{r:?}");
+}
+
 /// Bad configurations and GNSS files are refused with the reason, and no trajectory is left.
 #[test]
 fn kf_gins_refuses_bad_input_without_a_partial_file() {

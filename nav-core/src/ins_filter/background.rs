@@ -7,7 +7,7 @@
 use super::aiding::{AidCounters, AidResult, FilterCounters, GnssPosition, GnssVelocity};
 use super::covariance::{self, Transition};
 use super::foreground::Propagation;
-use super::integrity::{InnovationWindow, RefusedCluster, WindowVerdict, whiten};
+use super::integrity::{self, InnovationWindow, RefusedCluster, WindowVerdict, whiten};
 use super::model;
 use super::stationarity::StillWindow;
 use super::{
@@ -356,6 +356,7 @@ impl<T: Scalar> ErrorFilter<T> {
         ) * (dt * dt);
         if let Some(c) = &self.cluster
             && c.contains(&m.z, &m.r, &drift_var, gate)
+            && c.distance(&m.z, &m.r, &drift_var) < nis
             && !c.is_typical(&s)
         {
             self.cluster = Some(refused);
@@ -368,13 +369,19 @@ impl<T: Scalar> ErrorFilter<T> {
         };
         self.window.push(w);
         if self.window.verdict(gate) != WindowVerdict::Consistent {
-            // What the window's earlier fixes pulled the filter by is now doubtful.
-            let d = self.window.take_corrections();
-            self.p += d * d.transpose();
-            self.check_covariance();
-            let n = &mut self.counters.position.window_rejected;
-            *n = n.saturating_add(1);
-            return (AidResult::Rejected { nis }, None);
+            if self.counters.position.consecutive_rejected < integrity::WINDOW_REFUSALS_MAX {
+                // What the window's earlier fixes pulled the filter by is now doubtful.
+                let d = self.window.take_corrections();
+                self.p += d * d.transpose();
+                self.check_covariance();
+                let n = &mut self.counters.position.window_rejected;
+                *n = n.saturating_add(1);
+                return (AidResult::Rejected { nis }, None);
+            }
+            // Refused so long that the window holds the filter's own drift while it was
+            // refusing (module docs of `integrity`): this fix starts a new window.
+            self.window.clear();
+            self.window.push(w);
         }
         self.cluster = None;
         let out = self.apply(m, &s, nis);

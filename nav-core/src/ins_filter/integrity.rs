@@ -13,7 +13,13 @@
 //!
 //! A fix that fails either is refused and counted ([`super::AidCounters::window_rejected`]); it
 //! stays in the window, so the fixes of a bias that keeps growing keep failing, and the test
-//! passes again once the bias is gone or the filter's own growing covariance covers it. The
+//! passes again once the bias is gone or the filter's own growing covariance covers it. That
+//! lasts at most [`WINDOW_REFUSALS_MAX`] consecutive refused fixes: the innovations of fixes
+//! the filter did not use are not white (they share its drift since the last used one), and
+//! a filter whose noise model is a little optimistic drifts beyond its sigma while it refuses,
+//! which kept the window failing for ever (RTK fixes refused for minutes, metres of error).
+//! Past that count a failing window is emptied and restarted with the current fix, which the
+//! per-fix gate and the cluster rule judge as usual. The
 //! window's earlier fixes were used before the test could see the bias: the sum `d` of the
 //! corrections they applied to the error state is now doubtful, and at the detection it is
 //! added to the covariance as the rank-one term `P <- P + d d^T` (fault recovery by covariance
@@ -22,7 +28,9 @@
 //!
 //! **A refused cluster** [Teunissen, 1990, adaptation]. While fixes are being refused, the
 //! next one whose innovation agrees with the previous refused fix's (their difference within
-//! `chi^2(3)` at 99.9 % of both fixes' noise and the filter's drift between them) belongs to the same consistent cluster, and is refused even
+//! `chi^2(3)` at 99.9 % of both fixes' noise and the filter's drift between them, and closer
+//! to it in that measure than to the filter's prediction by its own normalised innovation
+//! squared) belongs to the same consistent cluster, and is refused even
 //! when the growing covariance would let it pass the gate: the filter refused that cluster while
 //! it still knew its own position, and a wider covariance is no evidence for it. A fix that
 //! leaves the cluster (the fault ended) is judged by the gate alone: that is the re-acquisition
@@ -40,6 +48,10 @@ use nalgebra::{Matrix3, Vector3};
 
 /// Fixes in the window [-] (10 s at 1 Hz).
 pub const WINDOW: usize = 10;
+
+/// Consecutive refused fixes [-] after which a failing window no longer refuses: by then it
+/// holds the filter's own drift since it stopped using fixes (module docs).
+pub const WINDOW_REFUSALS_MAX: u32 = WINDOW as u32;
 
 /// 99.9 % point of chi-square with `3 * WINDOW` = 30 degrees of freedom: the global test.
 pub const CHI2_30DOF_999: f64 = 59.703;
@@ -113,6 +125,11 @@ impl<T: Scalar> InnovationWindow<T> {
         sum
     }
 
+    /// Empties the window.
+    pub fn clear(&mut self) {
+        *self = Self::default();
+    }
+
     /// Fixes held.
     pub fn len(&self) -> usize {
         self.len
@@ -175,11 +192,17 @@ impl<T: Scalar> RefusedCluster<T> {
         drift_var_m2: &Vector3<T>,
         gate_3dof: T,
     ) -> bool {
+        self.distance(z, r, drift_var_m2) <= gate_3dof
+    }
+
+    /// The normalised square `(z - z_c)^T (R + R_c + D)^-1 (z - z_c)` [-] of
+    /// [`Self::contains`]: a fix is a member only when this is below its own normalised
+    /// innovation squared, i.e. it agrees better with the cluster than with the filter.
+    pub fn distance(&self, z: &Vector3<T>, r: &Vector3<T>, drift_var_m2: &Vector3<T>) -> T {
         let d = z - self.z_ned_m;
-        let q = (0..3).fold(T::zero(), |a, i| {
+        (0..3).fold(T::zero(), |a, i| {
             a + d[i] * d[i] / (r[i] + self.r_ned_m2[i] + drift_var_m2[i])
-        });
-        q <= gate_3dof
+        })
     }
 
     /// True when this cluster's offset is a typical error of the filter: its normalised
@@ -236,6 +259,9 @@ mod tests {
         wide.set_last_correction(&x);
         assert_eq!(wide.take_corrections()[0], 1.0);
         assert_eq!(wide.take_corrections()[0], 0.0);
+        wide.clear();
+        assert!(wide.is_empty());
+        assert_eq!(wide.verdict(gate), WindowVerdict::Consistent);
     }
 
     #[test]
@@ -249,6 +275,17 @@ mod tests {
         assert!(c.contains(&Vector3::new(0.3, 29.5, 0.5), &r, &Vector3::zeros(), gate));
         // The fault ended: the fix is back near the filter's prediction.
         assert!(!c.contains(&Vector3::new(0.3, 1.0, 0.5), &r, &Vector3::zeros(), gate));
+        // After a refused fix 4 sigma off (RTK: 2 cm noise, innovation 1-sigma 2.4 cm), a fix
+        // at the prediction agrees better with the filter than with it: not a member.
+        let rtk = Vector3::repeat(4e-4);
+        let c4 = RefusedCluster {
+            z_ned_m: Vector3::new(0.096, 0.0, 0.0),
+            r_ned_m2: rtk,
+        };
+        let z = Vector3::new(0.01, 0.005, 0.0);
+        let nis = z.norm_squared() / 5.8e-4;
+        assert!(c4.contains(&z, &rtk, &Vector3::zeros(), gate));
+        assert!(c4.distance(&z, &rtk, &Vector3::zeros()) > nis);
         // 30 m is not typical of a 5 m 1-sigma, it is of a 30 m one.
         assert!(!c.is_typical(&Matrix3::from_diagonal_element(25.0)));
         assert!(c.is_typical(&Matrix3::from_diagonal_element(900.0)));
