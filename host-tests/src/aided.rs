@@ -236,13 +236,15 @@ pub fn run<T: Scalar, E: fmt::Display>(
     sink: &mut impl AidedSink<T>,
 ) -> Result<AidedReport> {
     let mut report = AidedReport::default();
+    // Converted once, not at every sample that waits for the fix.
+    let inputs: Vec<Option<GnssFixInput<T>>> = fixes.iter().map(fix_input::<T>).collect();
     let mut next_fix = 0;
     let mut first = true;
     while let Some(s) = samples().map_err(|e| anyhow!("{e}"))? {
         report.samples += 1;
         // Fixes due at or before this sample go in first (held by the sequencer until it).
-        while let Some(f) = fixes.get(next_fix) {
-            let Some(input) = fix_input::<T>(f) else {
+        while let Some(input) = inputs.get(next_fix) {
+            let Some(input) = *input else {
                 report.bad_time_tags += 1;
                 next_fix += 1;
                 continue;

@@ -181,7 +181,7 @@ fn kf_gins_fix(
     for (i, slot) in v.iter_mut().enumerate().take(fields.len()) {
         *slot = fields.number(i, names[i]).map_err(at)?;
     }
-    check_time(v[0], fields.text(0)).map_err(at)?;
+    check_time(v[0], || fields.text(0)).map_err(at)?;
     check_increasing(v[0], previous_t_s, names[0], Record::Line).map_err(at)?;
     check_latitude(v[1], names[1]).map_err(at)?;
     let (sigma_ned_m, velocity) = if fields.len() == GNSS_COLUMNS.len() {

@@ -225,15 +225,15 @@ fn fields(text: &str) -> impl Iterator<Item = &str> {
 /// The fields of a line of plain numbers, split and parsed in one pass (no `char` machinery,
 /// no second scan: 720,000-line files): each field must be one whole number as
 /// [`fast_float2::parse_partial`] reads it (the syntax of `str::parse::<f64>`), followed by a
-/// blank, a tab, a comma or the line's end. `None` for any other line (more fields than `out`
-/// holds, a field that is not a number, white space other than blanks and tabs): the caller
-/// then splits it with [`fields`] and its errors name the field.
-fn ascii_numbers<'a>(
-    text: &'a str,
-    texts: &mut [&'a str; MAX_FIELDS],
+/// blank, a tab, a comma or the line's end; `spans` gets each field's byte range. `None` for any
+/// other line (more fields than `values` holds, a field that is not a number, white space other
+/// than blanks and tabs, any byte that is not ASCII): the caller then splits it with [`fields`]
+/// and its errors name the field. A line it splits is all ASCII.
+fn ascii_numbers(
+    bytes: &[u8],
+    spans: &mut [(usize, usize); MAX_FIELDS],
     values: &mut [f64; MAX_FIELDS],
 ) -> Option<usize> {
-    let bytes = text.as_bytes();
     let is_separator = |b: u8| matches!(b, b' ' | b'\t' | b',');
     let (mut n, mut i) = (0, 0);
     loop {
@@ -248,36 +248,67 @@ fn ascii_numbers<'a>(
         if len == 0 || (end < bytes.len() && !is_separator(bytes[end])) {
             return None;
         }
-        *texts.get_mut(n)? = text.get(i..end)?;
+        *spans.get_mut(n)? = (i, end);
         *values.get_mut(n)? = value;
         n += 1;
         i = end;
     }
 }
 
+/// `bytes` without the white space `str::trim` takes off an ASCII line.
+fn trim_ascii(bytes: &[u8]) -> &[u8] {
+    let white = |b: &u8| matches!(b, b' ' | b'\t' | b'\n' | b'\x0b' | b'\x0c' | b'\r');
+    let start = bytes.iter().position(|b| !white(b)).unwrap_or(bytes.len());
+    let end = bytes
+        .iter()
+        .rposition(|b| !white(b))
+        .map_or(start, |e| e + 1);
+    &bytes[start..end]
+}
+
 /// The fields of one data line, as a reader's row closure gets them: their text and, when the
 /// line was split by the fast path ([`ascii_numbers`]), their values.
 pub(crate) struct Fields<'a> {
-    texts: &'a [&'a str],
+    texts: Texts<'a>,
     values: Option<&'a [f64]>,
+}
+
+/// Where the fields' text is.
+enum Texts<'a> {
+    /// Byte ranges of an all-ASCII line (the fast path's: not checked as UTF-8 a second time).
+    Ascii {
+        line: &'a [u8],
+        spans: &'a [(usize, usize)],
+    },
+    /// Split as text.
+    Text(&'a [&'a str]),
 }
 
 impl<'a> Fields<'a> {
     /// How many fields.
     pub(crate) fn len(&self) -> usize {
-        self.texts.len()
+        match self.texts {
+            Texts::Ascii { spans, .. } => spans.len(),
+            Texts::Text(texts) => texts.len(),
+        }
     }
 
     /// Field `i` as written.
     pub(crate) fn text(&self, i: usize) -> &'a str {
-        self.texts[i]
+        match self.texts {
+            Texts::Ascii { line, spans } => {
+                let (start, end) = spans[i];
+                std::str::from_utf8(&line[start..end]).expect("the fast path's lines are ASCII")
+            }
+            Texts::Text(texts) => texts[i],
+        }
     }
 
     /// Field `i` as a number ([`parse`]; `column` names it in the error).
     pub(crate) fn number(&self, i: usize, column: &'static str) -> Result<f64, KfGinsErrorKind> {
         match self.values {
             Some(values) => Ok(values[i]),
-            None => parse(self.texts[i], column),
+            None => parse(self.text(i), column),
         }
     }
 }
@@ -360,7 +391,7 @@ impl<R: BufRead> Iterator for ImuReader<R> {
         self.lines.next_with(|values, at| {
             let number = |i: usize| values.number(i, IMU_COLUMNS[i]).map_err(at);
             let t_s = number(0)?;
-            check_time(t_s, values.text(0)).map_err(at)?;
+            check_time(t_s, || values.text(0)).map_err(at)?;
             if let Some(previous) = *previous_t_s
                 && t_s <= previous
             {
@@ -439,7 +470,7 @@ impl<R: BufRead> Iterator for NavReader<R> {
                 }
                 _ => *week0 = Some(week),
             }
-            check_time(v[SOW], fields.text(SOW)).map_err(at)?;
+            check_time(v[SOW], || fields.text(SOW)).map_err(at)?;
             if let Some(previous) = *previous_t_s
                 && v[SOW] < previous
             {
@@ -520,7 +551,7 @@ impl<R: BufRead> DataLines<R> {
     ) -> Option<Result<T, KfGinsError>> {
         let (path, file) = (&self.path, self.file);
         loop {
-            let line = match self.lines.next_line() {
+            let line = match self.lines.next_bytes() {
                 None if self.any => return None,
                 None => {
                     let kind = KfGinsErrorKind::NoData {
@@ -539,17 +570,50 @@ impl<R: BufRead> DataLines<R> {
             };
             let line_no = line.number;
             let at = |kind| TextError::new(path, Some(line_no), kind);
-            let text = line.text.trim().trim_start_matches('\u{feff}');
+            // The fields in stack arrays (no allocation per line: 720,000-line files), a
+            // vector only for a line the fast path does not take.
+            let mut spans = [(0, 0); MAX_FIELDS];
+            let mut numbers = [0.0; MAX_FIELDS];
+            // The fast path: a complete line of ASCII numbers, split straight from the bytes
+            // (what the text path below does with it, without its UTF-8 check and trims).
+            if !line.unterminated {
+                let bytes = trim_ascii(line.bytes);
+                if let Some(n) = ascii_numbers(bytes, &mut spans, &mut numbers)
+                    && n > 0
+                {
+                    let spans = &spans[..n];
+                    // ASCII: the fields' characters are their bytes.
+                    self.cut.note_lengths(spans.iter().map(|(a, b)| b - a));
+                    let fields = Fields {
+                        texts: Texts::Ascii { line: bytes, spans },
+                        values: Some(&numbers[..n]),
+                    };
+                    return Some(data_row(file, &mut self.any, &fields, &at, row));
+                }
+            }
+            let Ok(text) = std::str::from_utf8(line.bytes) else {
+                let e = std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    "stream did not contain valid UTF-8",
+                );
+                return Some(Err(at(KfGinsErrorKind::Io(e))));
+            };
+            let text = text
+                .trim_end_matches(['\n', '\r'])
+                .trim()
+                .trim_start_matches('\u{feff}');
             if skipped(text) {
                 continue;
             }
-            // The fields in stack arrays (no allocation per line: 720,000-line files), a
-            // vector only for a line the fast path does not take.
+            let fast = ascii_numbers(text.as_bytes(), &mut spans, &mut numbers);
             let mut array = [""; MAX_FIELDS];
-            let mut numbers = [0.0; MAX_FIELDS];
-            let fast = ascii_numbers(text, &mut array, &mut numbers);
             let spilled: Option<Vec<&str>> = match fast {
-                Some(_) => None,
+                Some(n) => {
+                    for (t, (a, b)) in array.iter_mut().zip(&spans[..n]) {
+                        *t = &text[*a..*b]; // ASCII bytes: character boundaries
+                    }
+                    None
+                }
                 None => Some(fields(text).collect()),
             };
             let values: &[&str] = match (&spilled, fast) {
@@ -571,21 +635,34 @@ impl<R: BufRead> DataLines<R> {
             } else {
                 self.cut.note(values.iter().copied());
             }
-            if !file.allows(values.len()) {
-                return Some(Err(at(KfGinsErrorKind::ColumnCount {
-                    expected: file.expected().to_owned(),
-                    found: values.len(),
-                    hint: file.hint(values.len()),
-                })));
-            }
-            self.any = true;
             let fields = Fields {
-                texts: values,
+                texts: Texts::Text(values),
                 values: fast.map(|n| &numbers[..n]),
             };
-            return Some(row(&fields, &at));
+            return Some(data_row(file, &mut self.any, &fields, &at, row));
         }
     }
+}
+
+/// `row(fields, at)` of a data line of `file` whose fields are split, after the check of
+/// their count; `any` notes that the file has a data line.
+fn data_row<T>(
+    file: FileKind,
+    any: &mut bool,
+    fields: &Fields,
+    at: LineError,
+    row: impl FnOnce(&Fields, LineError) -> Result<T, KfGinsError>,
+) -> Result<T, KfGinsError> {
+    let n = fields.len();
+    if !file.allows(n) {
+        return Err(at(KfGinsErrorKind::ColumnCount {
+            expected: file.expected().to_owned(),
+            found: n,
+            hint: file.hint(n),
+        }));
+    }
+    *any = true;
+    row(fields, at)
 }
 
 pub(crate) fn parse(text: &str, column: &'static str) -> Result<f64, KfGinsErrorKind> {
@@ -597,12 +674,15 @@ pub(crate) fn parse(text: &str, column: &'static str) -> Result<f64, KfGinsError
 }
 
 /// A time must be finite, non-negative and within the recording clock's range (it becomes
-/// nanoseconds on the recording's clock).
-pub(crate) fn check_time(t_s: f64, text: &str) -> Result<(), KfGinsErrorKind> {
+/// nanoseconds on the recording's clock); `text()` is the field as written, for the error.
+pub(crate) fn check_time<'a>(
+    t_s: f64,
+    text: impl FnOnce() -> &'a str,
+) -> Result<(), KfGinsErrorKind> {
     if !t_s.is_finite() {
         Err(KfGinsErrorKind::NotFinite {
             column: "seconds of week",
-            found: text.to_owned(),
+            found: text().to_owned(),
         })
     } else if t_s < 0.0 {
         Err(KfGinsErrorKind::NegativeTime { t_s })
@@ -699,19 +779,26 @@ mod tests {
                 );
             }
         }
-        let (mut texts, mut values) = ([""; MAX_FIELDS], [0.0; MAX_FIELDS]);
+        let (mut spans, mut values) = ([(0, 0); MAX_FIELDS], [0.0; MAX_FIELDS]);
         assert_eq!(
-            ascii_numbers("1 -2e3,\t.5 ", &mut texts, &mut values),
+            ascii_numbers(b"1 -2e3,\t.5 ", &mut spans, &mut values),
             Some(3)
         );
-        assert_eq!((texts[1], values[1]), ("-2e3", -2000.0));
+        assert_eq!((spans[1], values[1]), ((2, 6), -2000.0));
         for other in ["1 2x 3", "1\r 2", "1 \u{a0}2", &"1 ".repeat(MAX_FIELDS + 1)] {
             assert_eq!(
-                ascii_numbers(other, &mut texts, &mut values),
+                ascii_numbers(other.as_bytes(), &mut spans, &mut values),
                 None,
                 "{other:?}"
             );
         }
+        assert_eq!(trim_ascii(b" \t\x0b1 2\r\x0c"), b"1 2");
+        assert_eq!(trim_ascii(b" \r "), b"");
+        // What the fast path trims is what `str::trim` takes off an ASCII line.
+        let ascii: String = (0..128u8).map(char::from).collect();
+        let white: String = ascii.chars().filter(|c| c.is_whitespace()).collect();
+        let padded = format!("{white}1{white}");
+        assert_eq!(trim_ascii(padded.as_bytes()), padded.trim().as_bytes());
     }
 
     #[test]

@@ -11,9 +11,9 @@
 //! (0.1 mm) in latitude and longitude, 1 nm in height, 1 nm/s in velocity.
 //!
 //! **Fast.** A field is formatted as a fixed-point integer (`round(|x| 1e9)`, ties to even on the
-//! exact binary value, as C's `printf` rounds) written digit pair by digit pair into the row's
-//! stack buffer of blanks, appended at once to one reused line buffer: no `format!`, no
-//! allocation per row. The output is byte-identical to
+//! exact binary value, as C's `printf` rounds) written digit pair by digit pair into blanks
+//! reserved at the end of the rows gathered for one 1 MiB write: no `format!`, no allocation
+//! and no copy per row. The output is byte-identical to
 //! `printf("%-15.9f ")` (and to Rust's `{:<15.9} `) for every finite value; values of 9e9 or
 //! more (beyond the fixed-point integer) go through Rust's formatter. NaN and infinities are
 //! written as C writes them (`nan`, `inf`, `-inf`, `-nan`); the reader refuses such lines.
@@ -111,35 +111,36 @@ const PAIRS: &[u8; 200] = b"\
 8081828384858687888990919293949596979899";
 
 /// Appends each of `fields` (at most [`ROW_FIELDS`]) as C's `%-15.9lf ` does: the common
-/// ones into one stack buffer of blanks appended at once, a rare one ([`format_rare`]) on its
-/// own.
+/// ones straight into blanks reserved at the end of `line` (no copy of the row), a rare one
+/// ([`format_rare`]) on its own.
 fn append_fields(fields: &[f64], line: &mut Vec<u8>) {
-    let mut buf = [b' '; ROW_FIELDS * FIELD_BYTES];
+    let mut start = line.len();
+    line.resize(start + ROW_FIELDS * FIELD_BYTES, b' ');
     let mut at = 0;
     for &x in fields {
         if x.is_finite() && x.abs() < 9.0e9 {
-            let field: &mut [u8; FIELD_BYTES] = (&mut buf[at..at + FIELD_BYTES])
+            let field: &mut [u8; FIELD_BYTES] = (&mut line[start + at..][..FIELD_BYTES])
                 .try_into()
                 .expect("FIELD_BYTES long");
             at += format_field(x, field);
         } else {
-            line.extend_from_slice(&buf[..at]);
-            buf[..at].fill(b' ');
-            at = 0;
+            line.truncate(start + at);
             format_rare(x, line);
+            start = line.len();
+            at = 0;
+            line.resize(start + ROW_FIELDS * FIELD_BYTES, b' ');
         }
     }
-    line.extend_from_slice(&buf[..at]);
+    line.truncate(start + at);
 }
 
 /// Writes a finite `x` with `|x| < 9e9` as C's `%-15.9lf ` at the start of `out` (blanks);
 /// returns the bytes used, padding included.
 fn format_field(x: f64, out: &mut [u8; FIELD_BYTES]) -> usize {
-    let mut i = 0;
-    if x.is_sign_negative() {
-        out[0] = b'-';
-        i = 1;
-    }
+    // Without a branch on the sign (velocities and small angles change it at random): a
+    // positive value's first digit overwrites the '-'.
+    out[0] = b'-';
+    let mut i = usize::from(x.is_sign_negative());
     let n = nano_units(x.abs());
     let (int, frac) = (n / 1_000_000_000, (n % 1_000_000_000) as u32);
     i += write_integer(int, &mut out[i..i + 10]);
@@ -206,15 +207,11 @@ fn nano_units(a: f64) -> u64 {
     }
     // Here |e| <= ulp(p) / 2 <= 0.25.
     let fp = p - n as i64 as f64; // exact, in [0, 1)
-    if fp < 0.25 {
-        return n; // fp + e < 0.5
-    }
-    let r = 0.5 - fp; // exact (Sterbenz: fp in [0.25, 1))
-    if e > r || (e == r && n % 2 == 1) {
-        n + 1
-    } else {
-        n
-    }
+    // Exact for fp in [0.25, 1) (Sterbenz); for fp below, r >= 0.25 >= e (rounding keeps
+    // 0.5 - fp above 0.25), and e == r would need ulp(p) = 0.5, so fp = 0 and r = 0.5: no
+    // round-up, as it must be (fp + e < 0.5). No branch: fp is random.
+    let r = 0.5 - fp;
+    n + u64::from((e > r) | ((e == r) & (n % 2 == 1)))
 }
 
 /// Writes the decimal digits of `n` (< 1e10; no leading zeros, "0" for 0) at the start of
@@ -263,9 +260,15 @@ fn write_nine_digits(n: u32, out: &mut [u8]) {
 pub struct NavWriter {
     file: AtomicFile,
     path: PathBuf,
-    line: Vec<u8>,
+    /// Rows formatted and not yet written, [`CHUNK_BYTES`] at most (and one row).
+    pending: Vec<u8>,
     rows: u64,
 }
+
+/// Rows are written [`CHUNK_BYTES`] at a time: the kernel fills the page cache for a large
+/// write in large folios; 8 KiB writes (`BufWriter`'s) cost about twice the system time of a
+/// 128 MB trajectory, and copy each byte once more.
+const CHUNK_BYTES: usize = 1 << 20;
 
 impl NavWriter {
     /// Starts writing `path`: a temporary file beside it until [`Self::finish`].
@@ -273,20 +276,28 @@ impl NavWriter {
         Ok(Self {
             file: AtomicFile::create(path).map_err(|e| TextError::io(path, e))?,
             path: path.to_owned(),
-            line: Vec::with_capacity(11 * (WIDTH + 1) + 1),
+            pending: Vec::with_capacity(CHUNK_BYTES + ROW_FIELDS * FIELD_BYTES + 1),
             rows: 0,
         })
     }
 
-    /// Writes one row.
+    /// Writes one row (to the file once [`CHUNK_BYTES`] are gathered).
     pub fn write_row(&mut self, row: &NavRow) -> Result<(), TextError> {
-        self.line.clear();
-        format_row(row, &mut self.line);
+        format_row(row, &mut self.pending);
+        self.rows += 1;
+        if self.pending.len() >= CHUNK_BYTES {
+            self.write_pending()?;
+        }
+        Ok(())
+    }
+
+    /// Writes the rows gathered; the `BufWriter` passes a write this large straight through.
+    fn write_pending(&mut self) -> Result<(), TextError> {
         self.file
             .writer()
-            .write_all(&self.line)
+            .write_all(&self.pending)
             .map_err(|e| TextError::io(&self.path, e))?;
-        self.rows += 1;
+        self.pending.clear();
         Ok(())
     }
 
@@ -295,13 +306,14 @@ impl NavWriter {
         self.write_row(&NavRow::from_truth(truth))
     }
 
-    /// Rows written so far.
+    /// Rows taken so far (in the file once [`Self::finish`] returns).
     pub fn rows(&self) -> u64 {
         self.rows
     }
 
     /// Flushes, syncs and puts the file in place; returns the number of rows.
-    pub fn finish(self) -> Result<u64, TextError> {
+    pub fn finish(mut self) -> Result<u64, TextError> {
+        self.write_pending()?;
         let path = self.path;
         self.file.commit().map_err(|e| TextError::io(&path, e))?;
         Ok(self.rows)

@@ -177,6 +177,30 @@ impl<R: BufRead> LineReader<R> {
     /// The next line, `None` at the end of the file; an error carries the number of the line
     /// that could not be read (e.g. invalid UTF-8).
     pub fn next_line(&mut self) -> Option<Result<Line<'_>, (u64, io::Error)>> {
+        let (bytes, number, unterminated) = match self.next_bytes()? {
+            Ok(line) => (line.bytes, line.number, line.unterminated),
+            Err(e) => return Some(Err(e)),
+        };
+        let text = match std::str::from_utf8(bytes) {
+            Ok(text) => text.trim_end_matches(['\n', '\r']),
+            Err(_) => {
+                let e = io::Error::new(
+                    io::ErrorKind::InvalidData,
+                    "stream did not contain valid UTF-8",
+                );
+                return Some(Err((number, e)));
+            }
+        };
+        Some(Ok(Line {
+            text,
+            number,
+            unterminated,
+        }))
+    }
+
+    /// The next line as bytes, without its `\n` (a `\r` before it stays), not checked as UTF-8
+    /// (a caller that parses ASCII numbers needs no second pass; [`Self::next_line`] checks).
+    pub fn next_bytes(&mut self) -> Option<Result<RawLine<'_>, (u64, io::Error)>> {
         self.reader.consume(std::mem::take(&mut self.pending));
         self.number += 1;
         let number = self.number;
@@ -208,22 +232,23 @@ impl<R: BufRead> LineReader<R> {
                 (text, unterminated)
             }
         };
-        let text = match std::str::from_utf8(bytes) {
-            Ok(text) => text.trim_end_matches(['\n', '\r']),
-            Err(_) => {
-                let e = io::Error::new(
-                    io::ErrorKind::InvalidData,
-                    "stream did not contain valid UTF-8",
-                );
-                return Some(Err((number, e)));
-            }
-        };
-        Some(Ok(Line {
-            text,
+        Some(Ok(RawLine {
+            bytes,
             number,
             unterminated,
         }))
     }
+}
+
+/// One line handed out by [`LineReader::next_bytes`].
+#[derive(Debug)]
+pub struct RawLine<'a> {
+    /// The bytes, without the `\n`.
+    pub bytes: &'a [u8],
+    /// 1-based line number.
+    pub number: u64,
+    /// `true` for the file's last line when no newline ends it.
+    pub unterminated: bool,
 }
 
 /// The lines seen so far, for the test of an unterminated last line (see the module docs): the

@@ -64,8 +64,8 @@ impl Position {
         let q = about_z(lon) * about_y(-(half_pi + lat)) * about_z(wander);
         let c = q.into_inner().coords;
         Self {
-            q_n_e: [c.w, c.x, c.y, c.z].map(I2F62::saturating_from_num),
-            h_m: I32F32::saturating_from_num(if h.is_finite() { h } else { 0.0 }),
+            q_n_e: [c.w, c.x, c.y, c.z].map(f64::to_fixed_saturating),
+            h_m: (if h.is_finite() { h } else { 0.0 }).to_fixed_saturating(),
         }
     }
 
@@ -109,7 +109,7 @@ impl Position {
     /// `q_n_e` in the working scalar (not renormalised).
     #[inline]
     pub fn q_n_e<T: Scalar>(&self) -> Quaternion<T> {
-        let [w, x, y, z] = self.q_n_e.map(|c| c.to_num::<T>());
+        let [w, x, y, z] = self.q_n_e.map(T::of_fixed);
         Quaternion::new(w, x, y, z)
     }
 
@@ -124,12 +124,12 @@ impl Position {
     /// Height [m] in the working scalar.
     #[inline]
     pub fn h<T: Scalar>(&self) -> T {
-        self.h_m.to_num::<T>()
+        T::of_fixed(self.h_m)
     }
 
     /// Height [m] as `f64` (exact conversion of the fixed-point value).
     pub fn h_f64(&self) -> f64 {
-        self.h_m.to_num::<f64>()
+        f64::of_fixed(self.h_m)
     }
 
     /// Geodetic latitude [rad] in the working scalar (an `atan2`: for alignment and output, not
@@ -152,7 +152,7 @@ impl Position {
     /// Longitude [rad] in (-pi, pi], computed in `f64`; 0 at a pole.
     pub fn lon_f64(&self) -> f64 {
         // Down axis in ECEF, the third column of C_n_e: -(cos lat cos lon, cos lat sin lon, sin lat).
-        let [w, x, y, z] = self.q_n_e.map(|c| c.to_num::<f64>());
+        let [w, x, y, z] = self.q_n_e.map(f64::of_fixed);
         let d_x = 2.0 * (x * z + w * y);
         let d_y = 2.0 * (y * z - w * x);
         libm_atan2(-d_y, -d_x)
@@ -189,7 +189,7 @@ impl Position {
             return false;
         }
         for (c, dc) in self.q_n_e.iter_mut().zip(d) {
-            *c = c.saturating_add(I2F62::saturating_from_num(dc));
+            *c = c.saturating_add(dc.to_fixed_saturating());
         }
         true
     }
@@ -201,7 +201,7 @@ impl Position {
         if !d_h.finite() {
             return false;
         }
-        self.h_m = self.h_m.saturating_add(I32F32::saturating_from_num(d_h));
+        self.h_m = self.h_m.saturating_add(d_h.to_fixed_saturating());
         true
     }
 }

@@ -5,7 +5,7 @@
 //! by any crate in a host build, e.g. proptest) replaces them with the host C library's, which
 //! can differ by an ulp and would break the firmware/harness bit-identity.
 
-use fixed::traits::{FromFixed, ToFixed};
+use fixed::traits::{Fixed, FromFixed, ToFixed};
 use nalgebra::{ArrayStorage, RealField, SMatrix};
 
 /// A floating-point scalar usable by every nav-core algorithm.
@@ -29,6 +29,13 @@ pub trait Scalar: RealField + Copy + ToFixed + FromFixed {
     fn patan2(self, x: Self) -> Self;
     /// `asin` from the `libm` crate.
     fn pasin(self) -> Self;
+    /// The value of a 64-bit fixed-point number (the position's `I2F62`, `I32F32`), rounded
+    /// to nearest, ties to even: `fixed`'s `to_num`, bit for bit.
+    fn of_fixed<F: Fixed<Bits = i64>>(x: F) -> Self;
+    /// This value as a 64-bit fixed-point number, rounded to nearest, ties to even, and
+    /// saturated: `fixed`'s `saturating_from_num`, bit for bit. Not for NaN (the callers refuse
+    /// it first).
+    fn to_fixed_saturating<F: Fixed<Bits = i64>>(self) -> F;
     /// Largest squared rotation angle [rad^2] for which the series of
     /// [`crate::attitude::rotation_vector_quat`] (to the 6th power) is exact to this precision:
     /// the first omitted term is `x^8 / 10321920` relative.
@@ -60,6 +67,14 @@ impl Scalar for f32 {
     #[inline]
     fn pasin(self) -> Self {
         libm::asinf(self)
+    }
+    #[inline]
+    fn of_fixed<F: Fixed<Bits = i64>>(x: F) -> Self {
+        x.to_num()
+    }
+    #[inline]
+    fn to_fixed_saturating<F: Fixed<Bits = i64>>(self) -> F {
+        F::saturating_from_num(self)
     }
     // x = 0.5 rad: 3.8e-10 < 6e-8 (f32 epsilon / 2); covers 2000 deg/s at 400 Hz.
     const ROTATION_SERIES_MAX2: f64 = 0.25;
@@ -99,6 +114,20 @@ impl Scalar for f64 {
     fn pasin(self) -> Self {
         libm::asin(self)
     }
+    // The two below give `fixed`'s results with a fraction of its generic conversion's work (a
+    // fixed-point component was converted a dozen times per step: 6 % of a host run).
+    #[inline]
+    fn of_fixed<F: Fixed<Bits = i64>>(x: F) -> Self {
+        // The cast rounds to nearest, ties to even; the power of two scales exactly.
+        x.to_bits() as f64 * pow2(-(F::FRAC_NBITS as i32))
+    }
+    #[inline]
+    fn to_fixed_saturating<F: Fixed<Bits = i64>>(self) -> F {
+        debug_assert!(!self.is_nan());
+        // Scaling by a power of two is exact (an overflow is infinite and saturates below);
+        // `rint` rounds ties to even, and the cast saturates as `fixed` does.
+        F::from_bits(libm::rint(self * pow2(F::FRAC_NBITS as i32)) as i64)
+    }
     // x = 0.05 rad: 3.8e-18 < 1.1e-16.
     const ROTATION_SERIES_MAX2: f64 = 0.0025;
     const ZERO: Self = 0.0;
@@ -117,5 +146,98 @@ impl Scalar for f64 {
     #[inline]
     fn finite(self) -> bool {
         self.is_finite()
+    }
+}
+
+/// `2^e` for `e` in [-1022, 1023].
+#[inline]
+fn pow2(e: i32) -> f64 {
+    f64::from_bits(((1023 + e) as u64) << 52)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fixed::types::{I2F62, I32F32};
+
+    /// A few hundred thousand pseudo-random `u64` (xorshift64*).
+    fn bits(n: usize) -> impl Iterator<Item = u64> {
+        let mut x = 0x9e37_79b9_7f4a_7c15_u64;
+        (0..n).map(move |_| {
+            x ^= x >> 12;
+            x ^= x << 25;
+            x ^= x >> 27;
+            x.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        })
+    }
+
+    fn of_fixed_is_to_num<F: Fixed<Bits = i64>>() {
+        let edges = [
+            0,
+            1,
+            -1,
+            i64::MAX,
+            i64::MIN,
+            1 << 53,
+            (1 << 53) + 1,
+            (1 << 54) + 2,
+        ];
+        let shifted = bits(200_000).map(|b| (b as i64) >> (b % 64));
+        for b in edges.into_iter().chain(shifted) {
+            let x = F::from_bits(b);
+            assert_eq!(
+                f64::of_fixed(x).to_bits(),
+                x.to_num::<f64>().to_bits(),
+                "{b}"
+            );
+        }
+    }
+
+    fn to_fixed_is_saturating_from_num<F: Fixed<Bits = i64>>() {
+        let ulp = pow2(-(F::FRAC_NBITS as i32));
+        let edges = [
+            0.0,
+            -0.0,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE / 4.0,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            0.5 * ulp,
+            1.5 * ulp,
+            -2.5 * ulp,
+            2.5 * ulp,
+            (0.5 * ulp).next_up(),
+            (0.5 * ulp).next_down(),
+            9.2e18 * ulp,
+            -9.3e18 * ulp,
+        ];
+        // Random signs, mantissas and exponents around the fixed-point range, and ties.
+        let random = bits(200_000).map(|b| {
+            let e = (b >> 52) as i32 % 140 - 70 - F::FRAC_NBITS as i32 / 2;
+            let m = f64::from_bits((b & ((1 << 52) - 1)) | (1023 << 52));
+            let x = m * pow2(e);
+            let x = if b % 3 == 0 {
+                ((b >> 20) as f64 + 0.5) * ulp
+            } else {
+                x
+            };
+            if b % 2 == 0 { -x } else { x }
+        });
+        for x in edges.into_iter().chain(random) {
+            assert_eq!(
+                x.to_fixed_saturating::<F>(),
+                F::saturating_from_num(x),
+                "{x:e}"
+            );
+        }
+    }
+
+    #[test]
+    fn fast_fixed_conversions_equal_fixeds() {
+        of_fixed_is_to_num::<I2F62>();
+        of_fixed_is_to_num::<I32F32>();
+        to_fixed_is_saturating_from_num::<I2F62>();
+        to_fixed_is_saturating_from_num::<I32F32>();
     }
 }
