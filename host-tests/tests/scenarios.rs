@@ -331,3 +331,26 @@ fn the_land_vehicle_replay_hint_runs() {
         "{text}"
     );
 }
+
+/// `nav sim ... --list-params | head -1`: the reader closes the pipe before `nav` has written
+/// everything; `nav` ends as command-line tools do, without a panic message.
+#[test]
+fn output_into_a_closed_pipe_is_not_a_panic() {
+    use std::process::{Command, Stdio};
+    // `nav` starts after the reader has gone (the shell waits first).
+    let mut child = Command::new("sh")
+        .args([
+            "-c",
+            "sleep 0.3; exec \"$0\" sim land-vehicle --list-params",
+            env!("CARGO_BIN_EXE_nav"),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert_ne!(out.status.code(), Some(101), "{err}");
+}

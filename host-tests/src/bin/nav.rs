@@ -1269,6 +1269,8 @@ fn write_readouts(
 }
 
 fn main() -> ExitCode {
+    // Output piped into `head` ends the process as it ends `cat`'s, without a panic message.
+    sigpipe::reset();
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
