@@ -160,15 +160,12 @@ mod tests {
     use super::*;
     use fixed::types::{I2F62, I32F32};
 
-    /// A few hundred thousand pseudo-random `u64` (xorshift64*).
+    /// `n` pseudo-random `u64`, the same on every run.
     fn bits(n: usize) -> impl Iterator<Item = u64> {
-        let mut x = 0x9e37_79b9_7f4a_7c15_u64;
-        (0..n).map(move |_| {
-            x ^= x >> 12;
-            x ^= x << 25;
-            x ^= x >> 27;
-            x.wrapping_mul(0x2545_f491_4f6c_dd1d)
-        })
+        use proptest::prelude::Rng;
+        use proptest::test_runner::{RngAlgorithm, TestRng};
+        let mut rng = TestRng::deterministic_rng(RngAlgorithm::ChaCha);
+        (0..n).map(move |_| rng.next_u64())
     }
 
     fn of_fixed_is_to_num<F: Fixed<Bits = i64>>() {

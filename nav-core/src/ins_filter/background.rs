@@ -355,9 +355,7 @@ impl<T: Scalar> ErrorFilter<T> {
             self.p[(VEL + 2, VEL + 2)],
         ) * (dt * dt);
         if let Some(c) = &self.cluster
-            && c.contains(&m.z, &m.r, &drift_var, gate)
-            && c.distance(&m.z, &m.r, &drift_var) < nis
-            && !c.is_typical(&s)
+            && c.claims(&m.z, &m.r, &drift_var, nis, &s, gate)
         {
             self.cluster = Some(refused);
             let n = &mut self.counters.position.cluster_rejected;

@@ -196,13 +196,29 @@ impl<T: Scalar> RefusedCluster<T> {
     }
 
     /// The normalised square `(z - z_c)^T (R + R_c + D)^-1 (z - z_c)` [-] of
-    /// [`Self::contains`]: a fix is a member only when this is below its own normalised
-    /// innovation squared, i.e. it agrees better with the cluster than with the filter.
+    /// [`Self::contains`].
     pub fn distance(&self, z: &Vector3<T>, r: &Vector3<T>, drift_var_m2: &Vector3<T>) -> T {
         let d = z - self.z_ned_m;
         (0..3).fold(T::zero(), |a, i| {
             a + d[i] * d[i] / (r[i] + self.r_ned_m2[i] + drift_var_m2[i])
         })
+    }
+
+    /// True when a fix (innovation `z` [m], noise variance `r` [m^2], normalised innovation
+    /// squared `nis` [-] against the innovation covariance `s` [m^2]) is refused as a member
+    /// (module docs): [`Self::contains`] it, agrees better with it than with the filter's
+    /// prediction, and the cluster is not yet [`Self::is_typical`].
+    pub fn claims(
+        &self,
+        z: &Vector3<T>,
+        r: &Vector3<T>,
+        drift_var_m2: &Vector3<T>,
+        nis: T,
+        s: &Matrix3<T>,
+        gate_3dof: T,
+    ) -> bool {
+        let q = self.distance(z, r, drift_var_m2);
+        q <= gate_3dof && q < nis && !self.is_typical(s)
     }
 
     /// True when this cluster's offset is a typical error of the filter: its normalised
