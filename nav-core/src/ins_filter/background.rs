@@ -11,7 +11,7 @@ use super::integrity::{self, InnovationWindow, RefusedCluster, WindowVerdict, wh
 use super::model;
 use super::stationarity::StillWindow;
 use super::{
-    ATT, BG, Covariance, FilterConfig, FilterError, FilterStatus, InitialSigma, N, POS, SG,
+    ATT, BA, BG, Covariance, FilterConfig, FilterError, FilterStatus, InitialSigma, N, POS, SG,
     StateVector, VEL,
 };
 use crate::alignment::fine::kalman::{ScalarUpdate, update_scalar};
@@ -323,16 +323,18 @@ impl<T: Scalar> ErrorFilter<T> {
         lag_s: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
         let out = match self.position_measurement(snap, fix, lag_s) {
-            Some(m) => self.screened_position_update(&m),
+            Some(m) => self.screened_position_update(&m, snap.earth.g),
             None => (AidResult::Invalid, None),
         };
         Self::counted(&mut self.counters.position, out)
     }
 
-    /// The position update with the integrity tests of [`super::integrity`].
+    /// The position update with the integrity tests of [`super::integrity`]; `g` [m/s^2] the
+    /// gravity at the solution.
     fn screened_position_update(
         &mut self,
         m: &Measurement<T, 3>,
+        g: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
         let Some((s, nis)) = self.innovation(m) else {
             return (AidResult::Invalid, None);
@@ -340,24 +342,26 @@ impl<T: Scalar> ErrorFilter<T> {
         let gate = self.config.gate_nis;
         // Time since the previous fix (the cluster's last member, if refused) [s].
         let dt = core::mem::replace(&mut self.since_fix_s, T::zero());
-        let refused = RefusedCluster {
-            z_ned_m: m.z,
-            r_ned_m2: m.r,
-        };
+        let drift = self.fix_drift(dt, g);
         if nis > gate {
-            self.cluster = Some(refused);
+            // Continues the cluster it agrees with, or starts one.
+            self.cluster = Some(match &self.cluster {
+                Some(c) if c.contains(&m.z, &m.r, &drift, gate) => c.followed_by(m.z, m.r, dt),
+                _ => RefusedCluster::start(
+                    m.z,
+                    m.r,
+                    nis,
+                    gate,
+                    self.window.len() == integrity::WINDOW,
+                ),
+            });
             return (AidResult::Rejected { nis }, None);
         }
         // A member of the cluster refused before.
-        let drift_var = Vector3::new(
-            self.p[(VEL, VEL)],
-            self.p[(VEL + 1, VEL + 1)],
-            self.p[(VEL + 2, VEL + 2)],
-        ) * (dt * dt);
         if let Some(c) = &self.cluster
-            && c.claims(&m.z, &m.r, &drift_var, nis, &s, gate)
+            && c.claims(&m.z, &m.r, &drift, nis, &s, gate)
         {
-            self.cluster = Some(refused);
+            self.cluster = Some(c.followed_by(m.z, m.r, dt));
             let n = &mut self.counters.position.cluster_rejected;
             *n = n.saturating_add(1);
             return (AidResult::Rejected { nis }, None);
@@ -387,6 +391,22 @@ impl<T: Scalar> ErrorFilter<T> {
             self.window.set_last_correction(&c.x);
         }
         out
+    }
+
+    /// The filter's own drift over the `dt` [s] since the previous fix
+    /// ([`integrity::FixDrift`]): the velocity variance times `dt^2`, and a bound of the
+    /// acceleration error's variance, `g^2` [m/s^2] times the attitude variances plus the
+    /// accelerometer bias variances (isotropic: a tilt or a heading error times the specific
+    /// force, a bias in any axis), times `dt^4`.
+    fn fix_drift(&self, dt: T, g: T) -> integrity::FixDrift<T> {
+        let var = |at: usize| (0..3).fold(T::zero(), |a, k| a + self.p[(at + k, at + k)]);
+        let accel_var = g * g * var(ATT) + var(BA);
+        let dt2 = dt * dt;
+        integrity::FixDrift {
+            dt_s: dt,
+            var_m2: Vector3::from_fn(|k, _| self.p[(VEL + k, VEL + k)]) * dt2,
+            curvature_var_m2: Vector3::repeat(accel_var * dt2 * dt2),
+        }
     }
 
     /// The measurement of a position fix: predicted minus measured, the INS position's NED

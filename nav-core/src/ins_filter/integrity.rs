@@ -41,6 +41,25 @@
 //! filter can then no longer tell which of the two is wrong, and a filter that was itself
 //! pulled off by a fault the window could not see (a MEMS filter follows a slow ramp with small
 //! innovations) re-acquires the true fixes from its own growing sigma.
+//!
+//! **A gross cluster** is not released that way. Its first fix was beyond
+//! [`GROSS_NIS_FACTOR`] times the gate, a jump no plausible optimism of the filter's own
+//! covariance explains (a 30 m offset against a 0.3 m sigma), at a time the filter's position
+//! had been confirmed by a full window of fixes (a wrong initial position is not confirmed:
+//! the rule above re-acquires from it). The filter knew its position then, and its later drift, however large, is no evidence for the jump: a MEMS filter whose
+//! sigma grows to 10 m in 40 s of refusals would otherwise take a held 30 m offset as its
+//! position with a sigma of centimetres. A gate refusal that the cluster contains continues
+//! it (its start is kept). Its members are refused for as long as the chain of members tells
+//! the jump apart from the filter's own drift: the next member must lie on the line through
+//! the last two (the filter's drift is smooth: between fixes its error departs from a straight
+//! line by its acceleration error times `dt^2`, centimetres), within [`CHAIN_GATE_FACTOR`]
+//! times the gate of that extrapolation's noise, which the jump must exceed
+//! ([`RefusedCluster::extrapolation`]; with one member, the distance of [`RefusedCluster::contains`]
+//! and the gate). When the fault ends, the next fix leaves the line by the jump and is judged
+//! by the gate alone, against the sigma the filter's drift has grown to. A filter so poor that
+//! its acceleration error blurs the jump between fixes can no longer tell, and the rule above
+//! applies. The price: a filter that an unseen fault pulled off by such a gross amount stays
+//! DEGRADED (refusing) until the fixes leave the line or its drift blurs the jump.
 
 use super::states::StateVector;
 use crate::Scalar;
@@ -55,6 +74,16 @@ pub const WINDOW_REFUSALS_MAX: u32 = WINDOW as u32;
 
 /// 99.9 % point of chi-square with `3 * WINDOW` = 30 degrees of freedom: the global test.
 pub const CHI2_30DOF_999: f64 = 59.703;
+
+/// A cluster whose first fix's normalised innovation squared exceeds the gate by this factor
+/// [-] is gross (module docs): beyond what a filter whose 1-sigma were up to 4 times
+/// optimistic (16 in variance) could see from its own error.
+pub const GROSS_NIS_FACTOR: f64 = 16.0;
+
+/// The chain of a gross cluster is judged against this factor times the gate [-]: chi-square
+/// with 3 degrees of freedom at about 65, which a member on the chain exceeds with a
+/// probability of 1e-13 (a false release would capture the cluster).
+pub const CHAIN_GATE_FACTOR: f64 = 4.0;
 
 /// Median of chi-square with 3 degrees of freedom: a refused cluster whose offset is this
 /// typical of the filter's own error is released (module docs).
@@ -171,53 +200,142 @@ impl<T: Scalar> InnovationWindow<T> {
     }
 }
 
-/// The last refused position fix's innovation and noise variance (module docs).
+/// The filter's own drift between two fixes, as the cluster tests need it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FixDrift<T: Scalar> {
+    /// Interval since the previous fix [s].
+    pub dt_s: T,
+    /// Variance of the position drift over it, per NED axis: the velocity variance times
+    /// `dt^2` [m^2].
+    pub var_m2: Vector3<T>,
+    /// Variance of the drift's departure from a straight line over it, per NED axis: a bound
+    /// of the acceleration error's variance times `dt^4` [m^2].
+    pub curvature_var_m2: Vector3<T>,
+}
+
+/// The last refused position fixes' innovations and noise variances, and the jump that
+/// started the cluster (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RefusedCluster<T: Scalar> {
-    /// Its innovation, predicted minus measured, NED [m].
+    /// The last member's innovation, predicted minus measured, NED [m].
     pub z_ned_m: Vector3<T>,
     /// Its noise variance, NED [m^2].
     pub r_ned_m2: Vector3<T>,
+    /// The member before it (innovation [m], noise variance [m^2]) and the interval between
+    /// the two [s]; `None` while the cluster has one member.
+    pub previous: Option<(Vector3<T>, Vector3<T>, T)>,
+    /// The innovation of the fix that started the cluster, NED [m]: the jump the filter saw
+    /// while it still knew its position.
+    pub jump_ned_m: Vector3<T>,
+    /// The start was gross: its normalised innovation squared beyond [`GROSS_NIS_FACTOR`]
+    /// times the gate.
+    pub gross: bool,
 }
 
 impl<T: Scalar> RefusedCluster<T> {
-    /// True when a fix with innovation `z` [m] and noise variance `r` [m^2] agrees with this
-    /// one: `(z - z_c)^T (R + R_c + D)^-1 (z - z_c) <= gate` (chi-square with 3 degrees of
-    /// freedom), `D` [m^2] the variance of the filter's own drift since that fix (its velocity
-    /// variance times the interval squared).
+    /// A cluster started by a fix refused by the gate (innovation `z` [m], noise variance `r`
+    /// [m^2], normalised innovation squared `nis` [-] against the gate `gate_3dof`);
+    /// `confirmed` when the filter's position had been confirmed by fixes (a full window of
+    /// them passed the gate): only then can the start be gross.
+    pub fn start(z: Vector3<T>, r: Vector3<T>, nis: T, gate_3dof: T, confirmed: bool) -> Self {
+        Self {
+            z_ned_m: z,
+            r_ned_m2: r,
+            previous: None,
+            jump_ned_m: z,
+            gross: confirmed && nis > gate_3dof * T::c(GROSS_NIS_FACTOR),
+        }
+    }
+
+    /// The cluster with its next refused member (innovation `z` [m], noise variance `r`
+    /// [m^2], `dt_s` [s] after the last one); its start is kept.
+    pub fn followed_by(&self, z: Vector3<T>, r: Vector3<T>, dt_s: T) -> Self {
+        Self {
+            z_ned_m: z,
+            r_ned_m2: r,
+            previous: Some((self.z_ned_m, self.r_ned_m2, dt_s)),
+            ..*self
+        }
+    }
+
+    /// True when a fix with innovation `z` [m] and noise variance `r` [m^2] agrees with the
+    /// last member: [`Self::distance`] within `gate_3dof` (chi-square with 3 degrees of
+    /// freedom).
     pub fn contains(
         &self,
         z: &Vector3<T>,
         r: &Vector3<T>,
-        drift_var_m2: &Vector3<T>,
+        drift: &FixDrift<T>,
         gate_3dof: T,
     ) -> bool {
-        self.distance(z, r, drift_var_m2) <= gate_3dof
+        self.distance(z, r, drift) <= gate_3dof
     }
 
-    /// The normalised square `(z - z_c)^T (R + R_c + D)^-1 (z - z_c)` [-] of
-    /// [`Self::contains`].
-    pub fn distance(&self, z: &Vector3<T>, r: &Vector3<T>, drift_var_m2: &Vector3<T>) -> T {
-        let d = z - self.z_ned_m;
-        (0..3).fold(T::zero(), |a, i| {
-            a + d[i] * d[i] / (r[i] + self.r_ned_m2[i] + drift_var_m2[i])
-        })
+    /// The normalised square `(z - z_c)^T (R + R_c + D)^-1 (z - z_c)` [-] of a fix's
+    /// innovation `z` [m] against the last member's `z_c`, `D` the filter's drift between
+    /// them ([`FixDrift::var_m2`]).
+    pub fn distance(&self, z: &Vector3<T>, r: &Vector3<T>, drift: &FixDrift<T>) -> T {
+        let den = r + self.r_ned_m2 + drift.var_m2;
+        normalised_square(&(z - self.z_ned_m), &den)
+    }
+
+    /// The chain test of a gross cluster with two members or more (module docs): the
+    /// normalised squares [-] of a fix's departure from the line through the last two
+    /// members, and of the start's jump, against the noise of that extrapolation
+    /// `R + (1 + a)^2 R_1 + a^2 R_2 + K` (`a` the ratio of the two intervals, `K`
+    /// [`FixDrift::curvature_var_m2`]); `None` with one member.
+    pub fn extrapolation(
+        &self,
+        z: &Vector3<T>,
+        r: &Vector3<T>,
+        drift: &FixDrift<T>,
+    ) -> Option<(T, T)> {
+        let (z2, r2, dt2) = self.previous?;
+        if !(dt2 > T::zero()) {
+            return None;
+        }
+        let a = drift.dt_s / dt2;
+        let predicted = self.z_ned_m + (self.z_ned_m - z2) * a;
+        let b = T::one() + a;
+        let den = r + self.r_ned_m2 * (b * b) + r2 * (a * a) + drift.curvature_var_m2;
+        Some((
+            normalised_square(&(z - predicted), &den),
+            normalised_square(&self.jump_ned_m, &den),
+        ))
     }
 
     /// True when a fix (innovation `z` [m], noise variance `r` [m^2], normalised innovation
     /// squared `nis` [-] against the innovation covariance `s` [m^2]) is refused as a member
-    /// (module docs): [`Self::contains`] it, agrees better with it than with the filter's
-    /// prediction, and the cluster is not yet [`Self::is_typical`].
+    /// (module docs). A gross cluster whose chain still tells its jump from the filter's
+    /// drift (the jump's [`Self::extrapolation`] beyond [`CHAIN_GATE_FACTOR`] times the gate,
+    /// or with one member its [`Self::distance`] beyond the gate) claims every fix that stays
+    /// on the chain. Otherwise a member is within [`Self::contains`], agrees better with the
+    /// cluster than with the filter's prediction, and the cluster is not yet
+    /// [`Self::is_typical`].
     pub fn claims(
         &self,
         z: &Vector3<T>,
         r: &Vector3<T>,
-        drift_var_m2: &Vector3<T>,
+        drift: &FixDrift<T>,
         nis: T,
         s: &Matrix3<T>,
         gate_3dof: T,
     ) -> bool {
-        let q = self.distance(z, r, drift_var_m2);
+        let q = self.distance(z, r, drift);
+        if self.gross {
+            let chain_gate = gate_3dof * T::c(CHAIN_GATE_FACTOR);
+            match self.extrapolation(z, r, drift) {
+                Some((q_line, q_jump)) if q_jump > chain_gate => return q_line <= chain_gate,
+                None if normalised_square(
+                    &self.jump_ned_m,
+                    &(r + self.r_ned_m2 + drift.var_m2),
+                ) > gate_3dof =>
+                {
+                    return q <= gate_3dof;
+                }
+                _ => {}
+            }
+        }
         q <= gate_3dof && q < nis && !self.is_typical(s)
     }
 
@@ -226,6 +344,11 @@ impl<T: Scalar> RefusedCluster<T> {
     pub fn is_typical(&self, s: &Matrix3<T>) -> bool {
         whiten(s, &self.z_ned_m).is_some_and(|w| w.norm_squared() <= T::c(CHI2_3DOF_MEDIAN))
     }
+}
+
+/// `sum d_i^2 / den_i` [-].
+fn normalised_square<T: Scalar>(d: &Vector3<T>, den: &Vector3<T>) -> T {
+    (0..3).fold(T::zero(), |a, i| a + d[i] * d[i] / den[i])
 }
 
 #[cfg(test)]
@@ -280,30 +403,94 @@ mod tests {
         assert_eq!(wide.verdict(gate), WindowVerdict::Consistent);
     }
 
+    /// A drift of velocity variance `v` [m^2/s^2] and curvature variance `k` [m^2] over 1 s.
+    fn drift(v: f64, k: f64) -> FixDrift<f64> {
+        FixDrift {
+            dt_s: 1.0,
+            var_m2: Vector3::repeat(v),
+            curvature_var_m2: Vector3::repeat(k),
+        }
+    }
+
     #[test]
     fn a_cluster_holds_its_own_fixes_until_typical() {
         let r = Vector3::new(0.25, 0.25, 1.0);
-        let c = RefusedCluster {
-            z_ned_m: Vector3::new(0.0, 30.0, 0.0),
-            r_ned_m2: r,
-        };
         let gate = crate::ins_filter::CHI2_3DOF_999;
-        assert!(c.contains(&Vector3::new(0.3, 29.5, 0.5), &r, &Vector3::zeros(), gate));
+        let still = drift(0.0, 0.0);
+        // Started by a fix just beyond the gate: not gross.
+        let c = RefusedCluster::start(Vector3::new(0.0, 30.0, 0.0), r, 2.0 * gate, gate, true);
+        assert!(!c.gross);
+        assert!(c.contains(&Vector3::new(0.3, 29.5, 0.5), &r, &still, gate));
         // The fault ended: the fix is back near the filter's prediction.
-        assert!(!c.contains(&Vector3::new(0.3, 1.0, 0.5), &r, &Vector3::zeros(), gate));
+        assert!(!c.contains(&Vector3::new(0.3, 1.0, 0.5), &r, &still, gate));
         // After a refused fix 4 sigma off (RTK: 2 cm noise, innovation 1-sigma 2.4 cm), a fix
         // at the prediction agrees better with the filter than with it: not a member.
         let rtk = Vector3::repeat(4e-4);
-        let c4 = RefusedCluster {
-            z_ned_m: Vector3::new(0.096, 0.0, 0.0),
-            r_ned_m2: rtk,
-        };
+        let c4 = RefusedCluster::start(Vector3::new(0.096, 0.0, 0.0), rtk, 16.0, gate, true);
         let z = Vector3::new(0.01, 0.005, 0.0);
         let nis = z.norm_squared() / 5.8e-4;
-        assert!(c4.contains(&z, &rtk, &Vector3::zeros(), gate));
-        assert!(c4.distance(&z, &rtk, &Vector3::zeros()) > nis);
+        assert!(c4.contains(&z, &rtk, &still, gate));
+        assert!(c4.distance(&z, &rtk, &still) > nis);
+        assert!(!c4.claims(
+            &z,
+            &rtk,
+            &still,
+            nis,
+            &Matrix3::from_diagonal_element(5.8e-4),
+            gate
+        ));
         // 30 m is not typical of a 5 m 1-sigma, it is of a 30 m one.
         assert!(!c.is_typical(&Matrix3::from_diagonal_element(25.0)));
         assert!(c.is_typical(&Matrix3::from_diagonal_element(900.0)));
+    }
+
+    /// A held 30 m offset that jumped from a filter of 0.3 m sigma stays refused while the
+    /// filter's sigma grows to make it typical and its velocity sigma grows to 8 m/s (which
+    /// blurs the jump between two fixes, not the line through three); the fix after the
+    /// fault ends leaves the chain.
+    #[test]
+    fn a_gross_cluster_is_not_released_by_the_growing_sigma() {
+        let gate = crate::ins_filter::CHI2_3DOF_999;
+        let r = Vector3::new(0.25, 0.25, 1.0);
+        let jump = Vector3::new(0.0, -30.0, 0.0);
+        // Innovation covariance at the jump: 0.3 m sigma plus the fix noise.
+        let nis0 = 900.0 / (0.09 + 0.25);
+        let start = RefusedCluster::start(jump, r, nis0, gate, true);
+        assert!(start.gross);
+        // A filter whose position no fix has confirmed yet (a wrong initial position) has no
+        // gross clusters: its own growing sigma re-acquires the fixes.
+        assert!(!RefusedCluster::start(jump, r, nis0, gate, false).gross);
+        // One member: judged by the distance while it resolves the jump.
+        let slow = drift(0.25, 1e-2);
+        let near = Vector3::new(0.3, -29.6, 0.2);
+        assert!(start.claims(
+            &near,
+            &r,
+            &slow,
+            1.0,
+            &Matrix3::from_diagonal_element(1e4),
+            gate
+        ));
+        // Later, the filter drifting at 3 m/s north-east with a sigma of 50 m (the offset is
+        // typical of it) and of 8 m/s in velocity: two members on that line.
+        let fast = drift(64.0, 1e-2);
+        let c = start
+            .followed_by(Vector3::new(-20.0, -10.0, 0.1), r, 1.0)
+            .followed_by(Vector3::new(-23.0, -7.0, -0.1), r, 1.0);
+        let s = Matrix3::from_diagonal(&Vector3::new(2500.0, 2500.0, 400.0));
+        assert!(c.is_typical(&s));
+        // One interval's drift blurs the jump between two fixes.
+        assert!(normalised_square(&c.jump_ned_m, &(r + r + fast.var_m2)) < gate);
+        let z = Vector3::new(-26.3, -4.2, 0.3);
+        let nis = (z.x * z.x + z.y * z.y) / 2500.0 + z.z * z.z / 400.0;
+        assert!(c.claims(&z, &r, &fast, nis, &s, gate));
+        // The same fixes in a cluster that started just beyond the gate are released.
+        let mild = RefusedCluster { gross: false, ..c };
+        assert!(!mild.claims(&z, &r, &fast, nis, &s, gate));
+        // The fault ends: the fix is 30 m off the line, out of the chain.
+        let back = z + Vector3::new(0.0, 30.0, 0.0);
+        assert!(!c.claims(&back, &r, &fast, 1.0, &s, gate));
+        // A curvature of 10 m per interval blurs the jump: the chain can no longer tell.
+        assert!(!c.claims(&z, &r, &drift(64.0, 100.0), nis, &s, gate));
     }
 }
