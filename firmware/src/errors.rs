@@ -351,6 +351,7 @@ impl Format for Settings<'_> {
             SettingsError::BadValue(what) => {
                 write!(f, "{=str} must be finite and not negative", what)
             }
+            SettingsError::OutOfRange(why) => write!(f, "{=str}", why),
             SettingsError::LeverArmTooLong { length_m } => write!(
                 f,
                 "lever arm {=f64} m is beyond {=f64} m {=str}",

@@ -484,12 +484,17 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
         (
             "arw0",
             "lat-deg = 45\ngyro-arw-rad-per-sqrt-s = 0\n",
-            "bad-arw0.txt:2: refused (reason code 8): the gyro ARW (gyro-arw-rad-per-sqrt-s: above 0",
+            "bad-arw0.txt:2: refused (reason code 8): gyro-arw-rad-per-sqrt-s must be above 0",
         ),
         (
             "vrw",
             "accel-vrw-mps-per-sqrt-s = 1e9\n",
-            "bad-vrw.txt:1: refused (reason code 8): the accelerometer VRW",
+            "bad-vrw.txt:1: refused (reason code 8): accel-vrw-mps-per-sqrt-s must be above 0",
+        ),
+        (
+            "bias",
+            "gyro-bias-rad-s = 1e9\n",
+            "bad-bias.txt:1: refused (reason code 8): gyro-bias-rad-s must be 0 or more",
         ),
     ] {
         let f = d.join(format!("bad-{name}.txt"));

@@ -295,30 +295,53 @@ pub const MAX_ARW_RAD_PER_SQRT_S: f64 = 0.1;
 /// 1 g/sqrt(Hz): thousands of times a consumer MEMS accelerometer's).
 pub const MAX_VRW_MPS_PER_SQRT_S: f64 = 10.0;
 
-/// What a gyro ARW out of range is called in its refusal
-/// ([`SettingsError::BadValue`], reason [`ReasonCode::Alignment`]).
-pub const ARW_OUT_OF_RANGE: &str = "the gyro ARW (gyro-arw-rad-per-sqrt-s: above 0, since zero \
-     makes the filters overconfident, and up to 0.1 rad/sqrt(s), beyond any IMU's)";
+/// Largest gyro bias 1-sigma accepted [rad/s] (0.1 rad/s, about 6 deg/s: ten times a
+/// consumer MEMS gyro's turn-on bias).
+pub const MAX_GYRO_BIAS_RAD_S: f64 = 0.1;
 
-/// What an accelerometer VRW out of range is called in its refusal.
-pub const VRW_OUT_OF_RANGE: &str = "the accelerometer VRW (accel-vrw-mps-per-sqrt-s: above 0, \
-     since zero makes the filters overconfident, and up to 10 m/s/sqrt(s), beyond any IMU's)";
+/// Largest accelerometer bias 1-sigma accepted [m/s^2] (10 m/s^2, about 1 g: fifty times a
+/// consumer MEMS accelerometer's turn-on bias).
+pub const MAX_ACCEL_BIAS_MPS2: f64 = 10.0;
 
-/// `Err` when the white noise densities of `noise` are not above zero (a zero density makes
-/// the filters overconfident) and within [`MAX_ARW_RAD_PER_SQRT_S`] and
-/// [`MAX_VRW_MPS_PER_SQRT_S`]; the refusal is the alignment's noise refusal.
+/// The refusal of a gyro ARW out of range ([`SettingsError::OutOfRange`], reason
+/// [`ReasonCode::Alignment`]).
+pub const ARW_OUT_OF_RANGE: &str = "gyro-arw-rad-per-sqrt-s must be above 0 (zero makes the \
+     filters overconfident) and at most 0.1 rad/sqrt(s) (more than any IMU's)";
+
+/// The refusal of an accelerometer VRW out of range.
+pub const VRW_OUT_OF_RANGE: &str = "accel-vrw-mps-per-sqrt-s must be above 0 (zero makes the \
+     filters overconfident) and at most 10 m/s/sqrt(s) (more than any IMU's)";
+
+/// The refusal of a gyro bias 1-sigma out of range.
+pub const GYRO_BIAS_OUT_OF_RANGE: &str =
+    "gyro-bias-rad-s must be 0 or more and at most 0.1 rad/s (more than any IMU's)";
+
+/// The refusal of an accelerometer bias 1-sigma out of range.
+pub const ACCEL_BIAS_OUT_OF_RANGE: &str =
+    "accel-bias-mps2 must be 0 or more and at most 10 m/s^2 (more than any IMU's)";
+
+/// `Err` when the noise figures of `noise` are out of an IMU's range: the white noise
+/// densities not above zero (a zero density makes the filters overconfident) or beyond
+/// [`MAX_ARW_RAD_PER_SQRT_S`], [`MAX_VRW_MPS_PER_SQRT_S`]; the bias 1-sigmas negative or
+/// beyond [`MAX_GYRO_BIAS_RAD_S`], [`MAX_ACCEL_BIAS_MPS2`]. The refusal is the alignment's
+/// noise refusal.
 fn check_noise_densities(noise: &SensorNoise<f64>) -> Result<(), ConfigRefusal> {
-    // NaN fails both comparisons.
-    let within = |v: f64, max: f64| v > 0.0 && v <= max;
-    let what = if !within(noise.arw_rad_per_sqrt_s, MAX_ARW_RAD_PER_SQRT_S) {
+    // NaN fails every comparison.
+    let density = |v: f64, max: f64| v > 0.0 && v <= max;
+    let sigma = |v: f64, max: f64| (0.0..=max).contains(&v);
+    let why = if !density(noise.arw_rad_per_sqrt_s, MAX_ARW_RAD_PER_SQRT_S) {
         ARW_OUT_OF_RANGE
-    } else if !within(noise.vrw_mps_per_sqrt_s, MAX_VRW_MPS_PER_SQRT_S) {
+    } else if !density(noise.vrw_mps_per_sqrt_s, MAX_VRW_MPS_PER_SQRT_S) {
         VRW_OUT_OF_RANGE
+    } else if !sigma(noise.gyro_bias_rad_s, MAX_GYRO_BIAS_RAD_S) {
+        GYRO_BIAS_OUT_OF_RANGE
+    } else if !sigma(noise.accel_bias_mps2, MAX_ACCEL_BIAS_MPS2) {
+        ACCEL_BIAS_OUT_OF_RANGE
     } else {
         return Ok(());
     };
     Err(ConfigRefusal::Run(ConfigError::Alignment(
-        SettingsError::BadValue(what),
+        SettingsError::OutOfRange(why),
     )))
 }
 

@@ -154,7 +154,9 @@ pub fn keys_of(
     refusal: &super::config::ConfigRefusal,
 ) -> impl Iterator<Item = &'static str> + use<> {
     use super::config::ConfigRefusal as R;
-    use super::config::{ARW_OUT_OF_RANGE, VRW_OUT_OF_RANGE};
+    use super::config::{
+        ACCEL_BIAS_OUT_OF_RANGE, ARW_OUT_OF_RANGE, GYRO_BIAS_OUT_OF_RANGE, VRW_OUT_OF_RANGE,
+    };
     use nav_core::alignment::machine::SettingsError;
     use nav_core::navigator::ConfigError as E;
     let (own, noise): (&'static [&'static str], bool) = match refusal {
@@ -164,12 +166,14 @@ pub fn keys_of(
         R::Run(E::NotFinite(_)) => (&["lon-deg", "h-m", "align-seconds"], false),
         R::Run(E::LogEvery) => (&["log-every"], false),
         R::Run(E::BiasPrior(_)) => (&["bias-prior"], false),
-        R::Run(E::Alignment(SettingsError::BadValue(what))) if *what == ARW_OUT_OF_RANGE => (
-            &["gyro-arw-rad-per-sqrt-s", "imu-model", "imu-noise"],
-            false,
-        ),
-        R::Run(E::Alignment(SettingsError::BadValue(what))) if *what == VRW_OUT_OF_RANGE => (
-            &["accel-vrw-mps-per-sqrt-s", "imu-model", "imu-noise"],
+        R::Run(E::Alignment(SettingsError::OutOfRange(why))) => (
+            match *why {
+                ARW_OUT_OF_RANGE => &["gyro-arw-rad-per-sqrt-s", "imu-model", "imu-noise"],
+                VRW_OUT_OF_RANGE => &["accel-vrw-mps-per-sqrt-s", "imu-model", "imu-noise"],
+                GYRO_BIAS_OUT_OF_RANGE => &["gyro-bias-rad-s", "imu-model", "imu-noise"],
+                ACCEL_BIAS_OUT_OF_RANGE => &["accel-bias-mps2", "imu-model", "imu-noise"],
+                _ => &NOISE_KEYS,
+            },
             false,
         ),
         R::Run(E::Alignment(_)) => (

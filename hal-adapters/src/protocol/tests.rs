@@ -358,16 +358,21 @@ fn defaults_are_valid_and_each_refusal_has_its_code() {
     assert_eq!(ReasonCode::from_code(0), None);
 }
 
-/// A zero, negative or absurd gyro ARW or accelerometer VRW is refused with the alignment's
-/// reason and a message naming the figure and its range; the grades' and parts' figures pass.
+/// A zero, negative or absurd gyro ARW or accelerometer VRW, or a negative or absurd bias
+/// 1-sigma, is refused with the alignment's reason and a message naming the figure and its
+/// range; the grades' and parts' figures and the range's ends pass.
 #[test]
-fn noise_densities_zero_negative_or_beyond_an_imu_are_refused() {
-    for line in [
-        "gyro-arw-rad-per-sqrt-s = 0",
-        "gyro-arw-rad-per-sqrt-s = -1e-4",
-        "gyro-arw-rad-per-sqrt-s = 1e9",
-        "accel-vrw-mps-per-sqrt-s = 0",
-        "accel-vrw-mps-per-sqrt-s = 1e9",
+fn noise_figures_beyond_an_imu_are_refused() {
+    for (line, density) in [
+        ("gyro-arw-rad-per-sqrt-s = 0", true),
+        ("gyro-arw-rad-per-sqrt-s = -1e-4", true),
+        ("gyro-arw-rad-per-sqrt-s = 1e9", true),
+        ("accel-vrw-mps-per-sqrt-s = 0", true),
+        ("accel-vrw-mps-per-sqrt-s = 1e9", true),
+        ("gyro-bias-rad-s = -1e-5", false),
+        ("gyro-bias-rad-s = 1e9", false),
+        ("accel-bias-mps2 = -0.01", false),
+        ("accel-bias-mps2 = 1e9", false),
     ] {
         let mut c = DeviceConfig::default();
         c.apply_line(line).unwrap();
@@ -376,9 +381,10 @@ fn noise_densities_zero_negative_or_beyond_an_imu_are_refused() {
         let key = line.split(' ').next().unwrap();
         let text = std::format!("{r}");
         assert!(
-            text.contains(key) && text.contains("overconfident"),
+            text.starts_with(key) && text.contains("more than any IMU's"),
             "{line}: {text}"
         );
+        assert_eq!(text.contains("overconfident"), density, "{line}: {text}");
         assert!(keys_of(&r).any(|k| k == key), "{line}");
     }
     for line in [
@@ -387,6 +393,9 @@ fn noise_densities_zero_negative_or_beyond_an_imu_are_refused() {
         "imu-model = bmi088",
         "gyro-arw-rad-per-sqrt-s = 0.1",
         "accel-vrw-mps-per-sqrt-s = 10",
+        "gyro-bias-rad-s = 0",
+        "gyro-bias-rad-s = 0.1",
+        "accel-bias-mps2 = 10",
     ] {
         let mut c = DeviceConfig::default();
         c.apply_line(line).unwrap();

@@ -369,6 +369,9 @@ pub enum SettingsError {
     NearPole,
     /// A noise, lever-arm or base-motion value is negative or not finite.
     BadValue(&'static str),
+    /// A value outside the range any IMU can have; the text is the whole reason (the value,
+    /// its key and its range).
+    OutOfRange(&'static str),
     /// A known lever arm longer than [`MAX_LEVER_ARM_M`].
     LeverArmTooLong {
         /// Its length [m].
@@ -421,6 +424,7 @@ impl core::fmt::Display for SettingsError {
             Self::NearPole => f.write_str("latitude not finite or too close to a pole to align"),
             Self::NotCompiledIn(method) => not_compiled_in(f, *method),
             Self::BadValue(what) => write!(f, "{what} must be finite and not negative"),
+            Self::OutOfRange(why) => f.write_str(why),
             Self::LeverArmTooLong { length_m } => write!(
                 f,
                 "lever arm {} m is beyond {MAX_LEVER_ARM_M} m (the IMU sits on the base, within a hull's length of its centre of rotation)",
@@ -461,6 +465,7 @@ impl SettingsError {
             Self::NearPole => "near a pole",
             Self::NotCompiledIn(_) => "method not in this build",
             Self::BadValue(_) => "bad value",
+            Self::OutOfRange(_) => "value out of range",
             Self::SwayNeedsLeverArm => "sway needs the lever arm",
             Self::GyrosTooCoarse { .. } => "gyros too coarse to find north",
             Self::LeverArmTooLong { .. } | Self::LeverArmSigmaTooLarge { .. } => {
