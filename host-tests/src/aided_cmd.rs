@@ -273,8 +273,8 @@ impl GivenStart {
             gyro_scale: v3(ssg),
             accel_scale: v3(ssa),
         };
-        if !sigma.is_valid() {
-            bail!("every initial 1-sigma must be a finite number >= 0");
+        if let Some(why) = nav_core::ins_filter::limits::initial_sigma_out_of_range(&sigma) {
+            bail!("{why}");
         }
         let s = &self.sensors;
         Ok(Start::Given {
@@ -457,7 +457,8 @@ mod tests {
             let m = grade_filter_model(grade);
             let kept = (-2.0 * 3600.0 / m.noise.correlation_time_s).exp();
             assert!(kept > 0.95, "{grade}: {kept}");
-            assert!(m.noise.is_valid(), "{grade}");
+            let out = nav_core::ins_filter::limits::noise_out_of_range(&m.noise);
+            assert_eq!(out, None, "{grade}");
             // The in-run drive is the grade's, whatever the correlation time: for the gyros
             // the rate random walk (their Gauss–Markov parts are short, counted as white).
             let drive = 2.0 * m.noise.gyro_bias_rad_s.powi(2) / m.noise.correlation_time_s;

@@ -255,7 +255,8 @@ fn kf_gins_refuses_bad_input_without_a_partial_file() {
     assert!(!out.exists());
     // A corrupt GNSS file.
     let gnss = dir.path().join("gnss.txt");
-    let mut g = std::fs::read_to_string(&gnss).unwrap();
+    let good_gnss = std::fs::read_to_string(&gnss).unwrap();
+    let mut g = good_gnss.clone();
     g.push_str("123 not-a-number\n");
     std::fs::write(&gnss, g).unwrap();
     let e = run_err(
@@ -271,6 +272,38 @@ fn kf_gins_refuses_bad_input_without_a_partial_file() {
     std::fs::write(&bad, "imupath: [unclosed\n").unwrap();
     run_err(nav().arg("kf-gins").arg(&bad).arg("--out").arg(&out));
     assert!(!out.exists());
+    // Figures beyond any IMU's (a unit slip): refused, naming the figure, before any run.
+    std::fs::write(&gnss, good_gnss).unwrap();
+    let set = |key: &str, value: &str| {
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with(&format!("{key}:")))
+            .unwrap_or_else(|| panic!("{key} in {text}"));
+        let indent = &line[..line.len() - line.trim_start().len()];
+        text.replace(line, &format!("{indent}{key}: {value}"))
+    };
+    for (key, value, reason) in [
+        ("arw", "[1e300, 1e300, 1e300]", "gyro ARW"),
+        ("gbstd", "[1e30, 1e30, 1e30]", "gyro bias 1-sigma"),
+        ("corrtime", "1e-300", "correlation time"),
+        (
+            "initposstd",
+            "[1e30, 1e30, 1e30]",
+            "initial position 1-sigma",
+        ),
+        (
+            "initbgstd",
+            "[1e30, 1e30, 1e30]",
+            "initial gyro bias 1-sigma",
+        ),
+        ("initgyrbias", "[1e30, 0, 0]", "initial gyro bias must be"),
+        ("initaccscale", "[-1e6, 0, 0]", "scale-factor error"),
+    ] {
+        std::fs::write(&bad, set(key, value)).unwrap();
+        let e = run_err(nav().arg("kf-gins").arg(&bad).arg("--out").arg(&out));
+        assert!(e.contains(reason), "{key}: {e}");
+        assert!(!out.exists(), "{key}");
+    }
 }
 
 /// A receiver the filter could not use is refused before anything is simulated or written.

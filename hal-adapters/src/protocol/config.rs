@@ -287,21 +287,10 @@ impl BoardIdentity {
     }
 }
 
-/// Largest gyro angle random walk accepted [rad/sqrt(s)] (0.1 rad/sqrt(s), about 340
-/// deg/sqrt(h): hundreds of times a consumer MEMS gyro's; a larger figure is a typing error).
-pub const MAX_ARW_RAD_PER_SQRT_S: f64 = 0.1;
-
-/// Largest accelerometer velocity random walk accepted [m/s/sqrt(s)] (10 m/s/sqrt(s), about
-/// 1 g/sqrt(Hz): thousands of times a consumer MEMS accelerometer's).
-pub const MAX_VRW_MPS_PER_SQRT_S: f64 = 10.0;
-
-/// Largest gyro bias 1-sigma accepted [rad/s] (0.1 rad/s, about 6 deg/s: ten times a
-/// consumer MEMS gyro's turn-on bias).
-pub const MAX_GYRO_BIAS_RAD_S: f64 = 0.1;
-
-/// Largest accelerometer bias 1-sigma accepted [m/s^2] (10 m/s^2, about 1 g: fifty times a
-/// consumer MEMS accelerometer's turn-on bias).
-pub const MAX_ACCEL_BIAS_MPS2: f64 = 10.0;
+// The ranges are nav-core's, the filter's own (one place for the rule).
+pub use nav_core::ins_filter::limits::{
+    MAX_ACCEL_BIAS_MPS2, MAX_ARW_RAD_PER_SQRT_S, MAX_GYRO_BIAS_RAD_S, MAX_VRW_MPS_PER_SQRT_S,
+};
 
 /// The refusal of a gyro ARW out of range ([`SettingsError::OutOfRange`], reason
 /// [`ReasonCode::Alignment`]).

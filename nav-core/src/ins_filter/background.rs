@@ -8,6 +8,7 @@ use super::aiding::{AidCounters, AidResult, FilterCounters, GnssPosition, GnssVe
 use super::covariance::{self, Transition};
 use super::foreground::Propagation;
 use super::integrity::{self, InnovationWindow, RefusedCluster, WindowVerdict, whiten};
+use super::limits;
 use super::model;
 use super::stationarity::StillWindow;
 use super::{
@@ -76,11 +77,11 @@ impl<T: Scalar> ErrorFilter<T> {
         yaw: T,
         config: FilterConfig<T>,
     ) -> Result<Self, FilterError> {
-        if !config.noise.is_valid() {
-            return Err(FilterError::BadNoise);
+        if let Some(why) = limits::noise_out_of_range(&config.noise) {
+            return Err(FilterError::BadNoise(why));
         }
-        if !sigma.is_valid() {
-            return Err(FilterError::BadInitialSigma);
+        if let Some(why) = limits::initial_sigma_out_of_range(sigma) {
+            return Err(FilterError::BadInitialSigma(why));
         }
         let l = &config.antenna_lever_arm_b_m;
         if !(l.iter().all(|v| v.finite()) && l.norm() <= T::c(100.0)) {

@@ -66,6 +66,9 @@ impl<T: Scalar> AidedMechanization<T> {
         if !(state_finite && sensors.is_finite()) {
             return Err(FilterError::BadState);
         }
+        if let Some(why) = super::limits::sensor_errors_out_of_range(&sensors) {
+            return Err(FilterError::BadSensorErrors(why));
+        }
         let mechanization = MechanizationConfig {
             frame: NavFrame::Ned,
             ..config.mechanization

@@ -7,6 +7,7 @@
 //! - [`aiding`]: the measurements, their outcomes and counters;
 //! - [`integrity`]: the windowed innovation test and the refusal of a consistent cluster of
 //!   wrong position fixes;
+//! - [`limits`]: the range of the noise figures and initial 1-sigmas any IMU can have;
 //! - [`stationarity`]: the IMU-only stop detector;
 //! - [`motion`]: the start in motion from GNSS (level from the accelerometers, heading from the
 //!   GNSS track).
@@ -31,6 +32,7 @@ pub mod background;
 pub mod covariance;
 pub mod foreground;
 pub mod integrity;
+pub mod limits;
 pub mod model;
 pub mod motion;
 pub mod sequencer;
@@ -119,14 +121,19 @@ impl<T: Scalar> FilterConfig<T> {
 /// Why a filter cannot start.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FilterError {
-    /// A noise figure is negative or not finite, or the correlation time not positive.
-    BadNoise,
-    /// An initial 1-sigma is negative or not finite.
-    BadInitialSigma,
+    /// A noise figure is negative, not finite or beyond any IMU's, or the correlation time
+    /// too short ([`limits`]); the text names it and its range.
+    BadNoise(&'static str),
+    /// An initial 1-sigma is negative, not finite or beyond its range ([`limits`]); the text
+    /// names it and its range.
+    BadInitialSigma(&'static str),
     /// The propagation interval is not within (0, 1] s.
     BadInterval,
     /// The initial state or sensor errors are not finite.
     BadState,
+    /// A known sensor error at the start is beyond any IMU's ([`limits`]); the text names it
+    /// and its range.
+    BadSensorErrors(&'static str),
     /// The lever arm is not finite or beyond 100 m.
     BadLeverArm,
 }
@@ -134,10 +141,7 @@ pub enum FilterError {
 impl core::fmt::Display for FilterError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(match self {
-            Self::BadNoise => {
-                "a noise figure is negative or not finite (or the correlation time not positive)"
-            }
-            Self::BadInitialSigma => "an initial 1-sigma is negative or not finite",
+            Self::BadNoise(why) | Self::BadInitialSigma(why) | Self::BadSensorErrors(why) => why,
             Self::BadInterval => "the covariance propagation interval must be within (0, 1] s",
             Self::BadState => "the initial state or sensor errors are not finite",
             Self::BadLeverArm => "the antenna lever arm is not finite or beyond 100 m",

@@ -66,30 +66,6 @@ pub struct FilterNoise<T: Scalar> {
     pub gyro_g_sensitivity: T,
 }
 
-impl<T: Scalar> FilterNoise<T> {
-    /// True when every figure is finite and not negative and the correlation time positive.
-    pub fn is_valid(&self) -> bool {
-        let all = [
-            self.arw_rad_per_sqrt_s,
-            self.vrw_mps_per_sqrt_s,
-            self.gyro_bias_rad_s,
-            self.accel_bias_mps2,
-            self.gyro_scale,
-            self.accel_scale,
-        ];
-        all.iter().all(|v| v.finite() && *v >= T::zero())
-            && [
-                self.gyro_cross_coupling_rad,
-                self.accel_cross_coupling_rad,
-                self.gyro_g_sensitivity,
-            ]
-            .iter()
-            .all(|v| v.finite() && *v >= T::zero())
-            && self.correlation_time_s.finite()
-            && self.correlation_time_s > T::zero()
-    }
-}
-
 /// What the error model is linearised about: the navigation solution at the end of the
 /// propagation interval and the interval's mean sensor outputs.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -46,21 +46,6 @@ pub struct InitialSigma<T: Scalar> {
 }
 
 impl<T: Scalar> InitialSigma<T> {
-    /// True when every value is finite and not negative.
-    pub fn is_valid(&self) -> bool {
-        [
-            &self.position_ned_m,
-            &self.velocity_ned_m_s,
-            &self.attitude_rad,
-            &self.gyro_bias_rad_s,
-            &self.accel_bias_mps2,
-            &self.gyro_scale,
-            &self.accel_scale,
-        ]
-        .iter()
-        .all(|v| v.iter().all(|x| x.finite() && *x >= T::zero()))
-    }
-
     /// The start covariance of a body at heading `yaw` [rad]: diagonal but for the tilt pair
     /// (roll and pitch errors are tilts about the body's forward and right axes: turned by the
     /// yaw into north and east ones); the scale-factor states are zero when not modelled.

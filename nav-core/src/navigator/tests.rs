@@ -824,12 +824,14 @@ fn an_aided_run_refuses_bad_settings_and_an_unstartable_filter() {
     let mut nav = Navigator::<f64>::new(&setup);
     let e = nav
         .on_background(FromBackground::FilterFailed(
-            crate::ins_filter::FilterError::BadInitialSigma,
+            crate::ins_filter::FilterError::BadInitialSigma(
+                "the initial position 1-sigma must be 0 to 6,400 km",
+            ),
         ))
         .unwrap_err();
     assert_eq!(
         e.to_string(),
-        "the navigation filter cannot start from the alignment's outcome: an initial 1-sigma is negative or not finite"
+        "the navigation filter cannot start from the alignment's outcome: the initial position 1-sigma must be 0 to 6,400 km"
     );
     assert_eq!(nav.push(&still(1).next().unwrap()), Step::NotReady);
     assert_eq!(nav.finish().unwrap_err(), e);
