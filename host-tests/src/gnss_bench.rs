@@ -116,6 +116,9 @@ pub struct OutlierOutcome {
     pub max_error_m: f64,
     /// The filter's horizontal 1-sigma at that moment [m].
     pub sigma_at_max_m: f64,
+    /// Largest ratio of the horizontal error to the horizontal 1-sigma over the same span [-]
+    /// (where the filter was most overconfident; below 3 for an honest sigma).
+    pub max_error_per_sigma: f64,
     /// The filter reported DEGRADED during it.
     pub degraded: bool,
     /// A fix was accepted again after it ended (within 60 s).
@@ -126,6 +129,7 @@ struct Watch<'a> {
     truth: &'a [Truth],
     windows: Vec<(f64, f64)>,
     max: Vec<(f64, f64)>,
+    max_ratio: Vec<f64>,
     degraded: Vec<bool>,
 }
 
@@ -143,10 +147,12 @@ impl AidedSink<f64> for Watch<'_> {
                 {
                     let e = state_error(ins.state(), &truth);
                     let h = (e[0] * e[0] + e[1] * e[1]).sqrt();
+                    let p = ins.covariance();
+                    let sigma = (p[(0, 0)] + p[(1, 1)]).sqrt();
                     if h > self.max[k].0 {
-                        let p = ins.covariance();
-                        self.max[k] = (h, (p[(0, 0)] + p[(1, 1)]).sqrt());
+                        self.max[k] = (h, sigma);
                     }
+                    self.max_ratio[k] = self.max_ratio[k].max(h / sigma);
                 }
             }
         }
@@ -224,6 +230,7 @@ pub fn outliers(case: &Case) -> Result<Vec<OutlierOutcome>> {
         truth: &prepared.sim.truth,
         windows: windows.clone(),
         max: vec![(0.0, 0.0); n],
+        max_ratio: vec![0.0; n],
         degraded: vec![false; n],
     };
     let report = aided::run(
@@ -258,6 +265,7 @@ pub fn outliers(case: &Case) -> Result<Vec<OutlierOutcome>> {
             refused,
             max_error_m: sink.max[k].0,
             sigma_at_max_m: sink.max[k].1,
+            max_error_per_sigma: sink.max_ratio[k],
             degraded: sink.degraded[k],
             reacquired,
         });

@@ -132,6 +132,13 @@ fn outliers_are_refused_or_bounded() {
                 .find(|o| o.name == name && o.t_s == t)
                 .unwrap_or_else(|| panic!("{name} at {t}: {out:?}"))
         };
+        // Wherever it was, the error stayed within 3 sigma (the MEMS filter's followed ramp
+        // aside: not asserted, reported by `nav bench outliers`).
+        for o in &out {
+            if !(grade == Grade::MemsTactical && o.name == "ramp") {
+                assert!(o.max_error_per_sigma < 3.0, "{grade}: {o:?}");
+            }
+        }
         let jump = by("jump", 200.0);
         assert_eq!(jump.refused, jump.fixes, "{grade}: {jump:?}");
         assert!(

@@ -568,22 +568,23 @@ fn bench_outliers() -> Result<()> {
     use host_tests::gnss_bench::{outlier_case, outliers};
     use host_tests::sensor_model::Grade;
     println!(
-        "land vehicle, 1 Hz fixes of 0.5 m; each outlier, what the gate did, the largest horizontal error from its start to 30 s after it"
+        "land vehicle, 1 Hz fixes of 0.5 m; each outlier, what the gate did, the largest horizontal error from its start to 30 s after it and the largest ratio of the error to the filter's 1-sigma there"
     );
     println!(
-        "| grade | outlier | at [s] | fixes | refused | max error [m] | 1-sigma there [m] | DEGRADED | accepted again |"
+        "| grade | outlier | at [s] | fixes | refused | max error [m] | 1-sigma there [m] | max error/1-sigma | DEGRADED | accepted again |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for grade in [Grade::Fog, Grade::MemsTactical] {
         for o in outliers(&outlier_case(grade, 1))? {
             println!(
-                "| {grade} | {} | {} | {} | {} | {:.2} | {:.2} | {} | {} |",
+                "| {grade} | {} | {} | {} | {} | {:.2} | {:.2} | {:.1} | {} | {} |",
                 o.name,
                 o.t_s,
                 o.fixes,
                 o.refused,
                 o.max_error_m,
                 o.sigma_at_max_m,
+                o.max_error_per_sigma,
                 if o.degraded { "yes" } else { "no" },
                 if o.reacquired { "yes" } else { "no" }
             );
