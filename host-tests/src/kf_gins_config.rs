@@ -41,6 +41,7 @@
 //! column. Keys KF-GINS does not read are ignored and listed in the returned warnings.
 
 use anyhow::{Context, Result, bail};
+use nav_core::number::Number;
 use serde::Deserialize;
 use serde::de::IgnoredAny;
 use std::collections::BTreeMap;
@@ -227,7 +228,7 @@ pub fn parse(text: &str, path: &Path, dir: &Path) -> Result<(KfGinsConfig, Vec<S
         corr_time_s: {
             let h = c.number("imunoise.corrtime", noise.corrtime, "h")?;
             if h <= 0.0 {
-                bail!(c.key("imunoise.corrtime", format!("{h} h: must be > 0")));
+                bail!(c.key("imunoise.corrtime", format!("{} h: must be > 0", Number(h))));
             }
             h * 3600.0
         },
@@ -238,20 +239,29 @@ pub fn parse(text: &str, path: &Path, dir: &Path) -> Result<(KfGinsConfig, Vec<S
         if n != 7.0 && n != 8.0 {
             bail!(c.key(
                 "imudatalen",
-                format!("{n}: expected 7 (time, 3 gyro, 3 accelerometer) or 8 (and an odometer)")
+                format!(
+                    "{}: expected 7 (time, 3 gyro, 3 accelerometer) or 8 (and an odometer)",
+                    Number(n)
+                )
             ));
         }
         n as usize
     };
     let imu_rate_hz = c.number("imudatarate", raw.imudatarate, "Hz")?;
     if imu_rate_hz <= 0.0 {
-        bail!(c.key("imudatarate", format!("{imu_rate_hz} Hz: must be > 0")));
+        bail!(c.key(
+            "imudatarate",
+            format!("{} Hz: must be > 0", Number(imu_rate_hz))
+        ));
     }
     let start_time_s = c.number("starttime", raw.starttime, "s of week")?;
     if !(0.0..=WEEK_S).contains(&start_time_s) {
         bail!(c.key(
             "starttime",
-            format!("{start_time_s} s: a time of week is within 0 to {WEEK_S} s")
+            format!(
+                "{} s: a time of week is within 0 to {WEEK_S} s",
+                Number(start_time_s)
+            )
         ));
     }
     let end = c.number("endtime", raw.endtime, "s of week, -1: to the end")?;
@@ -260,12 +270,19 @@ pub fn parse(text: &str, path: &Path, dir: &Path) -> Result<(KfGinsConfig, Vec<S
     } else if end > WEEK_S {
         bail!(c.key(
             "endtime",
-            format!("{end} s: a time of week is within 0 to {WEEK_S} s (-1: to the end)")
+            format!(
+                "{} s: a time of week is within 0 to {WEEK_S} s (-1: to the end)",
+                Number(end)
+            )
         ));
     } else if end < start_time_s {
         bail!(c.key(
             "endtime",
-            format!("{end} s is before starttime {start_time_s} s (-1: to the end)")
+            format!(
+                "{} s is before starttime {} s (-1: to the end)",
+                Number(end),
+                Number(start_time_s)
+            )
         ));
     } else {
         Some(end)
@@ -275,7 +292,7 @@ pub fn parse(text: &str, path: &Path, dir: &Path) -> Result<(KfGinsConfig, Vec<S
     if !(-90.0..=90.0).contains(&pos[0]) {
         bail!(c.key(
             "initpos",
-            format!("latitude {} deg is outside [-90, 90]", pos[0])
+            format!("latitude {} deg is outside [-90, 90]", Number(pos[0]))
         ));
     }
     let deg = |v: [f64; 3]| v.map(f64::to_radians);
@@ -374,7 +391,7 @@ impl Check<'_> {
                 format!(
                     "value {} ({} {unit}) is negative: a standard deviation is >= 0",
                     i + 1,
-                    v[i]
+                    Number(v[i])
                 )
             ));
         }
@@ -598,6 +615,12 @@ odolever: [ 1, 2, 3 ]
                 "key 'imudatalen': 9: expected 7",
             ),
             ("starttime: 456300", "starttime: 700000", "key 'starttime'"),
+            // A huge value reads as typed, not as 301 digits.
+            (
+                "starttime: 456300",
+                "starttime: 1e300",
+                "key 'starttime': 1e300 s: a time of week",
+            ),
             (
                 "initpos: [ 30.4447873701,",
                 "initpos: [ 95,",
