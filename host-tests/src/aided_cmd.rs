@@ -13,6 +13,7 @@ use nav_core::ins_filter::motion::MotionAlignConfig;
 use nav_core::ins_filter::sequencer::{Sequencer, Start};
 use nav_core::ins_filter::{FilterConfig, InitialSigma, SensorErrors};
 use nav_core::navigator::config::{MAX_HEIGHT_M, MIN_HEIGHT_M};
+use nav_core::number::{Number, Rounded};
 use nav_core::{NavState, Position, Scalar, Vector3, attitude};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -224,27 +225,34 @@ impl GivenStart {
             bail!("the initial state and its 1-sigma must be finite numbers");
         }
         if self.pos_deg_m[0].abs() > 90.0 {
-            bail!("initial latitude {} deg is beyond +-90", self.pos_deg_m[0]);
+            bail!(
+                "initial latitude {} deg is beyond +-90",
+                Number(self.pos_deg_m[0])
+            );
         }
         let h_m = self.pos_deg_m[2];
         if !(MIN_HEIGHT_M..=MAX_HEIGHT_M).contains(&h_m) {
             bail!(
-                "initial height {h_m} m is not within [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m (the \
-                 Earth model's range)"
+                "initial height {} m is not within [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m (the \
+                 Earth model's range)",
+                Number(h_m)
             );
         }
         let speed_m_s = self.vel_m_s.iter().map(|v| v * v).sum::<f64>().sqrt();
         if speed_m_s > MAX_START_SPEED_M_S {
             bail!(
-                "initial speed {speed_m_s} m/s is beyond {MAX_START_SPEED_M_S} m/s (faster than \
-                 an orbit): check the units (m/s) and the order (north, east, down)"
+                "initial speed {} m/s is beyond {MAX_START_SPEED_M_S} m/s (faster than an \
+                 orbit): check the units (m/s) and the order (north, east, down)",
+                Rounded(speed_m_s)
             );
         }
         let [roll_deg, pitch_deg, _] = self.att_deg;
         if roll_deg.abs() > 180.0 || pitch_deg.abs() > 90.0 {
             bail!(
-                "initial roll {roll_deg} deg and pitch {pitch_deg} deg must be within +-180 and \
-                 +-90 deg (check the order: roll, pitch, yaw)"
+                "initial roll {} deg and pitch {} deg must be within +-180 and +-90 deg (check \
+                 the order: roll, pitch, yaw)",
+                Number(roll_deg),
+                Number(pitch_deg)
             );
         }
         let [r, p, y] = self.att_deg.map(|d| T::c(d.to_radians()));

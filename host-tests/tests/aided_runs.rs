@@ -409,6 +409,11 @@ fn replay_refuses_an_impossible_start() {
             ["45,7.5,250", "0,3e4,0", "0,0,0", "1,0.1,1"],
             "initial speed",
         ),
+        // A huge value reads as typed, not as thirty-one digits.
+        (
+            ["45,7.5,250", "0,1e30,0", "0,0,0", "1,0.1,1"],
+            "initial speed 1.000e30 m/s",
+        ),
         (["45,7.5,250", "0,0,0", "0,95,0", "1,0.1,1"], "pitch"),
         (["91,7.5,250", "0,0,0", "0,0,0", "1,0.1,1"], "latitude"),
     ] {
