@@ -214,13 +214,13 @@ pub fn parse(text: &str, path: &Path, dir: &Path) -> Result<(KfGinsConfig, Vec<S
         )
     }));
     let imu_noise = KfGinsImuNoise {
-        arw_rad_sqrt_s: c.std3(
+        arw_rad_sqrt_s: c.density3(
             "imunoise.arw",
             noise.arw,
             "deg/sqrt(h)",
             1f64.to_radians() * PER_SQRT_H,
         )?,
-        vrw_m_s_sqrt_s: c.std3("imunoise.vrw", noise.vrw, "m/s/sqrt(h)", PER_SQRT_H)?,
+        vrw_m_s_sqrt_s: c.density3("imunoise.vrw", noise.vrw, "m/s/sqrt(h)", PER_SQRT_H)?,
         gyro_bias_std_rad_s: c.std3("imunoise.gbstd", noise.gbstd, "deg/h", DEG_PER_H)?,
         accel_bias_std_m_s2: c.std3("imunoise.abstd", noise.abstd, "mGal", MGAL)?,
         gyro_scale_std: c.std3("imunoise.gsstd", noise.gsstd, "ppm", PPM)?,
@@ -414,6 +414,29 @@ impl Check<'_> {
                 format!(
                     "value {} is 0 {unit}: the start's 1-sigma must be positive (a zero claims \
                      an exactly known state)",
+                    i + 1
+                )
+            ));
+        }
+        Ok(v)
+    }
+
+    /// Three positive white-noise densities ([`Self::std3`], a zero refused: a noiseless
+    /// sensor makes the filter trust its own prediction over every fix).
+    fn density3(
+        &self,
+        key: &str,
+        value: Option<Vec<f64>>,
+        unit: &str,
+        to_si: f64,
+    ) -> Result<[f64; 3]> {
+        let v = self.std3(key, value, unit, to_si)?;
+        if let Some(i) = v.iter().position(|x| *x == 0.0) {
+            bail!(self.key(
+                key,
+                format!(
+                    "value {} is 0 {unit}: a noise density must be positive (a noiseless \
+                     sensor makes the filter trust its prediction over every fix)",
                     i + 1
                 )
             ));
@@ -615,6 +638,11 @@ odolever: [ 1, 2, 3 ]
                 "key 'imudatalen': 9: expected 7",
             ),
             ("starttime: 456300", "starttime: 700000", "key 'starttime'"),
+            (
+                "vrw: [0.03, 0.03, 0.03]",
+                "vrw: [0.03, 0, 0.03]",
+                "key 'imunoise.vrw': value 2 is 0 m/s/sqrt(h): a noise density must be positive",
+            ),
             // A huge value reads as typed, not as 301 digits.
             (
                 "starttime: 456300",
