@@ -407,18 +407,13 @@ impl Check<'_> {
         unit: &str,
         to_si: f64,
     ) -> Result<[f64; 3]> {
-        let v = self.std3(key, value, unit, to_si)?;
-        if let Some(i) = v.iter().position(|x| *x == 0.0) {
-            bail!(self.key(
-                key,
-                format!(
-                    "value {} is 0 {unit}: the start's 1-sigma must be positive (a zero claims \
-                     an exactly known state)",
-                    i + 1
-                )
-            ));
-        }
-        Ok(v)
+        self.positive3(
+            key,
+            value,
+            unit,
+            to_si,
+            "the start's 1-sigma must be positive (a zero claims an exactly known state)",
+        )
     }
 
     /// Three positive white-noise densities ([`Self::std3`], a zero refused: a noiseless
@@ -430,16 +425,28 @@ impl Check<'_> {
         unit: &str,
         to_si: f64,
     ) -> Result<[f64; 3]> {
+        self.positive3(
+            key,
+            value,
+            unit,
+            to_si,
+            "a noise density must be positive (a noiseless sensor makes the filter trust its \
+             prediction over every fix)",
+        )
+    }
+
+    /// [`Self::std3`] with a zero refused, `why` the refusal's reason.
+    fn positive3(
+        &self,
+        key: &str,
+        value: Option<Vec<f64>>,
+        unit: &str,
+        to_si: f64,
+        why: &str,
+    ) -> Result<[f64; 3]> {
         let v = self.std3(key, value, unit, to_si)?;
         if let Some(i) = v.iter().position(|x| *x == 0.0) {
-            bail!(self.key(
-                key,
-                format!(
-                    "value {} is 0 {unit}: a noise density must be positive (a noiseless \
-                     sensor makes the filter trust its prediction over every fix)",
-                    i + 1
-                )
-            ));
+            bail!(self.key(key, format!("value {} is 0 {unit}: {why}", i + 1)));
         }
         Ok(v)
     }

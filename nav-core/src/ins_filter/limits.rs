@@ -47,7 +47,7 @@ pub const MAX_ATTITUDE_SIGMA_RAD: f64 = core::f64::consts::TAU;
 
 /// Which figure is out of range, with its range (the refusal's text).
 pub fn noise_out_of_range<T: Scalar>(n: &FilterNoise<T>) -> Option<&'static str> {
-    let within = |v: T, max: f64| v.finite() && v >= T::zero() && v.to_f64() <= max;
+    let within = sigma_within::<T>;
     if !within(n.arw_rad_per_sqrt_s, MAX_ARW_RAD_PER_SQRT_S) {
         Some("the gyro ARW must be 0 to 0.1 rad/sqrt(s) (340 deg/sqrt(h))")
     } else if !within(n.vrw_mps_per_sqrt_s, MAX_VRW_MPS_PER_SQRT_S) {
@@ -74,10 +74,7 @@ pub fn noise_out_of_range<T: Scalar>(n: &FilterNoise<T>) -> Option<&'static str>
 
 /// Which initial 1-sigma is out of range, with its range (the refusal's text).
 pub fn initial_sigma_out_of_range<T: Scalar>(s: &InitialSigma<T>) -> Option<&'static str> {
-    let within = |v: &Vector3<T>, max: f64| {
-        v.iter()
-            .all(|x| x.finite() && *x >= T::zero() && x.to_f64() <= max)
-    };
+    let within = |v: &Vector3<T>, max: f64| v.iter().all(|x| sigma_within(*x, max));
     if !within(&s.position_ned_m, MAX_POSITION_SIGMA_M) {
         Some("the initial position 1-sigma must be 0 to 6,400 km")
     } else if !within(&s.velocity_ned_m_s, MAX_VELOCITY_SIGMA_M_S) {
@@ -93,6 +90,11 @@ pub fn initial_sigma_out_of_range<T: Scalar>(s: &InitialSigma<T>) -> Option<&'st
     } else {
         None
     }
+}
+
+/// A 1-sigma or noise figure `v` within `[0, max]` (and finite).
+fn sigma_within<T: Scalar>(v: T, max: f64) -> bool {
+    v.finite() && v >= T::zero() && v.to_f64() <= max
 }
 
 /// Which known sensor error at the start is out of range (the same bounds as the 1-sigmas,
