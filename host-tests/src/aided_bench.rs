@@ -12,7 +12,7 @@
 //! at a time ([`Case::without`]).
 
 use crate::aided::{self, AidedSample, AidedSink};
-use crate::aided_cmd::{GradeFilterModel, grade_filter_model, grade_noise};
+use crate::aided_cmd::{GradeFilterModel, filter_model_of, grade_noise};
 use crate::gnss_sim::{self, GnssSimOptions};
 use crate::recording_io::Recording;
 use crate::report::interpolate;
@@ -51,11 +51,14 @@ pub struct Case {
     /// stands for a stopped vehicle's residual motion, which the simulated stops lack (they
     /// are exactly still): with them the filter is conservative at every stop by design.
     pub zero_motion: bool,
-    /// The filter's noise model: [`grade_filter_model`] (true: the grade's turn-on spread as
-    /// the start's uncertainty, its in-run processes alone as process noise) or
-    /// [`grade_noise`] (false: one figure per sensor for both, as `nav replay --imu-noise`).
+    /// The filter's noise model: [`filter_model_of`] the simulated errors (true: the grade's
+    /// turn-on spread as the start's uncertainty, its in-run processes alone as process
+    /// noise) or [`grade_noise`] (false: one figure per sensor for both, as `nav replay
+    /// --imu-noise`).
     pub in_run_noise: bool,
-    /// Sensor errors the simulator leaves out (diagnostics; empty: the grade as it is).
+    /// Sensor errors the simulator leaves out (diagnostics; empty: the grade as it is); the
+    /// filter's model ([`Case::in_run_noise`]) leaves them out as well, so that a diagnosis
+    /// compares a filter with the sensor it models.
     pub without: Vec<ErrorSource>,
 }
 
@@ -300,7 +303,7 @@ pub fn prepare(case: &Case) -> Result<Prepared> {
     let sim = sense(traj.as_ref(), sampling, every, injector, |_, _| {})?;
     let gnss = gnss_sim::simulate(&sim.truth, &case.gnss)?;
     let model = if case.in_run_noise {
-        grade_filter_model(case.grade)
+        filter_model_of(&case.error_model())
     } else {
         let noise = grade_noise(case.grade);
         GradeFilterModel {

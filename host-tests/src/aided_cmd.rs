@@ -94,7 +94,11 @@ pub struct GradeFilterModel {
 /// - misalignment and g-sensitivity as in [`grade_noise`]: the process model covers what the
 ///   bias states cannot hold of them ([`nav_core::ins_filter::model::CrossCoupling`]).
 pub fn grade_filter_model(grade: Grade) -> GradeFilterModel {
-    let m = grade.model();
+    filter_model_of(&grade.model())
+}
+
+/// [`GradeFilterModel`] of an error model `m` ([`grade_filter_model`]: the same rules).
+pub fn filter_model_of(m: &crate::sensor_model::ImuErrorModel) -> GradeFilterModel {
     let tau_f = FILTER_CORRELATION_TIME_S;
     // (white-noise density [U/sqrt(Hz)], in-run Gauss–Markov 1-sigma [U], start 1-sigma [U]).
     let split = |t: &crate::sensor_model::TriadErrors| {

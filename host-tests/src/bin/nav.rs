@@ -202,10 +202,10 @@ enum Command {
         /// design).
         #[arg(long)]
         zero_motion: bool,
-        /// Sensor errors the simulator leaves out, comma-separated (consistency; diagnostics):
-        /// misalignment (gyro-misalignment, accel-misalignment), g-sensitivity, scale, bias,
-        /// bias-instability, rate-random-walk,
-        /// white-noise, quantisation.
+        /// Sensor errors the simulator leaves out, and the filter's noise model with them,
+        /// comma-separated (consistency; diagnostics): misalignment (gyro-misalignment,
+        /// accel-misalignment), g-sensitivity, scale, bias, bias-instability,
+        /// rate-random-walk, white-noise, quantisation.
         #[arg(long, value_delimiter = ',')]
         without: Vec<host_tests::sensor_model::ErrorSource>,
         /// Only these cells of the table, 1-based, comma-separated (consistency) [default: all].
