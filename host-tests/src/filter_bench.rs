@@ -230,6 +230,9 @@ pub struct FilterBenchReport {
     pub samples: u64,
     /// Wall-clock time of `nav kf-gins` [s].
     pub seconds: f64,
+    /// Of [`Self::seconds`], the wait for the disk to store the `.nav` file (sync and rename)
+    /// [s].
+    pub store_seconds: f64,
     /// The thread's own CPU time over the same run [s] (Linux; `None` elsewhere): the speed on
     /// one core when other jobs share the machine's cores and stretch the wall clock.
     pub cpu_seconds: Option<f64>,
@@ -281,6 +284,7 @@ pub fn run(data: &DataSet) -> Result<FilterBenchReport> {
     Ok(FilterBenchReport {
         samples: run.report.samples,
         seconds,
+        store_seconds: run.store_s,
         cpu_seconds,
         horizontal_rms_m: (h2 / n as f64).sqrt(),
         vertical_rms_m: (v2 / n as f64).sqrt(),

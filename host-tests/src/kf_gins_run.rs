@@ -34,6 +34,10 @@ pub struct KfGinsRun {
     pub warnings: Vec<String>,
     /// IMU rows skipped before `starttime` or after `endtime`.
     pub outside_window: u64,
+    /// Time spent storing the trajectory once written, syncing it to the disk and renaming
+    /// it into place [s]: a wait on the disk, not processing (KF-GINS does not sync its
+    /// output).
+    pub store_s: f64,
 }
 
 /// The filter's settings of a KF-GINS configuration. KF-GINS gives the noise per axis; the
@@ -188,12 +192,13 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
             c.imu_path.display()
         );
     }
-    let rows = sink.writer.finish()?;
+    let (rows, store_s) = sink.writer.finish_timed()?;
     Ok(KfGinsRun {
         report,
         rows,
         out,
         warnings,
         outside_window,
+        store_s,
     })
 }

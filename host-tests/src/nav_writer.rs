@@ -312,11 +312,18 @@ impl NavWriter {
     }
 
     /// Flushes, syncs and puts the file in place; returns the number of rows.
-    pub fn finish(mut self) -> Result<u64, TextError> {
+    pub fn finish(self) -> Result<u64, TextError> {
+        self.finish_timed().map(|(rows, _)| rows)
+    }
+
+    /// [`Self::finish`], and the time [s] the last step took: syncing the file to the disk
+    /// and renaming it into place, a wait on the disk rather than processing.
+    pub fn finish_timed(mut self) -> Result<(u64, f64), TextError> {
         self.write_pending()?;
         let path = self.path;
+        let started = std::time::Instant::now();
         self.file.commit().map_err(|e| TextError::io(&path, e))?;
-        Ok(self.rows)
+        Ok((self.rows, started.elapsed().as_secs_f64()))
     }
 }
 
