@@ -210,6 +210,20 @@ pub fn outlier_case(grade: Grade, seed: u64) -> Case {
     }
 }
 
+/// 1-sigma of the velocity fixes of [`outlier_case_with_velocity`], north, east, down
+/// [m/s] (a receiver's Doppler velocity).
+pub const OUTLIER_VELOCITY_SIGMA_M_S: [f64; 3] = [0.05, 0.05, 0.1];
+
+/// [`outlier_case`] with velocity in every fix ([`OUTLIER_VELOCITY_SIGMA_M_S`]); the
+/// outliers move the positions alone, as multipath moves a code position but not the
+/// Doppler velocity. A slow position ramp that a MEMS filter cannot tell from its own drift
+/// on positions alone disagrees with the velocity fixes.
+pub fn outlier_case_with_velocity(grade: Grade, seed: u64) -> Case {
+    let mut case = outlier_case(grade, seed);
+    case.gnss.sigma_v_ned_m_s = Some(OUTLIER_VELOCITY_SIGMA_M_S);
+    case
+}
+
 /// Runs the outlier case and reports each outlier.
 pub fn outliers(case: &Case) -> Result<Vec<OutlierOutcome>> {
     let prepared = prepare(case)?;

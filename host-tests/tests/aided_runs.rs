@@ -4,7 +4,9 @@
 
 use host_tests::aided_bench::{Case, average_chi2_bounds, consistency_cell};
 use host_tests::filter_bench::{FilterBenchOptions, generate};
-use host_tests::gnss_bench::{outage_case, outage_drifts, outlier_case, outliers};
+use host_tests::gnss_bench::{
+    outage_case, outage_drifts, outlier_case, outlier_case_with_velocity, outliers,
+};
 use host_tests::gnss_sim::GnssSimOptions;
 use host_tests::sensor_model::Grade;
 use std::path::Path;
@@ -170,6 +172,26 @@ fn outliers_are_refused_or_bounded() {
             assert!(ramp.reacquired, "{ramp:?}");
         }
     }
+}
+
+/// The MEMS filter follows the slow ramp on positions alone (its own 30 s drift is as large);
+/// with the receiver's velocity in the fixes it refuses the ramp, and every outlier stays
+/// within 3 sigma.
+#[test]
+fn velocity_fixes_expose_a_slow_position_ramp() {
+    let out = outliers(&outlier_case_with_velocity(Grade::MemsTactical, 1)).unwrap();
+    for o in &out {
+        assert!(o.max_error_per_sigma < 3.0, "{o:?}");
+    }
+    let ramp = out.iter().find(|o| o.name == "ramp").expect("a ramp");
+    assert!(ramp.refused > 0, "{ramp:?}");
+    assert!(ramp.reacquired, "{ramp:?}");
+    let held = out
+        .iter()
+        .find(|o| o.t_s == 700.0)
+        .expect("the held offset");
+    assert_eq!(held.refused, held.fixes, "{held:?}");
+    assert!(held.degraded && held.reacquired, "{held:?}");
 }
 
 fn data_set(dir: &Path, seconds: f64) -> host_tests::filter_bench::DataSet {

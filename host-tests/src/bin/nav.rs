@@ -565,19 +565,35 @@ fn bench_outages(runs: usize, threads: usize) -> Result<()> {
 
 /// `nav bench outliers`.
 fn bench_outliers() -> Result<()> {
-    use host_tests::gnss_bench::{outlier_case, outliers};
+    use host_tests::gnss_bench::{
+        OUTLIER_VELOCITY_SIGMA_M_S, outlier_case, outlier_case_with_velocity, outliers,
+    };
     use host_tests::sensor_model::Grade;
     println!(
-        "land vehicle, 1 Hz fixes of 0.5 m; each outlier, what the gate did, the largest horizontal error from its start to 30 s after it and the largest ratio of the error to the filter's 1-sigma there"
+        "land vehicle, 1 Hz fixes of 0.5 m (and, where the GNSS column says so, velocity of {} m/s; the outliers move the positions alone); each outlier, what the gate did, the largest horizontal error from its start to 30 s after it and the largest ratio of the error to the filter's 1-sigma there",
+        OUTLIER_VELOCITY_SIGMA_M_S[0]
     );
     println!(
-        "| grade | outlier | at [s] | fixes | refused | max error [m] | 1-sigma there [m] | max error/1-sigma | DEGRADED | accepted again |"
+        "| grade | GNSS | outlier | at [s] | fixes | refused | max error [m] | 1-sigma there [m] | max error/1-sigma | DEGRADED | accepted again |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
-    for grade in [Grade::Fog, Grade::MemsTactical] {
-        for o in outliers(&outlier_case(grade, 1))? {
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    let cases = [
+        (Grade::Fog, "position", outlier_case(Grade::Fog, 1)),
+        (
+            Grade::MemsTactical,
+            "position",
+            outlier_case(Grade::MemsTactical, 1),
+        ),
+        (
+            Grade::MemsTactical,
+            "position + velocity",
+            outlier_case_with_velocity(Grade::MemsTactical, 1),
+        ),
+    ];
+    for (grade, gnss, case) in &cases {
+        for o in outliers(case)? {
             println!(
-                "| {grade} | {} | {} | {} | {} | {:.2} | {:.2} | {:.1} | {} | {} |",
+                "| {grade} | {gnss} | {} | {} | {} | {} | {:.2} | {:.2} | {:.1} | {} | {} |",
                 o.name,
                 o.t_s,
                 o.fixes,
