@@ -62,9 +62,17 @@ impl AidedSink<f64> for EndOfOutage<'_> {
     }
 }
 
-/// 60 s outages every 180 s over `seconds` of a land-vehicle run of `grade` (1 Hz fixes of
-/// 0.5 m / 0.5 m / 1 m, starting after 300 s of aiding).
-pub fn outage_case(grade: Grade, seconds: f64, seed: u64) -> Case {
+/// Length of the outages of the KF-GINS / OB_GINS outage test [s] (every
+/// [`OUTAGE_PERIOD_S`]).
+pub const OUTAGE_S: f64 = 60.0;
+
+/// Period of the outages of [`outage_case`] [s].
+pub const OUTAGE_PERIOD_S: f64 = 180.0;
+
+/// Outages of `outage_s` (e.g. [`OUTAGE_S`]) every [`OUTAGE_PERIOD_S`] over `seconds` of a
+/// land-vehicle run of `grade` (1 Hz fixes of 0.5 m / 0.5 m / 1 m, starting after 300 s of
+/// aiding).
+pub fn outage_case(grade: Grade, seconds: f64, outage_s: f64, seed: u64) -> Case {
     Case {
         scenario: "land-vehicle".into(),
         grade,
@@ -78,7 +86,7 @@ pub fn outage_case(grade: Grade, seconds: f64, seed: u64) -> Case {
             sigma_ned_m: [0.5, 0.5, 1.0],
             sigma_v_ned_m_s: None,
             lever_arm_b_m: [0.8, -0.3, -1.1],
-            outages: Outage::every(180.0, 60.0, 300.0, seconds),
+            outages: Outage::every(OUTAGE_PERIOD_S, outage_s, 300.0, seconds),
             seed,
             ..GnssSimOptions::default()
         },

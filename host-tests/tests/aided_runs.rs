@@ -5,7 +5,7 @@
 use host_tests::aided_bench::{Case, average_chi2_bounds, consistency_cell};
 use host_tests::filter_bench::{FilterBenchOptions, generate};
 use host_tests::gnss_bench::{
-    outage_case, outage_drifts, outlier_case, outlier_case_with_velocity, outliers,
+    OUTAGE_S, outage_case, outage_drifts, outlier_case, outlier_case_with_velocity, outliers,
 };
 use host_tests::gnss_sim::GnssSimOptions;
 use host_tests::sensor_model::Grade;
@@ -102,7 +102,7 @@ fn a_small_family_is_consistent() {
 /// times the drift).
 #[test]
 fn outage_drift_stays_within_the_predicted_sigma() {
-    let drifts = outage_drifts(&outage_case(Grade::MemsTactical, 900.0, 3)).unwrap();
+    let drifts = outage_drifts(&outage_case(Grade::MemsTactical, 900.0, OUTAGE_S, 3)).unwrap();
     assert_eq!(drifts.len(), 4, "{drifts:?}");
     for d in &drifts {
         assert!(d.drift_m <= 3.0 * d.sigma_m, "{d:?}");
@@ -174,7 +174,7 @@ fn outliers_are_refused_or_bounded() {
     }
 }
 
-/// The MEMS filter follows the slow ramp on positions alone (its own 30 s drift is as large);
+/// The MEMS filter follows the slow ramp on positions alone (its own 30 s drift is larger);
 /// with the receiver's velocity in the fixes it refuses the ramp, and every outlier stays
 /// within 3 sigma.
 #[test]

@@ -177,8 +177,8 @@ enum Command {
     Bench {
         /// What to measure: mechanization (steps/s, no I/O), filter (`nav kf-gins` speed and
         /// accuracy on a generated 1-hour KF-GINS data set), consistency (NEES/NIS Monte Carlo
-        /// of the GNSS-aided filter), outages (drift in 60 s GNSS outages every 180 s) or
-        /// outliers (jumps, spikes, multipath, NaN fixes).
+        /// of the GNSS-aided filter), outages (drift in GNSS outages of `--outage-seconds`
+        /// every 180 s) or outliers (jumps, spikes, multipath, NaN fixes).
         #[arg(default_value = "mechanization")]
         what: BenchKind,
         /// Passes over the 240,000 increments (mechanization).
@@ -193,6 +193,9 @@ enum Command {
         /// Length of each simulated run [s] (consistency; filter and outages use 1 h).
         #[arg(long, default_value_t = 600.0)]
         seconds: f64,
+        /// Length of each outage [s] (outages; one every 180 s).
+        #[arg(long, default_value_t = host_tests::gnss_bench::OUTAGE_S)]
+        outage_seconds: f64,
         /// Directory for the generated data set (filter) [default: a temporary directory].
         #[arg(long, value_name = "DIR")]
         dir: Option<PathBuf>,
@@ -506,12 +509,18 @@ impl ReplayArgs {
 }
 
 /// `nav bench outages`: 1-hour land-vehicle runs, 60 s outages every 180 s.
-fn bench_outages(runs: usize, threads: usize) -> Result<()> {
-    use host_tests::gnss_bench::{outage_case, outage_drifts};
+fn bench_outages(runs: usize, threads: usize, outage_s: f64) -> Result<()> {
+    use host_tests::gnss_bench::{OUTAGE_PERIOD_S, outage_case, outage_drifts};
     use host_tests::sensor_model::Grade;
     anyhow::ensure!(runs >= 1, "--runs must be at least 1");
+    anyhow::ensure!(
+        outage_s >= 1.0 && outage_s <= OUTAGE_PERIOD_S - 10.0,
+        "--outage-seconds must be from 1 to {} s (an outage every {OUTAGE_PERIOD_S} s, with fixes between), not {}",
+        OUTAGE_PERIOD_S - 10.0,
+        nav_core::number::Number(outage_s)
+    );
     println!(
-        "1 h land vehicle, 1 Hz fixes (0.5/0.5/1 m), 60 s outages every 180 s from 300 s; {runs} run(s) per grade; drift = horizontal error at the outage's end"
+        "1 h land vehicle, 1 Hz fixes (0.5/0.5/1 m), {outage_s} s outages every {OUTAGE_PERIOD_S} s from 300 s; {runs} run(s) per grade; drift = horizontal error at the outage's end"
     );
     println!(
         "| grade | outages | drift RMS [m] | drift max [m] | predicted 1-sigma RMS [m] | max drift/sigma | beyond 3 sigma |"
@@ -530,7 +539,7 @@ fn bench_outages(runs: usize, threads: usize) -> Result<()> {
                 let (all, seeds) = (&all, &seeds);
                 s.spawn(move || {
                     for seed in seeds.iter().skip(t).step_by(threads.max(1)) {
-                        let r = outage_drifts(&outage_case(grade, 3600.0, *seed));
+                        let r = outage_drifts(&outage_case(grade, 3600.0, outage_s, *seed));
                         all.lock().expect("no panic").push(r);
                     }
                 });
@@ -1499,8 +1508,9 @@ fn run(cli: Cli) -> Result<()> {
             what: BenchKind::Outages,
             runs,
             threads,
+            outage_seconds,
             ..
-        } => bench_outages(runs, threads),
+        } => bench_outages(runs, threads, outage_seconds),
         Command::Bench {
             what: BenchKind::Outliers,
             ..
