@@ -514,7 +514,7 @@ fn bench_outages(runs: usize, threads: usize, outage_s: f64) -> Result<()> {
     use host_tests::sensor_model::Grade;
     anyhow::ensure!(runs >= 1, "--runs must be at least 1");
     anyhow::ensure!(
-        outage_s >= 1.0 && outage_s <= OUTAGE_PERIOD_S - 10.0,
+        (1.0..=OUTAGE_PERIOD_S - 10.0).contains(&outage_s),
         "--outage-seconds must be from 1 to {} s (an outage every {OUTAGE_PERIOD_S} s, with fixes between), not {}",
         OUTAGE_PERIOD_S - 10.0,
         nav_core::number::Number(outage_s)
