@@ -119,6 +119,7 @@ enum Command {
     /// Gyro-free attitude from an isotropic oscillator [Oscillator INS]: the estimator's accuracy
     /// against the ratio of the oscillator frequency to the body rate and against readout noise,
     /// for the paper's method as written and with the rotation compensation.
+    #[command(allow_negative_numbers = true)]
     OscBench {
         /// Seconds of coning per row (after 1 s of lock).
         #[arg(long, default_value_t = 4.0)]
@@ -156,6 +157,7 @@ enum Command {
     /// Run the oscillator estimator [Oscillator INS] over a readout file (`t_s,x_m,y_m,z_m`, e.g. from
     /// `nav oscillator --readouts`): counts, faults and, with --out, one CSV row per epoch
     /// (attitude C_b_e as a quaternion, specific force, 1-sigma, frequency).
+    #[command(allow_negative_numbers = true)]
     OscReplay {
         /// The readout file.
         file: PathBuf,

@@ -1,0 +1,116 @@
+//! Absurd numeric options of `nav` (1e300, inf, a duration no memory holds) are refused with a
+//! message naming the value readably and its range, with status 1: no panic (101), no
+//! allocation abort, no silently computed nonsense.
+
+mod common;
+
+use common::{nav, output_text};
+
+/// Runs `nav args`, expecting a refusal (status 1) whose text contains every one of `expected`
+/// and no number of more than 30 digits; returns the text.
+fn refused(args: &[&str], expected: &[&str]) -> String {
+    let o = nav(args);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "nav {args:?}: {text}");
+    assert!(!text.contains("panicked"), "nav {args:?}: {text}");
+    for e in expected {
+        assert!(text.contains(e), "nav {args:?}: expected {e:?} in {text}");
+    }
+    let longest_digits = text
+        .split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0);
+    assert!(longest_digits <= 30, "nav {args:?}: unreadable number in {text}");
+    text
+}
+
+/// The oscillator's length and frequency: a capacity-overflow panic (1e300) or an allocation
+/// abort (1e6 s: 44 GB of readouts) before; now the readout count is refused with its limit.
+#[test]
+fn oscillator_lengths_beyond_memory_are_refused() {
+    refused(
+        &["oscillator", "static", "--seconds", "1e300"],
+        &["1e300 s", "at most 1.000e7"],
+    );
+    refused(
+        &["oscillator", "static", "--seconds", "1e6"],
+        &["1e6 s", "at most 1.000e7"],
+    );
+    refused(
+        &["oscillator", "static", "--seconds", "2", "--f0-hz", "1e300"],
+        &["5e301 readouts/s", "at most 1.000e7"],
+    );
+    refused(
+        &["osc-bench", "--seconds", "inf"],
+        &["seconds must be a finite number >= 0, not inf"],
+    );
+    refused(&["osc-bench", "--seconds", "1e300"], &["at most 1.000e7"]);
+}
+
+/// `osc-bench --noise-ratio`: 1e300, inf, NaN and 0 printed a table of zeros; a negative
+/// value was a clap usage error without the range.
+#[test]
+fn oscillator_bench_ratio_out_of_range_is_refused() {
+    for ratio in ["1e300", "inf", "NaN", "0", "-5"] {
+        refused(
+            &["osc-bench", "--seconds", "0.1", "--noise-ratio", ratio],
+            &["w0/|omega| must be within [1, 1e6]"],
+        );
+    }
+}
+
+/// `generate` and `sim` lengths: 1e300 s said "18446744073709551615 samples do not fit the
+/// binary format" (a saturated count), 1e7 s aborted allocating 160 GB.
+#[test]
+fn recording_lengths_beyond_memory_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.bin");
+    let out = out.to_str().unwrap();
+    for seconds in ["1e300", "1e7"] {
+        let text = refused(
+            &["generate", "--out", out, "--seconds", seconds],
+            &["samples: a simulated recording holds at most 5.000e7"],
+        );
+        assert!(text.contains(&format!("{seconds} s at 400 Hz")), "{text}");
+        let sim = dir.path().join("sim");
+        refused(
+            &["sim", "static", "--out", sim.to_str().unwrap(), "--seconds", seconds],
+            &["a simulated recording holds at most 5.000e7"],
+        );
+        assert!(!sim.exists(), "nav sim --seconds {seconds} wrote {}", sim.display());
+    }
+    assert!(!dir.path().join("g.bin").exists());
+    refused(
+        &["sim", "static", "--out", out, "--rate", "1e300"],
+        &["the rate must be within (0, 100000] Hz, not 1e300"],
+    );
+    refused(
+        &["sim", "static", "--out", out, "--truth-rate", "1e300"],
+        &["the truth rate 1e300 Hz must divide the IMU rate 400 Hz"],
+    );
+}
+
+/// `generate --roll/--pitch/--yaw 1e300` wrote a recording of a meaningless orientation (and
+/// printed the angle in 301 digits).
+#[test]
+fn generate_angles_out_of_range_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.bin");
+    let out = out.to_str().unwrap();
+    for (option, range) in [
+        ("--roll", "roll must be within [-180, 180] deg"),
+        ("--pitch", "pitch must be within [-90, 90] deg"),
+        ("--yaw", "yaw must be within [-360, 360] deg"),
+    ] {
+        refused(
+            &["generate", "--out", out, "--seconds", "1", option, "1e300"],
+            &[range, "not 1e300"],
+        );
+    }
+    refused(
+        &["generate", "--out", out, "--seconds", "1", "--pitch", "95"],
+        &["pitch must be within [-90, 90] deg, not 95"],
+    );
+    assert!(!dir.path().join("g.bin").exists());
+}
