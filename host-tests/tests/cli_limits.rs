@@ -21,7 +21,10 @@ fn refused(args: &[&str], expected: &[&str]) -> String {
         .map(str::len)
         .max()
         .unwrap_or(0);
-    assert!(longest_digits <= 30, "nav {args:?}: unreadable number in {text}");
+    assert!(
+        longest_digits <= 30,
+        "nav {args:?}: unreadable number in {text}"
+    );
     text
 }
 
@@ -75,10 +78,21 @@ fn recording_lengths_beyond_memory_are_refused() {
         assert!(text.contains(&format!("{seconds} s at 400 Hz")), "{text}");
         let sim = dir.path().join("sim");
         refused(
-            &["sim", "static", "--out", sim.to_str().unwrap(), "--seconds", seconds],
+            &[
+                "sim",
+                "static",
+                "--out",
+                sim.to_str().unwrap(),
+                "--seconds",
+                seconds,
+            ],
             &["a simulated recording holds at most 5.000e7"],
         );
-        assert!(!sim.exists(), "nav sim --seconds {seconds} wrote {}", sim.display());
+        assert!(
+            !sim.exists(),
+            "nav sim --seconds {seconds} wrote {}",
+            sim.display()
+        );
     }
     assert!(!dir.path().join("g.bin").exists());
     refused(
@@ -113,4 +127,59 @@ fn generate_angles_out_of_range_are_refused() {
         &["pitch must be within [-90, 90] deg, not 95"],
     );
     assert!(!dir.path().join("g.bin").exists());
+}
+
+/// `replay`'s site and window: 1e300 printed 301 digits; `--align-seconds -1` (or 0, -0) was
+/// reported as "alignment window 0.0025 s", the one sample it rounded to.
+#[test]
+fn replay_site_and_window_read_as_typed() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = dir.path().join("imu.bin");
+    let out = dir.path().join("o.csv");
+    let o = nav(&[
+        "generate",
+        "--out",
+        imu.to_str().unwrap(),
+        "--seconds",
+        "12",
+    ]);
+    assert!(o.status.success(), "{}", output_text(&o));
+    let replay = |site: [&str; 4], expected: &str| {
+        let args = [
+            "replay",
+            "--imu",
+            imu.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--lat",
+            site[0],
+            "--lon",
+            site[1],
+            "--h",
+            site[2],
+            "--align-seconds",
+            site[3],
+        ];
+        refused(&args, &[expected]);
+        assert!(!out.exists());
+    };
+    replay(
+        ["1e300", "7.5", "150", "10"],
+        "latitude 1e300 deg is not within [-90, 90]",
+    );
+    replay(
+        ["45", "-1e300", "150", "10"],
+        "longitude -1e300 deg is not within [-180, 180]",
+    );
+    replay(["45", "7.5", "1e300", "10"], "height 1e300 m is not within");
+    replay(
+        ["45", "7.5", "150", "1e300"],
+        "alignment window 1e300 s is longer than 86400 s",
+    );
+    for window in ["-1", "0", "-0"] {
+        replay(
+            ["45", "7.5", "150", window],
+            &format!("alignment window {window} s is shorter than the static method's minimum"),
+        );
+    }
 }

@@ -29,6 +29,7 @@ use super::stillness::{Scatter, Stillness};
 use super::sway::SwayAlignment;
 #[cfg(feature = "align-sway")]
 use super::sway::SwayConfig;
+use crate::number::Number;
 use crate::{ImuIncrement, InputLimits, NavState, Position, Scalar, earth};
 use nalgebra::{UnitQuaternion, Vector3};
 
@@ -410,16 +411,19 @@ impl core::fmt::Display for SettingsError {
                 min_s,
             } => write!(
                 f,
-                "alignment window {seconds} s is shorter than the {} method's minimum of {min_s} s",
+                "alignment window {} s is shorter than the {} method's minimum of {min_s} s",
+                Number(*seconds),
                 method.name()
             ),
             Self::BadRate(r) => write!(
                 f,
-                "sampling rate {r} Hz is not a positive number up to {MAX_RATE_HZ} Hz"
+                "sampling rate {} Hz is not a positive number up to {MAX_RATE_HZ} Hz",
+                Number(*r)
             ),
             Self::WindowTooLong { seconds } => write!(
                 f,
-                "alignment window {seconds} s is longer than {MAX_WINDOW_S} s (a day)"
+                "alignment window {} s is longer than {MAX_WINDOW_S} s (a day)",
+                Number(*seconds)
             ),
             Self::NearPole => f.write_str("latitude not finite or too close to a pole to align"),
             Self::NotCompiledIn(method) => not_compiled_in(f, *method),
@@ -526,6 +530,16 @@ impl<T: Scalar> AlignSettings<T> {
         }
         if seconds > MAX_WINDOW_S {
             return Err(SettingsError::WindowTooLong { seconds });
+        }
+        // The window asked for, before its sample count (at least one) hides a zero or a
+        // negative one.
+        let min_s = method.min_seconds();
+        if method.compiled_in() && !(seconds + 0.5 / rate_hz >= min_s) {
+            return Err(SettingsError::WindowTooShort {
+                method,
+                seconds,
+                min_s,
+            });
         }
         let samples = super::samples_for(seconds, rate_hz);
         let coarse_samples = match method {

@@ -9,6 +9,7 @@ use crate::alignment::machine::DEFAULT_LEVER_ARM_SIGMA_M;
 use crate::alignment::{AlignMethod, BaseMotion, LeverArm, SensorNoise, SettingsError};
 use crate::calibration::{CalibrationError, ImuCalibration};
 use crate::ins_filter::model::FilterNoise;
+use crate::number::Number;
 use crate::poisson::DcmIntegrator;
 use crate::scalar::Scalar;
 use crate::strapdown::{AttitudeMethod, MechanizationConfig, NavFrame, VerticalChannel};
@@ -429,16 +430,29 @@ pub enum ConfigError {
 impl fmt::Display for ConfigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::Latitude(lat) => write!(f, "latitude {lat} deg is not within [-90, 90]"),
-            Self::Longitude(lon) => write!(f, "longitude {lon} deg is not within [-180, 180]"),
+            Self::Latitude(lat) => {
+                write!(f, "latitude {} deg is not within [-90, 90]", Number(*lat))
+            }
+            Self::Longitude(lon) => {
+                write!(
+                    f,
+                    "longitude {} deg is not within [-180, 180]",
+                    Number(*lon)
+                )
+            }
             Self::Height(h) => write!(
                 f,
-                "height {h} m is not within [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m (the Earth model's range)"
+                "height {} m is not within [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m (the Earth model's range)",
+                Number(*h)
             ),
             Self::NotFinite(what) => write!(f, "{what} is not a finite number"),
             Self::LogEvery => f.write_str("log_every must be at least 1"),
             Self::BiasPrior(k) => {
-                write!(f, "bias prior scale {k} must be finite and not negative")
+                write!(
+                    f,
+                    "bias prior scale {} must be finite and not negative",
+                    Number(*k)
+                )
             }
             Self::Calibration(e) => write!(f, "{e}"),
             Self::Alignment(e) => write!(f, "{e}"),
@@ -601,7 +615,7 @@ mod tests {
                     h_m: -1e7,
                     ..config()
                 },
-                "height -10000000 m is not within [-12000, 100000] m (the Earth model's range)",
+                "height -1e7 m is not within [-12000, 100000] m (the Earth model's range)",
             ),
         ] {
             assert_eq!(c.validate().unwrap_err().to_string(), msg);
