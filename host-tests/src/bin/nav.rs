@@ -761,7 +761,7 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
     anyhow::ensure!(
         a.propagation_rate.is_finite() && (1.0..=1000.0).contains(&a.propagation_rate),
         "--propagation-rate must be within 1 to 1000 Hz, not {}",
-        a.propagation_rate
+        nav_core::number::Number(a.propagation_rate)
     );
     let mut config = nav_core::ins_filter::FilterConfig::new(noise);
     config.scale_factors = !a.no_scale_factors;
