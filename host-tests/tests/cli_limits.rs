@@ -183,3 +183,99 @@ fn replay_site_and_window_read_as_typed() {
         );
     }
 }
+
+/// `replay`'s alignment options beyond any IMU or base: accepted in f64 (`--bias-prior 1e300`,
+/// `--base-translation 1e300` navigated), refused in f32 as "the IMU noise / the lever arm /
+/// the base motion must be finite and not negative" (1e100 is infinite in f32), which named
+/// neither the option nor its range. Now the same refusal in both precisions.
+#[test]
+fn replay_alignment_options_beyond_range_are_refused_in_both_precisions() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = dir.path().join("imu.bin");
+    let out = dir.path().join("o.csv");
+    let o = nav(&[
+        "generate",
+        "--out",
+        imu.to_str().unwrap(),
+        "--seconds",
+        "12",
+    ]);
+    assert!(o.status.success(), "{}", output_text(&o));
+    for precision in ["f32", "f64"] {
+        for (option, value, expected) in [
+            (
+                "--bias-prior",
+                "1e300",
+                "bias prior scale 1e300 must be finite",
+            ),
+            (
+                "--bias-prior",
+                "1e10",
+                "bias prior scale 1e10 must be finite",
+            ),
+            (
+                "--base-translation",
+                "1e100",
+                "the base translation 1-sigma must be 0 to 100 m",
+            ),
+            (
+                "--base-translation",
+                "1e10",
+                "the base translation 1-sigma must be 0 to 100 m",
+            ),
+            (
+                "--lever-arm-sigma",
+                "1e100",
+                "lever arm 1-sigma 1.000e100 m is beyond 100 m",
+            ),
+            (
+                "--lever-arm",
+                "1e300,0,0",
+                "lever arm 1.000e300 m is beyond 100 m",
+            ),
+        ] {
+            let args = [
+                "replay",
+                "--imu",
+                imu.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "--lat",
+                "45",
+                "--lon",
+                "7.5",
+                "--h",
+                "150",
+                "--align-seconds",
+                "10",
+                "--precision",
+                precision,
+                option,
+                value,
+            ];
+            refused(&args, &[expected]);
+            assert!(!out.exists());
+        }
+    }
+}
+
+/// `nav config` (the board's f32 run): `base-translation = 1e300` was refused as "the lever
+/// arm must be finite and not negative", naming the lever-arm line too.
+#[test]
+fn config_text_base_translation_beyond_range_names_its_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = dir.path().join("run.txt");
+    std::fs::write(&text, "base-translation = 1e300\n").unwrap();
+    let out = dir.path().join("run.bin");
+    let msg = refused(
+        &[
+            "config",
+            text.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &["the base translation 1-sigma must be 0 to 100 m"],
+    );
+    assert!(!msg.contains("lever arm"), "{msg}");
+    assert!(!out.exists());
+}

@@ -8,6 +8,7 @@
 use crate::alignment::machine::DEFAULT_LEVER_ARM_SIGMA_M;
 use crate::alignment::{AlignMethod, BaseMotion, LeverArm, SensorNoise, SettingsError};
 use crate::calibration::{CalibrationError, ImuCalibration};
+use crate::ins_filter::limits::{MAX_ACCEL_BIAS_MPS2, MAX_GYRO_BIAS_RAD_S};
 use crate::ins_filter::model::FilterNoise;
 use crate::number::Number;
 use crate::poisson::DcmIntegrator;
@@ -222,6 +223,17 @@ impl RunConfig {
         if !(self.bias_prior.is_finite() && self.bias_prior >= 0.0) {
             return Err(ConfigError::BiasPrior(self.bias_prior));
         }
+        // A scale that takes the biases beyond any IMU's (the noise's own are checked as such).
+        let scaled = self.align_noise();
+        if self.bias_prior > 1.0
+            && !(scaled.gyro_bias_rad_s <= MAX_GYRO_BIAS_RAD_S
+                && scaled.accel_bias_mps2 <= MAX_ACCEL_BIAS_MPS2)
+        {
+            return Err(ConfigError::BiasPrior(self.bias_prior));
+        }
+        // In f64, before the run's precision: 1e100 m is infinite in f32.
+        crate::alignment::machine::check_geometry(&self.lever_arm, &self.base)
+            .map_err(ConfigError::Alignment)?;
         self.calibration
             .compensation::<f64>()
             .map_err(ConfigError::Calibration)?;
@@ -450,7 +462,9 @@ impl fmt::Display for ConfigError {
             Self::BiasPrior(k) => {
                 write!(
                     f,
-                    "bias prior scale {} must be finite and not negative",
+                    "bias prior scale {} must be finite, not negative, and keep the bias \
+                     1-sigmas within any IMU's ({MAX_GYRO_BIAS_RAD_S} rad/s, \
+                     {MAX_ACCEL_BIAS_MPS2} m/s^2)",
                     Number(*k)
                 )
             }
@@ -596,7 +610,17 @@ mod tests {
                     bias_prior: -1.0,
                     ..config()
                 },
-                "bias prior scale -1 must be finite and not negative",
+                "bias prior scale -1 must be finite, not negative, and keep the bias 1-sigmas \
+                 within any IMU's (0.1 rad/s, 10 m/s^2)",
+            ),
+            // Beyond any IMU's biases (it was accepted).
+            (
+                RunConfig {
+                    bias_prior: 1e10,
+                    ..config()
+                },
+                "bias prior scale 1e10 must be finite, not negative, and keep the bias 1-sigmas \
+                 within any IMU's (0.1 rad/s, 10 m/s^2)",
             ),
         ];
         for (c, msg) in cases {
