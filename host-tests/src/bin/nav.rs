@@ -640,6 +640,9 @@ struct ConsistencyChoice {
     blocks: bool,
 }
 
+/// Cells of `nav bench consistency`'s table.
+const CONSISTENCY_CELLS: usize = 5;
+
 /// `nav bench consistency`.
 fn bench_consistency(
     runs: usize,
@@ -652,11 +655,19 @@ fn bench_consistency(
     use host_tests::gnss_sim::GnssSimOptions;
     use host_tests::sensor_model::Grade;
     anyhow::ensure!(runs >= 2, "--runs must be at least 2");
+    if let Some(cell) = choice
+        .cells
+        .iter()
+        .find(|c| !(1..=CONSISTENCY_CELLS).contains(*c))
+    {
+        anyhow::bail!("--cells {cell}: the table has cells 1 to {CONSISTENCY_CELLS}");
+    }
     let (lo9, hi9) = average_chi2_bounds(9.0, runs);
     let (lo3, hi3) = average_chi2_bounds(3.0, runs);
     println!(
-        "{runs} runs per cell, {seconds} s each, zero-velocity/rate updates {}; 95 % bounds of \
+        "{runs} runs per cell, {} s each, zero-velocity/rate updates {}; 95 % bounds of \
          the average NEES (9 dof) [{lo9:.2}, {hi9:.2}], NIS (3 dof) [{lo3:.2}, {hi3:.2}]",
+        nav_core::number::Number(seconds),
         if zero_motion { "on" } else { "off" }
     );
     println!(
@@ -664,7 +675,7 @@ fn bench_consistency(
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut block_tables = Vec::new();
-    for (cell, (scenario, grade, rate, sigma, vel)) in [
+    let table: [_; CONSISTENCY_CELLS] = [
         ("land-vehicle", Grade::Fog, 1.0, [0.5, 0.5, 1.0], None),
         (
             "land-vehicle",
@@ -688,10 +699,8 @@ fn bench_consistency(
             Some([0.05, 0.05, 0.1]),
         ),
         ("flight", Grade::MemsTactical, 2.0, [1.0, 1.0, 2.0], None),
-    ]
-    .into_iter()
-    .enumerate()
-    {
+    ];
+    for (cell, (scenario, grade, rate, sigma, vel)) in table.into_iter().enumerate() {
         if !(choice.cells.is_empty() || choice.cells.contains(&(cell + 1))) {
             continue;
         }
