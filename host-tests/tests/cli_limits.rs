@@ -279,3 +279,81 @@ fn config_text_base_translation_beyond_range_names_its_key() {
     assert!(!msg.contains("lever arm"), "{msg}");
     assert!(!out.exists());
 }
+
+/// Scenario lengths of `nav sim --set`: the land vehicle's `seconds=1e300` (or inf) planned
+/// its route lap by lap until an allocation aborted; the flight's `climb_s` or `still_s` of
+/// 1e300 summed its ground distance second by second without end.
+#[test]
+fn scenario_lengths_beyond_range_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let out = out.to_str().unwrap();
+    for (scenario, set, expected) in [
+        (
+            "land-vehicle",
+            "seconds=1e300",
+            "seconds must be at most 1e6 (11 days), not 1e300",
+        ),
+        (
+            "land-vehicle",
+            "seconds=inf",
+            "seconds must be a finite number, not inf",
+        ),
+        ("static", "seconds=1e300", "seconds must be at most 1e6"),
+        (
+            "flight",
+            "climb_s=1e300",
+            "climb_s must be at most 1e6 s, not 1e300",
+        ),
+        (
+            "flight",
+            "still_s=1e300",
+            "still_s must be within [0, 1e6] s, not 1e300",
+        ),
+        (
+            "flight",
+            "still_s=-1",
+            "still_s must be within [0, 1e6] s, not -1",
+        ),
+    ] {
+        refused(
+            &[
+                "sim",
+                scenario,
+                "--out",
+                out,
+                "--seconds",
+                "5",
+                "--set",
+                set,
+            ],
+            &[expected],
+        );
+    }
+    // `nav bench consistency` plans its land-vehicle runs the same way.
+    refused(
+        &[
+            "bench",
+            "consistency",
+            "--runs",
+            "2",
+            "--cells",
+            "1",
+            "--seconds",
+            "1e300",
+        ],
+        &[
+            "2 runs per cell, 1e300 s each",
+            "seconds must be at most 1e6",
+        ],
+    );
+}
+
+/// `nav bench consistency --cells 0,9` printed an empty table with status 0.
+#[test]
+fn bench_cells_outside_the_table_are_refused() {
+    refused(
+        &["bench", "consistency", "--runs", "2", "--cells", "1,9"],
+        &["--cells 9: the table has cells 1 to 5"],
+    );
+}
