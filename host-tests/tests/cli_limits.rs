@@ -357,3 +357,12 @@ fn bench_cells_outside_the_table_are_refused() {
         &["--cells 9: the table has cells 1 to 5"],
     );
 }
+
+/// `nav align-bench family --seconds 1e300` printed the window in 301 digits.
+#[test]
+fn align_bench_window_reads_as_typed() {
+    refused(
+        &["align-bench", "family", "--runs", "1", "--seconds", "1e300"],
+        &["alignment windows must be within (0, 300] s, not 1e300"],
+    );
+}
