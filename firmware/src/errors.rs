@@ -305,7 +305,7 @@ impl Format for Config<'_> {
             ConfigError::LogEvery => write!(f, "log_every must be at least 1"),
             ConfigError::BiasPrior(k) => write!(
                 f,
-                "bias prior scale {=f64} must be finite and not negative",
+                "bias prior scale {=f64} must be finite, not negative, and keep the bias 1-sigmas within any IMU's (0.1 rad/s, 10 m/s^2)",
                 k
             ),
             ConfigError::Calibration(e) => write!(f, "{}", Calibration(e)),

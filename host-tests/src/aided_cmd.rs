@@ -234,6 +234,12 @@ impl GivenStart {
                 Number(self.pos_deg_m[0])
             );
         }
+        if self.pos_deg_m[1].abs() > 180.0 {
+            bail!(
+                "initial longitude {} deg is beyond +-180",
+                Number(self.pos_deg_m[1])
+            );
+        }
         let h_m = self.pos_deg_m[2];
         if !(MIN_HEIGHT_M..=MAX_HEIGHT_M).contains(&h_m) {
             bail!(
@@ -242,7 +248,19 @@ impl GivenStart {
                 Number(h_m)
             );
         }
-        let speed_m_s = self.vel_m_s.iter().map(|v| v * v).sum::<f64>().sqrt();
+        // Scaled by the largest component: the squares of 1e300 m/s would overflow to inf.
+        let largest = self.vel_m_s.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let speed_m_s = if largest > 0.0 {
+            largest
+                * self
+                    .vel_m_s
+                    .iter()
+                    .map(|v| (v / largest).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+        } else {
+            0.0
+        };
         if speed_m_s > MAX_START_SPEED_M_S {
             bail!(
                 "initial speed {} m/s is beyond {MAX_START_SPEED_M_S} m/s (faster than an \
@@ -250,13 +268,14 @@ impl GivenStart {
                 Rounded(speed_m_s)
             );
         }
-        let [roll_deg, pitch_deg, _] = self.att_deg;
-        if roll_deg.abs() > 180.0 || pitch_deg.abs() > 90.0 {
+        let [roll_deg, pitch_deg, yaw_deg] = self.att_deg;
+        if roll_deg.abs() > 180.0 || pitch_deg.abs() > 90.0 || yaw_deg.abs() > 360.0 {
             bail!(
-                "initial roll {} deg and pitch {} deg must be within +-180 and +-90 deg (check \
-                 the order: roll, pitch, yaw)",
+                "initial roll {} deg, pitch {} deg and yaw {} deg must be within +-180, +-90 and \
+                 +-360 deg (check the order: roll, pitch, yaw)",
                 Number(roll_deg),
-                Number(pitch_deg)
+                Number(pitch_deg),
+                Number(yaw_deg)
             );
         }
         let [r, p, y] = self.att_deg.map(|d| T::c(d.to_radians()));

@@ -88,8 +88,8 @@ impl Stationary {
     /// every interval is the nominal one.
     ///
     /// Refused: a rate outside (0, [`MAX_RATE_HZ`]] Hz, a length giving no sample (or more
-    /// than the binary format holds), a site `nav replay` would refuse (latitude, longitude,
-    /// height range), non-finite angles; and, independently, any record that is not finite
+    /// than [`crate::simulate::MAX_SAMPLES`]), a site `nav replay` would refuse (latitude, longitude,
+    /// height range), a roll, pitch or yaw beyond +-180, +-90 or +-360 deg; and, independently, any record that is not finite
     /// or not after the previous one ([`crate::output_check::check_records`]).
     pub fn recording(&self) -> Result<Recording> {
         ensure!(
@@ -117,24 +117,22 @@ impl Stationary {
             "the height must be within [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m (the Earth model's range), not {}",
             Number(self.h_m)
         );
-        for (name, v) in [
-            ("roll", self.roll_deg),
-            ("pitch", self.pitch_deg),
-            ("yaw", self.yaw_deg),
+        for (name, v, limit) in [
+            ("roll", self.roll_deg, 180.0),
+            ("pitch", self.pitch_deg, 90.0),
+            ("yaw", self.yaw_deg, 360.0),
         ] {
-            ensure!(v.is_finite(), "{name} must be a finite number, not {v}");
+            ensure!(
+                (-limit..=limit).contains(&v),
+                "the {name} must be within [-{limit}, {limit}] deg, not {}",
+                Number(v)
+            );
         }
+        crate::simulate::check_sample_count(
+            crate::trajectory::Sampling::new(self.rate_hz, self.seconds),
+            self.seconds,
+        )?;
         let n = self.sample_count();
-        ensure!(
-            n >= 1,
-            "{} s at {} Hz gives no sample",
-            Number(self.seconds),
-            Number(self.rate_hz)
-        );
-        ensure!(
-            n <= u64::from(u32::MAX),
-            "{n} samples do not fit the binary format"
-        );
         let (omega_ib_b, f_ib_b) = self.body_inputs();
         let mut t_prev = 0_u64;
         let records = (0..n)

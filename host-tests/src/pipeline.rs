@@ -469,7 +469,7 @@ mod tests {
         let e = run::<f64, _, _>(&config(0.0, 40), 100.0, &mut still(50, 0), &mut log).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "invalid configuration: alignment window 0.01 s is shorter than the static method's minimum of 10 s"
+            "invalid configuration: alignment window 0 s is shorter than the static method's minimum of 10 s"
         );
         let e = run::<f64, _, _>(&config(10.0, 0), 100.0, &mut still(50, 0), &mut log).unwrap_err();
         assert!(matches!(e, PipelineError::Config(_)), "{e}");

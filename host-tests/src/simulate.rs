@@ -22,7 +22,7 @@ use crate::{generate::TEMPERATURE_C, imu_csv, truth_csv};
 use anyhow::{Context, Result, bail, ensure};
 use hal_adapters::recording::{Kind, Record};
 use nav_core::alignment::AlignMethod;
-use nav_core::number::Number;
+use nav_core::number::{Number, Rounded};
 use std::fmt::Write as _;
 use std::fs;
 use std::io::Write;
@@ -101,7 +101,7 @@ pub(crate) fn plan(rate_hz: f64, truth_rate_hz: f64, seconds: f64) -> Result<(Sa
     ensure!(
         rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= 100_000.0,
         "the rate must be within (0, 100000] Hz, not {}",
-        rate_hz
+        Number(rate_hz)
     );
     let every = (rate_hz / truth_rate_hz).round();
     ensure!(
@@ -109,12 +109,13 @@ pub(crate) fn plan(rate_hz: f64, truth_rate_hz: f64, seconds: f64) -> Result<(Sa
             && every >= 1.0
             && (every * truth_rate_hz - rate_hz).abs() < 1e-9 * rate_hz,
         "the truth rate {} Hz must divide the IMU rate {} Hz",
-        truth_rate_hz,
-        rate_hz
+        Number(truth_rate_hz),
+        Number(rate_hz)
     );
     ensure!(
         seconds.is_finite() && seconds > 0.0,
-        "the length must be positive, not {seconds} s"
+        "the length must be positive, not {} s",
+        Number(seconds)
     );
     let sampling = Sampling::new(rate_hz, seconds);
     check_sample_count(sampling, seconds)?;
@@ -162,18 +163,28 @@ pub(crate) fn sense(
     })
 }
 
-/// Refuses a length that gives no sample, or more than the binary format holds.
+/// Most samples a simulated recording holds (it is built in memory, 40 bytes a record: 2 GB;
+/// 34 h at 400 Hz), well within the binary format's `u32` count.
+pub const MAX_SAMPLES: f64 = 5e7;
+
+/// Refuses a length that gives no sample, or more than [`MAX_SAMPLES`].
 pub(crate) fn check_sample_count(sampling: Sampling, seconds: f64) -> Result<()> {
+    // From the product itself: `sampling.n` saturates at u64::MAX.
+    let n = (seconds * sampling.rate_hz).round();
     ensure!(
-        sampling.n >= 1,
+        n >= 1.0,
         "{} s at {} Hz gives no sample",
         Number(seconds),
         Number(sampling.rate_hz)
     );
     ensure!(
-        sampling.n <= u64::from(u32::MAX),
-        "{} samples do not fit the binary format",
-        sampling.n
+        n <= MAX_SAMPLES,
+        "{} s at {} Hz is {} samples: a simulated recording holds at most {} ({} h at this rate)",
+        Number(seconds),
+        Number(sampling.rate_hz),
+        Rounded(n),
+        Rounded(MAX_SAMPLES),
+        Rounded(MAX_SAMPLES / sampling.rate_hz / 3600.0)
     );
     Ok(())
 }

@@ -436,8 +436,26 @@ fn replay_refuses_an_impossible_start() {
             ["45,7.5,250", "0,1e30,0", "0,0,0", "1,0.1,1"],
             "initial speed 1.000e30 m/s",
         ),
+        (
+            ["45,7.5,250", "1e300,0,0", "0,0,0", "1,0.1,1"],
+            "initial speed 1.000e300 m/s",
+        ),
         (["45,7.5,250", "0,0,0", "0,95,0", "1,0.1,1"], "pitch"),
         (["91,7.5,250", "0,0,0", "0,0,0", "1,0.1,1"], "latitude"),
+        // Was accepted: every fix refused, a free-inertial run from nowhere (exit 0), or
+        // "the initial state or sensor errors are not finite" naming no value.
+        (
+            ["45,1e300,250", "0,0,0", "0,0,0", "1,0.1,1"],
+            "initial longitude 1e300 deg is beyond +-180",
+        ),
+        (
+            ["45,200,250", "0,0,0", "0,0,0", "1,0.1,1"],
+            "initial longitude 200 deg",
+        ),
+        (
+            ["45,7.5,250", "0,0,0", "0,0,1e300", "1,0.1,1"],
+            "yaw 1e300 deg must be within",
+        ),
     ] {
         let msg = replay_given(&[
             "--init-pos",

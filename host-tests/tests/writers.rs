@@ -366,7 +366,7 @@ fn a_height_far_from_the_earth_is_a_bad_argument_not_a_gravity_mismatch() {
     let o = nav(&args);
     assert_refused(
         &o,
-        "invalid configuration: height -10000000 m is not within [-12000, 100000] m",
+        "invalid configuration: height -1e7 m is not within [-12000, 100000] m",
     );
     assert!(!text(&o).contains("gravity"), "{}", text(&o));
     assert!(!out.exists());

@@ -172,6 +172,9 @@ pub fn keys_of(
                 VRW_OUT_OF_RANGE => &["accel-vrw-mps-per-sqrt-s", "imu-model", "imu-noise"],
                 GYRO_BIAS_OUT_OF_RANGE => &["gyro-bias-rad-s", "imu-model", "imu-noise"],
                 ACCEL_BIAS_OUT_OF_RANGE => &["accel-bias-mps2", "imu-model", "imu-noise"],
+                nav_core::alignment::machine::BASE_TRANSLATION_OUT_OF_RANGE => {
+                    &["base-translation"]
+                }
                 _ => &NOISE_KEYS,
             },
             false,

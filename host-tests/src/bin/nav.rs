@@ -119,6 +119,7 @@ enum Command {
     /// Gyro-free attitude from an isotropic oscillator [Oscillator INS]: the estimator's accuracy
     /// against the ratio of the oscillator frequency to the body rate and against readout noise,
     /// for the paper's method as written and with the rotation compensation.
+    #[command(allow_negative_numbers = true)]
     OscBench {
         /// Seconds of coning per row (after 1 s of lock).
         #[arg(long, default_value_t = 4.0)]
@@ -156,6 +157,7 @@ enum Command {
     /// Run the oscillator estimator [Oscillator INS] over a readout file (`t_s,x_m,y_m,z_m`, e.g. from
     /// `nav oscillator --readouts`): counts, faults and, with --out, one CSV row per epoch
     /// (attitude C_b_e as a quaternion, specific force, 1-sigma, frequency).
+    #[command(allow_negative_numbers = true)]
     OscReplay {
         /// The readout file.
         file: PathBuf,
@@ -668,6 +670,9 @@ struct ConsistencyChoice {
     blocks: bool,
 }
 
+/// Cells of `nav bench consistency`'s table.
+const CONSISTENCY_CELLS: usize = 5;
+
 /// `nav bench consistency`.
 fn bench_consistency(
     runs: usize,
@@ -680,11 +685,19 @@ fn bench_consistency(
     use host_tests::gnss_sim::GnssSimOptions;
     use host_tests::sensor_model::Grade;
     anyhow::ensure!(runs >= 2, "--runs must be at least 2");
+    if let Some(cell) = choice
+        .cells
+        .iter()
+        .find(|c| !(1..=CONSISTENCY_CELLS).contains(*c))
+    {
+        anyhow::bail!("--cells {cell}: the table has cells 1 to {CONSISTENCY_CELLS}");
+    }
     let (lo9, hi9) = average_chi2_bounds(9.0, runs);
     let (lo3, hi3) = average_chi2_bounds(3.0, runs);
     println!(
-        "{runs} runs per cell, {seconds} s each, zero-velocity/rate updates {}; 95 % bounds of \
+        "{runs} runs per cell, {} s each, zero-velocity/rate updates {}; 95 % bounds of \
          the average NEES (9 dof) [{lo9:.2}, {hi9:.2}], NIS (3 dof) [{lo3:.2}, {hi3:.2}]",
+        nav_core::number::Number(seconds),
         if zero_motion { "on" } else { "off" }
     );
     println!(
@@ -692,7 +705,7 @@ fn bench_consistency(
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut block_tables = Vec::new();
-    for (cell, (scenario, grade, rate, sigma, vel)) in [
+    let table: [_; CONSISTENCY_CELLS] = [
         ("land-vehicle", Grade::Fog, 1.0, [0.5, 0.5, 1.0], None),
         (
             "land-vehicle",
@@ -716,10 +729,8 @@ fn bench_consistency(
             Some([0.05, 0.05, 0.1]),
         ),
         ("flight", Grade::MemsTactical, 2.0, [1.0, 1.0, 2.0], None),
-    ]
-    .into_iter()
-    .enumerate()
-    {
+    ];
+    for (cell, (scenario, grade, rate, sigma, vel)) in table.into_iter().enumerate() {
         if !(choice.cells.is_empty() || choice.cells.contains(&(cell + 1))) {
             continue;
         }
@@ -789,7 +800,7 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
     anyhow::ensure!(
         a.propagation_rate.is_finite() && (1.0..=1000.0).contains(&a.propagation_rate),
         "--propagation-rate must be within 1 to 1000 Hz, not {}",
-        a.propagation_rate
+        nav_core::number::Number(a.propagation_rate)
     );
     let mut config = nav_core::ins_filter::FilterConfig::new(noise);
     config.scale_factors = !a.no_scale_factors;

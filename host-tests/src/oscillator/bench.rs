@@ -10,6 +10,7 @@
 use super::{OscillatorParams, simulate_oscillator};
 use crate::trajectory::{Motion, Point, Trajectory};
 use anyhow::{Result, ensure};
+use nav_core::number::Number;
 use nav_core::oscillator::{OscillatorConfig, OscillatorEstimator, OscillatorFault};
 use nav_core::{UnitQuaternion, Vector3};
 use std::f64::consts::PI;
@@ -116,7 +117,8 @@ impl TruthTrack {
 
 /// Runs the oscillator along `traj` for `seconds` and both estimators on its readouts.
 pub fn measure(traj: &dyn Trajectory, params: &OscillatorParams, seconds: f64) -> Result<Row> {
-    let n = (seconds * params.sample_rate_hz) as usize;
+    params.validate()?;
+    let n = params.readouts_in(seconds)? as usize;
     let mut readouts = Vec::with_capacity(n);
     let mut track = TruthTrack {
         t0: 1.0 / params.sample_rate_hz,
@@ -196,6 +198,9 @@ fn estimate(
 pub const RATIOS: [f64; 9] = [
     20.0, 50.0, 100.0, 200.0, 500.0, 1000.0, 3000.0, 10000.0, 30000.0,
 ];
+/// Largest ratio `w0/|omega|` of the noise table (a body turning 0.003 rad/s under a 100 Hz
+/// oscillator; beyond it the coning is no motion to measure).
+pub const MAX_RATIO: f64 = 1e6;
 /// The readout noises of the table [m].
 pub const NOISES_M: [f64; 5] = [0.0, 1e-10, 1e-9, 1e-8, 1e-7];
 
@@ -215,6 +220,12 @@ pub fn tables(
     seconds: f64,
     noise_ratio: f64,
 ) -> Result<(Vec<Row>, Vec<Row>)> {
+    ensure!(
+        (1.0..=MAX_RATIO).contains(&noise_ratio),
+        "the noise table's ratio w0/|omega| must be within [1, {}], not {}",
+        Number(MAX_RATIO),
+        Number(noise_ratio)
+    );
     let mut by_ratio = Vec::new();
     for ratio in RATIOS {
         let p = OscillatorParams {

@@ -154,6 +154,7 @@ pub use sim::{
 };
 
 use anyhow::{Result, bail};
+use nav_core::number::{Number, Rounded};
 use nav_core::{UnitQuaternion, attitude};
 use std::f64::consts::TAU;
 use std::fmt::Write as _;
@@ -212,6 +213,10 @@ impl Default for OscillatorParams {
 /// Fewest RK4 steps per oscillator period that [`OscillatorParams::validate`] accepts (phase
 /// lag `(2 pi/32)^5/120` = 2.4e-6 rad per step).
 pub const MIN_STEPS_PER_PERIOD: f64 = 32.0;
+
+/// Most readouts one simulation makes: 2000 s at the default 5 kHz, about a minute of one
+/// core (the bench keeps every readout in memory, some 80 bytes each).
+pub const MAX_READOUTS: f64 = 1e7;
 
 impl OscillatorParams {
     /// `w0 = 2 pi f0` [rad/s].
@@ -286,6 +291,30 @@ impl OscillatorParams {
         }
         positive("start_scale", self.start_scale)?;
         Ok(())
+    }
+
+    /// The readouts in `seconds` [s] at [`Self::sample_rate_hz`]; refused: a length that is not
+    /// a finite number >= 0, or more than [`MAX_READOUTS`] readouts.
+    pub fn readouts_in(&self, seconds: f64) -> Result<u64> {
+        if !(seconds.is_finite() && seconds >= 0.0) {
+            bail!(
+                "seconds must be a finite number >= 0, not {}",
+                Number(seconds)
+            );
+        }
+        let n = (seconds * self.sample_rate_hz).round();
+        if n > MAX_READOUTS {
+            bail!(
+                "{} s at {} readouts/s (50 f0) is {} readouts: at most {} are simulated ({} s at \
+                 this rate)",
+                Number(seconds),
+                Number(self.sample_rate_hz),
+                Rounded(n),
+                Rounded(MAX_READOUTS),
+                Rounded(MAX_READOUTS / self.sample_rate_hz)
+            );
+        }
+        Ok(n as u64)
     }
 
     /// The parameters as `key = value` lines (SI units as the keys say; the ellipse

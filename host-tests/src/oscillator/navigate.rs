@@ -212,7 +212,7 @@ fn oscillator_run(opts: &NavCompareOptions) -> Result<(NavErrors, OscillatorStat
         coning_sculling: false,
         ..Default::default()
     };
-    let n = Sampling::new(p.sample_rate_hz, opts.seconds).n;
+    let n = p.readouts_in(opts.seconds)?;
     let stride_dt = TRUTH_STRIDE as f64 / p.sample_rate_hz;
 
     let mut kept: Vec<Truth> = Vec::with_capacity((n / TRUTH_STRIDE + 2) as usize);
@@ -356,7 +356,10 @@ fn gyro_run(opts: &NavCompareOptions) -> Result<NavErrors> {
 /// Runs both navigations on `opts.scenario` for `opts.seconds`.
 pub fn compare(opts: &NavCompareOptions) -> Result<NavComparison> {
     if !(opts.seconds.is_finite() && opts.seconds > 0.0) {
-        bail!("seconds must be a positive number, not {}", opts.seconds);
+        bail!(
+            "seconds must be a positive number, not {}",
+            nav_core::number::Number(opts.seconds)
+        );
     }
     let (oscillator, stats, motion) = oscillator_run(opts)?;
     let gyro = gyro_run(opts)?;

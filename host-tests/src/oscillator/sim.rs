@@ -4,7 +4,7 @@
 use super::OscillatorParams;
 use crate::trajectory::{Generator, Rider, Sampling, Trajectory, sensed_at, truth_at};
 use crate::truth::Truth;
-use anyhow::{Result, bail};
+use anyhow::Result;
 use nav_core::attitude::{about_y, about_z};
 use nav_core::earth::OMEGA_IE;
 use nav_core::{ImuIncrement, UnitQuaternion, Vector3};
@@ -246,9 +246,7 @@ pub fn simulate_oscillator(
     mut visit: impl FnMut(u64, &OscSample, &OscTruth),
 ) -> Result<OscillatorRun> {
     params.validate()?;
-    if !(seconds.is_finite() && seconds >= 0.0) {
-        bail!("seconds must be a finite number >= 0, not {seconds}");
-    }
+    params.readouts_in(seconds)?;
     let model = OscillatorModel::new(params);
     let mut generator = Generator::with_substeps(traj, params.substeps);
     let ellipse_i = q_b_i(&generator.truth()) * params.ellipse_b;

@@ -222,8 +222,26 @@ fn check_lever_arm(lever_arm_m: &[f64; 3]) -> Result<()> {
 }
 
 fn check_positive(key: &str, v: f64) -> Result<()> {
+    // Infinity is a value here (a rocking that never stops, a period of no motion).
     if v.is_nan() || v <= 0.0 {
-        bail!("{key} must be positive, not {v}");
+        bail!("{key} must be positive, not {}", Number(v));
+    }
+    Ok(())
+}
+
+/// Longest scenario [s] (11.6 days; the land vehicle plans its route lap by lap up to it: 1e300
+/// or inf planned until memory ran out).
+pub const MAX_SECONDS: f64 = 1e6;
+
+/// A scenario's length: positive, within [`MAX_SECONDS`].
+fn check_seconds(v: f64) -> Result<()> {
+    check_positive("seconds", v)?;
+    if v > MAX_SECONDS {
+        bail!(
+            "seconds must be at most {} (11 days), not {}",
+            Number(MAX_SECONDS),
+            Number(v)
+        );
     }
     Ok(())
 }
@@ -283,7 +301,7 @@ impl Static {
         if self.pitch_deg.abs() >= 89.0 {
             bail!("pitch_deg must be within (-89, 89), not {}", self.pitch_deg);
         }
-        check_positive("seconds", self.seconds)?;
+        check_seconds(self.seconds)?;
         Ok(*self)
     }
 }
@@ -541,7 +559,7 @@ impl Rocking {
             }
         }
         check_positive("rock_until_s", self.rock_until_s)?;
-        check_positive("seconds", self.seconds)?;
+        check_seconds(self.seconds)?;
         Ok(self.clone())
     }
 
@@ -937,8 +955,20 @@ impl FlightPlan {
         if self.climb_s < 800.0 {
             bail!("climb_s must be at least 800 s (the descent slows down over its last 800 s)");
         }
-        if self.still_s < 0.0 {
-            bail!("still_s must not be negative");
+        if !(0.0..=MAX_SECONDS).contains(&self.still_s) {
+            bail!(
+                "still_s must be within [0, {}] s, not {}",
+                Number(MAX_SECONDS),
+                Number(self.still_s)
+            );
+        }
+        // The ground distance is summed second by second over the profile: 1e300 s never ended.
+        if self.climb_s > MAX_SECONDS {
+            bail!(
+                "climb_s must be at most {} s, not {}",
+                Number(MAX_SECONDS),
+                Number(self.climb_s)
+            );
         }
         let (lat1, lon1) = (
             self.from_lat_deg.to_radians(),
@@ -1105,7 +1135,7 @@ impl LandVehicle {
         check_lon("lon_deg", self.lon_deg)?;
         check_height("h_m", self.h_m)?;
         check_positive("speed_mps", self.speed_mps)?;
-        check_positive("seconds", self.seconds)?;
+        check_seconds(self.seconds)?;
         if self.speed_mps > 70.0 {
             bail!(
                 "speed_mps {} is beyond 70 m/s: not a road vehicle (the route's fastest leg is 4/3 of it)",

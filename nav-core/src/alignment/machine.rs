@@ -29,6 +29,7 @@ use super::stillness::{Scatter, Stillness};
 use super::sway::SwayAlignment;
 #[cfg(feature = "align-sway")]
 use super::sway::SwayConfig;
+use crate::number::Number;
 use crate::{ImuIncrement, InputLimits, NavState, Position, Scalar, earth};
 use nalgebra::{UnitQuaternion, Vector3};
 
@@ -336,6 +337,11 @@ fn start_sway<T: Scalar>(
 /// it); beyond that the value is a typing or unit error, not a base.
 pub const MAX_LEVER_ARM_M: f64 = 100.0;
 
+/// The refusal of a base translation 1-sigma beyond [`MAX_LEVER_ARM_M`] (waves move a hull's
+/// centre by metres; 1e10 m is a unit or typing error).
+pub const BASE_TRANSLATION_OUT_OF_RANGE: &str =
+    "the base translation 1-sigma must be 0 to 100 m (waves move a hull's centre by metres)";
+
 /// Highest IMU sampling rate an alignment accepts [Hz] (no IMU samples faster; a rate
 /// beyond it is a unit or typing error). A day's window at this rate still fits the sample
 /// counter.
@@ -410,16 +416,19 @@ impl core::fmt::Display for SettingsError {
                 min_s,
             } => write!(
                 f,
-                "alignment window {seconds} s is shorter than the {} method's minimum of {min_s} s",
+                "alignment window {} s is shorter than the {} method's minimum of {min_s} s",
+                Number(*seconds),
                 method.name()
             ),
             Self::BadRate(r) => write!(
                 f,
-                "sampling rate {r} Hz is not a positive number up to {MAX_RATE_HZ} Hz"
+                "sampling rate {} Hz is not a positive number up to {MAX_RATE_HZ} Hz",
+                Number(*r)
             ),
             Self::WindowTooLong { seconds } => write!(
                 f,
-                "alignment window {seconds} s is longer than {MAX_WINDOW_S} s (a day)"
+                "alignment window {} s is longer than {MAX_WINDOW_S} s (a day)",
+                Number(*seconds)
             ),
             Self::NearPole => f.write_str("latitude not finite or too close to a pole to align"),
             Self::NotCompiledIn(method) => not_compiled_in(f, *method),
@@ -527,6 +536,16 @@ impl<T: Scalar> AlignSettings<T> {
         if seconds > MAX_WINDOW_S {
             return Err(SettingsError::WindowTooLong { seconds });
         }
+        // The window asked for, before its sample count (at least one) hides a zero or a
+        // negative one.
+        let min_s = method.min_seconds();
+        if method.compiled_in() && !(seconds + 0.5 / rate_hz >= min_s) {
+            return Err(SettingsError::WindowTooShort {
+                method,
+                seconds,
+                min_s,
+            });
+        }
         let samples = super::samples_for(seconds, rate_hz);
         let coarse_samples = match method {
             AlignMethod::Fine | AlignMethod::Sway => {
@@ -621,35 +640,56 @@ impl<T: Scalar> AlignSettings<T> {
         {
             return Err(SettingsError::BadValue("the IMU noise"));
         }
-        let lever_ok = match self.lever_arm {
-            LeverArm::Known(r) => r.iter().all(|v| v.finite()),
-            LeverArm::Unknown { sigma_m } => ok(sigma_m),
+        let lever_arm = match self.lever_arm {
+            LeverArm::Known(r) => LeverArm::Known(r.map(|v| v.to_f64())),
+            LeverArm::Unknown { sigma_m } => LeverArm::Unknown {
+                sigma_m: sigma_m.to_f64(),
+            },
         };
-        if !lever_ok {
-            return Err(SettingsError::BadValue("the lever arm"));
-        }
-        match self.lever_arm {
-            LeverArm::Known(r) => {
-                // The norm in f64: an f32 lever arm of 1e30 m would overflow its square.
-                let length_m = libm::sqrt(r.iter().map(|v| v.to_f64() * v.to_f64()).sum());
-                if !(length_m <= MAX_LEVER_ARM_M) {
-                    return Err(SettingsError::LeverArmTooLong { length_m });
-                }
-            }
-            LeverArm::Unknown { sigma_m } => {
-                if !(sigma_m.to_f64() <= MAX_LEVER_ARM_M) {
-                    return Err(SettingsError::LeverArmSigmaTooLarge {
-                        sigma_m: sigma_m.to_f64(),
-                    });
-                }
-            }
-        }
-
-        if !(ok(self.base.position_sigma_m) && ok(self.base.translation_sigma_m)) {
-            return Err(SettingsError::BadValue("the base motion"));
-        }
-        Ok(())
+        let base = BaseMotion {
+            position_sigma_m: self.base.position_sigma_m.to_f64(),
+            translation_sigma_m: self.base.translation_sigma_m.to_f64(),
+        };
+        check_geometry(&lever_arm, &base)
     }
+}
+
+/// Checks the lever arm and the base's motion in `f64` (a run configuration checks them
+/// before its conversion to `f32`, where 1e100 m would arrive as infinite and be refused as
+/// not finite): finite, not negative, a lever arm (or its 1-sigma) within
+/// [`MAX_LEVER_ARM_M`], a base translation 1-sigma within it too.
+pub fn check_geometry(
+    lever_arm: &LeverArm<f64>,
+    base: &BaseMotion<f64>,
+) -> Result<(), SettingsError> {
+    let ok = |v: f64| v.is_finite() && v >= 0.0;
+    match *lever_arm {
+        LeverArm::Known(r) => {
+            if !r.iter().all(|v| v.is_finite()) {
+                return Err(SettingsError::BadValue("the lever arm"));
+            }
+            // hypot: the squares of 1e300 m would overflow.
+            let length_m = libm::hypot(libm::hypot(r.x, r.y), r.z);
+            if !(length_m <= MAX_LEVER_ARM_M) {
+                return Err(SettingsError::LeverArmTooLong { length_m });
+            }
+        }
+        LeverArm::Unknown { sigma_m } => {
+            if !ok(sigma_m) {
+                return Err(SettingsError::BadValue("the lever arm"));
+            }
+            if !(sigma_m <= MAX_LEVER_ARM_M) {
+                return Err(SettingsError::LeverArmSigmaTooLarge { sigma_m });
+            }
+        }
+    }
+    if !(ok(base.position_sigma_m) && ok(base.translation_sigma_m)) {
+        return Err(SettingsError::BadValue("the base motion"));
+    }
+    if !(base.translation_sigma_m <= MAX_LEVER_ARM_M) {
+        return Err(SettingsError::OutOfRange(BASE_TRANSLATION_OUT_OF_RANGE));
+    }
+    Ok(())
 }
 
 /// Samples (and seconds) each stage took.

@@ -8,7 +8,9 @@
 use crate::alignment::machine::DEFAULT_LEVER_ARM_SIGMA_M;
 use crate::alignment::{AlignMethod, BaseMotion, LeverArm, SensorNoise, SettingsError};
 use crate::calibration::{CalibrationError, ImuCalibration};
+use crate::ins_filter::limits::{MAX_ACCEL_BIAS_MPS2, MAX_GYRO_BIAS_RAD_S};
 use crate::ins_filter::model::FilterNoise;
+use crate::number::Number;
 use crate::poisson::DcmIntegrator;
 use crate::scalar::Scalar;
 use crate::strapdown::{AttitudeMethod, MechanizationConfig, NavFrame, VerticalChannel};
@@ -221,6 +223,17 @@ impl RunConfig {
         if !(self.bias_prior.is_finite() && self.bias_prior >= 0.0) {
             return Err(ConfigError::BiasPrior(self.bias_prior));
         }
+        // A scale that takes the biases beyond any IMU's (the noise's own are checked as such).
+        let scaled = self.align_noise();
+        if self.bias_prior > 1.0
+            && !(scaled.gyro_bias_rad_s <= MAX_GYRO_BIAS_RAD_S
+                && scaled.accel_bias_mps2 <= MAX_ACCEL_BIAS_MPS2)
+        {
+            return Err(ConfigError::BiasPrior(self.bias_prior));
+        }
+        // In f64, before the run's precision: 1e100 m is infinite in f32.
+        crate::alignment::machine::check_geometry(&self.lever_arm, &self.base)
+            .map_err(ConfigError::Alignment)?;
         self.calibration
             .compensation::<f64>()
             .map_err(ConfigError::Calibration)?;
@@ -429,16 +442,31 @@ pub enum ConfigError {
 impl fmt::Display for ConfigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::Latitude(lat) => write!(f, "latitude {lat} deg is not within [-90, 90]"),
-            Self::Longitude(lon) => write!(f, "longitude {lon} deg is not within [-180, 180]"),
+            Self::Latitude(lat) => {
+                write!(f, "latitude {} deg is not within [-90, 90]", Number(*lat))
+            }
+            Self::Longitude(lon) => {
+                write!(
+                    f,
+                    "longitude {} deg is not within [-180, 180]",
+                    Number(*lon)
+                )
+            }
             Self::Height(h) => write!(
                 f,
-                "height {h} m is not within [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m (the Earth model's range)"
+                "height {} m is not within [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m (the Earth model's range)",
+                Number(*h)
             ),
             Self::NotFinite(what) => write!(f, "{what} is not a finite number"),
             Self::LogEvery => f.write_str("log_every must be at least 1"),
             Self::BiasPrior(k) => {
-                write!(f, "bias prior scale {k} must be finite and not negative")
+                write!(
+                    f,
+                    "bias prior scale {} must be finite, not negative, and keep the bias \
+                     1-sigmas within any IMU's ({MAX_GYRO_BIAS_RAD_S} rad/s, \
+                     {MAX_ACCEL_BIAS_MPS2} m/s^2)",
+                    Number(*k)
+                )
             }
             Self::Calibration(e) => write!(f, "{e}"),
             Self::Alignment(e) => write!(f, "{e}"),
@@ -582,7 +610,17 @@ mod tests {
                     bias_prior: -1.0,
                     ..config()
                 },
-                "bias prior scale -1 must be finite and not negative",
+                "bias prior scale -1 must be finite, not negative, and keep the bias 1-sigmas \
+                 within any IMU's (0.1 rad/s, 10 m/s^2)",
+            ),
+            // Beyond any IMU's biases (it was accepted).
+            (
+                RunConfig {
+                    bias_prior: 1e10,
+                    ..config()
+                },
+                "bias prior scale 1e10 must be finite, not negative, and keep the bias 1-sigmas \
+                 within any IMU's (0.1 rad/s, 10 m/s^2)",
             ),
         ];
         for (c, msg) in cases {
@@ -601,7 +639,7 @@ mod tests {
                     h_m: -1e7,
                     ..config()
                 },
-                "height -10000000 m is not within [-12000, 100000] m (the Earth model's range)",
+                "height -1e7 m is not within [-12000, 100000] m (the Earth model's range)",
             ),
         ] {
             assert_eq!(c.validate().unwrap_err().to_string(), msg);

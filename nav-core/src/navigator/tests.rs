@@ -337,10 +337,16 @@ fn failures_end_the_run_with_a_reason() {
         "recording ended during alignment: 500 of 1000 samples used"
     );
     // Settings refused before any sample, naming the minimum window.
+    // The window as asked (0 s, -1 s), not its sample count's one sample.
     let e = Setup::<f32>::new(&config(0.0, 40), RATE_HZ).unwrap_err();
     assert_eq!(
         e.to_string(),
-        "alignment window 0.01 s is shorter than the static method's minimum of 10 s"
+        "alignment window 0 s is shorter than the static method's minimum of 10 s"
+    );
+    let e = Setup::<f32>::new(&config(-1.0, 40), RATE_HZ).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "alignment window -1 s is shorter than the static method's minimum of 10 s"
     );
     let fine = RunConfig {
         align_method: AlignMethod::Fine,

@@ -189,8 +189,9 @@ pub fn checked_windows(windows_s: &[f64]) -> Result<Vec<f64>> {
     for &s in &w {
         ensure!(
             s.is_finite() && s * RATE_HZ >= 1.0 && s <= crate::trajectory::family::FINAL_S,
-            "alignment windows must be within (0, {}] s, not {s}",
-            crate::trajectory::family::FINAL_S
+            "alignment windows must be within (0, {}] s, not {}",
+            crate::trajectory::family::FINAL_S,
+            nav_core::number::Number(s)
         );
     }
     w.sort_by(f64::total_cmp);

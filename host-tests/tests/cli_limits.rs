@@ -1,0 +1,368 @@
+//! Absurd numeric options of `nav` (1e300, inf, a duration no memory holds) are refused with a
+//! message naming the value readably and its range, with status 1: no panic (101), no
+//! allocation abort, no silently computed nonsense.
+
+mod common;
+
+use common::{nav, output_text};
+
+/// Runs `nav args`, expecting a refusal (status 1) whose text contains every one of `expected`
+/// and no number of more than 30 digits; returns the text.
+fn refused(args: &[&str], expected: &[&str]) -> String {
+    let o = nav(args);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "nav {args:?}: {text}");
+    assert!(!text.contains("panicked"), "nav {args:?}: {text}");
+    for e in expected {
+        assert!(text.contains(e), "nav {args:?}: expected {e:?} in {text}");
+    }
+    let longest_digits = text
+        .split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0);
+    assert!(
+        longest_digits <= 30,
+        "nav {args:?}: unreadable number in {text}"
+    );
+    text
+}
+
+/// The oscillator's length and frequency: a capacity-overflow panic (1e300) or an allocation
+/// abort (1e6 s: 44 GB of readouts) before; now the readout count is refused with its limit.
+#[test]
+fn oscillator_lengths_beyond_memory_are_refused() {
+    refused(
+        &["oscillator", "static", "--seconds", "1e300"],
+        &["1e300 s", "at most 1.000e7"],
+    );
+    refused(
+        &["oscillator", "static", "--seconds", "1e6"],
+        &["1e6 s", "at most 1.000e7"],
+    );
+    refused(
+        &["oscillator", "static", "--seconds", "2", "--f0-hz", "1e300"],
+        &["5e301 readouts/s", "at most 1.000e7"],
+    );
+    refused(
+        &["osc-bench", "--seconds", "inf"],
+        &["seconds must be a finite number >= 0, not inf"],
+    );
+    refused(&["osc-bench", "--seconds", "1e300"], &["at most 1.000e7"]);
+}
+
+/// `osc-bench --noise-ratio`: 1e300, inf, NaN and 0 printed a table of zeros; a negative
+/// value was a clap usage error without the range.
+#[test]
+fn oscillator_bench_ratio_out_of_range_is_refused() {
+    for ratio in ["1e300", "inf", "NaN", "0", "-5"] {
+        refused(
+            &["osc-bench", "--seconds", "0.1", "--noise-ratio", ratio],
+            &["w0/|omega| must be within [1, 1e6]"],
+        );
+    }
+}
+
+/// `generate` and `sim` lengths: 1e300 s said "18446744073709551615 samples do not fit the
+/// binary format" (a saturated count), 1e7 s aborted allocating 160 GB.
+#[test]
+fn recording_lengths_beyond_memory_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.bin");
+    let out = out.to_str().unwrap();
+    for seconds in ["1e300", "1e7"] {
+        let text = refused(
+            &["generate", "--out", out, "--seconds", seconds],
+            &["samples: a simulated recording holds at most 5.000e7"],
+        );
+        assert!(text.contains(&format!("{seconds} s at 400 Hz")), "{text}");
+        let sim = dir.path().join("sim");
+        refused(
+            &[
+                "sim",
+                "static",
+                "--out",
+                sim.to_str().unwrap(),
+                "--seconds",
+                seconds,
+            ],
+            &["a simulated recording holds at most 5.000e7"],
+        );
+        assert!(
+            !sim.exists(),
+            "nav sim --seconds {seconds} wrote {}",
+            sim.display()
+        );
+    }
+    assert!(!dir.path().join("g.bin").exists());
+    refused(
+        &["sim", "static", "--out", out, "--rate", "1e300"],
+        &["the rate must be within (0, 100000] Hz, not 1e300"],
+    );
+    refused(
+        &["sim", "static", "--out", out, "--truth-rate", "1e300"],
+        &["the truth rate 1e300 Hz must divide the IMU rate 400 Hz"],
+    );
+}
+
+/// `generate --roll/--pitch/--yaw 1e300` wrote a recording of a meaningless orientation (and
+/// printed the angle in 301 digits).
+#[test]
+fn generate_angles_out_of_range_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.bin");
+    let out = out.to_str().unwrap();
+    for (option, range) in [
+        ("--roll", "roll must be within [-180, 180] deg"),
+        ("--pitch", "pitch must be within [-90, 90] deg"),
+        ("--yaw", "yaw must be within [-360, 360] deg"),
+    ] {
+        refused(
+            &["generate", "--out", out, "--seconds", "1", option, "1e300"],
+            &[range, "not 1e300"],
+        );
+    }
+    refused(
+        &["generate", "--out", out, "--seconds", "1", "--pitch", "95"],
+        &["pitch must be within [-90, 90] deg, not 95"],
+    );
+    assert!(!dir.path().join("g.bin").exists());
+}
+
+/// `replay`'s site and window: 1e300 printed 301 digits; `--align-seconds -1` (or 0, -0) was
+/// reported as "alignment window 0.0025 s", the one sample it rounded to.
+#[test]
+fn replay_site_and_window_read_as_typed() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = dir.path().join("imu.bin");
+    let out = dir.path().join("o.csv");
+    let o = nav(&[
+        "generate",
+        "--out",
+        imu.to_str().unwrap(),
+        "--seconds",
+        "12",
+    ]);
+    assert!(o.status.success(), "{}", output_text(&o));
+    let replay = |site: [&str; 4], expected: &str| {
+        let args = [
+            "replay",
+            "--imu",
+            imu.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--lat",
+            site[0],
+            "--lon",
+            site[1],
+            "--h",
+            site[2],
+            "--align-seconds",
+            site[3],
+        ];
+        refused(&args, &[expected]);
+        assert!(!out.exists());
+    };
+    replay(
+        ["1e300", "7.5", "150", "10"],
+        "latitude 1e300 deg is not within [-90, 90]",
+    );
+    replay(
+        ["45", "-1e300", "150", "10"],
+        "longitude -1e300 deg is not within [-180, 180]",
+    );
+    replay(["45", "7.5", "1e300", "10"], "height 1e300 m is not within");
+    replay(
+        ["45", "7.5", "150", "1e300"],
+        "alignment window 1e300 s is longer than 86400 s",
+    );
+    for window in ["-1", "0", "-0"] {
+        replay(
+            ["45", "7.5", "150", window],
+            &format!("alignment window {window} s is shorter than the static method's minimum"),
+        );
+    }
+}
+
+/// `replay`'s alignment options beyond any IMU or base: accepted in f64 (`--bias-prior 1e300`,
+/// `--base-translation 1e300` navigated), refused in f32 as "the IMU noise / the lever arm /
+/// the base motion must be finite and not negative" (1e100 is infinite in f32), which named
+/// neither the option nor its range. Now the same refusal in both precisions.
+#[test]
+fn replay_alignment_options_beyond_range_are_refused_in_both_precisions() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = dir.path().join("imu.bin");
+    let out = dir.path().join("o.csv");
+    let o = nav(&[
+        "generate",
+        "--out",
+        imu.to_str().unwrap(),
+        "--seconds",
+        "12",
+    ]);
+    assert!(o.status.success(), "{}", output_text(&o));
+    for precision in ["f32", "f64"] {
+        for (option, value, expected) in [
+            (
+                "--bias-prior",
+                "1e300",
+                "bias prior scale 1e300 must be finite",
+            ),
+            (
+                "--bias-prior",
+                "1e10",
+                "bias prior scale 1e10 must be finite",
+            ),
+            (
+                "--base-translation",
+                "1e100",
+                "the base translation 1-sigma must be 0 to 100 m",
+            ),
+            (
+                "--base-translation",
+                "1e10",
+                "the base translation 1-sigma must be 0 to 100 m",
+            ),
+            (
+                "--lever-arm-sigma",
+                "1e100",
+                "lever arm 1-sigma 1.000e100 m is beyond 100 m",
+            ),
+            (
+                "--lever-arm",
+                "1e300,0,0",
+                "lever arm 1.000e300 m is beyond 100 m",
+            ),
+        ] {
+            let args = [
+                "replay",
+                "--imu",
+                imu.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "--lat",
+                "45",
+                "--lon",
+                "7.5",
+                "--h",
+                "150",
+                "--align-seconds",
+                "10",
+                "--precision",
+                precision,
+                option,
+                value,
+            ];
+            refused(&args, &[expected]);
+            assert!(!out.exists());
+        }
+    }
+}
+
+/// `nav config` (the board's f32 run): `base-translation = 1e300` was refused as "the lever
+/// arm must be finite and not negative", naming the lever-arm line too.
+#[test]
+fn config_text_base_translation_beyond_range_names_its_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = dir.path().join("run.txt");
+    std::fs::write(&text, "base-translation = 1e300\n").unwrap();
+    let out = dir.path().join("run.bin");
+    let msg = refused(
+        &[
+            "config",
+            text.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &["the base translation 1-sigma must be 0 to 100 m"],
+    );
+    assert!(!msg.contains("lever arm"), "{msg}");
+    assert!(!out.exists());
+}
+
+/// Scenario lengths of `nav sim --set`: the land vehicle's `seconds=1e300` (or inf) planned
+/// its route lap by lap until an allocation aborted; the flight's `climb_s` or `still_s` of
+/// 1e300 summed its ground distance second by second without end.
+#[test]
+fn scenario_lengths_beyond_range_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let out = out.to_str().unwrap();
+    for (scenario, set, expected) in [
+        (
+            "land-vehicle",
+            "seconds=1e300",
+            "seconds must be at most 1e6 (11 days), not 1e300",
+        ),
+        (
+            "land-vehicle",
+            "seconds=inf",
+            "seconds must be a finite number, not inf",
+        ),
+        ("static", "seconds=1e300", "seconds must be at most 1e6"),
+        (
+            "flight",
+            "climb_s=1e300",
+            "climb_s must be at most 1e6 s, not 1e300",
+        ),
+        (
+            "flight",
+            "still_s=1e300",
+            "still_s must be within [0, 1e6] s, not 1e300",
+        ),
+        (
+            "flight",
+            "still_s=-1",
+            "still_s must be within [0, 1e6] s, not -1",
+        ),
+    ] {
+        refused(
+            &[
+                "sim",
+                scenario,
+                "--out",
+                out,
+                "--seconds",
+                "5",
+                "--set",
+                set,
+            ],
+            &[expected],
+        );
+    }
+    // `nav bench consistency` plans its land-vehicle runs the same way.
+    refused(
+        &[
+            "bench",
+            "consistency",
+            "--runs",
+            "2",
+            "--cells",
+            "1",
+            "--seconds",
+            "1e300",
+        ],
+        &[
+            "2 runs per cell, 1e300 s each",
+            "seconds must be at most 1e6",
+        ],
+    );
+}
+
+/// `nav bench consistency --cells 0,9` printed an empty table with status 0.
+#[test]
+fn bench_cells_outside_the_table_are_refused() {
+    refused(
+        &["bench", "consistency", "--runs", "2", "--cells", "1,9"],
+        &["--cells 9: the table has cells 1 to 5"],
+    );
+}
+
+/// `nav align-bench family --seconds 1e300` printed the window in 301 digits.
+#[test]
+fn align_bench_window_reads_as_typed() {
+    refused(
+        &["align-bench", "family", "--runs", "1", "--seconds", "1e300"],
+        &["alignment windows must be within (0, 300] s, not 1e300"],
+    );
+}
