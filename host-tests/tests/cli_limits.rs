@@ -280,7 +280,7 @@ fn config_text_base_translation_beyond_range_names_its_key() {
     assert!(!out.exists());
 }
 
-/// Scenario lengths of `nav sim --set`: the land vehicle's `seconds=1e300` (or inf) planned
+/// Scenario lengths and angles of `nav sim --set`: the land vehicle's `seconds=1e300` (or inf) planned
 /// its route lap by lap until an allocation aborted; the flight's `climb_s` or `still_s` of
 /// 1e300 summed its ground distance second by second without end.
 #[test]
@@ -314,6 +314,27 @@ fn scenario_lengths_beyond_range_are_refused() {
             "flight",
             "still_s=-1",
             "still_s must be within [0, 1e6] s, not -1",
+        ),
+        // Angles beyond a turn: accepted before, as an orientation no one meant.
+        (
+            "static",
+            "roll_deg=1e300",
+            "roll_deg 1e300 is not within [-180, 180] deg",
+        ),
+        (
+            "static",
+            "yaw_deg=400",
+            "yaw_deg 400 is not within [-360, 360] deg",
+        ),
+        (
+            "ship-rocking",
+            "heading_deg=1e300",
+            "heading_deg 1e300 is not within [-360, 360] deg",
+        ),
+        (
+            "ship-rocking",
+            "roll_phase_deg=-1e300",
+            "roll_phase_deg -1e300 is not within [-360, 360] deg",
         ),
     ] {
         refused(

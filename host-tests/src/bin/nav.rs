@@ -183,8 +183,8 @@ enum Command {
         /// every 180 s) or outliers (jumps, spikes, multipath, NaN fixes).
         #[arg(default_value = "mechanization")]
         what: BenchKind,
-        /// Passes over the 240,000 increments (mechanization).
-        #[arg(long, default_value_t = 10)]
+        /// Passes over the 240,000 increments (mechanization; at least 1).
+        #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
         passes: u32,
         /// Monte Carlo runs per cell (consistency, outages).
         #[arg(long, default_value_t = 30)]

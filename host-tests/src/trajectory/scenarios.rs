@@ -221,6 +221,15 @@ fn check_lever_arm(lever_arm_m: &[f64; 3]) -> Result<()> {
     Ok(())
 }
 
+/// An angle `v` [deg] within `[-limit, limit]` (a roll within 180, a heading or phase within
+/// 360: a value beyond is a typing or unit error, not an orientation).
+fn check_angle(key: &str, v: f64, limit: f64) -> Result<()> {
+    if !(-limit..=limit).contains(&v) {
+        bail!("{key} {} is not within [-{limit}, {limit}] deg", Number(v));
+    }
+    Ok(())
+}
+
 fn check_positive(key: &str, v: f64) -> Result<()> {
     // Infinity is a value here (a rocking that never stops, a period of no motion).
     if v.is_nan() || v <= 0.0 {
@@ -298,9 +307,14 @@ impl Static {
         check_lat(self.lat_deg)?;
         check_lon("lon_deg", self.lon_deg)?;
         check_height("h_m", self.h_m)?;
-        if self.pitch_deg.abs() >= 89.0 {
-            bail!("pitch_deg must be within (-89, 89), not {}", self.pitch_deg);
+        if self.pitch_deg.is_nan() || self.pitch_deg.abs() >= 89.0 {
+            bail!(
+                "pitch_deg must be within (-89, 89), not {}",
+                Number(self.pitch_deg)
+            );
         }
+        check_angle("roll_deg", self.roll_deg, 180.0)?;
+        check_angle("yaw_deg", self.yaw_deg, 360.0)?;
         check_seconds(self.seconds)?;
         Ok(*self)
     }
@@ -530,15 +544,20 @@ impl Rocking {
         check_height("h_m", self.h_m)?;
         check_speed("speed_mps", self.speed_mps)?;
         check_lever_arm(&self.lever_arm_m)?;
+        check_angle("heading_deg", self.heading_deg, 360.0)?;
         for (k, h) in [
             ("roll", self.roll),
             ("pitch", self.pitch),
             ("yaw", self.yaw),
         ] {
             check_positive(&format!("{k}_period_s"), h.period_s)?;
-            if h.amp_deg.abs() > 45.0 {
-                bail!("{k}_amp_deg must be within 45 deg, not {}", h.amp_deg);
+            if h.amp_deg.is_nan() || h.amp_deg.abs() > 45.0 {
+                bail!(
+                    "{k}_amp_deg must be within 45 deg, not {}",
+                    Number(h.amp_deg)
+                );
             }
+            check_angle(&format!("{k}_phase_deg"), h.phase_deg, 360.0)?;
         }
         if self.roll.amp_deg.abs() + self.pitch.amp_deg.abs() > 80.0 {
             bail!("roll and pitch amplitudes together must stay below 80 deg");
@@ -548,15 +567,16 @@ impl Rocking {
             ("mean_pitch_deg", self.mean_pitch_deg),
         ] {
             if m.is_nan() || m.abs() > 30.0 {
-                bail!("{k} must be within 30 deg, not {m}");
+                bail!("{k} must be within 30 deg, not {}", Number(m));
             }
         }
         let t = &self.translation;
         for (k, d) in [("surge", t.surge), ("sway", t.sway), ("heave", t.heave)] {
             check_positive(&format!("{k}_period_s"), d.period_s)?;
-            if d.amp_m.is_nan() || d.amp_m.abs() > 100.0 || !d.phase_deg.is_finite() {
-                bail!("{k}_amp_m must be within 100 m, not {}", d.amp_m);
+            if d.amp_m.is_nan() || d.amp_m.abs() > 100.0 {
+                bail!("{k}_amp_m must be within 100 m, not {}", Number(d.amp_m));
             }
+            check_angle(&format!("{k}_phase_deg"), d.phase_deg, 360.0)?;
         }
         check_positive("rock_until_s", self.rock_until_s)?;
         check_seconds(self.seconds)?;
