@@ -758,6 +758,11 @@ const COLORS: [RGBColor; 4] = [
 /// written.
 pub fn write_plots(series: &ErrorSeries, dir: &Path) -> Result<Vec<PathBuf>> {
     ensure!(!series.samples.is_empty(), "no errors to plot");
+    ensure!(
+        !dir.exists() || dir.is_dir(),
+        "--plots {} is a file, not a directory for the plots",
+        dir.display()
+    );
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     PLOTS
         .iter()
@@ -941,6 +946,18 @@ mod tests {
 
     fn truth() -> Vec<Truth> {
         (0..=10).map(|k| row(k as f64)).collect()
+    }
+
+    #[test]
+    fn plots_into_a_file_are_refused_naming_it() {
+        let t = truth();
+        let series = compare(&t, &t).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("plots");
+        std::fs::write(&file, "not a directory").unwrap();
+        let e = write_plots(&series, &file).unwrap_err().to_string();
+        assert!(e.contains("is a file, not a directory"), "{e}");
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "not a directory");
     }
 
     #[test]
