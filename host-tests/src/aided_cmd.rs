@@ -8,6 +8,7 @@ use crate::recording_io::ReplaySource;
 use crate::sensor_model::Grade;
 use anyhow::{Context, Result, anyhow, bail};
 use hal_adapters::drivers::NoiseSpec;
+use nav_core::ins_filter::limits::MIN_BIAS_INSTABILITY_TIME_S;
 use nav_core::ins_filter::model::FilterNoise;
 use nav_core::ins_filter::motion::MotionAlignConfig;
 use nav_core::ins_filter::sequencer::{Sequencer, Start};
@@ -46,6 +47,9 @@ pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {
         gyro_cross_coupling_rad: off_diagonal_rms(&m.gyro.misalignment),
         accel_cross_coupling_rad: off_diagonal_rms(&m.accel.misalignment),
         gyro_g_sensitivity: m.g_sensitivity_rad_s_per_m_s2.amax(),
+        // The bias instability is in the bias figure.
+        gyro_bias_instability_rad_s: 0.0,
+        gyro_bias_instability_time_s: 0.0,
     }
 }
 
@@ -100,28 +104,32 @@ pub fn grade_filter_model(grade: Grade) -> GradeFilterModel {
 /// [`GradeFilterModel`] of an error model `m` ([`grade_filter_model`]: the same rules).
 pub fn filter_model_of(m: &crate::sensor_model::ImuErrorModel) -> GradeFilterModel {
     let tau_f = FILTER_CORRELATION_TIME_S;
-    // (white-noise density [U/sqrt(Hz)], in-run Gauss–Markov 1-sigma [U], start 1-sigma [U]).
-    let split = |t: &crate::sensor_model::TriadErrors| {
+    // (white-noise density [U/sqrt(Hz)], in-run Gauss–Markov 1-sigma [U], start 1-sigma [U],
+    // the short Gauss–Markov kept as such: 1-sigma [U], correlation time [s]).
+    let split = |t: &crate::sensor_model::TriadErrors, keep_short: bool| {
         let gm = t.bias_instability;
-        let (mut white2, mut drive) = (
+        let (mut white2, mut drive, mut short) = (
             t.white_noise.density().powi(2),
             t.rate_random_walk * t.rate_random_walk,
+            (0.0, 0.0),
         );
         if gm.sigma > 0.0 && gm.correlation_time_s.is_finite() {
-            if gm.correlation_time_s < WHITE_GM_BELOW_S {
-                white2 += 2.0 * gm.sigma * gm.sigma * gm.correlation_time_s;
-            } else {
+            if gm.correlation_time_s >= WHITE_GM_BELOW_S {
                 drive += 2.0 * gm.sigma * gm.sigma / gm.correlation_time_s;
+            } else if keep_short && gm.correlation_time_s >= MIN_BIAS_INSTABILITY_TIME_S {
+                short = (gm.sigma, gm.correlation_time_s);
+            } else {
+                white2 += 2.0 * gm.sigma * gm.sigma * gm.correlation_time_s;
             }
         }
         let start = t
             .turn_on_bias_sigma
             .map(|s| (s * s + gm.sigma * gm.sigma).sqrt())
             + t.bias.abs();
-        (white2.sqrt(), (drive * tau_f / 2.0).sqrt(), start)
+        (white2.sqrt(), (drive * tau_f / 2.0).sqrt(), start, short)
     };
-    let (arw, gyro_in_run, gyro_start) = split(&m.gyro);
-    let (vrw, accel_in_run, accel_start) = split(&m.accel);
+    let (arw, gyro_in_run, gyro_start, gyro_short) = split(&m.gyro, true);
+    let (vrw, accel_in_run, accel_start, _) = split(&m.accel, false);
     let scale = |t: &crate::sensor_model::TriadErrors| Vector3::repeat(t.scale.amax().max(1e-6));
     GradeFilterModel {
         noise: FilterNoise {
@@ -135,6 +143,8 @@ pub fn filter_model_of(m: &crate::sensor_model::ImuErrorModel) -> GradeFilterMod
             gyro_cross_coupling_rad: off_diagonal_rms(&m.gyro.misalignment),
             accel_cross_coupling_rad: off_diagonal_rms(&m.accel.misalignment),
             gyro_g_sensitivity: m.g_sensitivity_rad_s_per_m_s2.amax(),
+            gyro_bias_instability_rad_s: gyro_short.0,
+            gyro_bias_instability_time_s: gyro_short.1,
         },
         initial: [gyro_start, accel_start, scale(&m.gyro), scale(&m.accel)],
     }
@@ -163,6 +173,8 @@ pub fn config_in<T: Scalar>(c: &FilterConfig<f64>) -> FilterConfig<T> {
             gyro_cross_coupling_rad: T::c(n.gyro_cross_coupling_rad),
             accel_cross_coupling_rad: T::c(n.accel_cross_coupling_rad),
             gyro_g_sensitivity: T::c(n.gyro_g_sensitivity),
+            gyro_bias_instability_rad_s: T::c(n.gyro_bias_instability_rad_s),
+            gyro_bias_instability_time_s: T::c(n.gyro_bias_instability_time_s),
         },
         scale_factors: c.scale_factors,
         propagation_interval_s: T::c(c.propagation_interval_s),

@@ -201,7 +201,12 @@ pub fn generate(dir: &Path, o: &FilterBenchOptions) -> Result<DataSet> {
         each(init_sa * 1e6)
     )?;
     writeln!(yaml, "imunoise:")?;
-    writeln!(yaml, "  arw: {}", three(deg(n.arw_rad_per_sqrt_s) * 60.0))?;
+    // KF-GINS has no state for the few-second bias instability (our filter's consider state):
+    // it integrates like white noise of density 2 sigma^2 T ([Groves, eq. 14.80]).
+    let arw = (n.arw_rad_per_sqrt_s.powi(2)
+        + 2.0 * n.gyro_bias_instability_rad_s.powi(2) * n.gyro_bias_instability_time_s)
+        .sqrt();
+    writeln!(yaml, "  arw: {}", three(deg(arw) * 60.0))?;
     writeln!(yaml, "  vrw: {}", three(n.vrw_mps_per_sqrt_s * 60.0))?;
     writeln!(yaml, "  gbstd: {}", three(deg(n.gyro_bias_rad_s) * 3600.0))?;
     writeln!(yaml, "  abstd: {}", three(n.accel_bias_mps2 * 1e5))?;

@@ -57,6 +57,8 @@ pub fn filter_config(c: &KfGinsConfig) -> FilterConfig<f64> {
         gyro_cross_coupling_rad: 0.0,
         accel_cross_coupling_rad: 0.0,
         gyro_g_sensitivity: 0.0,
+        gyro_bias_instability_rad_s: 0.0,
+        gyro_bias_instability_time_s: 0.0,
     });
     config.antenna_lever_arm_b_m = Vector3::from(c.lever_arm_b_m);
     // KF-GINS has no stop detector; the filter's ZUPT stays on (its gate refuses a wrong one).

@@ -24,6 +24,8 @@ fn noise() -> FilterNoise<f64> {
         gyro_cross_coupling_rad: 0.0,
         accel_cross_coupling_rad: 0.0,
         gyro_g_sensitivity: 0.0,
+        gyro_bias_instability_rad_s: 0.0,
+        gyro_bias_instability_time_s: 0.0,
     }
 }
 

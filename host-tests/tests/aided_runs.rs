@@ -42,8 +42,9 @@ fn mean_chi2_upper(n: usize, z: f64) -> f64 {
     (1.0 - a + z * a.sqrt()).powi(3)
 }
 
-/// A small family (12 seeds of 300 s; a land vehicle with a FOG at 1 Hz, an aircraft with an
-/// RLG at 5 Hz, the filter's noise from the grades' in-run processes, no stop updates: the simulated stops are exactly
+/// A small family (12 seeds of 300 s; a land vehicle with a FOG and one with a tactical MEMS
+/// IMU, whose misalignment, g-sensitivity and bias instability are consider states, at 1 Hz,
+/// an aircraft with an RLG at 5 Hz, the filter's noise from the grades' in-run processes, no stop updates: the simulated stops are exactly
 /// still, `nav bench consistency --zero-motion` shows them): the average NEES (9 dof) and NIS
 /// (3 dof) inside their 95 % chi-square bounds on at least 90 % of the epochs (the
 /// requirement's target), each block's mean NEES within the 95 % bounds of one epoch's average
@@ -56,6 +57,7 @@ fn a_small_family_is_consistent() {
     let (lo3, hi3) = average_chi2_bounds(3.0, runs);
     for (scenario, grade, rate, vel) in [
         ("land-vehicle", Grade::Fog, 1.0, None),
+        ("land-vehicle", Grade::MemsTactical, 1.0, None),
         ("flight", Grade::Rlg, 5.0, Some([0.05, 0.05, 0.1])),
     ] {
         let case = Case {

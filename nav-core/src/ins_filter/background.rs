@@ -5,6 +5,7 @@
 //! slow faults, the refusal of a consistent cluster refused before).
 
 use super::aiding::{AidCounters, AidResult, FilterCounters, GnssPosition, GnssVelocity};
+use super::consider::{self, ConsiderModel, CrossCovariance};
 use super::covariance::{self, Transition};
 use super::foreground::Propagation;
 use super::integrity::{self, InnovationWindow, RefusedCluster, WindowVerdict, whiten};
@@ -66,8 +67,9 @@ pub struct ErrorFilter<T: Scalar> {
     cluster: Option<RefusedCluster<T>>,
     /// Propagated time since the last position fix [s].
     since_fix_s: T,
-    /// The lasting part of the motion, for the cross-coupling noise ([`model::SustainedMotion`]).
-    sustained: model::SustainedMotion<T>,
+    /// The consider states' model and cross-covariance `P_ac` ([`consider`]).
+    consider: ConsiderModel<T>,
+    p_ac: CrossCovariance<T>,
 }
 
 impl<T: Scalar> ErrorFilter<T> {
@@ -87,8 +89,12 @@ impl<T: Scalar> ErrorFilter<T> {
         if !(l.iter().all(|v| v.finite()) && l.norm() <= T::c(100.0)) {
             return Err(FilterError::BadLeverArm);
         }
+        let consider = ConsiderModel::of(&config.noise);
+        let mut p = sigma.covariance(yaw, config.scale_factors);
+        let mut p_ac = CrossCovariance::zeros();
+        consider::start(&mut p, &mut p_ac, &consider);
         Ok(Self {
-            p: sigma.covariance(yaw, config.scale_factors),
+            p,
             x: StateVector::zeros(),
             config,
             counters: FilterCounters::default(),
@@ -97,13 +103,19 @@ impl<T: Scalar> ErrorFilter<T> {
             window: InnovationWindow::default(),
             cluster: None,
             since_fix_s: T::zero(),
-            sustained: model::SustainedMotion::default(),
+            consider,
+            p_ac,
         })
     }
 
     /// The covariance.
     pub fn covariance(&self) -> &Covariance<T> {
         &self.p
+    }
+
+    /// The consider states' cross-covariance `P_ac` ([`consider`]).
+    pub fn consider_covariance(&self) -> &CrossCovariance<T> {
+        &self.p_ac
     }
 
     /// The settings.
@@ -171,14 +183,22 @@ impl<T: Scalar> ErrorFilter<T> {
     pub fn propagate(&mut self, prop: &Propagation<T>) {
         let f = model::system_matrix(&prop.lin, &self.config.noise, self.config.scale_factors);
         let phi = Transition::new(&f, prop.dt);
-        self.sustained.add(&prop.lin, prop.dt);
-        let q = model::noise_density(
-            &self.config.noise,
-            self.config.scale_factors,
-            &prop.lin,
-            &self.sustained,
-        );
+        let q = model::noise_density(&self.config.noise, self.config.scale_factors);
+        let phi_ac = self
+            .consider
+            .is_active()
+            .then(|| consider::transition_columns(&f, &prop.lin, &self.consider, prop.dt));
         covariance::propagate(&mut self.p, &phi, &q, prop.dt);
+        if let Some(phi_ac) = &phi_ac {
+            consider::propagate(
+                &mut self.p,
+                &mut self.p_ac,
+                &phi,
+                phi_ac,
+                &self.consider,
+                prop.dt,
+            );
+        }
         self.counters.propagations = self.counters.propagations.wrapping_add(1);
         self.since_fix_s += prop.dt;
         self.check_covariance();
@@ -194,6 +214,7 @@ impl<T: Scalar> ErrorFilter<T> {
         if bad {
             self.covariance_faults = self.covariance_faults.saturating_add(1);
             self.fault_latched = true;
+            self.p_ac = CrossCovariance::zeros();
             for i in 0..N {
                 for j in 0..N {
                     if i != j {
@@ -293,11 +314,19 @@ impl<T: Scalar> ErrorFilter<T> {
             // and the next fixes must be able to pull the solution back.
             let predicted = s[(i, i)] - m.r[i];
             let r_eff = m.r[i].max(predicted / T::c(MAX_SHRINK - 1.0));
+            // The gain, for the consider states' cross-covariance ([`consider::update`]).
+            let gain = self.consider.is_active().then(|| {
+                let ph = self.p * hi;
+                ph / (hi.dot(&ph) + r_eff)
+            });
             if update_scalar(&mut self.x, &mut self.p, &hi, innovation, r_eff, T::c(1e15))
                 != ScalarUpdate::Accepted
             {
                 // The vector test passed, so this is rounding: keep what was used.
                 break;
+            }
+            if let Some(k) = &gain {
+                consider::update(&mut self.p_ac, k, &hi);
             }
         }
         let correction = Correction { x: self.x };
@@ -533,7 +562,11 @@ impl<T: Scalar> ErrorFilter<T> {
         h.fixed_view_mut::<3, 3>(0, BG)
             .copy_from(&Matrix3::identity());
         let arw = self.config.noise.arw_rad_per_sqrt_s;
-        let var = arw * arw / w.duration_s + zm.rate_sigma_rad_s * zm.rate_sigma_rad_s;
+        // The bias instability is a consider state the measurement sees: its variance is
+        // given to the measurement noise (the window is shorter than its correlation time).
+        let var = arw * arw / w.duration_s
+            + zm.rate_sigma_rad_s * zm.rate_sigma_rad_s
+            + self.consider.gyro_bias_instability_variance();
         let r = Vector3::repeat(var);
         let (rr, cr) = self.update(&Measurement { z, h, r });
         self.counters.zero_rate.count(&rr);

@@ -80,6 +80,28 @@ impl<T: Scalar> Transition<T> {
         Self { nav_rows_t, decay }
     }
 
+    /// `Phi m` for a matrix `m` of `N` rows (the consider states' cross-covariance,
+    /// [`super::consider`]): the navigation rows full, the sensor rows scaled by their decay.
+    pub fn times<const C: usize>(&self, m: &SMatrix<T, N, C>) -> SMatrix<T, N, C> {
+        let mut out = SMatrix::<T, N, C>::zeros();
+        let phi_rows = columns(&self.nav_rows_t);
+        for c in 0..C {
+            for (i, phi_i) in phi_rows.iter().enumerate() {
+                let mut v = T::zero();
+                for (k, &phi_ik) in phi_i.iter().enumerate() {
+                    if phi_ik != T::zero() {
+                        v += phi_ik * m[(k, c)];
+                    }
+                }
+                out[(i, c)] = v;
+            }
+            for s in 0..SENSORS {
+                out[(NAV + s, c)] = self.decay[s] * m[(NAV + s, c)];
+            }
+        }
+        out
+    }
+
     /// The whole `N x N` matrix.
     pub fn matrix(&self) -> Covariance<T> {
         let mut phi = Covariance::<T>::zeros();
@@ -190,6 +212,8 @@ mod tests {
             gyro_cross_coupling_rad: 1e-3,
             accel_cross_coupling_rad: 1e-3,
             gyro_g_sensitivity: 1e-5,
+            gyro_bias_instability_rad_s: 0.0,
+            gyro_bias_instability_time_s: 0.0,
         }
     }
 
@@ -229,7 +253,7 @@ mod tests {
     fn structured_propagation_is_the_dense_formula() {
         for scale_factors in [true, false] {
             let f = model::system_matrix(&lin(), &noise(), scale_factors);
-            let q = model::noise_density(&noise(), scale_factors, &lin(), &Default::default());
+            let q = model::noise_density(&noise(), scale_factors);
             for dt in [0.005, 0.1, 1.0] {
                 let dense_phi = Covariance::<f64>::identity() + f * dt + f * f * (dt * dt / 2.0);
                 let phi = Transition::new(&f, dt);
@@ -238,6 +262,8 @@ mod tests {
                 let qm = Covariance::<f64>::from_diagonal(&q);
                 let dense = dense_phi * p * dense_phi.transpose()
                     + (dense_phi * qm * dense_phi.transpose() + qm) * (dt / 2.0);
+                let m = Covariance::<f64>::from_fn(|i, j| ((i * 3 + j) as f64).cos());
+                assert!((phi.times(&m) - dense_phi * m).amax() < 1e-14);
                 propagate(&mut p, &phi, &q, dt);
                 let err = (p - dense).amax();
                 assert!(err < 1e-14 * dense.amax(), "{err}");
@@ -250,7 +276,7 @@ mod tests {
     #[test]
     fn unmodelled_states_stay_zero() {
         let f = model::system_matrix(&lin(), &noise(), false);
-        let q = model::noise_density(&noise(), false, &lin(), &Default::default());
+        let q = model::noise_density(&noise(), false);
         let mut p = covariance();
         p.fixed_view_mut::<6, N>(SG, 0).fill(0.0);
         p.fixed_view_mut::<N, 6>(0, SG).fill(0.0);

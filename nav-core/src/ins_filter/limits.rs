@@ -36,6 +36,10 @@ pub const MAX_COUPLING: f64 = 0.1;
 /// propagation intervals at the default rate; a shorter one is white noise, not a bias.
 pub const MIN_CORRELATION_TIME_S: f64 = 1.0;
 
+/// Shortest correlation time of the gyro bias instability [s]: a shorter Gauss–Markov process
+/// is white noise at the propagation's rate (give it in the ARW).
+pub const MIN_BIAS_INSTABILITY_TIME_S: f64 = 0.1;
+
 /// Largest initial position 1-sigma [m] (the Earth's radius: a start anywhere).
 pub const MAX_POSITION_SIGMA_M: f64 = 6.4e6;
 
@@ -63,6 +67,15 @@ pub fn noise_out_of_range<T: Scalar>(n: &FilterNoise<T>) -> Option<&'static str>
         && within(n.gyro_g_sensitivity, MAX_COUPLING))
     {
         Some("a cross-coupling or g-sensitivity 1-sigma must be 0 to 0.1 (rad, rad/s per m/s^2)")
+    } else if !(within(n.gyro_bias_instability_rad_s, MAX_GYRO_BIAS_RAD_S)
+        && n.gyro_bias_instability_time_s.finite()
+        && n.gyro_bias_instability_time_s >= T::zero()
+        && (n.gyro_bias_instability_rad_s == T::zero()
+            || n.gyro_bias_instability_time_s.to_f64() >= MIN_BIAS_INSTABILITY_TIME_S))
+    {
+        Some(
+            "the gyro bias instability 1-sigma must be 0 to 0.1 rad/s, its correlation time finite and at least 0.1 s",
+        )
     } else if !(n.correlation_time_s.finite()
         && n.correlation_time_s.to_f64() >= MIN_CORRELATION_TIME_S)
     {
@@ -131,6 +144,8 @@ mod tests {
             gyro_cross_coupling_rad: 1e-3,
             accel_cross_coupling_rad: 1e-3,
             gyro_g_sensitivity: 1e-5,
+            gyro_bias_instability_rad_s: 1e-5,
+            gyro_bias_instability_time_s: 5.0,
         }
     }
 
@@ -151,7 +166,7 @@ mod tests {
     #[test]
     fn each_figure_beyond_its_range_is_named() {
         assert_eq!(noise_out_of_range(&noise()), None);
-        let cases: [Case<FilterNoise<f64>>; 9] = [
+        let cases: [Case<FilterNoise<f64>>; 12] = [
             (|n| n.arw_rad_per_sqrt_s = 0.15, "ARW"),
             (|n| n.vrw_mps_per_sqrt_s = f64::NAN, "VRW"),
             (|n| n.gyro_bias_rad_s = 10.0, "gyro bias"),
@@ -160,6 +175,18 @@ mod tests {
             (|n| n.accel_scale = f64::INFINITY, "scale-factor"),
             (|n| n.gyro_cross_coupling_rad = 1.0, "cross-coupling"),
             (|n| n.correlation_time_s = 1e-300, "correlation time"),
+            (
+                |n| n.gyro_bias_instability_rad_s = -1e-6,
+                "bias instability",
+            ),
+            (
+                |n| n.gyro_bias_instability_time_s = 0.01,
+                "bias instability",
+            ),
+            (
+                |n| n.gyro_bias_instability_time_s = f64::NAN,
+                "bias instability",
+            ),
             (|n| n.correlation_time_s = f64::INFINITY, "correlation time"),
         ];
         for (set, name) in cases {
@@ -226,6 +253,8 @@ mod tests {
             gyro_cross_coupling_rad: 0.0,
             accel_cross_coupling_rad: 0.0,
             gyro_g_sensitivity: 0.0,
+            gyro_bias_instability_rad_s: 0.0,
+            gyro_bias_instability_time_s: 0.0,
         };
         assert!(noise_out_of_range(&n).is_some_and(|w| w.contains("ARW")));
     }

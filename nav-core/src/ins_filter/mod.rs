@@ -4,6 +4,8 @@
 //! - [`states`]: the 21 error states and their named offsets;
 //! - [`model`]: the INS error equations (the process model) and their discretisation;
 //! - [`covariance`]: the covariance propagation over the transition matrix's blocks;
+//! - [`consider`]: the sensor errors carried as Schmidt consider states (cross-coupling,
+//!   g-sensitivity, the gyros' bias instability);
 //! - [`aiding`]: the measurements, their outcomes and counters;
 //! - [`integrity`]: the windowed innovation test and the refusal of a consistent cluster of
 //!   wrong position fixes;
@@ -29,6 +31,7 @@
 
 pub mod aiding;
 pub mod background;
+pub mod consider;
 pub mod covariance;
 pub mod foreground;
 pub mod integrity;

@@ -52,18 +52,21 @@ pub struct FilterNoise<T: Scalar> {
     pub accel_scale: T,
     /// Correlation time of the Gauss–Markov bias and scale-factor processes [s].
     pub correlation_time_s: T,
-    /// Gyro cross-axis coupling (misalignment), 1-sigma [rad]: not a state; its error
-    /// `M omega` is covered by process noise on attitude and gyro bias while the body turns
-    /// (see [`noise_density`]).
+    /// Gyro cross-axis coupling (misalignment), 1-sigma of each off-diagonal element [rad]:
+    /// a consider state ([`super::consider`]).
     pub gyro_cross_coupling_rad: T,
-    /// Accelerometer cross-axis coupling (misalignment), 1-sigma [rad]: at rest a part of the
-    /// bias; as the specific force leaves its value at rest, covered by process noise on
-    /// velocity and accelerometer bias.
+    /// Accelerometer cross-axis coupling (misalignment), 1-sigma of each off-diagonal element
+    /// [rad]: at rest a part of the bias; its change as the specific force leaves its value
+    /// at rest, a consider state.
     pub accel_cross_coupling_rad: T,
-    /// Gyro g-sensitivity, 1-sigma [rad/s per m/s^2]: at rest a part of the bias; as the
-    /// specific force leaves its value at rest, covered by process noise on attitude and gyro
-    /// bias.
+    /// Gyro g-sensitivity, 1-sigma of each element [rad/s per m/s^2]: at rest a part of the
+    /// bias; its change with the specific force, a consider state.
     pub gyro_g_sensitivity: T,
+    /// Gyro bias instability: the stationary 1-sigma of a Gauss–Markov bias of a few seconds
+    /// [rad/s] (zero: none), a consider state.
+    pub gyro_bias_instability_rad_s: T,
+    /// Its correlation time [s] (zero: none).
+    pub gyro_bias_instability_time_s: T,
 }
 
 /// What the error model is linearised about: the navigation solution at the end of the
@@ -185,140 +188,22 @@ pub fn system_matrix<T: Scalar>(
     f
 }
 
-/// The time that splits a cross-coupling error into a short one, covered as white noise on
-/// the integrated state, and a lasting one, covered as a random walk of the bias state [s].
-pub const CROSS_COUPLING_TIME_S: f64 = 10.0;
-
-/// The sensor errors that are not states, [Groves, §4.4.6]: `M_g omega_ib_b` and
-/// `G_g f_ib_b` on the gyros, `M_a f_ib_b` on the accelerometers, each a fixed unknown matrix
-/// times a quantity the IMU measures. At rest in the nominal attitude (body z down)
-/// `f_ib_b = (0, 0, -g)` and `omega_ib_b` is Earth rate: there they are constants the bias
-/// states absorb. What the bias states cannot hold is their change as the body moves, by
-/// `d = omega_ib_b` for `M_g` (Earth rate left in: a part of 1e-5 of a car's turn) and
-/// `d = f_ib_b - (0, 0, -g)` for `G_g`, `M_a` (a turn, a climb, a bank).
-///
-/// Per body axis `i` the error's variance is `m^2 (|d|^2 - d_i^2)` for a misalignment (its
-/// row couples the two other axes, each element of 1-sigma `m`) and `k^2 |d|^2` for the
-/// g-sensitivity (a full row of 1-sigma `k`): a car's yaw rate tilts, it does not turn the
-/// heading. That change is covered two ways, so that a motion of any length is: over a
-/// motion shorter than `T_c` ([`CROSS_COUPLING_TIME_S`]) the error `e` integrates into the
-/// attitude or velocity, whose white noise `e^2 T_c` gives a variance `e^2 T_c t` at least the
-/// error's `(e t)^2` for `t <= T_c`; a motion that lasts longer makes a new bias, reached by
-/// the bias state's random walk `e_s^2 / T_c`, where `e_s` is the same error of the motion's
-/// lasting part ([`SustainedMotion`]: `d` low-passed over `T_c`). The error of a short
-/// motion (a car's turn, a braking) ends with the motion: it is not a bias, and giving it to
-/// the bias states as one would keep its variance after the motion has gone.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CrossCoupling<T: Scalar> {
-    /// Gyro error variance per body axis [(rad/s)^2].
-    pub gyro_b: Vector3<T>,
-    /// Accelerometer error variance per body axis [(m/s^2)^2].
-    pub accel_b: Vector3<T>,
-}
-
-impl<T: Scalar> CrossCoupling<T> {
-    /// The variances at the linearisation point (type docs).
-    pub fn at(noise: &FilterNoise<T>, lin: &Linearisation<T>) -> Self {
-        Self::of(noise, &lin.omega_ib_b, &departure_from_rest(lin))
-    }
-
-    /// The variances of a body rate `omega_ib_b` [rad/s] and a specific-force departure from
-    /// rest `d_f_b` [m/s^2] (type docs).
-    pub fn of(noise: &FilterNoise<T>, omega_ib_b: &Vector3<T>, d_f_b: &Vector3<T>) -> Self {
-        let (w, d_f) = (omega_ib_b, d_f_b);
-        let (w2, f2) = (w.norm_squared(), d_f.norm_squared());
-        let (m_g2, m_a2) = (
-            noise.gyro_cross_coupling_rad * noise.gyro_cross_coupling_rad,
-            noise.accel_cross_coupling_rad * noise.accel_cross_coupling_rad,
-        );
-        let k2 = noise.gyro_g_sensitivity * noise.gyro_g_sensitivity;
-        Self {
-            gyro_b: Vector3::from_fn(|i, _| m_g2 * (w2 - w[i] * w[i]) + k2 * f2),
-            accel_b: Vector3::from_fn(|i, _| m_a2 * (f2 - d_f[i] * d_f[i])),
-        }
-    }
-}
-
-/// The specific force's departure from its value at rest in the nominal attitude,
-/// `f_ib_b - (0, 0, -g)` [m/s^2].
-fn departure_from_rest<T: Scalar>(lin: &Linearisation<T>) -> Vector3<T> {
-    let mut d_f = lin.f_ib_b;
-    d_f.z += lin.earth.g;
-    d_f
-}
-
-/// The lasting part of the motion that the cross-coupling errors follow: the body rate and
-/// the specific force's departure from rest, each low-passed over [`CROSS_COUPLING_TIME_S`]
-/// (first order, `x <- x + (d - x) dt / (T_c + dt)`, stable for any interval). A motion much
-/// shorter than `T_c` leaves it near zero; one that lasts several `T_c` brings it to the
-/// motion's value ([`CrossCoupling`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SustainedMotion<T: Scalar> {
-    /// Low-passed body rate `omega_ib_b` [rad/s].
-    pub omega_ib_b: Vector3<T>,
-    /// Low-passed departure of `f_ib_b` from rest [m/s^2].
-    pub d_f_b: Vector3<T>,
-}
-
-impl<T: Scalar> Default for SustainedMotion<T> {
-    fn default() -> Self {
-        Self {
-            omega_ib_b: Vector3::zeros(),
-            d_f_b: Vector3::zeros(),
-        }
-    }
-}
-
-impl<T: Scalar> SustainedMotion<T> {
-    /// Adds a propagation interval `dt` [s] whose mean motion `lin` gives.
-    pub fn add(&mut self, lin: &Linearisation<T>, dt: T) {
-        let a = dt / (T::c(CROSS_COUPLING_TIME_S) + dt);
-        self.omega_ib_b += (lin.omega_ib_b - self.omega_ib_b) * a;
-        self.d_f_b += (departure_from_rest(lin) - self.d_f_b) * a;
-    }
-
-    /// The cross-coupling variances of this lasting motion.
-    pub fn cross_coupling(&self, noise: &FilterNoise<T>) -> CrossCoupling<T> {
-        CrossCoupling::of(noise, &self.omega_ib_b, &self.d_f_b)
-    }
-}
-
-/// A diagonal bound in the NED frame of the body-frame diagonal covariance `diag(q_b)`:
-/// `Q = C_b_n diag(q_b) C_b_n^T` less its off-diagonal terms would not bound it, so each row's
-/// absolute sum is taken (the difference is then diagonally dominant, so positive
-/// semi-definite); for a level body and `q_x = q_y` it is `Q` itself.
-fn diagonal_bound_ned<T: Scalar>(c_b_n: &Matrix3<T>, q_b: &Vector3<T>) -> Vector3<T> {
-    let q = c_b_n * Matrix3::from_diagonal(q_b) * c_b_n.transpose();
-    Vector3::from_fn(|k, _| (0..3).fold(T::zero(), |sum, j| sum + q[(k, j)].abs()))
-}
-
 /// Spectral densities of the driving white noise, per state (diagonal of `G Q G^T`):
 /// `vrw^2` on velocity, `arw^2` on attitude (isotropic, so the rotation `C_b_n` drops out),
-/// `2 sigma^2 / tau` on each Gauss–Markov state ([Groves, eq. 14.80]), and the cross-coupling
-/// errors that are not states ([`CrossCoupling`]): `e^2 T_c` on attitude (gyro) or velocity
-/// (accelerometer), resolved in NED (a diagonal bound), and `e_s^2 / T_c` of the lasting
-/// motion `sustained` on the gyro or accelerometer bias, per body axis.
-pub fn noise_density<T: Scalar>(
-    noise: &FilterNoise<T>,
-    scale_factors: bool,
-    lin: &Linearisation<T>,
-    sustained: &SustainedMotion<T>,
-) -> StateVector<T> {
+/// `2 sigma^2 / tau` on each Gauss–Markov state ([Groves, eq. 14.80]). The cross-coupling
+/// errors and the bias instability are not noise here: they are consider states
+/// ([`super::consider`]).
+pub fn noise_density<T: Scalar>(noise: &FilterNoise<T>, scale_factors: bool) -> StateVector<T> {
     let mut q = StateVector::<T>::zeros();
     let two_over_tau = T::c(2.0) / noise.correlation_time_s;
     let gm = |sigma: T| sigma * sigma * two_over_tau;
-    let t_c = T::c(CROSS_COUPLING_TIME_S);
-    let c = CrossCoupling::at(noise, lin);
-    let lasting = sustained.cross_coupling(noise);
-    let att = diagonal_bound_ned(&lin.c_b_n, &c.gyro_b);
-    let vel = diagonal_bound_ned(&lin.c_b_n, &c.accel_b);
     let arw2 = noise.arw_rad_per_sqrt_s * noise.arw_rad_per_sqrt_s;
     let vrw2 = noise.vrw_mps_per_sqrt_s * noise.vrw_mps_per_sqrt_s;
     for k in 0..3 {
-        q[VEL + k] = vrw2 + vel[k] * t_c;
-        q[ATT + k] = arw2 + att[k] * t_c;
-        q[BG + k] = gm(noise.gyro_bias_rad_s) + lasting.gyro_b[k] / t_c;
-        q[BA + k] = gm(noise.accel_bias_mps2) + lasting.accel_b[k] / t_c;
+        q[VEL + k] = vrw2;
+        q[ATT + k] = arw2;
+        q[BG + k] = gm(noise.gyro_bias_rad_s);
+        q[BA + k] = gm(noise.accel_bias_mps2);
         if scale_factors {
             q[SG + k] = gm(noise.gyro_scale);
             q[SA + k] = gm(noise.accel_scale);
@@ -359,6 +244,8 @@ mod tests {
             gyro_cross_coupling_rad: 0.0,
             accel_cross_coupling_rad: 0.0,
             gyro_g_sensitivity: 0.0,
+            gyro_bias_instability_rad_s: 0.0,
+            gyro_bias_instability_time_s: 0.0,
         }
     }
 
@@ -433,97 +320,6 @@ mod tests {
         assert!((period_min - 84.4).abs() < 0.3, "{period_min}");
     }
 
-    /// The cross-coupling noise is zero at rest in the nominal attitude (where the errors are
-    /// biases the states hold) and, in a 30 deg bank, is sized by the specific force's
-    /// departure from `(0, 0, -g)`: white noise `e^2 T_c` on attitude and velocity at once, a
-    /// random walk on the biases only as the bank lasts (`e^2 / T_c` once it has lasted many
-    /// `T_c`, a part of 1e-3 of that after one second).
-    #[test]
-    fn cross_coupling_noise_follows_the_departure_from_rest() {
-        let mut n = noise();
-        n.gyro_cross_coupling_rad = 2e-3;
-        n.accel_cross_coupling_rad = 1e-3;
-        n.gyro_g_sensitivity = 1e-4;
-        let earth = LocalEarth::new(0.5, 0.0);
-        let g = earth.g;
-        let rest = Linearisation {
-            earth,
-            v_eb_n: Vector3::zeros(),
-            c_b_n: Matrix3::identity(),
-            f_ib_b: Vector3::new(0.0, 0.0, -g),
-            omega_ib_b: Vector3::zeros(),
-        };
-        let still = SustainedMotion::default();
-        let base = noise_density(&noise(), true, &rest, &still);
-        assert_eq!(noise_density(&n, true, &rest, &still), base);
-        let bank = 30f64.to_radians();
-        let turn = Linearisation {
-            f_ib_b: Vector3::new(0.0, 0.0, -g / bank.cos()),
-            omega_ib_b: Vector3::new(0.0, 0.0, 0.1),
-            ..rest
-        };
-        let d_f = g / bank.cos() - g;
-        let c = CrossCoupling::at(&n, &turn);
-        // Yaw rate couples into x and y, the vertical departure into x and y (misalignment)
-        // and into every gyro (g-sensitivity).
-        let k2 = (1e-4 * d_f).powi(2);
-        let gyro = Vector3::new(
-            (2e-3f64 * 0.1).powi(2) + k2,
-            (2e-3f64 * 0.1).powi(2) + k2,
-            k2,
-        );
-        let accel = Vector3::new((1e-3 * d_f).powi(2), (1e-3 * d_f).powi(2), 0.0);
-        assert!((c.gyro_b - gyro).amax() < 1e-20, "{c:?}");
-        assert!((c.accel_b - accel).amax() < 1e-20, "{c:?}");
-        let t_c = CROSS_COUPLING_TIME_S;
-        let rel = |a: f64, b: f64, tol: f64| (a - b).abs() <= tol * b.abs() + 1e-30;
-        // One second into the bank, then twenty time constants.
-        let (mut brief, mut lasting) = (still, still);
-        for _ in 0..10 {
-            brief.add(&turn, 0.1);
-        }
-        for _ in 0..(200.0 * t_c) as usize {
-            lasting.add(&turn, 0.1);
-        }
-        let q = noise_density(&n, true, &turn, &lasting);
-        let q_brief = noise_density(&n, true, &turn, &brief);
-        for k in 0..3 {
-            // Level body: the NED diagonal is the body one.
-            assert!(rel(q[ATT + k] - base[ATT + k], gyro[k] * t_c, 1e-12), "{k}");
-            assert!(
-                rel(q[VEL + k] - base[VEL + k], accel[k] * t_c, 1e-12),
-                "{k}"
-            );
-            assert_eq!(q_brief[ATT + k], q[ATT + k]);
-            assert!(rel(q[BG + k] - base[BG + k], gyro[k] / t_c, 1e-6), "{k}");
-            assert!(rel(q[BA + k] - base[BA + k], accel[k] / t_c, 1e-6), "{k}");
-            // (1 - e^(-1 s / T_c))^2 of the lasting walk, about 1/110.
-            assert!(
-                q_brief[BG + k] - base[BG + k] <= gyro[k] / t_c / 100.0,
-                "{k}"
-            );
-            assert!(
-                q_brief[BA + k] - base[BA + k] <= accel[k] / t_c / 100.0,
-                "{k}"
-            );
-        }
-    }
-
-    /// The NED diagonal bounds the rotated body covariance: `D - C diag(q) C^T` is positive
-    /// semi-definite for any attitude.
-    #[test]
-    fn the_ned_diagonal_bounds_the_rotated_covariance() {
-        let q_b = Vector3::new(1.0, 4.0, 0.5);
-        for (r, p, y) in [(0.1, -0.05, 1.0), (0.8, 0.4, -2.0), (1.5, -1.2, 0.3)] {
-            let c = *nalgebra::Rotation3::from_euler_angles(r, p, y).matrix();
-            let d = diagonal_bound_ned(&c, &q_b);
-            let q = c * Matrix3::from_diagonal(&q_b) * c.transpose();
-            let diff = Matrix3::from_diagonal(&d) - q;
-            let eig = diff.symmetric_eigenvalues();
-            assert!(eig.min() > -1e-12, "{eig}");
-        }
-    }
-
     #[test]
     fn scale_factors_off_leave_their_rows_empty() {
         let f = system_matrix(&lin(0.3, Vector3::zeros()), &noise(), false);
@@ -531,12 +327,7 @@ mod tests {
             assert!(f.row(i).iter().all(|x| *x == 0.0));
             assert!(f.column(i).iter().all(|x| *x == 0.0));
         }
-        let q = noise_density(
-            &noise(),
-            false,
-            &lin(0.3, Vector3::zeros()),
-            &SustainedMotion::default(),
-        );
+        let q = noise_density(&noise(), false);
         assert!(q.rows(SG, 6).iter().all(|x| *x == 0.0));
     }
 }

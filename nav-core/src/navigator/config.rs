@@ -81,6 +81,10 @@ pub fn filter_noise_of<T: Scalar>(n: &SensorNoise<f64>) -> FilterNoise<T> {
         gyro_cross_coupling_rad: T::c(DEFAULT_CROSS_COUPLING_RAD),
         accel_cross_coupling_rad: T::c(DEFAULT_CROSS_COUPLING_RAD),
         gyro_g_sensitivity: T::c(DEFAULT_G_SENSITIVITY),
+        // A data sheet's noise figures give no correlation time: the bias instability is in
+        // the bias figure.
+        gyro_bias_instability_rad_s: T::zero(),
+        gyro_bias_instability_time_s: T::zero(),
     }
 }
 
