@@ -64,8 +64,9 @@ pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {
 /// the drive `2 sigma^2 / tau` stays the grade's in-run drift (sigma follows tau).
 pub const FILTER_CORRELATION_TIME_S: f64 = 360_000.0;
 
-/// A simulated Gauss–Markov bias shorter than this [s] is seen by the filter as white noise
-/// (it decorrelates between a few GNSS fixes); a longer one as a drift of the bias state.
+/// A simulated Gauss–Markov bias shorter than this [s] is not a drift of the bias state (it
+/// decorrelates between a few GNSS fixes): a gyro's is the filter's bias-instability consider
+/// state, an accelerometer's white noise; a longer one drives the bias state.
 pub const WHITE_GM_BELOW_S: f64 = 60.0;
 
 /// The filter's model of a grade with its two kinds of sensor error kept apart, as KF-GINS
@@ -88,15 +89,16 @@ pub struct GradeFilterModel {
 ///   process: a Gauss–Markov state of 1 h driven as if the turn-on spread re-randomised every
 ///   hour lets the bias wander by `sigma sqrt(2 t / tau)` (a quarter of the turn-on spread in
 ///   two minutes), which makes the filter's sigma several times its error;
-/// - a Gauss–Markov bias of correlation time `T` below [`WHITE_GM_BELOW_S`] (the MEMS gyros'
-///   bias instability, `T` of a few seconds) integrates like white noise of density
-///   `2 sigma^2 T` (its spectrum at frequencies below `1 / T`, [Groves, eq. 14.80] for the
-///   density of a Gauss–Markov drive): added to the random walk; a longer one, and the rate
-///   random walk `K`, drive the bias state with `2 sigma^2 / T + K^2`;
+/// - a gyro Gauss–Markov bias of correlation time `T` below [`WHITE_GM_BELOW_S`] (the MEMS
+///   gyros' bias instability, `T` of a few seconds) is the filter's bias-instability consider
+///   state ([`nav_core::ins_filter::consider`]); an accelerometer's integrates like white noise
+///   of density `2 sigma^2 T` (its spectrum at frequencies below `1 / T`, [Groves, eq. 14.80]
+///   for the density of a Gauss–Markov drive), added to the random walk; a longer one, and the
+///   rate random walk `K`, drive the bias state with `2 sigma^2 / T + K^2`;
 /// - the scale factors are constants of the grade: the start's 1-sigma the largest of them
 ///   (at least 1 ppm), no in-run drift;
-/// - misalignment and g-sensitivity as in [`grade_noise`]: the process model covers what the
-///   bias states cannot hold of them ([`nav_core::ins_filter::model::CrossCoupling`]).
+/// - misalignment and g-sensitivity as in [`grade_noise`]: consider states of the filter
+///   ([`nav_core::ins_filter::consider`]).
 pub fn grade_filter_model(grade: Grade) -> GradeFilterModel {
     filter_model_of(&grade.model())
 }

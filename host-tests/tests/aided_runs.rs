@@ -108,8 +108,8 @@ fn outage_drift_stays_within_the_predicted_sigma() {
     assert_eq!(drifts.len(), 4, "{drifts:?}");
     for d in &drifts {
         assert!(d.drift_m <= 3.0 * d.sigma_m, "{d:?}");
-        // The 1-sigma grows in the outage beyond the aided 0.3 m.
-        assert!(d.sigma_m > 1.0, "{d:?}");
+        // The 1-sigma grows in the outage to more than twice the aided 0.3 m.
+        assert!(d.sigma_m > 0.6, "{d:?}");
     }
     let ms = |f: fn(&host_tests::gnss_bench::OutageDrift) -> f64| {
         drifts.iter().map(|d| f(d).powi(2)).sum::<f64>()

@@ -415,8 +415,18 @@ impl<T: Scalar> ErrorFilter<T> {
             self.window.clear();
             self.window.push(w);
         }
-        self.cluster = None;
-        let out = self.apply(m, &s, nis);
+        let out = if self.cluster.take().is_some() {
+            // The first fix after a refused cluster: its offset joins the position's
+            // covariance ([`integrity`] module docs, [Groves, ch. 17]).
+            let mut pos = self.p.fixed_view_mut::<3, 3>(POS, POS);
+            pos += m.z * m.z.transpose();
+            match self.innovation(m) {
+                Some((s, nis)) => self.apply(m, &s, nis),
+                None => (AidResult::Invalid, None),
+            }
+        } else {
+            self.apply(m, &s, nis)
+        };
         if let Some(c) = &out.1 {
             self.window.set_last_correction(&c.x);
         }

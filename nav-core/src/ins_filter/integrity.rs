@@ -40,7 +40,13 @@
 //! typical error of the filter (its normalised square within the median of `chi^2(3)`): the
 //! filter can then no longer tell which of the two is wrong, and a filter that was itself
 //! pulled off by a fault the window could not see (a MEMS filter follows a slow ramp with small
-//! innovations) re-acquires the true fixes from its own growing sigma.
+//! innovations) re-acquires the true fixes from its own growing sigma. The first fix taken
+//! after a cluster adds its own offset `z z^T` to the position's covariance (fault recovery by
+//! covariance increase [Groves, ch. 17], as the window does): the filter had refused fixes
+//! that agree with it again, so its position is doubtful by that offset, a step it followed
+//! rather than a drift of its velocity, and the fix moves the position, not the velocity (a
+//! MEMS filter that followed a ramp otherwise turned the step back into a velocity error and
+//! lost the fixes again).
 //!
 //! **A gross cluster** is not released that way. Its first fix was beyond
 //! [`GROSS_NIS_FACTOR`] times the gate, a jump no plausible optimism of the filter's own
