@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{nav, output_text};
+use common::{generated_recording, nav, output_text, replay_args};
 
 /// Runs `nav args`, expecting a refusal (status 1) whose text contains every one of `expected`
 /// and no number of more than 30 digits; returns the text.
@@ -136,14 +136,7 @@ fn replay_site_and_window_read_as_typed() {
     let dir = tempfile::tempdir().unwrap();
     let imu = dir.path().join("imu.bin");
     let out = dir.path().join("o.csv");
-    let o = nav(&[
-        "generate",
-        "--out",
-        imu.to_str().unwrap(),
-        "--seconds",
-        "12",
-    ]);
-    assert!(o.status.success(), "{}", output_text(&o));
+    generated_recording(&imu, "12");
     let replay = |site: [&str; 4], expected: &str| {
         let args = [
             "replay",
@@ -193,14 +186,7 @@ fn replay_alignment_options_beyond_range_are_refused_in_both_precisions() {
     let dir = tempfile::tempdir().unwrap();
     let imu = dir.path().join("imu.bin");
     let out = dir.path().join("o.csv");
-    let o = nav(&[
-        "generate",
-        "--out",
-        imu.to_str().unwrap(),
-        "--seconds",
-        "12",
-    ]);
-    assert!(o.status.success(), "{}", output_text(&o));
+    generated_recording(&imu, "12");
     for precision in ["f32", "f64"] {
         for (option, value, expected) in [
             (
@@ -234,25 +220,11 @@ fn replay_alignment_options_beyond_range_are_refused_in_both_precisions() {
                 "lever arm 1.000e300 m is beyond 100 m",
             ),
         ] {
-            let args = [
-                "replay",
-                "--imu",
+            let args = replay_args(
                 imu.to_str().unwrap(),
-                "--out",
                 out.to_str().unwrap(),
-                "--lat",
-                "45",
-                "--lon",
-                "7.5",
-                "--h",
-                "150",
-                "--align-seconds",
-                "10",
-                "--precision",
-                precision,
-                option,
-                value,
-            ];
+                &["--precision", precision, option, value],
+            );
             refused(&args, &[expected]);
             assert!(!out.exists());
         }

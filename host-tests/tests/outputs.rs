@@ -5,27 +5,7 @@ use host_tests::generate::Stationary;
 use host_tests::recording_io;
 use std::path::Path;
 mod common;
-use common::{nav, output_text as text};
-
-fn replay_args<'a>(imu: &'a str, out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
-    let mut v = vec![
-        "replay",
-        "--imu",
-        imu,
-        "--out",
-        out,
-        "--lat",
-        "45",
-        "--lon",
-        "7.5",
-        "--h",
-        "150",
-        "--align-seconds",
-        "10",
-    ];
-    v.extend_from_slice(extra);
-    v
-}
+use common::{nav, output_text as text, replay_args};
 
 fn recording(dir: &Path, seconds: f64) -> String {
     let s = Stationary {

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{nav, output_text};
+use common::{nav, output_text, replay_args};
 use hal_adapters::protocol::messages::{EndOfRun, HealthReport, NavSolution, RawIncrements};
 use hal_adapters::protocol::status::{HealthCounters, NavStatus, StatusFlags};
 use hal_adapters::protocol::vibration::VibrationLevels;
@@ -187,23 +187,11 @@ fn replayed_logs_come_back_byte_for_byte_through_garbage() {
         "30",
     ]);
     let free = d.join("free.csv");
-    run_ok(&[
-        "replay",
-        "--imu",
+    run_ok(&replay_args(
         imu.to_str().unwrap(),
-        "--out",
         free.to_str().unwrap(),
-        "--lat",
-        "45",
-        "--lon",
-        "7.5",
-        "--h",
-        "150",
-        "--align-seconds",
-        "10",
-        "--log-every",
-        "1",
-    ]);
+        &["--log-every", "1"],
+    ));
     let log = std::fs::read_to_string(&free).unwrap();
     assert!(log.lines().count() > 7000);
     decode_round_trip(d, "free", &log);

@@ -24,8 +24,8 @@
 
 mod common;
 
-use common::nav;
 use common::{EARTH_RADIUS_M, Row, expected_rows, parse_log, replay};
+use common::{nav, replay_args};
 use host_tests::generate::Stationary;
 use host_tests::recording_io;
 use host_tests::replay::ReplayOptions;
@@ -360,21 +360,11 @@ fn cli_reports_errors_without_panicking() {
     let bytes = scenario().recording().unwrap().to_bytes().unwrap();
     std::fs::write(&rec, &bytes[..48 + 40 * 10 + 7]).unwrap();
     let log = dir.path().join("log.csv");
-    let out = nav(&[
-        "replay",
-        "--imu",
+    let out = nav(&replay_args(
         rec.to_str().unwrap(),
-        "--lat",
-        "45",
-        "--lon",
-        "7.5",
-        "--h",
-        "150",
-        "--align-seconds",
-        "10",
-        "--out",
         log.to_str().unwrap(),
-    ]);
+        &[],
+    ));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(

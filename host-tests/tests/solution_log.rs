@@ -2,6 +2,8 @@
 //! log with it, and `nav report` compares a log without it with a warning that the run was cut
 //! short, and refuses an end record that does not match the rows.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -36,24 +38,7 @@ fn the_end_record_marks_a_complete_log_and_report_warns_without_it() {
         ],
     );
     assert!(o.status.success(), "{}", stderr(&o));
-    let o = nav(
-        d,
-        &[
-            "replay",
-            "--imu",
-            "sim/imu.bin",
-            "--out",
-            "log.csv",
-            "--lat",
-            "45",
-            "--lon",
-            "7.5",
-            "--h",
-            "150",
-            "--align-seconds",
-            "10",
-        ],
-    );
+    let o = nav(d, &common::replay_args("sim/imu.bin", "log.csv", &[]));
     assert!(o.status.success(), "{}", stderr(&o));
     let log = std::fs::read_to_string(d.join("log.csv")).unwrap();
     let lines: Vec<&str> = log.lines().collect();

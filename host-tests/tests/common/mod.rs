@@ -88,6 +88,40 @@ pub fn nav(args: &[&str]) -> std::process::Output {
         .expect("run nav")
 }
 
+/// `nav replay` of `imu` into `out` at the tests' site (45 deg, 7.5 deg, 150 m) with a 10 s
+/// alignment window, followed by `extra`.
+pub fn replay_args<'a>(imu: &'a str, out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut v = vec![
+        "replay",
+        "--imu",
+        imu,
+        "--out",
+        out,
+        "--lat",
+        "45",
+        "--lon",
+        "7.5",
+        "--h",
+        "150",
+        "--align-seconds",
+        "10",
+    ];
+    v.extend_from_slice(extra);
+    v
+}
+
+/// Writes a still recording of `seconds` [s] to `path` with `nav generate`, which must succeed.
+pub fn generated_recording(path: &Path, seconds: &str) {
+    let o = nav(&[
+        "generate",
+        "--out",
+        path.to_str().unwrap(),
+        "--seconds",
+        seconds,
+    ]);
+    assert!(o.status.success(), "{}", output_text(&o));
+}
+
 /// A command's stdout and stderr, as text.
 pub fn output_text(o: &std::process::Output) -> String {
     format!(
