@@ -27,8 +27,8 @@ pub fn noise_of_spec(n: &NoiseSpec) -> FilterNoise<f64> {
 
 /// The filter's assumptions for a grade: its white noise, and per axis the largest of the
 /// fixed bias, the turn-on 1-sigma and the Gauss–Markov 1-sigma (as the alignment's);
-/// scale factors: the largest fixed scale error; cross-axis coupling: the largest
-/// misalignment; correlation time 1 h. The start's sensor 1-sigma is the same figure, the
+/// scale factors: the largest fixed scale error; cross-axis coupling: the RMS of the six
+/// misalignment elements ([`off_diagonal_rms`]); correlation time 1 h. The start's sensor 1-sigma is the same figure, the
 /// process's stationary one, so its covariance does not decay; conservative (the turn-on
 /// spread is let wander in-run as well), used by `nav replay --imu-noise`, whose starts in
 /// motion and from the alignment take the sensor 1-sigma from the noise model alone.
@@ -153,8 +153,9 @@ pub fn filter_model_of(m: &crate::sensor_model::ImuErrorModel) -> GradeFilterMod
 }
 
 /// The 1-sigma of a misalignment matrix's elements (the filter's `*_cross_coupling_rad`):
-/// the RMS of its six off-diagonals [rad].
-fn off_diagonal_rms(m: &nav_core::nalgebra::Matrix3<f64>) -> f64 {
+/// the RMS of its six off-diagonals [rad], the grade's spread of such elements (a sensor's
+/// matrix is one draw of it; `nav bench consistency` draws one per run).
+pub fn off_diagonal_rms(m: &nav_core::nalgebra::Matrix3<f64>) -> f64 {
     let sum2 = m.norm_squared() - m.diagonal().norm_squared();
     (sum2.max(0.0) / 6.0).sqrt()
 }

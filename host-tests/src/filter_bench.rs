@@ -251,6 +251,9 @@ pub struct FilterBenchReport {
     pub horizontal_max_m: f64,
     /// Truth epochs compared.
     pub compared: usize,
+    /// The filter's own 1-sigma RMS over the run: the error it expects of itself on these
+    /// data, which no forward filter of the same model beats.
+    pub sigma_rms: kf_gins_run::SigmaRms,
 }
 
 /// Runs `nav kf-gins` on a generated data set and compares its trajectory with the truth.
@@ -296,6 +299,7 @@ pub fn run(data: &DataSet) -> Result<FilterBenchReport> {
         yaw_rms_deg: (y2 / n as f64).sqrt(),
         horizontal_max_m: hmax,
         compared: n,
+        sigma_rms: run.sigma_rms,
     })
 }
 

@@ -12,7 +12,7 @@ use crate::nav_writer::{NavRow, NavWriter};
 use anyhow::{Context, Result, bail};
 use nav_core::attitude::euler;
 use nav_core::ins_filter::model::FilterNoise;
-use nav_core::ins_filter::{AidedIns, FilterConfig, SensorErrors};
+use nav_core::ins_filter::{ATT, AidedIns, FilterConfig, POS, SensorErrors};
 use nav_core::{ImuIncrement, Vector3};
 use std::fs::File;
 use std::io::BufReader;
@@ -38,6 +38,18 @@ pub struct KfGinsRun {
     /// it into place [s]: a wait on the disk, not processing (KF-GINS does not sync its
     /// output).
     pub store_s: f64,
+    /// The filter's own 1-sigma over the trajectory's rows.
+    pub sigma_rms: SigmaRms,
+}
+
+/// RMS over a run's rows of the filter's own 1-sigma: the error a consistent filter expects,
+/// the bound its accuracy is judged beside.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SigmaRms {
+    /// Horizontal position, `sqrt(mean(P_nn + P_ee))` [m].
+    pub horizontal_m: f64,
+    /// Heading [deg].
+    pub yaw_deg: f64,
 }
 
 /// The filter's settings of a KF-GINS configuration. KF-GINS gives the noise per axis; the
@@ -94,14 +106,32 @@ pub fn start(c: &KfGinsConfig) -> GivenStart {
     }
 }
 
-/// Every filter sample as a `.nav` row.
+/// Every filter sample as a `.nav` row, and the sums of [`SigmaRms`].
 struct NavRows {
     writer: NavWriter,
+    /// Sums of the horizontal position variance [m^2] and the heading's [rad^2], and rows.
+    variance_sums: (f64, f64, u64),
+}
+
+impl NavRows {
+    fn sigma_rms(&self) -> SigmaRms {
+        let (h2, y2, n) = self.variance_sums;
+        let n = n.max(1) as f64;
+        SigmaRms {
+            horizontal_m: (h2 / n).sqrt(),
+            yaw_deg: (y2 / n).sqrt().to_degrees(),
+        }
+    }
 }
 
 impl AidedSink<f64> for NavRows {
     fn sample(&mut self, t_us: u64, ins: &AidedIns<f64>) -> Result<()> {
         let s = ins.state();
+        let p = ins.covariance();
+        let sums = &mut self.variance_sums;
+        sums.0 += p[(POS, POS)] + p[(POS + 1, POS + 1)];
+        sums.1 += p[(ATT + 2, ATT + 2)];
+        sums.2 += 1;
         let (roll, pitch, yaw) = euler(&s.q_b_n);
         self.writer.write_row(&NavRow {
             t_s: t_us as f64 * 1e-6,
@@ -174,6 +204,7 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
     };
     let mut sink = NavRows {
         writer: NavWriter::create(&out)?,
+        variance_sums: (0.0, 0.0, 0),
     };
     let report = aided::run(samples, &fixes, seq, &mut sink)?;
     if report.start_s.is_none() {
@@ -194,6 +225,7 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
             c.imu_path.display()
         );
     }
+    let sigma_rms = sink.sigma_rms();
     let (rows, store_s) = sink.writer.finish_timed()?;
     Ok(KfGinsRun {
         report,
@@ -202,5 +234,6 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
         warnings,
         outside_window,
         store_s,
+        sigma_rms,
     })
 }

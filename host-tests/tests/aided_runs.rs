@@ -225,6 +225,13 @@ fn kf_gins_runs_a_configuration_as_it_is() {
     assert_eq!(r.samples, data.imu_rows);
     // RTK fixes of 2 cm: the horizontal RMS within 3 times their horizontal 2.8 cm.
     assert!(r.horizontal_rms_m < 0.085, "{r:?}");
+    // The filter's own horizontal 1-sigma (RMS over the rows) tells the error: within a
+    // factor of 3 either way.
+    let sigma = r.sigma_rms.horizontal_m;
+    assert!(
+        r.horizontal_rms_m < 3.0 * sigma && sigma < 3.0 * r.horizontal_rms_m,
+        "{r:?}"
+    );
     let rows = std::fs::read_to_string(&data.out).unwrap().lines().count() as u64;
     assert_eq!(rows, data.imu_rows);
     // Without --out: KF-GINS's own name in outputpath.
@@ -264,6 +271,13 @@ fn an_optimistic_noise_model_does_not_run_away_from_rtk_fixes() {
         .unwrap();
     // Within 3 times the fixes' horizontal 2.8 cm, as with the right noise.
     assert!(r.horizontal_rms_m < 0.085, "{r:?}");
+    // The filter's own horizontal 1-sigma (RMS over the rows) tells the error: within a
+    // factor of 3 either way.
+    let sigma = r.sigma_rms.horizontal_m;
+    assert!(
+        r.horizontal_rms_m < 3.0 * sigma && sigma < 3.0 * r.horizontal_rms_m,
+        "{r:?}"
+    );
 }
 
 /// Bad configurations and GNSS files are refused with the reason, and no trajectory is left.
