@@ -352,6 +352,8 @@ pub struct AidedReplay {
     pub imu: PathBuf,
     /// The GNSS file.
     pub gnss: PathBuf,
+    /// The 1-sigma of a GNSS file without its own (gnss-ins-sim's GPS file).
+    pub gnss_sigma: Option<gnss::AssumedSigma>,
     /// The solution log.
     pub out: PathBuf,
     /// The filter's settings.
@@ -385,8 +387,8 @@ pub fn sequencer<T: Scalar>(
 /// Runs an aided replay in precision `T`, writing the log atomically.
 pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
     atomic::refuse_same_file(&[&a.imu, &a.gnss], &a.out)?;
-    let fixes: Vec<GnssFix> =
-        gnss::read_gnss(&a.gnss).with_context(|| format!("GNSS file {}", a.gnss.display()))?;
+    let fixes: Vec<GnssFix> = gnss::read_gnss_assuming(&a.gnss, a.gnss_sigma.as_ref())
+        .with_context(|| format!("GNSS file {}", a.gnss.display()))?;
     let seq = sequencer::<T>(&a.config, &a.start)?;
     let (mut source, _format) = ReplaySource::open(&a.imu)?;
     let report = atomic::write(&a.out, |w| -> Result<(AidedReport, u64)> {

@@ -1,5 +1,6 @@
 //! GNSS fixes (position, optionally velocity, with their 1-sigma): the fix type, the readers of
-//! the project's GNSS CSV and of KF-GINS's GNSS text file, and the CSV writer.
+//! the project's GNSS CSV and of KF-GINS's GNSS text file (and gnss-ins-sim's GPS file with a
+//! stated 1-sigma, [`read_gnss_assuming`]), and the CSV writer.
 //!
 //! **Project CSV** (header first, units in the column names):
 //!
@@ -39,6 +40,8 @@ use crate::text_stream::{CsvRecords, CutCheck, LineReader};
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read, Write};
 use std::path::Path;
+
+pub use crate::gnss_ins_sim::AssumedSigma;
 
 /// One GNSS fix, in SI units.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -129,8 +132,53 @@ pub fn detect(path: &Path) -> Result<GnssFormat, TextError> {
     Ok(GnssFormat::KfGins) // no data line: the text reader says so
 }
 
-/// Reads a GNSS file of either format ([`detect`]).
+/// Reads a GNSS file of either format ([`detect`]); gnss-ins-sim's GPS file, which has no
+/// 1-sigma, is refused ([`read_gnss_assuming`]).
 pub fn read_gnss(path: &Path) -> anyhow::Result<Vec<GnssFix>> {
+    read_gnss_assuming(path, None)
+}
+
+/// [`read_gnss`], or gnss-ins-sim's GPS file (`gps-K.csv`, or its folder for `gps-0.csv`;
+/// [`crate::gnss_ins_sim::read_gps`]) with the 1-sigma `assumed`, which it needs: that file
+/// holds none. A file with its own 1-sigma and an `assumed` one is refused (which would
+/// count is not for this reader to guess).
+pub fn read_gnss_assuming(
+    path: &Path,
+    assumed: Option<&AssumedSigma>,
+) -> anyhow::Result<Vec<GnssFix>> {
+    let gps_csv = path.join("gps-0.csv");
+    let path = if path.is_dir() && gps_csv.is_file() {
+        gps_csv.as_path()
+    } else {
+        path
+    };
+    let mut first = String::new();
+    File::open(path)
+        .map(BufReader::new)
+        .and_then(|mut r| r.read_line(&mut first))
+        .map_err(|e| TextError::io(path, e))?;
+    if crate::gnss_ins_sim::looks_like_gps(first.trim_start_matches('\u{feff}')) {
+        let Some(assumed) = assumed else {
+            anyhow::bail!(
+                "{}: gnss-ins-sim's GPS file holds no 1-sigma: state the receiver's with \
+                 --gnss-sigma N,E,D [m] (and --gnss-velocity-sigma VN,VE,VD [m/s] to use its \
+                 velocity); gnss-ins-sim's default receiver is 5,5,7 m and 0.05 m/s",
+                path.display()
+            );
+        };
+        return crate::gnss_ins_sim::read_gps(path, assumed);
+    }
+    anyhow::ensure!(
+        assumed.is_none(),
+        "{}: this GNSS file gives each fix its own 1-sigma; --gnss-sigma is for gnss-ins-sim's \
+         GPS file, which has none",
+        path.display()
+    );
+    read_text_gnss(path)
+}
+
+/// The project's CSV or KF-GINS's text ([`detect`]).
+fn read_text_gnss(path: &Path) -> anyhow::Result<Vec<GnssFix>> {
     // The firmware's binary fix file is not a text this reads: say what it is.
     let mut magic = [0u8; 8];
     let head = File::open(path)

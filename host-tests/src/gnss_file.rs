@@ -45,12 +45,12 @@ pub fn is_record_file(path: &Path) -> Result<bool> {
 }
 
 /// Reads a GNSS file of any format: binary ([`gnss_record`]) when it starts with its magic,
-/// text otherwise ([`gnss::read_gnss`]). Errors name the file (and the line, or the byte
-/// offset and fix).
-pub fn read_fixes(path: &Path) -> Result<GnssFixes> {
+/// text otherwise ([`gnss::read_gnss_assuming`], `assumed` the 1-sigma of a gnss-ins-sim GPS
+/// file). Errors name the file (and the line, or the byte offset and fix).
+pub fn read_fixes(path: &Path, assumed: Option<&gnss::AssumedSigma>) -> Result<GnssFixes> {
     let in_file = || format!("GNSS file {}", path.display());
-    if !is_record_file(path)? {
-        let text = gnss::read_gnss(path).with_context(in_file)?;
+    if path.is_dir() || !is_record_file(path)? {
+        let text = gnss::read_gnss_assuming(path, assumed).with_context(in_file)?;
         let mut out = GnssFixes::default();
         for f in &text {
             match fix_input::<f64>(f) {
@@ -158,9 +158,10 @@ pub fn write_record_file(path: &Path, fixes: &[GnssFix]) -> Result<()> {
     .with_context(|| format!("writing {}", path.display()))
 }
 
-/// Converts a GNSS text file (the project's CSV or KF-GINS's text) into the binary fix file
-/// the firmware reads; returns the number of fixes.
-pub fn convert(input: &Path, output: &Path) -> Result<usize> {
+/// Converts a GNSS text file (the project's CSV or KF-GINS's text, or gnss-ins-sim's GPS file
+/// with the 1-sigma `assumed`) into the binary fix file the firmware reads; returns the number
+/// of fixes.
+pub fn convert(input: &Path, output: &Path, assumed: Option<&gnss::AssumedSigma>) -> Result<usize> {
     // The output is binary: a text file's name would hide it.
     if let Some(ext) = output.extension().and_then(|e| e.to_str())
         && ["csv", "txt", "pos"].contains(&ext.to_ascii_lowercase().as_str())
@@ -171,7 +172,8 @@ pub fn convert(input: &Path, output: &Path) -> Result<usize> {
         );
     }
     atomic::refuse_same_file(&[input], output)?;
-    let fixes = gnss::read_gnss(input).with_context(|| format!("GNSS file {}", input.display()))?;
+    let fixes = gnss::read_gnss_assuming(input, assumed)
+        .with_context(|| format!("GNSS file {}", input.display()))?;
     write_record_file(output, &fixes)?;
     Ok(fixes.len())
 }
@@ -186,7 +188,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let input = dir.path().join("gnss.csv");
         let out = dir.path().join("fixes.CSV");
-        let e = convert(&input, &out).unwrap_err().to_string();
+        let e = convert(&input, &out, None).unwrap_err().to_string();
         assert!(e.contains("name it .bin"), "{e}");
         assert!(!out.exists());
     }
@@ -213,9 +215,12 @@ mod tests {
         let csv = dir.path().join("gnss.csv");
         let bin = dir.path().join("gnss.bin");
         gnss::write_gnss_csv(&csv, &fixes()).unwrap();
-        assert_eq!(convert(&csv, &bin).unwrap(), 5);
+        assert_eq!(convert(&csv, &bin, None).unwrap(), 5);
         assert!(is_record_file(&bin).unwrap() && !is_record_file(&csv).unwrap());
-        let (a, b) = (read_fixes(&csv).unwrap(), read_fixes(&bin).unwrap());
+        let (a, b) = (
+            read_fixes(&csv, None).unwrap(),
+            read_fixes(&bin, None).unwrap(),
+        );
         assert_eq!(a.fixes.len(), 5);
         assert_eq!(a.bad_time_tags, 0);
         // Bit for bit (a NaN sigma included): compare the records.
@@ -247,7 +252,7 @@ mod tests {
         let mut bytes = std::fs::read(&bin).unwrap();
         bytes[32 + 112 * 2 + 9] ^= 0x10;
         std::fs::write(&bin, &bytes).unwrap();
-        let e = read_fixes(&bin).unwrap_err();
+        let e = read_fixes(&bin, None).unwrap_err();
         assert_eq!(
             format!("{e:#}"),
             format!(
@@ -256,7 +261,7 @@ mod tests {
             )
         );
         std::fs::write(&bin, &bytes[..100]).unwrap();
-        let e = read_fixes(&bin).unwrap_err();
+        let e = read_fixes(&bin, None).unwrap_err();
         assert!(format!("{e:#}").contains("truncated"), "{e:#}");
     }
 }

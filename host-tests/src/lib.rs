@@ -48,6 +48,7 @@ pub mod generate;
 pub mod gnss;
 pub mod gnss_bench;
 pub mod gnss_file;
+pub mod gnss_ins_sim;
 pub mod gnss_sim;
 pub mod imu_csv;
 pub mod kf_gins;

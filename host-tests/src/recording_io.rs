@@ -19,7 +19,7 @@ use crate::text_error::{MAX_TIME_S, seconds_to_ns};
 use crate::text_recording::{
     self, HeaderScan, RATE_PREFIX_RECORDS, TextRecords, TextReplay, rate_from_times,
 };
-use crate::{imu_csv, kf_gins, psins};
+use crate::{gnss_ins_sim, imu_csv, kf_gins, psins};
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use core::convert::Infallible;
 use hal_adapters::io::StdReader;
@@ -44,6 +44,8 @@ pub enum Format {
     Psins,
     /// KF-GINS IMU text ([`kf_gins`]).
     KfGins,
+    /// A gnss-ins-sim output folder, or one of its IMU files ([`gnss_ins_sim`]).
+    GnssInsSim,
 }
 
 impl core::fmt::Display for Format {
@@ -53,6 +55,7 @@ impl core::fmt::Display for Format {
             Self::Csv => "CSV",
             Self::Psins => "PSINS",
             Self::KfGins => "KF-GINS",
+            Self::GnssInsSim => "gnss-ins-sim",
         })
     }
 }
@@ -60,8 +63,18 @@ impl core::fmt::Display for Format {
 /// Detects the format of `path`: by the binary magic bytes, the CSV header (`t_s,...`), a PSINS
 /// `%` comment on the first line, or a first line of 7 (or 8) numbers (KF-GINS); failing those, by
 /// the extension (`.bin`, `.csv`, `.imu`, `.txt` for KF-GINS), so a damaged file still gets the
-/// format's own error message. A KF-GINS GNSS file given as a recording is refused by name.
+/// format's own error message. A KF-GINS GNSS file given as a recording is refused by name. A
+/// folder is a gnss-ins-sim output folder or refused; so is a file with one of its headers.
 pub fn detect(path: &Path) -> Result<Format> {
+    if path.is_dir() {
+        ensure!(
+            gnss_ins_sim::locate(path).is_some(),
+            "recording {}: a folder, and not a gnss-ins-sim output folder (time.csv, gyro-0.csv, \
+             accel-0.csv): give a recording file",
+            path.display()
+        );
+        return Ok(Format::GnssInsSim);
+    }
     let mut head = Vec::with_capacity(256);
     File::open(path)
         .and_then(|f| f.take(256).read_to_end(&mut head))
@@ -76,6 +89,9 @@ pub fn detect(path: &Path) -> Result<Format> {
     }
     if first.starts_with('%') {
         return Ok(Format::Psins);
+    }
+    if gnss_ins_sim::looks_like(first) {
+        return Ok(Format::GnssInsSim);
     }
     if kf_gins::looks_like_gnss(first) {
         bail!(
@@ -239,6 +255,9 @@ impl Recording {
 /// and finds the header, a second reads the records.
 pub fn read(path: &Path) -> Result<Recording> {
     let format = detect(path)?;
+    if format == Format::GnssInsSim {
+        return read_gnss_ins_sim(path);
+    }
     let scanned = scan(path, format)?;
     let mut stream = RecordStream::open(path, format)?;
     let mut records = Vec::new();
@@ -254,6 +273,18 @@ pub fn read(path: &Path) -> Result<Recording> {
     })
 }
 
+/// A gnss-ins-sim folder (or one of its files) read into memory.
+fn read_gnss_ins_sim(path: &Path) -> Result<Recording> {
+    let run = gnss_ins_sim::locate(path).ok_or_else(|| {
+        anyhow!(
+            "recording {}: a gnss-ins-sim IMU file, but not named time.csv, gyro-K.csv or \
+             accel-K.csv: its run's other files are not found",
+            path.display()
+        )
+    })?;
+    gnss_ins_sim::read(&run).with_context(|| format!("recording {}", path.display()))
+}
+
 /// What a first pass over a recording file found: the binary header (a text file's is found as
 /// a replay finds it, [`text_recording`]) and whether a record has a temperature.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -267,6 +298,12 @@ struct Scanned {
 /// independent of the file's length.
 fn scan(path: &Path, format: Format) -> Result<Scanned> {
     let context = || format!("recording {}", path.display());
+    if format == Format::GnssInsSim {
+        return Ok(Scanned {
+            header: read_gnss_ins_sim(path)?.header()?,
+            has_temperature: false,
+        });
+    }
     let file = File::open(path).with_context(context)?;
     let mut has_temperature = false;
     let header = match format {
@@ -306,12 +343,17 @@ enum RecordStream<'a> {
     Binary(BufReader<File>, u32, &'a Path),
     /// A text file (boxed: its reader is large).
     Text(Box<TextRecords<BufReader<File>>>),
+    /// A recording read into memory (gnss-ins-sim's folder of files).
+    Memory(std::vec::IntoIter<Record>),
 }
 
 impl<'a> RecordStream<'a> {
     /// Opens `path` (of `format`) at its first record.
     fn open(path: &'a Path, format: Format) -> Result<Self> {
         let context = || format!("recording {}", path.display());
+        if format == Format::GnssInsSim {
+            return Ok(Self::Memory(read_gnss_ins_sim(path)?.records.into_iter()));
+        }
         let mut file = BufReader::new(File::open(path).with_context(context)?);
         Ok(match format {
             Format::Binary => {
@@ -341,6 +383,7 @@ impl<'a> RecordStream<'a> {
                 Ok(Some(r))
             }
             Self::Text(records) => Ok(records.next().transpose()?),
+            Self::Memory(records) => Ok(records.next()),
         }
     }
 }
@@ -704,6 +747,7 @@ impl ReplaySource {
                     text_recording::replay(format, path, || File::open(path).map(BufReader::new))?;
                 Self::Text(Box::new(replay), psins)
             }
+            Format::GnssInsSim => Self::from_recording(&read_gnss_ins_sim(path)?)?,
         };
         Ok((source, format))
     }

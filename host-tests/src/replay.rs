@@ -264,11 +264,13 @@ pub struct AidedFileReport {
 
 /// `nav replay --gnss GNSS` from the navigator's alignment: `imu` replayed in precision `T`
 /// with `options` (their [`RunConfig::aiding`] set), the fixes of `gnss` (any format,
-/// [`gnss_file::read_fixes`]) handed over at their samples, the log written to `out`
-/// atomically (nothing is left there on failure).
+/// [`gnss_file::read_fixes`], `gnss_sigma` the 1-sigma of a gnss-ins-sim GPS file) handed
+/// over at their samples, the log written to `out` atomically (nothing is left there on
+/// failure).
 pub fn replay_aided<T: Scalar>(
     imu: &Path,
     gnss: &Path,
+    gnss_sigma: Option<&crate::gnss::AssumedSigma>,
     out: &Path,
     options: &ReplayOptions,
 ) -> Result<AidedFileReport, ReplayFailure> {
@@ -279,7 +281,7 @@ pub fn replay_aided<T: Scalar>(
     let GnssFixes {
         fixes,
         bad_time_tags,
-    } = gnss_file::read_fixes(gnss)?;
+    } = gnss_file::read_fixes(gnss, gnss_sigma)?;
     let file = crate::atomic::write(out, |w| {
         replay_file_with_fixes::<T, _>(imu, options, &fixes, w)
     })?;
@@ -367,15 +369,16 @@ pub fn summary(imu: &Path, out: &Path, precision: &str, fr: &FileReport) -> Stri
 pub fn replay_aided_cli(
     imu: &Path,
     gnss: &Path,
+    gnss_sigma: Option<&crate::gnss::AssumedSigma>,
     out: &Path,
     options: &ReplayOptions,
     f64_precision: bool,
 ) -> Result<()> {
     let started = std::time::Instant::now();
     let run = if f64_precision {
-        replay_aided::<f64>(imu, gnss, out, options)
+        replay_aided::<f64>(imu, gnss, gnss_sigma, out, options)
     } else {
-        replay_aided::<f32>(imu, gnss, out, options)
+        replay_aided::<f32>(imu, gnss, gnss_sigma, out, options)
     };
     let r = run
         .map_err(|failure| {

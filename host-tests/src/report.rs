@@ -413,8 +413,9 @@ pub struct Trajectory {
     pub end: Option<EndRecord>,
 }
 
-/// Reads a trajectory: a CSV with the solution log's header (truth files, `nav replay` logs) or a
-/// KF-GINS `.nav` file (first data line all numbers). Shows a progress bar for large files when
+/// Reads a trajectory: a CSV with the solution log's header (truth files, `nav replay` logs), a
+/// KF-GINS `.nav` file (first data line all numbers), or a gnss-ins-sim output folder's
+/// reference trajectory ([`crate::gnss_ins_sim::read_truth`]). Shows a progress bar for large files when
 /// `progress` is set and stderr is a terminal.
 ///
 /// The readers stream ([`truth_csv::TruthReader`], [`kf_gins::NavReader`]); the rows are held
@@ -427,6 +428,14 @@ pub fn read_trajectory(path: &Path, progress: bool) -> Result<Vec<Truth>> {
 
 /// [`read_trajectory`], with the file's format and its end record (see the module docs).
 pub fn read_trajectory_file(path: &Path, progress: bool) -> Result<Trajectory> {
+    if path.is_dir() {
+        // A gnss-ins-sim output folder: its reference trajectory.
+        return Ok(Trajectory {
+            rows: crate::gnss_ins_sim::read_truth(path)?,
+            kf_gins: false,
+            end: None,
+        });
+    }
     let file = File::open(path).with_context(|| format!("{}", path.display()))?;
     let len = file.metadata().map(|m| m.len()).unwrap_or(0);
     let bar = (progress && len >= PROGRESS_MIN_BYTES && std::io::stderr().is_terminal())

@@ -86,12 +86,12 @@ impl<R: BufRead> TextRecords<R> {
             Format::Csv => Self::Csv(CsvReader::new(reader, path)?),
             Format::KfGins => Self::KfGins(ImuReader::new(reader, path)),
             Format::Psins => Self::Psins(PsinsReader::new(reader, path)?, 0),
-            Format::Binary => {
+            Format::Binary | Format::GnssInsSim => {
                 return Err(TextRecordError::Text(TextError::io(
                     path,
                     io::Error::new(
                         io::ErrorKind::InvalidInput,
-                        "a binary recording is not a text format",
+                        "a binary recording or a gnss-ins-sim folder is not a one-file text format",
                     ),
                 )));
             }

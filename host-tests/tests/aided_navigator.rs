@@ -100,8 +100,14 @@ fn aided_log<T: Scalar>(dir: &Path, lever_arm_b_m: [f64; 3], name: &str) -> (Str
         ..AidingConfig::default()
     });
     let out = dir.join(name);
-    let r = replay_aided::<T>(&dir.join("imu.bin"), &dir.join("gnss.csv"), &out, &options)
-        .unwrap_or_else(|e| panic!("{e:#}"));
+    let r = replay_aided::<T>(
+        &dir.join("imu.bin"),
+        &dir.join("gnss.csv"),
+        None,
+        &out,
+        &options,
+    )
+    .unwrap_or_else(|e| panic!("{e:#}"));
     println!(
         "{}",
         host_tests::replay::summary(&dir.join("imu.bin"), &out, name, &r.file)
@@ -305,7 +311,7 @@ fn bad_fixes_are_counted_and_bad_files_refused() {
     assert!(worst.iter().all(|z| *z < 5.0), "{worst:?}");
 
     // A corrupt binary fix file and a missing one: errors naming the file, no log.
-    host_tests::gnss_file::convert(&d.join("gnss.csv"), &d.join("gnss.bin")).unwrap();
+    host_tests::gnss_file::convert(&d.join("gnss.csv"), &d.join("gnss.bin"), None).unwrap();
     let mut bytes = std::fs::read(d.join("gnss.bin")).unwrap();
     bytes[32 + 112 * 7 + 3] ^= 0x01;
     std::fs::write(d.join("corrupt.bin"), &bytes).unwrap();

@@ -1274,7 +1274,7 @@ fn firmware_navigates_aided_like_the_harness() {
     };
     let fixes = gnss_sim::simulate(&sim.truth, &gnss).unwrap().fixes;
     host_tests::gnss::write_gnss_csv(&d.join("gnss.csv"), &fixes).unwrap();
-    host_tests::gnss_file::convert(&d.join("gnss.csv"), &d.join("gnss.bin")).unwrap();
+    host_tests::gnss_file::convert(&d.join("gnss.csv"), &d.join("gnss.bin"), None).unwrap();
     let options = ["--imu-noise", "fog", "--gnss-lever-arm", "0.8,-0.3,-1.1"];
     let site = ["45", "7.5", "250", "15"];
 

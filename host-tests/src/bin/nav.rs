@@ -254,9 +254,10 @@ enum Command {
         #[arg(long, default_value_t = 30.0)]
         yaw: f64,
     },
-    /// Convert a recording (CSV, PSINS, KF-GINS or binary; auto-detected) to binary, or to CSV
-    /// when the output ends in .csv; with --gnss, a GNSS file (the project's CSV or KF-GINS's
-    /// text) to the binary fix file the firmware's --gnss reads.
+    /// Convert a recording (CSV, PSINS, KF-GINS, gnss-ins-sim folder or binary; auto-detected)
+    /// to binary, or to CSV when the output ends in .csv; with --gnss, a GNSS file (the
+    /// project's CSV, KF-GINS's text, or gnss-ins-sim's GPS file with --gnss-sigma) to the
+    /// binary fix file the firmware's --gnss reads.
     Convert {
         /// Input recording (or GNSS file, with --gnss).
         #[arg(long = "in", value_name = "FILE")]
@@ -267,6 +268,8 @@ enum Command {
         /// The input is a GNSS file: write docs/gnss-record-format.md's binary fix file.
         #[arg(long)]
         gnss: bool,
+        #[command(flatten)]
+        gnss_sigma: GnssSigmaArgs,
     },
     /// Run a KF-GINS configuration file as it is (its IMU and GNSS text files, start, noise and
     /// lever arm) through this project's GNSS-aided filter, writing KF-GINS's 11-column .nav
@@ -295,7 +298,8 @@ enum Command {
         /// Solution log (CSV of `nav replay`, or a KF-GINS .nav result).
         #[arg(long, value_name = "FILE")]
         solution: PathBuf,
-        /// Truth trajectory (CSV with the solution log's header, or a KF-GINS .nav file).
+        /// Truth trajectory (CSV with the solution log's header, a KF-GINS .nav file, or a
+        /// gnss-ins-sim output folder's reference trajectory).
         #[arg(long, value_name = "FILE")]
         truth: PathBuf,
         /// Times [s] after the start of the truth (its first row) at which to print the errors (nearest row),
@@ -362,7 +366,8 @@ enum SimFormat {
 /// arguments) and the files.
 #[derive(clap::Args)]
 struct ReplayArgs {
-    /// Input recording (binary, CSV, PSINS or KF-GINS; auto-detected).
+    /// Input recording (binary, CSV, PSINS, KF-GINS or a gnss-ins-sim output folder;
+    /// auto-detected).
     #[arg(long, value_name = "FILE")]
     imu: PathBuf,
     /// Latitude of the site [deg].
@@ -378,14 +383,17 @@ struct ReplayArgs {
     /// for static and inertial, 20 s for fine, 40 s for sway).
     #[arg(long, required_unless_present_any = ["init_pos", "start_in_motion"], conflicts_with_all = ["init_pos", "start_in_motion"])]
     align_seconds: Option<f64>,
-    /// GNSS fixes: CSV with units in the header (t_s,lat_deg,lon_deg,h_m,sigma_n_m,...) or
-    /// KF-GINS's text (7 columns, or 13 with velocity). Navigates with the GNSS-aided filter,
-    /// started by --init-pos/--init-vel/--init-att or --start-in-motion.
+    /// GNSS fixes: CSV with units in the header (t_s,lat_deg,lon_deg,h_m,sigma_n_m,...),
+    /// KF-GINS's text (7 columns, or 13 with velocity), or gnss-ins-sim's GPS file (gps-K.csv
+    /// or its folder, with --gnss-sigma). Navigates with the GNSS-aided filter, started by
+    /// --init-pos/--init-vel/--init-att or --start-in-motion.
     #[arg(long, value_name = "FILE")]
     gnss: Option<PathBuf>,
     /// The GNSS antenna's position from the IMU, body forward,right,down [m].
     #[arg(long, value_name = "X,Y,Z", requires = "gnss", allow_hyphen_values = true, value_parser = parse_vector3)]
     gnss_lever_arm: Option<[f64; 3]>,
+    #[command(flatten)]
+    gnss_sigma: GnssSigmaArgs,
     /// Initial position of the IMU: latitude, longitude [deg], height [m] (KF-GINS's initpos).
     #[arg(long, value_name = "LAT,LON,H", requires_all = ["gnss", "init_vel", "init_att"], allow_hyphen_values = true, value_parser = parse_vector3)]
     init_pos: Option<[f64; 3]>,
@@ -838,6 +846,7 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
             return host_tests::replay::replay_aided_cli(
                 &a.imu,
                 gnss,
+                a.gnss_sigma.assumed().as_ref(),
                 &a.out,
                 &options,
                 a.precision == Precision::F64,
@@ -847,6 +856,7 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
     let job = AidedReplay {
         imu: a.imu.clone(),
         gnss: gnss.to_path_buf(),
+        gnss_sigma: a.gnss_sigma.assumed(),
         out: a.out.clone(),
         config,
         start,
@@ -881,6 +891,10 @@ fn replay(a: ReplayArgs) -> Result<()> {
     anyhow::ensure!(
         a.lat.is_some() && a.lon.is_some() && a.h.is_some() && a.align_seconds.is_some(),
         "without --gnss, --lat, --lon, --h and --align-seconds are required"
+    );
+    anyhow::ensure!(
+        a.gnss_sigma.assumed().is_none(),
+        "--gnss-sigma is the 1-sigma of a --gnss file"
     );
     let options = a.options()?;
     let (imu, out) = (&a.imu, &a.out);
@@ -924,6 +938,29 @@ fn named<V: Copy + Send + Sync + 'static>(
 }
 
 /// `X,Y,Z` values: three finite numbers (nav-core's syntax, as the firmware's).
+/// The 1-sigma of a GNSS file that has none (gnss-ins-sim's GPS file).
+#[derive(clap::Args, Clone, Debug, Default)]
+struct GnssSigmaArgs {
+    /// 1-sigma of the fixes' position north, east, down [m], for gnss-ins-sim's GPS file
+    /// (gps-K.csv, which holds none; its default receiver: 5,5,7); refused for a file with its
+    /// own.
+    #[arg(long, value_name = "N,E,D", value_parser = parse_vector3)]
+    gnss_sigma: Option<[f64; 3]>,
+    /// 1-sigma of the fixes' velocity north, east, down [m/s], to use gnss-ins-sim's GPS
+    /// velocity (its default receiver: 0.05,0.05,0.05); without it, positions only.
+    #[arg(long, value_name = "VN,VE,VD", requires = "gnss_sigma", value_parser = parse_vector3)]
+    gnss_velocity_sigma: Option<[f64; 3]>,
+}
+
+impl GnssSigmaArgs {
+    fn assumed(&self) -> Option<host_tests::gnss::AssumedSigma> {
+        self.gnss_sigma.map(|p| host_tests::gnss::AssumedSigma {
+            position_ned_m: p,
+            velocity_ned_m_s: self.gnss_velocity_sigma,
+        })
+    }
+}
+
 fn parse_vector3(s: &str) -> Result<[f64; 3], String> {
     config::parse_vector3(s)
         .ok_or_else(|| format!("expected X,Y,Z (three finite numbers), not {s:?}"))
@@ -1553,8 +1590,9 @@ fn run(cli: Cli) -> Result<()> {
             input,
             out,
             gnss: true,
+            gnss_sigma,
         } => {
-            let n = host_tests::gnss_file::convert(&input, &out)?;
+            let n = host_tests::gnss_file::convert(&input, &out, gnss_sigma.assumed().as_ref())?;
             println!(
                 "converted {} ({n} GNSS fixes) to the binary fix file {}",
                 input.display(),
@@ -1566,7 +1604,12 @@ fn run(cli: Cli) -> Result<()> {
             input,
             out,
             gnss: false,
+            gnss_sigma,
         } => {
+            anyhow::ensure!(
+                gnss_sigma.assumed().is_none(),
+                "--gnss-sigma is for a GNSS file (--gnss)"
+            );
             // Streamed: memory independent of the file's length.
             let c = recording_io::convert(&input, &out)?;
             println!(
