@@ -40,7 +40,7 @@ fn main() -> Result<()> {
             let out = Path::new(out);
             std::fs::create_dir_all(out)?;
             gnss::write_gnss_csv(&out.join("gnss.csv"), &fixes)?;
-            gnss_file::convert(&out.join("gnss.csv"), &out.join("gnss.bin"))?;
+            gnss_file::convert(&out.join("gnss.csv"), &out.join("gnss.bin"), None)?;
             println!(
                 "{} fixes at {rate_hz} Hz -> {}/gnss.csv, gnss.bin",
                 fixes.len(),

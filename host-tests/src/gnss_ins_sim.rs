@@ -364,7 +364,7 @@ pub fn read_gps(path: &Path, assumed: &AssumedSigma) -> Result<Vec<crate::gnss::
             );
             previous = Some(*t);
             ensure!(
-                !(row[0].abs() > core::f64::consts::FRAC_PI_2),
+                row[0].is_nan() || row[0].abs() <= core::f64::consts::FRAC_PI_2,
                 "{}: line {}: latitude beyond 90 deg",
                 path.display(),
                 k + 2
