@@ -193,6 +193,9 @@ impl AidedSink<f64> for Consistency<'_> {
                         .copy_from(&p.fixed_view::<3, 3>(*ia, *ib));
                 }
             }
+            // The reported position covariance (with a refused cluster's doubt).
+            p9.fixed_view_mut::<3, 3>(0, 0)
+                .copy_from(&ins.position_covariance());
             let nees = p9
                 .cholesky()
                 .map(|c| e.dot(&c.solve(&e)))

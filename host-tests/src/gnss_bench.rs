@@ -48,7 +48,7 @@ impl AidedSink<f64> for EndOfOutage<'_> {
                 && let Some(truth) = interpolate(self.truth, t_s)
             {
                 let e = state_error(ins.state(), &truth);
-                let p = ins.covariance();
+                let p = ins.position_covariance();
                 self.drifts.push(OutageDrift {
                     t_s,
                     drift_m: (e[0] * e[0] + e[1] * e[1]).sqrt(),
@@ -127,6 +127,10 @@ pub struct OutlierOutcome {
     /// Largest ratio of the horizontal error to the horizontal 1-sigma over the same span [-]
     /// (where the filter was most overconfident; below 3 for an honest sigma).
     pub max_error_per_sigma: f64,
+    /// The same from its end to 30 s after it [-]: the filter that followed a fault it could
+    /// not see refuses the true fixes when they come back, and its reported sigma must then
+    /// cover what it cannot tell (the doubt of `nav_core::ins_filter::integrity`).
+    pub max_error_per_sigma_after: f64,
     /// The filter reported DEGRADED during it.
     pub degraded: bool,
     /// A fix was accepted again after it ended (within 60 s).
@@ -138,6 +142,7 @@ struct Watch<'a> {
     windows: Vec<(f64, f64)>,
     max: Vec<(f64, f64)>,
     max_ratio: Vec<f64>,
+    max_ratio_after: Vec<f64>,
     degraded: Vec<bool>,
 }
 
@@ -155,12 +160,15 @@ impl AidedSink<f64> for Watch<'_> {
                 {
                     let e = state_error(ins.state(), &truth);
                     let h = (e[0] * e[0] + e[1] * e[1]).sqrt();
-                    let p = ins.covariance();
+                    let p = ins.position_covariance();
                     let sigma = (p[(0, 0)] + p[(1, 1)]).sqrt();
                     if h > self.max[k].0 {
                         self.max[k] = (h, sigma);
                     }
                     self.max_ratio[k] = self.max_ratio[k].max(h / sigma);
+                    if t_s > *b {
+                        self.max_ratio_after[k] = self.max_ratio_after[k].max(h / sigma);
+                    }
                 }
             }
         }
@@ -253,6 +261,7 @@ pub fn outliers(case: &Case) -> Result<Vec<OutlierOutcome>> {
         windows: windows.clone(),
         max: vec![(0.0, 0.0); n],
         max_ratio: vec![0.0; n],
+        max_ratio_after: vec![0.0; n],
         degraded: vec![false; n],
     };
     let report = aided::run(
@@ -288,6 +297,7 @@ pub fn outliers(case: &Case) -> Result<Vec<OutlierOutcome>> {
             max_error_m: sink.max[k].0,
             sigma_at_max_m: sink.max[k].1,
             max_error_per_sigma: sink.max_ratio[k],
+            max_error_per_sigma_after: sink.max_ratio_after[k],
             degraded: sink.degraded[k],
             reacquired,
         });

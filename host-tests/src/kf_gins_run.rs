@@ -12,7 +12,7 @@ use crate::nav_writer::{NavRow, NavWriter};
 use anyhow::{Context, Result, bail};
 use nav_core::attitude::euler;
 use nav_core::ins_filter::model::FilterNoise;
-use nav_core::ins_filter::{ATT, AidedIns, FilterConfig, POS, SensorErrors};
+use nav_core::ins_filter::{ATT, AidedIns, FilterConfig, SensorErrors};
 use nav_core::{ImuIncrement, Vector3};
 use std::fs::File;
 use std::io::BufReader;
@@ -128,8 +128,9 @@ impl AidedSink<f64> for NavRows {
     fn sample(&mut self, t_us: u64, ins: &AidedIns<f64>) -> Result<()> {
         let s = ins.state();
         let p = ins.covariance();
+        let p_pos = ins.position_covariance();
         let sums = &mut self.variance_sums;
-        sums.0 += p[(POS, POS)] + p[(POS + 1, POS + 1)];
+        sums.0 += p_pos[(0, 0)] + p_pos[(1, 1)];
         sums.1 += p[(ATT + 2, ATT + 2)];
         sums.2 += 1;
         let (roll, pitch, yaw) = euler(&s.q_b_n);

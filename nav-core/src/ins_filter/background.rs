@@ -8,7 +8,9 @@ use super::aiding::{AidCounters, AidResult, FilterCounters, GnssPosition, GnssVe
 use super::consider::{self, ConsiderModel, CrossCovariance};
 use super::covariance::{self, Transition};
 use super::foreground::Propagation;
-use super::integrity::{self, InnovationWindow, RefusedCluster, WindowVerdict, whiten};
+use super::integrity::{
+    self, InnovationWindow, Reacquisition, RefusedCluster, WindowVerdict, whiten,
+};
 use super::limits;
 use super::model;
 use super::stationarity::StillWindow;
@@ -67,6 +69,11 @@ pub struct ErrorFilter<T: Scalar> {
     cluster: Option<RefusedCluster<T>>,
     /// Propagated time since the last position fix [s].
     since_fix_s: T,
+    /// The correction of the last position fix when it was a re-acquisition (taken alone
+    /// against a much wider prediction; [`integrity`] module docs), until the next fix.
+    reacquired: Option<Reacquisition<T>>,
+    /// The last update's variance shrink was limited by [`MAX_SHRINK`] on some row.
+    shrink_limited: bool,
     /// The consider states' model and cross-covariance `P_ac` ([`consider`]).
     consider: ConsiderModel<T>,
     p_ac: CrossCovariance<T>,
@@ -103,12 +110,15 @@ impl<T: Scalar> ErrorFilter<T> {
             window: InnovationWindow::default(),
             cluster: None,
             since_fix_s: T::zero(),
+            reacquired: None,
+            shrink_limited: false,
             consider,
             p_ac,
         })
     }
 
-    /// The covariance.
+    /// The filter's own covariance (its gate and updates use it; the reported position's is
+    /// [`Self::position_covariance`]).
     pub fn covariance(&self) -> &Covariance<T> {
         &self.p
     }
@@ -133,14 +143,31 @@ impl<T: Scalar> ErrorFilter<T> {
         self.covariance_faults
     }
 
-    /// 1-sigma of the state's block at `at` (one of the offsets), per axis.
+    /// 1-sigma of the state's block at `at` (one of the offsets), per axis; the position's
+    /// is that of [`Self::position_covariance`].
     pub fn sigma(&self, at: usize) -> Vector3<T> {
-        Vector3::new(
-            self.p[(at, at)],
-            self.p[(at + 1, at + 1)],
-            self.p[(at + 2, at + 2)],
-        )
-        .map(|v| v.max(T::zero()).sqrt())
+        let doubt = if at == POS {
+            self.position_doubt().diagonal()
+        } else {
+            Vector3::zeros()
+        };
+        Vector3::from_fn(|k, _| self.p[(at + k, at + k)] + doubt[k])
+            .map(|v| v.max(T::zero()).sqrt())
+    }
+
+    /// The doubt on the position, NED [m^2]: of a refused cluster that is not gross
+    /// ([`RefusedCluster::doubt`]) and of a re-acquisition not yet confirmed by the next fix
+    /// ([`Reacquisition::doubt`]); zero otherwise.
+    pub fn position_doubt(&self) -> Matrix3<T> {
+        let cluster = self.cluster.as_ref().and_then(RefusedCluster::doubt);
+        let reacquired = self.reacquired.as_ref().map(Reacquisition::doubt);
+        cluster.unwrap_or_else(Matrix3::zeros) + reacquired.unwrap_or_else(Matrix3::zeros)
+    }
+
+    /// The reported position covariance, NED [m^2]: the filter's own ([`Self::covariance`],
+    /// which its gate and updates use) plus [`Self::position_doubt`].
+    pub fn position_covariance(&self) -> Matrix3<T> {
+        self.p.fixed_view::<3, 3>(POS, POS) + self.position_doubt()
     }
 
     /// 1-sigma of roll, pitch, yaw [rad] at heading `yaw` [rad]: the NED tilt variances turned
@@ -165,7 +192,7 @@ impl<T: Scalar> ErrorFilter<T> {
             FilterStatus::CovarianceFault
         } else if self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade {
             FilterStatus::AidingRejected
-        } else if self.p[(POS, POS)] + self.p[(POS + 1, POS + 1)]
+        } else if self.sigma(POS).xy().norm_squared()
             > self.config.max_horizontal_sigma_m * self.config.max_horizontal_sigma_m
         {
             FilterStatus::SigmaAboveLimit
@@ -305,6 +332,7 @@ impl<T: Scalar> ErrorFilter<T> {
         s: &SMatrix<T, M, M>,
         nis: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
+        self.shrink_limited = false;
         for i in 0..M {
             let hi = m.h.row(i).transpose();
             let innovation = m.z[i] - hi.dot(&self.x);
@@ -314,6 +342,7 @@ impl<T: Scalar> ErrorFilter<T> {
             // and the next fixes must be able to pull the solution back.
             let predicted = s[(i, i)] - m.r[i];
             let r_eff = m.r[i].max(predicted / T::c(MAX_SHRINK - 1.0));
+            self.shrink_limited |= r_eff > m.r[i];
             // The gain, for the consider states' cross-covariance ([`consider::update`]).
             let gain = self.consider.is_active().then(|| {
                 let ph = self.p * hi;
@@ -366,10 +395,23 @@ impl<T: Scalar> ErrorFilter<T> {
         m: &Measurement<T, 3>,
         g: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
-        let Some((s, nis)) = self.innovation(m) else {
+        let Some((mut s, mut nis)) = self.innovation(m) else {
             return (AidResult::Invalid, None);
         };
         let gate = self.config.gate_nis;
+        // The previous fix was taken alone after a gap and this one disagrees with it: that
+        // fix may have been the outlier, and what it pulled the filter by is doubtful
+        // ([`integrity`] module docs).
+        if let Some(r) = self.reacquired.take()
+            && nis > gate
+        {
+            r.undo(&mut self.p);
+            self.check_covariance();
+            let Some(again) = self.innovation(m) else {
+                return (AidResult::Invalid, None);
+            };
+            (s, nis) = again;
+        }
         // Time since the previous fix (the cluster's last member, if refused) [s].
         let dt = core::mem::replace(&mut self.since_fix_s, T::zero());
         let drift = self.fix_drift(dt, g);
@@ -415,6 +457,7 @@ impl<T: Scalar> ErrorFilter<T> {
             self.window.clear();
             self.window.push(w);
         }
+        let p_pos_before = self.p.fixed_view::<3, 3>(POS, POS).into_owned();
         let out = if self.cluster.take().is_some() {
             // The first fix after a refused cluster: its offset joins the position's
             // covariance ([`integrity`] module docs, [Groves, ch. 17]).
@@ -429,6 +472,10 @@ impl<T: Scalar> ErrorFilter<T> {
         };
         if let Some(c) = &out.1 {
             self.window.set_last_correction(&c.x);
+            self.reacquired = self.shrink_limited.then(|| Reacquisition {
+                correction: c.x,
+                position_shrink: p_pos_before - self.p.fixed_view::<3, 3>(POS, POS),
+            });
         }
         out
     }

@@ -66,8 +66,34 @@
 //! its acceleration error blurs the jump between fixes can no longer tell, and the rule above
 //! applies. The price: a filter that an unseen fault pulled off by such a gross amount stays
 //! DEGRADED (refusing) until the fixes leave the line or its drift blurs the jump.
+//!
+//! **A re-acquisition is checked by the next fix** [Groves, ch. 17, adaptation]. After a gap
+//! (an outage, a wide start) the prediction is far wider than a fix, so the gate cannot see a
+//! bad first fix (a 20 m spike inside a 36 m sigma) and the update takes it (limited to a
+//! [`super::background::MAX_SHRINK`] shrink of the variance). The next true fix then lies
+//! beyond the gate of the shrunk covariance: refused, it would start a cluster of true fixes
+//! that a filter held by velocity fixes never releases. So when the fix after such a
+//! re-acquisition fails the gate, the re-acquisition is undone in the covariance
+//! ([`Reacquisition::undo`]: the position variance it removed comes back, and the correction
+//! `d` it applied joins as `P <- P + d d^T`, fault recovery by covariance increase as the
+//! window does), and the fix is judged again: the two fixes disagree, and the filter no
+//! longer pretends to know which. A fix taken that way is itself a re-acquisition, checked by
+//! the next one. Until that next fix, the reported position covariance carries
+//! `d_p d_p^T / 4` of the correction's position part (the doubt below: unconfirmed, the
+//! position it left stays within 2 sigma).
+//!
+//! **The doubt a refusal leaves** (reported, not gated). A cluster that is not gross is a
+//! disagreement the filter cannot settle from the fixes: after a slow ramp that a MEMS filter
+//! followed (its innovations stay white: the ramp is as fast as its own drift), the true fixes
+//! come back as a step and are refused while the filter is the one that is wrong. Its
+//! covariance knows nothing of that, so the reported position covariance adds the cluster's
+//! offset `z` as `z z^T / 4` ([`RefusedCluster::doubt`]): the refused fixes stay within
+//! 2 sigma of the solution, which does not claim to exclude what it cannot tell from its own
+//! error. Only the reported covariance carries it (the gate, the cluster rules and the
+//! updates use the filter's own, so what the filter refuses is unchanged); a gross cluster
+//! adds none (the filter knew its position when the jump came).
 
-use super::states::StateVector;
+use super::states::{Covariance, POS, StateVector};
 use crate::Scalar;
 use nalgebra::{Matrix3, Vector3};
 
@@ -100,6 +126,34 @@ pub const CHI2_3DOF_MEDIAN: f64 = 2.366;
 pub fn whiten<T: Scalar>(s: &Matrix3<T>, z: &Vector3<T>) -> Option<Vector3<T>> {
     let l = s.cholesky()?;
     l.l().solve_lower_triangular(z)
+}
+
+/// A position fix taken as a re-acquisition (its update's shrink limited by
+/// [`super::background::MAX_SHRINK`]), until the next fix confirms it (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reacquisition<T: Scalar> {
+    /// The correction it applied to the error state.
+    pub correction: StateVector<T>,
+    /// The position variance it removed, NED (prior minus posterior) [m^2].
+    pub position_shrink: Matrix3<T>,
+}
+
+impl<T: Scalar> Reacquisition<T> {
+    /// Undoes it in the covariance `p`: the removed position variance back, and the
+    /// correction `d` as `d d^T` (both positive semi-definite).
+    pub fn undo(&self, p: &mut Covariance<T>) {
+        let d = &self.correction;
+        *p += d * d.transpose();
+        let mut pos = p.fixed_view_mut::<3, 3>(POS, POS);
+        pos += self.position_shrink;
+    }
+
+    /// The reported doubt while unconfirmed: `d_p d_p^T / 4` of the correction's position
+    /// part [m^2].
+    pub fn doubt(&self) -> Matrix3<T> {
+        let d = self.correction.fixed_rows::<3>(POS);
+        d * d.transpose() * T::c(0.25)
+    }
 }
 
 /// What the windowed test found.
@@ -345,6 +399,12 @@ impl<T: Scalar> RefusedCluster<T> {
         q <= gate_3dof && q < nis && !self.is_typical(s)
     }
 
+    /// The doubt on the solution's position while this cluster is refused (module docs):
+    /// `z z^T / 4` of the last member's innovation `z` [m^2]; `None` for a gross cluster.
+    pub fn doubt(&self) -> Option<Matrix3<T>> {
+        (!self.gross).then(|| self.z_ned_m * self.z_ned_m.transpose() * T::c(0.25))
+    }
+
     /// True when this cluster's offset is a typical error of the filter: its normalised
     /// square against the innovation covariance `s` [m^2] within the median of `chi^2(3)`.
     pub fn is_typical(&self, s: &Matrix3<T>) -> bool {
@@ -360,6 +420,7 @@ fn normalised_square<T: Scalar>(d: &Vector3<T>, den: &Vector3<T>) -> T {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ins_filter::VEL;
 
     #[test]
     fn whitening_makes_the_covariance_the_identity() {
@@ -409,6 +470,29 @@ mod tests {
         assert_eq!(wide.verdict(gate), WindowVerdict::Consistent);
     }
 
+    #[test]
+    fn an_undone_reacquisition_gives_back_what_it_removed_and_its_correction() {
+        let mut x = StateVector::<f64>::zeros();
+        x[POS + 1] = 19.0;
+        x[VEL] = 0.5;
+        let shrink = Matrix3::from_diagonal(&Vector3::new(25.0, 25.0, 4.0));
+        let r = Reacquisition {
+            correction: x,
+            position_shrink: shrink,
+        };
+        let mut p = Covariance::<f64>::identity();
+        r.undo(&mut p);
+        assert_eq!(p[(POS + 1, POS + 1)], 1.0 + 25.0 + 361.0);
+        assert_eq!(p[(POS, POS)], 1.0 + 25.0);
+        assert_eq!(p[(VEL, VEL)], 1.25);
+        assert_eq!(p[(POS + 1, VEL)], 9.5);
+        assert!(p.cholesky().is_some());
+        // Unconfirmed, the 19 m it moved the position by is 2 sigma of the reported doubt.
+        let d = r.doubt();
+        assert!((d[(1, 1)].sqrt() * 2.0 - 19.0).abs() < 1e-12);
+        assert_eq!(d[(0, 0)], 0.0);
+    }
+
     /// A drift of velocity variance `v` [m^2/s^2] and curvature variance `k` [m^2] over 1 s.
     fn drift(v: f64, k: f64) -> FixDrift<f64> {
         FixDrift {
@@ -445,6 +529,11 @@ mod tests {
             &Matrix3::from_diagonal_element(5.8e-4),
             gate
         ));
+        // Refusing 30 m it cannot tell from its own error, the solution reports a doubt
+        // that puts the fixes at 2 sigma.
+        let d = c.doubt().unwrap();
+        assert!((d[(1, 1)].sqrt() * 2.0 - 30.0).abs() < 1e-9);
+        assert_eq!(d[(0, 1)], 0.0);
         // 30 m is not typical of a 5 m 1-sigma, it is of a 30 m one.
         assert!(!c.is_typical(&Matrix3::from_diagonal_element(25.0)));
         assert!(c.is_typical(&Matrix3::from_diagonal_element(900.0)));
@@ -463,6 +552,8 @@ mod tests {
         let nis0 = 900.0 / (0.09 + 0.25);
         let start = RefusedCluster::start(jump, r, nis0, gate, true);
         assert!(start.gross);
+        // The filter knew its position when the jump came: no doubt.
+        assert!(start.doubt().is_none());
         // A filter whose position no fix has confirmed yet (a wrong initial position) has no
         // gross clusters: its own growing sigma re-acquires the fixes.
         assert!(!RefusedCluster::start(jump, r, nis0, gate, false).gross);

@@ -49,7 +49,7 @@ pub use aiding::{
 pub use background::{Correction, ErrorFilter, Snapshot};
 pub use foreground::{AidedMechanization, Events, Propagation};
 use model::FilterNoise;
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 pub use states::{ATT, BA, BG, Covariance, InitialSigma, N, POS, SA, SG, StateVector, VEL};
 use stationarity::StationarityConfig;
 
@@ -265,9 +265,17 @@ impl<T: Scalar> AidedIns<T> {
         self.mech.sensor_errors()
     }
 
-    /// The error covariance (at the last propagation or update).
+    /// The filter's own error covariance (at the last propagation or update; the one its gate
+    /// uses: the reported position covariance is [`Self::position_covariance`]).
     pub fn covariance(&self) -> &Covariance<T> {
         self.filter.covariance()
+    }
+
+    /// The reported position covariance, NED [m^2]
+    /// ([`ErrorFilter::position_covariance`]: the filter's own plus the doubt a refused
+    /// cluster leaves).
+    pub fn position_covariance(&self) -> Matrix3<T> {
+        self.filter.position_covariance()
     }
 
     /// The background half.
