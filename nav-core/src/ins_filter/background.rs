@@ -28,6 +28,13 @@ use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 /// following fixes finish the convergence (each shrinking by up to 16x).
 pub const MAX_SHRINK: f64 = 16.0;
 
+/// The noise variance an update uses for a row of innovation variance `s` and noise variance
+/// `r` [same unit^2]: `r`, raised so the predicted variance `s - r` shrinks at most
+/// [`MAX_SHRINK`] times (a re-acquisition, [`integrity`] module docs, when raised).
+fn effective_noise<T: Scalar>(s: T, r: T) -> T {
+    r.max((s - r) / T::c(MAX_SHRINK - 1.0))
+}
+
 /// What the updates need of one sample: the solution, the Earth at it, the compensated rate
 /// [rad/s] and the solution's acceleration [m/s^2].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -72,8 +79,6 @@ pub struct ErrorFilter<T: Scalar> {
     /// The correction of the last position fix when it was a re-acquisition (taken alone
     /// against a much wider prediction; [`integrity`] module docs), until the next fix.
     reacquired: Option<Reacquisition<T>>,
-    /// The last update's variance shrink was limited by [`MAX_SHRINK`] on some row.
-    shrink_limited: bool,
     /// The consider states' model and cross-covariance `P_ac` ([`consider`]).
     consider: ConsiderModel<T>,
     p_ac: CrossCovariance<T>,
@@ -111,7 +116,6 @@ impl<T: Scalar> ErrorFilter<T> {
             cluster: None,
             since_fix_s: T::zero(),
             reacquired: None,
-            shrink_limited: false,
             consider,
             p_ac,
         })
@@ -192,7 +196,7 @@ impl<T: Scalar> ErrorFilter<T> {
             FilterStatus::CovarianceFault
         } else if self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade {
             FilterStatus::AidingRejected
-        } else if self.sigma(POS).xy().norm_squared()
+        } else if self.position_covariance().fixed_view::<2, 2>(0, 0).trace()
             > self.config.max_horizontal_sigma_m * self.config.max_horizontal_sigma_m
         {
             FilterStatus::SigmaAboveLimit
@@ -332,7 +336,6 @@ impl<T: Scalar> ErrorFilter<T> {
         s: &SMatrix<T, M, M>,
         nis: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
-        self.shrink_limited = false;
         for i in 0..M {
             let hi = m.h.row(i).transpose();
             let innovation = m.z[i] - hi.dot(&self.x);
@@ -340,9 +343,7 @@ impl<T: Scalar> ErrorFilter<T> {
             // than MAX_SHRINK times (its noise variance is raised to the prediction's share):
             // a fix far inside a wide prediction can still be an outlier the gate cannot see,
             // and the next fixes must be able to pull the solution back.
-            let predicted = s[(i, i)] - m.r[i];
-            let r_eff = m.r[i].max(predicted / T::c(MAX_SHRINK - 1.0));
-            self.shrink_limited |= r_eff > m.r[i];
+            let r_eff = effective_noise(s[(i, i)], m.r[i]);
             // The gain, for the consider states' cross-covariance ([`consider::update`]).
             let gain = self.consider.is_active().then(|| {
                 let ph = self.p * hi;
@@ -457,22 +458,22 @@ impl<T: Scalar> ErrorFilter<T> {
             self.window.clear();
             self.window.push(w);
         }
-        let p_pos_before = self.p.fixed_view::<3, 3>(POS, POS).into_owned();
-        let out = if self.cluster.take().is_some() {
+        if self.cluster.take().is_some() {
             // The first fix after a refused cluster: its offset joins the position's
             // covariance ([`integrity`] module docs, [Groves, ch. 17]).
             let mut pos = self.p.fixed_view_mut::<3, 3>(POS, POS);
             pos += m.z * m.z.transpose();
-            match self.innovation(m) {
-                Some((s, nis)) => self.apply(m, &s, nis),
-                None => (AidResult::Invalid, None),
-            }
-        } else {
-            self.apply(m, &s, nis)
-        };
+            let Some(again) = self.innovation(m) else {
+                return (AidResult::Invalid, None);
+            };
+            (s, nis) = again;
+        }
+        let p_pos_before = self.p.fixed_view::<3, 3>(POS, POS).into_owned();
+        let out = self.apply(m, &s, nis);
         if let Some(c) = &out.1 {
             self.window.set_last_correction(&c.x);
-            self.reacquired = self.shrink_limited.then(|| Reacquisition {
+            let limited = (0..3).any(|i| effective_noise(s[(i, i)], m.r[i]) > m.r[i]);
+            self.reacquired = limited.then(|| Reacquisition {
                 correction: c.x,
                 position_shrink: p_pos_before - self.p.fixed_view::<3, 3>(POS, POS),
             });
