@@ -22,7 +22,8 @@ use anyhow::{Result, anyhow};
 use nav_core::attitude::rotation_vector_of;
 use nav_core::ins_filter::sequencer::{Sequencer, Start};
 use nav_core::ins_filter::{
-    ATT, AidResult, AidedIns, BA, BG, FilterConfig, InitialSigma, POS, SA, SG, SensorErrors, VEL,
+    ATT, AidResult, AidedIns, BA, BG, FilterConfig, GnssCorrelatedError, InitialSigma, POS, SA, SG,
+    SensorErrors, VEL,
 };
 use nav_core::nalgebra::{SMatrix, SVector};
 use nav_core::{NavState, Position, Scalar, Vector3};
@@ -324,6 +325,11 @@ pub fn prepare(case: &Case) -> Result<Prepared> {
         config.zero_motion = None;
     }
     config.antenna_lever_arm_b_m = Vector3::from(case.gnss.lever_arm_b_m);
+    // The receiver's correlated error, as its user would declare it.
+    config.gnss_correlated_error = case.gnss.correlated.map(|c| GnssCorrelatedError {
+        sigma_ned_m: Vector3::from(c.sigma_ned_m),
+        correlation_time_s: c.time_s,
+    });
     // A start with errors drawn from its own 1-sigma.
     let t0 = sim.truth[0];
     let sigma = InitialSigma {

@@ -182,6 +182,12 @@ pub fn config_in<T: Scalar>(c: &FilterConfig<f64>) -> FilterConfig<T> {
         scale_factors: c.scale_factors,
         propagation_interval_s: T::c(c.propagation_interval_s),
         antenna_lever_arm_b_m: v(&c.antenna_lever_arm_b_m),
+        gnss_correlated_error: c.gnss_correlated_error.map(|g| {
+            nav_core::ins_filter::GnssCorrelatedError {
+                sigma_ned_m: v(&g.sigma_ned_m),
+                correlation_time_s: T::c(g.correlation_time_s),
+            }
+        }),
         gate_nis: T::c(c.gate_nis),
         rejections_to_degrade: c.rejections_to_degrade,
         max_horizontal_sigma_m: T::c(c.max_horizontal_sigma_m),

@@ -4,7 +4,7 @@
 
 use crate::aided::{self, AidedSink};
 use crate::aided_bench::{Case, Prepared, prepare, state_error};
-use crate::gnss_sim::{GnssSimOptions, Outage, Outlier};
+use crate::gnss_sim::{CorrelatedError, GnssSimOptions, Outage, Outlier};
 use crate::report::interpolate;
 use crate::sensor_model::Grade;
 use crate::truth::Truth;
@@ -220,6 +220,7 @@ pub fn outlier_case(grade: Grade, seed: u64) -> Case {
                     offset_ned_m: [0.0, 30.0, 0.0],
                 },
             ],
+            correlated: None,
             seed,
         },
         seed,
@@ -237,6 +238,25 @@ pub const OUTLIER_VELOCITY_SIGMA_M_S: [f64; 3] = [0.05, 0.05, 0.1];
 pub fn outlier_case_with_velocity(grade: Grade, seed: u64) -> Case {
     let mut case = outlier_case(grade, seed);
     case.gnss.sigma_v_ned_m_s = Some(OUTLIER_VELOCITY_SIGMA_M_S);
+    case
+}
+
+/// The time-correlated error of [`outlier_case_code_receiver`]'s receiver: 1-sigma north,
+/// east, down [m] and correlation time [s] (a code receiver's multipath and atmosphere).
+pub const CODE_RECEIVER_CORRELATED: ([f64; 3], f64) = ([2.0, 2.0, 4.0], 60.0);
+
+/// [`outlier_case`] with a code receiver's positions: besides the white 0.5 m, a
+/// Gauss–Markov error of [`CODE_RECEIVER_CORRELATED`], simulated and declared to the filter
+/// (a consider state of the fixes, [`nav_core::ins_filter::consider`]). Declared white, the
+/// multipath ramp is a fault the tactical MEMS filter cannot tell from its own drift; declared,
+/// the filter's sigma holds what it cannot tell.
+pub fn outlier_case_code_receiver(grade: Grade, seed: u64) -> Case {
+    let mut case = outlier_case(grade, seed);
+    let (sigma_ned_m, time_s) = CODE_RECEIVER_CORRELATED;
+    case.gnss.correlated = Some(CorrelatedError {
+        sigma_ned_m,
+        time_s,
+    });
     case
 }
 

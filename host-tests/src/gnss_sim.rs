@@ -1,5 +1,5 @@
-//! A simulated GNSS receiver: fixes of the antenna from a truth trajectory, with white noise,
-//! outages and injected outliers, reproducible from a seed.
+//! A simulated GNSS receiver: fixes of the antenna from a truth trajectory, with white noise, a
+//! time-correlated error, outages and injected outliers, reproducible from a seed.
 //!
 //! **Epochs.** The truth rows come at a fixed rate (e.g. 50 Hz, as `nav sim` writes them). A fix
 //! is made at each truth row whose time is a whole multiple of the GNSS interval `1 / rate_hz`
@@ -21,9 +21,26 @@
 //! **Noise.** White Gaussian, independent per axis and fix: the position moved by `sigma_ned_m`
 //! times three standard normals (north, east, down, on the local radii again), the velocity plus
 //! `sigma_v_ned_m_s` times three more. The fix reports these same sigmas, whatever was injected.
-//! All draws come from one `ChaCha8Rng::seed_from_u64(seed)` stream, in epoch order: position
-//! then velocity normals for **every** epoch, those in outages included, so adding an outage or
-//! an outlier leaves the noise of every other fix unchanged.
+//! All white draws come from one `ChaCha8Rng::seed_from_u64(seed)` stream, in epoch order:
+//! position then velocity normals for **every** epoch, those in outages included, so adding an
+//! outage or an outlier leaves the noise of every other fix unchanged.
+//!
+//! **Correlated error** (optional, [`CorrelatedError`]): what a code receiver's multipath and
+//! atmosphere leave, a first-order Gauss–Markov process per axis with steady-state 1-sigma
+//! `sigma` and correlation time `tau`, discretised exactly between epochs `dt` apart:
+//!
+//! ```text
+//! b_0 = sigma w_0                                          (started in its steady state)
+//! b_k = exp(-dt/tau) b_(k-1) + sigma sqrt(1 - exp(-2 dt/tau)) w_k,   w_k ~ N(0, 1)
+//! ```
+//!
+//! so `E[b_k^2] = sigma^2` and `E[b_k b_(k+m)] = sigma^2 exp(-m dt/tau)`. It is added to the white
+//! position noise (north, east, down, on the local radii) before the outliers; the fix still
+//! reports the white `sigma_ned_m` as its sigma, as a receiver that does not know its multipath
+//! does. Its normals come from a second stream of the same seed
+//! (`set_stream(`[`CORRELATED_STREAM`]`)`), three per epoch, outages included: turning it on
+//! leaves every white draw as it was, and an outage leaves the error of every other fix as it
+//! was. [`GnssSim::correlated_ned_m`] holds what each fix got.
 //!
 //! **Outages** drop the fixes with `start_s <= t < start_s + length_s`. **Outliers** (position
 //! only; velocity is left as it is) add to the noisy position:
@@ -164,6 +181,33 @@ impl Outlier {
 pub const MAX_SIGMA_M: f64 = 1000.0;
 /// Largest GNSS velocity 1-sigma `nav sim` writes [m/s].
 pub const MAX_SIGMA_V_M_S: f64 = 100.0;
+/// Largest steady-state 1-sigma of the correlated error [m].
+pub const MAX_CORRELATED_SIGMA_M: f64 = 100.0;
+/// Longest correlation time of the correlated error [s].
+pub const MAX_CORRELATION_TIME_S: f64 = 1.0e6;
+/// The ChaCha8 stream (of the same seed) the correlated error draws from; the white noise uses
+/// stream 0.
+pub const CORRELATED_STREAM: u64 = 1;
+
+/// A time-correlated position error: a first-order Gauss–Markov process per axis (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CorrelatedError {
+    /// Steady-state 1-sigma north, east, down [m].
+    pub sigma_ned_m: [f64; 3],
+    /// Correlation time [s].
+    pub time_s: f64,
+}
+
+impl CorrelatedError {
+    /// `b` [m] advanced by `dt_s` [s] with the standard normals `w`: `exp(-dt/tau) b + sigma
+    /// sqrt(1 - exp(-2 dt/tau)) w` (module docs).
+    fn step(&self, b: [f64; 3], dt_s: f64, w: [f64; 3]) -> [f64; 3] {
+        let phi = (-dt_s / self.time_s).exp();
+        // 1 - exp(-2 dt/tau) without cancellation for dt << tau.
+        let q = (-(-2.0 * dt_s / self.time_s).exp_m1()).sqrt();
+        std::array::from_fn(|j| phi * b[j] + self.sigma_ned_m[j] * q * w[j])
+    }
+}
 
 /// `a,b,c` as typed on the command line.
 fn list(v: &[f64; 3]) -> String {
@@ -185,13 +229,15 @@ pub struct GnssSimOptions {
     pub outages: Vec<Outage>,
     /// Errors injected into the positions.
     pub outliers: Vec<Outlier>,
+    /// Time-correlated position error, added to the white noise; `None`: white noise only.
+    pub correlated: Option<CorrelatedError>,
     /// Seed of the noise.
     pub seed: u64,
 }
 
 impl Default for GnssSimOptions {
     /// 1 Hz, 0.5 m north and east and 1 m down, no velocity, no lever arm, no outage or outlier,
-    /// seed 0.
+    /// no correlated error, seed 0.
     fn default() -> Self {
         Self {
             rate_hz: 1.0,
@@ -200,6 +246,7 @@ impl Default for GnssSimOptions {
             lever_arm_b_m: [0.0; 3],
             outages: Vec::new(),
             outliers: Vec::new(),
+            correlated: None,
             seed: 0,
         }
     }
@@ -234,6 +281,8 @@ pub struct GnssSim {
     pub fixes: Vec<GnssFix>,
     /// Index of each fix's truth row.
     pub truth_rows: Vec<usize>,
+    /// The correlated error in each fix, north, east, down [m] (zeros without one).
+    pub correlated_ned_m: Vec<[f64; 3]>,
     /// The outliers' effects, by fix.
     pub injections: Vec<Injection>,
     /// Epochs dropped by outages.
@@ -259,6 +308,13 @@ impl GnssSim {
             self.dropped,
             options.outages.len()
         );
+        if let Some(c) = &options.correlated {
+            let _ = writeln!(
+                s,
+                "correlated error: 1-sigma N {} E {} D {} m, correlation time {} s",
+                c.sigma_ned_m[0], c.sigma_ned_m[1], c.sigma_ned_m[2], c.time_s
+            );
+        }
         for i in &self.injections {
             let name = options.outliers[i.outlier].name();
             match i.injected {
@@ -333,9 +389,15 @@ pub fn simulate(truth: &[Truth], options: &GnssSimOptions) -> Result<GnssSim> {
             StandardNormal.sample(&mut rng),
         ]
     };
+    // The correlated error's own stream: the white draws above stay as they are.
+    let mut rng_c = ChaCha8Rng::seed_from_u64(options.seed);
+    rng_c.set_stream(CORRELATED_STREAM);
+    let mut b_ned_m = [0.0; 3];
+    let mut last_t_s: Option<f64> = None;
     let mut sim = GnssSim {
         fixes: Vec::with_capacity(epochs.len()),
         truth_rows: Vec::with_capacity(epochs.len()),
+        correlated_ned_m: Vec::with_capacity(epochs.len()),
         injections: Vec::new(),
         dropped: 0,
         missed_outliers: Vec::new(),
@@ -345,6 +407,15 @@ pub fn simulate(truth: &[Truth], options: &GnssSimOptions) -> Result<GnssSim> {
         let t_s = truth[k].t_s;
         let z_p = normals();
         let z_v = options.sigma_v_ned_m_s.map(|_| normals());
+        // Advanced at every epoch, outages included.
+        if let Some(c) = &options.correlated {
+            let w: [f64; 3] = std::array::from_fn(|_| StandardNormal.sample(&mut rng_c));
+            b_ned_m = match last_t_s {
+                None => std::array::from_fn(|j| c.sigma_ned_m[j] * w[j]),
+                Some(t0_s) => c.step(b_ned_m, t_s - t0_s, w),
+            };
+            last_t_s = Some(t_s);
+        }
         // A one-fix outlier belongs to the first epoch at or after its time, outage or not.
         let mut once = |i: usize, at_s: f64| {
             let hit = !spike_done[i] && t_s >= at_s;
@@ -363,7 +434,7 @@ pub fn simulate(truth: &[Truth], options: &GnssSimOptions) -> Result<GnssSim> {
         }
         let (position, v_ea_n) = antenna(&truth[k], &omega_nb_b(truth, k), &options.lever_arm_b_m);
         let s = options.sigma_ned_m;
-        let mut d_ned = [s[0] * z_p[0], s[1] * z_p[1], s[2] * z_p[2]];
+        let mut d_ned: [f64; 3] = std::array::from_fn(|j| s[j] * z_p[j] + b_ned_m[j]);
         let mut nan = false;
         let fix_index = sim.fixes.len();
         for &(outlier, injected) in &effects {
@@ -406,6 +477,7 @@ pub fn simulate(truth: &[Truth], options: &GnssSimOptions) -> Result<GnssSim> {
         }
         sim.fixes.push(fix);
         sim.truth_rows.push(k);
+        sim.correlated_ned_m.push(b_ned_m);
     }
     sim.missed_outliers = (0..options.outliers.len())
         .filter(|&i| !sim.injections.iter().any(|j| j.outlier == i))
@@ -440,7 +512,8 @@ fn effect(outlier: &Outlier, t_s: f64, mut once: impl FnMut(f64) -> bool) -> Opt
 
 impl GnssSimOptions {
     /// Checks the options alone (before any truth is simulated): a positive rate, positive
-    /// finite sigmas, a lever arm within [`MAX_LEVER_ARM_M`], valid outages and outliers.
+    /// finite sigmas, a lever arm within [`MAX_LEVER_ARM_M`], a correlated error within
+    /// [`MAX_CORRELATED_SIGMA_M`] and [`MAX_CORRELATION_TIME_S`], valid outages and outliers.
     pub fn check(&self) -> Result<()> {
         let o = self;
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
@@ -483,6 +556,26 @@ impl GnssSimOptions {
                 bad.start_s,
                 bad.length_s
             );
+        }
+        if let Some(c) = &o.correlated {
+            if !c
+                .sigma_ned_m
+                .iter()
+                .all(|x| (0.0..=MAX_CORRELATED_SIGMA_M).contains(x))
+            {
+                bail!(
+                    "GNSS correlated error 1-sigma {} m: each must be finite, at least 0 and at \
+                     most {MAX_CORRELATED_SIGMA_M} m",
+                    list(&c.sigma_ned_m)
+                );
+            }
+            if !(c.time_s > 0.0 && c.time_s <= MAX_CORRELATION_TIME_S) {
+                bail!(
+                    "GNSS correlated error time {} s: must be positive and at most \
+                     {MAX_CORRELATION_TIME_S} s",
+                    c.time_s
+                );
+            }
         }
         if let Some(bad) = o.outliers.iter().find(|x| !x.is_valid()) {
             bail!(
@@ -626,6 +719,219 @@ mod tests {
         // C_b_n = Rz(r t) A: omega_nb_b = r A^T z.
         let expected = truth[40].q_b_ned.inverse() * Vector3::new(0.0, 0.0, 0.3);
         assert!((w - expected).norm() < 1e-12, "{w} {expected}");
+    }
+
+    /// A body at rest at 45 deg N, `n` rows `dt_s` [s] apart.
+    fn at_rest(n: usize, dt_s: f64) -> Vec<Truth> {
+        (0..n)
+            .map(|k| Truth {
+                t_s: k as f64 * dt_s,
+                lat: 45f64.to_radians(),
+                lon: 7.5f64.to_radians(),
+                h: 250.0,
+                v_eb_ned: Vector3::zeros(),
+                q_b_ned: from_euler(0.0, 0.0, 0.3),
+            })
+            .collect()
+    }
+
+    /// Per axis, `sum x_i y_i / sqrt(sum x_i^2 sum y_i^2)` (zero-mean correlation).
+    fn correlation(x: &[[f64; 3]], y: &[[f64; 3]]) -> [f64; 3] {
+        std::array::from_fn(|j| {
+            let dot = |a: &[[f64; 3]], b: &[[f64; 3]]| -> f64 {
+                a.iter().zip(b).map(|(p, q)| p[j] * q[j]).sum()
+            };
+            dot(x, y) / (dot(x, x) * dot(y, y)).sqrt()
+        })
+    }
+
+    /// Per axis, the root mean square.
+    fn rms(x: &[[f64; 3]]) -> [f64; 3] {
+        std::array::from_fn(|j| {
+            (x.iter().map(|p| p[j] * p[j]).sum::<f64>() / x.len() as f64).sqrt()
+        })
+    }
+
+    #[test]
+    fn the_correlated_error_is_added_on_top_of_unchanged_white_noise() {
+        let truth = turning(120.0, 0.05);
+        let white = GnssSimOptions {
+            rate_hz: 5.0,
+            sigma_v_ned_m_s: Some([0.1, 0.1, 0.2]),
+            lever_arm_b_m: [0.8, -0.3, -1.1],
+            outages: vec![Outage {
+                start_s: 40.0,
+                length_s: 20.0,
+            }],
+            outliers: vec![Outlier::Jump {
+                t_s: 70.0,
+                length_s: 5.0,
+                offset_ned_m: [10.0, 0.0, -3.0],
+            }],
+            seed: 9,
+            ..GnssSimOptions::default()
+        };
+        let correlated = GnssSimOptions {
+            correlated: Some(CorrelatedError {
+                sigma_ned_m: [2.0, 3.0, 5.0],
+                time_s: 30.0,
+            }),
+            ..white.clone()
+        };
+        let a = simulate(&truth, &white).unwrap();
+        let b = simulate(&truth, &correlated).unwrap();
+        assert!(a.correlated_ned_m.iter().all(|d| *d == [0.0; 3]));
+        assert_eq!(a.correlated_ned_m.len(), a.fixes.len());
+        assert_eq!(b.correlated_ned_m.len(), b.fixes.len());
+        assert_eq!(
+            (a.truth_rows.clone(), a.dropped),
+            (b.truth_rows.clone(), b.dropped)
+        );
+        assert_eq!(a.injections, b.injections);
+        for ((fa, fb), (&k, d)) in a
+            .fixes
+            .iter()
+            .zip(&b.fixes)
+            .zip(a.truth_rows.iter().zip(&b.correlated_ned_m))
+        {
+            // The white draws are the same: velocity (drawn after the position) to the bit.
+            assert_eq!(
+                (fa.t_s, fa.sigma_ned_m, fa.velocity),
+                (fb.t_s, fb.sigma_ned_m, fb.velocity)
+            );
+            let (p0, _) = antenna(&truth[k], &omega_nb_b(&truth, k), &white.lever_arm_b_m);
+            let pa = Position::from_radians(fa.lat_rad, fa.lon_rad, fa.h_m);
+            let pb = Position::from_radians(fb.lat_rad, fb.lon_rad, fb.h_m);
+            let (da, db) = (p0.ned_to(&pa), p0.ned_to(&pb));
+            for j in 0..3 {
+                assert!(
+                    (db[j] - da[j] - d[j]).abs() < 1e-6,
+                    "{} s: {db:?} - {da:?} != {d:?}",
+                    fa.t_s
+                );
+            }
+        }
+        // Something was injected, of the size asked for.
+        let r = rms(&b.correlated_ned_m);
+        assert!(r.iter().all(|x| *x > 0.5), "{r:?}");
+        // The process runs through outages: without the outage the other fixes' errors stay.
+        let c = simulate(
+            &truth,
+            &GnssSimOptions {
+                outages: Vec::new(),
+                ..correlated.clone()
+            },
+        )
+        .unwrap();
+        for (&k, d) in b.truth_rows.iter().zip(&b.correlated_ned_m) {
+            let i = c.truth_rows.iter().position(|&r| r == k).unwrap();
+            assert_eq!(c.correlated_ned_m[i], *d);
+        }
+        assert!(b.describe(&correlated).contains("correlation time 30 s"));
+    }
+
+    #[test]
+    fn the_correlated_error_has_its_sigma_and_correlation_time() {
+        // 1 Hz fixes on 1 Hz truth; 1-sigma distinct per axis, so a swap of axes fails.
+        let (n, tau_s) = (120_000, 30.0);
+        let sigma_ned_m = [2.0, 3.0, 5.0];
+        let options = GnssSimOptions {
+            correlated: Some(CorrelatedError {
+                sigma_ned_m,
+                time_s: tau_s,
+            }),
+            seed: 4,
+            ..GnssSimOptions::default()
+        };
+        let sim = simulate(&at_rest(n, 1.0), &options).unwrap();
+        let b = &sim.correlated_ned_m;
+        assert_eq!(b.len(), n);
+        // Large-sample standard errors of an AR(1) of coefficient phi (Bartlett), 4 of them
+        // allowed: 1-sigma via the variance of the sample variance, 2 sigma^4 / N (1 + phi^2) /
+        // (1 - phi^2); the lag-m autocorrelation, ((1 + phi^2)(1 - phi^2m) / (1 - phi^2) - 2 m
+        // phi^2m) / N.
+        let (nf, m) = (n as f64, tau_s as usize);
+        let phi2 = (-2.0 / tau_s).exp();
+        let ratio = (1.0 + phi2) / (1.0 - phi2);
+        let tol_sigma = 4.0 * 0.5 * (2.0 * ratio / nf).sqrt();
+        let phi2m = phi2.powi(m as i32);
+        let tol_rho = 4.0 * ((ratio * (1.0 - phi2m) - 2.0 * m as f64 * phi2m) / nf).sqrt();
+        assert!(tol_sigma < 0.05 && tol_rho < 0.1, "{tol_sigma} {tol_rho}");
+        let r = rms(b);
+        let rho = correlation(&b[..n - m], &b[m..]);
+        for j in 0..3 {
+            assert!(
+                (r[j] / sigma_ned_m[j] - 1.0).abs() < tol_sigma,
+                "{r:?} {tol_sigma}"
+            );
+            assert!(
+                (rho[j] - (-1f64).exp()).abs() < tol_rho,
+                "{rho:?} {tol_rho}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_correlated_error_starts_in_its_steady_state_and_steps_exactly() {
+        // Across seeds: the first two epochs, dt = tau = 1 s (where an Euler step would give a
+        // correlation of 0): each 1-sigma `sigma`, their correlation exp(-1).
+        let truth = at_rest(2, 1.0);
+        let sigma_ned_m = [2.0, 3.0, 5.0];
+        let seeds = 2000;
+        let (mut b0, mut b1) = (Vec::new(), Vec::new());
+        for seed in 0..seeds {
+            let options = GnssSimOptions {
+                correlated: Some(CorrelatedError {
+                    sigma_ned_m,
+                    time_s: 1.0,
+                }),
+                seed,
+                ..GnssSimOptions::default()
+            };
+            let sim = simulate(&truth, &options).unwrap();
+            b0.push(sim.correlated_ned_m[0]);
+            b1.push(sim.correlated_ned_m[1]);
+        }
+        // 4 standard errors of independent normals: 1-sigma 1 / sqrt(2 N), correlation (1 -
+        // rho^2) / sqrt(N).
+        let nf = seeds as f64;
+        let rho = (-1f64).exp();
+        let tol_sigma = 4.0 / (2.0 * nf).sqrt();
+        let tol_rho = 4.0 * (1.0 - rho * rho) / nf.sqrt();
+        let (r0, r1, c) = (rms(&b0), rms(&b1), correlation(&b0, &b1));
+        for j in 0..3 {
+            assert!((r0[j] / sigma_ned_m[j] - 1.0).abs() < tol_sigma, "{r0:?}");
+            assert!((r1[j] / sigma_ned_m[j] - 1.0).abs() < tol_sigma, "{r1:?}");
+            assert!((c[j] - rho).abs() < tol_rho, "{c:?}");
+        }
+    }
+
+    #[test]
+    fn a_correlated_error_out_of_range_is_refused() {
+        let with = |sigma_ned_m: [f64; 3], time_s: f64| GnssSimOptions {
+            correlated: Some(CorrelatedError {
+                sigma_ned_m,
+                time_s,
+            }),
+            ..GnssSimOptions::default()
+        };
+        // A zero 1-sigma is allowed (no error on that axis), as are the limits.
+        assert!(with([0.0, 100.0, 1.0], 1.0e6).check().is_ok());
+        let cases = [
+            (with([-0.1, 1.0, 1.0], 60.0), "1-sigma -0.1,1,1 m"),
+            (with([1.0, f64::NAN, 1.0], 60.0), "1-sigma 1,NaN,1 m"),
+            (with([1.0, 1.0, 100.5], 60.0), "at most 100 m"),
+            (with([1.0, 1.0, f64::INFINITY], 60.0), "1-sigma 1,1,inf m"),
+            (with([1.0; 3], 0.0), "time 0 s"),
+            (with([1.0; 3], -5.0), "time -5 s"),
+            (with([1.0; 3], f64::NAN), "time NaN s"),
+            (with([1.0; 3], 2.0e6), "at most 1000000 s"),
+        ];
+        for (bad, reason) in cases {
+            let m = bad.check().unwrap_err().to_string();
+            assert!(m.contains("correlated error") && m.contains(reason), "{m}");
+            assert!(simulate(&turning(2.0, 0.0), &bad).is_err());
+        }
     }
 
     #[test]

@@ -5,9 +5,10 @@
 use host_tests::aided_bench::{Case, average_chi2_bounds, consistency_cell};
 use host_tests::filter_bench::{FilterBenchOptions, generate};
 use host_tests::gnss_bench::{
-    OUTAGE_S, outage_case, outage_drifts, outlier_case, outlier_case_with_velocity, outliers,
+    CODE_RECEIVER_CORRELATED, OUTAGE_S, outage_case, outage_drifts, outlier_case,
+    outlier_case_code_receiver, outlier_case_with_velocity, outliers,
 };
-use host_tests::gnss_sim::GnssSimOptions;
+use host_tests::gnss_sim::{CorrelatedError, GnssSimOptions};
 use host_tests::sensor_model::Grade;
 use std::path::Path;
 use std::process::Command;
@@ -53,47 +54,74 @@ fn mean_chi2_upper(n: usize, z: f64) -> f64 {
 /// point.
 #[test]
 fn a_small_family_is_consistent() {
-    let runs = 12;
-    let (lo3, hi3) = average_chi2_bounds(3.0, runs);
     for (scenario, grade, rate, vel) in [
         ("land-vehicle", Grade::Fog, 1.0, None),
         ("land-vehicle", Grade::MemsTactical, 1.0, None),
         ("flight", Grade::Rlg, 5.0, Some([0.05, 0.05, 0.1])),
     ] {
-        let case = Case {
-            scenario: scenario.into(),
-            grade,
-            seconds: 300.0,
-            imu_rate_hz: 200.0,
-            gnss: GnssSimOptions {
-                rate_hz: rate,
-                sigma_ned_m: [0.5, 0.5, 1.0],
-                sigma_v_ned_m_s: vel,
-                lever_arm_b_m: [0.8, -0.3, -1.1],
-                ..GnssSimOptions::default()
-            },
-            seed: 1,
-            zero_motion: false,
-            in_run_noise: true,
-            without: Vec::new(),
-        };
-        let r = consistency_cell(&case, runs, 1).unwrap();
-        let cell = format!("{scenario} {grade}: {r:?}");
-        assert!(r.nees_inside >= 0.9, "{cell}");
-        assert!(r.nis_inside >= 0.9, "{cell}");
-        assert!((lo3..=hi3).contains(&r.nis_mean), "{cell}");
-        for b in r.nees_blocks_mean {
-            assert!((lo3..=hi3).contains(&b), "{cell}");
-        }
-        let hi = mean_chi2_upper(3 * runs, 3.09);
-        assert!(r.bias_z_rms.0.powi(2) <= hi, "{cell}");
-        assert!(r.bias_z_rms.1.powi(2) <= hi, "{cell}");
-        assert!(r.bias_z_max < 4.0, "{cell}");
-        // Every sensor error (bias and scale factor) within 3 sigma of what the filter can
-        // see of it: 36 normals per block, 0.1 expected outside; at most 3 allowed.
-        for f in r.sensor_within_3_sigma {
-            assert!(f >= 33.0 / 36.0, "{cell}");
-        }
+        assert_family_consistent(&family_case(scenario, grade, rate, vel));
+    }
+}
+
+/// The same family with a code receiver (tactical MEMS land vehicle, 1 Hz positions): besides
+/// the white 0.5 m a Gauss–Markov error ([`CODE_RECEIVER_CORRELATED`], and one of half its
+/// sigma and twice its correlation time), simulated and declared to the filter (a consider
+/// state of the fixes): the same bounds, so the reported sigma holds that error and is not
+/// several times the true one.
+#[test]
+fn a_family_with_a_code_receivers_correlated_error_is_consistent() {
+    let (sigma_ned_m, time_s) = CODE_RECEIVER_CORRELATED;
+    for (scale, stretch) in [(1.0, 1.0), (0.5, 2.0)] {
+        let mut case = family_case("land-vehicle", Grade::MemsTactical, 1.0, None);
+        case.gnss.correlated = Some(CorrelatedError {
+            sigma_ned_m: sigma_ned_m.map(|s| s * scale),
+            time_s: time_s * stretch,
+        });
+        assert_family_consistent(&case);
+    }
+}
+
+fn family_case(scenario: &str, grade: Grade, rate: f64, vel: Option<[f64; 3]>) -> Case {
+    Case {
+        scenario: scenario.into(),
+        grade,
+        seconds: 300.0,
+        imu_rate_hz: 200.0,
+        gnss: GnssSimOptions {
+            rate_hz: rate,
+            sigma_ned_m: [0.5, 0.5, 1.0],
+            sigma_v_ned_m_s: vel,
+            lever_arm_b_m: [0.8, -0.3, -1.1],
+            ..GnssSimOptions::default()
+        },
+        seed: 1,
+        zero_motion: false,
+        in_run_noise: true,
+        without: Vec::new(),
+    }
+}
+
+/// The bounds of [`a_small_family_is_consistent`] on 12 seeds of `case`.
+fn assert_family_consistent(case: &Case) {
+    let runs = 12;
+    let (lo3, hi3) = average_chi2_bounds(3.0, runs);
+    let r = consistency_cell(case, runs, 1).unwrap();
+    let cell = format!("{} {}: {r:?}", case.scenario, case.grade);
+    eprintln!("{cell}");
+    assert!(r.nees_inside >= 0.9, "{cell}");
+    assert!(r.nis_inside >= 0.9, "{cell}");
+    assert!((lo3..=hi3).contains(&r.nis_mean), "{cell}");
+    for b in r.nees_blocks_mean {
+        assert!((lo3..=hi3).contains(&b), "{cell}");
+    }
+    let hi = mean_chi2_upper(3 * runs, 3.09);
+    assert!(r.bias_z_rms.0.powi(2) <= hi, "{cell}");
+    assert!(r.bias_z_rms.1.powi(2) <= hi, "{cell}");
+    assert!(r.bias_z_max < 4.0, "{cell}");
+    // Every sensor error (bias and scale factor) within 3 sigma of what the filter can see of
+    // it: 36 normals per block, 0.1 expected outside; at most 3 allowed.
+    for f in r.sensor_within_3_sigma {
+        assert!(f >= 33.0 / 36.0, "{cell}");
     }
 }
 
@@ -200,6 +228,33 @@ fn a_spike_taken_after_an_outage_is_undone_by_the_next_fix() {
             .find(|o| o.t_s == 700.0)
             .expect("the held offset");
         assert_eq!(held.refused, held.fixes, "seed {seed}: {held:?}");
+    }
+}
+
+/// A code receiver whose time-correlated error is simulated and declared to the filter
+/// ([`CODE_RECEIVER_CORRELATED`], a consider state of the fixes): on positions alone the
+/// tactical MEMS filter still cannot tell the 5 m multipath ramp from its own drift, but its
+/// sigma now holds it (declared white, 14 sigma), and every other outlier is refused or
+/// bounded as before. Seed 5 stops while a held 30 m offset is refused: the stop's
+/// zero-velocity update moved the drifted position by 10 m, which broke the refused cluster's
+/// chain and let the offset be taken; the cluster now follows the correction.
+#[test]
+fn a_declared_correlated_error_bounds_the_slow_ramp() {
+    for seed in [1, 5] {
+        let out = outliers(&outlier_case_code_receiver(Grade::MemsTactical, seed)).unwrap();
+        for o in &out {
+            assert!(o.max_error_per_sigma < 3.0, "seed {seed}: {o:?}");
+            assert!(o.max_error_per_sigma_after < 3.0, "seed {seed}: {o:?}");
+            assert!(o.reacquired, "seed {seed}: {o:?}");
+        }
+        let held = out
+            .iter()
+            .find(|o| o.t_s == 700.0)
+            .expect("the held offset");
+        assert_eq!(held.refused, held.fixes, "seed {seed}: {held:?}");
+        assert!(held.degraded, "seed {seed}: {held:?}");
+        let nan = out.iter().find(|o| o.name == "NaN").expect("the NaN fix");
+        assert_eq!(nan.refused, 1, "seed {seed}: {nan:?}");
     }
 }
 
@@ -514,6 +569,53 @@ fn replay_refuses_an_impossible_start() {
         assert!(msg.contains(reason), "{start:?}: {msg}");
         assert!(!out.exists(), "{start:?}: a solution file was left");
     }
+    // A declared GNSS correlated error out of range is refused with its range.
+    let given = [
+        "--init-pos",
+        "45,7.5,250",
+        "--init-vel",
+        "0,0,0",
+        "--init-att",
+        "0,0,0",
+    ];
+    for (extra, reason) in [
+        (
+            ["-1,1,1", "60"],
+            "correlated-error 1-sigma must be 0 to 100 m",
+        ),
+        (
+            ["1,1,1e3", "60"],
+            "correlated-error 1-sigma must be 0 to 100 m",
+        ),
+        (["1,1,2", "0"], "correlation time must be 1 s to 86,400 s"),
+        (["1,1,2", "NaN"], "correlation time must be 1 s to 86,400 s"),
+    ] {
+        let args = [
+            "--gnss-correlated",
+            extra[0],
+            "--gnss-correlated-time",
+            extra[1],
+        ];
+        let msg = replay_given(&[&given[..], &args[..]].concat());
+        assert!(msg.contains(reason), "{extra:?}: {msg}");
+        assert!(!out.exists(), "{extra:?}: a solution file was left");
+    }
+    // The navigator's aided phase (after an alignment) takes the fixes' errors as white:
+    // refused by name rather than ignored.
+    let msg = replay_given(&[
+        "--lat",
+        "45",
+        "--lon",
+        "7.5",
+        "--h",
+        "250",
+        "--align-seconds",
+        "15",
+        "--gnss-correlated",
+        "1,1,2",
+    ]);
+    assert!(msg.contains("--gnss-correlated needs"), "{msg}");
+    assert!(!out.exists(), "a solution file was left");
     // Options of the alignment's run, which a given start does not use, are refused by name
     // rather than ignored.
     for extra in [

@@ -347,7 +347,7 @@ fn scenario_lengths_beyond_range_are_refused() {
 fn bench_cells_outside_the_table_are_refused() {
     refused(
         &["bench", "consistency", "--runs", "2", "--cells", "1,9"],
-        &["--cells 9: the table has cells 1 to 5"],
+        &["--cells 9: the table has cells 1 to 6"],
     );
 }
 

@@ -394,6 +394,20 @@ struct ReplayArgs {
     gnss_lever_arm: Option<[f64; 3]>,
     #[command(flatten)]
     gnss_sigma: GnssSigmaArgs,
+    /// The receiver's time-correlated position error (multipath, atmosphere), 1-sigma north,
+    /// east, down [m]: a Gauss–Markov error the filter carries as a consider state of the
+    /// position fixes (a code receiver's is metres; leave it out for RTK). Needs a given
+    /// (--init-pos) or in-motion start.
+    #[arg(long, value_name = "N,E,D", requires = "gnss", allow_hyphen_values = true, value_parser = parse_vector3)]
+    gnss_correlated: Option<[f64; 3]>,
+    /// Correlation time of --gnss-correlated [s].
+    #[arg(
+        long,
+        value_name = "S",
+        requires = "gnss_correlated",
+        default_value_t = 60.0
+    )]
+    gnss_correlated_time: f64,
     /// Initial position of the IMU: latitude, longitude [deg], height [m] (KF-GINS's initpos).
     #[arg(long, value_name = "LAT,LON,H", requires_all = ["gnss", "init_vel", "init_att"], allow_hyphen_values = true, value_parser = parse_vector3)]
     init_pos: Option<[f64; 3]>,
@@ -588,12 +602,13 @@ fn bench_outages(runs: usize, threads: usize, outage_s: f64) -> Result<()> {
 /// `nav bench outliers`.
 fn bench_outliers() -> Result<()> {
     use host_tests::gnss_bench::{
-        OUTLIER_VELOCITY_SIGMA_M_S, outlier_case, outlier_case_with_velocity, outliers,
+        CODE_RECEIVER_CORRELATED, OUTLIER_VELOCITY_SIGMA_M_S, outlier_case,
+        outlier_case_code_receiver, outlier_case_with_velocity, outliers,
     };
     use host_tests::sensor_model::Grade;
     println!(
-        "land vehicle, 1 Hz fixes of 0.5 m (and, where the GNSS column says so, velocity of {} m/s; the outliers move the positions alone); each outlier, what the gate did, the largest horizontal error from its start to 30 s after it and the largest ratio of the error to the filter's reported 1-sigma there, and the same from the outlier's end on (the true fixes back)",
-        OUTLIER_VELOCITY_SIGMA_M_S[0]
+        "land vehicle, 1 Hz fixes of 0.5 m white noise (where the GNSS column says so, with velocity of {} m/s, or with a code receiver's correlated error of {:?} m, tau {} s, simulated and declared to the filter; the outliers move the positions alone); each outlier, what the gate did, the largest horizontal error from its start to 30 s after it and the largest ratio of the error to the filter's reported 1-sigma there, and the same from the outlier's end on (the true fixes back)",
+        OUTLIER_VELOCITY_SIGMA_M_S[0], CODE_RECEIVER_CORRELATED.0, CODE_RECEIVER_CORRELATED.1
     );
     println!(
         "| grade | GNSS | outlier | at [s] | fixes | refused | max error [m] | 1-sigma there [m] | max error/1-sigma | after its end | DEGRADED | accepted again |"
@@ -610,6 +625,11 @@ fn bench_outliers() -> Result<()> {
             Grade::MemsTactical,
             "position + velocity",
             outlier_case_with_velocity(Grade::MemsTactical, 1),
+        ),
+        (
+            Grade::MemsTactical,
+            "position, correlated error declared",
+            outlier_case_code_receiver(Grade::MemsTactical, 1),
         ),
     ];
     for (grade, gnss, case) in &cases {
@@ -687,7 +707,7 @@ struct ConsistencyChoice {
 }
 
 /// Cells of `nav bench consistency`'s table.
-const CONSISTENCY_CELLS: usize = 5;
+const CONSISTENCY_CELLS: usize = 6;
 
 /// `nav bench consistency`.
 fn bench_consistency(
@@ -721,13 +741,20 @@ fn bench_consistency(
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut block_tables = Vec::new();
+    // The last cell: a code receiver, whose time-correlated error is simulated and declared.
+    let (code_sigma, code_time) = host_tests::gnss_bench::CODE_RECEIVER_CORRELATED;
+    let code = Some(host_tests::gnss_sim::CorrelatedError {
+        sigma_ned_m: code_sigma,
+        time_s: code_time,
+    });
     let table: [_; CONSISTENCY_CELLS] = [
-        ("land-vehicle", Grade::Fog, 1.0, [0.5, 0.5, 1.0], None),
+        ("land-vehicle", Grade::Fog, 1.0, [0.5, 0.5, 1.0], None, None),
         (
             "land-vehicle",
             Grade::MemsTactical,
             1.0,
             [0.5, 0.5, 1.0],
+            None,
             None,
         ),
         (
@@ -736,6 +763,7 @@ fn bench_consistency(
             10.0,
             [1.0, 1.0, 2.0],
             Some([0.05, 0.05, 0.1]),
+            None,
         ),
         (
             "flight",
@@ -743,10 +771,26 @@ fn bench_consistency(
             5.0,
             [0.5, 0.5, 1.0],
             Some([0.05, 0.05, 0.1]),
+            None,
         ),
-        ("flight", Grade::MemsTactical, 2.0, [1.0, 1.0, 2.0], None),
+        (
+            "flight",
+            Grade::MemsTactical,
+            2.0,
+            [1.0, 1.0, 2.0],
+            None,
+            None,
+        ),
+        (
+            "land-vehicle",
+            Grade::MemsTactical,
+            1.0,
+            [0.5, 0.5, 1.0],
+            None,
+            code,
+        ),
     ];
-    for (cell, (scenario, grade, rate, sigma, vel)) in table.into_iter().enumerate() {
+    for (cell, (scenario, grade, rate, sigma, vel, correlated)) in table.into_iter().enumerate() {
         if !(choice.cells.is_empty() || choice.cells.contains(&(cell + 1))) {
             continue;
         }
@@ -760,6 +804,7 @@ fn bench_consistency(
                 sigma_ned_m: sigma,
                 sigma_v_ned_m_s: vel,
                 lever_arm_b_m: [0.8, -0.3, -1.1],
+                correlated,
                 ..GnssSimOptions::default()
             },
             seed: 1,
@@ -768,8 +813,15 @@ fn bench_consistency(
             without: choice.without.clone(),
         };
         let r = consistency_cell(&case, runs, threads)?;
+        let gnss = match correlated {
+            Some(c) => format!(
+                "{rate} Hz, correlated {:?} m, {} s",
+                c.sigma_ned_m, c.time_s
+            ),
+            None => format!("{rate} Hz"),
+        };
         println!(
-            "| {scenario} | {grade} | {rate} Hz | {} | {:.0} % | {:.2} ({:.2}/{:.2}/{:.2}) | {:.0} % | {:.2} | {:.2} / {:.2} | {:.2} | {} | {}/{} |",
+            "| {scenario} | {grade} | {gnss} | {} | {:.0} % | {:.2} ({:.2}/{:.2}/{:.2}) | {:.0} % | {:.2} | {:.2} / {:.2} | {:.2} | {} | {}/{} |",
             r.epochs,
             100.0 * r.nees_inside,
             r.nees_mean,
@@ -822,6 +874,12 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
     config.scale_factors = !a.no_scale_factors;
     config.propagation_interval_s = 1.0 / a.propagation_rate;
     config.antenna_lever_arm_b_m = a.gnss_lever_arm.unwrap_or([0.0; 3]).into();
+    config.gnss_correlated_error =
+        a.gnss_correlated
+            .map(|s| nav_core::ins_filter::GnssCorrelatedError {
+                sigma_ned_m: s.into(),
+                correlation_time_s: a.gnss_correlated_time,
+            });
     let start = match (a.init_pos, a.init_vel, a.init_att) {
         (Some(pos), Some(vel), Some(att)) => AidedStart::Given(Box::new(GivenStart {
             pos_deg_m: pos,
@@ -837,6 +895,12 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
         _ => {
             // From the navigator's alignment (the firmware's `--gnss` run): the run
             // configuration of a plain replay, with the aided phase after the alignment.
+            anyhow::ensure!(
+                a.gnss_correlated.is_none(),
+                "--gnss-correlated needs --init-pos/--init-vel/--init-att or --start-in-motion \
+                 (the navigator's aided phase after an alignment, as the firmware runs it, takes \
+                 the fixes' errors as white)"
+            );
             let mut options = a.options()?;
             options.run.aiding = Some(nav_core::navigator::AidingConfig {
                 antenna_lever_arm_b_m: a.gnss_lever_arm.unwrap_or([0.0; 3]),
@@ -1045,6 +1109,19 @@ struct SimArgs {
     /// A NaN fix at T [s] (repeatable).
     #[arg(long, value_name = "T", requires = "gnss_rate")]
     gnss_nan: Vec<f64>,
+    /// A time-correlated position error (multipath, atmosphere) added to the white noise: a
+    /// first-order Gauss–Markov process of this steady-state 1-sigma north, east, down [m]; the
+    /// fixes still report --gnss-sigma.
+    #[arg(long, value_name = "N,E,D", allow_hyphen_values = true, value_parser = parse_vector3, requires = "gnss_rate")]
+    gnss_correlated: Option<[f64; 3]>,
+    /// The correlated error's correlation time [s].
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 60.0,
+        requires = "gnss_correlated"
+    )]
+    gnss_correlated_time: f64,
 }
 
 /// `K` comma-separated finite numbers.
@@ -1070,7 +1147,7 @@ fn gnss_options(
     rate_hz: f64,
     seconds: f64,
 ) -> Result<host_tests::gnss_sim::GnssSimOptions> {
-    use host_tests::gnss_sim::{GnssSimOptions, Outage, Outlier};
+    use host_tests::gnss_sim::{CorrelatedError, GnssSimOptions, Outage, Outlier};
     if let Some([period, length, _]) = a.gnss_outages
         && !(period > 0.0 && (0.0..period).contains(&length))
     {
@@ -1113,6 +1190,10 @@ fn gnss_options(
             .map(|[p, l, f]| Outage::every(p, l, f, seconds))
             .unwrap_or_default(),
         outliers,
+        correlated: a.gnss_correlated.map(|sigma_ned_m| CorrelatedError {
+            sigma_ned_m,
+            time_s: a.gnss_correlated_time,
+        }),
         seed: a.seed,
     })
 }

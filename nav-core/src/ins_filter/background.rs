@@ -18,7 +18,7 @@ use super::{
     ATT, BA, BG, Covariance, FilterConfig, FilterError, FilterStatus, InitialSigma, N, POS, SG,
     StateVector, VEL,
 };
-use crate::alignment::fine::kalman::{ScalarUpdate, update_scalar};
+use crate::alignment::fine::kalman::{ConsiderError, ScalarUpdate, update_scalar_correlated};
 use crate::earth::LocalEarth;
 use crate::{NavState, Position, Scalar};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
@@ -56,11 +56,34 @@ pub struct Correction<T: Scalar> {
     pub x: StateVector<T>,
 }
 
-/// A measurement `z = H x + v`, `v ~ N(0, diag(r))`, `z` predicted minus measured.
+/// A measurement `z = H x + v`, `v ~ N(0, diag(r))`, `z` predicted minus measured; row `i`
+/// also sees consider state `gnss_error + i` (`Some` for a position fix: the receiver's
+/// correlated error, [`consider::GP`], with [`consider::POSITION_SENSITIVITY`]).
 struct Measurement<T: Scalar, const M: usize> {
     z: SVector<T, M>,
     h: SMatrix<T, M, N>,
     r: SVector<T, M>,
+    gnss_error: Option<usize>,
+}
+
+impl<T: Scalar, const M: usize> Measurement<T, M> {
+    /// A measurement of the error states alone.
+    fn of_states(z: SVector<T, M>, h: SMatrix<T, M, N>, r: SVector<T, M>) -> Self {
+        Self {
+            z,
+            h,
+            r,
+            gnss_error: None,
+        }
+    }
+
+    /// The consider state row `i` sees.
+    fn seen(&self, i: usize) -> Option<consider::Seen<T>> {
+        self.gnss_error.map(|at| consider::Seen {
+            at: at + i,
+            sensitivity: T::c(consider::POSITION_SENSITIVITY),
+        })
+    }
 }
 
 /// The background half (module docs).
@@ -101,7 +124,14 @@ impl<T: Scalar> ErrorFilter<T> {
         if !(l.iter().all(|v| v.finite()) && l.norm() <= T::c(100.0)) {
             return Err(FilterError::BadLeverArm);
         }
-        let consider = ConsiderModel::of(&config.noise);
+        if let Some(why) = config
+            .gnss_correlated_error
+            .as_ref()
+            .and_then(limits::gnss_error_out_of_range)
+        {
+            return Err(FilterError::BadGnssError(why));
+        }
+        let consider = ConsiderModel::of(&config.noise, config.gnss_correlated_error.as_ref());
         let mut p = sigma.covariance(yaw, config.scale_factors);
         let mut p_ac = CrossCovariance::zeros();
         consider::start(&mut p, &mut p_ac, &consider);
@@ -301,11 +331,24 @@ impl<T: Scalar> ErrorFilter<T> {
 
     /// The innovation covariance `S = H P H^T + diag(r)` and the normalised innovation
     /// squared `z^T S^-1 z` of a measurement; `None` when `S` is singular or the NIS not
-    /// finite.
+    /// finite. With a consider error `e = H_c c` ([`consider`]), `S += H P_ac H_c^T + H_c
+    /// P_ca H^T + H_c P_cc H_c^T`.
     fn innovation<const M: usize>(&self, m: &Measurement<T, M>) -> Option<(SMatrix<T, M, M>, T)> {
         let mut s = m.h * self.p * m.h.transpose();
         for i in 0..M {
             s[(i, i)] += m.r[i];
+            if let Some(seen) = m.seen(i)
+                && self.consider.variance()[seen.at] > T::zero()
+            {
+                // Column i of H P_ac H_c^T, and its mirror.
+                let hu = m.h * self.p_ac.column(seen.at) * seen.sensitivity;
+                for j in 0..M {
+                    s[(j, i)] += hu[j];
+                    s[(i, j)] += hu[j];
+                }
+                s[(i, i)] +=
+                    seen.sensitivity * seen.sensitivity * self.consider.variance()[seen.at];
+            }
         }
         let s_inv = s.try_inverse()?;
         let nis = (m.z.transpose() * s_inv * m.z)[(0, 0)];
@@ -328,6 +371,25 @@ impl<T: Scalar> ErrorFilter<T> {
         self.apply(m, &s, nis)
     }
 
+    /// Per row, the variance the shrink limit ([`effective_noise`]) judges, from the
+    /// measurement's innovation covariance `s`: its diagonal, or for a fix that also sees the
+    /// declared GNSS error the error states' predicted variance `h^T P h` plus the noise `r`
+    /// (that error is not the filter's to shrink: counted in, its variance alone would limit
+    /// every fix of a receiver declared at metres, as after an outage).
+    fn shrink_basis<const M: usize>(
+        &self,
+        m: &Measurement<T, M>,
+        s: &SMatrix<T, M, M>,
+    ) -> SVector<T, M> {
+        if m.gnss_error.is_none() || !self.consider.has_gnss_error() {
+            return s.diagonal();
+        }
+        SVector::<T, M>::from_fn(|i, _| {
+            let hi = m.h.row(i).transpose();
+            hi.dot(&(self.p * hi)) + m.r[i]
+        })
+    }
+
     /// The scalar Joseph updates of a measurement that passed its tests, with innovation
     /// covariance `s`.
     fn apply<const M: usize>(
@@ -336,6 +398,7 @@ impl<T: Scalar> ErrorFilter<T> {
         s: &SMatrix<T, M, M>,
         nis: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
+        let basis = self.shrink_basis(m, s);
         for i in 0..M {
             let hi = m.h.row(i).transpose();
             let innovation = m.z[i] - hi.dot(&self.x);
@@ -343,23 +406,38 @@ impl<T: Scalar> ErrorFilter<T> {
             // than MAX_SHRINK times (its noise variance is raised to the prediction's share):
             // a fix far inside a wide prediction can still be an outlier the gate cannot see,
             // and the next fixes must be able to pull the solution back.
-            let r_eff = effective_noise(s[(i, i)], m.r[i]);
+            let r_eff = effective_noise(basis[i], m.r[i]);
+            let seen = m.seen(i);
+            let e = consider::consider_error(&self.p_ac, &self.consider, seen);
             // The gain, for the consider states' cross-covariance ([`consider::update`]).
-            let gain = self.consider.is_active().then(|| {
-                let ph = self.p * hi;
-                ph / (hi.dot(&ph) + r_eff)
-            });
-            if update_scalar(&mut self.x, &mut self.p, &hi, innovation, r_eff, T::c(1e15))
-                != ScalarUpdate::Accepted
+            let gain = self
+                .consider
+                .is_active()
+                .then(|| ConsiderError::gain(e.as_ref(), &self.p, &hi, r_eff))
+                .flatten();
+            if update_scalar_correlated(
+                &mut self.x,
+                &mut self.p,
+                &hi,
+                e.as_ref(),
+                innovation,
+                r_eff,
+                T::c(1e15),
+            ) != ScalarUpdate::Accepted
             {
                 // The vector test passed, so this is rounding: keep what was used.
                 break;
             }
             if let Some(k) = &gain {
-                consider::update(&mut self.p_ac, k, &hi);
+                consider::update(&mut self.p_ac, k, &hi, seen, &self.consider);
             }
         }
         let correction = Correction { x: self.x };
+        if let Some(c) = &self.cluster {
+            // Another aid's correction while fixes are refused (a position fix's ends the
+            // cluster before its update).
+            self.cluster = Some(c.corrected(&self.x.fixed_rows::<3>(POS).into_owned()));
+        }
         self.x = StateVector::zeros();
         self.check_covariance();
         (AidResult::Accepted { nis }, Some(correction))
@@ -443,7 +521,8 @@ impl<T: Scalar> ErrorFilter<T> {
             return (AidResult::Invalid, None);
         };
         self.window.push(w);
-        if self.window.verdict(gate) != WindowVerdict::Consistent {
+        let local = !self.consider.has_gnss_error();
+        if self.window.verdict(gate, local) != WindowVerdict::Consistent {
             if self.counters.position.consecutive_rejected < integrity::WINDOW_REFUSALS_MAX {
                 // What the window's earlier fixes pulled the filter by is now doubtful.
                 let d = self.window.take_corrections();
@@ -469,10 +548,11 @@ impl<T: Scalar> ErrorFilter<T> {
             (s, nis) = again;
         }
         let p_pos_before = self.p.fixed_view::<3, 3>(POS, POS).into_owned();
+        let basis = self.shrink_basis(m, &s);
         let out = self.apply(m, &s, nis);
         if let Some(c) = &out.1 {
             self.window.set_last_correction(&c.x);
-            let limited = (0..3).any(|i| effective_noise(s[(i, i)], m.r[i]) > m.r[i]);
+            let limited = (0..3).any(|i| effective_noise(basis[i], m.r[i]) > m.r[i]);
             self.reacquired = limited.then(|| Reacquisition {
                 correction: c.x,
                 position_shrink: p_pos_before - self.p.fixed_view::<3, 3>(POS, POS),
@@ -522,7 +602,12 @@ impl<T: Scalar> ErrorFilter<T> {
         h.fixed_view_mut::<3, 3>(0, ATT)
             .copy_from(&model::skew(&l_n));
         let r = fix.sigma_ned_m.component_mul(&fix.sigma_ned_m);
-        Some(Measurement { z, h, r })
+        Some(Measurement {
+            z,
+            h,
+            r,
+            gnss_error: self.consider.has_gnss_error().then_some(consider::GP),
+        })
     }
 
     /// A GNSS velocity of the antenna taken `lag_s` [s] before the snapshot's sample.
@@ -572,7 +657,7 @@ impl<T: Scalar> ErrorFilter<T> {
                 .copy_from(&(c_l * Matrix3::from_diagonal(&snap.omega_ib_b)));
         }
         let r = fix.sigma_ned_m_s.component_mul(&fix.sigma_ned_m_s);
-        Some(Measurement { z, h, r })
+        Some(Measurement::of_states(z, h, r))
     }
 
     /// Zero-velocity and zero-rate updates over a still window: both results and the
@@ -595,7 +680,7 @@ impl<T: Scalar> ErrorFilter<T> {
         h.fixed_view_mut::<3, 3>(0, VEL)
             .copy_from(&Matrix3::identity());
         let r = Vector3::repeat(zm.velocity_sigma_m_s * zm.velocity_sigma_m_s);
-        let (rv, cv) = self.update(&Measurement { z, h, r });
+        let (rv, cv) = self.update(&Measurement::of_states(z, h, r));
         self.counters.zero_velocity.count(&rv);
         // The rate only at a stop the velocity confirms: a gentle curve driven at constant
         // speed also passes the detector, and its rate taken for a gyro bias would turn the
@@ -626,7 +711,7 @@ impl<T: Scalar> ErrorFilter<T> {
             + zm.rate_sigma_rad_s * zm.rate_sigma_rad_s
             + self.consider.gyro_bias_instability_variance();
         let r = Vector3::repeat(var);
-        let (rr, cr) = self.update(&Measurement { z, h, r });
+        let (rr, cr) = self.update(&Measurement::of_states(z, h, r));
         self.counters.zero_rate.count(&rr);
         let c = match (cv, cr) {
             (Some(a), Some(b)) => Some(Correction { x: a.x + b.x }),

@@ -11,7 +11,13 @@
 //!   a part of 1e-5 of a car's turn);
 //! - the gyros' bias instability, a Gauss–Markov process of a few seconds ([Groves, eq.
 //!   14.80]): too short for a bias state to follow between fixes, too long to be white noise
-//!   over the fixes' interval.
+//!   over the fixes' interval;
+//! - the GNSS receiver's time-correlated position error (multipath, atmosphere: a first-order
+//!   Gauss–Markov process per NED axis of a declared 1-sigma and correlation time,
+//!   [`GnssCorrelatedError`]; [Groves, §14.3.2]), which only the position fixes see: a fix is
+//!   `r_ant + b + v`, so the measurement "predicted minus measured" sees `-b` besides the
+//!   error states ([`POSITION_SENSITIVITY`]). Unmodelled, a slow multipath ramp passes the
+//!   gate fix by fix and the filter follows it with a sigma of the fixes' white noise.
 //!
 //! With `c` the consider states, the errors are `e_g = J_g c` on the gyros and `e_a = J_a c` on
 //! the accelerometers ([`sensitivities`]), so they enter the error equations of
@@ -25,16 +31,19 @@
 //! `P_aa <- (Phi_aa P_aa Phi_aa^T + Q) + X Phi_ac^T + Phi_ac X^T + Phi_ac P_cc Phi_ac^T`,
 //! `P_ac <- (X + Phi_ac P_cc) Phi_cc^T`.
 //!
-//! Update with gain `K` (the error states' gain: the Schmidt filter gives the consider states
-//! none, and the measurements do not see them): `P_ac <- (I - K h^T) P_ac`. The innovation's
-//! variance and the gain are those of the error states alone, as `H_c = 0`: the lever arm's
-//! velocity term `C (e_g x l)` is neglected (1e-3 m/s for 1 m, a 0.1 deg misalignment and a
-//! 30 deg/s turn).
+//! Update of a scalar measurement `z = h^T x + h_c^T c + v` with gain `K` (the error states'
+//! gain: the Schmidt filter gives the consider states none): `P_ac <- (I - K h^T) P_ac - K
+//! h_c^T P_cc`; the gain and the error states' covariance are those of
+//! [`crate::alignment::fine::kalman::update_scalar_correlated`] with the consider error `e =
+//! h_c^T c` ([`consider_error`]: `u = P_ac h_c`, `var = h_c^T P_cc h_c`). Only the position
+//! fixes' `h_c` is not zero (the GNSS error); the velocity fixes' lever-arm term `C (e_g x l)`
+//! is neglected (1e-3 m/s for 1 m, a 0.1 deg misalignment and a 30 deg/s turn).
 
 use super::covariance::{NAV, Transition};
 use super::model::{FilterNoise, Linearisation};
 use super::states::{ATT, BA, BG, Covariance, N, VEL};
 use crate::Scalar;
+use crate::alignment::fine::kalman::ConsiderError;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 /// Gyro misalignment [rad]: six elements `(i, j)` of [`OFF_DIAGONAL`] (gyro `i` sees
@@ -47,8 +56,25 @@ pub const GS: usize = 6;
 pub const MA: usize = 15;
 /// Gyro bias instability (Gauss–Markov), per body axis [rad/s].
 pub const GB: usize = 21;
+/// GNSS position error (Gauss–Markov), north, east, down [m].
+pub const GP: usize = 24;
 /// Number of consider states.
-pub const NC: usize = 24;
+pub const NC: usize = 27;
+
+/// The position fixes' sensitivity to the GNSS error [`GP`] [-] (`z` is predicted minus
+/// measured, the fix carries `+b`).
+pub const POSITION_SENSITIVITY: f64 = -1.0;
+
+/// A GNSS receiver's time-correlated position error: a first-order Gauss–Markov process per
+/// NED axis [Groves, §14.3.2] (what a code receiver's multipath and atmosphere make; an RTK
+/// receiver's is centimetres). Declared by the user; the fixes' own 1-sigma is the white part.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GnssCorrelatedError<T: Scalar> {
+    /// Steady-state 1-sigma, north, east, down [m].
+    pub sigma_ned_m: nalgebra::Vector3<T>,
+    /// Correlation time [s].
+    pub correlation_time_s: T,
+}
 
 /// The off-diagonal elements `(row, column)` of a misalignment matrix, in the order of the
 /// states: xy, xz, yx, yz, zx, zy.
@@ -73,33 +99,51 @@ pub struct ConsiderModel<T: Scalar> {
     variance: SVector<T, NC>,
     /// `1 / tau` of the bias instability [1/s] (zero when it is off).
     decay_rate: T,
+    /// `1 / tau` of the GNSS error [1/s] (zero when it is off).
+    gnss_decay_rate: T,
     active: bool,
 }
 
 impl<T: Scalar> ConsiderModel<T> {
     /// The model of a noise figure set: each misalignment element of 1-sigma
     /// `*_cross_coupling_rad`, each g-sensitivity element of `gyro_g_sensitivity`, the bias
-    /// instability of `gyro_bias_instability_rad_s` and `gyro_bias_instability_time_s`.
-    pub fn of(noise: &FilterNoise<T>) -> Self {
+    /// instability of `gyro_bias_instability_rad_s` and `gyro_bias_instability_time_s`; and
+    /// the GNSS receiver's correlated error `gnss` (`None`: its fixes' errors are white).
+    pub fn of(noise: &FilterNoise<T>, gnss: Option<&GnssCorrelatedError<T>>) -> Self {
         let sq = |v: T| v * v;
         let gm_on = noise.gyro_bias_instability_rad_s > T::zero()
             && noise.gyro_bias_instability_time_s > T::zero();
+        let gnss = gnss.filter(|g| g.correlation_time_s > T::zero());
         let variance = SVector::<T, NC>::from_fn(|i, _| match i {
             i if i < GS => sq(noise.gyro_cross_coupling_rad),
             i if i < MA => sq(noise.gyro_g_sensitivity),
             i if i < GB => sq(noise.accel_cross_coupling_rad),
-            _ if gm_on => sq(noise.gyro_bias_instability_rad_s),
-            _ => T::zero(),
+            i if i < GP && gm_on => sq(noise.gyro_bias_instability_rad_s),
+            i if i < GP => T::zero(),
+            i => gnss.map_or(T::zero(), |g| sq(g.sigma_ned_m[i - GP])),
         });
+        let rate = |on: bool, tau: T| if on { T::one() / tau } else { T::zero() };
         Self {
             variance,
-            decay_rate: if gm_on {
-                T::one() / noise.gyro_bias_instability_time_s
-            } else {
-                T::zero()
-            },
+            decay_rate: rate(gm_on, noise.gyro_bias_instability_time_s),
+            gnss_decay_rate: gnss.map_or(T::zero(), |g| T::one() / g.correlation_time_s),
             active: variance.iter().any(|v| *v > T::zero()),
         }
+    }
+
+    /// `1 / tau` of consider state `c` [1/s]: the bias instability's, the GNSS error's, zero
+    /// for the constants.
+    fn decay(&self, c: usize) -> T {
+        match c {
+            c if c >= GP => self.gnss_decay_rate,
+            c if c >= GB => self.decay_rate,
+            _ => T::zero(),
+        }
+    }
+
+    /// True when the GNSS error is modelled.
+    pub fn has_gnss_error(&self) -> bool {
+        self.gnss_decay_rate > T::zero()
     }
 
     /// True when any consider state has a variance (otherwise the filter skips them).
@@ -201,11 +245,7 @@ pub fn transition_columns<T: Scalar>(
     let f_nav = f.fixed_view::<NAV, ROWS>(0, VEL);
     let mut phi = f_nav * f_ac * half_dt2;
     for c in 0..NC {
-        let decay = if c >= GB {
-            -model.decay_rate
-        } else {
-            T::zero()
-        };
+        let decay = -model.decay(c);
         for r in 0..ROWS {
             phi[(VEL + r, c)] += f_ac[(r, c)] * (dt + decay * half_dt2);
         }
@@ -250,10 +290,10 @@ pub fn propagate<T: Scalar>(
             }
         }
     }
-    let d_gm = T::one() - model.decay_rate * dt
-        + model.decay_rate * model.decay_rate * dt * dt * T::c(0.5);
     for c in 0..NC {
-        let d = if c >= GB { d_gm } else { T::one() };
+        // exp(-dt / tau) to second order, as the error states' transition.
+        let rate = model.decay(c);
+        let d = T::one() - rate * dt + rate * rate * dt * dt * T::c(0.5);
         for i in 0..N {
             let extra = if i < NAV { phi_p[(i, c)] } else { T::zero() };
             p_ac[(i, c)] = (x[(i, c)] + extra) * d;
@@ -261,9 +301,41 @@ pub fn propagate<T: Scalar>(
     }
 }
 
-/// `P_ac <- P_ac - k (h^T P_ac)` of a scalar update with gain `k` (module docs).
-pub fn update<T: Scalar>(p_ac: &mut CrossCovariance<T>, k: &SVector<T, N>, h: &SVector<T, N>) {
-    let h_p = p_ac.tr_mul(h);
+/// A scalar measurement's sensitivity to one consider state: `h_c = sensitivity e_at`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Seen<T: Scalar> {
+    /// The consider state ([`GP`] + axis).
+    pub at: usize,
+    /// `dz / dc` [-].
+    pub sensitivity: T,
+}
+
+/// The consider error `e = h_c^T c` a scalar measurement sees ([`ConsiderError`]: `u = P_ac
+/// h_c`, `var = h_c^T P_cc h_c`); `None` when it sees none or that state has no variance.
+pub fn consider_error<T: Scalar>(
+    p_ac: &CrossCovariance<T>,
+    model: &ConsiderModel<T>,
+    seen: Option<Seen<T>>,
+) -> Option<ConsiderError<T, N>> {
+    let s = seen.filter(|s| model.variance[s.at] > T::zero())?;
+    Some(ConsiderError {
+        u: p_ac.column(s.at) * s.sensitivity,
+        var: s.sensitivity * s.sensitivity * model.variance[s.at],
+    })
+}
+
+/// `P_ac <- P_ac - k (h^T P_ac + h_c^T P_cc)` of a scalar update with gain `k` (module docs).
+pub fn update<T: Scalar>(
+    p_ac: &mut CrossCovariance<T>,
+    k: &SVector<T, N>,
+    h: &SVector<T, N>,
+    seen: Option<Seen<T>>,
+    model: &ConsiderModel<T>,
+) {
+    let mut h_p = p_ac.tr_mul(h);
+    if let Some(s) = seen {
+        h_p[s.at] += s.sensitivity * model.variance[s.at];
+    }
     for c in 0..NC {
         let hc = h_p[c];
         if hc == T::zero() {
@@ -357,7 +429,7 @@ mod tests {
         const M: usize = N + NC;
         let n = noise();
         let l = lin();
-        let model = ConsiderModel::of(&n);
+        let model = ConsiderModel::of(&n, Some(&gnss()));
         let f = model::system_matrix(&l, &n, true);
         let q = model::noise_density(&n, true);
         let mut f_aug = SMatrix::<f64, M, M>::zeros();
@@ -367,6 +439,7 @@ mod tests {
             .copy_from(&system_columns(&l));
         for i in 0..3 {
             f_aug[(N + GB + i, N + GB + i)] = -1.0 / n.gyro_bias_instability_time_s;
+            f_aug[(N + GP + i, N + GP + i)] = -1.0 / gnss().correlation_time_s;
         }
         // A correlated start: P_ac from a dense positive definite augmented covariance.
         let lower = SMatrix::<f64, M, M>::from_fn(|i, j| match i.cmp(&j) {
@@ -401,30 +474,93 @@ mod tests {
         assert_eq!(p, p.transpose());
     }
 
-    /// The update is the augmented Joseph update with the consider states' gain set to zero.
+    fn gnss() -> GnssCorrelatedError<f64> {
+        GnssCorrelatedError {
+            sigma_ned_m: Vector3::new(1.0, 1.5, 2.5),
+            correlation_time_s: 90.0,
+        }
+    }
+
+    /// The update is the augmented Joseph update with the consider states' gain set to zero:
+    /// of the error states and of their cross-covariance, for a measurement that sees a
+    /// consider state (the GNSS error) and one that does not.
     #[test]
     fn update_is_the_schmidt_update() {
-        let mut p_ac =
-            CrossCovariance::<f64>::from_fn(|i, c| ((i * 7 + c * 3) as f64).sin() * 1e-3);
-        let before = p_ac;
-        let k = SVector::<f64, N>::from_fn(|i, _| 0.01 * i as f64);
-        let h = SVector::<f64, N>::from_fn(|i, _| if i < 3 { 1.0 } else { 0.0 });
-        update(&mut p_ac, &k, &h);
-        let expected = (Covariance::<f64>::identity() - k * h.transpose()) * before;
-        assert!((p_ac - expected).amax() < 1e-16);
+        use crate::alignment::fine::kalman::{ScalarUpdate, update_scalar_correlated};
+        const M: usize = N + NC;
+        let model = ConsiderModel::of(&noise(), Some(&gnss()));
+        let lower = SMatrix::<f64, M, M>::from_fn(|i, j| match i.cmp(&j) {
+            core::cmp::Ordering::Less => 0.0,
+            core::cmp::Ordering::Equal => 0.5 + 0.01 * i as f64,
+            core::cmp::Ordering::Greater => 0.05 * ((3 * i + 5 * j) as f64).sin(),
+        });
+        let mut full = lower * lower.transpose();
+        // P_cc is the model's (diagonal).
+        let scale = SMatrix::<f64, M, M>::from_fn(|i, j| match (i >= N, j >= N) {
+            (true, true) => 0.0,
+            _ => 1.0,
+        });
+        full = full.component_mul(&scale);
+        for c in 0..NC {
+            full[(N + c, N + c)] = model.variance()[c];
+        }
+        // Keep the augmented matrix positive definite: the cross block scaled to the P_cc.
+        for c in 0..NC {
+            let sd = model.variance()[c].sqrt();
+            for i in 0..N {
+                full[(i, N + c)] *= sd * 0.1;
+                full[(N + c, i)] = full[(i, N + c)];
+            }
+        }
+        let h =
+            SVector::<f64, N>::from_fn(|i, _| [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.3][i.min(7)]);
+        for seen in [
+            None,
+            Some(Seen {
+                at: GP + 1,
+                sensitivity: POSITION_SENSITIVITY,
+            }),
+        ] {
+            let mut ha = SVector::<f64, M>::zeros();
+            ha.fixed_rows_mut::<N>(0).copy_from(&h);
+            if let Some(s) = seen {
+                ha[N + s.at] = s.sensitivity;
+            }
+            let r = 0.25;
+            let mut ka = full * ha / (ha.dot(&(full * ha)) + r);
+            ka.fixed_rows_mut::<NC>(N).fill(0.0);
+            let i_kh = SMatrix::<f64, M, M>::identity() - ka * ha.transpose();
+            let expected = i_kh * full * i_kh.transpose() + ka * ka.transpose() * r;
+            let mut p = full.fixed_view::<N, N>(0, 0).into_owned();
+            let mut p_ac = full.fixed_view::<N, NC>(0, N).into_owned();
+            let e = consider_error(&p_ac, &model, seen);
+            assert_eq!(e.is_some(), seen.is_some());
+            let k = ConsiderError::gain(e.as_ref(), &p, &h, r).unwrap();
+            let mut x = SVector::<f64, N>::zeros();
+            let u = update_scalar_correlated(&mut x, &mut p, &h, e.as_ref(), 0.1, r, 1e9);
+            assert_eq!(u, ScalarUpdate::Accepted);
+            update(&mut p_ac, &k, &h, seen, &model);
+            let e_aa = (p - expected.fixed_view::<N, N>(0, 0)).amax();
+            let e_ac = (p_ac - expected.fixed_view::<N, NC>(0, N)).amax();
+            assert!(e_aa < 1e-13, "{e_aa}");
+            assert!(e_ac < 1e-13, "{e_ac}");
+        }
     }
 
     #[test]
     fn nothing_is_active_without_figures() {
         let mut n = noise();
-        assert!(ConsiderModel::of(&n).is_active());
+        assert!(ConsiderModel::of(&n, None).is_active());
         n.gyro_cross_coupling_rad = 0.0;
         n.accel_cross_coupling_rad = 0.0;
         n.gyro_g_sensitivity = 0.0;
-        assert!(ConsiderModel::of(&n).is_active());
+        assert!(ConsiderModel::of(&n, None).is_active());
         n.gyro_bias_instability_time_s = 0.0;
-        let m = ConsiderModel::of(&n);
+        let m = ConsiderModel::of(&n, None);
         assert!(!m.is_active());
+        assert!(!m.has_gnss_error());
         assert_eq!(m.gyro_bias_instability_variance(), 0.0);
+        let m = ConsiderModel::of(&n, Some(&gnss()));
+        assert!(m.is_active() && m.has_gnss_error());
     }
 }

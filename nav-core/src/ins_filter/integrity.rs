@@ -248,9 +248,13 @@ impl<T: Scalar> InnovationWindow<T> {
     }
 
     /// Both tests at 99.9 %: the local one against `gate_3dof` (the per-fix gate's point), the
-    /// global one against [`CHI2_30DOF_999`] once the window is full.
-    pub fn verdict(&self, gate_3dof: T) -> WindowVerdict {
-        if self.bias_statistic() > gate_3dof {
+    /// global one against [`CHI2_30DOF_999`] once the window is full. `local` false leaves the
+    /// local test out: under a declared time-correlated GNSS error (a consider state,
+    /// [`super::consider`]) a bias common to the window is what the receiver was declared to
+    /// have, the innovations share it and are not independent, and the per-fix gate (whose
+    /// innovation covariance holds that error's variance) judges its size.
+    pub fn verdict(&self, gate_3dof: T, local: bool) -> WindowVerdict {
+        if local && self.bias_statistic() > gate_3dof {
             WindowVerdict::Bias
         } else if self.len == WINDOW && self.spread_statistic() > T::c(CHI2_30DOF_999) {
             WindowVerdict::Spread
@@ -314,6 +318,19 @@ impl<T: Scalar> RefusedCluster<T> {
             z_ned_m: z,
             r_ned_m2: r,
             previous: Some((self.z_ned_m, self.r_ned_m2, dt_s)),
+            ..*self
+        }
+    }
+
+    /// The cluster after a correction `dr_ned_m` [m] of the solution's position by another
+    /// aid (a stop's zero-velocity update moves a drifted position by metres): its members'
+    /// innovations, predicted minus measured, are taken against the corrected solution, so
+    /// the next member stays on the chain the correction would otherwise break (and the
+    /// cluster released and taken).
+    pub fn corrected(&self, dr_ned_m: &Vector3<T>) -> Self {
+        Self {
+            z_ned_m: self.z_ned_m - dr_ned_m,
+            previous: self.previous.map(|(z, r, dt)| (z - dr_ned_m, r, dt)),
             ..*self
         }
     }
@@ -433,6 +450,34 @@ mod tests {
         assert!(whiten(&(-s), &z).is_none());
     }
 
+    /// A correction of the solution moves the members' innovations with it: a member taken
+    /// after it stays on the chain it would otherwise leave.
+    #[test]
+    fn a_cluster_follows_a_correction_of_the_solution() {
+        let gate = crate::ins_filter::CHI2_3DOF_999;
+        let r = Vector3::repeat(0.25);
+        let drift = FixDrift {
+            dt_s: 1.0,
+            var_m2: Vector3::repeat(0.01),
+            curvature_var_m2: Vector3::repeat(1e-4),
+        };
+        let c = RefusedCluster::start(Vector3::new(0.0, -30.0, 0.0), r, 3600.0, gate, true)
+            .followed_by(Vector3::new(0.0, -29.9, 0.0), r, 1.0);
+        assert!(c.gross);
+        // A stop's update moves the position by 10 m east: the next innovation is 10 m less.
+        let dr = Vector3::new(0.0, 10.0, 0.0);
+        let next = Vector3::new(0.0, -39.8, 0.0);
+        let (q_line, _) = c.extrapolation(&next, &r, &drift).unwrap();
+        assert!(q_line > CHAIN_GATE_FACTOR * gate, "{q_line}");
+        let moved = c.corrected(&dr);
+        let (q_line, q_jump) = moved.extrapolation(&next, &r, &drift).unwrap();
+        assert!(q_line < gate, "{q_line}");
+        assert!(q_jump > CHAIN_GATE_FACTOR * gate, "{q_jump}");
+        assert_eq!(moved.jump_ned_m, c.jump_ned_m);
+        assert!(moved.claims(&next, &r, &drift, 1.0, &Matrix3::identity(), gate));
+        assert!(!c.claims(&next, &r, &drift, 1.0, &Matrix3::identity(), gate));
+    }
+
     #[test]
     fn a_common_bias_fails_the_local_test_and_white_noise_passes() {
         let gate = crate::ins_filter::CHI2_3DOF_999;
@@ -442,21 +487,22 @@ mod tests {
             let s = if k % 2 == 0 { 1.0 } else { -1.0 };
             white.push(Vector3::repeat(s));
         }
-        assert_eq!(white.verdict(gate), WindowVerdict::Consistent);
+        assert_eq!(white.verdict(gate, true), WindowVerdict::Consistent);
         // A bias of 1.3 sigma on one axis on every fix: each fix's NIS 1.7 passes any gate,
         // the window's mean 10 * 1.69 = 16.9 does not.
         let mut biased = InnovationWindow::<f64>::default();
         for _ in 0..WINDOW {
             biased.push(Vector3::new(0.0, 1.3, 0.0));
         }
-        assert_eq!(biased.verdict(gate), WindowVerdict::Bias);
+        assert_eq!(biased.verdict(gate, true), WindowVerdict::Bias);
+        assert_eq!(biased.verdict(gate, false), WindowVerdict::Consistent);
         // Large alternating innovations: no mean, too much spread (10 * 3 * 4 = 120 > 59.7).
         let mut wide = InnovationWindow::<f64>::default();
         for k in 0..WINDOW {
             let s = if k % 2 == 0 { 2.0 } else { -2.0 };
             wide.push(Vector3::repeat(s));
         }
-        assert_eq!(wide.verdict(gate), WindowVerdict::Spread);
+        assert_eq!(wide.verdict(gate, true), WindowVerdict::Spread);
         // The corrections are summed once.
         let mut x = StateVector::<f64>::zeros();
         x[0] = 0.5;
@@ -467,7 +513,7 @@ mod tests {
         assert_eq!(wide.take_corrections()[0], 0.0);
         wide.clear();
         assert!(wide.is_empty());
-        assert_eq!(wide.verdict(gate), WindowVerdict::Consistent);
+        assert_eq!(wide.verdict(gate, true), WindowVerdict::Consistent);
     }
 
     #[test]

@@ -40,6 +40,14 @@ pub const MIN_CORRELATION_TIME_S: f64 = 1.0;
 /// is white noise at the propagation's rate (give it in the ARW).
 pub const MIN_BIAS_INSTABILITY_TIME_S: f64 = 0.1;
 
+/// Largest GNSS correlated-error 1-sigma [m] (a code receiver's is metres; beyond this the
+/// fixes are not worth taking).
+pub const MAX_GNSS_ERROR_SIGMA_M: f64 = 100.0;
+
+/// Correlation times of the GNSS correlated error [s]: from a second (a shorter one is white
+/// noise at 1 Hz fixes: give it in the fixes' 1-sigma) to a day.
+pub const GNSS_ERROR_TIME_S: (f64, f64) = (1.0, 86_400.0);
+
 /// Largest initial position 1-sigma [m] (the Earth's radius: a start anywhere).
 pub const MAX_POSITION_SIGMA_M: f64 = 6.4e6;
 
@@ -80,6 +88,27 @@ pub fn noise_out_of_range<T: Scalar>(n: &FilterNoise<T>) -> Option<&'static str>
         && n.correlation_time_s.to_f64() >= MIN_CORRELATION_TIME_S)
     {
         Some("the correlation time must be finite and at least 1 s")
+    } else {
+        None
+    }
+}
+
+/// Why a declared GNSS correlated error is out of range (the refusal's text).
+pub fn gnss_error_out_of_range<T: Scalar>(
+    g: &super::consider::GnssCorrelatedError<T>,
+) -> Option<&'static str> {
+    let t = g.correlation_time_s;
+    if !g
+        .sigma_ned_m
+        .iter()
+        .all(|v| sigma_within(*v, MAX_GNSS_ERROR_SIGMA_M))
+    {
+        Some("the GNSS correlated-error 1-sigma must be 0 to 100 m per axis")
+    } else if !(t.finite()
+        && t.to_f64() >= GNSS_ERROR_TIME_S.0
+        && t.to_f64() <= GNSS_ERROR_TIME_S.1)
+    {
+        Some("the GNSS correlated error's correlation time must be 1 s to 86,400 s")
     } else {
         None
     }

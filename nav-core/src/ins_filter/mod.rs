@@ -47,6 +47,7 @@ pub use aiding::{
     AidCounters, AidResult, CHI2_3DOF_999, FilterCounters, GnssPosition, GnssVelocity,
 };
 pub use background::{Correction, ErrorFilter, Snapshot};
+pub use consider::GnssCorrelatedError;
 pub use foreground::{AidedMechanization, Events, Propagation};
 use model::FilterNoise;
 use nalgebra::{Matrix3, Vector3};
@@ -91,6 +92,9 @@ pub struct FilterConfig<T: Scalar> {
     pub propagation_interval_s: T,
     /// The GNSS antenna's position from the IMU, body forward, right, down [m].
     pub antenna_lever_arm_b_m: Vector3<T>,
+    /// The receiver's time-correlated position error, a consider state of the position fixes
+    /// ([`consider`]; `None`: the fixes' errors are white, as an RTK receiver's nearly are).
+    pub gnss_correlated_error: Option<GnssCorrelatedError<T>>,
     /// Chi-square gate of a 3-component measurement [-] (default [`CHI2_3DOF_999`]).
     pub gate_nis: T,
     /// Consecutive position rejections after which the filter reports itself degraded.
@@ -112,6 +116,7 @@ impl<T: Scalar> FilterConfig<T> {
             scale_factors: true,
             propagation_interval_s: T::c(0.1),
             antenna_lever_arm_b_m: Vector3::zeros(),
+            gnss_correlated_error: None,
             gate_nis: T::c(CHI2_3DOF_999),
             rejections_to_degrade: 100,
             max_horizontal_sigma_m: T::c(50.0),
@@ -139,12 +144,18 @@ pub enum FilterError {
     BadSensorErrors(&'static str),
     /// The lever arm is not finite or beyond 100 m.
     BadLeverArm,
+    /// The GNSS correlated error's 1-sigma or correlation time is out of range ([`limits`]);
+    /// the text names it and its range.
+    BadGnssError(&'static str),
 }
 
 impl core::fmt::Display for FilterError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(match self {
-            Self::BadNoise(why) | Self::BadInitialSigma(why) | Self::BadSensorErrors(why) => why,
+            Self::BadNoise(why)
+            | Self::BadInitialSigma(why)
+            | Self::BadSensorErrors(why)
+            | Self::BadGnssError(why) => why,
             Self::BadInterval => "the covariance propagation interval must be within (0, 1] s",
             Self::BadState => "the initial state or sensor errors are not finite",
             Self::BadLeverArm => "the antenna lever arm is not finite or beyond 100 m",

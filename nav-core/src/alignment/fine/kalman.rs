@@ -79,15 +79,73 @@ pub fn update_scalar<T: Scalar, const N: usize>(
     r: T,
     gate: T,
 ) -> ScalarUpdate {
+    update_scalar_correlated(x, p, h, None, innovation, r, gate)
+}
+
+/// A consider error `e` the measurement sees besides the states (`z = h^T x + e + v`, e.g.
+/// `e = h_c^T c` of Schmidt consider states `c` [Schmidt, 1966]): its covariance with the
+/// states `u = E[x e]` and its variance `var = E[e^2]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConsiderError<T: Scalar, const N: usize> {
+    /// `E[x e]` [state unit times measurement unit].
+    pub u: SVector<T, N>,
+    /// `E[e^2]` [measurement unit^2].
+    pub var: T,
+}
+
+impl<T: Scalar, const N: usize> ConsiderError<T, N> {
+    /// The gain of the states (the consider error gets none: Schmidt's filter),
+    /// `K = (P h + u) / S`, `S = h^T P h + 2 h^T u + var + r`; `None` when `S` is not positive
+    /// and finite.
+    pub fn gain(
+        consider: Option<&Self>,
+        p: &SMatrix<T, N, N>,
+        h: &SVector<T, N>,
+        r: T,
+    ) -> Option<SVector<T, N>> {
+        let ph = times(p, h);
+        let (a, s) = Self::gain_terms(consider, &ph, h, r);
+        (s.finite() && s > T::zero()).then(|| a / s)
+    }
+
+    /// `P h + u` and `S` from `ph = P h`.
+    fn gain_terms(
+        consider: Option<&Self>,
+        ph: &SVector<T, N>,
+        h: &SVector<T, N>,
+        r: T,
+    ) -> (SVector<T, N>, T) {
+        let s = h.dot(ph) + r;
+        match consider {
+            Some(c) => (ph + c.u, s + T::c(2.0) * h.dot(&c.u) + c.var),
+            None => (*ph, s),
+        }
+    }
+}
+
+/// [`update_scalar`] of a measurement that also sees a consider error (`z = h^T x + e + v`,
+/// [`ConsiderError`]; `None`: none): gain [`ConsiderError::gain`], and the Joseph form of the
+/// augmented state `[x; e]` with the consider error's gain set to zero,
+/// `P <- (I - K h^T) P (I - K h^T)^T - w K^T - K w^T + (var + r) K K^T`, `w = (I - K h^T) u`
+/// (the consider error's own covariance with the states, `u <- w - K var`, is the caller's).
+pub fn update_scalar_correlated<T: Scalar, const N: usize>(
+    x: &mut SVector<T, N>,
+    p: &mut SMatrix<T, N, N>,
+    h: &SVector<T, N>,
+    consider: Option<&ConsiderError<T, N>>,
+    innovation: T,
+    r: T,
+    gate: T,
+) -> ScalarUpdate {
     let ph = times(p, h);
-    let s = h.dot(&ph) + r;
+    let (a, s) = ConsiderError::gain_terms(consider, &ph, h, r);
     if !(s.finite() && s > T::zero() && innovation.finite()) {
         return ScalarUpdate::Degenerate;
     }
     if innovation * innovation > gate * gate * s {
         return ScalarUpdate::Gated;
     }
-    let k = ph / s;
+    let k = a / s;
     if !k.iter().all(|v| v.finite()) {
         return ScalarUpdate::Degenerate;
     }
@@ -102,9 +160,23 @@ pub fn update_scalar<T: Scalar, const N: usize>(
         }
     }
     let ah = times(p, h);
-    for j in 0..N {
-        for i in 0..N {
-            p[(i, j)] = p[(i, j)] - ah[i] * k[j] + k[i] * k[j] * r;
+    match consider {
+        None => {
+            for j in 0..N {
+                for i in 0..N {
+                    p[(i, j)] = p[(i, j)] - ah[i] * k[j] + k[i] * k[j] * r;
+                }
+            }
+        }
+        Some(c) => {
+            let w = c.u - k * h.dot(&c.u);
+            let b = ah + w;
+            let r_all = r + c.var;
+            for j in 0..N {
+                for i in 0..N {
+                    p[(i, j)] = p[(i, j)] - b[i] * k[j] - k[i] * w[j] + k[i] * k[j] * r_all;
+                }
+            }
         }
     }
     symmetrize(p);
@@ -166,6 +238,45 @@ mod tests {
             ScalarUpdate::Degenerate
         );
         assert_eq!((x, p), before);
+    }
+
+    /// The consider-error update is the Joseph update of the augmented state `[x; e]` with
+    /// the consider error's gain set to zero, and its gain is that of the Schmidt filter.
+    #[test]
+    fn correlated_update_is_the_augmented_schmidt_update() {
+        use nalgebra::{Matrix3, Vector3};
+        // Augmented covariance of [x0, x1, e], positive definite.
+        let l = Matrix3::new(1.0, 0.0, 0.0, 0.3, 0.8, 0.0, -0.4, 0.5, 0.7_f64);
+        let pa = l * l.transpose();
+        let (h, r, innovation) = (Vector2::new(0.7, -1.2), 0.3, 0.4);
+        let ha = Vector3::new(h[0], h[1], 1.0);
+        let s = ha.dot(&(pa * ha)) + r;
+        let mut ka = pa * ha / s;
+        ka[2] = 0.0;
+        let i_kh = Matrix3::identity() - ka * ha.transpose();
+        let expected = i_kh * pa * i_kh.transpose() + ka * ka.transpose() * r;
+        let mut p = Matrix2::new(pa[(0, 0)], pa[(0, 1)], pa[(1, 0)], pa[(1, 1)]);
+        let c = ConsiderError {
+            u: Vector2::new(pa[(0, 2)], pa[(1, 2)]),
+            var: pa[(2, 2)],
+        };
+        let mut x = Vector2::zeros();
+        let k = ConsiderError::gain(Some(&c), &p, &h, r).unwrap();
+        assert!((k - Vector2::new(ka[0], ka[1])).amax() < 1e-15);
+        let u = update_scalar_correlated(&mut x, &mut p, &h, Some(&c), innovation, r, 1e9);
+        assert_eq!(u, ScalarUpdate::Accepted);
+        assert!((x - k * innovation).amax() < 1e-15);
+        for i in 0..2 {
+            for j in 0..2 {
+                assert!(
+                    (p[(i, j)] - expected[(i, j)]).abs() < 1e-14,
+                    "{p} {expected}"
+                );
+            }
+        }
+        // The consider error's covariance with the states afterwards: w - K var.
+        let w = c.u - k * h.dot(&c.u) - k * c.var;
+        assert!((w - Vector2::new(expected[(0, 2)], expected[(1, 2)])).amax() < 1e-14);
     }
 
     proptest! {
