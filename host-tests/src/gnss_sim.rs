@@ -145,7 +145,6 @@ impl Outlier {
         }
     }
 
-    /// Its times and offsets are finite, its lengths not negative.
     /// When it starts [s].
     pub fn start_s(&self) -> f64 {
         match *self {
@@ -154,6 +153,7 @@ impl Outlier {
         }
     }
 
+    /// Its times and offsets are finite, its lengths not negative.
     fn is_valid(&self) -> bool {
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         // An event before the first fix would land on it.

@@ -281,7 +281,7 @@ impl NavWriter {
         })
     }
 
-    /// Writes one row (to the file once [`CHUNK_BYTES`] are gathered).
+    /// Writes one row (to the file once `CHUNK_BYTES` are gathered).
     pub fn write_row(&mut self, row: &NavRow) -> Result<(), TextError> {
         format_row(row, &mut self.pending);
         self.rows += 1;
