@@ -5,7 +5,7 @@
 use host_tests::aided_bench::{Case, average_chi2_bounds, consistency_cell};
 use host_tests::filter_bench::{FilterBenchOptions, generate};
 use host_tests::gnss_bench::{
-    CODE_RECEIVER_CORRELATED, OUTAGE_S, outage_case, outage_drifts, outlier_case,
+    CODE_RECEIVER_CORRELATED, OUTAGE_S, OutlierOutcome, outage_case, outage_drifts, outlier_case,
     outlier_case_code_receiver, outlier_case_with_velocity, outliers,
 };
 use host_tests::gnss_sim::{CorrelatedError, GnssSimOptions};
@@ -223,10 +223,7 @@ fn a_spike_taken_after_an_outage_is_undone_by_the_next_fix() {
                 assert!(o.max_error_per_sigma < 3.0, "seed {seed}: {o:?}");
             }
         }
-        let held = out
-            .iter()
-            .find(|o| o.t_s == 700.0)
-            .expect("the held offset");
+        let held = held_offset(&out);
         assert_eq!(held.refused, held.fixes, "seed {seed}: {held:?}");
     }
 }
@@ -247,15 +244,19 @@ fn a_declared_correlated_error_bounds_the_slow_ramp() {
             assert!(o.max_error_per_sigma_after < 3.0, "seed {seed}: {o:?}");
             assert!(o.reacquired, "seed {seed}: {o:?}");
         }
-        let held = out
-            .iter()
-            .find(|o| o.t_s == 700.0)
-            .expect("the held offset");
+        let held = held_offset(&out);
         assert_eq!(held.refused, held.fixes, "seed {seed}: {held:?}");
         assert!(held.degraded, "seed {seed}: {held:?}");
         let nan = out.iter().find(|o| o.name == "NaN").expect("the NaN fix");
         assert_eq!(nan.refused, 1, "seed {seed}: {nan:?}");
     }
+}
+
+/// The outlier run's 30 m offset held for 150 s from 700 s.
+fn held_offset(out: &[OutlierOutcome]) -> &OutlierOutcome {
+    out.iter()
+        .find(|o| o.t_s == 700.0)
+        .expect("the held offset")
 }
 
 /// The MEMS filter follows the slow ramp on positions alone (its own 30 s drift is larger);
@@ -270,10 +271,7 @@ fn velocity_fixes_expose_a_slow_position_ramp() {
     let ramp = out.iter().find(|o| o.name == "ramp").expect("a ramp");
     assert!(ramp.refused > 0, "{ramp:?}");
     assert!(ramp.reacquired, "{ramp:?}");
-    let held = out
-        .iter()
-        .find(|o| o.t_s == 700.0)
-        .expect("the held offset");
+    let held = held_offset(&out);
     assert_eq!(held.refused, held.fixes, "{held:?}");
     assert!(held.degraded && held.reacquired, "{held:?}");
 }

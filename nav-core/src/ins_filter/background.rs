@@ -337,17 +337,14 @@ impl<T: Scalar> ErrorFilter<T> {
         let mut s = m.h * self.p * m.h.transpose();
         for i in 0..M {
             s[(i, i)] += m.r[i];
-            if let Some(seen) = m.seen(i)
-                && self.consider.variance()[seen.at] > T::zero()
-            {
+            if let Some(e) = consider::consider_error(&self.p_ac, &self.consider, m.seen(i)) {
                 // Column i of H P_ac H_c^T, and its mirror.
-                let hu = m.h * self.p_ac.column(seen.at) * seen.sensitivity;
+                let hu = m.h * e.u;
                 for j in 0..M {
                     s[(j, i)] += hu[j];
                     s[(i, j)] += hu[j];
                 }
-                s[(i, i)] +=
-                    seen.sensitivity * seen.sensitivity * self.consider.variance()[seen.at];
+                s[(i, i)] += e.var;
             }
         }
         let s_inv = s.try_inverse()?;
@@ -368,7 +365,7 @@ impl<T: Scalar> ErrorFilter<T> {
         if nis > self.config.gate_nis {
             return (AidResult::Rejected { nis }, None);
         }
-        self.apply(m, &s, nis)
+        self.apply(m, &self.shrink_basis(m, &s), nis)
     }
 
     /// Per row, the variance the shrink limit ([`effective_noise`]) judges, from the
@@ -381,7 +378,7 @@ impl<T: Scalar> ErrorFilter<T> {
         m: &Measurement<T, M>,
         s: &SMatrix<T, M, M>,
     ) -> SVector<T, M> {
-        if m.gnss_error.is_none() || !self.consider.has_gnss_error() {
+        if m.gnss_error.is_none() {
             return s.diagonal();
         }
         SVector::<T, M>::from_fn(|i, _| {
@@ -390,15 +387,14 @@ impl<T: Scalar> ErrorFilter<T> {
         })
     }
 
-    /// The scalar Joseph updates of a measurement that passed its tests, with innovation
-    /// covariance `s`.
+    /// The scalar Joseph updates of a measurement that passed its tests, with the per-row
+    /// variances its shrink limit judges, `basis` ([`Self::shrink_basis`]).
     fn apply<const M: usize>(
         &mut self,
         m: &Measurement<T, M>,
-        s: &SMatrix<T, M, M>,
+        basis: &SVector<T, M>,
         nis: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
-        let basis = self.shrink_basis(m, s);
         for i in 0..M {
             let hi = m.h.row(i).transpose();
             let innovation = m.z[i] - hi.dot(&self.x);
@@ -549,7 +545,7 @@ impl<T: Scalar> ErrorFilter<T> {
         }
         let p_pos_before = self.p.fixed_view::<3, 3>(POS, POS).into_owned();
         let basis = self.shrink_basis(m, &s);
-        let out = self.apply(m, &s, nis);
+        let out = self.apply(m, &basis, nis);
         if let Some(c) = &out.1 {
             self.window.set_last_correction(&c.x);
             let limited = (0..3).any(|i| effective_noise(basis[i], m.r[i]) > m.r[i]);
