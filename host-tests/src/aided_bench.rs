@@ -10,12 +10,14 @@
 //! at a time ([`Case::without`]).
 
 use crate::aided::{self, AidedSample, AidedSink};
-use crate::aided_cmd::{GradeFilterModel, filter_model_of, grade_noise, off_diagonal_rms};
+use crate::aided_cmd::{
+    GradeFilterModel, bias_state_part, filter_model_of, grade_noise, off_diagonal_rms,
+};
 use crate::gnss_sim::{self, GnssSimOptions};
 use crate::recording_io::Recording;
 use crate::report::interpolate;
 use crate::sensor_model::{ErrorInjector, ErrorSource, Grade, ImuErrorModel};
-use crate::simulate::{SimOptions, plan, sense};
+use crate::simulate::{InRunBiases, SimOptions, plan, sense};
 use crate::trajectory::scenarios::Scenario;
 use crate::truth::Truth;
 use anyhow::{Result, anyhow};
@@ -150,8 +152,8 @@ pub fn state_error(ins_state: &NavState<f64>, truth: &Truth) -> SVector<f64, 9> 
 /// ([`nav_core::ins_filter::consider`]): its bias states hold `b` plus `G f_rest` and
 /// `M_a f_rest` at rest in the nominal attitude, `f_rest = (0, 0, -g)` (the gyro misalignment
 /// times Earth rate, below 1e-7 rad/s, is left out there as here). `biases`: the simulator's
-/// fixed plus turn-on biases of the gyros and the accelerometers (its Gauss–Markov and
-/// random-walk parts are not included).
+/// biases of the gyros and the accelerometers as the bias states hold them
+/// ([`Consistency::biases_at`]).
 pub fn effective_sensor_errors(
     model: &ImuErrorModel,
     biases: [Vector3<f64>; 2],
@@ -172,8 +174,28 @@ struct Consistency<'a> {
     model: ImuErrorModel,
     /// Its fixed plus turn-on biases, gyros and accelerometers.
     biases: [Vector3<f64>; 2],
+    /// Its in-run biases at each truth row.
+    in_run: &'a [InRunBiases],
     epochs: Vec<Epoch>,
-    last: Option<AidedIns<f64>>,
+    /// The last update's time [s] and state.
+    last: Option<(f64, AidedIns<f64>)>,
+}
+
+impl Consistency<'_> {
+    /// The simulated gyro and accelerometer biases at `t_s` [s] as the filter's bias states
+    /// hold them: fixed, turn-on, and the in-run parts they follow ([`bias_state_part`]) at
+    /// the last truth row not after `t_s`.
+    fn biases_at(&self, t_s: f64) -> [Vector3<f64>; 2] {
+        let k = self
+            .truth
+            .partition_point(|row| row.t_s <= t_s)
+            .saturating_sub(1);
+        let drift = self.in_run.get(k).copied().unwrap_or_default();
+        [
+            self.biases[0] + bias_state_part(&self.model.gyro, drift.gyro_gm, drift.gyro_rw),
+            self.biases[1] + bias_state_part(&self.model.accel, drift.accel_gm, drift.accel_rw),
+        ]
+    }
 }
 
 impl AidedSink<f64> for Consistency<'_> {
@@ -216,7 +238,7 @@ impl AidedSink<f64> for Consistency<'_> {
                 est.gyro_scale,
                 est.accel_scale,
             ];
-            let sensor_truth = effective_sensor_errors(&self.model, self.biases);
+            let sensor_truth = effective_sensor_errors(&self.model, self.biases_at(t_s));
             let mut nees_sensor = [0.0; 4];
             for (k, (n, offset)) in nees_sensor.iter_mut().zip([BG, BA, SG, SA]).enumerate() {
                 let e = estimates[k] - sensor_truth[k];
@@ -239,7 +261,7 @@ impl AidedSink<f64> for Consistency<'_> {
                 ),
             });
         }
-        self.last = Some(ins.clone());
+        self.last = Some((t_s, ins.clone()));
     }
 }
 
@@ -389,10 +411,13 @@ pub fn run_case(case: &Case) -> Result<CaseResult> {
         truth: &sim.truth,
         model: m,
         biases: sink_biases,
+        in_run: &sim.in_run_biases,
         epochs: Vec::new(),
         last: None,
     };
     let report = aided::run(prepared_sim.samples(), &fixes, seq, &mut sink)?;
+    let no_update = || anyhow!("no GNSS update in the run");
+    let final_biases = sink.biases_at(sink.last.as_ref().ok_or_else(no_update)?.0);
     let Consistency {
         mut epochs, last, ..
     } = sink;
@@ -404,10 +429,10 @@ pub fn run_case(case: &Case) -> Result<CaseResult> {
     for e in &mut epochs {
         e.nis = nis.next().flatten();
     }
-    let ins = last.ok_or_else(|| anyhow!("no GNSS update in the run"))?;
+    let (_, ins) = last.ok_or_else(no_update)?;
     // The final estimates against what the filter can see of the sensor errors
     // ([`effective_sensor_errors`]), each over its own 1-sigma.
-    let truth = effective_sensor_errors(&m, sink_biases);
+    let truth = effective_sensor_errors(&m, final_biases);
     let est = ins.sensor_errors();
     let estimates = [
         est.gyro_bias_rad_s,
@@ -487,7 +512,9 @@ pub struct ConsistencyRow {
 
 /// Runs `runs` seeds of one cell on `threads` threads.
 pub fn consistency_cell(base: &Case, runs: usize, threads: usize) -> Result<ConsistencyRow> {
-    let seeds: Vec<u64> = (0..runs as u64).map(|k| base.seed + k).collect();
+    let seeds: Vec<u64> = (0..runs as u64)
+        .map(|k| base.seed.wrapping_add(k))
+        .collect();
     let results = std::sync::Mutex::new(Vec::new());
     let chunks: Vec<Vec<u64>> = (0..threads.max(1))
         .map(|t| {

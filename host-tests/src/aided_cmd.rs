@@ -103,6 +103,23 @@ pub fn grade_filter_model(grade: Grade) -> GradeFilterModel {
     filter_model_of(&grade.model())
 }
 
+/// What the filter's bias states hold of a triad's in-run bias, by the rules of
+/// [`filter_model_of`]: the rate random walk `rw_now` and a Gauss–Markov bias `gm_now` of
+/// correlation time at least [`WHITE_GM_BELOW_S`] (or a constant one); a shorter one is, to
+/// the filter, a consider state or white noise [U].
+pub fn bias_state_part(
+    t: &crate::sensor_model::TriadErrors,
+    gm_now: Vector3<f64>,
+    rw_now: Vector3<f64>,
+) -> Vector3<f64> {
+    let tau = t.bias_instability.correlation_time_s;
+    if tau.is_finite() && tau < WHITE_GM_BELOW_S {
+        rw_now
+    } else {
+        rw_now + gm_now
+    }
+}
+
 /// [`GradeFilterModel`] of an error model `m` ([`grade_filter_model`]: the same rules).
 pub fn filter_model_of(m: &crate::sensor_model::ImuErrorModel) -> GradeFilterModel {
     let tau_f = FILTER_CORRELATION_TIME_S;

@@ -35,7 +35,11 @@
 //! simulator has no antenna lever arm) with `gps_time.csv` (`gps_time (sec)`) beside it. The
 //! files hold no 1-sigma; the user states the receiver's ([`AssumedSigma`]; gnss-ins-sim's
 //! default receiver is 5, 5, 7 m and 0.05 m/s), and without it the file is refused: a guessed
-//! sigma would make the filter's own sigma a guess.
+//! sigma would make the filter's own sigma a guess. gnss-ins-sim writes a fix at every GPS
+//! epoch, visible or not, and the motion definition's visibility column as
+//! `gps_visibility.csv` (`gps_visibility ()`, 1 or 0 per fix) beside them: a fix flagged 0 is
+//! left out (an outage, as the simulation meant it); a flag other than 0 or 1, or a count that
+//! is not the fixes', refuses the file.
 //!
 //! A folder is recognised by its `time.csv` with a `gyro-K.csv` and an `accel-K.csv` (the
 //! lowest `K` that has both); any of the three files given by name stands for its folder (a
@@ -144,6 +148,8 @@ const ANGLE_UNITS: Units = &[("deg", core::f64::consts::PI / 180.0), ("rad", 1.0
 const METRES: Units = &[("m", 1.0)];
 /// Metres per second.
 const SPEED_UNITS: Units = &[("m/s", 1.0)];
+/// No unit (gnss-ins-sim writes `name ()`).
+const NO_UNIT: Units = &[("", 1.0)];
 
 /// The rows of one file: `N` columns named `names[i] (unit)`, the unit one of `units[i]`, each
 /// scaled to SI.
@@ -351,8 +357,10 @@ pub fn read_gps(path: &Path, assumed: &AssumedSigma) -> Result<Vec<crate::gnss::
         time.len()
     );
     ensure!(!gps.is_empty(), "{}: no fix", path.display());
+    let visible = read_visibility(&dir, gps.len())?;
     let mut previous: Option<f64> = None;
-    time.iter()
+    let fixes: Vec<crate::gnss::GnssFix> = time
+        .iter()
         .zip(&gps)
         .enumerate()
         .map(|(k, ([t], row))| {
@@ -383,7 +391,46 @@ pub fn read_gps(path: &Path, assumed: &AssumedSigma) -> Result<Vec<crate::gnss::
                     }),
             })
         })
-        .collect()
+        .collect::<Result<_>>()?;
+    Ok(match visible {
+        Some(v) => fixes
+            .into_iter()
+            .zip(v)
+            .filter(|(_, v)| *v)
+            .map(|(f, _)| f)
+            .collect(),
+        None => fixes,
+    })
+}
+
+/// The visibility flags of `dir/gps_visibility.csv` (module docs), one per fix of `fixes`
+/// rows; `None` without the file.
+fn read_visibility(dir: &Path, fixes: usize) -> Result<Option<Vec<bool>>> {
+    let path = dir.join("gps_visibility.csv");
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let flags = read_columns(&path, ["gps_visibility"], [NO_UNIT])?;
+    ensure!(
+        flags.len() == fixes,
+        "{}: {} rows, {fixes} fixes in the GPS file: one flag per fix",
+        path.display(),
+        flags.len()
+    );
+    flags
+        .iter()
+        .enumerate()
+        .map(|(k, [x])| {
+            ensure!(
+                *x == 0.0 || *x == 1.0,
+                "{}: line {}: visibility {x} is neither 1 (visible) nor 0 (not)",
+                path.display(),
+                k + 2
+            );
+            Ok(*x == 1.0)
+        })
+        .collect::<Result<_>>()
+        .map(Some)
 }
 
 /// The reference trajectory of the gnss-ins-sim folder `dir` (module docs), one row per epoch.
@@ -609,6 +656,54 @@ mod tests {
         std::fs::write(dir.path().join("gps_time.csv"), "gps_time (sec)\n1\n1\n").unwrap();
         let e = format!("{:#}", read_gps(&gps, &assumed).unwrap_err());
         assert!(e.contains("line 3: time 1 s"), "{e}");
+    }
+
+    /// A fix gnss-ins-sim flags as not visible is left out (an outage); a bad flag or a count
+    /// other than the fixes' refuses the file.
+    #[test]
+    fn gps_visibility_makes_outages() {
+        let dir = tempfile::tempdir().unwrap();
+        let gps = dir.path().join("gps-0.csv");
+        std::fs::write(
+            &gps,
+            "gps_lat (deg),gps_lon (deg),gps_alt (m),gps_vN (m/s),gps_vE (m/s),gps_vD (m/s)\n\
+             45,7,100,1,2,3\n45.1,7,100,1,2,3\n45.2,7,100,1,2,3\n",
+        )
+        .unwrap();
+        std::fs::write(dir.path().join("gps_time.csv"), "gps_time (sec)\n0\n1\n2\n").unwrap();
+        let assumed = AssumedSigma {
+            position_ned_m: [5.0, 5.0, 7.0],
+            velocity_ned_m_s: None,
+        };
+        let visibility = dir.path().join("gps_visibility.csv");
+        // As gnss-ins-sim's numpy writes it.
+        std::fs::write(
+            &visibility,
+            "gps_visibility ()\n1.000000000000000000e+00\n0.000000000000000000e+00\n\
+             1.000000000000000000e+00\n",
+        )
+        .unwrap();
+        let f = read_gps(&gps, &assumed).unwrap();
+        assert_eq!(f.iter().map(|f| f.t_s).collect::<Vec<_>>(), [0.0, 2.0]);
+        for (text, expected) in [
+            (
+                "gps_visibility ()\n1\n0.5\n1\n",
+                "line 3: visibility 0.5 is neither",
+            ),
+            (
+                "gps_visibility ()\n1\nnan\n1\n",
+                "line 3: visibility NaN is neither",
+            ),
+            (
+                "gps_visibility ()\n1\n1\n",
+                "2 rows, 3 fixes in the GPS file",
+            ),
+            ("gps_visibility (m)\n1\n1\n1\n", "unit 'm' is not one of"),
+        ] {
+            std::fs::write(&visibility, text).unwrap();
+            let e = format!("{:#}", read_gps(&gps, &assumed).unwrap_err());
+            assert!(e.contains(expected), "{text:?}: {e}");
+        }
     }
 
     /// A folder without the files is not a run; a missing accelerometer file is named.

@@ -83,6 +83,35 @@ pub struct Simulated {
     pub truth: Vec<Truth>,
     /// What the sensor model did.
     pub counters: InjectorCounters,
+    /// The sensors' in-run biases at each truth row (the injector's state after the row's
+    /// last sample).
+    pub in_run_biases: Vec<InRunBiases>,
+}
+
+/// The simulated sensors' in-run bias parts at one instant: Gauss–Markov and rate random walk,
+/// gyros [rad/s] and accelerometers [m/s^2] (the turn-on and fixed biases are constants).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct InRunBiases {
+    /// Gyro Gauss–Markov bias [rad/s].
+    pub gyro_gm: nav_core::Vector3<f64>,
+    /// Gyro rate-random-walk bias [rad/s].
+    pub gyro_rw: nav_core::Vector3<f64>,
+    /// Accelerometer Gauss–Markov bias [m/s^2].
+    pub accel_gm: nav_core::Vector3<f64>,
+    /// Accelerometer random-walk bias [m/s^2].
+    pub accel_rw: nav_core::Vector3<f64>,
+}
+
+impl InRunBiases {
+    fn of(injector: &ErrorInjector) -> Self {
+        let (g, a) = (injector.gyro_state(), injector.accel_state());
+        Self {
+            gyro_gm: g.gm_bias,
+            gyro_rw: g.rw_bias,
+            accel_gm: a.gm_bias,
+            accel_rw: a.rw_bias,
+        }
+    }
 }
 
 /// Runs the simulation in memory; `progress(done, total)` is called every 4096 samples.
@@ -134,6 +163,7 @@ pub(crate) fn sense(
 ) -> Result<Simulated> {
     let mut records = Vec::with_capacity(sampling.n as usize);
     let mut truth = vec![crate::trajectory::Generator::new(traj).truth()];
+    let mut in_run_biases = vec![InRunBiases::of(&injector)];
     generate(traj, sampling, |k, t_ns, exact, t| {
         let sensed = injector.apply(exact);
         let f32s = |v: &nav_core::Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
@@ -145,6 +175,7 @@ pub(crate) fn sense(
         });
         if (k + 1) % every == 0 {
             truth.push(*t);
+            in_run_biases.push(InRunBiases::of(&injector));
         }
         if k % 4096 == 0 {
             progress(k, sampling.n);
@@ -160,6 +191,7 @@ pub(crate) fn sense(
         },
         truth,
         counters: injector.counters(),
+        in_run_biases,
     })
 }
 

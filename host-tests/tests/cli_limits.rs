@@ -336,7 +336,7 @@ fn scenario_lengths_beyond_range_are_refused() {
             "1e300",
         ],
         &[
-            "2 runs per cell, 1e300 s each",
+            "2 runs per family, 1 family per cell, 1e300 s each",
             "seconds must be at most 1e6",
         ],
     );
@@ -349,6 +349,42 @@ fn bench_cells_outside_the_table_are_refused() {
         &["bench", "consistency", "--runs", "2", "--cells", "1,9"],
         &["--cells 9: the table has cells 1 to 6"],
     );
+}
+
+/// An absurd `--runs` allocated every seed before failing; `--threads 0` ran on one thread.
+#[test]
+fn bench_runs_threads_and_families_are_bounded() {
+    for (what, args, expected) in [
+        (
+            "consistency",
+            ["--runs", "1"],
+            "--runs must be from 2 to 100000, not 1",
+        ),
+        (
+            "consistency",
+            ["--runs", "999999999999"],
+            "--runs must be from 2 to 100000, not 999999999999",
+        ),
+        (
+            "consistency",
+            ["--threads", "0"],
+            "--threads must be from 1 to 256, not 0",
+        ),
+        (
+            "outages",
+            ["--runs", "0"],
+            "--runs must be from 1 to 100000, not 0",
+        ),
+        (
+            "outages",
+            ["--threads", "1000"],
+            "--threads must be from 1 to 256, not 1000",
+        ),
+    ] {
+        let mut argv = vec!["bench", what];
+        argv.extend(args);
+        refused(&argv, &[expected]);
+    }
 }
 
 /// `nav align-bench family --seconds 1e300` printed the window in 301 digits.

@@ -174,8 +174,10 @@ enum Command {
         #[arg(long, default_value = "f64")]
         precision: Precision,
     },
-    /// Benchmark the mechanization alone (no I/O): steps per second on one thread, f32 and f64,
-    /// over 10 min of exact 400 Hz increments of a 900 km/h flight.
+    /// Benchmarks, printed: the mechanization alone (the default: steps per second on one
+    /// thread, f32 and f64, over 10 min of exact 400 Hz increments of a 900 km/h flight), `nav
+    /// kf-gins` speed and accuracy, the aided filter's NEES/NIS consistency, GNSS outages and
+    /// GNSS outliers.
     Bench {
         /// What to measure: mechanization (steps/s, no I/O), filter (`nav kf-gins` speed and
         /// accuracy on a generated 1-hour KF-GINS data set), consistency (NEES/NIS Monte Carlo
@@ -222,6 +224,17 @@ enum Command {
         /// Print each block's mean NEES per tenth of the run (consistency).
         #[arg(long)]
         blocks: bool,
+        /// Seed of the first run; run k uses this + k (consistency: another value draws an
+        /// independent family of the same size).
+        #[arg(long, default_value_t = 1)]
+        first_seed: u64,
+        /// Independent families of --runs runs per cell, on consecutive seeds (consistency):
+        /// one row each and the spread of their NEES-inside fractions. An error correlated
+        /// over a minute or more (a misalignment, a receiver's correlated error) makes the
+        /// fraction of one family move by 10 % or more from one family to the next even when
+        /// the filter is consistent; the mean over families is the figure to judge.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
+        families: u32,
     },
     /// Write a synthetic recording of a body at rest on the Earth (exact inputs).
     #[command(allow_negative_numbers = true)]
@@ -535,11 +548,30 @@ impl ReplayArgs {
     }
 }
 
+/// Most runs of a Monte Carlo bench.
+const MAX_RUNS: usize = 100_000;
+/// Most threads of a Monte Carlo bench.
+const MAX_THREADS: usize = 256;
+
+/// Refuses a bench's `--runs` outside `min_runs..=MAX_RUNS` and `--threads` outside
+/// `1..=MAX_THREADS`.
+fn check_monte_carlo(runs: usize, min_runs: usize, threads: usize) -> Result<()> {
+    anyhow::ensure!(
+        (min_runs..=MAX_RUNS).contains(&runs),
+        "--runs must be from {min_runs} to {MAX_RUNS}, not {runs}"
+    );
+    anyhow::ensure!(
+        (1..=MAX_THREADS).contains(&threads),
+        "--threads must be from 1 to {MAX_THREADS}, not {threads}"
+    );
+    Ok(())
+}
+
 /// `nav bench outages`: 1-hour land-vehicle runs, 60 s outages every 180 s.
 fn bench_outages(runs: usize, threads: usize, outage_s: f64) -> Result<()> {
     use host_tests::gnss_bench::{OUTAGE_PERIOD_S, outage_case, outage_drifts};
     use host_tests::sensor_model::Grade;
-    anyhow::ensure!(runs >= 1, "--runs must be at least 1");
+    check_monte_carlo(runs, 1, threads)?;
     anyhow::ensure!(
         (1.0..=OUTAGE_PERIOD_S - 10.0).contains(&outage_s),
         "--outage-seconds must be from 1 to {} s (an outage every {OUTAGE_PERIOD_S} s, with fixes between), not {}",
@@ -613,7 +645,7 @@ fn bench_outliers() -> Result<()> {
     println!(
         "| grade | GNSS | outlier | at [s] | fixes | refused | max error [m] | 1-sigma there [m] | max error/1-sigma | after its end | DEGRADED | accepted again |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let cases = [
         (Grade::Fog, "position", outlier_case(Grade::Fog, 1)),
         (
@@ -704,6 +736,10 @@ struct ConsistencyChoice {
     cells: Vec<usize>,
     /// Print the blocks' NEES over time.
     blocks: bool,
+    /// Seed of the first run.
+    first_seed: u64,
+    /// Independent families of runs per cell.
+    families: usize,
 }
 
 /// Cells of `nav bench consistency`'s table.
@@ -720,7 +756,7 @@ fn bench_consistency(
     use host_tests::aided_bench::{Case, average_chi2_bounds, consistency_cell};
     use host_tests::gnss_sim::GnssSimOptions;
     use host_tests::sensor_model::Grade;
-    anyhow::ensure!(runs >= 2, "--runs must be at least 2");
+    check_monte_carlo(runs, 2, threads)?;
     if let Some(cell) = choice
         .cells
         .iter()
@@ -731,16 +767,23 @@ fn bench_consistency(
     let (lo9, hi9) = average_chi2_bounds(9.0, runs);
     let (lo3, hi3) = average_chi2_bounds(3.0, runs);
     println!(
-        "{runs} runs per cell, {} s each, zero-velocity/rate updates {}; 95 % bounds of \
-         the average NEES (9 dof) [{lo9:.2}, {hi9:.2}], NIS (3 dof) [{lo3:.2}, {hi3:.2}]",
+        "{runs} runs per family, {} {} per cell, {} s each, zero-velocity/rate updates {}; \
+         95 % bounds of the average NEES (9 dof) [{lo9:.2}, {hi9:.2}], NIS (3 dof) [{lo3:.2}, {hi3:.2}]",
+        choice.families,
+        if choice.families == 1 {
+            "family"
+        } else {
+            "families"
+        },
         nav_core::number::Number(seconds),
         if zero_motion { "on" } else { "off" }
     );
     println!(
-        "| scenario | grade | GNSS | epochs | NEES inside | mean NEES (pos/vel/att) | NIS inside | mean NIS | bias z RMS gyro/accel | max |bias z| | within 3 sigma b_g/b_a/s_g/s_a | gated |"
+        "| seeds | scenario | grade | GNSS | epochs | NEES inside | mean NEES (pos/vel/att) | NIS inside | mean NIS | bias z RMS gyro/accel | max |bias z| | within 3 sigma b_g/b_a/s_g/s_a | gated |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut block_tables = Vec::new();
+    let mut summaries = Vec::new();
     // The last cell: a code receiver, whose time-correlated error is simulated and declared.
     let (code_sigma, code_time) = host_tests::gnss_bench::CODE_RECEIVER_CORRELATED;
     let code = Some(host_tests::gnss_sim::CorrelatedError {
@@ -807,12 +850,11 @@ fn bench_consistency(
                 correlated,
                 ..GnssSimOptions::default()
             },
-            seed: 1,
+            seed: choice.first_seed,
             zero_motion,
             in_run_noise: true,
             without: choice.without.clone(),
         };
-        let r = consistency_cell(&case, runs, threads)?;
         let gnss = match correlated {
             Some(c) => format!(
                 "{rate} Hz, correlated {:?} m, {} s",
@@ -820,26 +862,57 @@ fn bench_consistency(
             ),
             None => format!("{rate} Hz"),
         };
-        println!(
-            "| {scenario} | {grade} | {gnss} | {} | {:.0} % | {:.2} ({:.2}/{:.2}/{:.2}) | {:.0} % | {:.2} | {:.2} / {:.2} | {:.2} | {} | {}/{} |",
-            r.epochs,
-            100.0 * r.nees_inside,
-            r.nees_mean,
-            r.nees_blocks_mean[0],
-            r.nees_blocks_mean[1],
-            r.nees_blocks_mean[2],
-            100.0 * r.nis_inside,
-            r.nis_mean,
-            r.bias_z_rms.0,
-            r.bias_z_rms.1,
-            r.bias_z_max,
-            r.sensor_within_3_sigma
-                .map(|f| format!("{:.0} %", 100.0 * f))
-                .join(" / "),
-            r.rejected.0,
-            r.rejected.1
-        );
-        block_tables.push((format!("{scenario} {grade}"), r.blocks_over_time));
+        let mut inside = Vec::new();
+        for family in 0..choice.families as u64 {
+            let first = choice
+                .first_seed
+                .wrapping_add(family.wrapping_mul(runs as u64));
+            let seeds = format!("{first}–{}", first.wrapping_add(runs as u64 - 1));
+            let r = consistency_cell(
+                &Case {
+                    seed: first,
+                    ..case.clone()
+                },
+                runs,
+                threads,
+            )?;
+            println!(
+                "| {seeds} | {scenario} | {grade} | {gnss} | {} | {:.0} % | {:.2} ({:.2}/{:.2}/{:.2}) | {:.0} % | {:.2} | {:.2} / {:.2} | {:.2} | {} | {}/{} |",
+                r.epochs,
+                100.0 * r.nees_inside,
+                r.nees_mean,
+                r.nees_blocks_mean[0],
+                r.nees_blocks_mean[1],
+                r.nees_blocks_mean[2],
+                100.0 * r.nis_inside,
+                r.nis_mean,
+                r.bias_z_rms.0,
+                r.bias_z_rms.1,
+                r.bias_z_max,
+                r.sensor_within_3_sigma
+                    .map(|f| format!("{:.0} %", 100.0 * f))
+                    .join(" / "),
+                r.rejected.0,
+                r.rejected.1
+            );
+            inside.push(100.0 * r.nees_inside);
+            block_tables.push((
+                format!("{scenario} {grade} {gnss}, seeds {seeds}"),
+                r.blocks_over_time,
+            ));
+        }
+        if inside.len() > 1 {
+            let mean = inside.iter().sum::<f64>() / inside.len() as f64;
+            let each: Vec<String> = inside.iter().map(|x| format!("{x:.0}")).collect();
+            summaries.push(format!(
+                "cell {} ({scenario}, {grade}, {gnss}): NEES inside per family {} %, mean {mean:.0} %",
+                cell + 1,
+                each.join(" / ")
+            ));
+        }
+    }
+    for line in &summaries {
+        println!("{line}");
     }
     if choice.blocks {
         use host_tests::aided_bench::NEES_BLOCKS;
@@ -1624,6 +1697,8 @@ fn run(cli: Cli) -> Result<()> {
             without,
             cells,
             blocks,
+            first_seed,
+            families,
             ..
         } => bench_consistency(
             runs.unwrap_or(60),
@@ -1634,6 +1709,8 @@ fn run(cli: Cli) -> Result<()> {
                 without,
                 cells,
                 blocks,
+                first_seed,
+                families: families as usize,
             },
         ),
         Command::Bench {
