@@ -27,6 +27,8 @@ pub struct ConfigArgs {
 pub fn parse(name: &Path, text: &str) -> Result<DeviceConfig> {
     let mut config = DeviceConfig::default();
     let mut line_of: HashMap<&str, usize> = HashMap::new();
+    // A byte-order mark (Windows editors write one) is not part of the first key.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     for (k, line) in text.lines().enumerate() {
         let n = k + 1;
         config
@@ -96,4 +98,18 @@ pub fn run(args: &ConfigArgs) -> Result<()> {
         args.out.display()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A byte-order mark was read as part of the first key ("unknown key '\u{feff}lat-deg'").
+    #[test]
+    fn a_byte_order_mark_is_not_part_of_the_first_key() {
+        let name = Path::new("run.txt");
+        let text = "lat-deg = 10\nlon-deg = 20\n";
+        let with_bom = format!("\u{feff}{text}");
+        assert_eq!(parse(name, &with_bom).unwrap(), parse(name, text).unwrap());
+    }
 }

@@ -153,9 +153,11 @@ impl Outlier {
         }
     }
 
-    /// Its times and offsets are finite, its lengths not negative.
+    /// Its times are finite, its offsets within [`MAX_OUTLIER_OFFSET_M`] on each axis, its
+    /// lengths not negative.
     fn is_valid(&self) -> bool {
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        let offset = |v: &[f64]| v.iter().all(|x| x.abs() <= MAX_OUTLIER_OFFSET_M);
         // An event before the first fix would land on it.
         if self.start_s().is_nan() || self.start_s() < 0.0 {
             return false;
@@ -165,13 +167,13 @@ impl Outlier {
                 t_s,
                 length_s,
                 offset_ned_m,
-            } => finite(&[*t_s, *length_s]) && *length_s >= 0.0 && finite(offset_ned_m),
-            Self::Spike { t_s, offset_ned_m } => t_s.is_finite() && finite(offset_ned_m),
+            } => finite(&[*t_s, *length_s]) && *length_s >= 0.0 && offset(offset_ned_m),
+            Self::Spike { t_s, offset_ned_m } => t_s.is_finite() && offset(offset_ned_m),
             Self::Ramp {
                 start_s,
                 length_s,
                 final_offset_ned_m,
-            } => finite(&[*start_s, *length_s]) && *length_s > 0.0 && finite(final_offset_ned_m),
+            } => finite(&[*start_s, *length_s]) && *length_s > 0.0 && offset(final_offset_ned_m),
             Self::NaN { t_s } => t_s.is_finite(),
         }
     }
@@ -183,6 +185,9 @@ pub const MAX_SIGMA_M: f64 = 1000.0;
 pub const MAX_SIGMA_V_M_S: f64 = 100.0;
 /// Largest steady-state 1-sigma of the correlated error [m].
 pub const MAX_CORRELATED_SIGMA_M: f64 = 100.0;
+/// Largest outlier offset `nav sim` injects, per axis [m]: 100 km, far beyond any gate, while
+/// the fix stays a point near the truth on the Earth model.
+pub const MAX_OUTLIER_OFFSET_M: f64 = 1.0e5;
 /// Longest correlation time of the correlated error [s].
 pub const MAX_CORRELATION_TIME_S: f64 = 1.0e6;
 /// The ChaCha8 stream (of the same seed) the correlated error draws from; the white noise uses
@@ -579,8 +584,8 @@ impl GnssSimOptions {
         }
         if let Some(bad) = o.outliers.iter().find(|x| !x.is_valid()) {
             bail!(
-                "GNSS {} at {} s: times must be >= 0 and finite, offsets finite, lengths >= 0 \
-                 (a ramp's > 0)",
+                "GNSS {} at {} s: times must be >= 0 and finite, offsets within \
+                 {MAX_OUTLIER_OFFSET_M} m on each axis, lengths >= 0 (a ramp's > 0)",
                 bad.name(),
                 bad.start_s()
             );
@@ -702,6 +707,28 @@ mod tests {
                     ..ok.clone()
                 },
                 "positive number",
+            ),
+            // An offset of 1e300 m put the fix at the pole with its usual sigma.
+            (
+                GnssSimOptions {
+                    outliers: vec![Outlier::Spike {
+                        t_s: 2.0,
+                        offset_ned_m: [1e300, 0.0, 0.0],
+                    }],
+                    ..ok.clone()
+                },
+                "offsets within 100000 m",
+            ),
+            (
+                GnssSimOptions {
+                    outliers: vec![Outlier::Ramp {
+                        start_s: 2.0,
+                        length_s: 10.0,
+                        final_offset_ned_m: [0.0, -2e5, 0.0],
+                    }],
+                    ..ok.clone()
+                },
+                "offsets within 100000 m",
             ),
         ];
         for (bad, reason) in cases {

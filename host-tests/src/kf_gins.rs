@@ -8,7 +8,8 @@
 //! IMU file (7 columns): GNSS seconds of week [s], angle increments x y z [rad], velocity
 //! increments x y z [m/s], body axes forward-right-down, each over the interval ending at the
 //! time tag. KF-GINS's optional 8th column (odometer, config `imudatalen: 8`) is accepted and
-//! ignored. Time must increase from line to line; NaN or infinite increments are parsed, not
+//! ignored; `nav kf-gins` holds every line to its configuration's `imudatalen`
+//! ([`ImuReader::with_columns`]). Time must increase from line to line; NaN or infinite increments are parsed, not
 //! refused (the replay flags them), as in the project's CSV format.
 //!
 //! Trajectory file (`truth.nav`, and KF-GINS's own `KF_GINS_Navresult.nav`; 11 columns): GNSS week,
@@ -371,6 +372,8 @@ pub fn read_imu_from<R: BufRead>(reader: R, path: &Path) -> Result<KfGinsImu, Kf
 pub struct ImuReader<R> {
     lines: DataLines<R>,
     previous_t_s: Option<f64>,
+    /// The columns every line must have (KF-GINS's `imudatalen`); `None`: 7 or 8.
+    columns: Option<usize>,
 }
 
 impl<R: BufRead> ImuReader<R> {
@@ -379,7 +382,15 @@ impl<R: BufRead> ImuReader<R> {
         Self {
             lines: DataLines::new(reader, path, FileKind::Imu),
             previous_t_s: None,
+            columns: None,
         }
+    }
+
+    /// Refuses a line of other than `columns` fields (a configuration's `imudatalen`: KF-GINS
+    /// reads that many numbers a line, so a file of the other width is misread there).
+    pub fn with_columns(mut self, columns: usize) -> Self {
+        self.columns = Some(columns);
+        self
     }
 }
 
@@ -388,7 +399,17 @@ impl<R: BufRead> Iterator for ImuReader<R> {
 
     fn next(&mut self) -> Option<Self::Item> {
         let previous_t_s = &mut self.previous_t_s;
+        let columns = self.columns;
         self.lines.next_with(|values, at| {
+            if let Some(n) = columns
+                && values.len() != n
+            {
+                return Err(at(KfGinsErrorKind::ColumnCount {
+                    expected: format!("{n} columns (imudatalen)"),
+                    found: values.len(),
+                    hint: None,
+                }));
+            }
             let number = |i: usize| values.number(i, IMU_COLUMNS[i]).map_err(at);
             let t_s = number(0)?;
             check_time(t_s, || values.text(0)).map_err(at)?;

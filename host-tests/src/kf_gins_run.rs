@@ -167,12 +167,14 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
     let seq = sequencer::<f64>(&config, &AidedStart::Given(Box::new(start(&c))))?;
     let file = File::open(&c.imu_path)
         .with_context(|| format!("IMU file {} (imupath)", c.imu_path.display()))?;
-    let mut rows = ImuReader::new(BufReader::with_capacity(1 << 20, file), &c.imu_path);
+    let mut rows = ImuReader::new(BufReader::with_capacity(1 << 20, file), &c.imu_path)
+        .with_columns(c.imu_columns);
     let nominal_dt = 1.0 / c.imu_rate_hz;
     let (t_start, t_end) = (c.start_time_s, c.end_time_s.unwrap_or(f64::INFINITY));
     let mut prev_t: Option<f64> = None;
     let mut outside_window = 0_u64;
-    // Intervals off `imudatarate` by more than half its interval, of all intervals.
+    // Intervals off `imudatarate` by more than a quarter of its interval, of all intervals (a
+    // rate off by a factor of 2 or 4/3 is caught; a receiver's jitter of a few percent is not).
     let (mut off_rate, mut intervals) = (0_u64, 0_u64);
     let samples = || -> Result<Option<AidedSample<f64>>> {
         loop {
@@ -183,7 +185,7 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
             let dt = prev_t.map_or(nominal_dt, |p| row.t_s - p);
             if prev_t.is_some() {
                 intervals += 1;
-                off_rate += u64::from((dt - nominal_dt).abs() > 0.5 * nominal_dt);
+                off_rate += u64::from((dt - nominal_dt).abs() > 0.25 * nominal_dt);
             }
             prev_t = Some(row.t_s);
             // KF-GINS starts at the first epoch at or after `starttime`.
@@ -221,7 +223,7 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
     if intervals > 0 && off_rate * 10 > intervals {
         bail!(
             "imudatarate {} Hz does not match {}: {off_rate} of its {intervals} epoch intervals \
-             differ from {nominal_dt} s by more than half",
+             differ from {nominal_dt} s by more than a quarter",
             c.imu_rate_hz,
             c.imu_path.display()
         );

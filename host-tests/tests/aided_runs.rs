@@ -379,6 +379,19 @@ fn kf_gins_refuses_bad_input_without_a_partial_file() {
     let e = run_err(nav().arg("kf-gins").arg(&bad).arg("--out").arg(&out));
     assert!(e.contains("imudatarate 1000 Hz does not match"), "{e}");
     assert!(!out.exists());
+    // Half the rate (the commonest slip) was let through.
+    std::fs::write(&bad, text.replace("imudatarate: 200", "imudatarate: 100")).unwrap();
+    let e = run_err(nav().arg("kf-gins").arg(&bad).arg("--out").arg(&out));
+    assert!(e.contains("imudatarate 100 Hz does not match"), "{e}");
+    assert!(!out.exists());
+    // An odometer column the 7-column IMU file does not have: KF-GINS would misread it.
+    std::fs::write(&bad, text.replace("imudatalen: 7", "imudatalen: 8")).unwrap();
+    let e = run_err(nav().arg("kf-gins").arg(&bad).arg("--out").arg(&out));
+    assert!(
+        e.contains("expected 8 columns (imudatalen), found 7"),
+        "{e}"
+    );
+    assert!(!out.exists());
     // A corrupt GNSS file.
     let gnss = dir.path().join("gnss.txt");
     let good_gnss = std::fs::read_to_string(&gnss).unwrap();
@@ -457,6 +470,8 @@ fn sim_refuses_a_receiver_the_filter_could_not_use() {
         ),
         (["--gnss-outages", "-5,1,1"], "period must be positive"),
         (["--gnss-jump", "-3,1,0,0,0"], "times must be >= 0"),
+        // A fix at the pole with its usual sigma was written.
+        (["--gnss-spike", "2,1e300,0,0"], "offsets within 100000 m"),
     ] {
         let msg = run_err(
             nav()
@@ -468,6 +483,15 @@ fn sim_refuses_a_receiver_the_filter_could_not_use() {
         assert!(msg.contains(reason), "{args:?}: {msg}");
         assert!(!out.join("imu.bin").exists(), "{args:?}: files written");
     }
+    // Found only when the receiver was simulated, after the recording had been written.
+    let msg = run_err(
+        nav()
+            .args(["sim", "land-vehicle", "--seconds", "10", "--gnss-rate", "3"])
+            .arg("--out")
+            .arg(&out),
+    );
+    assert!(msg.contains("whole number of truth intervals"), "{msg}");
+    assert!(!out.exists(), "files written");
 }
 
 /// Comma-separated options whose first value is negative: lever arms and offsets are taken.

@@ -350,7 +350,7 @@ enum AlignBenchKind {
 }
 
 /// `nav bench` measurements.
-#[derive(Clone, Copy, ValueEnum)]
+#[derive(Clone, Copy, PartialEq, Eq, Debug, ValueEnum)]
 enum BenchKind {
     /// Mechanization steps per second.
     Mechanization,
@@ -757,6 +757,8 @@ fn bench_consistency(
     use host_tests::gnss_sim::GnssSimOptions;
     use host_tests::sensor_model::Grade;
     check_monte_carlo(runs, 2, threads)?;
+    // Before the table's header: each run's scenario checks it again.
+    host_tests::trajectory::scenarios::check_seconds(seconds)?;
     if let Some(cell) = choice
         .cells
         .iter()
@@ -1411,13 +1413,19 @@ fn sim(a: SimArgs) -> Result<()> {
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    let files = write(&out, &opts, &sim)?;
     let n = sim.recording.records.len();
-    if let Some(rate) = a.gnss_rate {
-        let seconds = n as f64 / opts.rate_hz;
-        let g = gnss_options(&a, rate, seconds)?;
-        let receiver =
-            host_tests::gnss_sim::simulate(&sim.truth, &g).context("simulated GNSS receiver")?;
+    // The receiver is simulated before anything is written: a refusal leaves no recording.
+    let receiver = match a.gnss_rate {
+        Some(rate) => {
+            let g = gnss_options(&a, rate, n as f64 / opts.rate_hz)?;
+            let r = host_tests::gnss_sim::simulate(&sim.truth, &g)
+                .context("simulated GNSS receiver")?;
+            Some((g, r))
+        }
+        None => None,
+    };
+    let files = write(&out, &opts, &sim)?;
+    if let Some((g, receiver)) = receiver {
         let path = out.join("gnss.csv");
         host_tests::gnss::write_gnss_csv(&path, &receiver.fixes)?;
         let bin = out.join("gnss.bin");
@@ -1522,6 +1530,57 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: Cli) -> Result<()> {
+    if let Command::Bench {
+        what,
+        passes,
+        runs,
+        threads,
+        seconds,
+        outage_seconds,
+        dir,
+        zero_motion,
+        without,
+        cells,
+        blocks,
+        first_seed,
+        families,
+    } = &cli.command
+    {
+        use BenchKind::{Consistency as C, Filter as F, Mechanization as M, Outages as O};
+        // (option, given with other than its default, the measurements that use it)
+        let options: [(&str, bool, &[BenchKind]); 12] = [
+            ("--passes", *passes != 10, &[M]),
+            ("--runs", runs.is_some(), &[C, O]),
+            ("--threads", *threads != 2, &[C, O]),
+            ("--seconds", *seconds != 600.0, &[C]),
+            (
+                "--outage-seconds",
+                *outage_seconds != host_tests::gnss_bench::OUTAGE_S,
+                &[O],
+            ),
+            ("--dir", dir.is_some(), &[F]),
+            ("--zero-motion", *zero_motion, &[C]),
+            ("--without", !without.is_empty(), &[C]),
+            ("--cells", !cells.is_empty(), &[C]),
+            ("--blocks", *blocks, &[C]),
+            ("--first-seed", *first_seed != 1, &[C]),
+            ("--families", *families != 1, &[C]),
+        ];
+        if let Some((name, _, kinds)) = options
+            .iter()
+            .find(|(_, given, kinds)| *given && !kinds.contains(what))
+        {
+            let names: Vec<String> = kinds
+                .iter()
+                .map(|k| format!("{k:?}").to_lowercase())
+                .collect();
+            anyhow::bail!(
+                "{name} is an option of `nav bench {}`, not of `nav bench {}`",
+                names.join("` and `nav bench "),
+                format!("{what:?}").to_lowercase()
+            );
+        }
+    }
     match cli.command {
         Command::AlignBench {
             which,

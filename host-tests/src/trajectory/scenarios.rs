@@ -243,7 +243,7 @@ fn check_positive(key: &str, v: f64) -> Result<()> {
 pub const MAX_SECONDS: f64 = 1e6;
 
 /// A scenario's length: positive, within [`MAX_SECONDS`].
-fn check_seconds(v: f64) -> Result<()> {
+pub fn check_seconds(v: f64) -> Result<()> {
     check_positive("seconds", v)?;
     if v > MAX_SECONDS {
         bail!(
