@@ -385,6 +385,11 @@ impl<T: Scalar> OscillatorEstimator<T> {
     /// Phase-locked loop step on the phase error `delta` [rad] (eq. 2.17): the integrator learns
     /// the frequency, the proportional part is spread over the next period.
     fn steer(&mut self, delta: f64) {
+        // A period whose fit overflowed (an absurd readout) measures nothing: a NaN taken in
+        // here would stay in the loop for good.
+        if !delta.is_finite() {
+            return;
+        }
         let period = 2.0 * PI / self.omega_run;
         if !self.steered {
             // First measurement: move the phase, learn nothing about the frequency yet (an

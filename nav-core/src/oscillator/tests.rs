@@ -358,6 +358,29 @@ fn bad_readouts_spoil_only_their_period() {
     assert!(after_gap > 70);
 }
 
+/// A finite but absurd readout (1e300 m: its square overflows) while acquiring made a NaN phase
+/// error that the loop took in for good: no epoch for the rest of the run.
+#[test]
+fn an_absurd_readout_spoils_only_a_few_periods() {
+    let s = scene(spin);
+    let mut est = OscillatorEstimator::<f64>::new(cfg(true)).unwrap();
+    let (mut epochs, mut after) = (0, 0);
+    for k in 0..10_000u64 {
+        let t = k as f64 / 5000.0;
+        let out = match k {
+            500 => est.add(&Vector3::new(1e300, 0.0, 0.0)),
+            _ => est.add(&s.readout(t)),
+        };
+        if let Some(Ok(_)) = out {
+            epochs += 1;
+            after += usize::from(k > 2000);
+        }
+    }
+    println!("{epochs} epochs, {after} after 2000, {:?}", est.counters());
+    assert!(after > 70, "{after}");
+    assert!(est.frequency_hz().is_finite());
+}
+
 #[test]
 fn bad_settings_are_refused() {
     let mut c = cfg(true);
