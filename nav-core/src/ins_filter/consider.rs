@@ -232,8 +232,8 @@ fn system_columns<T: Scalar>(lin: &Linearisation<T>) -> SMatrix<T, ROWS, NC> {
 }
 
 /// `Phi_ac = F_ac dt + (F_aa F_ac + F_ac F_cc) dt^2 / 2` over the navigation rows (the sensor
-/// rows of `Phi_ac` are zero: their rows of `F` are diagonal), `f` the error states' system
-/// matrix.
+/// rows of `Phi_ac` are zero: their rows of `F` are diagonal; so are the GNSS error's columns
+/// from [`GP`], which the dynamics do not reach), `f` the error states' system matrix.
 pub fn transition_columns<T: Scalar>(
     f: &Covariance<T>,
     lin: &Linearisation<T>,
@@ -243,8 +243,11 @@ pub fn transition_columns<T: Scalar>(
     let f_ac = system_columns(lin);
     let half_dt2 = dt * dt * T::c(0.5);
     let f_nav = f.fixed_view::<NAV, ROWS>(0, VEL);
-    let mut phi = f_nav * f_ac * half_dt2;
-    for c in 0..NC {
+    // The columns from GP stay zero: the GNSS error is not in the dynamics.
+    let mut phi = SMatrix::<T, NAV, NC>::zeros();
+    phi.fixed_view_mut::<NAV, GP>(0, 0)
+        .copy_from(&(f_nav * f_ac.fixed_view::<ROWS, GP>(0, 0) * half_dt2));
+    for c in 0..GP {
         let decay = -model.decay(c);
         for r in 0..ROWS {
             phi[(VEL + r, c)] += f_ac[(r, c)] * (dt + decay * half_dt2);
@@ -256,6 +259,10 @@ pub fn transition_columns<T: Scalar>(
 /// The consider part of a propagation (module docs): adds the consider terms to `p`, already
 /// propagated (`Phi_aa P_aa Phi_aa^T + Q`), and moves `p_ac` over the interval. `phi` the
 /// error states' transition, `phi_ac` the columns of [`transition_columns`].
+///
+/// Without a declared GNSS error ([`ConsiderModel::has_gnss_error`]) its columns of `P_ac`
+/// (from [`GP`]) are zero and stay zero (no variance, no update reaches them): only the
+/// first [`GP`] consider states are propagated.
 pub fn propagate<T: Scalar>(
     p: &mut Covariance<T>,
     p_ac: &mut CrossCovariance<T>,
@@ -264,10 +271,28 @@ pub fn propagate<T: Scalar>(
     model: &ConsiderModel<T>,
     dt: T,
 ) {
-    let x = phi.times(p_ac);
+    if model.has_gnss_error() {
+        propagate_first::<T, NC>(p, p_ac, phi, phi_ac, model, dt);
+    } else {
+        propagate_first::<T, GP>(p, p_ac, phi, phi_ac, model, dt);
+    }
+}
+
+/// [`propagate`] over the first `C` consider states (`P_ac`'s other columns are zero and
+/// left as they are).
+fn propagate_first<T: Scalar, const C: usize>(
+    p: &mut Covariance<T>,
+    p_ac: &mut CrossCovariance<T>,
+    phi: &Transition<T>,
+    phi_ac: &SMatrix<T, NAV, NC>,
+    model: &ConsiderModel<T>,
+    dt: T,
+) {
+    let x = phi.times(&p_ac.fixed_view::<N, C>(0, 0));
+    let phi_ac = phi_ac.fixed_view::<NAV, C>(0, 0);
     // X Phi_ac^T (N x NAV), mirrored into the rows and the columns of the navigation states.
     let a = x * phi_ac.transpose();
-    let mut phi_p = *phi_ac;
+    let mut phi_p = phi_ac.into_owned();
     for (c, mut col) in phi_p.column_iter_mut().enumerate() {
         col *= model.variance[c];
     }
@@ -290,7 +315,7 @@ pub fn propagate<T: Scalar>(
             }
         }
     }
-    for c in 0..NC {
+    for c in 0..C {
         // exp(-dt / tau) to second order, as the error states' transition.
         let rate = model.decay(c);
         let d = T::one() - rate * dt + rate * rate * dt * dt * T::c(0.5);
@@ -472,6 +497,47 @@ mod tests {
         assert!(e_aa < 1e-14 * scale, "{e_aa}");
         assert!(e_ac < 1e-14 * scale, "{e_ac}");
         assert_eq!(p, p.transpose());
+    }
+
+    /// Without a GNSS error the propagation over the first [`GP`] consider states gives, bit
+    /// for bit, what the propagation of all [`NC`] gives (the skipped columns of `P_ac` are
+    /// zero and stay zero).
+    #[test]
+    fn skipping_the_undeclared_gnss_error_changes_no_bit() {
+        let n = noise();
+        let l = lin();
+        let model = ConsiderModel::of(&n, None);
+        assert!(model.is_active() && !model.has_gnss_error());
+        let f = model::system_matrix(&l, &n, true);
+        let q = model::noise_density(&n, true);
+        let dt = 0.1;
+        let phi = covariance::Transition::new(&f, dt);
+        let phi_ac = transition_columns(&f, &l, &model, dt);
+        let lower = Covariance::<f64>::from_fn(|i, j| match i.cmp(&j) {
+            core::cmp::Ordering::Less => 0.0,
+            core::cmp::Ordering::Equal => 0.1 + 0.01 * i as f64,
+            core::cmp::Ordering::Greater => 0.02 * ((3 * i + 5 * j) as f64).sin(),
+        });
+        let mut p = lower * lower.transpose();
+        let mut p_ac = CrossCovariance::<f64>::zeros();
+        start(&mut p, &mut p_ac, &model);
+        // Correlations as the motion and the updates leave them, none with the GNSS error.
+        for c in 0..GP {
+            for i in 0..N {
+                p_ac[(i, c)] += 1e-7 * ((7 * i + 11 * c) as f64).cos();
+            }
+        }
+        let (mut p_all, mut p_ac_all) = (p, p_ac);
+        for _ in 0..3 {
+            covariance::propagate(&mut p, &phi, &q, dt);
+            propagate(&mut p, &mut p_ac, &phi, &phi_ac, &model, dt);
+            covariance::propagate(&mut p_all, &phi, &q, dt);
+            propagate_first::<f64, NC>(&mut p_all, &mut p_ac_all, &phi, &phi_ac, &model, dt);
+        }
+        let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+        assert!(same(p.as_slice(), p_all.as_slice()));
+        assert!(same(p_ac.as_slice(), p_ac_all.as_slice()));
+        assert!(p_ac.fixed_view::<N, 3>(0, GP).iter().all(|v| *v == 0.0));
     }
 
     fn gnss() -> GnssCorrelatedError<f64> {

@@ -21,7 +21,7 @@
 
 use super::states::{BG, Covariance, N, StateVector};
 use crate::Scalar;
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{Const, Matrix, RawStorage, SMatrix, SVector};
 
 /// Navigation error states (position, velocity, attitude): the full rows of `Phi`.
 pub const NAV: usize = BG;
@@ -80,9 +80,13 @@ impl<T: Scalar> Transition<T> {
         Self { nav_rows_t, decay }
     }
 
-    /// `Phi m` for a matrix `m` of `N` rows (the consider states' cross-covariance,
-    /// [`super::consider`]): the navigation rows full, the sensor rows scaled by their decay.
-    pub fn times<const C: usize>(&self, m: &SMatrix<T, N, C>) -> SMatrix<T, N, C> {
+    /// `Phi m` for a matrix (or a view) `m` of `N` rows (the consider states'
+    /// cross-covariance, [`super::consider`]): the navigation rows full, the sensor rows
+    /// scaled by their decay.
+    pub fn times<const C: usize, S: RawStorage<T, Const<N>, Const<C>>>(
+        &self,
+        m: &Matrix<T, Const<N>, Const<C>, S>,
+    ) -> SMatrix<T, N, C> {
         let mut out = SMatrix::<T, N, C>::zeros();
         let phi_rows = columns(&self.nav_rows_t);
         for c in 0..C {
