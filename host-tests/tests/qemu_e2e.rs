@@ -1441,7 +1441,7 @@ fn firmware_navigates_aided_like_the_harness() {
                 "250",
                 "15",
             ][..],
-            "--gnss-lever-arm and --propagation-rate need --gnss FILE",
+            "--gnss-lever-arm, --propagation-rate, --gnss-correlated and --gnss-correlated-time need --gnss FILE",
         ),
         (
             &[
