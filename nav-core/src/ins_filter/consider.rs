@@ -146,6 +146,12 @@ impl<T: Scalar> ConsiderModel<T> {
         self.gnss_decay_rate > T::zero()
     }
 
+    /// The consider states a propagation moves: all [`NC`], or without a GNSS error the
+    /// first [`GP`] (its columns of `P_ac` are zero and stay zero).
+    pub fn columns(&self) -> usize {
+        if self.has_gnss_error() { NC } else { GP }
+    }
+
     /// True when any consider state has a variance (otherwise the filter skips them).
     pub fn is_active(&self) -> bool {
         self.active
@@ -232,8 +238,8 @@ fn system_columns<T: Scalar>(lin: &Linearisation<T>) -> SMatrix<T, ROWS, NC> {
 }
 
 /// `Phi_ac = F_ac dt + (F_aa F_ac + F_ac F_cc) dt^2 / 2` over the navigation rows (the sensor
-/// rows of `Phi_ac` are zero: their rows of `F` are diagonal; so are the GNSS error's columns
-/// from [`GP`], which the dynamics do not reach), `f` the error states' system matrix.
+/// rows of `Phi_ac` are zero: their rows of `F` are diagonal), `f` the error states' system
+/// matrix.
 pub fn transition_columns<T: Scalar>(
     f: &Covariance<T>,
     lin: &Linearisation<T>,
@@ -243,11 +249,8 @@ pub fn transition_columns<T: Scalar>(
     let f_ac = system_columns(lin);
     let half_dt2 = dt * dt * T::c(0.5);
     let f_nav = f.fixed_view::<NAV, ROWS>(0, VEL);
-    // The columns from GP stay zero: the GNSS error is not in the dynamics.
-    let mut phi = SMatrix::<T, NAV, NC>::zeros();
-    phi.fixed_view_mut::<NAV, GP>(0, 0)
-        .copy_from(&(f_nav * f_ac.fixed_view::<ROWS, GP>(0, 0) * half_dt2));
-    for c in 0..GP {
+    let mut phi = f_nav * f_ac * half_dt2;
+    for c in 0..NC {
         let decay = -model.decay(c);
         for r in 0..ROWS {
             phi[(VEL + r, c)] += f_ac[(r, c)] * (dt + decay * half_dt2);
@@ -262,7 +265,11 @@ pub fn transition_columns<T: Scalar>(
 ///
 /// Without a declared GNSS error ([`ConsiderModel::has_gnss_error`]) its columns of `P_ac`
 /// (from [`GP`]) are zero and stay zero (no variance, no update reaches them): only the
-/// first [`GP`] consider states are propagated.
+/// first [`ConsiderModel::columns`] are moved by `Phi` and decayed. The fixed-size products
+/// with `Phi_ac` run over all columns (its GNSS columns are zero whatever the model: the
+/// dynamics do not reach that error); on the Cortex-M4 cutting them short, by hand-written
+/// loops or a second instance of this function for fewer columns, cost more guest
+/// instructions than it saved (QEMU, `f32`: 113,400 and 159,000 against 113,300).
 pub fn propagate<T: Scalar>(
     p: &mut Covariance<T>,
     p_ac: &mut CrossCovariance<T>,
@@ -271,28 +278,11 @@ pub fn propagate<T: Scalar>(
     model: &ConsiderModel<T>,
     dt: T,
 ) {
-    if model.has_gnss_error() {
-        propagate_first::<T, NC>(p, p_ac, phi, phi_ac, model, dt);
-    } else {
-        propagate_first::<T, GP>(p, p_ac, phi, phi_ac, model, dt);
-    }
-}
-
-/// [`propagate`] over the first `C` consider states (`P_ac`'s other columns are zero and
-/// left as they are).
-fn propagate_first<T: Scalar, const C: usize>(
-    p: &mut Covariance<T>,
-    p_ac: &mut CrossCovariance<T>,
-    phi: &Transition<T>,
-    phi_ac: &SMatrix<T, NAV, NC>,
-    model: &ConsiderModel<T>,
-    dt: T,
-) {
-    let x = phi.times(&p_ac.fixed_view::<N, C>(0, 0));
-    let phi_ac = phi_ac.fixed_view::<NAV, C>(0, 0);
+    let columns = model.columns();
+    let x = phi.times(p_ac, columns);
     // X Phi_ac^T (N x NAV), mirrored into the rows and the columns of the navigation states.
     let a = x * phi_ac.transpose();
-    let mut phi_p = phi_ac.into_owned();
+    let mut phi_p = *phi_ac;
     for (c, mut col) in phi_p.column_iter_mut().enumerate() {
         col *= model.variance[c];
     }
@@ -315,7 +305,7 @@ fn propagate_first<T: Scalar, const C: usize>(
             }
         }
     }
-    for c in 0..C {
+    for c in 0..columns {
         // exp(-dt / tau) to second order, as the error states' transition.
         let rate = model.decay(c);
         let d = T::one() - rate * dt + rate * rate * dt * dt * T::c(0.5);
@@ -528,11 +518,15 @@ mod tests {
             }
         }
         let (mut p_all, mut p_ac_all) = (p, p_ac);
+        // The same model, every column propagated (a GNSS error of zero variance).
+        let mut all = model;
+        all.gnss_decay_rate = 1.0 / 60.0;
+        assert_eq!((model.columns(), all.columns()), (GP, NC));
         for _ in 0..3 {
             covariance::propagate(&mut p, &phi, &q, dt);
             propagate(&mut p, &mut p_ac, &phi, &phi_ac, &model, dt);
             covariance::propagate(&mut p_all, &phi, &q, dt);
-            propagate_first::<f64, NC>(&mut p_all, &mut p_ac_all, &phi, &phi_ac, &model, dt);
+            propagate(&mut p_all, &mut p_ac_all, &phi, &phi_ac, &all, dt);
         }
         let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
         assert!(same(p.as_slice(), p_all.as_slice()));
