@@ -5,7 +5,9 @@
 //! its option names and value syntax ([`RunConfig::set`]); only the files, the device and the
 //! noise grade are the firmware's own. `--gnss FILE` (a binary fix file,
 //! `hal_adapters::gnss_record`) switches the GNSS-aided phase on ([`RunConfig::aiding`]);
-//! `--gnss-lever-arm X,Y,Z` and `--propagation-rate HZ` tune it and need it. `--stream FILE`
+//! `--gnss-lever-arm X,Y,Z`, `--propagation-rate HZ`, `--gnss-correlated N,E,D` and
+//! `--gnss-correlated-time S` (the receiver's correlated error) tune it and need it, with
+//! `nav replay --gnss`'s names and syntax. `--stream FILE`
 //! writes the output protocol's byte stream beside the solution log; `--config-frame FILE`
 //! feeds a file's bytes (`nav config`'s frame) to the configuration input before the run.
 
@@ -126,9 +128,10 @@ impl fmt::Display for ArgError<'_> {
             Self::StreamSameFile => f.write_str(
                 "--stream FILE is an input or the solution log: refusing to overwrite it",
             ),
-            Self::AidingWithoutGnss => {
-                f.write_str("--gnss-lever-arm and --propagation-rate need --gnss FILE")
-            }
+            Self::AidingWithoutGnss => f.write_str(
+                "--gnss-lever-arm, --propagation-rate, --gnss-correlated and \
+                     --gnss-correlated-time need --gnss FILE",
+            ),
         }
     }
 }
@@ -145,7 +148,7 @@ const NAMES: [&str; 8] = [
 ];
 
 /// The usage line for error messages.
-pub const USAGE: &str = "firmware [--device adis16505|icm42688|bmi088] [--imu-mounting R11,R12,..,R33] [--align-method static|inertial|fine|sway] [--imu-noise fog|rlg|mems-tactical|mems-consumer] [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S] [--base-translation M] [--frame wander|ned] [--attitude NAME] [--vertical free|hold] [--gnss FILE [--gnss-lever-arm X,Y,Z] [--propagation-rate HZ]] [--stream FILE] [--config-frame FILE] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
+pub const USAGE: &str = "firmware [--device adis16505|icm42688|bmi088] [--imu-mounting R11,R12,..,R33] [--align-method static|inertial|fine|sway] [--imu-noise fog|rlg|mems-tactical|mems-consumer] [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S] [--base-translation M] [--frame wander|ned] [--attitude NAME] [--vertical free|hold] [--gnss FILE [--gnss-lever-arm X,Y,Z] [--propagation-rate HZ] [--gnss-correlated N,E,D [--gnss-correlated-time S]]] [--stream FILE] [--config-frame FILE] IMU_FILE OUT_FILE LAT_DEG LON_DEG H_M ALIGN_S [LOG_EVERY [CAL_FILE]]";
 
 /// nav-core's noise model of a part's or grade's figures.
 pub fn sensor_noise(n: &NoiseSpec) -> SensorNoise<f64> {

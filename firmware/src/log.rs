@@ -103,6 +103,15 @@ pub fn gnss(fixes: u32, run: &RunConfig, filter_cap: usize) {
         a.scale_factors,
         a.zero_motion
     );
+    if let Some(s) = a.gnss_correlated_sigma_ned_m {
+        defmt::info!(
+            "GNSS correlated error: 1-sigma {=f64} {=f64} {=f64} m (north, east, down), correlation time {=f64} s",
+            s[0],
+            s[1],
+            s[2],
+            a.gnss_correlated_time_s
+        );
+    }
 }
 
 /// Logs the filter's final report and the fixes' counts (the lines `nav replay --gnss`

@@ -326,3 +326,91 @@ fn bad_fixes_are_counted_and_bad_files_refused() {
         assert!(!d.join("x.csv").exists());
     }
 }
+
+/// A code receiver's time-correlated error declared on the navigator's aided phase (after the
+/// alignment, as the firmware runs it): the options' words through nav-core's
+/// `RunConfig::set` (the firmware's argument parser and `nav config`'s text) give the
+/// configuration `nav replay --gnss-correlated` runs with, the same log to the byte; the
+/// filter carries the error (its position 1-sigma wider than with the fixes taken as white)
+/// and every row stays within it.
+#[test]
+fn a_declared_gnss_correlated_error_runs_after_the_alignment() {
+    use host_tests::gnss_sim::CorrelatedError;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sim = drive(60.0);
+    let lever = [0.8, -0.3, -1.1];
+    let gnss = GnssSimOptions {
+        rate_hz: 1.0,
+        sigma_ned_m: [0.5, 0.5, 1.0],
+        sigma_v_ned_m_s: Some([0.05, 0.05, 0.1]),
+        lever_arm_b_m: lever,
+        correlated: Some(CorrelatedError {
+            sigma_ned_m: [1.5, 1.5, 3.0],
+            time_s: 60.0,
+        }),
+        seed: 3,
+        ..GnssSimOptions::default()
+    };
+    write_inputs(d, &sim, &gnss);
+    // The firmware's words (its `Args::parse` hands every run option to `RunConfig::set`).
+    let mut options = ReplayOptions::new(SITE[0], SITE[1], SITE[2], 15.0);
+    options.run.noise = sensor_noise(&Grade::Fog.noise_spec());
+    for (name, value) in [
+        ("gnss-lever-arm", "0.8,-0.3,-1.1"),
+        ("gnss-correlated-time", "60"),
+        ("gnss-correlated", "1.5,1.5,3"),
+    ] {
+        options.run.set(name, value).unwrap();
+    }
+    assert_eq!(
+        options.run.aiding,
+        Some(AidingConfig {
+            antenna_lever_arm_b_m: lever,
+            gnss_correlated_sigma_ned_m: Some([1.5, 1.5, 3.0]),
+            gnss_correlated_time_s: 60.0,
+            ..AidingConfig::default()
+        })
+    );
+    let run = |options: &ReplayOptions, name: &str| {
+        let out = d.join(name);
+        replay_aided::<f32>(&d.join("imu.bin"), &d.join("gnss.csv"), None, &out, options)
+            .unwrap_or_else(|e| panic!("{e:#}"));
+        std::fs::read_to_string(out).unwrap()
+    };
+    let declared = run(&options, "declared.csv");
+    let o = replay_aligned(
+        d,
+        "gnss.csv",
+        &[
+            "--gnss-lever-arm",
+            "0.8,-0.3,-1.1",
+            "--gnss-correlated",
+            "1.5,1.5,3",
+            "--gnss-correlated-time",
+            "60",
+            "--out",
+            "cli.csv",
+            "--precision",
+            "f32",
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read_to_string(d.join("cli.csv")).unwrap(),
+        declared
+    );
+    // The fixes taken as white: a narrower position 1-sigma in the last row.
+    options.run.aiding = Some(AidingConfig {
+        gnss_correlated_sigma_ned_m: None,
+        ..options.run.aiding.unwrap()
+    });
+    let white = run(&options, "white.csv");
+    let last_sigma_n = |log: &str| rows(log).last().unwrap().values[10];
+    let (with, without) = (last_sigma_n(&declared), last_sigma_n(&white));
+    println!("north 1-sigma at 60 s: declared {with:.3} m, white {without:.3} m");
+    assert!(with > 1.5 * without, "{with} {without}");
+    let (worst, beyond3, n) = consistency(&declared, &sim.truth);
+    println!("declared: {n} rows, worst |error / sigma| {worst:.2?}, beyond 3 sigma: {beyond3}");
+    assert!(worst.iter().all(|z| *z < 5.0), "{worst:?}");
+}

@@ -622,9 +622,9 @@ fn replay_refuses_an_impossible_start() {
         assert!(msg.contains(reason), "{extra:?}: {msg}");
         assert!(!out.exists(), "{extra:?}: a solution file was left");
     }
-    // The navigator's aided phase (after an alignment) takes the fixes' errors as white:
-    // refused by name rather than ignored.
-    let msg = replay_given(&[
+    // The navigator's aided phase (after an alignment, as the firmware runs it) takes the
+    // error too (tests/aided_navigator.rs), checked by the same ranges before any sample.
+    let aligned = [
         "--lat",
         "45",
         "--lon",
@@ -633,11 +633,27 @@ fn replay_refuses_an_impossible_start() {
         "250",
         "--align-seconds",
         "15",
-        "--gnss-correlated",
-        "1,1,2",
-    ]);
-    assert!(msg.contains("--gnss-correlated needs"), "{msg}");
-    assert!(!out.exists(), "a solution file was left");
+    ];
+    for (extra, reason) in [
+        (
+            ["1,1,1e3", "60"],
+            "GNSS aiding: the GNSS correlated-error 1-sigma must be 0 to 100 m per axis",
+        ),
+        (
+            ["1,1,2", "1e6"],
+            "GNSS aiding: the GNSS correlated error's correlation time must be 1 s to 86,400 s",
+        ),
+    ] {
+        let args = [
+            "--gnss-correlated",
+            extra[0],
+            "--gnss-correlated-time",
+            extra[1],
+        ];
+        let msg = replay_given(&[&aligned[..], &args[..]].concat());
+        assert!(msg.contains(reason), "{extra:?}: {msg}");
+        assert!(!out.exists(), "{extra:?}: a solution file was left");
+    }
     // Options of the alignment's run, which a given start does not use, are refused by name
     // rather than ignored.
     for extra in [

@@ -383,6 +383,8 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
                 align-seconds = 300\n\
                 aiding = on\n\
                 gnss-lever-arm = 0.5, 0, -1\n\
+                gnss-correlated = 2, 2, 4 # a code receiver\n\
+                gnss-correlated-time = 90\n\
                 log-every = 40\n\
                 health-every = 400\n";
     let file = d.join("good.txt");
@@ -413,6 +415,13 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
     assert_eq!(
         c.run.aiding.unwrap().antenna_lever_arm_b_m,
         [0.5, 0.0, -1.0]
+    );
+    // The GNSS correlated error, as `nav replay --gnss-correlated 2,2,4
+    // --gnss-correlated-time 90` gives it.
+    let a = c.run.aiding.unwrap();
+    assert_eq!(
+        (a.gnss_correlated_sigma_ned_m, a.gnss_correlated_time_s),
+        (Some([2.0, 2.0, 4.0]), 90.0)
     );
 
     for (name, text, want) in [
@@ -483,6 +492,12 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
             "bias",
             "gyro-bias-rad-s = 1e9\n",
             "bad-bias.txt:1: refused (reason code 8): gyro-bias-rad-s must be 0 or more",
+        ),
+        // The GNSS correlated error beyond the filter's range, named by its line.
+        (
+            "correlated",
+            "aiding = on\ngnss-correlated = 1, 1, 500\n",
+            "bad-correlated.txt:1,2: refused (reason code 9): GNSS aiding: the GNSS correlated-error 1-sigma must be 0 to 100 m per axis",
         ),
     ] {
         let f = d.join(format!("bad-{name}.txt"));

@@ -1441,7 +1441,7 @@ fn firmware_navigates_aided_like_the_harness() {
                 "250",
                 "15",
             ][..],
-            "--gnss-lever-arm and --propagation-rate need --gnss FILE",
+            "--gnss-lever-arm, --propagation-rate, --gnss-correlated and --gnss-correlated-time need --gnss FILE",
         ),
         (
             &[
@@ -1472,4 +1472,95 @@ fn firmware_navigates_aided_like_the_harness() {
             "{args:?}: expected '{expect}' in:\n{log}"
         );
     }
+}
+
+/// A code receiver's time-correlated error declared on the firmware's command line
+/// (`--gnss-correlated N,E,D --gnss-correlated-time S`, nav-core's `RunConfig::set` words):
+/// 25 s of the demo's drive (15 s of static alignment, then 10 s aided by 5 Hz fixes that
+/// carry such an error) give the solution log of `nav replay` with the same options, line for
+/// line: the firmware's parse is the harness's configuration.
+#[test]
+fn firmware_takes_the_gnss_correlated_error_like_the_harness() {
+    use host_tests::gnss_sim::{self, CorrelatedError, GnssSimOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut scenario = Scenario::by_name("land-vehicle").unwrap();
+    for (key, v) in [("lat_deg", 45.0), ("lon_deg", 7.5), ("h_m", 250.0)] {
+        scenario.set(key, v).unwrap();
+    }
+    let mut opts = SimOptions::new(scenario, Grade::Fog);
+    opts.seconds = Some(25.0);
+    opts.seed = 7;
+    let sim = simulate(&opts, |_, _| {}).unwrap();
+    recording_io::write(&d.join("rec.bin"), &sim.recording).unwrap();
+    let gnss = GnssSimOptions {
+        rate_hz: 5.0,
+        sigma_ned_m: [0.5, 0.5, 1.0],
+        lever_arm_b_m: [0.8, -0.3, -1.1],
+        correlated: Some(CorrelatedError {
+            sigma_ned_m: [1.5, 1.5, 2.5],
+            time_s: 60.0,
+        }),
+        seed: 5,
+        ..GnssSimOptions::default()
+    };
+    let fixes = gnss_sim::simulate(&sim.truth, &gnss).unwrap().fixes;
+    host_tests::gnss::write_gnss_csv(&d.join("gnss.csv"), &fixes).unwrap();
+    host_tests::gnss_file::convert(&d.join("gnss.csv"), &d.join("gnss.bin"), None).unwrap();
+    let options = [
+        "--imu-noise",
+        "fog",
+        "--gnss-lever-arm",
+        "0.8,-0.3,-1.1",
+        "--gnss-correlated",
+        "1.5,1.5,2.5",
+        "--gnss-correlated-time",
+        "45",
+    ];
+    let mut args = vec!["--gnss", "gnss.bin"];
+    args.extend_from_slice(&options);
+    args.extend_from_slice(&["rec.bin", "fw.csv", "45", "7.5", "250", "15"]);
+    let (code, log) = run_firmware(d, &args);
+    assert_eq!(code, 0, "firmware exit code {code}; log:\n{log}");
+    assert!(
+        log.contains("GNSS correlated error: 1-sigma 1.5 1.5 2.5 m (north, east, down)"),
+        "{log}"
+    );
+    let mut args = vec![
+        "replay",
+        "--imu",
+        "rec.bin",
+        "--gnss",
+        "gnss.csv",
+        "--out",
+        "host.csv",
+        "--lat",
+        "45",
+        "--lon",
+        "7.5",
+        "--h",
+        "250",
+        "--align-seconds",
+        "15",
+        "--device",
+        "adis16505",
+        "--precision",
+        "f32",
+    ];
+    args.extend_from_slice(&options);
+    let o = nav(d, &args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
+    let host = std::fs::read_to_string(d.join("host.csv")).unwrap();
+    // The aligned row at 15 s, a row every 0.1 s to 25 s, the end record.
+    assert_eq!(host.lines().count(), 1 + 1 + 100 + 1, "{host}");
+    for (i, (a, b)) in fw.lines().zip(host.lines()).enumerate() {
+        assert_eq!(
+            a,
+            b,
+            "line {} differs:\nfirmware: {a}\nhost:     {b}",
+            i + 1
+        );
+    }
+    assert_eq!(fw.lines().count(), host.lines().count());
 }

@@ -145,7 +145,8 @@ pub enum ReasonCode {
     Calibration = 7,
     /// Alignment settings refused (window, rate, site near a pole, noise, lever arm).
     Alignment = 8,
-    /// Aided phase settings refused (propagation interval, antenna lever arm, noise).
+    /// Aided phase settings refused (propagation interval, antenna lever arm, noise, GNSS
+    /// correlated error).
     Aiding = 9,
     /// The mounting is not a rotation.
     Mounting = 10,
@@ -334,8 +335,17 @@ fn check_noise_densities(noise: &SensorNoise<f64>) -> Result<(), ConfigRefusal> 
     )))
 }
 
-/// Payload length of a configuration frame [bytes].
-pub const CONFIG_LEN: usize = 201;
+/// Payload length of a configuration frame [bytes] (201 in protocol version 1, before the
+/// GNSS correlated error).
+pub const CONFIG_LEN: usize = 233;
+
+/// The aiding bits of a configuration frame: aiding on, scale-factor states, stop updates, a
+/// GNSS correlated error declared.
+const AIDING_ON: u8 = 1;
+const SCALE_FACTORS: u8 = 1 << 1;
+const ZERO_MOTION: u8 = 1 << 2;
+const GNSS_CORRELATED: u8 = 1 << 3;
+const AIDING_BITS: u8 = AIDING_ON | SCALE_FACTORS | ZERO_MOTION | GNSS_CORRELATED;
 
 impl DeviceConfig {
     /// Checks the configuration: the white noise densities (above zero, within an IMU's
@@ -423,12 +433,15 @@ impl DeviceConfig {
         w.u8(index_of(&VERTICALS, &m.vertical))?;
         w.u32(r.log_every)?;
         let a = r.aiding.unwrap_or_default();
-        let bits = u8::from(r.aiding.is_some())
-            | u8::from(a.scale_factors) << 1
-            | u8::from(a.zero_motion) << 2;
-        w.u8(bits)?;
+        let flag = |on: bool, bit: u8| if on { bit } else { 0 };
+        w.u8(flag(r.aiding.is_some(), AIDING_ON)
+            | flag(a.scale_factors, SCALE_FACTORS)
+            | flag(a.zero_motion, ZERO_MOTION)
+            | flag(a.gnss_correlated_sigma_ned_m.is_some(), GNSS_CORRELATED))?;
         w.f64s(&a.antenna_lever_arm_b_m)?;
         w.f64(a.propagation_interval_s)?;
+        w.f64s(&a.gnss_correlated_sigma_ned_m.unwrap_or_default())?;
+        w.f64(a.gnss_correlated_time_s)?;
         w.u16(self.rates.raw_every)?;
         w.u16(self.rates.health_every)?;
         w.u16(self.rates.align_progress_every)
@@ -461,11 +474,13 @@ impl DeviceConfig {
         let vertical = field(&VERTICALS, r.u8().ok_or(short)?, "vertical channel")?.1;
         let log_every = r.u32().ok_or(short)?;
         let bits = r.u8().ok_or(short)?;
-        if bits & !0b111 != 0 {
+        if bits & !AIDING_BITS != 0 {
             return Err(ConfigRefusal::Malformed("aiding bits"));
         }
         let antenna_lever_arm_b_m = r.f64s().ok_or(short)?;
         let propagation_interval_s = r.f64().ok_or(short)?;
+        let gnss_correlated_sigma_ned_m: [f64; 3] = r.f64s().ok_or(short)?;
+        let gnss_correlated_time_s = r.f64().ok_or(short)?;
         let rates = OutputRates {
             raw_every: r.u16().ok_or(short)?,
             health_every: r.u16().ok_or(short)?,
@@ -494,11 +509,14 @@ impl DeviceConfig {
         run.mechanization.attitude = attitude;
         run.mechanization.vertical = vertical;
         run.log_every = log_every;
-        run.aiding = (bits & 1 != 0).then_some(AidingConfig {
+        run.aiding = (bits & AIDING_ON != 0).then_some(AidingConfig {
             antenna_lever_arm_b_m,
             propagation_interval_s,
-            scale_factors: bits & 2 != 0,
-            zero_motion: bits & 4 != 0,
+            scale_factors: bits & SCALE_FACTORS != 0,
+            zero_motion: bits & ZERO_MOTION != 0,
+            gnss_correlated_sigma_ned_m: (bits & GNSS_CORRELATED != 0)
+                .then_some(gnss_correlated_sigma_ned_m),
+            gnss_correlated_time_s,
         });
         Ok(Self {
             run,

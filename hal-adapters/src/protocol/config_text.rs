@@ -15,7 +15,7 @@
 //! | `align-seconds` | alignment window [s] |
 //! | `raw-every`, `health-every`, `align-progress-every` | output rates [IMU samples between frames], 0: off |
 //! | `aiding` | `on` or `off` (GNSS-aided phase) |
-//! | `align-method`, `bias-prior`, `lever-arm` (X,Y,Z [m]), `lever-arm-sigma` [m], `base-translation` [m], `log-every` (solution rate, [navigation steps]), `frame`, `attitude`, `vertical`, `gnss-lever-arm` (X,Y,Z [m]), `propagation-rate` [Hz] | as `nav replay`'s options |
+//! | `align-method`, `bias-prior`, `lever-arm` (X,Y,Z [m]), `lever-arm-sigma` [m], `base-translation` [m], `log-every` (solution rate, [navigation steps]), `frame`, `attitude`, `vertical`, `gnss-lever-arm` (X,Y,Z [m]), `propagation-rate` [Hz], `gnss-correlated` (N,E,D 1-sigma [m]), `gnss-correlated-time` [s] | as `nav replay`'s options |
 
 use super::config::{DeviceConfig, ImuModel, sensor_noise};
 use crate::drivers::Mounting;
@@ -192,7 +192,16 @@ pub fn keys_of(
             ],
             true,
         ),
-        R::Run(E::Aiding(_)) => (&["aiding", "gnss-lever-arm", "propagation-rate"], true),
+        R::Run(E::Aiding(_)) => (
+            &[
+                "aiding",
+                "gnss-lever-arm",
+                "propagation-rate",
+                "gnss-correlated",
+                "gnss-correlated-time",
+            ],
+            true,
+        ),
         R::Mounting => (&["mounting"], false),
         R::HealthOff => (&["health-every"], false),
         R::NotThisBoard(_) => (&["imu-model", "imu-rate-hz", "aiding"], false),

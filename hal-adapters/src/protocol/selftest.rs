@@ -76,6 +76,8 @@ pub fn every_message() -> [Message; 10] {
     config
         .apply_line("gnss-lever-arm = 0.1, -0.2, 0.3")
         .unwrap();
+    config.apply_line("gnss-correlated = 1.5, 2, 4").unwrap();
+    config.apply_line("gnss-correlated-time = 90").unwrap();
     config.apply_line("lever-arm = 1,2,3").unwrap();
     config
         .apply_line("mounting = 1,0,0, 0,-1,0, 0,0,-1")
@@ -162,7 +164,7 @@ pub fn every_message() -> [Message; 10] {
 pub type Mutation = fn(&mut DeviceConfig);
 
 /// Changes of the default configuration and the reason each must be refused with.
-pub fn refusal_cases() -> [(Mutation, ReasonCode); 11] {
+pub fn refusal_cases() -> [(Mutation, ReasonCode); 12] {
     [
         (|c| c.run.lat_deg = 91.0, ReasonCode::Latitude),
         (|c| c.run.lon_deg = 400.0, ReasonCode::Longitude),
@@ -176,6 +178,12 @@ pub fn refusal_cases() -> [(Mutation, ReasonCode); 11] {
             |c| {
                 let _ = c.apply_line("propagation-rate = 10");
                 c.run.noise.gyro_bias_rad_s = 0.0;
+            },
+            ReasonCode::Aiding,
+        ),
+        (
+            |c| {
+                let _ = c.apply_line("gnss-correlated = 1, 1, 1000");
             },
             ReasonCode::Aiding,
         ),

@@ -6,7 +6,7 @@ extern crate std;
 use super::config::{ConfigRefusal, DeviceConfig, ReasonCode};
 use super::config_text::{LineError, keys_of};
 use super::decoder::{Decoder, Received, Refusal};
-use super::frame::{CRC, Encoder, MAX_FRAME};
+use super::frame::{CRC, Encoder, MAX_FRAME, VERSION};
 use super::messages::*;
 use nav_core::alignment::machine::AlignMethod;
 use nav_core::navigator::ConfigError;
@@ -118,21 +118,24 @@ fn vec_u8(b: &[u8]) -> Vec<u8> {
 fn refusals_name_their_reason_and_count_their_bytes() {
     let end = [5u8, 0, 0, 0];
     let cases: [(Vec<u8>, Refusal); 7] = [
-        (raw_frame(1, 6, 0, 4, &end, false), Refusal::Crc),
-        (raw_frame(2, 6, 0, 4, &end, true), Refusal::Version(2)),
+        (raw_frame(VERSION, 6, 0, 4, &end, false), Refusal::Crc),
         (
-            raw_frame(1, 0x7f, 0, 4, &end, true),
+            raw_frame(VERSION + 1, 6, 0, 4, &end, true),
+            Refusal::Version(VERSION + 1),
+        ),
+        (
+            raw_frame(VERSION, 0x7f, 0, 4, &end, true),
             Refusal::UnknownId(0x7f),
         ),
         (
-            raw_frame(1, 6, 0, 3, &end[..3], true),
+            raw_frame(VERSION, 6, 0, 3, &end[..3], true),
             Refusal::Length {
                 id: MessageId::EndOfRun,
                 len: 3,
             },
         ),
         (
-            raw_frame(1, 0x11, 0, 3, &[0, 0, 99], true),
+            raw_frame(VERSION, 0x11, 0, 3, &[0, 0, 99], true),
             Refusal::Payload(PayloadError::Field("reason code")),
         ),
         (std::vec![1, 1, 1, 0], Refusal::TooShort),
@@ -194,7 +197,7 @@ fn repeated_and_going_back_sequence_numbers_are_out_of_order_not_lost() {
     // End-of-run frames (id 6, 4 bytes) with chosen sequence numbers.
     let frames = |seqs: &[u16]| -> Vec<u8> {
         seqs.iter()
-            .flat_map(|&seq| raw_frame(1, 6, seq, 4, &[5, 0, 0, 0], true))
+            .flat_map(|&seq| raw_frame(VERSION, 6, seq, 4, &[5, 0, 0, 0], true))
             .collect()
     };
     let (out, d) = decode_all(&frames(&[0, 1, 1, 2, 0, 1, 4]));
@@ -477,6 +480,95 @@ fn malformed_config_payloads_are_refused() {
         Message::read_payload(MessageId::Config, &payload[..n]),
         Ok(m)
     );
+}
+
+/// The GNSS correlated error travels in the frame: declared (1-sigma and time) or not (its
+/// time kept all the same), bit for bit; the text keys set it and a refusal of it names
+/// them; an unknown aiding bit is malformed.
+#[test]
+fn the_gnss_correlated_error_round_trips_and_its_keys_are_named() {
+    let mut c = DeviceConfig::default();
+    c.apply_line("gnss-correlated-time = 90").unwrap();
+    c.apply_line("gnss-correlated = 1.5, 2, 4 # a code receiver")
+        .unwrap();
+    let a = c.run.aiding.unwrap();
+    assert_eq!(a.gnss_correlated_sigma_ned_m, Some([1.5, 2.0, 4.0]));
+    assert_eq!(a.gnss_correlated_time_s, 90.0);
+    let mut without = c;
+    without.run.aiding = Some(nav_core::navigator::AidingConfig {
+        gnss_correlated_sigma_ned_m: None,
+        gnss_correlated_time_s: 30.0,
+        ..a
+    });
+    for config in [c, without] {
+        assert_eq!(config.validate(), Ok(()));
+        let m = Message::Config(config);
+        let mut payload = [0u8; 256];
+        let n = m.write_payload(&mut payload).unwrap();
+        assert_eq!(n, super::config::CONFIG_LEN);
+        assert_eq!(
+            Message::read_payload(MessageId::Config, &payload[..n]),
+            Ok(m)
+        );
+    }
+    let mut bad = c;
+    bad.apply_line("gnss-correlated-time = 0.5").unwrap();
+    let r = bad.validate().unwrap_err();
+    assert_eq!(r.code(), ReasonCode::Aiding, "{r}");
+    assert!(
+        std::format!("{r}").contains("correlation time must be 1 s to 86,400 s"),
+        "{r}"
+    );
+    assert!(keys_of(&r).any(|k| k == "gnss-correlated-time"));
+    assert!(keys_of(&r).any(|k| k == "gnss-correlated"));
+    assert!(matches!(
+        c.apply_line("gnss-correlated = 1, 2"),
+        Err(LineError::Option(_))
+    ));
+    // The aiding bits' byte (after the solution rate): bit 4 is no flag.
+    let m = Message::Config(c);
+    let mut payload = [0u8; 256];
+    let n = m.write_payload(&mut payload).unwrap();
+    payload[162] |= 1 << 4;
+    assert_eq!(
+        Message::read_payload(MessageId::Config, &payload[..n]),
+        Err(PayloadError::Field("aiding bits"))
+    );
+}
+
+/// A configuration frame of protocol version 1 (201 bytes, without the GNSS correlated
+/// error) is refused by its version, with a message naming both versions, not misread; its
+/// old length under the new version is refused by length.
+#[test]
+fn a_version_1_config_frame_is_refused_by_its_version() {
+    let m = Message::Config(DeviceConfig::default());
+    let mut payload = [0u8; 256];
+    let n = m.write_payload(&mut payload).unwrap();
+    // Version 1's layout: the same fields without the correlated error's 32 bytes at 195.
+    let old: Vec<u8> = [&payload[..195], &payload[227..n]].concat();
+    assert_eq!(old.len(), 201);
+    for (version, want) in [
+        (1, Refusal::Version(1)),
+        (
+            VERSION,
+            Refusal::Length {
+                id: MessageId::Config,
+                len: 201,
+            },
+        ),
+    ] {
+        let mut d = Decoder::new();
+        let mut out = Vec::new();
+        d.push_config(&raw_frame(version, 0x10, 0, 201, &old, true), |r| {
+            out.push(r)
+        });
+        assert_eq!(out, std::vec![Err(want)]);
+    }
+    assert_eq!(
+        std::format!("{}", Refusal::Version(1)),
+        std::format!("unknown protocol version 1 (this is {VERSION})")
+    );
+    assert_eq!(VERSION, 2);
 }
 
 mod properties {

@@ -409,8 +409,8 @@ struct ReplayArgs {
     gnss_sigma: GnssSigmaArgs,
     /// The receiver's time-correlated position error (multipath, atmosphere), 1-sigma north,
     /// east, down [m]: a Gauss–Markov error the filter carries as a consider state of the
-    /// position fixes (a code receiver's is metres; leave it out for RTK). Needs a given
-    /// (--init-pos) or in-motion start.
+    /// position fixes (a code receiver's is metres; leave it out for RTK). Any start: given,
+    /// in motion or after the alignment (the firmware's `--gnss` run takes the same option).
     #[arg(long, value_name = "N,E,D", requires = "gnss", allow_hyphen_values = true, value_parser = parse_vector3)]
     gnss_correlated: Option<[f64; 3]>,
     /// Correlation time of --gnss-correlated [s].
@@ -418,7 +418,7 @@ struct ReplayArgs {
         long,
         value_name = "S",
         requires = "gnss_correlated",
-        default_value_t = 60.0
+        default_value_t = nav_core::navigator::config::DEFAULT_GNSS_CORRELATION_TIME_S
     )]
     gnss_correlated_time: f64,
     /// Initial position of the IMU: latitude, longitude [deg], height [m] (KF-GINS's initpos).
@@ -970,17 +970,13 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
         _ => {
             // From the navigator's alignment (the firmware's `--gnss` run): the run
             // configuration of a plain replay, with the aided phase after the alignment.
-            anyhow::ensure!(
-                a.gnss_correlated.is_none(),
-                "--gnss-correlated needs --init-pos/--init-vel/--init-att or --start-in-motion \
-                 (the navigator's aided phase after an alignment, as the firmware runs it, takes \
-                 the fixes' errors as white)"
-            );
             let mut options = a.options()?;
             options.run.aiding = Some(nav_core::navigator::AidingConfig {
                 antenna_lever_arm_b_m: a.gnss_lever_arm.unwrap_or([0.0; 3]),
                 propagation_interval_s: 1.0 / a.propagation_rate,
                 scale_factors: !a.no_scale_factors,
+                gnss_correlated_sigma_ned_m: a.gnss_correlated,
+                gnss_correlated_time_s: a.gnss_correlated_time,
                 ..nav_core::navigator::AidingConfig::default()
             });
             return host_tests::replay::replay_aided_cli(

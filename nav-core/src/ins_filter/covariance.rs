@@ -81,11 +81,12 @@ impl<T: Scalar> Transition<T> {
     }
 
     /// `Phi m` for a matrix `m` of `N` rows (the consider states' cross-covariance,
-    /// [`super::consider`]): the navigation rows full, the sensor rows scaled by their decay.
-    pub fn times<const C: usize>(&self, m: &SMatrix<T, N, C>) -> SMatrix<T, N, C> {
+    /// [`super::consider`]): the navigation rows full, the sensor rows scaled by their decay;
+    /// of its first `cols` columns only (the others zero).
+    pub fn times<const C: usize>(&self, m: &SMatrix<T, N, C>, cols: usize) -> SMatrix<T, N, C> {
         let mut out = SMatrix::<T, N, C>::zeros();
         let phi_rows = columns(&self.nav_rows_t);
-        for c in 0..C {
+        for c in 0..cols.min(C) {
             for (i, phi_i) in phi_rows.iter().enumerate() {
                 let mut v = T::zero();
                 for (k, &phi_ik) in phi_i.iter().enumerate() {
@@ -263,7 +264,7 @@ mod tests {
                 let dense = dense_phi * p * dense_phi.transpose()
                     + (dense_phi * qm * dense_phi.transpose() + qm) * (dt / 2.0);
                 let m = Covariance::<f64>::from_fn(|i, j| ((i * 3 + j) as f64).cos());
-                assert!((phi.times(&m) - dense_phi * m).amax() < 1e-14);
+                assert!((phi.times(&m, N) - dense_phi * m).amax() < 1e-14);
                 propagate(&mut p, &phi, &q, dt);
                 let err = (p - dense).amax();
                 assert!(err < 1e-14 * dense.amax(), "{err}");

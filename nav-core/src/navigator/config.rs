@@ -8,7 +8,8 @@
 use crate::alignment::machine::DEFAULT_LEVER_ARM_SIGMA_M;
 use crate::alignment::{AlignMethod, BaseMotion, LeverArm, SensorNoise, SettingsError};
 use crate::calibration::{CalibrationError, ImuCalibration};
-use crate::ins_filter::limits::{MAX_ACCEL_BIAS_MPS2, MAX_GYRO_BIAS_RAD_S};
+use crate::ins_filter::GnssCorrelatedError;
+use crate::ins_filter::limits::{self, MAX_ACCEL_BIAS_MPS2, MAX_GYRO_BIAS_RAD_S};
 use crate::ins_filter::model::FilterNoise;
 use crate::number::Number;
 use crate::poisson::DcmIntegrator;
@@ -101,6 +102,9 @@ pub const DEFAULT_CROSS_COUPLING_RAD: f64 = 1.745e-3;
 pub const DEFAULT_G_SENSITIVITY: f64 = 1.78e-5;
 /// Default covariance propagation interval of the aided phase [s] (10 Hz).
 pub const DEFAULT_PROPAGATION_INTERVAL_S: f64 = 0.1;
+/// Default correlation time of the GNSS receiver's correlated position error [s] (a minute:
+/// a code receiver's multipath and atmosphere change over tens of seconds to minutes).
+pub const DEFAULT_GNSS_CORRELATION_TIME_S: f64 = 60.0;
 
 /// The GNSS-aided navigation after the alignment: the closed-loop error-state filter
 /// ([`crate::ins_filter`]) started from the alignment's outcome. Its noise model is the run's
@@ -115,16 +119,43 @@ pub struct AidingConfig {
     pub scale_factors: bool,
     /// Zero-velocity and zero-rate updates at stops (the IMU-only stop detector).
     pub zero_motion: bool,
+    /// The GNSS receiver's time-correlated position error (multipath, atmosphere), steady-state
+    /// 1-sigma north, east, down [m]: a Gauss–Markov error the filter carries as a consider
+    /// state of the position fixes ([`crate::ins_filter::consider`]; `None`: the fixes' errors
+    /// are white, as an RTK receiver's nearly are).
+    pub gnss_correlated_sigma_ned_m: Option<[f64; 3]>,
+    /// Correlation time of that error [s] (within [`limits::GNSS_ERROR_TIME_S`]; checked
+    /// even without the error, as every value carried).
+    pub gnss_correlated_time_s: f64,
 }
 
 impl Default for AidingConfig {
-    /// No lever arm, [`DEFAULT_PROPAGATION_INTERVAL_S`], scale factors and stop updates on.
+    /// No lever arm, [`DEFAULT_PROPAGATION_INTERVAL_S`], scale factors and stop updates on, no
+    /// GNSS correlated error (its time [`DEFAULT_GNSS_CORRELATION_TIME_S`]).
     fn default() -> Self {
         Self {
             antenna_lever_arm_b_m: [0.0; 3],
             propagation_interval_s: DEFAULT_PROPAGATION_INTERVAL_S,
             scale_factors: true,
             zero_motion: true,
+            gnss_correlated_sigma_ned_m: None,
+            gnss_correlated_time_s: DEFAULT_GNSS_CORRELATION_TIME_S,
+        }
+    }
+}
+
+impl AidingConfig {
+    /// The filter's GNSS correlated error in precision `T` (`None` when none is declared).
+    pub fn gnss_correlated_error<T: Scalar>(&self) -> Option<GnssCorrelatedError<T>> {
+        self.gnss_correlated_sigma_ned_m
+            .map(|sigma| self.correlated_error_of(sigma))
+    }
+
+    /// The correlated error of 1-sigma `sigma_ned_m` [m] and this correlation time.
+    fn correlated_error_of<T: Scalar>(&self, sigma_ned_m: [f64; 3]) -> GnssCorrelatedError<T> {
+        GnssCorrelatedError {
+            sigma_ned_m: sigma_ned_m.map(T::c).into(),
+            correlation_time_s: T::c(self.gnss_correlated_time_s),
         }
     }
 }
@@ -259,6 +290,12 @@ impl RunConfig {
                     "the GNSS antenna lever arm must be finite and within 100 m",
                 ));
             }
+            // The filter's own ranges (its refusal's text), the time also without an error.
+            let declared =
+                a.correlated_error_of::<f64>(a.gnss_correlated_sigma_ned_m.unwrap_or_default());
+            if let Some(why) = limits::gnss_error_out_of_range(&declared) {
+                return Err(ConfigError::Aiding(why));
+            }
             let n = &self.noise;
             let figures = [
                 n.arw_rad_per_sqrt_s,
@@ -298,8 +335,11 @@ impl RunConfig {
     /// `bias-prior K`, `lever-arm X,Y,Z` (known, body FRD [m]), `lever-arm-sigma S` (unknown,
     /// [m] per axis), `log-every N`, `frame NAME`, `attitude NAME`, `vertical NAME`, and for
     /// the aided phase (which they switch on, [`Self::aiding`]) `gnss-lever-arm X,Y,Z` (body
-    /// FRD [m]) and `propagation-rate HZ`. The values are checked by [`Self::validate`] and
-    /// [`Setup::new`](super::Setup::new), not here, beyond their syntax.
+    /// FRD [m]), `propagation-rate HZ`, `gnss-correlated N,E,D` (the receiver's correlated
+    /// error's 1-sigma [m], [`AidingConfig::gnss_correlated_sigma_ned_m`]) and
+    /// `gnss-correlated-time S` (its correlation time [s]). The values are checked by
+    /// [`Self::validate`] and [`Setup::new`](super::Setup::new), not here, beyond their
+    /// syntax.
     pub fn set(&mut self, name: &str, value: &str) -> Result<(), OptionError> {
         let bad = |option: &'static str, expected: &'static str| OptionError::Invalid {
             option,
@@ -366,6 +406,19 @@ impl RunConfig {
                 self.aiding
                     .get_or_insert_with(AidingConfig::default)
                     .propagation_interval_s = 1.0 / hz;
+            }
+            "gnss-correlated" => {
+                let sigma =
+                    parse_vector3(value).ok_or(bad("gnss-correlated", "N,E,D (three numbers)"))?;
+                self.aiding
+                    .get_or_insert_with(AidingConfig::default)
+                    .gnss_correlated_sigma_ned_m = Some(sigma);
+            }
+            "gnss-correlated-time" => {
+                let tau = number("gnss-correlated-time", value)?;
+                self.aiding
+                    .get_or_insert_with(AidingConfig::default)
+                    .gnss_correlated_time_s = tau;
             }
             _ => return Err(OptionError::Unknown),
         }
@@ -553,6 +606,33 @@ mod tests {
                 ..AidingConfig::default()
             })
         );
+        // The correlated error's time before or after its 1-sigma: the same.
+        for order in [
+            [
+                ("gnss-correlated", "1,1.5,-0"),
+                ("gnss-correlated-time", "90"),
+            ],
+            [
+                ("gnss-correlated-time", "90"),
+                ("gnss-correlated", "1,1.5,-0"),
+            ],
+        ] {
+            let mut d = config();
+            for (name, value) in order {
+                d.set(name, value).unwrap();
+            }
+            let a = d.aiding.unwrap();
+            assert_eq!(a.gnss_correlated_sigma_ned_m, Some([1.0, 1.5, 0.0]));
+            assert_eq!(a.gnss_correlated_time_s, 90.0);
+            assert_eq!(
+                a.gnss_correlated_error::<f32>(),
+                Some(GnssCorrelatedError {
+                    sigma_ned_m: nalgebra::Vector3::new(1.0, 1.5, 0.0),
+                    correlation_time_s: 90.0,
+                })
+            );
+        }
+        assert_eq!(AidingConfig::default().gnss_correlated_error::<f64>(), None);
         c.set("lever-arm-sigma", "2.5").unwrap();
         assert_eq!(c.lever_arm, LeverArm::Unknown { sigma_m: 2.5 });
         // The bias prior scales the biases only.
@@ -573,6 +653,10 @@ mod tests {
             ("attitude", "rk5"),
             ("vertical", "aided"),
             ("gnss-lever-arm", "1,2"),
+            ("gnss-correlated", "1,2"),
+            ("gnss-correlated", "1,2,nan"),
+            ("gnss-correlated-time", "x"),
+            ("gnss-correlated-time", "inf"),
             ("propagation-rate", "0.5"),
             ("propagation-rate", "x"),
         ] {
@@ -663,6 +747,12 @@ mod tests {
             ..config()
         };
         assert_eq!(aided(AidingConfig::default()).validate(), Ok(()));
+        let declared = AidingConfig {
+            gnss_correlated_sigma_ned_m: Some([2.0, 2.0, 4.0]),
+            gnss_correlated_time_s: 1.0,
+            ..AidingConfig::default()
+        };
+        assert_eq!(aided(declared).validate(), Ok(()));
         for (c, msg) in [
             (
                 aided(AidingConfig {
@@ -684,6 +774,37 @@ mod tests {
                     ..AidingConfig::default()
                 }),
                 "GNSS aiding: the GNSS antenna lever arm must be finite and within 100 m",
+            ),
+            // The filter's own ranges, refused before any sample.
+            (
+                aided(AidingConfig {
+                    gnss_correlated_sigma_ned_m: Some([1.0, -1.0, 1.0]),
+                    ..AidingConfig::default()
+                }),
+                "GNSS aiding: the GNSS correlated-error 1-sigma must be 0 to 100 m per axis",
+            ),
+            (
+                aided(AidingConfig {
+                    gnss_correlated_sigma_ned_m: Some([1.0, 1.0, 1e3]),
+                    ..AidingConfig::default()
+                }),
+                "GNSS aiding: the GNSS correlated-error 1-sigma must be 0 to 100 m per axis",
+            ),
+            (
+                aided(AidingConfig {
+                    gnss_correlated_sigma_ned_m: Some([1.0, 1.0, 2.0]),
+                    gnss_correlated_time_s: 0.5,
+                    ..AidingConfig::default()
+                }),
+                "GNSS aiding: the GNSS correlated error's correlation time must be 1 s to 86,400 s",
+            ),
+            // A time out of range is refused without the error too (every value carried is).
+            (
+                aided(AidingConfig {
+                    gnss_correlated_time_s: f64::NAN,
+                    ..AidingConfig::default()
+                }),
+                "GNSS aiding: the GNSS correlated error's correlation time must be 1 s to 86,400 s",
             ),
             (
                 RunConfig {

@@ -74,6 +74,7 @@ impl<T: Scalar> Setup<T> {
             f.scale_factors = a.scale_factors;
             f.propagation_interval_s = T::c(a.propagation_interval_s);
             f.antenna_lever_arm_b_m = Vector3::from(a.antenna_lever_arm_b_m.map(T::c));
+            f.gnss_correlated_error = a.gnss_correlated_error();
             f.zero_motion = a.zero_motion.then(ZeroMotionConfig::default);
             f.mechanization = MechanizationConfig {
                 frame: NavFrame::Ned,

@@ -842,3 +842,39 @@ fn an_aided_run_refuses_bad_settings_and_an_unstartable_filter() {
     assert_eq!(nav.push(&still(1).next().unwrap()), Step::NotReady);
     assert_eq!(nav.finish().unwrap_err(), e);
 }
+
+/// A declared GNSS correlated error reaches the aided phase's filter, in the run's precision;
+/// without one, the filter has none; out of its range, the run is refused with the filter's
+/// reason.
+#[test]
+fn the_gnss_correlated_error_reaches_the_filter() {
+    let filter_error = |a: AidingConfig| {
+        let c = RunConfig {
+            aiding: Some(a),
+            ..config(10.0, 40)
+        };
+        Setup::<f32>::new(&c, RATE_HZ).map(|s| s.filter.unwrap().gnss_correlated_error)
+    };
+    assert_eq!(filter_error(AidingConfig::default()), Ok(None));
+    let declared = AidingConfig {
+        gnss_correlated_sigma_ned_m: Some([2.0, 2.5, 4.0]),
+        gnss_correlated_time_s: 90.0,
+        ..AidingConfig::default()
+    };
+    assert_eq!(
+        filter_error(declared),
+        Ok(Some(crate::ins_filter::GnssCorrelatedError {
+            sigma_ned_m: Vector3::new(2.0, 2.5, 4.0),
+            correlation_time_s: 90.0,
+        }))
+    );
+    let e = filter_error(AidingConfig {
+        gnss_correlated_time_s: 1e9,
+        ..declared
+    })
+    .unwrap_err();
+    assert!(
+        e.to_string().contains("correlation time must be 1 s"),
+        "{e}"
+    );
+}
