@@ -238,7 +238,12 @@ mod tests {
             assert!(msg.contains(&path.display().to_string()), "{msg}");
             assert!(AtomicFile::create(path).is_err());
         }
-        assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+        assert!(
+            std::fs::symlink_metadata(&fifo)
+                .unwrap()
+                .file_type()
+                .is_fifo()
+        );
         assert!(sub.is_dir());
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
     }

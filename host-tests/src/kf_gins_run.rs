@@ -151,7 +151,7 @@ impl AidedSink<f64> for NavRows {
 pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
     let (c, warnings) = kf_gins_config::load(config_path)?;
     let out = out.map_or_else(|| c.output_dir.join(KF_GINS_NAV_NAME), Path::to_path_buf);
-    crate::atomic::refuse_same_file(&[&c.imu_path, &c.gnss_path], &out)?;
+    crate::atomic::refuse_same_file(&[config_path, &c.imu_path, &c.gnss_path], &out)?;
     // Before the run, not after it: the folder the trajectory goes to.
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty())
         && !dir.is_dir()

@@ -395,3 +395,79 @@ fn align_bench_window_reads_as_typed() {
         &["alignment windows must be within (0, 300] s, not 1e300"],
     );
 }
+
+/// A KF-GINS configuration whose files need not exist: refusals of `nav kf-gins` that come
+/// before it opens them.
+const KF_GINS_CONFIG: &str = "imupath: imu.txt
+gnsspath: gnss.txt
+outputpath: .
+imudatalen: 7
+imudatarate: 200
+starttime: 0
+endtime: -1
+initpos: [45.0, 7.5, 250.0]
+initvel: [0.0, 0.0, 0.0]
+initatt: [0.0, 0.0, 0.0]
+initgyrbias: [0, 0, 0]
+initaccbias: [0, 0, 0]
+initgyrscale: [0, 0, 0]
+initaccscale: [0, 0, 0]
+initposstd: [0.1, 0.1, 0.2]
+initvelstd: [0.05, 0.05, 0.05]
+initattstd: [0.5, 0.5, 1.0]
+imunoise:
+  arw: [0.24, 0.24, 0.24]
+  vrw: [0.24, 0.24, 0.24]
+  gbstd: [50.0, 50.0, 50.0]
+  abstd: [250.0, 250.0, 250.0]
+  gsstd: [1000.0, 1000.0, 1000.0]
+  asstd: [1000.0, 1000.0, 1000.0]
+  corrtime: 1.0
+antlever: [0.0, 0.0, 0.0]
+";
+
+/// Inputs given as the output were overwritten: `kf-gins ok.yaml --out ok.yaml` the
+/// configuration, `emulate --errors E --out E` (or `--errors-out E`) the error file,
+/// `replay --calibration C --out C` the calibration. Refused now, the file untouched.
+#[test]
+fn configuration_inputs_are_not_overwritten_by_the_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (config, errors, truth, calibration) = (
+        path("ok.yaml"),
+        path("err.txt"),
+        path("tr.csv"),
+        path("cal.txt"),
+    );
+    std::fs::write(&config, KF_GINS_CONFIG).unwrap();
+    std::fs::write(&errors, "gyro-bias-deg-h = 0.01 0.01 0.01\n").unwrap();
+    std::fs::write(&truth, "t_s\n").unwrap();
+    std::fs::write(&calibration, "calibration\n").unwrap();
+    let unchanged = || {
+        assert_eq!(std::fs::read_to_string(&config).unwrap(), KF_GINS_CONFIG);
+        assert_eq!(
+            std::fs::read_to_string(&errors).unwrap(),
+            "gyro-bias-deg-h = 0.01 0.01 0.01\n"
+        );
+        assert_eq!(
+            std::fs::read_to_string(&calibration).unwrap(),
+            "calibration\n"
+        );
+    };
+    refused(&["kf-gins", &config, "--out", &config], &["is the input"]);
+    unchanged();
+    for out in ["--out", "--errors-out"] {
+        let other = path("displayed.csv");
+        let mut args = vec!["emulate", "--truth", &truth, "--errors", &errors];
+        args.extend([out, &errors]);
+        if out == "--errors-out" {
+            args.extend(["--out", &other]);
+        }
+        refused(&args, &["is the input", "err.txt"]);
+        unchanged();
+    }
+    let imu = path("imu.bin");
+    let args = replay_args(&imu, &calibration, &["--calibration", &calibration]);
+    refused(&args, &["is the input", "cal.txt"]);
+    unchanged();
+}
