@@ -407,4 +407,42 @@ mod tests {
         assert!(implausible(&sigma, None).is_some());
         assert!(implausible(&Row::Free(at(1)), Some(at(0).t_us)).is_none());
     }
+
+    /// Times of 2^63 us and more printed as negative (an i64 on the way): `u64::MAX` us was
+    /// `-0.000001`, and 2^63 - 1000 then 2^63 + 1000 us read as going back. Both in order now,
+    /// and a time after the later one's is still refused as going back.
+    #[test]
+    fn times_beyond_i64_print_unsigned_and_in_order() {
+        let at = |t_us: u64| solution(Row::Free(Solution { t_us, ..S }));
+        let half = 1_u64 << 63;
+        let messages = [
+            at(half - 1000),
+            at(half + 1000),
+            at(u64::MAX),
+            at(half),
+            Message::EndOfRun(EndOfRun { rows: 3 }),
+        ];
+        let mut out = Vec::new();
+        let s = decode(&mut frames(&messages).as_slice(), &mut out).unwrap();
+        assert_eq!((s.rows, s.implausible), (3, 1));
+        let text = String::from_utf8(out).unwrap();
+        let times: Vec<&str> = text
+            .lines()
+            .skip(1)
+            .filter_map(|l| l.split(',').next())
+            .collect();
+        assert_eq!(
+            times,
+            [
+                "9223372036854.774808",
+                "9223372036854.776808",
+                "18446744073709.551615"
+            ],
+            "{text}"
+        );
+        assert!(
+            s.to_string().contains("not after the previous row's"),
+            "{s}"
+        );
+    }
 }
