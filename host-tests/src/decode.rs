@@ -4,8 +4,9 @@
 //!
 //! The log ends with its end record only when the stream's end-of-run frame came and its row
 //! count equals the rows decoded: a stream cut short, or one that lost solution frames, gives
-//! a log without it (incomplete, as the project's logs say). The CSV is written atomically
-//! ([`crate::atomic`]). What the decoder skipped and refused, and the frames by type, are
+//! a log without it (incomplete, as the project's logs say). A stream without a solution row
+//! to write is refused, with its counts. The CSV is written atomically ([`crate::atomic`]):
+//! nothing is left at the output path when the decoding fails. What the decoder skipped and refused, and the frames by type, are
 //! reported ([`DecodeSummary`]'s `Display`).
 
 use crate::aided_cmd::MAX_START_SPEED_M_S;
@@ -212,7 +213,8 @@ pub fn decode_file(stream: &Path, out: &Path) -> Result<DecodeSummary> {
 }
 
 /// Decodes `input` and writes the solution CSV to `out` (module docs). Refuses a stream with
-/// no frame at all, and one that mixes free-inertial and aided rows.
+/// no frame at all, one with no solution row (none sent, or every one refused), and one that
+/// mixes free-inertial and aided rows.
 pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSummary> {
     let mut decoder = Decoder::new();
     let mut summary = DecodeSummary::default();
@@ -300,8 +302,14 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
             summary.stats.crc_failures
         );
     }
-    if aided.is_none() {
-        writeln!(out, "{CSV_HEADER}")?;
+    // A header-only CSV would read as a run that logged nothing.
+    if summary.rows == 0 {
+        bail!(
+            "no solution frame decoded ({} solution frames in the stream, {} refused for their \
+             content): nothing written\n{summary}",
+            summary.stats.frames[MessageId::NavSolution.index()],
+            summary.implausible
+        );
     }
     if summary.complete() {
         writeln!(out, "{}", EndRecord { rows: summary.rows })?;
@@ -365,7 +373,7 @@ mod tests {
     };
 
     #[test]
-    fn mixed_rows_are_refused_and_a_stream_without_rows_has_a_header_only() {
+    fn mixed_rows_are_refused() {
         let later = Solution {
             t_us: S.t_us + 2500,
             ..S
@@ -382,15 +390,39 @@ mod tests {
         let bytes = frames(&[solution(Row::Free(S)), solution(aided)]);
         let e = decode(&mut bytes.as_slice(), &mut Vec::new()).unwrap_err();
         assert!(e.to_string().contains("free-inertial and aided"), "{e}");
+    }
 
-        let bytes = frames(&[Message::EndOfRun(EndOfRun { rows: 0 })]);
-        let mut out = Vec::new();
-        let s = decode(&mut bytes.as_slice(), &mut out).unwrap();
-        assert!(s.complete());
-        assert_eq!(
-            String::from_utf8(out).unwrap(),
-            format!("{CSV_HEADER}\n# end: 0 rows, ok\n")
-        );
+    /// A stream with only an end-of-run frame (or a configuration frame), or whose every
+    /// solution frame was refused, gave a header-only CSV and status 0: refused now, with the
+    /// counts, and no file left at the output path.
+    #[test]
+    fn a_stream_without_a_solution_row_is_refused_and_writes_nothing() {
+        let end = Message::EndOfRun(EndOfRun { rows: 0 });
+        let nan = solution(Row::Free(Solution { h_m: f64::NAN, ..S }));
+        for (messages, expected) in [
+            (
+                vec![end.clone()],
+                "(0 solution frames in the stream, 0 refused",
+            ),
+            (
+                vec![nan.clone(), nan, end],
+                "(2 solution frames in the stream, 2 refused",
+            ),
+        ] {
+            let e = decode(&mut frames(&messages).as_slice(), &mut Vec::new()).unwrap_err();
+            let msg = format!("{e:#}");
+            assert!(msg.contains("no solution frame decoded"), "{msg}");
+            assert!(msg.contains(expected), "{msg}");
+            assert!(msg.contains("frames by type"), "{msg}");
+
+            let dir = tempfile::tempdir().unwrap();
+            let stream = dir.path().join("run.bin");
+            std::fs::write(&stream, frames(&messages)).unwrap();
+            let out = dir.path().join("run.csv");
+            assert!(decode_file(&stream, &out).is_err());
+            assert!(!out.exists());
+            assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        }
     }
 
     /// Frames whose CRC holds but whose content no navigator writes are refused, counted,
