@@ -13,6 +13,7 @@ use anyhow::{Context, Result, bail};
 use nav_core::attitude::euler;
 use nav_core::ins_filter::model::FilterNoise;
 use nav_core::ins_filter::{ATT, AidedIns, FilterConfig, SensorErrors};
+use nav_core::number::Number;
 use nav_core::{ImuIncrement, Vector3};
 use std::fs::File;
 use std::io::BufReader;
@@ -221,9 +222,10 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
     if intervals > 0 && off_rate * 10 > intervals {
         bail!(
             "imudatarate {} Hz does not match {}: {off_rate} of its {intervals} epoch intervals \
-             differ from {nominal_dt} s by more than half",
-            c.imu_rate_hz,
-            c.imu_path.display()
+             differ from {} s by more than half",
+            Number(c.imu_rate_hz),
+            c.imu_path.display(),
+            Number(nominal_dt)
         );
     }
     let sigma_rms = sink.sigma_rms();

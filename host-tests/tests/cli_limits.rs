@@ -16,16 +16,19 @@ fn refused(args: &[&str], expected: &[&str]) -> String {
     for e in expected {
         assert!(text.contains(e), "nav {args:?}: expected {e:?} in {text}");
     }
-    let longest_digits = text
-        .split(|c: char| !c.is_ascii_digit())
-        .map(str::len)
-        .max()
-        .unwrap_or(0);
     assert!(
-        longest_digits <= 30,
+        longest_digits(&text) <= 30,
         "nav {args:?}: unreadable number in {text}"
     );
     text
+}
+
+/// The most digits in a row in `text`.
+fn longest_digits(text: &str) -> usize {
+    text.split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0)
 }
 
 /// The oscillator's length and frequency: a capacity-overflow panic (1e300) or an allocation
@@ -470,4 +473,63 @@ fn configuration_inputs_are_not_overwritten_by_the_output() {
     let args = replay_args(&imu, &calibration, &["--calibration", &calibration]);
     refused(&args, &["is the input", "cal.txt"]);
     unchanged();
+}
+
+/// Figures of `nav sim`'s receiver and of `nav kf-gins` printed in hundreds of digits:
+/// `--gnss-rate 1e300` ("a 1000... Hz receiver"), `--gnss-lever-arm 1e300,0,0`,
+/// `imudatarate: 1e300`; a 1e300 m spike's line (355 characters) of a run that succeeds.
+#[test]
+fn receiver_and_kf_gins_figures_read_as_typed() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let out = out.to_str().unwrap();
+    let sim = ["sim", "static", "--seconds", "5", "--out", out];
+    let with = |extra: &[&'static str]| [&sim[..], extra].concat();
+    refused(
+        &with(&["--gnss-rate", "1e300"]),
+        &["a 1e300 Hz receiver on truth at 50 Hz"],
+    );
+    refused(
+        &with(&["--gnss-rate", "1", "--gnss-lever-arm", "1e300,0,0"]),
+        &["lever arm 1e300,0,0 m: must be finite and within 100 m"],
+    );
+    let o = nav(&with(&["--gnss-rate", "1", "--gnss-spike", "2,1e300,0,0"]));
+    let text = output_text(&o);
+    assert!(o.status.success(), "{text}");
+    assert!(
+        text.contains("spike #0: N 1.000e300 E 0.000 D 0.000 m"),
+        "{text}"
+    );
+    assert!(longest_digits(&text) <= 30, "{text}");
+
+    let data = host_tests::filter_bench::generate(
+        dir.path(),
+        &host_tests::filter_bench::FilterBenchOptions {
+            seconds: 20.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(&data.config).unwrap();
+    assert!(text.contains("imudatarate: 200\n"), "{text}");
+    let config = dir.path().join("rate.yaml");
+    std::fs::write(
+        &config,
+        text.replace("imudatarate: 200\n", "imudatarate: 1e300\n"),
+    )
+    .unwrap();
+    let nav_out = dir.path().join("rate.nav");
+    refused(
+        &[
+            "kf-gins",
+            config.to_str().unwrap(),
+            "--out",
+            nav_out.to_str().unwrap(),
+        ],
+        &[
+            "imudatarate 1e300 Hz does not match",
+            "differ from 1e-300 s",
+        ],
+    );
+    assert!(!nav_out.exists());
 }
