@@ -533,3 +533,37 @@ fn receiver_and_kf_gins_figures_read_as_typed() {
     );
     assert!(!nav_out.exists());
 }
+
+/// `convert --in imu.bin --out c1.txt` wrote the binary format under a name the readers take
+/// for KF-GINS text (`.imu`: PSINS); refused as `convert --gnss` refuses it, nothing written.
+#[test]
+fn a_binary_recording_under_a_text_name_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = dir.path().join("imu.bin");
+    generated_recording(&imu, "1");
+    for (name, format) in [("c1.txt", "KF-GINS"), ("c1.IMU", "PSINS")] {
+        let out = dir.path().join(name);
+        refused(
+            &[
+                "convert",
+                "--in",
+                imu.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            &[&format!("{format} text file's name"), "name it .bin"],
+        );
+        assert!(!out.exists());
+    }
+    for name in ["c1.bin", "c1.csv", "c1.dat"] {
+        let out = dir.path().join(name);
+        let o = nav(&[
+            "convert",
+            "--in",
+            imu.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", output_text(&o));
+    }
+}
