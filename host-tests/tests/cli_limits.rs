@@ -567,3 +567,34 @@ fn a_binary_recording_under_a_text_name_is_refused() {
         assert!(o.status.success(), "{}", output_text(&o));
     }
 }
+
+/// `--out` at a FIFO or a directory: the rename replaced it (`--out /dev/full` made a regular
+/// file of the device, as root); refused now, naming the path, the FIFO left as it was.
+#[cfg(unix)]
+#[test]
+fn an_output_that_is_not_a_regular_file_is_refused() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe.csv");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let imu = dir.path().join("imu.bin");
+    generated_recording(&imu, "1");
+    let imu = imu.to_str().unwrap();
+    for (out, what) in [(fifo.as_path(), "a FIFO"), (dir.path(), "a directory")] {
+        let out = out.to_str().unwrap();
+        refused(
+            &replay_args(imu, out, &[]),
+            &[out, &format!("is not a regular file ({what})")],
+        );
+        refused(
+            &["convert", "--in", imu, "--out", out],
+            &[&format!("is not a regular file ({what})")],
+        );
+    }
+    let kind = std::fs::symlink_metadata(&fifo).unwrap().file_type();
+    assert!(kind.is_fifo());
+}
