@@ -400,12 +400,9 @@ mod tests {
         let end = Message::EndOfRun(EndOfRun { rows: 0 });
         let nan = solution(Row::Free(Solution { h_m: f64::NAN, ..S }));
         for (messages, expected) in [
+            (vec![end], "(0 solution frames in the stream, 0 refused"),
             (
-                vec![end.clone()],
-                "(0 solution frames in the stream, 0 refused",
-            ),
-            (
-                vec![nan.clone(), nan, end],
+                vec![nan, nan, end],
                 "(2 solution frames in the stream, 2 refused",
             ),
         ] {
