@@ -1,8 +1,15 @@
 //! Outputs written whole or not at all: every file the harness writes goes to a temporary file
 //! in the destination's directory and is renamed into place only when it is complete, so a
 //! failed run leaves nothing at its output path and an existing file there untouched.
+//!
+//! **What may be at the path.** Nothing (a new file, mode 0666 less the umask, as a shell's
+//! `>` makes it), or a regular file (replaced, its permission bits kept). A symbolic link is
+//! followed: the link's final target is replaced the same way, so the link still points to the
+//! output and a file elsewhere is not left stale behind it; a link to nothing is refused. A
+//! directory, FIFO, socket or device is refused: renaming a new file over it would replace it
+//! (`--out /dev/full` made a regular file of the device).
 
-use std::fs::File;
+use std::fs::{File, Metadata, Permissions};
 use std::io::{self, BufWriter};
 use std::path::{Path, PathBuf};
 
@@ -31,8 +38,11 @@ pub struct AtomicFile {
 }
 
 impl AtomicFile {
-    /// Starts writing `path`: creates the temporary file beside it.
+    /// Starts writing `path`: creates the temporary file beside it (beside a symbolic link's
+    /// target); refuses a path that holds something other than a regular file (module docs).
     pub fn create(path: &Path) -> io::Result<Self> {
+        let (path, keep) = destination(path)?;
+        let path = path.as_path();
         let dir = match path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
@@ -40,11 +50,20 @@ impl AtomicFile {
         let name = path
             .file_name()
             .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-        let tmp = tempfile::Builder::new()
-            .prefix(&format!(".{name}."))
-            .suffix(".part")
-            .tempfile_in(dir)?;
-        let (file, tmp) = tmp.into_parts();
+        let prefix = format!(".{name}.");
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".part");
+        // open(2) applies the umask; tempfile's own default is 0600.
+        #[cfg(unix)]
+        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+        let (file, tmp) = builder.tempfile_in(dir)?.into_parts();
+        // The replaced file's bits exactly (fchmod, no umask).
+        #[cfg(unix)]
+        if let Some(keep) = keep {
+            file.set_permissions(keep)?;
+        }
+        #[cfg(not(unix))]
+        let _ = keep;
         Ok(Self {
             out: BufWriter::new(file),
             tmp,
@@ -65,6 +84,64 @@ impl AtomicFile {
         drop(file);
         tmp.persist(&path).map_err(|e| e.error)?;
         Ok(())
+    }
+}
+
+/// The file an output at `path` replaces and the permissions to keep (`None`: a new file);
+/// refuses what is not a regular file (module docs).
+fn destination(path: &Path) -> io::Result<(PathBuf, Option<Permissions>)> {
+    let meta = match std::fs::symlink_metadata(path) {
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok((path.to_owned(), None)),
+        other => other?,
+    };
+    let (target, meta) = if meta.file_type().is_symlink() {
+        let target = path.canonicalize().map_err(|e| {
+            io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!(
+                    "output {} is a symbolic link whose target cannot be resolved ({e}): give \
+                     the file's own path",
+                    path.display()
+                ),
+            )
+        })?;
+        let meta = std::fs::metadata(&target)?;
+        (target, meta)
+    } else {
+        (path.to_owned(), meta)
+    };
+    if !meta.is_file() {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "output {} is not a regular file ({}): an output is written to a new file \
+                 renamed over it, which would replace it",
+                path.display(),
+                kind(&meta)
+            ),
+        ));
+    }
+    Ok((target, Some(meta.permissions())))
+}
+
+/// What a file that is not a regular file is, for a message.
+fn kind(meta: &Metadata) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let t = meta.file_type();
+        if t.is_fifo() {
+            return "a FIFO";
+        } else if t.is_socket() {
+            return "a socket";
+        } else if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+    }
+    if meta.is_dir() {
+        "a directory"
+    } else {
+        "not a file"
     }
 }
 
@@ -136,5 +213,89 @@ mod tests {
         assert!(refuse_same_file(&[&input], &other).is_err());
         assert!(refuse_same_file(&[&input], &dir.path().join("new.csv")).is_ok());
         assert_eq!(std::fs::read_to_string(&input).unwrap(), "data");
+    }
+
+    /// `--out` at a FIFO or a directory replaced it with a regular file; now refused before
+    /// anything is opened (the FIFO is never opened: no reader blocks).
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_or_a_directory_at_the_path_is_refused_and_left() {
+        use std::os::unix::fs::FileTypeExt;
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("pipe");
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap();
+        assert!(made.success());
+        let sub = dir.path().join("sub");
+        std::fs::create_dir(&sub).unwrap();
+        for (path, what) in [(&fifo, "(a FIFO)"), (&sub, "(a directory)")] {
+            let e = write(path, |w| w.write_all(b"row\n")).unwrap_err();
+            let msg = e.to_string();
+            assert!(msg.contains("is not a regular file"), "{msg}");
+            assert!(msg.contains(what), "{msg}");
+            assert!(msg.contains(&path.display().to_string()), "{msg}");
+            assert!(AtomicFile::create(path).is_err());
+        }
+        assert!(
+            std::fs::symlink_metadata(&fifo)
+                .unwrap()
+                .file_type()
+                .is_fifo()
+        );
+        assert!(sub.is_dir());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    /// A symbolic link was replaced by a file, its target left stale: the target is written
+    /// now, the link kept; a link to nothing (or to a directory) is refused.
+    #[cfg(unix)]
+    #[test]
+    fn a_symbolic_link_is_followed_to_its_target() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("target.csv");
+        std::fs::write(&target, "old\n").unwrap();
+        let link = dir.path().join("link.csv");
+        std::os::unix::fs::symlink("target.csv", &link).unwrap();
+        write(&link, |w| w.write_all(b"new\n")).unwrap();
+        assert!(std::fs::symlink_metadata(&link).unwrap().is_symlink());
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "new\n");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+
+        let dangling = dir.path().join("dangling.csv");
+        std::os::unix::fs::symlink("missing.csv", &dangling).unwrap();
+        let e = write(&dangling, |w| w.write_all(b"new\n")).unwrap_err();
+        assert!(e.to_string().contains("symbolic link"), "{e}");
+        let to_dir = dir.path().join("to_dir");
+        std::os::unix::fs::symlink(".", &to_dir).unwrap();
+        let e = write(&to_dir, |w| w.write_all(b"new\n")).unwrap_err();
+        assert!(e.to_string().contains("(a directory)"), "{e}");
+        assert!(!dir.path().join("missing.csv").exists());
+    }
+
+    /// Every output was 0600 (tempfile's default) and a replaced 0644 file became 0600: a new
+    /// output now has the mode `File::create` gives (0666 less the umask), a replaced one keeps
+    /// its bits.
+    #[cfg(unix)]
+    #[test]
+    fn new_outputs_get_the_usual_mode_and_replaced_ones_keep_theirs() {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o7777;
+        let dir = tempfile::tempdir().unwrap();
+        let plain = dir.path().join("plain");
+        File::create(&plain).unwrap();
+        let new = dir.path().join("new.csv");
+        write(&new, |w| w.write_all(b"row\n")).unwrap();
+        assert_eq!(mode(&new), mode(&plain));
+        for bits in [0o644, 0o640, 0o666, 0o604] {
+            std::fs::set_permissions(&new, Permissions::from_mode(bits)).unwrap();
+            write(&new, |w| w.write_all(b"row\n")).unwrap();
+            assert_eq!(mode(&new), bits, "{bits:o}");
+            let mut f = AtomicFile::create(&new).unwrap();
+            f.writer().write_all(b"row\n").unwrap();
+            f.commit().unwrap();
+            assert_eq!(mode(&new), bits, "{bits:o}");
+        }
     }
 }

@@ -4,14 +4,18 @@
 //!
 //! The log ends with its end record only when the stream's end-of-run frame came and its row
 //! count equals the rows decoded: a stream cut short, or one that lost solution frames, gives
-//! a log without it (incomplete, as the project's logs say). The CSV is written atomically
-//! ([`crate::atomic`]). What the decoder skipped and refused, and the frames by type, are
+//! a log without it (incomplete, as the project's logs say). A stream without a solution row
+//! to write is refused, with its counts. The CSV is written atomically ([`crate::atomic`]):
+//! nothing is left at the output path when the decoding fails. What the decoder skipped and refused, and the frames by type, are
 //! reported ([`DecodeSummary`]'s `Display`).
 
+use crate::aided_cmd::MAX_START_SPEED_M_S;
 use crate::atomic::AtomicFile;
 use anyhow::{Context, Result, bail};
 use hal_adapters::protocol::messages::EndOfRun;
 use hal_adapters::protocol::{DecodeStats, Decoder, Message, MessageId, Refusal};
+use nav_core::navigator::config::{MAX_HEIGHT_M, MIN_HEIGHT_M};
+use nav_core::number::{Number, Rounded};
 use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, EndRecord, Row};
 use std::fmt;
 use std::fs::File;
@@ -52,8 +56,10 @@ pub struct DecodeSummary {
 }
 
 /// Why a solution row that passed its frame's checks is not a navigator's: time not after the
-/// previous row's, latitude or longitude out of range, a value that is not finite, a negative
-/// 1-sigma.
+/// previous row's, latitude or longitude out of range, a value that is not finite, a height
+/// outside the Earth model's range (the site's limits, [`MIN_HEIGHT_M`], [`MAX_HEIGHT_M`]), an
+/// angle beyond its range, a speed beyond the fastest start `nav replay` accepts
+/// ([`MAX_START_SPEED_M_S`]), a negative 1-sigma.
 pub fn implausible(row: &Row, previous_t_us: Option<u64>) -> Option<String> {
     let s = row.solution();
     if let Some(p) = previous_t_us
@@ -73,6 +79,33 @@ pub fn implausible(row: &Row, previous_t_us: Option<u64>) -> Option<String> {
     let values = [s.h_m, s.roll_deg, s.pitch_deg, s.yaw_deg];
     if !values.iter().chain(&s.v_eb_n).all(|x| x.is_finite()) {
         return Some("height, velocity or attitude not finite".into());
+    }
+    if !(MIN_HEIGHT_M..=MAX_HEIGHT_M).contains(&s.h_m) {
+        return Some(format!(
+            "height {} m not within [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m (the Earth model's range)",
+            Number(s.h_m)
+        ));
+    }
+    // Yaw is in (-180, 180] (docs/protocol.md); -180 is let through, as atan2 of a -0 gives it.
+    for (name, angle_deg, limit_deg) in [
+        ("roll", s.roll_deg, 180.0),
+        ("pitch", s.pitch_deg, 90.0),
+        ("yaw", s.yaw_deg, 180.0),
+    ] {
+        if angle_deg.abs() > limit_deg {
+            return Some(format!(
+                "{name} {} deg not within [-{limit_deg}, {limit_deg}]",
+                Number(angle_deg)
+            ));
+        }
+    }
+    let [vn, ve, vd] = s.v_eb_n;
+    let speed_m_s = vn.hypot(ve).hypot(vd);
+    if speed_m_s > MAX_START_SPEED_M_S {
+        return Some(format!(
+            "speed {} m/s beyond {MAX_START_SPEED_M_S} m/s (faster than an orbit)",
+            Rounded(speed_m_s)
+        ));
     }
     if let Row::Aided(_, c) = row {
         let sigmas = c
@@ -180,7 +213,8 @@ pub fn decode_file(stream: &Path, out: &Path) -> Result<DecodeSummary> {
 }
 
 /// Decodes `input` and writes the solution CSV to `out` (module docs). Refuses a stream with
-/// no frame at all, and one that mixes free-inertial and aided rows.
+/// no frame at all, one with no solution row (none sent, or every one refused), and one that
+/// mixes free-inertial and aided rows.
 pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSummary> {
     let mut decoder = Decoder::new();
     let mut summary = DecodeSummary::default();
@@ -268,8 +302,14 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
             summary.stats.crc_failures
         );
     }
-    if aided.is_none() {
-        writeln!(out, "{CSV_HEADER}")?;
+    // A header-only CSV would read as a run that logged nothing.
+    if summary.rows == 0 {
+        bail!(
+            "no solution frame decoded ({} solution frames in the stream, {} refused for their \
+             content): nothing written\n{summary}",
+            summary.stats.frames[MessageId::NavSolution.index()],
+            summary.implausible
+        );
     }
     if summary.complete() {
         writeln!(out, "{}", EndRecord { rows: summary.rows })?;
@@ -333,7 +373,7 @@ mod tests {
     };
 
     #[test]
-    fn mixed_rows_are_refused_and_a_stream_without_rows_has_a_header_only() {
+    fn mixed_rows_are_refused() {
         let later = Solution {
             t_us: S.t_us + 2500,
             ..S
@@ -350,15 +390,36 @@ mod tests {
         let bytes = frames(&[solution(Row::Free(S)), solution(aided)]);
         let e = decode(&mut bytes.as_slice(), &mut Vec::new()).unwrap_err();
         assert!(e.to_string().contains("free-inertial and aided"), "{e}");
+    }
 
-        let bytes = frames(&[Message::EndOfRun(EndOfRun { rows: 0 })]);
-        let mut out = Vec::new();
-        let s = decode(&mut bytes.as_slice(), &mut out).unwrap();
-        assert!(s.complete());
-        assert_eq!(
-            String::from_utf8(out).unwrap(),
-            format!("{CSV_HEADER}\n# end: 0 rows, ok\n")
-        );
+    /// A stream with only an end-of-run frame (or a configuration frame), or whose every
+    /// solution frame was refused, gave a header-only CSV and status 0: refused now, with the
+    /// counts, and no file left at the output path.
+    #[test]
+    fn a_stream_without_a_solution_row_is_refused_and_writes_nothing() {
+        let end = Message::EndOfRun(EndOfRun { rows: 0 });
+        let nan = solution(Row::Free(Solution { h_m: f64::NAN, ..S }));
+        for (messages, expected) in [
+            (vec![end], "(0 solution frames in the stream, 0 refused"),
+            (
+                vec![nan, nan, end],
+                "(2 solution frames in the stream, 2 refused",
+            ),
+        ] {
+            let e = decode(&mut frames(&messages).as_slice(), &mut Vec::new()).unwrap_err();
+            let msg = format!("{e:#}");
+            assert!(msg.contains("no solution frame decoded"), "{msg}");
+            assert!(msg.contains(expected), "{msg}");
+            assert!(msg.contains("frames by type"), "{msg}");
+
+            let dir = tempfile::tempdir().unwrap();
+            let stream = dir.path().join("run.bin");
+            std::fs::write(&stream, frames(&messages)).unwrap();
+            let out = dir.path().join("run.csv");
+            assert!(decode_file(&stream, &out).is_err());
+            assert!(!out.exists());
+            assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        }
     }
 
     /// Frames whose CRC holds but whose content no navigator writes are refused, counted,
@@ -380,6 +441,37 @@ mod tests {
             },
             // Back in time.
             at(0),
+            // Beyond the Earth model or an angle's range, faster than an orbit (written as
+            // valid rows before).
+            Solution { h_m: -1e6, ..at(1) },
+            Solution {
+                h_m: 1e300,
+                ..at(1)
+            },
+            Solution {
+                roll_deg: 400.0,
+                ..at(1)
+            },
+            Solution {
+                pitch_deg: -200.0,
+                ..at(1)
+            },
+            Solution {
+                yaw_deg: -720.0,
+                ..at(1)
+            },
+            Solution {
+                yaw_deg: 540.0,
+                ..at(1)
+            },
+            Solution {
+                v_eb_n: [1e300, -1e-300, 5e-324],
+                ..at(1)
+            },
+            Solution {
+                v_eb_n: [6000.0, 6000.0, 0.0],
+                ..at(1)
+            },
         ];
         for b in bad {
             let messages = [
@@ -406,5 +498,65 @@ mod tests {
         );
         assert!(implausible(&sigma, None).is_some());
         assert!(implausible(&Row::Free(at(1)), Some(at(0).t_us)).is_none());
+        // The ranges' ends are a navigator's.
+        let edge = Solution {
+            h_m: MIN_HEIGHT_M,
+            roll_deg: -180.0,
+            pitch_deg: 90.0,
+            yaw_deg: 180.0,
+            v_eb_n: [MAX_START_SPEED_M_S, 0.0, 0.0],
+            ..at(1)
+        };
+        assert_eq!(implausible(&Row::Free(edge), None), None);
+        let why = implausible(
+            &Row::Free(Solution {
+                h_m: 1e300,
+                ..at(1)
+            }),
+            None,
+        )
+        .unwrap();
+        assert_eq!(
+            why,
+            "height 1e300 m not within [-12000, 100000] m (the Earth model's range)"
+        );
+    }
+
+    /// Times of 2^63 us and more printed as negative (an i64 on the way): `u64::MAX` us was
+    /// `-0.000001`, and 2^63 - 1000 then 2^63 + 1000 us read as going back. Both in order now,
+    /// and a time after the later one's is still refused as going back.
+    #[test]
+    fn times_beyond_i64_print_unsigned_and_in_order() {
+        let at = |t_us: u64| solution(Row::Free(Solution { t_us, ..S }));
+        let half = 1_u64 << 63;
+        let messages = [
+            at(half - 1000),
+            at(half + 1000),
+            at(u64::MAX),
+            at(half),
+            Message::EndOfRun(EndOfRun { rows: 3 }),
+        ];
+        let mut out = Vec::new();
+        let s = decode(&mut frames(&messages).as_slice(), &mut out).unwrap();
+        assert_eq!((s.rows, s.implausible), (3, 1));
+        let text = String::from_utf8(out).unwrap();
+        let times: Vec<&str> = text
+            .lines()
+            .skip(1)
+            .filter_map(|l| l.split(',').next())
+            .collect();
+        assert_eq!(
+            times,
+            [
+                "9223372036854.774808",
+                "9223372036854.776808",
+                "18446744073709.551615"
+            ],
+            "{text}"
+        );
+        assert!(
+            s.to_string().contains("not after the previous row's"),
+            "{s}"
+        );
     }
 }

@@ -1020,9 +1020,14 @@ impl EmulateJob<'_> {
     /// renamed into place before the displayed trajectory, which is renamed only if the
     /// series was written.
     pub fn run(&self) -> anyhow::Result<String> {
-        crate::atomic::refuse_same_file(&[self.truth], self.out)?;
+        // The error file (`--errors`) is an input too.
+        let inputs: Vec<&Path> = std::iter::once(self.truth)
+            .chain(self.errors_file)
+            .collect();
+        crate::atomic::refuse_same_file(&inputs, self.out)?;
         if let Some(path) = self.errors_out {
-            crate::atomic::refuse_same_file(&[self.truth, self.out], path)?;
+            crate::atomic::refuse_same_file(&inputs, path)?;
+            crate::atomic::refuse_same_file(&[self.out], path)?;
             anyhow::ensure!(
                 !same_path(path, self.out),
                 "--errors-out {} is --out: refusing to write both into one file",

@@ -63,6 +63,7 @@ use anyhow::{Result, bail};
 use nav_core::alignment::machine::MAX_LEVER_ARM_M;
 use nav_core::attitude::rotation_vector_of;
 use nav_core::earth::LocalEarth;
+use nav_core::number::{Number, Rounded};
 use nav_core::{Position, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -216,7 +217,16 @@ impl CorrelatedError {
 
 /// `a,b,c` as typed on the command line.
 fn list(v: &[f64; 3]) -> String {
-    format!("{},{},{}", v[0], v[1], v[2])
+    format!("{},{},{}", Number(v[0]), Number(v[1]), Number(v[2]))
+}
+
+/// An injected offset [m]: to the millimetre, or to four digits when that would be long.
+fn offset_m(x: f64) -> String {
+    if x.abs() < 1e6 {
+        format!("{x:.3}")
+    } else {
+        Rounded(x).to_string()
+    }
 }
 
 /// The simulated receiver.
@@ -326,8 +336,13 @@ impl GnssSim {
                 Injected::Offset(d) => {
                     let _ = writeln!(
                         s,
-                        "t {} s (fix {}): {name} #{}: N {:.3} E {:.3} D {:.3} m",
-                        i.t_s, i.fix, i.outlier, d[0], d[1], d[2]
+                        "t {} s (fix {}): {name} #{}: N {} E {} D {} m",
+                        Number(i.t_s),
+                        i.fix,
+                        i.outlier,
+                        offset_m(d[0]),
+                        offset_m(d[1]),
+                        offset_m(d[2])
                     );
                 }
                 Injected::NaN => {
@@ -523,7 +538,10 @@ impl GnssSimOptions {
         let o = self;
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         if !(o.rate_hz > 0.0 && o.rate_hz.is_finite()) {
-            bail!("GNSS rate {} Hz: must be a positive number", o.rate_hz);
+            bail!(
+                "GNSS rate {} Hz: must be a positive number",
+                Number(o.rate_hz)
+            );
         }
         // The file carries the sigmas to the filter, which refuses a fix with a zero one.
         // ... and a receiver's noise beyond these would put its fixes off the Earth model.
@@ -558,8 +576,8 @@ impl GnssSimOptions {
         {
             bail!(
                 "GNSS outage at {} s for {} s: start and length must be finite and >= 0",
-                bad.start_s,
-                bad.length_s
+                Number(bad.start_s),
+                Number(bad.length_s)
             );
         }
         if let Some(c) = &o.correlated {
@@ -578,7 +596,7 @@ impl GnssSimOptions {
                 bail!(
                     "GNSS correlated error time {} s: must be positive and at most \
                      {MAX_CORRELATION_TIME_S} s",
-                    c.time_s
+                    Number(c.time_s)
                 );
             }
         }
@@ -587,7 +605,7 @@ impl GnssSimOptions {
                 "GNSS {} at {} s: times must be >= 0 and finite, offsets within \
                  {MAX_OUTLIER_OFFSET_M} m on each axis, lengths >= 0 (a ramp's > 0)",
                 bad.name(),
-                bad.start_s()
+                Number(bad.start_s())
             );
         }
         Ok(())
@@ -615,8 +633,8 @@ fn epochs(truth: &[Truth], options: &GnssSimOptions) -> Result<Vec<usize>> {
         bail!(
             "a {} Hz receiver on truth at {} Hz: the GNSS interval must be a whole number of \
              truth intervals (no interpolation)",
-            o.rate_hz,
-            1.0 / dt_s
+            Number(o.rate_hz),
+            Number(1.0 / dt_s)
         );
     }
     let mut rows = Vec::new();

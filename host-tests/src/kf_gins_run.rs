@@ -13,6 +13,7 @@ use anyhow::{Context, Result, bail};
 use nav_core::attitude::euler;
 use nav_core::ins_filter::model::FilterNoise;
 use nav_core::ins_filter::{ATT, AidedIns, FilterConfig, SensorErrors};
+use nav_core::number::Number;
 use nav_core::{ImuIncrement, Vector3};
 use std::fs::File;
 use std::io::BufReader;
@@ -151,7 +152,7 @@ impl AidedSink<f64> for NavRows {
 pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
     let (c, warnings) = kf_gins_config::load(config_path)?;
     let out = out.map_or_else(|| c.output_dir.join(KF_GINS_NAV_NAME), Path::to_path_buf);
-    crate::atomic::refuse_same_file(&[&c.imu_path, &c.gnss_path], &out)?;
+    crate::atomic::refuse_same_file(&[config_path, &c.imu_path, &c.gnss_path], &out)?;
     // Before the run, not after it: the folder the trajectory goes to.
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty())
         && !dir.is_dir()
@@ -223,9 +224,10 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
     if intervals > 0 && off_rate * 10 > intervals {
         bail!(
             "imudatarate {} Hz does not match {}: {off_rate} of its {intervals} epoch intervals \
-             differ from {nominal_dt} s by more than a quarter",
-            c.imu_rate_hz,
-            c.imu_path.display()
+             differ from {} s by more than a quarter",
+            Number(c.imu_rate_hz),
+            c.imu_path.display(),
+            Number(nominal_dt)
         );
     }
     let sigma_rms = sink.sigma_rms();

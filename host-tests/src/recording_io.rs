@@ -103,22 +103,28 @@ pub fn detect(path: &Path) -> Result<Format> {
     if kf_gins::looks_like_imu(first) {
         return Ok(Format::KfGins);
     }
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("bin") => Ok(Format::Binary),
-        Some("csv") => Ok(Format::Csv),
-        Some("imu") => Ok(Format::Psins),
-        Some("txt") => Ok(Format::KfGins),
-        _ => bail!(
+    match format_of_name(path) {
+        Some(format) => Ok(format),
+        None => bail!(
             "recording {}: unknown format: expected the binary magic {:?}, a CSV header starting \
              with 't_s,', a PSINS file starting with '%', a KF-GINS line of 7 numbers, or the \
              extension .bin, .csv, .imu or .txt",
             path.display(),
             String::from_utf8_lossy(&MAGIC)
         ),
+    }
+}
+
+/// The format [`detect`] gives a file by its extension (`.bin`, `.csv`, `.imu`, `.txt`, any
+/// case), when its content does not tell.
+fn format_of_name(path: &Path) -> Option<Format> {
+    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+    match ext.as_str() {
+        "bin" => Some(Format::Binary),
+        "csv" => Some(Format::Csv),
+        "imu" => Some(Format::Psins),
+        "txt" => Some(Format::KfGins),
+        _ => None,
     }
 }
 
@@ -464,12 +470,21 @@ impl Converted {
 }
 
 /// Converts the recording `input` (any format, [`detect`]) to `out`: CSV when its name ends in
-/// `.csv`, binary otherwise; the same bytes as [`write`] of [`read`]'s recording, in memory
+/// `.csv`, binary otherwise (refused under a PSINS or KF-GINS text name, `.imu`, `.txt`); the same bytes as [`write`] of [`read`]'s recording, in memory
 /// independent of the file's length. A first pass checks `input` and finds the header (a text
 /// file's count and rate, a binary file's own; whether a record has a temperature, for the CSV
 /// header), the second streams the records into `out`. `out` is written whole or not at all
 /// ([`crate::atomic`]) and must not be `input`.
 pub fn convert(input: &Path, out: &Path) -> Result<Converted> {
+    // The output is binary unless named .csv: a text format's name would hide it.
+    if let Some(text @ (Format::Psins | Format::KfGins)) = format_of_name(out) {
+        bail!(
+            "{}: the binary recording would carry a {text} text file's name (.{}); name it .bin \
+             (or .csv for the CSV format)",
+            out.display(),
+            out.extension().unwrap_or_default().to_string_lossy()
+        );
+    }
     let format = detect(input)?;
     crate::atomic::refuse_same_file(&[input], out)?;
     let scanned = scan(input, format)?;

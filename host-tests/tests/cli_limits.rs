@@ -16,16 +16,19 @@ fn refused(args: &[&str], expected: &[&str]) -> String {
     for e in expected {
         assert!(text.contains(e), "nav {args:?}: expected {e:?} in {text}");
     }
-    let longest_digits = text
-        .split(|c: char| !c.is_ascii_digit())
-        .map(str::len)
-        .max()
-        .unwrap_or(0);
     assert!(
-        longest_digits <= 30,
+        longest_digits(&text) <= 30,
         "nav {args:?}: unreadable number in {text}"
     );
     text
+}
+
+/// The most digits in a row in `text`.
+fn longest_digits(text: &str) -> usize {
+    text.split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0)
 }
 
 /// The oscillator's length and frequency: a capacity-overflow panic (1e300) or an allocation
@@ -392,4 +395,204 @@ fn align_bench_window_reads_as_typed() {
         &["align-bench", "family", "--runs", "1", "--seconds", "1e300"],
         &["alignment windows must be within (0, 300] s, not 1e300"],
     );
+}
+
+/// A KF-GINS configuration whose files need not exist: refusals of `nav kf-gins` that come
+/// before it opens them.
+const KF_GINS_CONFIG: &str = "imupath: imu.txt
+gnsspath: gnss.txt
+outputpath: .
+imudatalen: 7
+imudatarate: 200
+starttime: 0
+endtime: -1
+initpos: [45.0, 7.5, 250.0]
+initvel: [0.0, 0.0, 0.0]
+initatt: [0.0, 0.0, 0.0]
+initgyrbias: [0, 0, 0]
+initaccbias: [0, 0, 0]
+initgyrscale: [0, 0, 0]
+initaccscale: [0, 0, 0]
+initposstd: [0.1, 0.1, 0.2]
+initvelstd: [0.05, 0.05, 0.05]
+initattstd: [0.5, 0.5, 1.0]
+imunoise:
+  arw: [0.24, 0.24, 0.24]
+  vrw: [0.24, 0.24, 0.24]
+  gbstd: [50.0, 50.0, 50.0]
+  abstd: [250.0, 250.0, 250.0]
+  gsstd: [1000.0, 1000.0, 1000.0]
+  asstd: [1000.0, 1000.0, 1000.0]
+  corrtime: 1.0
+antlever: [0.0, 0.0, 0.0]
+";
+
+/// Inputs given as the output were overwritten: `kf-gins ok.yaml --out ok.yaml` the
+/// configuration, `emulate --errors E --out E` (or `--errors-out E`) the error file,
+/// `replay --calibration C --out C` the calibration. Refused now, the file untouched.
+#[test]
+fn configuration_inputs_are_not_overwritten_by_the_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (config, errors, truth, calibration) = (
+        path("ok.yaml"),
+        path("err.txt"),
+        path("tr.csv"),
+        path("cal.txt"),
+    );
+    std::fs::write(&config, KF_GINS_CONFIG).unwrap();
+    std::fs::write(&errors, "gyro-bias-deg-h = 0.01 0.01 0.01\n").unwrap();
+    std::fs::write(&truth, "t_s\n").unwrap();
+    std::fs::write(&calibration, "calibration\n").unwrap();
+    let unchanged = || {
+        assert_eq!(std::fs::read_to_string(&config).unwrap(), KF_GINS_CONFIG);
+        assert_eq!(
+            std::fs::read_to_string(&errors).unwrap(),
+            "gyro-bias-deg-h = 0.01 0.01 0.01\n"
+        );
+        assert_eq!(
+            std::fs::read_to_string(&calibration).unwrap(),
+            "calibration\n"
+        );
+    };
+    refused(&["kf-gins", &config, "--out", &config], &["is the input"]);
+    unchanged();
+    for out in ["--out", "--errors-out"] {
+        let other = path("displayed.csv");
+        let mut args = vec!["emulate", "--truth", &truth, "--errors", &errors];
+        args.extend([out, &errors]);
+        if out == "--errors-out" {
+            args.extend(["--out", &other]);
+        }
+        refused(&args, &["is the input", "err.txt"]);
+        unchanged();
+    }
+    let imu = path("imu.bin");
+    let args = replay_args(&imu, &calibration, &["--calibration", &calibration]);
+    refused(&args, &["is the input", "cal.txt"]);
+    unchanged();
+}
+
+/// Figures of `nav sim`'s receiver and of `nav kf-gins` printed in hundreds of digits:
+/// `--gnss-rate 1e300` ("a 1000... Hz receiver"), `--gnss-lever-arm 1e300,0,0`,
+/// `imudatarate: 1e300`; a 1e300 m spike's line (355 characters) of a run that succeeds.
+#[test]
+fn receiver_and_kf_gins_figures_read_as_typed() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let out = out.to_str().unwrap();
+    let sim = ["sim", "static", "--seconds", "5", "--out", out];
+    let with = |extra: &[&'static str]| [&sim[..], extra].concat();
+    refused(
+        &with(&["--gnss-rate", "1e300"]),
+        &["a 1e300 Hz receiver on truth at 50 Hz"],
+    );
+    refused(
+        &with(&["--gnss-rate", "1", "--gnss-lever-arm", "1e300,0,0"]),
+        &["lever arm 1e300,0,0 m: must be finite and within 100 m"],
+    );
+    let o = nav(&with(&["--gnss-rate", "1", "--gnss-spike", "2,1e300,0,0"]));
+    let text = output_text(&o);
+    assert!(o.status.success(), "{text}");
+    assert!(
+        text.contains("spike #0: N 1.000e300 E 0.000 D 0.000 m"),
+        "{text}"
+    );
+    assert!(longest_digits(&text) <= 30, "{text}");
+
+    let data = host_tests::filter_bench::generate(
+        dir.path(),
+        &host_tests::filter_bench::FilterBenchOptions {
+            seconds: 20.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(&data.config).unwrap();
+    assert!(text.contains("imudatarate: 200\n"), "{text}");
+    let config = dir.path().join("rate.yaml");
+    std::fs::write(
+        &config,
+        text.replace("imudatarate: 200\n", "imudatarate: 1e300\n"),
+    )
+    .unwrap();
+    let nav_out = dir.path().join("rate.nav");
+    refused(
+        &[
+            "kf-gins",
+            config.to_str().unwrap(),
+            "--out",
+            nav_out.to_str().unwrap(),
+        ],
+        &[
+            "imudatarate 1e300 Hz does not match",
+            "differ from 1e-300 s",
+        ],
+    );
+    assert!(!nav_out.exists());
+}
+
+/// `convert --in imu.bin --out c1.txt` wrote the binary format under a name the readers take
+/// for KF-GINS text (`.imu`: PSINS); refused as `convert --gnss` refuses it, nothing written.
+#[test]
+fn a_binary_recording_under_a_text_name_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = dir.path().join("imu.bin");
+    generated_recording(&imu, "1");
+    for (name, format) in [("c1.txt", "KF-GINS"), ("c1.IMU", "PSINS")] {
+        let out = dir.path().join(name);
+        refused(
+            &[
+                "convert",
+                "--in",
+                imu.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            &[&format!("{format} text file's name"), "name it .bin"],
+        );
+        assert!(!out.exists());
+    }
+    for name in ["c1.bin", "c1.csv", "c1.dat"] {
+        let out = dir.path().join(name);
+        let o = nav(&[
+            "convert",
+            "--in",
+            imu.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", output_text(&o));
+    }
+}
+
+/// `--out` at a FIFO or a directory: the rename replaced it (`--out /dev/full` made a regular
+/// file of the device, as root); refused now, naming the path, the FIFO left as it was.
+#[cfg(unix)]
+#[test]
+fn an_output_that_is_not_a_regular_file_is_refused() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe.csv");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let imu = dir.path().join("imu.bin");
+    generated_recording(&imu, "1");
+    let imu = imu.to_str().unwrap();
+    for (out, what) in [(fifo.as_path(), "a FIFO"), (dir.path(), "a directory")] {
+        let out = out.to_str().unwrap();
+        refused(
+            &replay_args(imu, out, &[]),
+            &[out, &format!("is not a regular file ({what})")],
+        );
+        refused(
+            &["convert", "--in", imu, "--out", out],
+            &[&format!("is not a regular file ({what})")],
+        );
+    }
+    let kind = std::fs::symlink_metadata(&fifo).unwrap().file_type();
+    assert!(kind.is_fifo());
 }

@@ -190,14 +190,20 @@ impl fmt::Display for Row {
 
 /// Writes `value / 10^digits` exactly, e.g. `-0.000000500` for (-500, 9).
 fn write_decimal(f: &mut fmt::Formatter<'_>, value: i64, digits: u32) -> fmt::Result {
+    if value < 0 {
+        f.write_str("-")?;
+    }
+    write_unsigned_decimal(f, value.unsigned_abs(), digits)
+}
+
+/// Writes `value / 10^digits` exactly, e.g. `18446744073709.551615` for (`u64::MAX`, 6).
+fn write_unsigned_decimal(f: &mut fmt::Formatter<'_>, value: u64, digits: u32) -> fmt::Result {
     let scale = 10_u64.pow(digits);
-    let sign = if value < 0 { "-" } else { "" };
-    let mag = value.unsigned_abs();
     write!(
         f,
-        "{sign}{}.{:0width$}",
-        mag / scale,
-        mag % scale,
+        "{}.{:0width$}",
+        value / scale,
+        value % scale,
         width = digits as usize
     )
 }
@@ -205,7 +211,8 @@ fn write_decimal(f: &mut fmt::Formatter<'_>, value: i64, digits: u32) -> fmt::Re
 impl fmt::Display for Solution {
     /// One CSV row matching [`CSV_HEADER`] (no line terminator).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write_decimal(f, self.t_us as i64, 6)?;
+        // Unsigned: a time of 2^63 us or more printed as negative through an i64.
+        write_unsigned_decimal(f, self.t_us, 6)?;
         f.write_str(",")?;
         write_decimal(f, self.lat_ndeg, 9)?;
         f.write_str(",")?;

@@ -505,6 +505,7 @@ impl ReplayArgs {
         let calibration = match &self.calibration {
             None => ImuCalibration::default(),
             Some(path) => {
+                host_tests::atomic::refuse_same_file(&[path], &self.out)?;
                 let text = std::fs::read_to_string(path)
                     .with_context(|| format!("reading {}", path.display()))?;
                 ImuCalibration::parse(&text).with_context(|| format!("in {}", path.display()))?
