@@ -646,7 +646,7 @@ fn bench_outliers() -> Result<()> {
     println!(
         "| grade | GNSS | outlier | at [s] | fixes | refused | max error [m] | 1-sigma there [m] | max error/1-sigma | after its end | DEGRADED | accepted again |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let cases = [
         (Grade::Fog, "position", outlier_case(Grade::Fog, 1)),
         (
