@@ -844,3 +844,57 @@ fn start_in_motion_from_gnss() {
         last[18]
     );
 }
+
+/// `nav bench consistency --families`: one row per family, on consecutive seeds, and the
+/// families' inside fractions with their mean.
+#[test]
+fn consistency_families_run_on_consecutive_seeds() {
+    let text = run_ok(nav().args([
+        "bench",
+        "consistency",
+        "--runs",
+        "2",
+        "--families",
+        "2",
+        "--first-seed",
+        "7",
+        "--seconds",
+        "60",
+        "--cells",
+        "6",
+    ]));
+    assert!(
+        text.contains("2 runs per family, 2 families per cell"),
+        "{text}"
+    );
+    let rows: Vec<&str> = text.lines().filter(|l| l.starts_with("| ")).collect();
+    assert!(
+        rows.iter().any(|r| r.starts_with("| 7–8 | land-vehicle")),
+        "{text}"
+    );
+    assert!(
+        rows.iter().any(|r| r.starts_with("| 9–10 | land-vehicle")),
+        "{text}"
+    );
+    let summary = text
+        .lines()
+        .find(|l| l.starts_with("cell 6 ("))
+        .unwrap_or_else(|| panic!("{text}"));
+    // "... NEES inside per family A / B %, mean M %", M the mean of A and B.
+    let numbers = |s: &str| -> Vec<f64> {
+        s.split(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .filter_map(|t| t.parse().ok())
+            .collect()
+    };
+    let (each, mean) = summary
+        .split_once("per family")
+        .and_then(|(_, r)| r.split_once("mean"))
+        .unwrap_or_else(|| panic!("{summary}"));
+    let (each, mean) = (numbers(each), numbers(mean));
+    assert_eq!(each.len(), 2, "{summary}");
+    // Each printed to the percent: their mean and the printed mean differ by 1 at most.
+    assert!(
+        ((each[0] + each[1]) / 2.0 - mean[0]).abs() <= 1.0,
+        "{summary}"
+    );
+}
