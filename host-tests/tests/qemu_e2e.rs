@@ -382,21 +382,9 @@ fn firmware_in_qemu_matches_host_replay() {
     // and the final one, and the end record.
     assert_eq!(host.lines().count(), 1 + 1 + 99 + 1 + 1, "host log rows");
     assert_eq!(host.lines().last(), Some("# end: 101 rows, ok"));
-    assert_eq!(
-        fw.lines().count(),
-        host.lines().count(),
-        "row counts differ"
-    );
     // Both sides run the same f32 code with libm's functions and IEEE single arithmetic (Rust
     // does not contract to FMA), so the logs are expected to be identical text.
-    for (i, (a, b)) in fw.lines().zip(host.lines()).enumerate() {
-        assert_eq!(
-            a,
-            b,
-            "line {} differs:\nfirmware: {a}\nhost:     {b}",
-            i + 1
-        );
-    }
+    assert_same_lines(&fw, &host);
     // The protocol stream: `nav decode` gives the firmware's log back, equal to the harness's.
     let report = decode_stream(d, "fw.bin", "decoded.csv");
     println!("nav decode: {report}");
@@ -1242,6 +1230,83 @@ fn lines_with<'a>(log: &'a str, names: &[&str]) -> Vec<&'a str> {
         .collect()
 }
 
+/// Asserts that the firmware's log `fw` is the harness's `host` line for line (the first line
+/// that differs shown), and as long.
+fn assert_same_lines(fw: &str, host: &str) {
+    for (i, (a, b)) in fw.lines().zip(host.lines()).enumerate() {
+        assert_eq!(
+            a,
+            b,
+            "line {} differs:\nfirmware: {a}\nhost:     {b}",
+            i + 1
+        );
+    }
+    assert_eq!(
+        fw.lines().count(),
+        host.lines().count(),
+        "row counts differ"
+    );
+}
+
+/// The aided runs' receiver: 5 Hz fixes of 0.5/0.5/1 m, the antenna at 0.8, -0.3, -1.1 m.
+fn aided_receiver() -> host_tests::gnss_sim::GnssSimOptions {
+    host_tests::gnss_sim::GnssSimOptions {
+        rate_hz: 5.0,
+        sigma_ned_m: [0.5, 0.5, 1.0],
+        lever_arm_b_m: [0.8, -0.3, -1.1],
+        seed: 5,
+        ..Default::default()
+    }
+}
+
+/// Writes `seconds` [s] of the demo's drive (FOG grade, seed 7, at 45 deg N, 7.5 deg E, 250 m)
+/// into `d` as `rec.bin`, and the fixes of `gnss` along it as `gnss.csv` and the binary fix
+/// file `gnss.bin`.
+fn aided_drive(d: &Path, seconds: f64, gnss: &host_tests::gnss_sim::GnssSimOptions) {
+    let mut scenario = Scenario::by_name("land-vehicle").unwrap();
+    for (key, v) in [("lat_deg", 45.0), ("lon_deg", 7.5), ("h_m", 250.0)] {
+        scenario.set(key, v).unwrap();
+    }
+    let mut opts = SimOptions::new(scenario, Grade::Fog);
+    opts.seconds = Some(seconds);
+    opts.seed = 7;
+    let sim = simulate(&opts, |_, _| {}).unwrap();
+    recording_io::write(&d.join("rec.bin"), &sim.recording).unwrap();
+    let fixes = host_tests::gnss_sim::simulate(&sim.truth, gnss)
+        .unwrap()
+        .fixes;
+    host_tests::gnss::write_gnss_csv(&d.join("gnss.csv"), &fixes).unwrap();
+    host_tests::gnss_file::convert(&d.join("gnss.csv"), &d.join("gnss.bin"), None).unwrap();
+}
+
+/// `nav replay` of `aided_drive`'s files as the firmware runs them (aligned at the site over
+/// 15 s, the ADIS16505's conversion, f32) with `options`, writing `host.csv`.
+fn replay_like_the_firmware(d: &Path, options: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "replay",
+        "--imu",
+        "rec.bin",
+        "--gnss",
+        "gnss.csv",
+        "--out",
+        "host.csv",
+        "--lat",
+        "45",
+        "--lon",
+        "7.5",
+        "--h",
+        "250",
+        "--align-seconds",
+        "15",
+        "--device",
+        "adis16505",
+        "--precision",
+        "f32",
+    ];
+    args.extend_from_slice(options);
+    nav(d, &args)
+}
+
 /// The GNSS-aided phase in the firmware (`--gnss FILE`): 60 s of the demo's drive (FOG grade;
 /// 15 s of static alignment, 5 s still, then starting, turning) with 5 Hz fixes of an antenna
 /// 1.4 m from the IMU, position and velocity, from the binary fix file converted from the
@@ -1252,29 +1317,17 @@ fn lines_with<'a>(log: &'a str, names: &[&str]) -> Vec<&'a str> {
 /// file and aided options without `--gnss` are refused before anything is navigated.
 #[test]
 fn firmware_navigates_aided_like_the_harness() {
-    use host_tests::gnss_sim::{self, GnssSimOptions};
+    use host_tests::gnss_sim::GnssSimOptions;
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let mut scenario = Scenario::by_name("land-vehicle").unwrap();
-    for (key, v) in [("lat_deg", 45.0), ("lon_deg", 7.5), ("h_m", 250.0)] {
-        scenario.set(key, v).unwrap();
-    }
-    let mut opts = SimOptions::new(scenario, Grade::Fog);
-    opts.seconds = Some(60.0);
-    opts.seed = 7;
-    let sim = simulate(&opts, |_, _| {}).unwrap();
-    recording_io::write(&d.join("rec.bin"), &sim.recording).unwrap();
-    let gnss = GnssSimOptions {
-        rate_hz: 5.0,
-        sigma_ned_m: [0.5, 0.5, 1.0],
-        sigma_v_ned_m_s: Some([0.05, 0.05, 0.1]),
-        lever_arm_b_m: [0.8, -0.3, -1.1],
-        seed: 5,
-        ..GnssSimOptions::default()
-    };
-    let fixes = gnss_sim::simulate(&sim.truth, &gnss).unwrap().fixes;
-    host_tests::gnss::write_gnss_csv(&d.join("gnss.csv"), &fixes).unwrap();
-    host_tests::gnss_file::convert(&d.join("gnss.csv"), &d.join("gnss.bin"), None).unwrap();
+    aided_drive(
+        d,
+        60.0,
+        &GnssSimOptions {
+            sigma_v_ned_m_s: Some([0.05, 0.05, 0.1]),
+            ..aided_receiver()
+        },
+    );
     let options = ["--imu-noise", "fog", "--gnss-lever-arm", "0.8,-0.3,-1.1"];
     let site = ["45", "7.5", "250", "15"];
 
@@ -1302,29 +1355,7 @@ fn firmware_navigates_aided_like_the_harness() {
         assert!(field(&log, key) > 0, "{key}");
     }
 
-    let mut args = vec![
-        "replay",
-        "--imu",
-        "rec.bin",
-        "--gnss",
-        "gnss.csv",
-        "--out",
-        "host.csv",
-        "--lat",
-        "45",
-        "--lon",
-        "7.5",
-        "--h",
-        "250",
-        "--align-seconds",
-        "15",
-        "--device",
-        "adis16505",
-        "--precision",
-        "f32",
-    ];
-    args.extend_from_slice(&options);
-    let o = nav(d, &args);
+    let o = replay_like_the_firmware(d, &options);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
@@ -1332,15 +1363,7 @@ fn firmware_navigates_aided_like_the_harness() {
     assert!(fw.starts_with(nav_core::output::AIDED_CSV_HEADER), "{fw}");
     // The aligned row at 15 s, a row every 0.1 s to 60 s, the end record.
     assert_eq!(host.lines().count(), 1 + 1 + 450 + 1);
-    for (i, (a, b)) in fw.lines().zip(host.lines()).enumerate() {
-        assert_eq!(
-            a,
-            b,
-            "line {} differs:\nfirmware: {a}\nhost:     {b}",
-            i + 1
-        );
-    }
-    assert_eq!(fw.lines().count(), host.lines().count());
+    assert_same_lines(&fw, &host);
     // The stream gives the same log back, and an aiding event per fix the filter counted.
     let report = decode_stream(d, "fw.bin", "decoded.csv");
     let decoded = std::fs::read_to_string(d.join("decoded.csv")).unwrap();
@@ -1481,32 +1504,20 @@ fn firmware_navigates_aided_like_the_harness() {
 /// line: the firmware's parse is the harness's configuration.
 #[test]
 fn firmware_takes_the_gnss_correlated_error_like_the_harness() {
-    use host_tests::gnss_sim::{self, CorrelatedError, GnssSimOptions};
+    use host_tests::gnss_sim::{CorrelatedError, GnssSimOptions};
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let mut scenario = Scenario::by_name("land-vehicle").unwrap();
-    for (key, v) in [("lat_deg", 45.0), ("lon_deg", 7.5), ("h_m", 250.0)] {
-        scenario.set(key, v).unwrap();
-    }
-    let mut opts = SimOptions::new(scenario, Grade::Fog);
-    opts.seconds = Some(25.0);
-    opts.seed = 7;
-    let sim = simulate(&opts, |_, _| {}).unwrap();
-    recording_io::write(&d.join("rec.bin"), &sim.recording).unwrap();
-    let gnss = GnssSimOptions {
-        rate_hz: 5.0,
-        sigma_ned_m: [0.5, 0.5, 1.0],
-        lever_arm_b_m: [0.8, -0.3, -1.1],
-        correlated: Some(CorrelatedError {
-            sigma_ned_m: [1.5, 1.5, 2.5],
-            time_s: 60.0,
-        }),
-        seed: 5,
-        ..GnssSimOptions::default()
-    };
-    let fixes = gnss_sim::simulate(&sim.truth, &gnss).unwrap().fixes;
-    host_tests::gnss::write_gnss_csv(&d.join("gnss.csv"), &fixes).unwrap();
-    host_tests::gnss_file::convert(&d.join("gnss.csv"), &d.join("gnss.bin"), None).unwrap();
+    aided_drive(
+        d,
+        25.0,
+        &GnssSimOptions {
+            correlated: Some(CorrelatedError {
+                sigma_ned_m: [1.5, 1.5, 2.5],
+                time_s: 60.0,
+            }),
+            ..aided_receiver()
+        },
+    );
     let options = [
         "--imu-noise",
         "fog",
@@ -1526,41 +1537,11 @@ fn firmware_takes_the_gnss_correlated_error_like_the_harness() {
         log.contains("GNSS correlated error: 1-sigma 1.5 1.5 2.5 m (north, east, down)"),
         "{log}"
     );
-    let mut args = vec![
-        "replay",
-        "--imu",
-        "rec.bin",
-        "--gnss",
-        "gnss.csv",
-        "--out",
-        "host.csv",
-        "--lat",
-        "45",
-        "--lon",
-        "7.5",
-        "--h",
-        "250",
-        "--align-seconds",
-        "15",
-        "--device",
-        "adis16505",
-        "--precision",
-        "f32",
-    ];
-    args.extend_from_slice(&options);
-    let o = nav(d, &args);
+    let o = replay_like_the_firmware(d, &options);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
     let host = std::fs::read_to_string(d.join("host.csv")).unwrap();
     // The aligned row at 15 s, a row every 0.1 s to 25 s, the end record.
     assert_eq!(host.lines().count(), 1 + 1 + 100 + 1, "{host}");
-    for (i, (a, b)) in fw.lines().zip(host.lines()).enumerate() {
-        assert_eq!(
-            a,
-            b,
-            "line {} differs:\nfirmware: {a}\nhost:     {b}",
-            i + 1
-        );
-    }
-    assert_eq!(fw.lines().count(), host.lines().count());
+    assert_same_lines(&fw, &host);
 }

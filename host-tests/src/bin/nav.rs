@@ -1526,7 +1526,9 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(cli: Cli) -> Result<()> {
+/// Refuses an option of `nav bench` given with other than its default to a measurement that
+/// does not use it (it was ignored).
+fn refuse_unused_bench_options(command: &Command) -> Result<()> {
     if let Command::Bench {
         what,
         passes,
@@ -1541,7 +1543,7 @@ fn run(cli: Cli) -> Result<()> {
         blocks,
         first_seed,
         families,
-    } = &cli.command
+    } = command
     {
         use BenchKind::{Consistency as C, Filter as F, Mechanization as M, Outages as O};
         // (option, given with other than its default, the measurements that use it)
@@ -1578,6 +1580,11 @@ fn run(cli: Cli) -> Result<()> {
             );
         }
     }
+    Ok(())
+}
+
+fn run(cli: Cli) -> Result<()> {
+    refuse_unused_bench_options(&cli.command)?;
     match cli.command {
         Command::AlignBench {
             which,
