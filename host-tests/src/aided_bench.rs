@@ -153,7 +153,7 @@ pub fn state_error(ins_state: &NavState<f64>, truth: &Truth) -> SVector<f64, 9> 
 /// `M_a f_rest` at rest in the nominal attitude, `f_rest = (0, 0, -g)` (the gyro misalignment
 /// times Earth rate, below 1e-7 rad/s, is left out there as here). `biases`: the simulator's
 /// biases of the gyros and the accelerometers as the bias states hold them
-/// ([`Consistency::biases_at`]).
+/// (`Consistency::biases_at`).
 pub fn effective_sensor_errors(
     model: &ImuErrorModel,
     biases: [Vector3<f64>; 2],

@@ -88,10 +88,29 @@ fn no_epoch_is_a_failure() {
         "{}",
         String::from_utf8_lossy(&o.stdout)
     );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("no attitude epoch"), "{stderr}");
+    // The refusal is the readout file's, not a failure to write the output.
     assert!(
-        String::from_utf8_lossy(&o.stderr).contains("no attitude epoch"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
+        stderr.contains(&format!("error: {}: ", input.display())) && !stderr.contains("writing"),
+        "{stderr}"
     );
     assert!(!out.exists());
+    // A corrupt line is named once, by the reader.
+    std::fs::write(&input, "t_s,x_m,y_m,z_m\n0,1,2,3\nfoo,1,2\n").unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+        .args(["osc-replay", input.to_str().unwrap(), "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && !out.exists(), "{stderr}");
+    assert_eq!(
+        stderr.trim(),
+        format!(
+            "error: {}: line 3: expected 4 columns (t_s,x_m,y_m,z_m), found 3",
+            input.display()
+        ),
+        "{stderr}"
+    );
 }

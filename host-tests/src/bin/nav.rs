@@ -27,6 +27,9 @@
 //! Output recordings are binary unless the file name ends in `.csv`. Errors name the file and the
 //! line or byte offset, and exit with status 1.
 
+// Units are written `[m/s]` in docs (project convention), which rustdoc would read as links.
+#![allow(rustdoc::broken_intra_doc_links)]
+
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use host_tests::generate::Stationary;
@@ -1664,13 +1667,25 @@ fn run(cli: Cli) -> Result<()> {
                 Precision::F32 => replay::replay_rows::<f32, _>(rows, f0_hz, !seed_method, w),
                 Precision::F64 => replay::replay_rows::<f64, _>(rows, f0_hz, !seed_method, w),
             };
+            // The reader's errors name the file and line; a write error names the output; the
+            // estimator's own refusals (a time jump, no rate) name the readout file.
+            let name = |e: anyhow::Error, out: Option<&Path>| match out {
+                _ if e.is::<host_tests::text_error::TextError>() => e,
+                Some(p) if e.is::<std::io::Error>() => {
+                    e.context(format!("writing {}", p.display()))
+                }
+                _ => e.context(file.display().to_string()),
+            };
             let summary = match &out {
                 Some(p) => {
                     host_tests::atomic::refuse_same_file(&[&file], p)?;
-                    host_tests::atomic::write(p, |w| run(Some(w)))
-                        .with_context(|| format!("writing {}", p.display()))?
+                    let writing = || format!("writing {}", p.display());
+                    let mut f = host_tests::atomic::AtomicFile::create(p).with_context(writing)?;
+                    let summary = run(Some(f.writer())).map_err(|e| name(e, Some(p)))?;
+                    f.commit().with_context(writing)?;
+                    summary
                 }
-                None => run(None)?,
+                None => run(None).map_err(|e| name(e, None))?,
             };
             print!("{summary}");
             Ok(())
