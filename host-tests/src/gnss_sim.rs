@@ -21,7 +21,9 @@
 //! **Noise.** White Gaussian, independent per axis and fix: the position moved by `sigma_ned_m`
 //! times three standard normals (north, east, down, on the local radii again), the velocity plus
 //! `sigma_v_ned_m_s` times three more. The fix reports these same sigmas, whatever was injected.
-//! All white draws come from one `ChaCha8Rng::seed_from_u64(seed)` stream, in epoch order:
+//! All white draws come from one stream of `ChaCha8Rng::seed_from_u64(seed)` (stream
+//! [`WHITE_STREAM`]; the sensor simulator of the same seed draws from stream 0, so a run's fixes
+//! and its sensor errors are independent), in epoch order:
 //! position then velocity normals for **every** epoch, those in outages included, so adding an
 //! outage or an outlier leaves the noise of every other fix unchanged.
 //!
@@ -191,9 +193,12 @@ pub const MAX_CORRELATED_SIGMA_M: f64 = 100.0;
 pub const MAX_OUTLIER_OFFSET_M: f64 = 1.0e5;
 /// Longest correlation time of the correlated error [s].
 pub const MAX_CORRELATION_TIME_S: f64 = 1.0e6;
-/// The ChaCha8 stream (of the same seed) the correlated error draws from; the white noise uses
-/// stream 0.
+/// The ChaCha8 stream (of the same seed) the correlated error draws from.
 pub const CORRELATED_STREAM: u64 = 1;
+/// The ChaCha8 stream (of the same seed) the white noise draws from. Not stream 0: the sensor
+/// simulator ([`crate::sensor_model::ErrorInjector`]) of a run draws from stream 0 of the same
+/// seed, and its turn-on biases and white noise were the fixes' noise, number for number.
+pub const WHITE_STREAM: u64 = 2;
 
 /// A time-correlated position error: a first-order Gauss–Markov process per axis (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -402,6 +407,7 @@ fn within(t_s: f64, start_s: f64, length_s: f64) -> bool {
 pub fn simulate(truth: &[Truth], options: &GnssSimOptions) -> Result<GnssSim> {
     let epochs = epochs(truth, options)?;
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
+    rng.set_stream(WHITE_STREAM);
     let mut normals = || -> [f64; 3] {
         [
             StandardNormal.sample(&mut rng),
@@ -873,6 +879,55 @@ mod tests {
             assert_eq!(c.correlated_ned_m[i], *d);
         }
         assert!(b.describe(&correlated).contains("correlation time 30 s"));
+    }
+
+    /// The white noise of the fixes is not the sensor simulator's: the injector of the same
+    /// seed draws from stream 0, whose normals were once the fixes' noise one for one.
+    #[test]
+    fn the_white_noise_is_independent_of_the_sensor_simulators_draws() {
+        let n = 3000;
+        let options = GnssSimOptions {
+            rate_hz: 1.0,
+            sigma_ned_m: [1.0, 1.0, 1.0],
+            seed: 17,
+            ..GnssSimOptions::default()
+        };
+        let truth = at_rest(n, 1.0);
+        let sim = simulate(&truth, &options).unwrap();
+        let noise: Vec<[f64; 3]> = sim
+            .fixes
+            .iter()
+            .zip(&sim.truth_rows)
+            .map(|(f, &k)| {
+                let (p0, _) = antenna(&truth[k], &Vector3::zeros(), &options.lever_arm_b_m);
+                p0.ned_to(&Position::from_radians(f.lat_rad, f.lon_rad, f.h_m))
+                    .into()
+            })
+            .collect();
+        assert_eq!(noise.len(), n);
+        // Unit white noise as drawn: 1-sigma 1 m.
+        let r = rms(&noise);
+        assert!(r.iter().all(|x| (x - 1.0).abs() < 0.1), "{r:?}");
+        let ErrorInjectorDraws(stream0) = ErrorInjectorDraws::of(options.seed, n);
+        let rho = correlation(&noise, &stream0);
+        // Independent: |rho| within 4 standard errors of zero.
+        let tol = 4.0 / (n as f64).sqrt();
+        assert!(rho.iter().all(|r| r.abs() < tol), "{rho:?} {tol}");
+    }
+
+    /// The first `3 n` standard normals of stream 0 of `seed`, as the sensor simulator draws
+    /// them, three per row.
+    struct ErrorInjectorDraws(Vec<[f64; 3]>);
+
+    impl ErrorInjectorDraws {
+        fn of(seed: u64, n: usize) -> Self {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            Self(
+                (0..n)
+                    .map(|_| std::array::from_fn(|_| StandardNormal.sample(&mut rng)))
+                    .collect(),
+            )
+        }
     }
 
     #[test]

@@ -47,7 +47,7 @@ pub struct InjectorCounters {
 
 /// An [`ImuErrorModel`] with its random states and a seeded `ChaCha8Rng`.
 ///
-/// **Determinism.** All draws come from one `ChaCha8Rng::seed_from_u64(seed)` stream (standard
+/// **Determinism.** All draws come from stream 0 of `ChaCha8Rng::seed_from_u64(seed)` (standard
 /// normals by `rand_distr::StandardNormal`) in a fixed order: at construction the gyro turn-on
 /// biases (x, y, z), the accelerometer ones, then the initial Gauss–Markov states (drawn from
 /// their stationary distribution, gyro then accelerometer); per valid sample 18 draws, gyro then

@@ -490,22 +490,40 @@ impl<T: Scalar> ErrorFilter<T> {
         // Time since the previous fix (the cluster's last member, if refused) [s].
         let dt = core::mem::replace(&mut self.since_fix_s, T::zero());
         let drift = self.fix_drift(dt, g);
+        let mut recovered = false;
         if nis > gate {
             // Continues the cluster it agrees with, or starts one.
-            self.cluster = Some(match &self.cluster {
+            let cluster = match &self.cluster {
                 Some(c) if c.contains(&m.z, &m.r, &drift, gate) => c.followed_by(m.z, m.r, dt),
-                _ => RefusedCluster::start(
+                previous => RefusedCluster::start(
                     m.z,
                     m.r,
                     nis,
                     gate,
                     self.window.len() == integrity::WINDOW,
-                ),
-            });
-            return (AidResult::Rejected { nis }, None);
+                )
+                .replacing(previous.as_ref()),
+            };
+            self.cluster = Some(cluster);
+            // DEGRADED, and the refused fixes moved away from the filter faster than its own
+            // covariance allows: the filter is the one drifting ([`integrity`] module docs).
+            let p_pos = Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)]);
+            recovered = self.counters.position.consecutive_rejected
+                >= self.config.rejections_to_degrade
+                && cluster.drifted(&p_pos, gate);
+            if !recovered {
+                return (AidResult::Rejected { nis }, None);
+            }
+            // Its velocity is doubtful by the rate of that drift; its position by the
+            // cluster's offset (added below as after any cluster) [Groves, ch. 17].
+            let v = cluster.drift_rate();
+            let mut vel = self.p.fixed_view_mut::<3, 3>(VEL, VEL);
+            vel += v * v.transpose();
+            self.window.clear();
         }
         // A member of the cluster refused before.
-        if let Some(c) = &self.cluster
+        if !recovered
+            && let Some(c) = &self.cluster
             && c.claims(&m.z, &m.r, &drift, nis, &s, gate)
         {
             self.cluster = Some(c.followed_by(m.z, m.r, dt));
@@ -516,9 +534,13 @@ impl<T: Scalar> ErrorFilter<T> {
         let Some(w) = whiten(&s, &m.z) else {
             return (AidResult::Invalid, None);
         };
-        self.window.push(w);
+        // The recovered fix starts nothing in the window: its innovation is the drift the
+        // filter did not see.
+        if !recovered {
+            self.window.push(w);
+        }
         let local = !self.consider.has_gnss_error();
-        if self.window.verdict(gate, local) != WindowVerdict::Consistent {
+        if !recovered && self.window.verdict(gate, local) != WindowVerdict::Consistent {
             if self.counters.position.consecutive_rejected < integrity::WINDOW_REFUSALS_MAX {
                 // What the window's earlier fixes pulled the filter by is now doubtful.
                 let d = self.window.take_corrections();

@@ -48,6 +48,20 @@
 //! MEMS filter that followed a ramp otherwise turned the step back into a velocity error and
 //! lost the fixes again).
 //!
+//! **A DEGRADED filter that drifted recovers** [Groves, ch. 17, fault recovery by covariance
+//! increase]. A filter that followed part of a fault (a FOG filter pulled by a ramp the window
+//! saw late) can be off in velocity by decimetres per second while its covariance claims
+//! centimetres: the true fixes then move away from it steadily, each refused by the gate, and
+//! its own sigma never grows to meet them (seed 5 of the outlier bench: 50 m off after 170 s,
+//! and then it took a held 30 m offset as its position). So once the filter is DEGRADED
+//! (`rejections_to_degrade` refusals in a row), a refused cluster that is not gross and whose
+//! offset has moved since its first member by more than the filter's position covariance
+//! explains ([`RefusedCluster::drifted`]: the normalised square of `z - z_1` against
+//! `R + R_1 + P_pos` beyond the gate) is taken as the filter's own drift: the drift's rate
+//! `v` joins the velocity covariance as `v v^T`, the offset joins the position's as after any
+//! cluster, the window restarts, and the fix is used. A held offset does not move (it stays
+//! refused until it is typical, above), and a gross cluster is never taken this way.
+//!
 //! **A gross cluster** is not released that way. Its first fix was beyond
 //! [`GROSS_NIS_FACTOR`] times the gate, a jump no plausible optimism of the filter's own
 //! covariance explains (a 30 m offset against a 0.3 m sigma), at a time the filter's position
@@ -91,7 +105,10 @@
 //! 2 sigma of the solution, which does not claim to exclude what it cannot tell from its own
 //! error. Only the reported covariance carries it (the gate, the cluster rules and the
 //! updates use the filter's own, so what the filter refuses is unchanged); a gross cluster
-//! adds none (the filter knew its position when the jump came).
+//! adds none (the filter knew its position when the jump came). A cluster that starts while
+//! another is refused carries the other's doubt ([`RefusedCluster::replacing`]): a held offset
+//! that begins while the filter refuses the true fixes it may have drifted from (after a ramp
+//! it followed) leaves that doubt standing.
 
 use super::states::{Covariance, POS, StateVector};
 use crate::Scalar;
@@ -294,6 +311,15 @@ pub struct RefusedCluster<T: Scalar> {
     /// The start was gross: its normalised innovation squared beyond [`GROSS_NIS_FACTOR`]
     /// times the gate.
     pub gross: bool,
+    /// The first member's innovation as the last one's is taken (corrected alike), NED [m],
+    /// and its noise variance [m^2]: how far the offset has moved since.
+    pub first: (Vector3<T>, Vector3<T>),
+    /// Time from the first member to the last [s].
+    pub age_s: T,
+    /// The doubt of a cluster this one replaced while it was still refused [m^2] (module
+    /// docs: a held offset that starts while the true fixes are refused does not clear the
+    /// filter's doubt about them).
+    pub carried_doubt: Matrix3<T>,
 }
 
 impl<T: Scalar> RefusedCluster<T> {
@@ -308,6 +334,19 @@ impl<T: Scalar> RefusedCluster<T> {
             previous: None,
             jump_ned_m: z,
             gross: confirmed && nis > gate_3dof * T::c(GROSS_NIS_FACTOR),
+            first: (z, r),
+            age_s: T::zero(),
+            carried_doubt: Matrix3::zeros(),
+        }
+    }
+
+    /// This cluster, started while `previous` was refused: it carries `previous`'s doubt.
+    pub fn replacing(self, previous: Option<&Self>) -> Self {
+        Self {
+            carried_doubt: previous
+                .and_then(Self::doubt)
+                .unwrap_or_else(Matrix3::zeros),
+            ..self
         }
     }
 
@@ -318,6 +357,7 @@ impl<T: Scalar> RefusedCluster<T> {
             z_ned_m: z,
             r_ned_m2: r,
             previous: Some((self.z_ned_m, self.r_ned_m2, dt_s)),
+            age_s: self.age_s + dt_s,
             ..*self
         }
     }
@@ -331,7 +371,28 @@ impl<T: Scalar> RefusedCluster<T> {
         Self {
             z_ned_m: self.z_ned_m - dr_ned_m,
             previous: self.previous.map(|(z, r, dt)| (z - dr_ned_m, r, dt)),
+            first: (self.first.0 - dr_ned_m, self.first.1),
             ..*self
+        }
+    }
+
+    /// True when the filter's own drift shows in this cluster (module docs, the recovery of a
+    /// DEGRADED filter): its offset has moved since the first member by more than the
+    /// filter's position variances `p_pos_m2` [m^2] explain, the normalised square of
+    /// `z - z_1` against `R + R_1 + P_pos` beyond the gate. Never for a gross cluster.
+    pub fn drifted(&self, p_pos_m2: &Vector3<T>, gate_3dof: T) -> bool {
+        let (z1, r1) = self.first;
+        !self.gross
+            && normalised_square(&(self.z_ned_m - z1), &(self.r_ned_m2 + r1 + p_pos_m2)) > gate_3dof
+    }
+
+    /// The rate at which the offset moved from the first member to the last [m/s]; zero
+    /// with one member.
+    pub fn drift_rate(&self) -> Vector3<T> {
+        if self.age_s > T::zero() {
+            (self.z_ned_m - self.first.0) / self.age_s
+        } else {
+            Vector3::zeros()
         }
     }
 
@@ -417,9 +478,15 @@ impl<T: Scalar> RefusedCluster<T> {
     }
 
     /// The doubt on the solution's position while this cluster is refused (module docs):
-    /// `z z^T / 4` of the last member's innovation `z` [m^2]; `None` for a gross cluster.
+    /// `z z^T / 4` of the last member's innovation `z` [m^2], none for a gross cluster, plus
+    /// the doubt it carries from a cluster it replaced; `None` when both are none.
     pub fn doubt(&self) -> Option<Matrix3<T>> {
-        (!self.gross).then(|| self.z_ned_m * self.z_ned_m.transpose() * T::c(0.25))
+        let own = (!self.gross).then(|| self.z_ned_m * self.z_ned_m.transpose() * T::c(0.25));
+        let carried = (self.carried_doubt != Matrix3::zeros()).then_some(self.carried_doubt);
+        match (own, carried) {
+            (Some(a), Some(b)) => Some(a + b),
+            (a, b) => a.or(b),
+        }
     }
 
     /// True when this cluster's offset is a typical error of the filter: its normalised
@@ -635,5 +702,54 @@ mod tests {
         assert!(!c.claims(&back, &r, &fast, 1.0, &s, gate));
         // A curvature of 10 m per interval blurs the jump: the chain can no longer tell.
         assert!(!c.claims(&z, &r, &drift(64.0, 100.0), nis, &s, gate));
+    }
+
+    /// The recovery test: a cluster whose offset moved 20 m in 100 s against a filter that
+    /// claims 1 m has drifted (rate 0.2 m/s east); one whose offset held has not, nor a gross
+    /// one, nor the same drift against a filter whose covariance allows it.
+    #[test]
+    fn a_cluster_moving_away_faster_than_the_covariance_allows_has_drifted() {
+        let gate = 16.27;
+        let r = Vector3::repeat(0.25);
+        let start = RefusedCluster::start(Vector3::new(0.0, 5.0, 0.0), r, 60.0, gate, false);
+        assert_eq!(start.drift_rate(), Vector3::zeros());
+        let mut moving = start;
+        let mut held = start;
+        for k in 1..=100 {
+            moving = moving.followed_by(Vector3::new(0.0, 5.0 + 0.2 * k as f64, 0.0), r, 1.0);
+            held = held.followed_by(Vector3::new(0.1, 5.0, -0.1), r, 1.0);
+        }
+        assert!((moving.age_s - 100.0).abs() < 1e-9);
+        assert!((moving.drift_rate() - Vector3::new(0.0, 0.2, 0.0)).norm() < 1e-9);
+        let p_small = Vector3::repeat(1.0);
+        assert!(moving.drifted(&p_small, gate));
+        assert!(!held.drifted(&p_small, gate));
+        assert!(!moving.drifted(&Vector3::repeat(400.0), gate));
+        let gross = RefusedCluster {
+            gross: true,
+            ..moving
+        };
+        assert!(!gross.drifted(&p_small, gate));
+        // A correction by another aid moves every member alike: the drift is unchanged.
+        let dr = Vector3::new(0.0, 3.0, 0.0);
+        assert!((moving.corrected(&dr).drift_rate() - moving.drift_rate()).norm() < 1e-12);
+    }
+
+    /// A gross cluster that starts while a cluster of 3 m was refused keeps its doubt; one
+    /// started afresh has none.
+    #[test]
+    fn a_cluster_started_while_another_was_refused_carries_its_doubt() {
+        let (gate, r) = (16.27, Vector3::repeat(0.25));
+        let before = RefusedCluster::start(Vector3::new(0.0, 3.0, 0.0), r, 40.0, gate, false);
+        let jump = Vector3::new(0.0, -30.0, 0.0);
+        let fresh = RefusedCluster::start(jump, r, 3600.0, gate, true);
+        assert!(fresh.gross && fresh.doubt().is_none());
+        let held = fresh.replacing(Some(&before));
+        let d = held.doubt().expect("the carried doubt");
+        assert!((d[(1, 1)] - 2.25).abs() < 1e-12, "{d}");
+        // Carried through its members.
+        let next = held.followed_by(jump, r, 1.0);
+        assert_eq!(next.doubt(), Some(d));
+        assert!(fresh.replacing(None).doubt().is_none());
     }
 }
