@@ -218,6 +218,9 @@ pub fn config_in<T: Scalar>(c: &FilterConfig<f64>) -> FilterConfig<T> {
                     gyro_floor_rad_s_sq: T::c(z.detector.gyro_floor_rad_s_sq),
                     max_rate_rad_s: T::c(z.detector.max_rate_rad_s),
                     max_gravity_error_mps2: T::c(z.detector.max_gravity_error_mps2),
+                    max_horizontal_specific_force_mps2: T::c(
+                        z.detector.max_horizontal_specific_force_mps2,
+                    ),
                     windows_to_declare: z.detector.windows_to_declare,
                 },
                 velocity_sigma_m_s: T::c(z.velocity_sigma_m_s),

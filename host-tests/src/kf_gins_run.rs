@@ -1,7 +1,8 @@
 //! `nav kf-gins CONFIG.yaml`: a KF-GINS configuration run as it is — its IMU and GNSS text
 //! files, its start (`initpos`, `initvel`, `initatt`, `init*std`), its noise (`imunoise`) and
 //! antenna lever arm — through this project's filter, writing KF-GINS's 11-column `.nav`
-//! trajectory, one row per IMU epoch, in `f64`.
+//! trajectory, one row per IMU epoch after the start (an epoch at `starttime` is the start's,
+//! as in KF-GINS: not integrated, no row), in `f64`.
 
 use crate::aided::{self, AidedReport, AidedSample, AidedSink};
 use crate::aided_cmd::{AidedStart, GivenStart, sequencer};
@@ -189,9 +190,17 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
                 off_rate += u64::from((dt - nominal_dt).abs() > 0.25 * nominal_dt);
             }
             prev_t = Some(row.t_s);
-            // KF-GINS starts at the first epoch at or after `starttime`.
+            // KF-GINS starts at the first epoch at or after `starttime`: its initpos, initvel
+            // and initatt hold at that epoch, whose increment (over the interval before it)
+            // is not integrated (`kf_gins.cpp` adds it as `imupre_` only) and which gets no
+            // row. An epoch at `starttime` is that epoch here too (the start holds at
+            // `starttime`, every later epoch is integrated from it); integrating it moved
+            // the whole trajectory one IMU interval ahead (6 cm at 12 m/s and 200 Hz).
             if row.t_s < t_start {
                 outside_window += 1;
+                continue;
+            }
+            if row.t_s == t_start {
                 continue;
             }
             if row.t_s > t_end {

@@ -918,3 +918,99 @@ fn consistency_families_run_on_consecutive_seeds() {
         "{summary}"
     );
 }
+
+/// KF-GINS's start: `initpos`, `initvel`, `initatt` hold at the first IMU epoch at or after
+/// `starttime`; that epoch's increment (the interval before it) is not integrated and gets no
+/// row (`kf_gins.cpp`: it becomes `imupre_`; the first row is the next epoch's). A car at
+/// 20 m/s along a meridian with an epoch at `starttime`: the first row is the next epoch's and
+/// lies on the truth, not one interval (0.1 m) ahead of it.
+#[test]
+fn kf_gins_starts_at_the_epoch_at_starttime_without_integrating_it() {
+    use host_tests::truth::MeridianFlight;
+    use std::fmt::Write as _;
+    let dir = tempfile::tempdir().unwrap();
+    let flight = MeridianFlight {
+        lat0: 0.5,
+        lon0: 0.1,
+        h: 100.0,
+        speed: 20.0,
+    };
+    let (dt, n, t_start_s) = (0.005, 400, 356_000.0);
+    let mut increments = Vec::new();
+    let mut truths = Vec::new();
+    flight.run(dt, n, |inc, t| {
+        increments.push(*inc);
+        truths.push(*t);
+    });
+    let line = |t: f64, inc: &nav_core::ImuIncrement<f64>| {
+        let (a, b) = (inc.delta_theta_ib_b, inc.delta_v_ib_b);
+        format!(
+            "{t:.6} {:e} {:e} {:e} {:e} {:e} {:e}\n",
+            a.x, a.y, a.z, b.x, b.y, b.z
+        )
+    };
+    // The epoch at starttime carries the interval before the start (the motion is uniform).
+    let mut imu = line(t_start_s, &increments[0]);
+    for (k, inc) in increments.iter().enumerate() {
+        imu += &line(t_start_s + (k + 1) as f64 * dt, inc);
+    }
+    std::fs::write(dir.path().join("imu.txt"), imu).unwrap();
+    // One fix, after the rows checked here.
+    let fix = &truths[199];
+    std::fs::write(
+        dir.path().join("gnss.txt"),
+        format!(
+            "{:.6} {:.11} {:.11} {:.4} 0.5 0.5 1.0\n",
+            t_start_s + 1.0,
+            fix.lat.to_degrees(),
+            fix.lon.to_degrees(),
+            fix.h
+        ),
+    )
+    .unwrap();
+    let mut yaml = String::new();
+    let d = dir.path().display();
+    writeln!(yaml, "imupath: \"{d}/imu.txt\"\ngnsspath: \"{d}/gnss.txt\"").unwrap();
+    writeln!(yaml, "outputpath: \"{d}\"\nimudatalen: 7\nimudatarate: 200").unwrap();
+    writeln!(yaml, "starttime: {t_start_s}\nendtime: -1").unwrap();
+    writeln!(
+        yaml,
+        "initpos: [{:.11}, {:.11}, {}]\ninitvel: [20, 0, 0]\ninitatt: [0, 0, 0]",
+        flight.lat0.to_degrees(),
+        flight.lon0.to_degrees(),
+        flight.h
+    )
+    .unwrap();
+    yaml += "initgyrbias: [0, 0, 0]\ninitaccbias: [0, 0, 0]\n\
+             initgyrscale: [0, 0, 0]\ninitaccscale: [0, 0, 0]\n\
+             initposstd: [0.1, 0.1, 0.1]\ninitvelstd: [0.01, 0.01, 0.01]\n\
+             initattstd: [0.01, 0.01, 0.1]\n\
+             imunoise:\n  arw: [0.003, 0.003, 0.003]\n  vrw: [0.01, 0.01, 0.01]\n  \
+             gbstd: [0.1, 0.1, 0.1]\n  abstd: [10, 10, 10]\n  gsstd: [10, 10, 10]\n  \
+             asstd: [10, 10, 10]\n  corrtime: 1\nantlever: [0, 0, 0]\n";
+    let config = dir.path().join("kf-gins.yaml");
+    std::fs::write(&config, yaml).unwrap();
+    let out = dir.path().join("result.nav");
+    run_ok(nav().arg("kf-gins").arg(&config).arg("--out").arg(&out));
+    let text = std::fs::read_to_string(&out).unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .map(|l| l.split_whitespace().map(|f| f.parse().unwrap()).collect())
+        .collect();
+    // No row at starttime; one per integrated epoch.
+    assert_eq!(rows.len(), n, "{}", rows[0][1]);
+    for k in [0, 1, 100] {
+        let (row, truth) = (&rows[k], &truths[k]);
+        assert!(
+            (row[1] - (t_start_s + (k + 1) as f64 * dt)).abs() < 1e-6,
+            "row {k} at {}",
+            row[1]
+        );
+        // Along the meridian: latitude [deg] to metres.
+        let north_m = (row[2] - truth.lat.to_degrees()).to_radians() * 6.37e6;
+        assert!(
+            north_m.abs() < 0.005,
+            "row {k}: {north_m} m north of the truth"
+        );
+    }
+}

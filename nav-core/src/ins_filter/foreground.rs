@@ -167,6 +167,7 @@ impl<T: Scalar> AidedMechanization<T> {
             Some(det) => det.add(
                 &self.snapshot.omega_ib_b,
                 &(comp.delta_v_ib_b / dt),
+                &self.snapshot.state.q_b_n,
                 dt,
                 self.snapshot.earth.g,
                 self.arw,

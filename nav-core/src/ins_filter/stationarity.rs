@@ -5,11 +5,19 @@
 //! (`vrw^2 / dt` and `arw^2 / dt` per axis; a floor stands for vibration of a stopped engine);
 //! the mean rate must be below [`StationarityConfig::max_rate_rad_s`] and the mean specific force
 //! within [`StationarityConfig::max_gravity_error_mps2`] of gravity [Groves, §15.3.3, the
-//! acceleration-magnitude and variance tests]. A vehicle cruising straight at constant speed
-//! passes the same tests: the filter's innovation gate, not the detector, refuses such a ZUPT.
+//! acceleration-magnitude and variance tests]. The magnitude test is blind to a horizontal
+//! acceleration `a` (it sees `a^2 / 2g`: 0.002 m/s^2 of a 0.2 m/s^2 braking), so the mean
+//! specific force is also levelled by the solution's attitude and its horizontal part held
+//! below [`StationarityConfig::max_horizontal_specific_force_mps2`]: a vehicle easing to a stop
+//! decelerates at some 0.3 m/s^2 while it still creeps at 0.2 m/s, without vibration or rate
+//! that the other tests would see, and a zero velocity taken then (a 0.2 m/s innovation within
+//! the gate of a filter whose velocity 1-sigma is 0.07 m/s) pulled its tilt by 0.2 deg and its
+//! position by 0.9 m, after which the filter refused the true fixes and drifted by hundreds of
+//! metres. A vehicle cruising straight at constant speed passes every test: the filter's
+//! innovation gate, not the detector, refuses such a ZUPT.
 
 use crate::Scalar;
-use nalgebra::Vector3;
+use nalgebra::{UnitQuaternion, Vector3};
 
 /// The detector's thresholds.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -26,13 +34,19 @@ pub struct StationarityConfig<T: Scalar> {
     pub max_rate_rad_s: T,
     /// Largest difference of the mean specific force's magnitude from gravity [m/s^2].
     pub max_gravity_error_mps2: T,
+    /// Largest horizontal part of the mean specific force in the navigation frame [m/s^2]
+    /// (levelled by the solution's attitude: a tilt error `e` reads `g e`).
+    pub max_horizontal_specific_force_mps2: T,
     /// Consecutive still windows before the first update.
     pub windows_to_declare: u32,
 }
 
 impl<T: Scalar> Default for StationarityConfig<T> {
     /// 0.5 s windows, variance within 4x the noise's (floors 0.05 m/s^2 and 0.2 deg/s RMS),
-    /// mean rate below 0.5 deg/s, specific force within 0.05 m/s^2 of gravity, two windows.
+    /// mean rate below 0.5 deg/s, specific force within 0.05 m/s^2 of gravity and its
+    /// horizontal part below 0.1 m/s^2 (a tilt error up to 0.58 deg still passes a true stop;
+    /// a vehicle easing to a stop passes once it decelerates below 0.1 m/s^2, some 0.05 m/s
+    /// from standstill), two windows.
     fn default() -> Self {
         Self {
             window_s: T::c(0.5),
@@ -41,6 +55,7 @@ impl<T: Scalar> Default for StationarityConfig<T> {
             gyro_floor_rad_s_sq: T::c(0.2f64.to_radians() * 0.2f64.to_radians()),
             max_rate_rad_s: T::c(0.5f64.to_radians()),
             max_gravity_error_mps2: T::c(0.05),
+            max_horizontal_specific_force_mps2: T::c(0.1),
             windows_to_declare: 2,
         }
     }
@@ -101,12 +116,16 @@ impl<T: Scalar> Stationarity<T> {
     }
 
     /// Adds one compensated sample: rate `omega_ib_b` [rad/s], specific force `f_ib_b`
-    /// [m/s^2] over `dt` [s]; `g` [m/s^2] local gravity, `arw`, `vrw` the noise densities.
-    /// Returns the window when one ends still and the vehicle has been still long enough.
+    /// [m/s^2] over `dt` [s], `q_b_n` the solution's attitude after it (used at a window's
+    /// end only, to level the mean specific force); `g` [m/s^2] local gravity, `arw`, `vrw`
+    /// the noise densities. Returns the window when one ends still and the vehicle has been
+    /// still long enough.
+    #[allow(clippy::too_many_arguments)]
     pub fn add(
         &mut self,
         omega_ib_b: &Vector3<T>,
         f_ib_b: &Vector3<T>,
+        q_b_n: &UnitQuaternion<T>,
         dt: T,
         g: T,
         arw: T,
@@ -139,10 +158,14 @@ impl<T: Scalar> Stationarity<T> {
                 var <= c.noise_ratio * white * white / dt_mean + floor
             })
         };
+        // The mean specific force in the navigation frame: at a stop `-g_n`, whatever the
+        // slope the vehicle stands on; a horizontal part is an acceleration (or a tilt error).
+        let f_n = q_b_n * mean_f;
         let still = var_ok(&self.sum_f2, &mean_df, vrw, c.accel_floor_mps2_sq)
             && var_ok(&self.sum_w2, &mean_dw, arw, c.gyro_floor_rad_s_sq)
             && mean_w.norm() <= c.max_rate_rad_s
-            && (mean_f.norm() - g).abs() <= c.max_gravity_error_mps2;
+            && (mean_f.norm() - g).abs() <= c.max_gravity_error_mps2
+            && (f_n.x * f_n.x + f_n.y * f_n.y).sqrt() <= c.max_horizontal_specific_force_mps2;
         let window = StillWindow {
             omega_ib_b: mean_w,
             duration_s: self.t,
@@ -166,11 +189,12 @@ mod tests {
     fn still_after_two_windows_and_not_when_turning_or_accelerating() {
         let mut d = Stationarity::<f64>::new(StationarityConfig::default());
         let g = 9.8;
+        let level = UnitQuaternion::identity();
         let f = Vector3::new(0.0, 0.0, -g);
         let w = Vector3::new(5e-5, 0.0, -4e-5);
         let mut out = 0;
         for _ in 0..400 {
-            if d.add(&w, &f, 0.0025, g, 1e-4, 1e-3).is_some() {
+            if d.add(&w, &f, &level, 0.0025, g, 1e-4, 1e-3).is_some() {
                 out += 1;
             }
         }
@@ -180,14 +204,39 @@ mod tests {
         // Turning at 2 deg/s.
         let turn = Vector3::new(0.0, 0.0, 2f64.to_radians());
         for _ in 0..400 {
-            assert!(d.add(&turn, &f, 0.0025, g, 1e-4, 1e-3).is_none());
+            assert!(d.add(&turn, &f, &level, 0.0025, g, 1e-4, 1e-3).is_none());
         }
         assert!(!d.is_still());
         // Accelerating at 1.5 m/s^2 (the magnitude test sees 0.11 m/s^2 of it).
         let acc = Vector3::new(1.5, 0.0, -g);
         for _ in 0..400 {
-            assert!(d.add(&w, &acc, 0.0025, g, 1e-4, 1e-3).is_none());
+            assert!(d.add(&w, &acc, &level, 0.0025, g, 1e-4, 1e-3).is_none());
         }
+    }
+
+    /// Easing to a stop: 0.2 m/s^2 of braking, level, with the specific force's magnitude
+    /// exactly g (the magnitude test sees nothing) and no vibration, is not a stop; the
+    /// vehicle standing on a 5 deg slope, pitched by it, is.
+    #[test]
+    fn braking_gently_is_not_still_and_a_slope_is() {
+        let g = 9.8;
+        let w = Vector3::new(5e-5, 0.0, -4e-5);
+        let level = UnitQuaternion::identity();
+        let braking = Vector3::new(-0.2, 0.0, -(g * g - 0.04_f64).sqrt());
+        let mut d = Stationarity::<f64>::new(StationarityConfig::default());
+        for _ in 0..800 {
+            assert!(d.add(&w, &braking, &level, 0.0025, g, 1e-4, 1e-3).is_none());
+        }
+        assert!(!d.is_still());
+        // Pitched up 5 deg on the slope: the body sees gravity tilted, the levelled mean none.
+        let q_b_n = UnitQuaternion::from_euler_angles(0.0, 5f64.to_radians(), 30f64.to_radians());
+        let f_ib_b = q_b_n.inverse() * Vector3::new(0.0, 0.0, -g);
+        assert!(f_ib_b.x.abs() > 0.8);
+        let mut out = 0;
+        for _ in 0..400 {
+            out += usize::from(d.add(&w, &f_ib_b, &q_b_n, 0.0025, g, 1e-4, 1e-3).is_some());
+        }
+        assert_eq!(out, 1);
     }
 
     /// The samples at which each precision's windows end and declare, on a still FOG-grade
@@ -213,8 +262,17 @@ mod tests {
             let f = Vector3::new(s * uniform(), s * uniform(), -g + s * uniform());
             let w = Vector3::new(1e-5, 2e-5, -3e-5) + Vector3::repeat(arw * uniform());
             let c = |v: Vector3<f64>| v.map(T::c);
-            if d.add(&c(w), &c(f), T::c(dt), T::c(g), T::c(arw), T::c(vrw))
-                .is_some()
+            let level = UnitQuaternion::identity();
+            if d.add(
+                &c(w),
+                &c(f),
+                &level,
+                T::c(dt),
+                T::c(g),
+                T::c(arw),
+                T::c(vrw),
+            )
+            .is_some()
             {
                 at[n.min(11)] = k;
                 n += 1;
