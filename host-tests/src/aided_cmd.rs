@@ -491,7 +491,7 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
 /// the lever arm or the fixes' 1-sigma do not match the data).
 pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
     let p = &r.counters.position;
-    let mut out = Vec::new();
+    let mut out: Vec<String> = r.lost.warning().into_iter().collect();
     if r.start_s.is_some() && p.accepted == 0 {
         out.push(format!(
             "WARNING: no GNSS position fix was used ({} refused, {} invalid, {} before/after the \

@@ -898,3 +898,120 @@ fn consistency_families_run_on_consecutive_seeds() {
         "{summary}"
     );
 }
+
+/// A simulated land vehicle (FOG, 60 s, fixes at 1 Hz) in `d`, and `nav replay --gnss` of
+/// `imu` and `gnss` with `args` added.
+fn lv_fog(d: &Path) {
+    run_ok(
+        nav()
+            .args(["sim", "land-vehicle", "--grade", "fog", "--seconds", "60"])
+            .args(["--gnss-rate", "1", "--format", "bin", "--out"])
+            .arg(d),
+    );
+}
+
+fn replay_gnss(imu: &Path, gnss: &Path, out: &Path, args: &[&str]) -> Command {
+    let mut cmd = nav();
+    cmd.arg("replay")
+        .arg("--imu")
+        .arg(imu)
+        .arg("--gnss")
+        .arg(gnss)
+        .args(["--imu-noise", "fog"])
+        .args(args)
+        .arg("--out")
+        .arg(out);
+    cmd
+}
+
+const GIVEN: [&str; 6] = [
+    "--init-pos",
+    "45,7.5,250",
+    "--init-vel",
+    "0,0,0",
+    "--init-att",
+    "0,0,0",
+];
+const ALIGNED: [&str; 8] = [
+    "--lat",
+    "45",
+    "--lon",
+    "7.5",
+    "--h",
+    "250",
+    "--align-seconds",
+    "15",
+];
+
+/// The GNSS file with its times moved by `dt_s`.
+fn shifted_gnss(d: &Path, dt_s: f64) -> std::path::PathBuf {
+    let fixes = host_tests::gnss::read_gnss(&d.join("gnss.csv")).unwrap();
+    let moved: Vec<_> = fixes
+        .iter()
+        .map(|f| host_tests::gnss::GnssFix {
+            t_s: f.t_s + dt_s,
+            ..*f
+        })
+        .collect();
+    let path = d.join(format!("gnss-{dt_s}.csv"));
+    host_tests::gnss::write_gnss_csv(&path, &moved).unwrap();
+    path
+}
+
+/// Fixes on another clock (GNSS seconds of week against a recording from 0): not one falls
+/// within the IMU data. Was: exit 0 and a complete log, free-inertial (a warning from a given
+/// start; after the alignment not even that, status NAV).
+#[test]
+fn fixes_on_another_clock_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    lv_fog(d);
+    let (imu, out) = (d.join("imu.bin"), d.join("sol.csv"));
+    let week = shifted_gnss(d, 456_250.0);
+    for start in [&GIVEN[..], &ALIGNED[..]] {
+        let msg = run_err(&mut replay_gnss(&imu, &week, &out, start));
+        assert!(
+            msg.contains("no GNSS fix within the IMU data's time span: the 61 fixes are at 456250 .. 456310 s"),
+            "{start:?}: {msg}"
+        );
+        assert!(!out.exists(), "{start:?}: a solution file was left");
+    }
+    // Fixes overlapping the data in part are used where they overlap.
+    let late = shifted_gnss(d, 30.0);
+    for start in [&GIVEN[..], &ALIGNED[..]] {
+        run_ok(&mut replay_gnss(&imu, &late, &out, start));
+        assert!(out.exists());
+        std::fs::remove_file(&out).unwrap();
+    }
+}
+
+/// One second of IMU records lost (a logger's dropout): the mechanization does not move across
+/// it. Was: counted as one flagged sample, no word of the time lost.
+#[test]
+fn lost_imu_time_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    lv_fog(d);
+    let mut rec = host_tests::recording_io::read(&d.join("imu.bin")).unwrap();
+    // 400 records from t = 30 s: the next one ends 1.0025 s after the last one kept.
+    rec.records.drain(12_000..12_400);
+    let imu = d.join("gap.bin");
+    std::fs::write(&imu, rec.to_bytes().unwrap()).unwrap();
+    let out = d.join("sol.csv");
+    for start in [&GIVEN[..], &ALIGNED[..]] {
+        let text = run_ok(&mut replay_gnss(&imu, &d.join("gnss.csv"), &out, start));
+        assert!(
+            text.contains("s of IMU data not navigated in 1 gap(s) (the longest 1.00")
+                && text.contains("ending at t = 31.005 s)"),
+            "{start:?}: {text}"
+        );
+    }
+    // The recording without the gap: no such warning.
+    let text = run_ok(&mut replay_gnss(
+        &d.join("imu.bin"),
+        &d.join("gnss.csv"),
+        &out,
+        &GIVEN,
+    ));
+    assert!(!text.contains("not navigated"), "{text}");
+}
