@@ -486,27 +486,40 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
     .join("\n")
 }
 
-/// Warnings for a run whose GNSS aiding did not work as the user meant: no position fix used
-/// (the solution is free-inertial), or more fixes refused than used (the filter's noise model,
-/// the lever arm or the fixes' 1-sigma do not match the data).
+/// Warnings for a run whose GNSS aiding did not work as the user meant: IMU time not
+/// navigated, and [`position_warning`].
 pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
-    let p = &r.counters.position;
-    let mut out: Vec<String> = r.lost.warning().into_iter().collect();
-    if r.start_s.is_some() && p.accepted == 0 {
-        out.push(format!(
-            "WARNING: no GNSS position fix was used ({} refused, {} invalid, {} before/after the \
-             IMU data, {} bad time tags): the solution is free-inertial",
-            p.rejected, p.invalid, r.outside_imu_data, r.bad_time_tags
-        ));
+    let unused = format!(
+        "{} before/after the IMU data, {} bad time tags",
+        r.outside_imu_data, r.bad_time_tags
+    );
+    let position = r
+        .start_s
+        .and_then(|_| position_warning(&r.counters.position, &unused));
+    r.lost.warning().into_iter().chain(position).collect()
+}
+
+/// The warning for a filter's GNSS position counters `p`, once it ran: no fix used (the
+/// solution is free-inertial; `unused` says where the others went), or more fixes refused than
+/// used (the filter's noise model, the lever arm or the fixes' 1-sigma do not match the data).
+/// The same for a given start, a start in motion and the navigator's aided phase.
+pub fn position_warning(p: &nav_core::ins_filter::AidCounters, unused: &str) -> Option<String> {
+    if p.accepted == 0 {
+        Some(format!(
+            "WARNING: no GNSS position fix was used ({} refused, {} invalid, {unused}): the \
+             solution is free-inertial",
+            p.rejected, p.invalid
+        ))
     } else if p.rejected + p.invalid > p.accepted {
-        out.push(format!(
+        Some(format!(
             "WARNING: more GNSS position fixes refused ({}) or invalid ({}) than used ({}): the \
              filter's IMU noise (--imu-noise, imunoise), the antenna lever arm or the fixes' \
              1-sigma do not match the data, and the solution may be far off",
             p.rejected, p.invalid, p.accepted
-        ));
+        ))
+    } else {
+        None
     }
-    out
 }
 
 #[cfg(test)]

@@ -406,6 +406,16 @@ pub fn replay_aided_cli(
     if let Some(w) = r.file.report.lost.warning() {
         println!("{w}");
     }
+    // The given start's warnings, for the aided phase after the alignment.
+    if let Some(a) = &r.file.report.aided {
+        let unused = format!(
+            "{} before the aided phase, {} after the data",
+            a.fixes_unused, a.fixes_after_data
+        );
+        if let Some(w) = crate::aided_cmd::position_warning(&a.counters.position, &unused) {
+            println!("{w}");
+        }
+    }
     println!(
         "GNSS file {}: {} fixes ({} with a time tag off the IMU clock, left out)",
         gnss.display(),
