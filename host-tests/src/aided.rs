@@ -331,6 +331,24 @@ pub fn check_fixes_in_span(
     ))
 }
 
+/// Why a filter started from a given state never ran although samples came: their counts,
+/// and the limits that refused them (increments given as rates, or in degrees, fail them).
+pub fn no_usable_sample(r: &AidedReport) -> String {
+    let limits = nav_core::InputLimits::<f64>::default();
+    format!(
+        "not one of the {} IMU samples was usable: {} flagged by the reader, {} refused by the \
+         increment limits (an interval beyond {} s, a rate beyond {:.0} deg/s or a specific \
+         force beyond {:.0} m/s^2: rates or degrees where increments in radians and m/s \
+         belong?)",
+        r.samples,
+        r.flagged,
+        r.rejected,
+        limits.max_dt,
+        limits.max_rate.to_degrees(),
+        limits.max_specific_force
+    )
+}
+
 /// Runs `samples` with `fixes` (time order) through `seq` into `sink`; refused when no fix
 /// lies within the samples' time span ([`check_fixes_in_span`]).
 pub fn run<T: Scalar, E: fmt::Display>(

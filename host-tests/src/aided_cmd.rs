@@ -427,8 +427,8 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
                 "the filter never started: {}",
                 match a.start {
                     AidedStart::Motion =>
-                        "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold (5 m/s)",
-                    AidedStart::Given(_) => "no usable IMU sample",
+                        "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold (5 m/s)".to_owned(),
+                    AidedStart::Given(_) => aided::no_usable_sample(&report),
                 }
             );
         }

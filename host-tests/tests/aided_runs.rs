@@ -1021,3 +1021,43 @@ fn lost_imu_time_is_reported() {
     ));
     assert!(!text.contains("not navigated"), "{text}");
 }
+
+/// A KF-GINS IMU file of rates (rad/s, m/s^2) where increments belong: every epoch is refused
+/// by the increment limits. Was: "no IMU epoch between starttime and endtime" (there were
+/// 4000), or "no usable IMU sample" with no count.
+#[test]
+fn increments_given_as_rates_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = data_set(dir.path(), 20.0);
+    let imu = dir.path().join("imu.txt");
+    let rates: String = std::fs::read_to_string(&imu)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let mut f = l.split_whitespace();
+            let t = f.next().unwrap().to_owned();
+            let rest: Vec<String> = f
+                .map(|x| (x.parse::<f64>().unwrap() * 200.0).to_string())
+                .collect();
+            format!("{t} {}\n", rest.join(" "))
+        })
+        .collect();
+    std::fs::write(&imu, rates).unwrap();
+    let out = dir.path().join("rates.nav");
+    let e = run_err(
+        nav()
+            .arg("kf-gins")
+            .arg(&data.config)
+            .arg("--out")
+            .arg(&out),
+    );
+    let n = data.imu_rows;
+    assert!(
+        e.contains(&format!(
+            "not one of the {n} IMU samples was usable: 0 flagged by the reader, {n} refused by \
+             the increment limits"
+        )),
+        "{e}"
+    );
+    assert!(!out.exists());
+}
