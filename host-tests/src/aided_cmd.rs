@@ -496,7 +496,28 @@ pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
     let position = r
         .start_s
         .and_then(|_| position_warning(&r.counters.position, &unused));
-    r.lost.warning().into_iter().chain(position).collect()
+    let velocity = r
+        .start_s
+        .and_then(|_| velocity_warning(&r.counters.velocity));
+    r.lost
+        .warning()
+        .into_iter()
+        .chain(position)
+        .chain(velocity)
+        .collect()
+}
+
+/// The warning for a filter's GNSS velocity counters `v`: more velocity fixes refused or
+/// invalid than used (the positions may carry the run alone, the velocities then ignored
+/// without a word: km/h for m/s, up for down).
+pub fn velocity_warning(v: &nav_core::ins_filter::AidCounters) -> Option<String> {
+    (v.rejected + v.invalid > v.accepted).then(|| {
+        format!(
+            "WARNING: more GNSS velocity fixes refused ({}) or invalid ({}) than used ({}): \
+             their unit (m/s), axes (north, east, down) or 1-sigma do not match the data",
+            v.rejected, v.invalid, v.accepted
+        )
+    })
 }
 
 /// The warning for a filter's GNSS position counters `p`, once it ran: no fix used (the

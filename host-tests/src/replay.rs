@@ -412,7 +412,9 @@ pub fn replay_aided_cli(
             "{} before the aided phase, {} after the data",
             a.fixes_unused, a.fixes_after_data
         );
-        if let Some(w) = crate::aided_cmd::position_warning(&a.counters.position, &unused) {
+        let position = crate::aided_cmd::position_warning(&a.counters.position, &unused);
+        let velocity = crate::aided_cmd::velocity_warning(&a.counters.velocity);
+        for w in position.into_iter().chain(velocity) {
             println!("{w}");
         }
     }

@@ -1061,3 +1061,41 @@ fn increments_given_as_rates_are_named() {
     );
     assert!(!out.exists());
 }
+
+/// GNSS velocities in km/h where m/s belong: the positions carry the run and the filter refuses
+/// nearly every velocity. Was: no word of it.
+#[test]
+fn refused_gnss_velocities_are_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run_ok(
+        nav()
+            .args(["sim", "land-vehicle", "--grade", "fog", "--seconds", "60"])
+            .args(["--gnss-rate", "1", "--gnss-velocity-sigma", "0.05,0.05,0.1"])
+            .args(["--format", "bin", "--out"])
+            .arg(d),
+    );
+    let fixes = host_tests::gnss::read_gnss(&d.join("gnss.csv")).unwrap();
+    let kmh: Vec<_> = fixes
+        .iter()
+        .map(|f| host_tests::gnss::GnssFix {
+            velocity: f.velocity.map(|v| host_tests::gnss::GnssVelocity {
+                v_ned_m_s: v.v_ned_m_s.map(|x| 3.6 * x),
+                ..v
+            }),
+            ..*f
+        })
+        .collect();
+    let gnss = d.join("kmh.csv");
+    host_tests::gnss::write_gnss_csv(&gnss, &kmh).unwrap();
+    let (imu, out) = (d.join("imu.bin"), d.join("sol.csv"));
+    for start in [&GIVEN[..], &ALIGNED[..]] {
+        let text = run_ok(&mut replay_gnss(&imu, &gnss, &out, start));
+        assert!(
+            text.contains("WARNING: more GNSS velocity fixes refused"),
+            "{start:?}: {text}"
+        );
+    }
+    let text = run_ok(&mut replay_gnss(&imu, &d.join("gnss.csv"), &out, &GIVEN));
+    assert!(!text.contains("WARNING"), "{text}");
+}
