@@ -522,7 +522,8 @@ pub fn velocity_warning(v: &nav_core::ins_filter::AidCounters) -> Option<String>
 
 /// The warning for a filter's GNSS position counters `p`, once it ran: no fix used (the
 /// solution is free-inertial; `unused` says where the others went), or more fixes refused than
-/// used (the filter's noise model, the lever arm or the fixes' 1-sigma do not match the data).
+/// used (the filter's noise model, the start, the lever arm or the fixes' 1-sigma do not match
+/// the data).
 /// The same for a given start, a start in motion and the navigator's aided phase.
 pub fn position_warning(p: &nav_core::ins_filter::AidCounters, unused: &str) -> Option<String> {
     if p.accepted == 0 {
@@ -534,8 +535,9 @@ pub fn position_warning(p: &nav_core::ins_filter::AidCounters, unused: &str) -> 
     } else if p.rejected + p.invalid > p.accepted {
         Some(format!(
             "WARNING: more GNSS position fixes refused ({}) or invalid ({}) than used ({}): the \
-             filter's IMU noise (--imu-noise, imunoise), the antenna lever arm or the fixes' \
-             1-sigma do not match the data, and the solution may be far off",
+             filter's IMU noise (--imu-noise, imunoise), the start and its 1-sigma (--init-*, \
+             init*, or the alignment's), the antenna lever arm or the fixes' 1-sigma do not \
+             match the data, and the solution may be far off",
             p.rejected, p.invalid, p.accepted
         ))
     } else {
