@@ -104,6 +104,74 @@ pub struct UpdateRecord {
     pub velocity: Option<AidResult<f64>>,
 }
 
+/// IMU time not navigated: the spans between a navigated sample and the next whose samples
+/// were unusable (a gap beyond the reader's limit, a bad interval) or refused, less the
+/// intervals navigated. The mechanization does not move across them: the solution lags the
+/// vehicle by what it travelled then, and the filter's 1-sigma does not know it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LostImuTime {
+    /// Spans lost (a run of consecutive unnavigated samples is one).
+    pub gaps: u32,
+    /// Their sum [s].
+    pub total_s: f64,
+    /// The longest [s] and the time it ended [s].
+    pub longest_s: f64,
+    /// End of the longest [s].
+    pub longest_end_s: f64,
+    prev_t_us: Option<u64>,
+    open_s: f64,
+}
+
+/// A lost span shorter than this is not reported [s] (rounding of the time tags).
+const LOST_TOLERANCE_S: f64 = 1e-4;
+
+impl LostImuTime {
+    /// One sample ending at `t_us` [us]: navigated over `navigated_dt_s` [s], or not (`None`).
+    pub fn note(&mut self, t_us: u64, navigated_dt_s: Option<f64>) {
+        let Some(prev) = self.prev_t_us.replace(t_us) else {
+            return;
+        };
+        let interval_s = t_us.saturating_sub(prev) as f64 * 1e-6;
+        self.open_s += (interval_s - navigated_dt_s.unwrap_or(0.0)).max(0.0);
+        if navigated_dt_s.is_some() {
+            self.close(t_us);
+        }
+    }
+
+    /// Ends the open span at `t_us` [us] (a navigated sample, or the end of the data).
+    fn close(&mut self, t_us: u64) {
+        let lost_s = core::mem::take(&mut self.open_s);
+        if lost_s > LOST_TOLERANCE_S {
+            self.gaps += 1;
+            self.total_s += lost_s;
+            if lost_s > self.longest_s {
+                self.longest_s = lost_s;
+                self.longest_end_s = t_us as f64 * 1e-6;
+            }
+        }
+    }
+
+    /// Ends the data.
+    pub fn finish(&mut self) {
+        if let Some(t_us) = self.prev_t_us {
+            self.close(t_us);
+        }
+    }
+
+    /// The warning for the terminal, when time was lost.
+    pub fn warning(&self) -> Option<String> {
+        (self.gaps > 0).then(|| {
+            format!(
+                "WARNING: {:.3} s of IMU data not navigated in {} gap(s) (the longest {:.3} s, \
+                 ending at t = {:.3} s): the mechanization does not move across a gap, so the \
+                 solution lags the vehicle by what it travelled meanwhile and its 1-sigma does \
+                 not know it",
+                self.total_s, self.gaps, self.longest_s, self.longest_end_s
+            )
+        })
+    }
+}
+
 /// What an aided run did.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AidedReport {
@@ -127,6 +195,8 @@ pub struct AidedReport {
     pub covariance_faults: u32,
     /// Every update's outcome.
     pub updates: Vec<UpdateRecord>,
+    /// IMU time not navigated.
+    pub lost: LostImuTime,
 }
 
 fn wide(r: &AidResult<impl Scalar>) -> AidResult<f64> {
@@ -228,7 +298,59 @@ impl<T: Scalar, F: FnMut(&AidedRow) -> Result<()>> AidedSink<T> for CsvRows<F> {
     }
 }
 
-/// Runs `samples` with `fixes` (time order) through `seq` into `sink`.
+/// Refuses a run in which not one GNSS fix lies within the IMU data's time span
+/// `imu_span_us` (first and last sample end [us]; `None`: no sample): the two files' time tags
+/// are on different clocks (GNSS seconds of week against a recording that starts at 0, or
+/// milliseconds for seconds), and the run would be free-inertial while looking aided. A file
+/// without fixes, or with some in the span, passes.
+pub fn check_fixes_in_span(
+    fix_times_s: impl IntoIterator<Item = f64>,
+    imu_span_us: Option<(u64, u64)>,
+) -> Result<()> {
+    let times: Vec<f64> = fix_times_s.into_iter().collect();
+    let (Some(first), Some(last)) = (times.first(), times.last()) else {
+        return Ok(());
+    };
+    let Some((a_us, b_us)) = imu_span_us else {
+        return Ok(());
+    };
+    let (a_s, b_s) = (a_us as f64 * 1e-6, b_us as f64 * 1e-6);
+    if times.iter().any(|t| (a_s..=b_s).contains(t)) {
+        return Ok(());
+    }
+    Err(anyhow!(
+        "no GNSS fix within the IMU data's time span: the {} fixes are at {} .. {} s, the IMU \
+         samples at {} .. {} s: the GNSS time tags are on another clock than the recording's \
+         (e.g. GNSS seconds of week against a recording that starts at 0); give the fixes the \
+         recording's time",
+        times.len(),
+        nav_core::number::Number(*first),
+        nav_core::number::Number(*last),
+        nav_core::number::Number(a_s),
+        nav_core::number::Number(b_s)
+    ))
+}
+
+/// Why a filter started from a given state never ran although samples came: their counts,
+/// and the limits that refused them (increments given as rates, or in degrees, fail them).
+pub fn no_usable_sample(r: &AidedReport) -> String {
+    let limits = nav_core::InputLimits::<f64>::default();
+    format!(
+        "not one of the {} IMU samples was usable: {} flagged by the reader, {} refused by the \
+         increment limits (an interval beyond {} s, a rate beyond {:.0} deg/s or a specific \
+         force beyond {:.0} m/s^2: rates or degrees where increments in radians and m/s \
+         belong?)",
+        r.samples,
+        r.flagged,
+        r.rejected,
+        limits.max_dt,
+        limits.max_rate.to_degrees(),
+        limits.max_specific_force
+    )
+}
+
+/// Runs `samples` with `fixes` (time order) through `seq` into `sink`; refused when no fix
+/// lies within the samples' time span ([`check_fixes_in_span`]).
 pub fn run<T: Scalar, E: fmt::Display>(
     mut samples: impl FnMut() -> Result<Option<AidedSample<T>>, E>,
     fixes: &[GnssFix],
@@ -240,8 +362,10 @@ pub fn run<T: Scalar, E: fmt::Display>(
     let inputs: Vec<Option<GnssFixInput<T>>> = fixes.iter().map(fix_input::<T>).collect();
     let mut next_fix = 0;
     let mut first = true;
+    let mut span_us: Option<(u64, u64)> = None;
     while let Some(s) = samples().map_err(|e| anyhow!("{e}"))? {
         report.samples += 1;
+        span_us = Some((span_us.map_or(s.t_us, |(a, _)| a), s.t_us));
         // Fixes due at or before this sample go in first (held by the sequencer until it).
         while let Some(input) = inputs.get(next_fix) {
             let Some(input) = *input else {
@@ -262,13 +386,18 @@ pub fn run<T: Scalar, E: fmt::Display>(
         first = false;
         if s.unusable {
             report.flagged += 1;
+            report.lost.note(s.t_us, None);
             seq.restart_increments();
             continue;
         }
         if s.gap {
             seq.restart_increments();
         }
-        match seq.on_sample(s.t_us, &s.increment) {
+        let navigated = seq.on_sample(s.t_us, &s.increment);
+        report
+            .lost
+            .note(s.t_us, navigated.is_ok().then(|| s.increment.dt.to_f64()));
+        match navigated {
             Err(_) => {
                 report.rejected += 1;
                 continue;
@@ -294,6 +423,8 @@ pub fn run<T: Scalar, E: fmt::Display>(
         }
         sink.sample(s.t_us, ins)?;
     }
+    check_fixes_in_span(fixes.iter().map(|f| f.t_s), span_us)?;
+    report.lost.finish();
     sink.finish()?;
     report.outside_imu_data += (fixes.len() - next_fix) as u64;
     if let Some(ins) = seq.filter() {

@@ -430,8 +430,8 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
                 "the filter never started: {}",
                 match a.start {
                     AidedStart::Motion =>
-                        "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold (5 m/s)",
-                    AidedStart::Given(_) => "no usable IMU sample",
+                        "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold (5 m/s)".to_owned(),
+                    AidedStart::Given(_) => aided::no_usable_sample(&report),
                 }
             );
         }
@@ -489,27 +489,63 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
     .join("\n")
 }
 
-/// Warnings for a run whose GNSS aiding did not work as the user meant: no position fix used
-/// (the solution is free-inertial), or more fixes refused than used (the filter's noise model,
-/// the lever arm or the fixes' 1-sigma do not match the data).
+/// Warnings for a run whose GNSS aiding did not work as the user meant: IMU time not
+/// navigated, and [`position_warning`].
 pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
-    let p = &r.counters.position;
-    let mut out = Vec::new();
-    if r.start_s.is_some() && p.accepted == 0 {
-        out.push(format!(
-            "WARNING: no GNSS position fix was used ({} refused, {} invalid, {} before/after the \
-             IMU data, {} bad time tags): the solution is free-inertial",
-            p.rejected, p.invalid, r.outside_imu_data, r.bad_time_tags
-        ));
+    let unused = format!(
+        "{} before/after the IMU data, {} bad time tags",
+        r.outside_imu_data, r.bad_time_tags
+    );
+    let position = r
+        .start_s
+        .and_then(|_| position_warning(&r.counters.position, &unused));
+    let velocity = r
+        .start_s
+        .and_then(|_| velocity_warning(&r.counters.velocity));
+    r.lost
+        .warning()
+        .into_iter()
+        .chain(position)
+        .chain(velocity)
+        .collect()
+}
+
+/// The warning for a filter's GNSS velocity counters `v`: more velocity fixes refused or
+/// invalid than used (the positions may carry the run alone, the velocities then ignored
+/// without a word: km/h for m/s, up for down).
+pub fn velocity_warning(v: &nav_core::ins_filter::AidCounters) -> Option<String> {
+    (v.rejected + v.invalid > v.accepted).then(|| {
+        format!(
+            "WARNING: more GNSS velocity fixes refused ({}) or invalid ({}) than used ({}): \
+             their unit (m/s), axes (north, east, down) or 1-sigma do not match the data",
+            v.rejected, v.invalid, v.accepted
+        )
+    })
+}
+
+/// The warning for a filter's GNSS position counters `p`, once it ran: no fix used (the
+/// solution is free-inertial; `unused` says where the others went), or more fixes refused than
+/// used (the filter's noise model, the start, the lever arm or the fixes' 1-sigma do not match
+/// the data).
+/// The same for a given start, a start in motion and the navigator's aided phase.
+pub fn position_warning(p: &nav_core::ins_filter::AidCounters, unused: &str) -> Option<String> {
+    if p.accepted == 0 {
+        Some(format!(
+            "WARNING: no GNSS position fix was used ({} refused, {} invalid, {unused}): the \
+             solution is free-inertial",
+            p.rejected, p.invalid
+        ))
     } else if p.rejected + p.invalid > p.accepted {
-        out.push(format!(
+        Some(format!(
             "WARNING: more GNSS position fixes refused ({}) or invalid ({}) than used ({}): the \
-             filter's IMU noise (--imu-noise, imunoise), the antenna lever arm or the fixes' \
-             1-sigma do not match the data, and the solution may be far off",
+             filter's IMU noise (--imu-noise, imunoise), the start and its 1-sigma (--init-*, \
+             init*, or the alignment's), the antenna lever arm or the fixes' 1-sigma do not \
+             match the data, and the solution may be far off",
             p.rejected, p.invalid, p.accepted
-        ));
+        ))
+    } else {
+        None
     }
-    out
 }
 
 #[cfg(test)]

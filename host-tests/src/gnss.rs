@@ -22,8 +22,8 @@
 //! position sigmas from columns 8-10 of a 13-column line). Lines of 7 and 13 columns may mix.
 //!
 //! **Rules** (both formats): a wrong number of fields, a field that is not a number, a time that
-//! is not finite, negative or not strictly increasing, a finite latitude outside [-90, 90] deg and
-//! a last line cut off inside a field ([`crate::text_stream`]) are errors naming the file, the
+//! is not finite, negative or not strictly increasing, a finite latitude outside [-90, 90] deg or
+//! longitude outside [-180, 180] deg, and a last line cut off inside a field ([`crate::text_stream`]) are errors naming the file, the
 //! line and the column; so is a file without a fix. A NaN or infinite position or velocity value,
 //! and a sigma that is zero, negative, NaN or infinite, are **not** file errors: the fix is kept
 //! as read, for the navigation filter to reject and count (a receiver does output such fixes).
@@ -232,6 +232,7 @@ fn kf_gins_fix(
     check_time(v[0], || fields.text(0)).map_err(at)?;
     check_increasing(v[0], previous_t_s, names[0], Record::Line).map_err(at)?;
     check_latitude(v[1], names[1]).map_err(at)?;
+    check_longitude(v[2], names[2]).map_err(at)?;
     let (sigma_ned_m, velocity) = if fields.len() == GNSS_COLUMNS.len() {
         ([v[4], v[5], v[6]], None)
     } else {
@@ -273,6 +274,15 @@ fn check_increasing(
 fn check_latitude(lat_deg: f64, column: &'static str) -> Result<(), TextErrorKind> {
     if lat_deg.is_finite() && !(-90.0..=90.0).contains(&lat_deg) {
         Err(TextErrorKind::BadLatitude { column, lat_deg })
+    } else {
+        Ok(())
+    }
+}
+
+/// A finite longitude must be within [-180, 180] deg (a NaN one is a bad fix, kept).
+fn check_longitude(lon_deg: f64, column: &'static str) -> Result<(), TextErrorKind> {
+    if lon_deg.is_finite() && !(-180.0..=180.0).contains(&lon_deg) {
+        Err(TextErrorKind::BadLongitude { column, lon_deg })
     } else {
         Ok(())
     }
@@ -385,6 +395,7 @@ fn csv_fix(
     let lat_deg = number(1)?;
     check_latitude(lat_deg, CSV_COLUMNS[1])?;
     let (lon_deg, h_m) = (number(2)?, number(3)?);
+    check_longitude(lon_deg, CSV_COLUMNS[2])?;
     let sigma_ned_m = [number(4)?, number(5)?, number(6)?];
     let n = CSV_COLUMNS.len();
     let velocity = if width == n || (n..width).all(|i| record[i].is_empty()) {
@@ -527,6 +538,19 @@ mod tests {
         assert!(m.ends_with("found 6"), "{m}");
         assert!(msg("# nothing\n").contains("no data"));
         assert!(msg("1 95 7 100 1 1 1\n").contains("line 1: column latitude: 95 deg"));
+        // A longitude beyond +-180 deg (367.5 for 7.5) was wrapped without a word.
+        let m = msg("1 45 367.5 100 1 1 1\n");
+        assert!(
+            m.contains("line 1: column longitude: 367.5 deg is outside [-180, 180]"),
+            "{m}"
+        );
+        assert!(msg("1 45 -180.5 100 1 1 1\n").contains("-180.5 deg is outside"));
+        assert_eq!(
+            kf("1 45 -180 100 1 1 1\n2 45 NaN 100 1 1 1\n")
+                .unwrap()
+                .len(),
+            2
+        );
         assert!(msg("1 45 7 100 1 1 1\n2 45 7 100 1 1").contains("truncated: last line 2"));
     }
 
@@ -583,6 +607,11 @@ mod tests {
             "mem.csv: line 3: column t_s: time does not increase: 1 s after 2 s on the previous row"
         );
         assert!(msg(&format!("{h7}\n")).contains("no data"));
+        assert_eq!(
+            msg(&format!("{h7}\n1,45,-352.5,100,1,1,1\n")),
+            "mem.csv: line 2: column lon_deg: longitude -352.5 deg is outside [-180, 180] \
+             (refused, not wrapped: a converter's error)"
+        );
         assert!(msg("").contains("empty file"));
         let m = msg("t_s,lat_deg\n");
         assert!(m.contains("optionally followed by ',v_n_m_s,"), "{m}");

@@ -377,6 +377,13 @@ pub fn read_gps(path: &Path, assumed: &AssumedSigma) -> Result<Vec<crate::gnss::
                 path.display(),
                 k + 2
             );
+            // Refused, not wrapped, as the other GNSS readers do.
+            ensure!(
+                row[1].is_nan() || row[1].abs() <= core::f64::consts::PI,
+                "{}: line {}: longitude beyond 180 deg",
+                path.display(),
+                k + 2
+            );
             Ok(crate::gnss::GnssFix {
                 t_s: *t,
                 lat_rad: row[0],
@@ -656,6 +663,16 @@ mod tests {
         std::fs::write(dir.path().join("gps_time.csv"), "gps_time (sec)\n1\n1\n").unwrap();
         let e = format!("{:#}", read_gps(&gps, &assumed).unwrap_err());
         assert!(e.contains("line 3: time 1 s"), "{e}");
+        // A longitude beyond 180 deg (367 for 7) was wrapped without a word.
+        std::fs::write(dir.path().join("gps_time.csv"), "gps_time (sec)\n0\n1\n").unwrap();
+        std::fs::write(
+            &gps,
+            "gps_lat (deg),gps_lon (deg),gps_alt (m),gps_vN (m/s),gps_vE (m/s),gps_vD (m/s)\n\
+             45,7,100,1,2,3\n45.1,367,100,1,2,3\n",
+        )
+        .unwrap();
+        let e = format!("{:#}", read_gps(&gps, &assumed).unwrap_err());
+        assert!(e.contains("line 3: longitude beyond 180 deg"), "{e}");
     }
 
     /// A fix gnss-ins-sim flags as not visible is left out (an outage); a bad flag or a count

@@ -220,12 +220,20 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
         variance_sums: (0.0, 0.0, 0),
     };
     let report = aided::run(samples, &fixes, seq, &mut sink)?;
-    if report.start_s.is_none() {
+    if report.samples == 0 {
         bail!(
             "no IMU epoch between starttime {} s and endtime {} s in {}",
             t_start,
             t_end,
             c.imu_path.display()
+        );
+    }
+    if report.start_s.is_none() {
+        // Epochs in the window, none navigated: not "no epoch".
+        bail!(
+            "{}: {}",
+            c.imu_path.display(),
+            aided::no_usable_sample(&report)
         );
     }
     // A wrong `imudatarate` marks every epoch a gap (or none): refused before the

@@ -227,6 +227,10 @@ pub struct Report {
     pub final_solution: Solution,
     /// The aided phase's outcome, in an aided run.
     pub aided: Option<AidedOutcome>,
+    /// End times of the first and last samples [us] (`None`: no sample).
+    pub span_us: Option<(u64, u64)>,
+    /// IMU time not navigated (the spans of unusable samples).
+    pub lost: crate::aided::LostImuTime,
 }
 
 /// Why a run failed.
@@ -288,7 +292,12 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
     };
     writeln!(out, "{header}").map_err(PipelineError::Output)?;
     let mut next_fix = fixes.iter().peekable();
+    let mut span_us: Option<(u64, u64)> = None;
+    let mut lost = crate::aided::LostImuTime::default();
     while let Some(s) = source.read_sample().map_err(PipelineError::Source)? {
+        span_us = Some((span_us.map_or(s.t_us, |(a, _)| a), s.t_us));
+        let usable = unusable(s.flags).is_none();
+        lost.note(s.t_us, usable.then_some(f64::from(s.dt_s)));
         while let Some(f) = next_fix.next_if(|f| f.t_us <= s.t_us) {
             navigator.push_fix(crate::gnss_file::narrow::<T>(f));
         }
@@ -315,6 +324,7 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
     writeln!(out, "{}", summary.end_record()).map_err(PipelineError::Output)?;
     out.flush().map_err(PipelineError::Output)?;
     let c = summary.counters;
+    lost.finish();
     Ok(Report {
         samples: c.samples,
         flagged: c.flagged,
@@ -335,6 +345,8 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
                 u32::try_from(next_fix.count()).unwrap_or(u32::MAX),
             )
         }),
+        span_us,
+        lost,
     })
 }
 

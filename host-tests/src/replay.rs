@@ -283,7 +283,13 @@ pub fn replay_aided<T: Scalar>(
         bad_time_tags,
     } = gnss_file::read_fixes(gnss, gnss_sigma)?;
     let file = crate::atomic::write(out, |w| {
-        replay_file_with_fixes::<T, _>(imu, options, &fixes, w)
+        let file = replay_file_with_fixes::<T, _>(imu, options, &fixes, w)?;
+        // Before the log is renamed into place.
+        crate::aided::check_fixes_in_span(
+            fixes.iter().map(|f| f.t_us as f64 * 1e-6),
+            file.report.span_us,
+        )?;
+        Ok::<_, ReplayFailure>(file)
     })?;
     Ok(AidedFileReport {
         file,
@@ -397,6 +403,21 @@ pub fn replay_aided_cli(
     let seconds = started.elapsed().as_secs_f64();
     let precision = if f64_precision { "f64" } else { "f32" };
     println!("{}", summary(imu, out, precision, &r.file));
+    if let Some(w) = r.file.report.lost.warning() {
+        println!("{w}");
+    }
+    // The given start's warnings, for the aided phase after the alignment.
+    if let Some(a) = &r.file.report.aided {
+        let unused = format!(
+            "{} before the aided phase, {} after the data",
+            a.fixes_unused, a.fixes_after_data
+        );
+        let position = crate::aided_cmd::position_warning(&a.counters.position, &unused);
+        let velocity = crate::aided_cmd::velocity_warning(&a.counters.velocity);
+        for w in position.into_iter().chain(velocity) {
+            println!("{w}");
+        }
+    }
     println!(
         "GNSS file {}: {} fixes ({} with a time tag off the IMU clock, left out)",
         gnss.display(),

@@ -4,7 +4,9 @@
 //! Each solution row is compared with the truth at the same time: the truth is interpolated
 //! linearly in time between its rows (latitude, longitude, height, velocity; attitude by slerp).
 //! Solution rows outside the truth's time span (with 1 us of slack, the solution log's
-//! resolution) are skipped and counted. Errors are solution minus truth:
+//! resolution) are skipped and counted, and so are rows inside a gap of the truth (an interval
+//! over [`TRUTH_GAP_FACTOR`] times its median: a straight line across it is not the
+//! trajectory). Errors are solution minus truth:
 //! - position north and east [m]: the latitude and longitude differences times the radii of
 //!   curvature at the truth (`(R_N + h) dlat`, `(R_E + h) cos(lat) dlon`), their horizontal
 //!   norm, and the height difference [m];
@@ -88,7 +90,18 @@ pub struct ErrorSeries {
     pub skipped_before: usize,
     /// Solution rows skipped because they are after the truth's span.
     pub skipped_after: usize,
+    /// Solution rows skipped because they fall in a gap of the truth longer than
+    /// [`TRUTH_GAP_FACTOR`] times its median interval (interpolated across it, the truth is
+    /// not the trajectory).
+    pub skipped_in_gaps: usize,
+    /// The longest interval between truth rows the comparison interpolates across [s].
+    pub max_truth_interval_s: f64,
 }
+
+/// A gap in the truth: an interval between its rows longer than this many times their median
+/// interval. A solution row inside one is not compared: a straight line across a truth hole of
+/// 200 s of a turning car was reported as a 1 km error of the solution.
+pub const TRUTH_GAP_FACTOR: f64 = 5.0;
 
 /// An error quantity of an [`ErrorSample`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -307,15 +320,19 @@ pub fn compare_with_sigma(
         );
     }
     let (t0, t1) = (first.t_s, last.t_s);
+    let max_truth_interval_s = TRUTH_GAP_FACTOR * median_interval_s(truth);
     let mut series = ErrorSeries {
         t_start_s: t0,
         truth_span_s: (t0, t1),
         samples: Vec::with_capacity(solution.len()),
         skipped_before: 0,
         skipped_after: 0,
+        skipped_in_gaps: 0,
+        max_truth_interval_s,
     };
     for (k, s) in solution.iter().enumerate() {
         match interpolate(truth, s.t_s) {
+            Some(_) if in_gap(truth, s.t_s, max_truth_interval_s) => series.skipped_in_gaps += 1,
             Some(t) => series.samples.push(ErrorSample {
                 sigma: sigma.map(|sigma| sigma[k]),
                 ..errors(s, &t)
@@ -326,13 +343,42 @@ pub fn compare_with_sigma(
     }
     if series.samples.is_empty() {
         let t_end = solution.last().map_or(start.t_s, |s| s.t_s);
+        let gaps = if series.skipped_in_gaps > 0 {
+            format!(
+                "; {} rows fall in gaps of the truth longer than {} s",
+                series.skipped_in_gaps,
+                Number(max_truth_interval_s)
+            )
+        } else {
+            String::new()
+        };
         bail!(
             "no solution row within the truth's time span [{t0}, {t1}] s (the solution spans \
-             [{}, {t_end}] s)",
+             [{}, {t_end}] s){gaps}",
             start.t_s
         );
     }
     Ok(series)
+}
+
+/// The median interval between consecutive rows of `truth` [s] (infinite for one row: no
+/// gap can be told).
+fn median_interval_s(truth: &[Truth]) -> f64 {
+    let mut d: Vec<f64> = truth.windows(2).map(|w| w[1].t_s - w[0].t_s).collect();
+    if d.is_empty() {
+        return f64::INFINITY;
+    }
+    d.sort_by(f64::total_cmp);
+    d[d.len() / 2]
+}
+
+/// Whether `t_s` lies strictly between two truth rows more than `max_interval_s` apart.
+fn in_gap(truth: &[Truth], t_s: f64, max_interval_s: f64) -> bool {
+    let k = truth.partition_point(|r| r.t_s <= t_s);
+    match (k.checked_sub(1).and_then(|i| truth.get(i)), truth.get(k)) {
+        (Some(a), Some(b)) => a.t_s < t_s && b.t_s - a.t_s > max_interval_s,
+        _ => false,
+    }
 }
 
 /// The truth at `t_s` [s]: linear in time between the rows around it, attitude by slerp; `None`
@@ -707,6 +753,16 @@ pub fn report_files(
         series.skipped_after,
         series.t_start_s
     );
+    if series.skipped_in_gaps > 0 {
+        let _ = writeln!(
+            out,
+            "skipped {} rows inside gaps of the truth (intervals longer than {} s, {} times its \
+             median): not compared",
+            series.skipped_in_gaps,
+            Number(series.max_truth_interval_s),
+            TRUTH_GAP_FACTOR
+        );
+    }
     out.push_str(&format_table(&series, at_s));
     if let Some(dir) = plots {
         for path in write_plots(&series, dir)? {
@@ -1059,6 +1115,24 @@ mod tests {
         assert!(series.samples[0].horizontal_m < 1e-9);
         assert!(series.samples[0].rotation_deg < 1e-9);
         assert_eq!(series.t_start_s, t[0].t_s);
+
+        // A hole in the truth (rows 3..7 missing, 5 times the median interval of 1 s): rows
+        // inside it are skipped, not compared with a straight line across it; rows on its
+        // edges and in ordinary intervals are.
+        let holed: Vec<Truth> = t
+            .iter()
+            .filter(|r| !(2.5..7.5).contains(&r.t_s))
+            .copied()
+            .collect();
+        let sol: Vec<Truth> = [1.5, 2.0, 4.0, 6.5, 8.0, 9.5].map(row).to_vec();
+        let series = compare(&sol, &holed).unwrap();
+        assert_eq!(series.skipped_in_gaps, 2);
+        assert_eq!(series.samples.len(), 4);
+        let err = compare(&[row(5.0)], &holed).unwrap_err().to_string();
+        assert!(
+            err.contains("1 rows fall in gaps of the truth longer than 5 s"),
+            "{err}"
+        );
 
         // The ends are inside (with 1 us of slack), beyond them not.
         assert!(interpolate(&t, 10.0 + 0.5e-6).is_some());

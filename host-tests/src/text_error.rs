@@ -223,6 +223,14 @@ pub enum TextErrorKind {
         /// The latitude found [deg].
         lat_deg: f64,
     },
+    /// The longitude is outside [-180, 180] deg (refused, not wrapped, as a site's).
+    BadLongitude {
+        /// Column name; the message names the longitude unless the column is called
+        /// `longitude`.
+        column: &'static str,
+        /// The longitude found [deg].
+        lon_deg: f64,
+    },
     /// A sample's time (column `t_s`) is not later than the previous row's.
     SampleTimeNotIncreasing {
         /// The previous row's time [s].
@@ -409,6 +417,18 @@ impl fmt::Display for TextErrorKind {
                 write!(
                     f,
                     "column {column}: {what}{lat_deg} deg is outside [-90, 90]"
+                )
+            }
+            Self::BadLongitude { column, lon_deg } => {
+                let what = if *column == "longitude" {
+                    ""
+                } else {
+                    "longitude "
+                };
+                write!(
+                    f,
+                    "column {column}: {what}{lon_deg} deg is outside [-180, 180] (refused, not \
+                     wrapped: a converter's error)"
                 )
             }
             Self::SampleTimeNotIncreasing { previous, found } => write!(

@@ -1014,3 +1014,204 @@ fn kf_gins_starts_at_the_epoch_at_starttime_without_integrating_it() {
         );
     }
 }
+
+/// A simulated land vehicle (FOG, 60 s, fixes at 1 Hz) in `d`, and `nav replay --gnss` of
+/// `imu` and `gnss` with `args` added.
+fn lv_fog(d: &Path) {
+    run_ok(
+        nav()
+            .args(["sim", "land-vehicle", "--grade", "fog", "--seconds", "60"])
+            .args(["--gnss-rate", "1", "--format", "bin", "--out"])
+            .arg(d),
+    );
+}
+
+fn replay_gnss(imu: &Path, gnss: &Path, out: &Path, args: &[&str]) -> Command {
+    let mut cmd = nav();
+    cmd.arg("replay")
+        .arg("--imu")
+        .arg(imu)
+        .arg("--gnss")
+        .arg(gnss)
+        .args(["--imu-noise", "fog"])
+        .args(args)
+        .arg("--out")
+        .arg(out);
+    cmd
+}
+
+const GIVEN: [&str; 6] = [
+    "--init-pos",
+    "45,7.5,250",
+    "--init-vel",
+    "0,0,0",
+    "--init-att",
+    "0,0,0",
+];
+const ALIGNED: [&str; 8] = [
+    "--lat",
+    "45",
+    "--lon",
+    "7.5",
+    "--h",
+    "250",
+    "--align-seconds",
+    "15",
+];
+
+/// The GNSS file with its times moved by `dt_s`.
+fn shifted_gnss(d: &Path, dt_s: f64) -> std::path::PathBuf {
+    let fixes = host_tests::gnss::read_gnss(&d.join("gnss.csv")).unwrap();
+    let moved: Vec<_> = fixes
+        .iter()
+        .map(|f| host_tests::gnss::GnssFix {
+            t_s: f.t_s + dt_s,
+            ..*f
+        })
+        .collect();
+    let path = d.join(format!("gnss-{dt_s}.csv"));
+    host_tests::gnss::write_gnss_csv(&path, &moved).unwrap();
+    path
+}
+
+/// Fixes on another clock (GNSS seconds of week against a recording from 0): not one falls
+/// within the IMU data. Was: exit 0 and a complete log, free-inertial (a warning from a given
+/// start; after the alignment not even that, status NAV).
+#[test]
+fn fixes_on_another_clock_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    lv_fog(d);
+    let (imu, out) = (d.join("imu.bin"), d.join("sol.csv"));
+    let week = shifted_gnss(d, 456_250.0);
+    for start in [&GIVEN[..], &ALIGNED[..]] {
+        let msg = run_err(&mut replay_gnss(&imu, &week, &out, start));
+        assert!(
+            msg.contains("no GNSS fix within the IMU data's time span: the 61 fixes are at 456250 .. 456310 s"),
+            "{start:?}: {msg}"
+        );
+        assert!(!out.exists(), "{start:?}: a solution file was left");
+    }
+    // Fixes overlapping the data in part are taken where they overlap; 30 s late, the filter
+    // refuses most, and says so whichever the start (after the alignment it said nothing).
+    let late = shifted_gnss(d, 30.0);
+    for start in [&GIVEN[..], &ALIGNED[..]] {
+        let text = run_ok(&mut replay_gnss(&imu, &late, &out, start));
+        assert!(
+            text.contains("WARNING: more GNSS position fixes refused")
+                || text.contains("WARNING: no GNSS position fix was used"),
+            "{start:?}: {text}"
+        );
+        assert!(out.exists());
+        std::fs::remove_file(&out).unwrap();
+    }
+}
+
+/// One second of IMU records lost (a logger's dropout): the mechanization does not move across
+/// it. Was: counted as one flagged sample, no word of the time lost.
+#[test]
+fn lost_imu_time_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    lv_fog(d);
+    let mut rec = host_tests::recording_io::read(&d.join("imu.bin")).unwrap();
+    // 400 records from t = 30 s: the next one ends 1.0025 s after the last one kept.
+    rec.records.drain(12_000..12_400);
+    let imu = d.join("gap.bin");
+    std::fs::write(&imu, rec.to_bytes().unwrap()).unwrap();
+    let out = d.join("sol.csv");
+    for start in [&GIVEN[..], &ALIGNED[..]] {
+        let text = run_ok(&mut replay_gnss(&imu, &d.join("gnss.csv"), &out, start));
+        assert!(
+            text.contains("s of IMU data not navigated in 1 gap(s) (the longest 1.00")
+                && text.contains("ending at t = 31.005 s)"),
+            "{start:?}: {text}"
+        );
+    }
+    // The recording without the gap: no such warning.
+    let text = run_ok(&mut replay_gnss(
+        &d.join("imu.bin"),
+        &d.join("gnss.csv"),
+        &out,
+        &GIVEN,
+    ));
+    assert!(!text.contains("not navigated"), "{text}");
+}
+
+/// A KF-GINS IMU file of rates (rad/s, m/s^2) where increments belong: every epoch is refused
+/// by the increment limits. Was: "no IMU epoch between starttime and endtime" (there were
+/// 4000), or "no usable IMU sample" with no count.
+#[test]
+fn increments_given_as_rates_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = data_set(dir.path(), 20.0);
+    let imu = dir.path().join("imu.txt");
+    let rates: String = std::fs::read_to_string(&imu)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let mut f = l.split_whitespace();
+            let t = f.next().unwrap().to_owned();
+            let rest: Vec<String> = f
+                .map(|x| (x.parse::<f64>().unwrap() * 200.0).to_string())
+                .collect();
+            format!("{t} {}\n", rest.join(" "))
+        })
+        .collect();
+    std::fs::write(&imu, rates).unwrap();
+    let out = dir.path().join("rates.nav");
+    let e = run_err(
+        nav()
+            .arg("kf-gins")
+            .arg(&data.config)
+            .arg("--out")
+            .arg(&out),
+    );
+    let n = data.imu_rows;
+    assert!(
+        e.contains(&format!(
+            "not one of the {n} IMU samples was usable: 0 flagged by the reader, {n} refused by \
+             the increment limits"
+        )),
+        "{e}"
+    );
+    assert!(!out.exists());
+}
+
+/// GNSS velocities in km/h where m/s belong: the positions carry the run and the filter refuses
+/// nearly every velocity. Was: no word of it.
+#[test]
+fn refused_gnss_velocities_are_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run_ok(
+        nav()
+            .args(["sim", "land-vehicle", "--grade", "fog", "--seconds", "60"])
+            .args(["--gnss-rate", "1", "--gnss-velocity-sigma", "0.05,0.05,0.1"])
+            .args(["--format", "bin", "--out"])
+            .arg(d),
+    );
+    let fixes = host_tests::gnss::read_gnss(&d.join("gnss.csv")).unwrap();
+    let kmh: Vec<_> = fixes
+        .iter()
+        .map(|f| host_tests::gnss::GnssFix {
+            velocity: f.velocity.map(|v| host_tests::gnss::GnssVelocity {
+                v_ned_m_s: v.v_ned_m_s.map(|x| 3.6 * x),
+                ..v
+            }),
+            ..*f
+        })
+        .collect();
+    let gnss = d.join("kmh.csv");
+    host_tests::gnss::write_gnss_csv(&gnss, &kmh).unwrap();
+    let (imu, out) = (d.join("imu.bin"), d.join("sol.csv"));
+    for start in [&GIVEN[..], &ALIGNED[..]] {
+        let text = run_ok(&mut replay_gnss(&imu, &gnss, &out, start));
+        assert!(
+            text.contains("WARNING: more GNSS velocity fixes refused"),
+            "{start:?}: {text}"
+        );
+    }
+    let text = run_ok(&mut replay_gnss(&imu, &d.join("gnss.csv"), &out, &GIVEN));
+    assert!(!text.contains("WARNING"), "{text}");
+}

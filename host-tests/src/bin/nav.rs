@@ -1913,4 +1913,7 @@ fn print_summary(imu: &Path, out: &Path, precision: Precision, fr: &FileReport) 
         Precision::F64 => "f64",
     };
     println!("{}", host_tests::replay::summary(imu, out, p, fr));
+    if let Some(w) = fr.report.lost.warning() {
+        println!("{w}");
+    }
 }

@@ -9,6 +9,12 @@
 //!   the velocity's 1-sigma over the speed and the sideslip allowance.
 //! - Velocity: the GNSS velocity, or the difference of two positions over their interval.
 //!
+//! - Fixes farther apart than [`MAX_FIX_INTERVAL_S`] (an outage) are not an interval: their
+//!   position difference is the mean velocity over the outage, not the velocity at the fix, and
+//!   a small velocity change across it does not make the vehicle quasi-static in between. The
+//!   level and velocity found before it are dropped, and the start begins again at the fix
+//!   after it.
+//!
 //! When both are known at a fix, [`MotionAlign::add_fix`] returns the start of the filter with a
 //! large heading 1-sigma; the filter's GNSS updates refine it as the vehicle accelerates and
 //! turns.
@@ -17,6 +23,11 @@ use super::aiding::{GnssPosition, GnssVelocity};
 use super::states::InitialSigma;
 use crate::{NavState, Position, Scalar, attitude};
 use nalgebra::Vector3;
+
+/// Longest interval between two fixes the start takes as consecutive [s]: a 0.5 Hz receiver's
+/// (a position-differenced velocity over a 57 s outage, at a turn, once started the filter 54
+/// deg off in heading with a 5 deg 1-sigma).
+pub const MAX_FIX_INTERVAL_S: f64 = 2.0;
 
 /// The start-in-motion thresholds.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -124,6 +135,12 @@ impl<T: Scalar> MotionAlign<T> {
         if !(dt > T::zero()) {
             return None;
         }
+        if t_s - prev.t_s > MAX_FIX_INTERVAL_S {
+            // An outage: what was known before it is stale (module docs).
+            self.last_velocity = None;
+            self.level = None;
+            return None;
+        }
         // Velocity at this fix and its 1-sigma (RMS over the axes).
         let (v, sv) = match vel {
             Some(v) => (
@@ -194,5 +211,53 @@ impl<T: Scalar> MotionAlign<T> {
                 accel_scale: Vector3::zeros(),
             },
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fix(north_m: f64, east_m: f64) -> GnssPosition<f64> {
+        let p = Position::from_degrees(45.0, 7.5, 250.0).offset_ned([north_m, east_m, 0.0]);
+        GnssPosition {
+            lat_rad: p.lat_f64(),
+            lon_rad: p.lon_f64(),
+            h_m: p.h_f64(),
+            sigma_ned_m: Vector3::repeat(0.5),
+        }
+    }
+
+    /// Level at rest, then `dt_s` later a fix 14 m/s east on average: a start at once when the
+    /// fixes are consecutive, none across an outage (its mean velocity is not the velocity at
+    /// the fix, and the vehicle may have turned and climbed meanwhile).
+    fn start_after(dt_s: f64) -> Option<MotionStart<f64>> {
+        let mut m = MotionAlign::new(MotionAlignConfig::default(), Vector3::zeros());
+        let still = GnssVelocity {
+            v_ned_m_s: Vector3::zeros(),
+            sigma_ned_m_s: Vector3::repeat(0.05),
+        };
+        for k in 0..3 {
+            m.add_imu(&Vector3::new(0.0, 0.0, -9.8 * 0.01), 0.01);
+            assert!(
+                m.add_fix(f64::from(k), &fix(0.0, 0.0), Some(&still))
+                    .is_none()
+            );
+        }
+        assert!(m.has_level());
+        m.add_imu(&Vector3::new(0.0, 0.0, -9.8 * dt_s), dt_s);
+        m.add_fix(2.0 + dt_s, &fix(0.0, 14.0 * dt_s), None)
+    }
+
+    #[test]
+    fn an_outage_is_not_an_interval() {
+        let s = start_after(1.0).expect("consecutive fixes start");
+        assert!(
+            (s.state.v_eb_n.y - 14.0).abs() < 0.1,
+            "{:?}",
+            s.state.v_eb_n
+        );
+        assert!(start_after(MAX_FIX_INTERVAL_S).is_some());
+        assert_eq!(start_after(57.0), None);
     }
 }
