@@ -739,7 +739,7 @@ mod tests {
     /// started afresh has none.
     #[test]
     fn a_cluster_started_while_another_was_refused_carries_its_doubt() {
-        let (gate, r) = (16.27, Vector3::repeat(0.25));
+        let (gate, r) = (16.27_f64, Vector3::repeat(0.25));
         let before = RefusedCluster::start(Vector3::new(0.0, 3.0, 0.0), r, 40.0, gate, false);
         let jump = Vector3::new(0.0, -30.0, 0.0);
         let fresh = RefusedCluster::start(jump, r, 3600.0, gate, true);
