@@ -901,7 +901,6 @@ mod tests {
             .map(|(f, &k)| {
                 let (p0, _) = antenna(&truth[k], &Vector3::zeros(), &options.lever_arm_b_m);
                 p0.ned_to(&Position::from_radians(f.lat_rad, f.lon_rad, f.h_m))
-                    .into()
             })
             .collect();
         assert_eq!(noise.len(), n);
