@@ -530,6 +530,62 @@ fn sim_takes_negative_lever_arms_and_offsets() {
 }
 
 /// An impossible given start is refused with its reason, and no solution file is left.
+/// `--init-std` with nine values gives each axis its own 1-sigma (KF-GINS's initposstd,
+/// initvelstd, initattstd): a heading known to 10 deg no longer makes the level 10 deg too.
+#[test]
+fn replay_takes_a_1_sigma_per_axis_at_the_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run_ok(
+        nav()
+            .args(["sim", "land-vehicle", "--seconds", "5", "--gnss-rate", "1"])
+            .args(["--grade", "mems-tactical", "--format", "bin", "--out"])
+            .arg(d),
+    );
+    let out = d.join("sol.csv");
+    run_ok(
+        nav()
+            .arg("replay")
+            .arg("--imu")
+            .arg(d.join("imu.bin"))
+            .arg("--gnss")
+            .arg(d.join("gnss.csv"))
+            .args(["--imu-noise", "mems-tactical", "--init-pos", "45,7.5,250"])
+            .args(["--init-vel", "0,0,0", "--init-att", "0,0,0", "--init-std"])
+            .arg("1,2,3,0.1,0.2,0.3,0.1,0.2,10")
+            .arg("--out")
+            .arg(&out),
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let first: Vec<f64> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap_or(f64::NAN))
+        .collect();
+    let col = |name: &str| first[header.iter().position(|h| *h == name).unwrap()];
+    for (name, sigma) in [
+        ("sigma_n_m", 1.0),
+        ("sigma_e_m", 2.0),
+        ("sigma_d_m", 3.0),
+        ("sigma_vn_mps", 0.1),
+        ("sigma_ve_mps", 0.2),
+        ("sigma_vd_mps", 0.3),
+        ("sigma_roll_deg", 0.1),
+        ("sigma_pitch_deg", 0.2),
+        ("sigma_yaw_deg", 10.0),
+    ] {
+        // The first row comes after a few samples' propagation: within 5 %.
+        assert!(
+            (col(name) / sigma - 1.0).abs() < 0.05,
+            "{name} {} != {sigma}: {text:.400}",
+            col(name)
+        );
+    }
+}
+
 #[test]
 fn replay_refuses_an_impossible_start() {
     let dir = tempfile::tempdir().unwrap();
@@ -563,6 +619,14 @@ fn replay_refuses_an_impossible_start() {
         (
             ["45,7.5,250", "0,0,0", "0,0,0", "-1,1,1"],
             "positive 1-sigmas",
+        ),
+        (
+            ["45,7.5,250", "0,0,0", "0,0,0", "1,0.1,1,1"],
+            "three or nine positive 1-sigmas",
+        ),
+        (
+            ["45,7.5,250", "0,0,0", "0,0,0", "1,1,1,0.1,0.1,0.1,0.1,0,10"],
+            "three or nine positive 1-sigmas",
         ),
         (
             ["45,7.5,2e6", "0,0,0", "0,0,0", "1,0.1,1"],

@@ -433,10 +433,13 @@ struct ReplayArgs {
     /// Initial roll, pitch, yaw [deg] (initatt).
     #[arg(long, value_name = "ROLL,PITCH,YAW", requires = "init_pos", allow_hyphen_values = true, value_parser = parse_vector3)]
     init_att: Option<[f64; 3]>,
-    /// 1-sigma of the initial position [m], velocity [m/s] and attitude [deg], each for all
-    /// three axes (positive: a zero would claim an exactly known state).
-    #[arg(long, value_name = "POS,VEL,ATT", requires = "init_pos", default_value = "1,0.1,1", allow_hyphen_values = true, value_parser = parse_positive3)]
-    init_std: [f64; 3],
+    /// 1-sigma of the initial position [m], velocity [m/s] and attitude [deg]: three values,
+    /// each for all three axes, or nine, per axis as KF-GINS's initposstd, initvelstd and
+    /// initattstd (north, east, down; roll, pitch, yaw: a heading known to 10 deg with a level
+    /// known to 0.1 deg is `1,1,1,0.1,0.1,0.1,0.1,0.1,10`). Positive: a zero would claim an
+    /// exactly known state.
+    #[arg(long, value_name = "POS,VEL,ATT", requires = "init_pos", default_value = "1,0.1,1", allow_hyphen_values = true, value_parser = parse_init_std)]
+    init_std: [[f64; 3]; 3],
     /// Start the filter in motion from GNSS (level when quasi-static, heading from the track
     /// above 5 m/s): for IMUs that cannot find north (MEMS).
     #[arg(long, requires = "gnss", conflicts_with = "init_pos")]
@@ -964,9 +967,9 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
             pos_deg_m: pos,
             vel_m_s: vel,
             att_deg: att,
-            pos_std_m: [a.init_std[0]; 3],
-            vel_std_m_s: [a.init_std[1]; 3],
-            att_std_deg: [a.init_std[2]; 3],
+            pos_std_m: a.init_std[0],
+            vel_std_m_s: a.init_std[1],
+            att_std_deg: a.init_std[2],
             sensors: Default::default(),
             sensor_sigma: None,
         })),
@@ -1106,16 +1109,32 @@ fn parse_vector3(s: &str) -> Result<[f64; 3], String> {
         .ok_or_else(|| format!("expected X,Y,Z (three finite numbers), not {s:?}"))
 }
 
-/// Three positive numbers (1-sigmas).
-fn parse_positive3(s: &str) -> Result<[f64; 3], String> {
-    let v = parse_vector3(s)?;
-    if v.iter().all(|x| *x > 0.0) {
-        Ok(v)
-    } else {
-        Err(format!(
-            "expected three positive 1-sigmas, not {s:?}: a zero claims an exactly known state \
-             (every fix that disagrees would be refused)"
-        ))
+/// `--init-std`: three positive 1-sigmas (position, velocity, attitude, each for all three
+/// axes) or nine (per axis).
+fn parse_init_std(s: &str) -> Result<[[f64; 3]; 3], String> {
+    let bad = || {
+        format!(
+            "expected three or nine positive 1-sigmas (POS,VEL,ATT or N,E,D,VN,VE,VD,ROLL,PITCH,YAW), \
+             not {s:?}: a zero claims an exactly known state (every fix that disagrees would be \
+             refused)"
+        )
+    };
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| {
+            x.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite() && *x > 0.0)
+        })
+        .collect::<Option<_>>()
+        .ok_or_else(bad)?;
+    match v[..] {
+        [p, v, a] => Ok([[p; 3], [v; 3], [a; 3]]),
+        [..] if v.len() == 9 => Ok(core::array::from_fn(|k| {
+            core::array::from_fn(|i| v[3 * k + i])
+        })),
+        _ => Err(bad()),
     }
 }
 
