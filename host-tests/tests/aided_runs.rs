@@ -931,6 +931,32 @@ fn start_in_motion_from_gnss() {
 
 /// `nav bench consistency --families`: one row per family, on consecutive seeds, and the
 /// families' inside fractions with their mean.
+/// `nav bench outliers --runs N --first-seed S`: the table of seed S, then each outlier over
+/// seeds S..S+N-1, its figures the same as each seed's own run; `--runs 0` is refused.
+#[test]
+fn the_outlier_bench_runs_over_seeds() {
+    let text = run_ok(nav().args(["bench", "outliers", "--runs", "2", "--first-seed", "5"]));
+    assert!(text.contains("; seed 5\n"), "{text}");
+    assert!(text.contains("over seeds 5–6:"), "{text}");
+    let five = outliers(&outlier_case(Grade::Fog, 5)).unwrap();
+    let six = outliers(&outlier_case(Grade::Fog, 6)).unwrap();
+    // The FOG ramp's row: median of two is the larger (index 1), the max the larger too.
+    let (a, b) = (&five[2], &six[2]);
+    assert_eq!(a.name, "ramp");
+    let during = a.max_error_per_sigma.max(b.max_error_per_sigma);
+    let row = text
+        .lines()
+        .filter(|l| l.starts_with("| fog | position | ramp | 500 | "))
+        .nth(1)
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(
+        row.contains(&format!("| {during:.1} / {during:.1} |")),
+        "{row} {a:?} {b:?}"
+    );
+    let err = run_err(nav().args(["bench", "outliers", "--runs", "0"]));
+    assert!(err.contains("--runs must be from 1"), "{err}");
+}
+
 #[test]
 fn consistency_families_run_on_consecutive_seeds() {
     let text = run_ok(nav().args([

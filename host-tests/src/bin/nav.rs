@@ -194,7 +194,7 @@ enum Command {
         /// Monte Carlo runs per cell [default: 60 for consistency (each run's drawn
         /// misalignment holds through all its epochs, so with 30 the fraction of epochs inside
         /// the bounds moves by several percent from one set of seeds to the next), 30 for
-        /// outages]
+        /// outages, 1 for outliers (above 1: each outlier's figures over the seeds)]
         #[arg(long)]
         runs: Option<usize>,
         /// Threads (consistency, outages).
@@ -228,7 +228,7 @@ enum Command {
         #[arg(long)]
         blocks: bool,
         /// Seed of the first run; run k uses this + k (consistency: another value draws an
-        /// independent family of the same size).
+        /// independent family of the same size; outliers: the seed of the table).
         #[arg(long, default_value_t = 1)]
         first_seed: u64,
         /// Independent families of --runs runs per cell, on consecutive seeds (consistency):
@@ -638,54 +638,117 @@ fn bench_outages(runs: usize, threads: usize, outage_s: f64) -> Result<()> {
     Ok(())
 }
 
-/// `nav bench outliers`.
-fn bench_outliers() -> Result<()> {
+/// `nav bench outliers`: seed `first_seed`'s table, and with `runs` above 1 each outlier's
+/// figures over seeds `first_seed ..` (one draw shows one draw: a slow ramp is bounded on
+/// some seeds and not on others).
+fn bench_outliers(runs: usize, first_seed: u64) -> Result<()> {
     use host_tests::gnss_bench::{
-        CODE_RECEIVER_CORRELATED, OUTLIER_VELOCITY_SIGMA_M_S, outlier_case,
+        CODE_RECEIVER_CORRELATED, OUTLIER_VELOCITY_SIGMA_M_S, OutlierOutcome, outlier_case,
         outlier_case_code_receiver, outlier_case_with_velocity, outliers,
     };
     use host_tests::sensor_model::Grade;
+    check_monte_carlo(runs, 1, 1)?;
+    let last_seed = first_seed
+        .checked_add(runs as u64 - 1)
+        .ok_or_else(|| anyhow::anyhow!("--first-seed {first_seed} + --runs {runs} overflows"))?;
     println!(
-        "land vehicle, 1 Hz fixes of 0.5 m white noise (where the GNSS column says so, with velocity of {} m/s, or with a code receiver's correlated error of {:?} m, tau {} s, simulated and declared to the filter; the outliers move the positions alone); each outlier, what the gate did, the largest horizontal error from its start to 30 s after it and the largest ratio of the error to the filter's reported 1-sigma there, and the same from the outlier's end on (the true fixes back)",
+        "land vehicle, 1 Hz fixes of 0.5 m white noise (where the GNSS column says so, with velocity of {} m/s, or with a code receiver's correlated error of {:?} m, tau {} s, simulated and declared to the filter; the outliers move the positions alone); each outlier, what the gate did, the largest horizontal error from its start to 30 s after it and the largest ratio of the error to the filter's reported 1-sigma there, and the same from the outlier's end on (the true fixes back); seed {first_seed}",
         OUTLIER_VELOCITY_SIGMA_M_S[0], CODE_RECEIVER_CORRELATED.0, CODE_RECEIVER_CORRELATED.1
     );
     println!(
         "| grade | GNSS | outlier | at [s] | fixes | refused | max error [m] | 1-sigma there [m] | max error/1-sigma | after its end | DEGRADED | accepted again |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
-    let cases = [
-        (Grade::Fog, "position", outlier_case(Grade::Fog, 1)),
-        (
-            Grade::MemsTactical,
-            "position",
-            outlier_case(Grade::MemsTactical, 1),
-        ),
+    type CaseOf = fn(Grade, u64) -> host_tests::aided_bench::Case;
+    let cases: [(Grade, &str, CaseOf); 4] = [
+        (Grade::Fog, "position", outlier_case),
+        (Grade::MemsTactical, "position", outlier_case),
         (
             Grade::MemsTactical,
             "position + velocity",
-            outlier_case_with_velocity(Grade::MemsTactical, 1),
+            outlier_case_with_velocity,
         ),
         (
             Grade::MemsTactical,
             "position, correlated error declared",
-            outlier_case_code_receiver(Grade::MemsTactical, 1),
+            outlier_case_code_receiver,
         ),
     ];
-    for (grade, gnss, case) in &cases {
-        for o in outliers(case)? {
-            println!(
-                "| {grade} | {gnss} | {} | {} | {} | {} | {:.2} | {:.2} | {:.1} | {:.1} | {} | {} |",
-                o.name,
-                o.t_s,
-                o.fixes,
-                o.refused,
-                o.max_error_m,
-                o.sigma_at_max_m,
-                o.max_error_per_sigma,
-                o.max_error_per_sigma_after,
-                if o.degraded { "yes" } else { "no" },
-                if o.reacquired { "yes" } else { "no" }
-            );
+    // Per case, per seed, its outcomes.
+    let mut all: Vec<Vec<Vec<OutlierOutcome>>> = Vec::new();
+    for (grade, gnss, case_of) in &cases {
+        let mut by_seed = Vec::new();
+        for seed in first_seed..=last_seed {
+            let out = outliers(&case_of(*grade, seed))?;
+            if seed == first_seed {
+                for o in &out {
+                    println!(
+                        "| {grade} | {gnss} | {} | {} | {} | {} | {:.2} | {:.2} | {:.1} | {:.1} | {} | {} |",
+                        o.name,
+                        o.t_s,
+                        o.fixes,
+                        o.refused,
+                        o.max_error_m,
+                        o.sigma_at_max_m,
+                        o.max_error_per_sigma,
+                        o.max_error_per_sigma_after,
+                        if o.degraded { "yes" } else { "no" },
+                        if o.reacquired { "yes" } else { "no" }
+                    );
+                }
+            }
+            by_seed.push(out);
+        }
+        all.push(by_seed);
+    }
+    if runs > 1 {
+        println!(
+            "\nover seeds {first_seed}–{last_seed}: each outlier's median and largest max error/1-sigma while it lasts and after it, the seeds where either passed 3, the fixes refused (fewest–most) and the seeds where the true fixes were accepted again within 60 s"
+        );
+        println!(
+            "| grade | GNSS | outlier | at [s] | median / max during | median / max after | seeds beyond 3 sigma | refused | accepted again |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|");
+        for ((grade, gnss, _), by_seed) in cases.iter().zip(&all) {
+            for k in 0..by_seed[0].len() {
+                let of_k: Vec<&OutlierOutcome> = by_seed.iter().map(|out| &out[k]).collect();
+                let stats = |f: fn(&OutlierOutcome) -> f64| {
+                    let mut v: Vec<f64> = of_k.iter().map(|o| f(o)).collect();
+                    v.sort_by(f64::total_cmp);
+                    (v[v.len() / 2], v[v.len() - 1])
+                };
+                let during = stats(|o| o.max_error_per_sigma);
+                let after = stats(|o| o.max_error_per_sigma_after);
+                let beyond: Vec<String> = (first_seed..)
+                    .zip(&of_k)
+                    .filter(|(_, o)| {
+                        o.max_error_per_sigma > 3.0 || o.max_error_per_sigma_after > 3.0
+                    })
+                    .map(|(s, _)| s.to_string())
+                    .collect();
+                let refused = of_k.iter().map(|o| o.refused);
+                let (lo, hi) = (
+                    refused.clone().min().unwrap_or(0),
+                    refused.max().unwrap_or(0),
+                );
+                println!(
+                    "| {grade} | {gnss} | {} | {} | {:.1} / {:.1} | {:.1} / {:.1} | {} | {lo}–{hi} of {} | {}/{} |",
+                    of_k[0].name,
+                    of_k[0].t_s,
+                    during.0,
+                    during.1,
+                    after.0,
+                    after.1,
+                    if beyond.is_empty() {
+                        "none".to_string()
+                    } else {
+                        beyond.join(", ")
+                    },
+                    of_k[0].fixes,
+                    of_k.iter().filter(|o| o.reacquired).count(),
+                    of_k.len()
+                );
+            }
         }
     }
     Ok(())
@@ -1571,7 +1634,7 @@ fn refuse_unused_bench_options(command: &Command) -> Result<()> {
         // (option, given with other than its default, the measurements that use it)
         let options: [(&str, bool, &[BenchKind]); 12] = [
             ("--passes", *passes != 10, &[M]),
-            ("--runs", runs.is_some(), &[C, O]),
+            ("--runs", runs.is_some(), &[C, O, BenchKind::Outliers]),
             ("--threads", *threads != 2, &[C, O]),
             ("--seconds", *seconds != 600.0, &[C]),
             (
@@ -1584,7 +1647,7 @@ fn refuse_unused_bench_options(command: &Command) -> Result<()> {
             ("--without", !without.is_empty(), &[C]),
             ("--cells", !cells.is_empty(), &[C]),
             ("--blocks", *blocks, &[C]),
-            ("--first-seed", *first_seed != 1, &[C]),
+            ("--first-seed", *first_seed != 1, &[C, BenchKind::Outliers]),
             ("--families", *families != 1, &[C]),
         ];
         if let Some((name, _, kinds)) = options
@@ -1824,8 +1887,10 @@ fn run(cli: Cli) -> Result<()> {
         } => bench_outages(runs.unwrap_or(30), threads, outage_seconds),
         Command::Bench {
             what: BenchKind::Outliers,
+            runs,
+            first_seed,
             ..
-        } => bench_outliers(),
+        } => bench_outliers(runs.unwrap_or(1), first_seed),
         Command::Bench { passes, .. } => {
             let increments = host_tests::bench::flight_increments();
             for (name, rate) in [
