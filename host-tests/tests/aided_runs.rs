@@ -550,9 +550,9 @@ fn replay_takes_a_1_sigma_per_axis_at_the_start() {
             .arg(d.join("imu.bin"))
             .arg("--gnss")
             .arg(d.join("gnss.csv"))
-            .args(["--imu-noise", "mems-tactical", "--init-pos", "45,7.5,250"])
-            .args(["--init-vel", "0,0,0", "--init-att", "0,0,0", "--init-std"])
-            .arg("1,2,3,0.1,0.2,0.3,0.1,0.2,10")
+            .args(["--imu-noise", "mems-tactical"])
+            .args(GIVEN)
+            .args(["--init-std", "1,2,3,0.1,0.2,0.3,0.1,0.2,10"])
             .arg("--out")
             .arg(&out),
     );
@@ -676,14 +676,6 @@ fn replay_refuses_an_impossible_start() {
         assert!(!out.exists(), "{start:?}: a solution file was left");
     }
     // A declared GNSS correlated error out of range is refused with its range.
-    let given = [
-        "--init-pos",
-        "45,7.5,250",
-        "--init-vel",
-        "0,0,0",
-        "--init-att",
-        "0,0,0",
-    ];
     for (extra, reason) in [
         (
             ["-1,1,1", "60"],
@@ -702,22 +694,12 @@ fn replay_refuses_an_impossible_start() {
             "--gnss-correlated-time",
             extra[1],
         ];
-        let msg = replay_given(&[&given[..], &args[..]].concat());
+        let msg = replay_given(&[&GIVEN[..], &args[..]].concat());
         assert!(msg.contains(reason), "{extra:?}: {msg}");
         assert!(!out.exists(), "{extra:?}: a solution file was left");
     }
     // The navigator's aided phase (after an alignment, as the firmware runs it) takes the
     // error too (tests/aided_navigator.rs), checked by the same ranges before any sample.
-    let aligned = [
-        "--lat",
-        "45",
-        "--lon",
-        "7.5",
-        "--h",
-        "250",
-        "--align-seconds",
-        "15",
-    ];
     for (extra, reason) in [
         (
             ["1,1,1e3", "60"],
@@ -734,7 +716,7 @@ fn replay_refuses_an_impossible_start() {
             "--gnss-correlated-time",
             extra[1],
         ];
-        let msg = replay_given(&[&aligned[..], &args[..]].concat());
+        let msg = replay_given(&[&ALIGNED[..], &args[..]].concat());
         assert!(msg.contains(reason), "{extra:?}: {msg}");
         assert!(!out.exists(), "{extra:?}: a solution file was left");
     }
@@ -746,15 +728,7 @@ fn replay_refuses_an_impossible_start() {
         ["--lat", "10"],
         ["--lever-arm", "1,1,1"],
     ] {
-        let start = [
-            "--init-pos",
-            "45,7.5,250",
-            "--init-vel",
-            "0,0,0",
-            "--init-att",
-            "0,0,0",
-        ];
-        let msg = replay_given(&[&start[..], &extra[..]].concat());
+        let msg = replay_given(&[&GIVEN[..], &extra[..]].concat());
         assert!(
             msg.contains(extra[0]) && msg.contains("cannot be used with"),
             "{extra:?}: {msg}"
