@@ -461,6 +461,15 @@ mod app {
             OVERRUNS.load(Ordering::Relaxed),
             last_ready_us
         );
+        if c.gaps.bridged > 0 || c.gaps.lost > 0 {
+            defmt::warn!(
+                "IMU data gaps while navigating: {=u32} bridged, {=u32} beyond the bridge (solution lost), {=u64} us in all, the longest {=u64} us",
+                c.gaps.bridged,
+                c.gaps.lost,
+                c.gaps.time_us,
+                c.gaps.longest_us
+            );
+        }
         let mut aided_per_sample = None;
         if AIDED_COMPILED_IN && let Some(filter) = &summary.filter {
             let after_data = gnss.as_ref().map_or(0, |(f, n)| f.remaining(*n));

@@ -104,10 +104,11 @@ pub struct UpdateRecord {
     pub velocity: Option<AidResult<f64>>,
 }
 
-/// IMU time not navigated: the spans between a navigated sample and the next whose samples
-/// were unusable (a gap beyond the reader's limit, a bad interval) or refused, less the
-/// intervals navigated. The mechanization does not move across them: the solution lags the
-/// vehicle by what it travelled then, and the filter's 1-sigma does not know it.
+/// IMU time not covered by a navigated sample: the spans between a navigated sample and the
+/// next whose samples were unusable (a gap beyond the reader's limit, a bad interval) or
+/// refused, less the intervals navigated. The navigation bridges them (`nav_core::gap`: the
+/// rates either side, the filter's 1-sigma widened, a span beyond
+/// [`nav_core::gap::MAX_BRIDGED_S`] lost); this is the data's account of them for the terminal.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LostImuTime {
     /// Spans lost (a run of consecutive unnavigated samples is one).
@@ -162,11 +163,25 @@ impl LostImuTime {
     pub fn warning(&self) -> Option<String> {
         (self.gaps > 0).then(|| {
             format!(
-                "WARNING: {:.3} s of IMU data not navigated in {} gap(s) (the longest {:.3} s, \
-                 ending at t = {:.3} s): the mechanization does not move across a gap, so the \
-                 solution lags the vehicle by what it travelled meanwhile and its 1-sigma does \
-                 not know it",
-                self.total_s, self.gaps, self.longest_s, self.longest_end_s
+                "WARNING: {:.3} s of IMU data missing in {} gap(s) (the longest {:.3} s, ending \
+                 at t = {:.3} s): {}",
+                self.total_s,
+                self.gaps,
+                self.longest_s,
+                self.longest_end_s,
+                if self.longest_s <= nav_core::gap::MAX_BRIDGED_S {
+                    format!(
+                        "bridged with the rates either side (an aided run's 1-sigma widened for \
+                         the motion a gap may hide; up to {} s are bridged)",
+                        nav_core::gap::MAX_BRIDGED_S
+                    )
+                } else {
+                    format!(
+                        "a gap beyond {} s is not bridged: the solution is lost from there (an \
+                         aided run's status DEGRADED)",
+                        nav_core::gap::MAX_BRIDGED_S
+                    )
+                }
             )
         })
     }

@@ -128,6 +128,31 @@ pub struct CaseResult {
     pub rejected: u32,
 }
 
+/// The filter's reported covariance of position, velocity and attitude, in [`state_error`]'s
+/// order: its own, with the reported position block (a refused cluster's doubt included).
+pub fn navigation_covariance(ins: &AidedIns<f64>) -> SMatrix<f64, 9, 9> {
+    let p = ins.covariance();
+    let blocks = [POS, VEL, ATT];
+    let mut p9 = SMatrix::<f64, 9, 9>::zeros();
+    for (a, ia) in blocks.iter().enumerate() {
+        for (b, ib) in blocks.iter().enumerate() {
+            p9.fixed_view_mut::<3, 3>(3 * a, 3 * b)
+                .copy_from(&p.fixed_view::<3, 3>(*ia, *ib));
+        }
+    }
+    p9.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&ins.position_covariance());
+    p9
+}
+
+/// The normalised estimation error squared `e^T P^-1 e` (infinite when `P` is not positive
+/// definite).
+pub fn nees(p9: &SMatrix<f64, 9, 9>, e: &SVector<f64, 9>) -> f64 {
+    p9.cholesky()
+        .map(|c| e.dot(&c.solve(e)))
+        .unwrap_or(f64::INFINITY)
+}
+
 /// Error of the filter's state against the truth: position NED [m], velocity [m/s], attitude
 /// `phi` [rad] (computed minus true, the filter's convention).
 pub fn state_error(ins_state: &NavState<f64>, truth: &Truth) -> SVector<f64, 9> {
@@ -208,21 +233,8 @@ impl AidedSink<f64> for Consistency<'_> {
         if let Some(truth) = interpolate(self.truth, t_s) {
             let e = state_error(ins.state(), &truth);
             let p = ins.covariance();
-            let blocks = [POS, VEL, ATT];
-            let mut p9 = SMatrix::<f64, 9, 9>::zeros();
-            for (a, ia) in blocks.iter().enumerate() {
-                for (b, ib) in blocks.iter().enumerate() {
-                    p9.fixed_view_mut::<3, 3>(3 * a, 3 * b)
-                        .copy_from(&p.fixed_view::<3, 3>(*ia, *ib));
-                }
-            }
-            // The reported position covariance (with a refused cluster's doubt).
-            p9.fixed_view_mut::<3, 3>(0, 0)
-                .copy_from(&ins.position_covariance());
-            let nees = p9
-                .cholesky()
-                .map(|c| e.dot(&c.solve(&e)))
-                .unwrap_or(f64::INFINITY);
+            let p9 = navigation_covariance(ins);
+            let nees = nees(&p9, &e);
             let block = |b: usize| {
                 let eb = e.fixed_rows::<3>(3 * b).into_owned();
                 p9.fixed_view::<3, 3>(3 * b, 3 * b)

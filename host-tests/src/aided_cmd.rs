@@ -6,7 +6,7 @@ use crate::atomic;
 use crate::gnss::{self, GnssFix};
 use crate::recording_io::ReplaySource;
 use crate::sensor_model::Grade;
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Result, anyhow, bail};
 use hal_adapters::drivers::NoiseSpec;
 use nav_core::ins_filter::limits::MIN_BIAS_INSTABILITY_TIME_S;
 use nav_core::ins_filter::model::FilterNoise;
@@ -206,6 +206,10 @@ pub fn config_in<T: Scalar>(c: &FilterConfig<f64>) -> FilterConfig<T> {
             }
         }),
         gate_nis: T::c(c.gate_nis),
+        gap_dynamics: nav_core::gap::GapDynamics {
+            omega_sigma_rad_s: T::c(c.gap_dynamics.omega_sigma_rad_s),
+            f_sigma_mps2: T::c(c.gap_dynamics.f_sigma_mps2),
+        },
         rejections_to_degrade: c.rejections_to_degrade,
         max_horizontal_sigma_m: T::c(c.max_horizontal_sigma_m),
         zero_motion: c
@@ -413,8 +417,7 @@ pub fn sequencer<T: Scalar>(
 /// Runs an aided replay in precision `T`, writing the log atomically.
 pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
     atomic::refuse_same_file(&[&a.imu, &a.gnss], &a.out)?;
-    let fixes: Vec<GnssFix> = gnss::read_gnss_assuming(&a.gnss, a.gnss_sigma.as_ref())
-        .with_context(|| format!("GNSS file {}", a.gnss.display()))?;
+    let fixes: Vec<GnssFix> = crate::gnss_file::read_as_text_fixes(&a.gnss, a.gnss_sigma.as_ref())?;
     let seq = sequencer::<T>(&a.config, &a.start)?;
     let (mut source, _format) = ReplaySource::open(&a.imu)?;
     let report = atomic::write(&a.out, |w| -> Result<(AidedReport, u64)> {
@@ -470,11 +473,12 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
         line("zero velocity", &c.zero_velocity),
         line("zero rate", &c.zero_rate),
         format!(
-            "fixes: {} received, {} before/after the IMU data, {} bad time tags, {} out of order, {} late, {} used by the start",
+            "fixes: {} received, {} before/after the IMU data, {} bad time tags, {} out of order, {} beyond the queue, {} late, {} used by the start",
             r.fixes.received,
             r.outside_imu_data,
             r.bad_time_tags,
             r.fixes.out_of_order,
+            r.fixes.queue_full,
             r.fixes.late,
             r.fixes.for_start
         ),

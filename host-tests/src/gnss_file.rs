@@ -77,6 +77,34 @@ pub fn read_fixes(path: &Path, assumed: Option<&gnss::AssumedSigma>) -> Result<G
     Ok(out)
 }
 
+/// Reads a GNSS file of any format ([`read_fixes`]) as text fixes, for the runs that take
+/// those (a given start, a start in motion): a binary record's fix, taken back to the text
+/// form, goes through [`fix_input`] to the same fix. Errors name the file.
+pub fn read_as_text_fixes(
+    path: &Path,
+    assumed: Option<&gnss::AssumedSigma>,
+) -> Result<Vec<GnssFix>> {
+    if path.is_dir() || !is_record_file(path)? {
+        return gnss::read_gnss_assuming(path, assumed)
+            .with_context(|| format!("GNSS file {}", path.display()));
+    }
+    Ok(read_fixes(path, assumed)?
+        .fixes
+        .iter()
+        .map(|f| GnssFix {
+            t_s: f.t_us as f64 * 1e-6,
+            lat_rad: f.position.lat_rad,
+            lon_rad: f.position.lon_rad,
+            h_m: f.position.h_m,
+            sigma_ned_m: f.position.sigma_ned_m.into(),
+            velocity: f.velocity.map(|v| gnss::GnssVelocity {
+                v_ned_m_s: v.v_ned_m_s.into(),
+                sigma_ned_m_s: v.sigma_ned_m_s.into(),
+            }),
+        })
+        .collect())
+}
+
 /// nav-core's fix of a binary record (the firmware's conversion, in `f64`).
 pub fn fix_of_record(r: &GnssRecord) -> GnssFixInput<f64> {
     GnssFixInput {
@@ -237,6 +265,29 @@ mod tests {
             format!("{:?}", Some(f32_fix)),
             format!("{:?}", fix_input::<f32>(&fixes()[1]))
         );
+    }
+
+    /// The given start and the start in motion take text fixes: a binary file gives them the
+    /// same fixes as its text (was: refused as a GNSS file with an unknown header, while the
+    /// run after an alignment took it).
+    #[test]
+    fn a_binary_file_reads_as_the_same_text_fixes() {
+        let dir = tempfile::tempdir().unwrap();
+        let csv = dir.path().join("gnss.csv");
+        let bin = dir.path().join("gnss.bin");
+        gnss::write_gnss_csv(&csv, &fixes()).unwrap();
+        convert(&csv, &bin, None).unwrap();
+        let (a, b) = (
+            read_as_text_fixes(&csv, None).unwrap(),
+            read_as_text_fixes(&bin, None).unwrap(),
+        );
+        assert_eq!(a.len(), 5);
+        let inputs = |f: &[GnssFix]| -> Vec<String> {
+            f.iter()
+                .map(|f| format!("{:?}", fix_input::<f64>(f)))
+                .collect()
+        };
+        assert_eq!(inputs(&a), inputs(&b));
     }
 
     #[test]

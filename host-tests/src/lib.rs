@@ -44,6 +44,7 @@ pub mod config_cmd;
 pub mod decode;
 pub mod emulate;
 pub mod filter_bench;
+pub mod gap_bench;
 pub mod generate;
 pub mod gnss;
 pub mod gnss_bench;

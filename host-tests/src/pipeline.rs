@@ -176,8 +176,13 @@ impl fmt::Display for AidedOutcome {
         let x = &self.fixes;
         writeln!(
             f,
-            "  fixes: {} received while aided, {} out of order, {} late; {} before the aided phase, {} after the data",
-            x.received, x.out_of_order, x.late, self.fixes_unused, self.fixes_after_data
+            "  fixes: {} received while aided, {} out of order, {} beyond the queue, {} late; {} before the aided phase, {} after the data",
+            x.received,
+            x.out_of_order,
+            x.queue_full,
+            x.late,
+            self.fixes_unused,
+            self.fixes_after_data
         )?;
         let (p, v, a) = (self.sigma_ned_m, self.sigma_v_ned_m_s, self.sigma_att_deg);
         write!(

@@ -10,6 +10,7 @@ use host_tests::gnss_bench::{
 };
 use host_tests::gnss_sim::{CorrelatedError, GnssSimOptions};
 use host_tests::sensor_model::Grade;
+use nav_core::ins_filter::FilterStatus;
 use std::path::Path;
 use std::process::Command;
 
@@ -1171,26 +1172,39 @@ fn fixes_on_another_clock_are_refused() {
     }
 }
 
-/// One second of IMU records lost (a logger's dropout): the mechanization does not move across
-/// it. Was: counted as one flagged sample, no word of the time lost.
+/// IMU records lost (a logger's dropout): one second is bridged, and says so; six seconds
+/// are beyond the bridge, and the run ends DEGRADED. Was: the mechanization stood still across
+/// the gap, the status said NAV, and the warning said the 1-sigma did not know it.
 #[test]
 fn lost_imu_time_is_reported() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     lv_fog(d);
-    let mut rec = host_tests::recording_io::read(&d.join("imu.bin")).unwrap();
-    // 400 records from t = 30 s: the next one ends 1.0025 s after the last one kept.
-    rec.records.drain(12_000..12_400);
-    let imu = d.join("gap.bin");
-    std::fs::write(&imu, rec.to_bytes().unwrap()).unwrap();
     let out = d.join("sol.csv");
-    for start in [&GIVEN[..], &ALIGNED[..]] {
-        let text = run_ok(&mut replay_gnss(&imu, &d.join("gnss.csv"), &out, start));
-        assert!(
-            text.contains("s of IMU data not navigated in 1 gap(s) (the longest 1.00")
-                && text.contains("ending at t = 31.005 s)"),
-            "{start:?}: {text}"
-        );
+    for (records, bridged) in [(400, true), (2_400, false)] {
+        let mut rec = host_tests::recording_io::read(&d.join("imu.bin")).unwrap();
+        // From t = 30 s: the next record ends `records` periods + one after the last one kept.
+        rec.records.drain(12_000..12_000 + records);
+        let imu = d.join("gap.bin");
+        std::fs::write(&imu, rec.to_bytes().unwrap()).unwrap();
+        for start in [&GIVEN[..], &ALIGNED[..]] {
+            let text = run_ok(&mut replay_gnss(&imu, &d.join("gnss.csv"), &out, start));
+            let lost = format!(
+                "s of IMU data missing in 1 gap(s) (the longest {}",
+                records / 400
+            );
+            assert!(text.contains(&lost), "{start:?}: {text}");
+            assert_eq!(
+                text.contains("bridged with the rates either side"),
+                bridged,
+                "{text}"
+            );
+            assert_eq!(!bridged, text.contains("is not bridged"), "{text}");
+            let log = std::fs::read_to_string(&out).unwrap();
+            let last_row = log.lines().rev().find(|l| !l.starts_with('#')).unwrap();
+            let status = if bridged { "NAV" } else { "DEGRADED" };
+            assert!(last_row.ends_with(status), "{start:?}: {last_row}");
+        }
     }
     // The recording without the gap: no such warning.
     let text = run_ok(&mut replay_gnss(
@@ -1199,7 +1213,33 @@ fn lost_imu_time_is_reported() {
         &out,
         &GIVEN,
     ));
-    assert!(!text.contains("not navigated"), "{text}");
+    assert!(!text.contains("missing in"), "{text}");
+}
+
+/// Gaps in the IMU data over a family (grades, seeds, gap times drawn from the seed): a gap
+/// within the bridge leaves an error its widened covariance covers (the NEES of position,
+/// velocity and attitude at the first sample after it within the 99.9 % point of chi^2(9),
+/// the horizontal error within 3.5 sigma for 30 s), and the filter takes the fixes after it.
+/// Without the bridge a 1 s gap left 20-100 m and 80 sigma, and most later fixes refused; a
+/// gap beyond the bridge ends the run DEGRADED.
+#[test]
+fn gaps_in_the_imu_data_are_bridged_within_their_sigma() {
+    use host_tests::gap_bench::{gap_case, gap_run, gap_start_s};
+    const NEES9_999: f64 = 27.877;
+    for grade in [Grade::Fog, Grade::MemsConsumer] {
+        for seed in 1..=3 {
+            for lost_s in [0.3, 1.0, 3.0] {
+                let o = gap_run(&gap_case(grade, seed), gap_start_s(seed), lost_s).unwrap();
+                let what = format!("{grade} seed {seed}, {lost_s} s: {o:?}");
+                assert!(o.nees_after < NEES9_999, "{what}");
+                assert!(o.max_error_per_sigma < 3.5, "{what}");
+                assert!(o.refused <= 1, "{what}");
+                assert_eq!(o.status, FilterStatus::Nominal, "{what}");
+            }
+        }
+    }
+    let o = gap_run(&gap_case(Grade::Fog, 1), gap_start_s(1), 6.0).unwrap();
+    assert_eq!(o.status, FilterStatus::ImuLost, "{o:?}");
 }
 
 /// A KF-GINS IMU file of rates (rad/s, m/s^2) where increments belong: every epoch is refused

@@ -20,6 +20,7 @@ pub mod attitude;
 pub mod calibration;
 pub mod coning;
 pub mod earth;
+pub mod gap;
 pub mod increment;
 pub mod ins_filter;
 pub mod navigator;

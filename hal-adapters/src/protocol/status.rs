@@ -104,6 +104,9 @@ bitflags! {
         /// The run's configuration is the compiled-in one: no configuration frame was
         /// accepted in the standby window.
         const DEFAULT_CONFIG = 1 << 13;
+        /// A gap in the IMU data too long to bridge: the solution is lost for the rest of
+        /// the run (nav-core's `gap`).
+        const IMU_LOST = 1 << 14;
     }
 }
 
@@ -254,7 +257,8 @@ impl StatusModel {
         let degraded = StatusFlags::AIDING_REJECTED
             | StatusFlags::AIDING_LOST
             | StatusFlags::SIGMA_ABOVE_LIMIT
-            | StatusFlags::COVARIANCE_FAULT;
+            | StatusFlags::COVARIANCE_FAULT
+            | StatusFlags::IMU_LOST;
         let status = if flags.intersects(failed) {
             NavStatus::Fault
         } else {
@@ -303,6 +307,7 @@ fn nav_flags(nav: NavigatorState) -> StatusFlags {
         Some(FilterStatus::AidingRejected) => f |= StatusFlags::AIDING_REJECTED,
         Some(FilterStatus::SigmaAboveLimit) => f |= StatusFlags::SIGMA_ABOVE_LIMIT,
         Some(FilterStatus::CovarianceFault) => f |= StatusFlags::COVARIANCE_FAULT,
+        Some(FilterStatus::ImuLost) => f |= StatusFlags::IMU_LOST,
     }
     f
 }
@@ -399,6 +404,11 @@ mod tests {
                 state(Stage::Aligned, Some(FilterStatus::CovarianceFault)),
                 NavStatus::Degraded,
                 StatusFlags::COVARIANCE_FAULT,
+            ),
+            (
+                state(Stage::Aligned, Some(FilterStatus::ImuLost)),
+                NavStatus::Degraded,
+                StatusFlags::IMU_LOST,
             ),
             (
                 state(Stage::Failed, None),

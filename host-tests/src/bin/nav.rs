@@ -194,7 +194,7 @@ enum Command {
         /// Monte Carlo runs per cell [default: 60 for consistency (each run's drawn
         /// misalignment holds through all its epochs, so with 30 the fraction of epochs inside
         /// the bounds moves by several percent from one set of seeds to the next), 30 for
-        /// outages, 1 for outliers (above 1: each outlier's figures over the seeds)]
+        /// outages, 1 for outliers (above 1: each outlier's figures over the seeds), 10 for gaps]
         #[arg(long)]
         runs: Option<usize>,
         /// Threads (consistency, outages).
@@ -365,6 +365,8 @@ enum BenchKind {
     Outages,
     /// GNSS outliers.
     Outliers,
+    /// Gaps in the IMU data.
+    Gaps,
 }
 
 /// Recording files of `nav sim`.
@@ -749,6 +751,55 @@ fn bench_outliers(runs: usize, first_seed: u64) -> Result<()> {
                     of_k.len()
                 );
             }
+        }
+    }
+    Ok(())
+}
+
+/// `nav bench gaps`: per grade and gap length, `runs` land-vehicle runs (seeds `first_seed
+/// ..`), each with one gap of its IMU records at a time drawn from its seed.
+fn bench_gaps(runs: usize, first_seed: u64) -> Result<()> {
+    use host_tests::gap_bench::{GapOutcome, WATCH_S, gap_case, gap_run, gap_start_s};
+    use host_tests::sensor_model::Grade;
+    check_monte_carlo(runs, 1, 1)?;
+    let last_seed = first_seed
+        .checked_add(runs as u64 - 1)
+        .ok_or_else(|| anyhow::anyhow!("--first-seed {first_seed} + --runs {runs} overflows"))?;
+    // chi^2(9) at 99.9 %.
+    const NEES9_999: f64 = 27.877;
+    println!(
+        "land vehicle, 300 s at 200 Hz, 1 Hz fixes of 0.5 m; one gap of the IMU records per run at 60-240 s, bridged with the rates either side (nav_core::gap; at most {} s); seeds {first_seed}-{last_seed}: the NEES of position, velocity and attitude at the first sample after the gap (9 dof, 99.9 % point {NEES9_999}), the largest horizontal error per reported 1-sigma over the {WATCH_S} s after it, the largest error, the fixes refused then, and the runs that ended DEGRADED",
+        nav_core::gap::MAX_BRIDGED_S
+    );
+    println!(
+        "| grade | gap [s] | NEES after: median / max | runs beyond 99.9 % | max error/1-sigma: median / max | max error [m]: median / max | refused | DEGRADED |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    for grade in [Grade::Fog, Grade::MemsTactical, Grade::MemsConsumer] {
+        for lost_s in [0.1, 0.5, 1.0, 2.0, 4.0, 6.0] {
+            let mut out: Vec<GapOutcome> = Vec::new();
+            for seed in first_seed..=last_seed {
+                out.push(gap_run(&gap_case(grade, seed), gap_start_s(seed), lost_s)?);
+            }
+            let stats = |f: fn(&GapOutcome) -> f64| {
+                let mut v: Vec<f64> = out.iter().map(f).collect();
+                v.sort_by(f64::total_cmp);
+                (v[v.len() / 2], v[v.len() - 1])
+            };
+            let nees = stats(|o| o.nees_after);
+            let ratio = stats(|o| o.max_error_per_sigma);
+            let error = stats(|o| o.max_error_m);
+            let beyond = out.iter().filter(|o| o.nees_after > NEES9_999).count();
+            let refused: usize = out.iter().map(|o| o.refused).sum();
+            let fixes: usize = out.iter().map(|o| o.fixes).sum();
+            let degraded = out
+                .iter()
+                .filter(|o| o.status != nav_core::ins_filter::FilterStatus::Nominal)
+                .count();
+            println!(
+                "| {grade} | {lost_s} | {:.1} / {:.1} | {beyond} of {runs} | {:.2} / {:.2} | {:.2} / {:.2} | {refused} of {fixes} | {degraded} of {runs} |",
+                nees.0, nees.1, ratio.0, ratio.1, error.0, error.1
+            );
         }
     }
     Ok(())
@@ -1634,7 +1685,11 @@ fn refuse_unused_bench_options(command: &Command) -> Result<()> {
         // (option, given with other than its default, the measurements that use it)
         let options: [(&str, bool, &[BenchKind]); 12] = [
             ("--passes", *passes != 10, &[M]),
-            ("--runs", runs.is_some(), &[C, O, BenchKind::Outliers]),
+            (
+                "--runs",
+                runs.is_some(),
+                &[C, O, BenchKind::Outliers, BenchKind::Gaps],
+            ),
             ("--threads", *threads != 2, &[C, O]),
             ("--seconds", *seconds != 600.0, &[C]),
             (
@@ -1647,7 +1702,11 @@ fn refuse_unused_bench_options(command: &Command) -> Result<()> {
             ("--without", !without.is_empty(), &[C]),
             ("--cells", !cells.is_empty(), &[C]),
             ("--blocks", *blocks, &[C]),
-            ("--first-seed", *first_seed != 1, &[C, BenchKind::Outliers]),
+            (
+                "--first-seed",
+                *first_seed != 1,
+                &[C, BenchKind::Outliers, BenchKind::Gaps],
+            ),
             ("--families", *families != 1, &[C]),
         ];
         if let Some((name, _, kinds)) = options
@@ -1891,6 +1950,12 @@ fn run(cli: Cli) -> Result<()> {
             first_seed,
             ..
         } => bench_outliers(runs.unwrap_or(1), first_seed),
+        Command::Bench {
+            what: BenchKind::Gaps,
+            runs,
+            first_seed,
+            ..
+        } => bench_gaps(runs.unwrap_or(10), first_seed),
         Command::Bench { passes, .. } => {
             let increments = host_tests::bench::flight_increments();
             for (name, rate) in [

@@ -95,6 +95,8 @@ pub struct ErrorFilter<T: Scalar> {
     counters: FilterCounters,
     covariance_faults: u32,
     fault_latched: bool,
+    /// A gap in the IMU data was too long to bridge (latched).
+    imu_lost: bool,
     window: InnovationWindow<T>,
     cluster: Option<RefusedCluster<T>>,
     /// Propagated time since the last position fix [s].
@@ -142,6 +144,7 @@ impl<T: Scalar> ErrorFilter<T> {
             counters: FilterCounters::default(),
             covariance_faults: 0,
             fault_latched: false,
+            imu_lost: false,
             window: InnovationWindow::default(),
             cluster: None,
             since_fix_s: T::zero(),
@@ -224,6 +227,8 @@ impl<T: Scalar> ErrorFilter<T> {
     pub fn status(&self) -> FilterStatus {
         if self.fault_latched {
             FilterStatus::CovarianceFault
+        } else if self.imu_lost {
+            FilterStatus::ImuLost
         } else if self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade {
             FilterStatus::AidingRejected
         } else if self.position_covariance().fixed_view::<2, 2>(0, 0).trace()
@@ -244,7 +249,15 @@ impl<T: Scalar> ErrorFilter<T> {
     pub fn propagate(&mut self, prop: &Propagation<T>) {
         let f = model::system_matrix(&prop.lin, &self.config.noise, self.config.scale_factors);
         let phi = Transition::new(&f, prop.dt);
-        let q = model::noise_density(&self.config.noise, self.config.scale_factors);
+        let mut q = model::noise_density(&self.config.noise, self.config.scale_factors);
+        // A bridged gap's unknown motion, spread as driving noise over the interval
+        // ([`crate::gap::GapDynamics`]).
+        let b = &prop.bridged;
+        for k in 0..3 {
+            q[ATT + k] += b.attitude_var_rad2 / prop.dt;
+            q[VEL + k] += b.velocity_var_m2_s2 / prop.dt;
+        }
+        self.imu_lost |= b.lost;
         let phi_ac = self
             .consider
             .is_active()

@@ -8,6 +8,7 @@ use super::stationarity::{Stationarity, StillWindow};
 use super::{ATT, BA, BG, FilterConfig, FilterError, POS, SA, SG, SensorErrors, VEL};
 use crate::attitude::rotation_vector_quat;
 use crate::earth::LocalEarth;
+use crate::gap::{GapDynamics, ImuGap};
 use crate::{ImuIncrement, InputError, MechanizationConfig, NavFrame, NavState, Scalar, Strapdown};
 use nalgebra::Vector3;
 
@@ -18,6 +19,31 @@ pub struct Propagation<T: Scalar> {
     pub lin: Linearisation<T>,
     /// The interval [s].
     pub dt: T,
+    /// The gaps in the IMU data the interval bridged.
+    pub bridged: Bridged<T>,
+}
+
+/// What the gaps bridged in a propagation interval leave ([`crate::gap`]): the variances the
+/// interpolated rates cannot know, to add to the covariance over the interval.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bridged<T: Scalar> {
+    /// Attitude variance per axis [rad^2] ([`GapDynamics::variances`]).
+    pub attitude_var_rad2: T,
+    /// Velocity variance per axis [m^2/s^2].
+    pub velocity_var_m2_s2: T,
+    /// A gap was too long to bridge: the solution is lost.
+    pub lost: bool,
+}
+
+impl<T: Scalar> Bridged<T> {
+    /// No gap.
+    pub fn none() -> Self {
+        Self {
+            attitude_var_rad2: T::zero(),
+            velocity_var_m2_s2: T::zero(),
+            lost: false,
+        }
+    }
 }
 
 /// What one sample asks of the background.
@@ -41,6 +67,8 @@ pub struct AidedMechanization<T: Scalar> {
     acc_theta: Vector3<T>,
     acc_v: Vector3<T>,
     acc_dt: T,
+    acc_bridged: Bridged<T>,
+    gap_dynamics: GapDynamics<T>,
     snapshot: Snapshot<T>,
     detector: Option<Stationarity<T>>,
 }
@@ -84,6 +112,8 @@ impl<T: Scalar> AidedMechanization<T> {
             acc_theta: Vector3::zeros(),
             acc_v: Vector3::zeros(),
             acc_dt: T::zero(),
+            acc_bridged: Bridged::none(),
+            gap_dynamics: config.gap_dynamics,
             snapshot: Snapshot {
                 state: st,
                 earth: local_earth(&st),
@@ -131,9 +161,30 @@ impl<T: Scalar> AidedMechanization<T> {
         }
     }
 
-    /// Integrates one increment, compensated with the estimated sensor errors (`true =
-    /// (measured - b dt) / (1 + s)`); a refused increment leaves everything unchanged.
-    pub fn step(&mut self, inc: &ImuIncrement<T>) -> Result<Events<T>, InputError> {
+    /// Integrates the time lost before the next sample ([`crate::gap`]): the mean rates
+    /// either side, compensated as every sample, in short steps; the variances the bridge
+    /// cannot know join the current propagation interval ([`Bridged`]). A gap too long to
+    /// bridge is not integrated and marks the interval lost. Call before that sample's
+    /// [`Self::step`].
+    pub fn bridge(&mut self, gap: &ImuGap<T>) {
+        self.restart_increments();
+        let (n, step) = gap.step();
+        for _ in 0..n {
+            // The mean of two checked samples' rates passes the same limits.
+            if self.integrate(&step).is_err() {
+                break;
+            }
+        }
+        let (att, vel) = self.gap_dynamics.variances(gap);
+        let b = &mut self.acc_bridged;
+        b.attitude_var_rad2 += att;
+        b.velocity_var_m2_s2 += vel;
+        b.lost |= !gap.bridged();
+    }
+
+    /// Compensates and integrates one increment and accumulates it for the propagation;
+    /// returns the compensated increment.
+    fn integrate(&mut self, inc: &ImuIncrement<T>) -> Result<ImuIncrement<T>, InputError> {
         let dt = inc.dt;
         let s = &self.sensors;
         let comp = ImuIncrement {
@@ -151,11 +202,19 @@ impl<T: Scalar> AidedMechanization<T> {
             ),
             dt,
         };
-        let v_before = self.nav.state().v_eb_n;
         self.nav.step(&comp)?;
         self.acc_theta += comp.delta_theta_ib_b;
         self.acc_v += comp.delta_v_ib_b;
         self.acc_dt += dt;
+        Ok(comp)
+    }
+
+    /// Integrates one increment, compensated with the estimated sensor errors (`true =
+    /// (measured - b dt) / (1 + s)`); a refused increment leaves everything unchanged.
+    pub fn step(&mut self, inc: &ImuIncrement<T>) -> Result<Events<T>, InputError> {
+        let dt = inc.dt;
+        let v_before = self.nav.state().v_eb_n;
+        let comp = self.integrate(inc)?;
         let st = *self.nav.state();
         self.snapshot = Snapshot {
             state: st,
@@ -199,6 +258,7 @@ impl<T: Scalar> AidedMechanization<T> {
                 omega_ib_b: self.acc_theta / self.acc_dt,
             },
             dt: self.acc_dt,
+            bridged: core::mem::replace(&mut self.acc_bridged, Bridged::none()),
         };
         self.acc_theta = Vector3::zeros();
         self.acc_v = Vector3::zeros();

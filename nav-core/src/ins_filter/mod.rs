@@ -42,13 +42,14 @@ pub mod sequencer;
 pub mod states;
 pub mod stationarity;
 
+use crate::gap::{GapDynamics, ImuGap};
 use crate::{ImuIncrement, InputError, MechanizationConfig, NavState, Scalar, Strapdown};
 pub use aiding::{
     AidCounters, AidResult, CHI2_3DOF_999, FilterCounters, GnssPosition, GnssVelocity,
 };
 pub use background::{Correction, ErrorFilter, Snapshot};
 pub use consider::GnssCorrelatedError;
-pub use foreground::{AidedMechanization, Events, Propagation};
+pub use foreground::{AidedMechanization, Bridged, Events, Propagation};
 use model::FilterNoise;
 use nalgebra::{Matrix3, Vector3};
 pub use states::{ATT, BA, BG, Covariance, InitialSigma, N, POS, SA, SG, StateVector, VEL};
@@ -105,6 +106,8 @@ pub struct FilterConfig<T: Scalar> {
     pub zero_motion: Option<ZeroMotionConfig<T>>,
     /// The mechanization's options (its frame is always NED here).
     pub mechanization: MechanizationConfig<T>,
+    /// The motion a bridged gap in the IMU data may hide ([`crate::gap`]).
+    pub gap_dynamics: GapDynamics<T>,
 }
 
 impl<T: Scalar> FilterConfig<T> {
@@ -122,6 +125,7 @@ impl<T: Scalar> FilterConfig<T> {
             max_horizontal_sigma_m: T::c(50.0),
             zero_motion: Some(ZeroMotionConfig::default()),
             mechanization: MechanizationConfig::default(),
+            gap_dynamics: GapDynamics::default(),
         }
     }
 }
@@ -225,6 +229,9 @@ pub enum FilterStatus {
     SigmaAboveLimit,
     /// The covariance lost a positive variance (it has been reset to its diagonal).
     CovarianceFault,
+    /// A gap in the IMU data was too long to bridge ([`crate::gap::MAX_BRIDGED_S`]): the
+    /// solution is lost for the rest of the run.
+    ImuLost,
 }
 
 impl FilterStatus {
@@ -232,7 +239,10 @@ impl FilterStatus {
     pub fn name(self) -> &'static str {
         match self {
             Self::Nominal => "NAV",
-            Self::AidingRejected | Self::SigmaAboveLimit | Self::CovarianceFault => "DEGRADED",
+            Self::AidingRejected
+            | Self::SigmaAboveLimit
+            | Self::CovarianceFault
+            | Self::ImuLost => "DEGRADED",
         }
     }
 }
@@ -332,6 +342,11 @@ impl<T: Scalar> AidedIns<T> {
     /// Forgets the previous increment after a gap in the data.
     pub fn restart_increments(&mut self) {
         self.mech.restart_increments();
+    }
+
+    /// Integrates the time lost before the next sample ([`AidedMechanization::bridge`]).
+    pub fn bridge(&mut self, gap: &ImuGap<T>) {
+        self.mech.bridge(gap);
     }
 
     /// Integrates one IMU increment (compensated with the estimated sensor errors), and

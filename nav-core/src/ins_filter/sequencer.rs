@@ -7,6 +7,7 @@
 use super::aiding::{AidResult, GnssPosition, GnssVelocity};
 use super::motion::{MotionAlign, MotionAlignConfig, MotionStart};
 use super::{AidedIns, FilterConfig, FilterError, InitialSigma, SensorErrors};
+use crate::gap::{GapCounters, GapDetector};
 use crate::{ImuIncrement, InputError, NavState, Scalar};
 use nalgebra::Vector3;
 
@@ -58,8 +59,11 @@ pub enum Phase {
 pub struct FixCounters {
     /// Fixes received.
     pub received: u32,
-    /// Refused: older than the previous fix, or the queue full.
+    /// Refused: not later than the previous fix.
     pub out_of_order: u32,
+    /// Refused: the queue was full (more fixes due than it holds before the next sample:
+    /// fixes denser than the samples, or a gap in the IMU data).
+    pub queue_full: u32,
     /// Refused: applied later than [`MAX_LAG_US`] after their time.
     pub late: u32,
     /// Used by the in-motion start.
@@ -91,6 +95,7 @@ impl<T: Scalar> FixQueue<T> {
             counters: FixCounters {
                 received: 0,
                 out_of_order: 0,
+                queue_full: 0,
                 late: 0,
                 for_start: 0,
             },
@@ -103,8 +108,8 @@ impl<T: Scalar> FixQueue<T> {
     }
 
     /// Holds a fix until its sample. Fixes must come in time order; a fix not later than the
-    /// previous one, or beyond the queue, is refused (counted in
-    /// [`FixCounters::out_of_order`]) and `false` returned.
+    /// previous one is refused (counted in [`FixCounters::out_of_order`]), and so is one
+    /// beyond the queue ([`FixCounters::queue_full`]); `false` returned then.
     pub fn push(&mut self, fix: GnssFixInput<T>) -> bool {
         self.counters.received = self.counters.received.saturating_add(1);
         if self.last_fix_us.is_some_and(|t| fix.t_us <= t) {
@@ -112,7 +117,7 @@ impl<T: Scalar> FixQueue<T> {
             return false;
         }
         let Some(slot) = self.queue.iter_mut().find(|s| s.is_none()) else {
-            self.counters.out_of_order = self.counters.out_of_order.saturating_add(1);
+            self.counters.queue_full = self.counters.queue_full.saturating_add(1);
             return false;
         };
         *slot = Some(fix);
@@ -155,6 +160,8 @@ pub struct Sequencer<T: Scalar> {
     motion: Option<MotionAlign<T>>,
     ins: Option<AidedIns<T>>,
     fixes: FixQueue<T>,
+    gaps: GapDetector<T>,
+    gap_counters: GapCounters,
     /// Results of the fixes applied at the last sample (position, velocity).
     last_results: [Option<FixResult<T>>; QUEUE],
 }
@@ -196,6 +203,8 @@ impl<T: Scalar> Sequencer<T> {
             motion,
             ins,
             fixes: FixQueue::new(),
+            gaps: GapDetector::new(),
+            gap_counters: GapCounters::default(),
             last_results: [None; QUEUE],
         })
     }
@@ -224,6 +233,11 @@ impl<T: Scalar> Sequencer<T> {
         self.fixes.counters()
     }
 
+    /// The gaps in the IMU data found while the filter ran ([`crate::gap`]).
+    pub fn gap_counters(&self) -> &GapCounters {
+        &self.gap_counters
+    }
+
     /// The fixes applied at the last sample: their time [us] and the position and velocity
     /// results.
     pub fn last_results(&self) -> impl Iterator<Item = &FixResult<T>> + '_ {
@@ -244,15 +258,23 @@ impl<T: Scalar> Sequencer<T> {
         }
     }
 
-    /// One IMU sample ending at `t_us` [us]: integrated (or given to the in-motion start),
-    /// then every held fix due at it applied. A refused increment is returned as the error
-    /// (the fixes wait for the next sample).
+    /// One IMU sample ending at `t_us` [us]: the time lost since the previous one bridged
+    /// ([`crate::gap`]), the sample integrated (or given to the in-motion start), then every
+    /// held fix due at it applied. A refused increment is returned as the error (the fixes
+    /// wait for the next sample).
     pub fn on_sample(&mut self, t_us: u64, inc: &ImuIncrement<T>) -> Result<Phase, InputError> {
         self.last_results = [None; QUEUE];
+        inc.check(&self.config.mechanization.limits)?;
+        let gap = self.gaps.note(t_us, inc);
         match &mut self.ins {
-            Some(ins) => ins.step(inc)?,
+            Some(ins) => {
+                if let Some(gap) = &gap {
+                    ins.bridge(gap);
+                    self.gap_counters.add(gap);
+                }
+                ins.step(inc)?;
+            }
             None => {
-                inc.check(&self.config.mechanization.limits)?;
                 if let Some(m) = &mut self.motion {
                     m.add_imu(&inc.delta_v_ib_b, inc.dt);
                 }
@@ -301,5 +323,40 @@ impl<T: Scalar> Sequencer<T> {
             self.ins = Some(ins);
             self.motion = None;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fix(t_us: u64) -> GnssFixInput<f64> {
+        GnssFixInput {
+            t_us,
+            position: GnssPosition {
+                lat_rad: 0.7,
+                lon_rad: 0.1,
+                h_m: 100.0,
+                sigma_ned_m: Vector3::repeat(0.5),
+            },
+            velocity: None,
+        }
+    }
+
+    /// A repeated time is out of order; a fix beyond the full queue is counted apart (fixes
+    /// due faster than samples come: it is no ordering fault of the receiver's).
+    #[test]
+    fn a_full_queue_is_not_an_ordering_fault() {
+        let mut q = FixQueue::<f64>::new();
+        for k in 1..=QUEUE as u64 {
+            assert!(q.push(fix(k * 100_000)));
+        }
+        assert!(!q.push(fix(QUEUE as u64 * 100_000)));
+        assert!(!q.push(fix(10_000_000)));
+        let c = q.counters();
+        assert_eq!((c.received, c.out_of_order, c.queue_full), (6, 1, 1));
+        // The queue empties at its samples and takes fixes again.
+        assert!(q.pop_due(100_000).is_some());
+        assert!(q.push(fix(10_000_000)));
     }
 }

@@ -8,6 +8,7 @@ use super::setup::Setup;
 use crate::Scalar;
 use crate::alignment::{AlignFailure, AlignOutcome};
 use crate::calibration::ImuCompensation;
+use crate::gap::{GapCounters, GapDetector, ImuGap};
 use crate::increment::{ImuIncrement, InputError, InputLimits};
 use crate::ins_filter::sequencer::{FixCounters, FixQueue, GnssFixInput};
 use crate::ins_filter::stationarity::StillWindow;
@@ -147,6 +148,8 @@ pub struct Counters {
     /// GNSS fixes handed over while the run was not in its aided phase (aligning, or free
     /// inertial): not used.
     pub fixes_unused: u32,
+    /// Gaps in the IMU data found while navigating ([`crate::gap`]).
+    pub gaps: GapCounters,
 }
 
 impl Counters {
@@ -391,6 +394,8 @@ pub struct Navigator<T: Scalar> {
     finished: bool,
     /// The aided phase's filter settings (`None`: free inertial after the alignment).
     filter: Option<FilterConfig<T>>,
+    /// Time lost between navigated samples.
+    gaps: GapDetector<T>,
     /// GNSS fixes waiting for their sample.
     fixes: FixQueue<T>,
     /// The current aided sample's background work.
@@ -419,6 +424,7 @@ impl<T: Scalar> Navigator<T> {
             alignment: None,
             finished: false,
             filter: setup.filter,
+            gaps: GapDetector::new(),
             fixes: FixQueue::new(),
             work: Work::NONE,
             awaiting: None,
@@ -465,6 +471,10 @@ impl<T: Scalar> Navigator<T> {
             // As the strapdown does for an increment it refuses.
             self.restart_increments();
             return Step::Rejected(e);
+        }
+        let gap = self.gaps.note(input.t_us, &inc);
+        if let Some(gap) = &gap {
+            self.bridge(gap);
         }
         match &mut self.phase {
             Phase::Navigating(nav) => {
@@ -861,6 +871,27 @@ impl<T: Scalar> Navigator<T> {
             Phase::Aided(mech) => Some(mech.strapdown()),
             _ => None,
         }
+    }
+
+    /// Integrates the time lost before the current sample, navigating ([`crate::gap`]): free
+    /// inertial, the strapdown over the interpolated rates; aided, the filter's mechanization,
+    /// which widens the covariance. Counted in [`Counters::gaps`].
+    fn bridge(&mut self, gap: &ImuGap<T>) {
+        match &mut self.phase {
+            Phase::Navigating(nav) => {
+                nav.restart_increments();
+                let (n, step) = gap.step();
+                for _ in 0..n {
+                    // The mean of two checked samples' rates passes the same limits.
+                    if nav.step(&step).is_err() {
+                        break;
+                    }
+                }
+            }
+            Phase::Aided(mech) => mech.bridge(gap),
+            _ => return,
+        }
+        self.counters.gaps.add(gap);
     }
 
     fn restart_increments(&mut self) {

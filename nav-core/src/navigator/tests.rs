@@ -184,27 +184,36 @@ fn the_gate_rejects_garbage_and_restarts_the_two_sample_history() {
     let (refused, s) = run::<f64>(&c, inputs(None, Some(1100)));
     assert_eq!(s.unwrap().counters.rejected, 2);
     // The same steps, driven by hand: restart at the gap, or skip the refused sample (which
-    // restarts too).
+    // restarts too), whose interval the next sample bridges ([`crate::gap`]).
     let setup = Setup::<f64>::new(&c, RATE_HZ).unwrap();
     let replay = |skip: bool| {
         let mut nav = crate::Strapdown::new(
             plain_alignment(&c, &inputs(None, None)),
             setup.mechanization,
         );
+        let increment = |k: u32| {
+            let i = moving(k).increment;
+            crate::ImuIncrement::<f64>::new(
+                i.delta_theta_ib_b.map(f64::from).into(),
+                i.delta_v_ib_b.map(f64::from).into(),
+                f64::from(i.dt),
+            )
+        };
         let mut last = None;
         for k in 1002..=1200 {
             if k == 1100 {
                 nav.restart_increments();
                 if skip {
+                    let mut gaps = crate::gap::GapDetector::new();
+                    gaps.note(1099 * 10_000, &increment(1099));
+                    let gap = gaps.note(1101 * 10_000, &increment(1101)).unwrap();
+                    let (n, bridge) = gap.step();
+                    assert_eq!(n, 1);
+                    nav.step(&bridge).unwrap();
                     continue;
                 }
             }
-            let i = moving(k).increment;
-            let inc = crate::ImuIncrement::<f64>::new(
-                i.delta_theta_ib_b.map(f64::from).into(),
-                i.delta_v_ib_b.map(f64::from).into(),
-                f64::from(i.dt),
-            );
+            let inc = increment(k);
             nav.step(&inc).unwrap();
             last = Some(Solution::from_state(u64::from(k) * 10_000, nav.state()));
         }

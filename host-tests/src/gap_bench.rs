@@ -1,0 +1,171 @@
+//! Gaps in the IMU data on simulated aided land-vehicle runs: the records of a span removed
+//! (a logger's dropout, a bus lost for a while), the run replayed through the same sequencer,
+//! and what the bridge of `nav_core::gap` leaves: the error against the filter's widened
+//! covariance at the first sample after the gap, the largest horizontal error per reported
+//! 1-sigma over the 30 s after it, and the fixes the filter refused then.
+
+use crate::aided::{self, AidedSink};
+use crate::aided_bench::{Case, navigation_covariance, nees, prepare, state_error};
+use crate::gnss_sim::GnssSimOptions;
+use crate::report::interpolate;
+use crate::sensor_model::Grade;
+use crate::truth::Truth;
+use anyhow::{Result, bail};
+use nav_core::ins_filter::{AidResult, AidedIns, FilterStatus};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Uniform};
+
+/// Span after a gap that is watched [s].
+pub const WATCH_S: f64 = 30.0;
+
+/// What one gap left.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GapOutcome {
+    /// Start of the gap (the first record removed) [s].
+    pub at_s: f64,
+    /// Length of the records removed [s].
+    pub lost_s: f64,
+    /// NEES of position, velocity and attitude (9 degrees of freedom) at the first sample
+    /// after the gap, against the widened covariance.
+    pub nees_after: f64,
+    /// Horizontal position error there [m].
+    pub error_after_m: f64,
+    /// Largest ratio of the horizontal error to the reported horizontal 1-sigma over
+    /// [`WATCH_S`] after the gap [-].
+    pub max_error_per_sigma: f64,
+    /// Largest horizontal error over the same span [m].
+    pub max_error_m: f64,
+    /// Position fixes refused over the same span.
+    pub refused: usize,
+    /// Position fixes over the same span.
+    pub fixes: usize,
+    /// The filter's status at the end of the run.
+    pub status: FilterStatus,
+}
+
+/// The gap run: a land vehicle of `grade`, 300 s at 200 Hz, 1 Hz fixes of 0.5 m (1 m down)
+/// through a 0.8 / -0.3 / -1.1 m lever arm, the filter's noise model the simulated sensor's.
+pub fn gap_case(grade: Grade, seed: u64) -> Case {
+    Case {
+        scenario: "land-vehicle".into(),
+        grade,
+        seconds: 300.0,
+        imu_rate_hz: 200.0,
+        zero_motion: true,
+        in_run_noise: true,
+        without: Vec::new(),
+        gnss: GnssSimOptions {
+            rate_hz: 1.0,
+            sigma_ned_m: [0.5, 0.5, 1.0],
+            sigma_v_ned_m_s: None,
+            lever_arm_b_m: [0.8, -0.3, -1.1],
+            outages: Vec::new(),
+            outliers: Vec::new(),
+            correlated: None,
+            seed,
+        },
+        seed,
+    }
+}
+
+/// The start of the gap of `case`'s seed: uniform over 60-240 s (moving, the filter settled).
+pub fn gap_start_s(seed: u64) -> f64 {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x6A95_0F1E_D47A);
+    // The bounds are finite and ordered: `new` cannot fail.
+    Uniform::new(60.0, 240.0).map_or(150.0, |u| u.sample(&mut rng))
+}
+
+struct AfterGap<'a> {
+    truth: &'a [Truth],
+    gap_end_s: f64,
+    first: Option<(f64, f64)>,
+    max_ratio: f64,
+    max_error_m: f64,
+    status: FilterStatus,
+}
+
+impl AidedSink<f64> for AfterGap<'_> {
+    fn sample(&mut self, t_us: u64, ins: &AidedIns<f64>) -> Result<()> {
+        let t_s = t_us as f64 * 1e-6;
+        self.status = ins.status();
+        if t_s < self.gap_end_s || t_s > self.gap_end_s + WATCH_S {
+            return Ok(());
+        }
+        let first = self.first.is_none();
+        // Every 0.1 s is enough for the maximum.
+        if (first || (t_us / 1000).is_multiple_of(100))
+            && let Some(truth) = interpolate(self.truth, t_s)
+        {
+            let e = state_error(ins.state(), &truth);
+            let h = (e[0] * e[0] + e[1] * e[1]).sqrt();
+            let p = ins.position_covariance();
+            let sigma = (p[(0, 0)] + p[(1, 1)]).sqrt();
+            if first {
+                self.first = Some((nees(&navigation_covariance(ins), &e), h));
+            }
+            self.max_ratio = self.max_ratio.max(h / sigma);
+            self.max_error_m = self.max_error_m.max(h);
+        }
+        Ok(())
+    }
+}
+
+/// Runs `case` with the IMU records of `[at_s, at_s + lost_s)` removed.
+pub fn gap_run(case: &Case, at_s: f64, lost_s: f64) -> Result<GapOutcome> {
+    let mut prepared = prepare(case)?;
+    let rec = &mut prepared.sim.recording;
+    let (a_ns, b_ns) = (
+        rec.t0_ns + (at_s * 1e9) as u64,
+        rec.t0_ns + ((at_s + lost_s) * 1e9) as u64,
+    );
+    let before = rec.records.len();
+    rec.records.retain(|r| r.t_ns < a_ns || r.t_ns >= b_ns);
+    if rec.records.len() == before {
+        bail!("no IMU record within the gap at {at_s} s");
+    }
+    // The first sample after the gap ends at the first record kept.
+    let gap_end_s = rec
+        .records
+        .iter()
+        .find(|r| r.t_ns >= b_ns)
+        .map(|r| (r.t_ns - rec.t0_ns) as f64 * 1e-9)
+        .ok_or_else(|| anyhow::anyhow!("the gap at {at_s} s reaches the end of the data"))?;
+    let mut sink = AfterGap {
+        truth: &prepared.sim.truth,
+        gap_end_s,
+        first: None,
+        max_ratio: 0.0,
+        max_error_m: 0.0,
+        status: FilterStatus::Nominal,
+    };
+    let report = aided::run(
+        prepared.samples(),
+        &prepared.gnss.fixes,
+        prepared.seq.clone(),
+        &mut sink,
+    )?;
+    let watched: Vec<_> = report
+        .updates
+        .iter()
+        .filter(|u| u.t_s >= gap_end_s && u.t_s <= gap_end_s + WATCH_S)
+        .collect();
+    let refused = watched
+        .iter()
+        .filter(|u| !matches!(u.position, AidResult::Accepted { .. }))
+        .count();
+    let (nees_after, error_after_m) = sink
+        .first
+        .ok_or_else(|| anyhow::anyhow!("no sample after the gap at {at_s} s"))?;
+    Ok(GapOutcome {
+        at_s,
+        lost_s,
+        nees_after,
+        error_after_m,
+        max_error_per_sigma: sink.max_ratio,
+        max_error_m: sink.max_error_m,
+        refused,
+        fixes: watched.len(),
+        status: sink.status,
+    })
+}

@@ -1,0 +1,237 @@
+//! Bridging a gap in the IMU data.
+//!
+//! Time that no navigated sample covers (samples lost on the bus, or skipped as unusable) is a
+//! hole in the integration. Left out, the solution stands still while the vehicle moves on (a
+//! car at 20 m/s: 20 m per lost second), and a filter whose covariance does not know it then
+//! refuses the true fixes. So the lost time is integrated with the mean of the rates measured
+//! either side of it (the rates interpolated linearly across the gap), in steps of at most
+//! [`MAX_STEP_S`] ([`ImuGap::step`]), and the navigation filter widens its covariance for what
+//! the interpolation cannot know ([`GapDynamics`]). A gap longer than [`MAX_BRIDGED_S`] is not
+//! integrated: over seconds the interpolation says nothing of the motion, and the solution is
+//! lost ([`ImuGap::bridged`]: the filter then reports itself degraded for good).
+//!
+//! The rule is the same in every run: [`GapDetector`] sees every navigated sample, in the
+//! firmware's navigator and in the harness's sequencer alike.
+
+use crate::{ImuIncrement, Scalar};
+use nalgebra::Vector3;
+
+/// Longest step of a bridge [s]: rates held over it integrate exactly, and 250 steps bridge
+/// the longest gap (a few samples' time of the MCU's navigation task).
+pub const MAX_STEP_S: f64 = 0.02;
+
+/// Longest gap bridged [s]; a longer one is lost.
+pub const MAX_BRIDGED_S: f64 = 5.0;
+
+/// Time between two navigated samples that neither covers, below which nothing is lost: half
+/// the later sample's interval (time-tag jitter), and at least this [s].
+const TOLERANCE_S: f64 = 1e-4;
+
+/// Lost time before a navigated sample, and the rates either side of it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImuGap<T: Scalar> {
+    /// Time no sample covers [s].
+    pub lost_s: T,
+    /// Body rate of the last sample before the gap [rad/s].
+    pub omega_before_ib_b: Vector3<T>,
+    /// Body rate of the first sample after it [rad/s].
+    pub omega_after_ib_b: Vector3<T>,
+    /// Specific force before the gap [m/s^2].
+    pub f_before_ib_b: Vector3<T>,
+    /// Specific force after it [m/s^2].
+    pub f_after_ib_b: Vector3<T>,
+}
+
+impl<T: Scalar> ImuGap<T> {
+    /// True when the gap is short enough to be integrated ([`MAX_BRIDGED_S`]).
+    pub fn bridged(&self) -> bool {
+        self.lost_s <= T::c(MAX_BRIDGED_S + TOLERANCE_S)
+    }
+
+    /// The bridge as `n` equal steps: `(n, step)`, each step the mean rates over
+    /// `lost_s / n <=` [`MAX_STEP_S`]; `n = 0` when the gap is not bridged.
+    pub fn step(&self) -> (u32, ImuIncrement<T>) {
+        let n = if self.bridged() {
+            // lost_s <= MAX_BRIDGED_S: a small count (core has no f64::ceil).
+            let q = self.lost_s.to_f64() / MAX_STEP_S;
+            let n = q as u32;
+            if f64::from(n) < q { n + 1 } else { n.max(1) }
+        } else {
+            0
+        };
+        let half = T::c(0.5);
+        let dt = self.lost_s / T::c(f64::from(n.max(1)));
+        let omega = (self.omega_before_ib_b + self.omega_after_ib_b) * half;
+        let f = (self.f_before_ib_b + self.f_after_ib_b) * half;
+        (
+            n,
+            ImuIncrement {
+                delta_theta_ib_b: omega * dt,
+                delta_v_ib_b: f * dt,
+                dt,
+            },
+        )
+    }
+}
+
+/// The motion a bridge cannot know: the body rate and specific force are taken to differ from
+/// the interpolated ones by a random constant over the gap, whose 1-sigma is the vehicle's
+/// (`omega_sigma_rad_s`, `f_sigma_mps2`, every axis) plus what a step between the two sides at
+/// an unknown time inside the gap leaves (`|after - before| / sqrt(12)`: the step's time
+/// uniform over the gap). Over a gap of `L` seconds the attitude is then off by `sigma_omega L`
+/// and the velocity by `sigma_f L` (1-sigma per axis), which the filter adds to its covariance
+/// as extra driving noise over the propagation interval that holds the gap.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GapDynamics<T: Scalar> {
+    /// Body rate the interpolation may miss, 1-sigma per axis [rad/s].
+    pub omega_sigma_rad_s: T,
+    /// Specific force the interpolation may miss, 1-sigma per axis [m/s^2].
+    pub f_sigma_mps2: T,
+}
+
+impl<T: Scalar> Default for GapDynamics<T> {
+    /// 1 deg/s and 0.5 m/s^2: a land vehicle's or an aircraft's manoeuvre starting and ending
+    /// unseen within a second of a gap (a change seen across it is the `|after - before|`
+    /// term). `nav bench gaps` measures the errors against this: on the simulated land vehicle
+    /// they are a fraction of it.
+    fn default() -> Self {
+        Self {
+            omega_sigma_rad_s: T::c(1.0f64.to_radians()),
+            f_sigma_mps2: T::c(0.5),
+        }
+    }
+}
+
+impl<T: Scalar> GapDynamics<T> {
+    /// The variances a gap leaves per axis: attitude [rad^2] and velocity [m^2/s^2] (doc
+    /// above). A gap that is not bridged counts as [`MAX_BRIDGED_S`]: its solution is lost,
+    /// and no variance describes that.
+    pub fn variances(&self, gap: &ImuGap<T>) -> (T, T) {
+        let l = gap.lost_s.min(T::c(MAX_BRIDGED_S));
+        let l2 = l * l;
+        let twelfth = T::c(1.0 / 12.0);
+        let d_omega = (gap.omega_after_ib_b - gap.omega_before_ib_b).norm_squared();
+        let d_f = (gap.f_after_ib_b - gap.f_before_ib_b).norm_squared();
+        let omega2 = self.omega_sigma_rad_s * self.omega_sigma_rad_s + d_omega * twelfth;
+        let f2 = self.f_sigma_mps2 * self.f_sigma_mps2 + d_f * twelfth;
+        (omega2 * l2, f2 * l2)
+    }
+}
+
+/// Gaps found while navigating.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GapCounters {
+    /// Gaps bridged.
+    pub bridged: u32,
+    /// Gaps too long to bridge ([`MAX_BRIDGED_S`]).
+    pub lost: u32,
+    /// Time the gaps spanned, bridged or not [us].
+    pub time_us: u64,
+    /// The longest [us].
+    pub longest_us: u64,
+}
+
+impl GapCounters {
+    /// Counts `gap`.
+    pub fn add<T: Scalar>(&mut self, gap: &ImuGap<T>) {
+        if gap.bridged() {
+            self.bridged = self.bridged.saturating_add(1);
+        } else {
+            self.lost = self.lost.saturating_add(1);
+        }
+        let us = (gap.lost_s.to_f64() * 1e6) as u64;
+        self.time_us = self.time_us.saturating_add(us);
+        self.longest_us = self.longest_us.max(us);
+    }
+}
+
+/// Finds the time lost before each navigated sample (module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GapDetector<T: Scalar> {
+    last: Option<(u64, Vector3<T>, Vector3<T>)>,
+}
+
+impl<T: Scalar> GapDetector<T> {
+    /// Nothing seen yet.
+    pub const fn new() -> Self {
+        Self { last: None }
+    }
+
+    /// A navigated sample ending at `t_us` [us] with the increment `inc` (as navigated): the
+    /// gap before it, if time was lost since the previous one.
+    pub fn note(&mut self, t_us: u64, inc: &ImuIncrement<T>) -> Option<ImuGap<T>> {
+        let omega = inc.delta_theta_ib_b / inc.dt;
+        let f = inc.delta_v_ib_b / inc.dt;
+        let (prev_us, omega_before, f_before) = self.last.replace((t_us, omega, f))?;
+        let span_s = t_us.saturating_sub(prev_us) as f64 * 1e-6;
+        let lost_s = span_s - inc.dt.to_f64();
+        (lost_s > TOLERANCE_S.max(0.5 * inc.dt.to_f64())).then(|| ImuGap {
+            lost_s: T::c(lost_s),
+            omega_before_ib_b: omega_before,
+            omega_after_ib_b: omega,
+            f_before_ib_b: f_before,
+            f_after_ib_b: f,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn inc(omega: [f64; 3], f: [f64; 3], dt: f64) -> ImuIncrement<f64> {
+        ImuIncrement {
+            delta_theta_ib_b: Vector3::from(omega) * dt,
+            delta_v_ib_b: Vector3::from(f) * dt,
+            dt,
+        }
+    }
+
+    #[test]
+    fn a_sample_on_time_or_jittered_loses_nothing() {
+        let mut d = GapDetector::new();
+        assert_eq!(d.note(1_000_000, &inc([0.0; 3], [0.0; 3], 0.0025)), None);
+        assert_eq!(d.note(1_002_500, &inc([0.0; 3], [0.0; 3], 0.0025)), None);
+        // A late tag by 40 % of an interval is jitter.
+        assert_eq!(d.note(1_006_000, &inc([0.0; 3], [0.0; 3], 0.0025)), None);
+    }
+
+    #[test]
+    fn a_lost_second_is_found_with_the_rates_either_side() {
+        let mut d = GapDetector::new();
+        d.note(1_000_000, &inc([0.1, 0.0, 0.0], [0.0, 0.0, -9.8], 0.0025));
+        let g = d
+            .note(2_002_500, &inc([0.3, 0.0, 0.0], [1.0, 0.0, -9.8], 0.0025))
+            .unwrap();
+        assert!((g.lost_s - 1.0).abs() < 1e-9);
+        assert!(g.bridged());
+        let (n, step) = g.step();
+        assert_eq!(n, 50);
+        assert!((step.dt * f64::from(n) - 1.0).abs() < 1e-12);
+        // The mean rates: 0.2 rad/s and 0.5 m/s^2 forward.
+        assert!((step.delta_theta_ib_b.x / step.dt - 0.2).abs() < 1e-12);
+        assert!((step.delta_v_ib_b.x / step.dt - 0.5).abs() < 1e-12);
+        // The step between the sides widens the variances beyond the vehicle's own.
+        let dynamics = GapDynamics::<f64>::default();
+        let (att, vel) = dynamics.variances(&g);
+        let (s_omega, s_f) = (dynamics.omega_sigma_rad_s, dynamics.f_sigma_mps2);
+        assert!((att - (s_omega * s_omega + 0.04 / 12.0)).abs() < 1e-12);
+        assert!((vel - (s_f * s_f + 1.0 / 12.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_gap_beyond_the_limit_is_not_bridged() {
+        let mut d = GapDetector::new();
+        d.note(0, &inc([0.0; 3], [0.0; 3], 0.01));
+        let g = d.note(6_000_000, &inc([0.0; 3], [0.0; 3], 0.01)).unwrap();
+        assert!(!g.bridged());
+        assert_eq!(g.step().0, 0);
+        // Time going backwards is not a gap (the source flags it).
+        assert_eq!(d.note(1_000_000, &inc([0.0; 3], [0.0; 3], 0.01)), None);
+        // 5 s are bridged, in steps of at most 20 ms.
+        d.note(0, &inc([0.0; 3], [0.0; 3], 0.01));
+        let g = d.note(5_010_000, &inc([0.0; 3], [0.0; 3], 0.01)).unwrap();
+        assert!(g.bridged());
+        assert_eq!(g.step().0, 250);
+    }
+}
