@@ -145,10 +145,12 @@ impl GapCounters {
     }
 }
 
-/// Finds the time lost before each navigated sample (module docs).
+/// Finds the time lost before each navigated sample (module docs). Per sample it keeps the
+/// sample's time and increment; the rates are taken only when time was lost (the MCU's
+/// navigation task pays a subtraction and a comparison, in the run's precision).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GapDetector<T: Scalar> {
-    last: Option<(u64, Vector3<T>, Vector3<T>)>,
+    last: Option<(u64, ImuIncrement<T>)>,
 }
 
 impl<T: Scalar> GapDetector<T> {
@@ -160,17 +162,17 @@ impl<T: Scalar> GapDetector<T> {
     /// A navigated sample ending at `t_us` [us] with the increment `inc` (as navigated): the
     /// gap before it, if time was lost since the previous one.
     pub fn note(&mut self, t_us: u64, inc: &ImuIncrement<T>) -> Option<ImuGap<T>> {
-        let omega = inc.delta_theta_ib_b / inc.dt;
-        let f = inc.delta_v_ib_b / inc.dt;
-        let (prev_us, omega_before, f_before) = self.last.replace((t_us, omega, f))?;
-        let span_s = t_us.saturating_sub(prev_us) as f64 * 1e-6;
-        let lost_s = span_s - inc.dt.to_f64();
-        (lost_s > TOLERANCE_S.max(0.5 * inc.dt.to_f64())).then(|| ImuGap {
-            lost_s: T::c(lost_s),
-            omega_before_ib_b: omega_before,
-            omega_after_ib_b: omega,
-            f_before_ib_b: f_before,
-            f_after_ib_b: f,
+        let (prev_us, before) = self.last.replace((t_us, *inc))?;
+        // The count of microseconds is exact in f32 up to 2^24 (16 s), within 1 us beyond.
+        let span_s = T::of_f32(t_us.saturating_sub(prev_us) as f32) * T::c(1e-6);
+        let lost_s = span_s - inc.dt;
+        let tolerance_s = (inc.dt * T::c(0.5)).max(T::c(TOLERANCE_S));
+        (lost_s > tolerance_s).then(|| ImuGap {
+            lost_s,
+            omega_before_ib_b: before.delta_theta_ib_b / before.dt,
+            omega_after_ib_b: inc.delta_theta_ib_b / inc.dt,
+            f_before_ib_b: before.delta_v_ib_b / before.dt,
+            f_after_ib_b: inc.delta_v_ib_b / inc.dt,
         })
     }
 }

@@ -549,6 +549,8 @@ fn a_version_1_config_frame_is_refused_by_its_version() {
     assert_eq!(old.len(), 201);
     for (version, want) in [
         (1, Refusal::Version(1)),
+        // Version 2 had this config frame; its status frames lacked IMU_LOST.
+        (2, Refusal::Version(2)),
         (
             VERSION,
             Refusal::Length {
@@ -568,7 +570,7 @@ fn a_version_1_config_frame_is_refused_by_its_version() {
         std::format!("{}", Refusal::Version(1)),
         std::format!("unknown protocol version 1 (this is {VERSION})")
     );
-    assert_eq!(VERSION, 2);
+    assert_eq!(VERSION, 3);
 }
 
 mod properties {
