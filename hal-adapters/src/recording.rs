@@ -51,7 +51,11 @@
 //! - `delta <= 0`: `dt_s = 0` and [`SampleFlags::BAD_INTERVAL`];
 //! - `delta > 10 T`: [`SampleFlags::BAD_INTERVAL`];
 //! - `1.5 T < delta <= 10 T`: [`SampleFlags::GAP`], and `round(delta / T) - 1` samples are
-//!   counted as missed in [`ReplayStats::missed`];
+//!   counted as missed in [`ReplayStats::missed`]; but a record of increments whose velocity
+//!   increment covers its last period alone rather than the interval
+//!   ([`crate::sample::increment_spans_interval`] against the previous record's, when that one
+//!   covered one period: a logger that dropped records) is [`SampleFlags::BAD_INTERVAL`]
+//!   instead (the navigation bridges the interval);
 //! - any gyro or accelerometer component NaN or infinite: [`SampleFlags::NON_FINITE`] (a NaN
 //!   temperature means "unknown" and is not flagged).
 //!
@@ -63,6 +67,7 @@ use core::fmt;
 use crc::{CRC_32_ISO_HDLC, Crc};
 use embedded_io::{Read, Write};
 
+use crate::sample::increment_spans_interval;
 use crate::{Imu, ImuSample, Motion, SampleFlags};
 
 /// The file signature at offset 0.
@@ -495,6 +500,8 @@ pub struct Replay<R: Read> {
     period_ns: f64,
     next_index: u32,
     prev_t_ns: u64,
+    /// The previous record's velocity increment, when it covered one nominal period.
+    prev_delta_v: Option<[f32; 3]>,
     record_buf: [u8; RECORD_LEN],
     record_filled: usize,
     state: State,
@@ -523,6 +530,7 @@ impl<R: Read> Replay<R> {
             period_ns: header.period_ns(),
             next_index: 0,
             prev_t_ns: header.t0_ns,
+            prev_delta_v: None,
             record_buf: [0; RECORD_LEN],
             record_filled: 0,
             state: State::Reading,
@@ -559,7 +567,16 @@ impl<R: Read> Replay<R> {
             if delta_ns > BAD_INTERVAL_PERIODS * self.period_ns {
                 flags |= SampleFlags::BAD_INTERVAL;
             } else if delta_ns > GAP_PERIODS * self.period_ns {
-                flags |= SampleFlags::GAP;
+                // An increment of the last period alone cannot be integrated over the gap.
+                let short = self.header.kind == Kind::Increments
+                    && self.prev_delta_v.is_some_and(|p| {
+                        !increment_spans_interval(&record.accel, &p, delta_ns / self.period_ns)
+                    });
+                flags |= if short {
+                    SampleFlags::BAD_INTERVAL
+                } else {
+                    SampleFlags::GAP
+                };
                 // round(delta / T) for a positive value (core has no f64::round); at least one
                 // sample is missing in a gap, whatever the last-bit rounding of the quotient.
                 let periods = (delta_ns / self.period_ns + 0.5) as u32;
@@ -587,6 +604,7 @@ impl<R: Read> Replay<R> {
             self.stats.bad_interval = self.stats.bad_interval.saturating_add(1);
         }
         self.prev_t_ns = record.t_ns;
+        self.prev_delta_v = flags.is_empty().then_some(record.accel);
 
         let motion = match self.header.kind {
             Kind::Increments => Motion::Increments {

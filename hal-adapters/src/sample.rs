@@ -103,6 +103,23 @@ pub struct ImuSample {
     pub flags: SampleFlags,
 }
 
+/// Whether a velocity increment `delta_v` [m/s] read after an interval of `periods` nominal
+/// periods (a gap) covers the whole interval, as an increment recording's records are defined
+/// to (a sensor that accumulates between reads), rather than its last period alone (a logger
+/// that dropped records: the increments of the lost records are gone, and integrated over the
+/// whole interval the one left would lose gravity's balance, `g` times the time lost in the
+/// vertical velocity). The specific force's increment grows with the time it covers, and from
+/// one sample to the next its size changes far less than the factor `periods` (gravity
+/// dominates it for any vehicle short of free fall), so the previous sample's `delta_v_prev`
+/// (one period) decides, at the midpoint: covering when `|delta_v| >= (1 + periods) / 2 *
+/// |delta_v_prev|`. Near free fall both are small and the record's definition (covering)
+/// stands.
+pub fn increment_spans_interval(delta_v: &[f32; 3], delta_v_prev: &[f32; 3], periods: f64) -> bool {
+    let norm2 = |v: &[f32; 3]| v.iter().map(|x| f64::from(*x) * f64::from(*x)).sum::<f64>();
+    let k = 0.5 * (1.0 + periods);
+    norm2(delta_v) >= k * k * norm2(delta_v_prev)
+}
+
 impl ImuSample {
     /// The sample with its motion turned by `r` (`v' = r v`, both vectors): from the axes of
     /// the driver's mounting to the run's ([`crate::drivers::Mounting::relative_to`]).

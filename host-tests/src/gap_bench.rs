@@ -7,6 +7,7 @@
 use crate::aided::{self, AidedSink};
 use crate::aided_bench::{Case, navigation_covariance, nees, prepare, state_error};
 use crate::gnss_sim::GnssSimOptions;
+use crate::recording_io::ReplaySource;
 use crate::report::interpolate;
 use crate::sensor_model::Grade;
 use crate::truth::Truth;
@@ -113,8 +114,8 @@ impl AidedSink<f64> for AfterGap<'_> {
 
 /// Runs `case` with the IMU records of `[at_s, at_s + lost_s)` removed.
 pub fn gap_run(case: &Case, at_s: f64, lost_s: f64) -> Result<GapOutcome> {
-    let mut prepared = prepare(case)?;
-    let rec = &mut prepared.sim.recording;
+    let prepared = prepare(case)?;
+    let mut rec = prepared.sim.recording.clone();
     let (a_ns, b_ns) = (
         rec.t0_ns + (at_s * 1e9) as u64,
         rec.t0_ns + ((at_s + lost_s) * 1e9) as u64,
@@ -139,8 +140,10 @@ pub fn gap_run(case: &Case, at_s: f64, lost_s: f64) -> Result<GapOutcome> {
         max_error_m: 0.0,
         status: FilterStatus::Nominal,
     };
-    let report = aided::run(
-        prepared.samples(),
+    // Through the recording reader, as `nav replay` reads a file: its rules for gaps apply.
+    let mut source = ReplaySource::from_recording(&rec)?;
+    let report = aided::run_source(
+        &mut source,
         &prepared.gnss.fixes,
         prepared.seq.clone(),
         &mut sink,

@@ -174,6 +174,8 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
     let nominal_dt = 1.0 / c.imu_rate_hz;
     let (t_start, t_end) = (c.start_time_s, c.end_time_s.unwrap_or(f64::INFINITY));
     let mut prev_t: Option<f64> = None;
+    // The previous epoch's velocity increment, when it covered one interval.
+    let mut prev_dv: Option<[f32; 3]> = None;
     let mut outside_window = 0_u64;
     // Intervals off `imudatarate` by more than a quarter of its interval, of all intervals (a
     // rate off by a factor of 2 or 4/3 is caught; a receiver's jitter of a few percent is not).
@@ -190,6 +192,15 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
                 off_rate += u64::from((dt - nominal_dt).abs() > 0.25 * nominal_dt);
             }
             prev_t = Some(row.t_s);
+            let gap = dt > 1.5 * nominal_dt;
+            let dv = row.delta_v_ib_b.map(|x| x as f32);
+            // After a gap, an increment of the last interval alone (a logger that dropped
+            // epochs) is not integrated over the gap: the navigation bridges it.
+            let short = gap
+                && prev_dv.is_some_and(|p| {
+                    !hal_adapters::sample::increment_spans_interval(&dv, &p, dt / nominal_dt)
+                });
+            prev_dv = (!gap).then_some(dv);
             // KF-GINS starts at the first epoch at or after `starttime`: its initpos, initvel
             // and initatt hold at that epoch, whose increment (over the interval before it)
             // is not integrated (`kf_gins.cpp` adds it as `imupre_` only) and which gets no
@@ -210,8 +221,8 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
             return Ok(Some(AidedSample {
                 t_us: (row.t_s * 1e6).round() as u64,
                 increment: ImuIncrement::new(row.delta_theta_ib_b, row.delta_v_ib_b, dt),
-                unusable: false,
-                gap: dt > 1.5 * nominal_dt,
+                unusable: short,
+                gap,
             }));
         }
     };

@@ -418,9 +418,13 @@ fn time_going_backwards_is_bad_interval() {
 
 #[test]
 fn three_period_gap() {
+    // The increment after the gap covers its three periods (a sensor accumulating between
+    // reads), as the format defines it.
+    let mut covering = record(T0_NS + 4 * PERIOD_NS);
+    covering.accel = covering.accel.map(|a| 3.0 * a);
     let records = [
         record(T0_NS + PERIOD_NS),
-        record(T0_NS + 4 * PERIOD_NS),
+        covering,
         record(T0_NS + 5 * PERIOD_NS),
     ];
     let (samples, end) = replay_all(&file(&header(Kind::Increments, 3), &records));
@@ -437,6 +441,33 @@ fn three_period_gap() {
     assert_eq!(samples[1].dt_s, 0.03);
     assert_eq!(samples[1].seq, 1);
     assert_eq!(samples[2].flags, SampleFlags::empty());
+}
+
+/// Records dropped by a logger: the increment after the gap covers one period, not the three
+/// of its interval. Integrated over the interval it would lose gravity's balance for two
+/// periods; it is refused as a bad interval (the navigation bridges the time), and counted.
+/// An increment after the gap with no one-period record before it keeps the definition.
+#[test]
+fn an_increment_of_one_period_after_a_gap_is_a_bad_interval() {
+    let records = [
+        record(T0_NS + PERIOD_NS),
+        record(T0_NS + 4 * PERIOD_NS),
+        record(T0_NS + 5 * PERIOD_NS),
+    ];
+    let (samples, end) = replay_all(&file(&header(Kind::Increments, 3), &records));
+    assert_eq!(samples[1].flags, SampleFlags::BAD_INTERVAL);
+    assert_eq!(samples[2].flags, SampleFlags::empty());
+    let stats = end.unwrap();
+    assert_eq!((stats.missed, stats.bad_interval), (2, 1));
+    // Rates are held over the interval by definition: a gap.
+    let (samples, _) = replay_all(&file(&header(Kind::Rates, 3), &records));
+    assert_eq!(samples[1].flags, SampleFlags::GAP);
+    // The first record after the header's start has no record before it.
+    let (samples, _) = replay_all(&file(
+        &header(Kind::Increments, 1),
+        &[record(T0_NS + 3 * PERIOD_NS)],
+    ));
+    assert_eq!(samples[0].flags, SampleFlags::GAP);
 }
 
 #[test]

@@ -776,7 +776,7 @@ fn bench_gaps(runs: usize, first_seed: u64) -> Result<()> {
     );
     println!("|---|---|---|---|---|---|---|---|");
     for grade in [Grade::Fog, Grade::MemsTactical, Grade::MemsConsumer] {
-        for lost_s in [0.1, 0.5, 1.0, 2.0, 4.0, 6.0] {
+        for lost_s in [0.025, 0.1, 0.5, 1.0, 2.0, 4.0, 6.0] {
             let mut out: Vec<GapOutcome> = Vec::new();
             for seed in first_seed..=last_seed {
                 out.push(gap_run(&gap_case(grade, seed), gap_start_s(seed), lost_s)?);
