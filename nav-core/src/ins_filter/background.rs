@@ -9,7 +9,7 @@ use super::consider::{self, ConsiderModel, CrossCovariance};
 use super::covariance::{self, Transition};
 use super::foreground::Propagation;
 use super::integrity::{
-    self, InnovationWindow, Reacquisition, RefusedCluster, WindowVerdict, whiten,
+    self, InnovationWindow, Reacquisition, RefusedCluster, Restart, WindowVerdict, whiten,
 };
 use super::limits;
 use super::model;
@@ -104,6 +104,10 @@ pub struct ErrorFilter<T: Scalar> {
     /// The correction of the last position fix when it was a re-acquisition (taken alone
     /// against a much wider prediction; [`integrity`] module docs), until the next fix.
     reacquired: Option<Reacquisition<T>>,
+    /// What the fixes moved the solution by since the window restarted after
+    /// [`integrity::WINDOW_REFUSALS_MAX`] refusals, until confirmed ([`integrity`] module
+    /// docs).
+    restart: Option<Restart<T>>,
     /// The consider states' model and cross-covariance `P_ac` ([`consider`]).
     consider: ConsiderModel<T>,
     p_ac: CrossCovariance<T>,
@@ -149,6 +153,7 @@ impl<T: Scalar> ErrorFilter<T> {
             cluster: None,
             since_fix_s: T::zero(),
             reacquired: None,
+            restart: None,
             consider,
             p_ac,
         })
@@ -193,12 +198,17 @@ impl<T: Scalar> ErrorFilter<T> {
     }
 
     /// The doubt on the position, NED [m^2]: of a refused cluster that is not gross
-    /// ([`RefusedCluster::doubt`]) and of a re-acquisition not yet confirmed by the next fix
-    /// ([`Reacquisition::doubt`]); zero otherwise.
+    /// ([`RefusedCluster::doubt`]), of a re-acquisition not yet confirmed by the next fix
+    /// ([`Reacquisition::doubt`]) and of a window restart not yet confirmed
+    /// ([`Restart::doubt`]); zero otherwise.
     pub fn position_doubt(&self) -> Matrix3<T> {
         let cluster = self.cluster.as_ref().and_then(RefusedCluster::doubt);
         let reacquired = self.reacquired.as_ref().map(Reacquisition::doubt);
-        cluster.unwrap_or_else(Matrix3::zeros) + reacquired.unwrap_or_else(Matrix3::zeros)
+        let p_pos = self.p.fixed_view::<3, 3>(POS, POS).into_owned();
+        let restarted = self.restart.map(|r| r.doubt(self.since_fix_s, &p_pos));
+        cluster.unwrap_or_else(Matrix3::zeros)
+            + reacquired.unwrap_or_else(Matrix3::zeros)
+            + restarted.unwrap_or_else(Matrix3::zeros)
     }
 
     /// The reported position covariance, NED [m^2]: the filter's own ([`Self::covariance`],
@@ -503,6 +513,7 @@ impl<T: Scalar> ErrorFilter<T> {
         // Time since the previous fix (the cluster's last member, if refused) [s].
         let dt = core::mem::replace(&mut self.since_fix_s, T::zero());
         let drift = self.fix_drift(dt, g);
+        self.restart = self.restart.map(|r| r.carried(dt));
         let mut recovered = false;
         if nis > gate {
             // Continues the cluster it agrees with, or starts one.
@@ -533,6 +544,7 @@ impl<T: Scalar> ErrorFilter<T> {
             let mut vel = self.p.fixed_view_mut::<3, 3>(VEL, VEL);
             vel += v * v.transpose();
             self.window.clear();
+            self.restart = None;
         }
         // A member of the cluster refused before.
         if !recovered
@@ -559,6 +571,7 @@ impl<T: Scalar> ErrorFilter<T> {
                 let d = self.window.take_corrections();
                 self.p += d * d.transpose();
                 self.check_covariance();
+                self.restart = None;
                 let n = &mut self.counters.position.window_rejected;
                 *n = n.saturating_add(1);
                 return (AidResult::Rejected { nis }, None);
@@ -567,6 +580,11 @@ impl<T: Scalar> ErrorFilter<T> {
             // refusing (module docs of `integrity`): this fix starts a new window.
             self.window.clear();
             self.window.push(w);
+            // Until a full window confirms it, what its fixes move the solution by is
+            // doubtful ([`integrity`] module docs).
+            self.restart = Some(Restart::new(
+                self.p.fixed_view::<3, 3>(POS, POS).into_owned(),
+            ));
         }
         if self.cluster.take().is_some() {
             // The first fix after a refused cluster: its offset joins the position's
@@ -583,6 +601,10 @@ impl<T: Scalar> ErrorFilter<T> {
         let out = self.apply(m, &basis, nis);
         if let Some(c) = &out.1 {
             self.window.set_last_correction(&c.x);
+            self.restart = self
+                .restart
+                .map(|r| r.taken(&c.x))
+                .filter(|r| !r.is_confirmed());
             let limited = (0..3).any(|i| effective_noise(basis[i], m.r[i]) > m.r[i]);
             self.reacquired = limited.then(|| Reacquisition {
                 correction: c.x,

@@ -19,12 +19,35 @@
 //! a filter whose noise model is a little optimistic drifts beyond its sigma while it refuses,
 //! which kept the window failing for ever (RTK fixes refused for minutes, metres of error).
 //! Past that count a failing window is emptied and restarted with the current fix, which the
-//! per-fix gate and the cluster rule judge as usual. The
-//! window's earlier fixes were used before the test could see the bias: the sum `d` of the
+//! per-fix gate and the cluster rule judge as usual.
+//!
+//! The window's earlier fixes were used before the test could see the bias: the sum `d` of the
 //! corrections they applied to the error state is now doubtful, and at the detection it is
 //! added to the covariance as the rank-one term `P <- P + d d^T` (fault recovery by covariance
 //! increase [Groves, ch. 17]): the filter's sigma covers what the fault may have pulled it
 //! by, and the same corrections are not added twice.
+//!
+//! **A restart's doubt** [Groves, ch. 17, fault recovery by covariance increase;
+//! Bar-Shalom et al., ch. 11, the moments of a Gaussian mixture; reported, not gated]. The
+//! restart takes fixes of the kind the window refused, and the filter cannot tell what they
+//! are: its own drift (the fixes are right) or a fault that is still growing (a multipath
+//! ramp: its refused innovations drift linearly, as the filter's own velocity error would
+//! make them, at a rate a filter a few times optimistic could have). It takes them, and a
+//! FOG filter that restarted inside a 5 m ramp followed its last fixes by metres with a
+//! sigma of decimetres (11–17 sigma in the outlier bench). So until [`WINDOW`] fixes taken
+//! since the restart confirm it, the reported position covariance is that of the two
+//! hypotheses, equally likely, about the solution ([`Restart::doubt`]): the fixes are right
+//! (the filter's own `P`), or the solution belongs where the restart found it, `d` away
+//! with the covariance `P_0` it had then, `(P + P_0) / 2 + d d^T / 2`. `d` sums what the
+//! fixes since the restart moved the solution by: their position corrections, each carried
+//! on by the velocity corrections applied before it (`d_p + d_v dt`, the transition's
+//! position-velocity block to first order). A restarted window that fails again ends it
+//! (its fixes' corrections then join the covariance as `d d^T`, above), and so does the
+//! recovery of a DEGRADED filter (below), whose own covariance increase takes its place.
+//! The doubt does not bound what the filter follows before the window sees a fault (the
+//! window needs its fixes: the ramp's first 10 s pull a FOG filter to 3–4 of its 0.2 m
+//! sigma), nor a fault that grows on for a full window after the restart: that one is taken
+//! as the filter's own error, as the MEMS filter takes the ramp.
 //!
 //! **A refused cluster** [Teunissen, 1990, adaptation]. While fixes are being refused, the
 //! next one whose innovation agrees with the previous refused fix's (their difference within
@@ -110,7 +133,7 @@
 //! that begins while the filter refuses the true fixes it may have drifted from (after a ramp
 //! it followed) leaves that doubt standing.
 
-use super::states::{Covariance, POS, StateVector};
+use super::states::{Covariance, POS, StateVector, VEL};
 use crate::Scalar;
 use nalgebra::{Matrix3, Vector3};
 
@@ -170,6 +193,67 @@ impl<T: Scalar> Reacquisition<T> {
     pub fn doubt(&self) -> Matrix3<T> {
         let d = self.correction.fixed_rows::<3>(POS);
         d * d.transpose() * T::c(0.25)
+    }
+}
+
+/// What the fixes taken since the window restarted after [`WINDOW_REFUSALS_MAX`] refusals
+/// moved the solution by, until [`WINDOW`] of them confirm the restart (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Restart<T: Scalar> {
+    /// Their position corrections, each carried to the last fix by the velocity corrections
+    /// before it, NED [m].
+    pub position_ned_m: Vector3<T>,
+    /// Their velocity corrections, NED [m/s].
+    pub velocity_ned_m_s: Vector3<T>,
+    /// Fixes taken since the restart [-].
+    pub fixes: usize,
+    /// The filter's position covariance before the restart, NED [m^2].
+    pub before_m2: Matrix3<T>,
+}
+
+impl<T: Scalar> Restart<T> {
+    /// At the restart, the filter's position covariance `before_m2` [m^2]: nothing moved
+    /// yet.
+    pub fn new(before_m2: Matrix3<T>) -> Self {
+        Self {
+            position_ned_m: Vector3::zeros(),
+            velocity_ned_m_s: Vector3::zeros(),
+            fixes: 0,
+            before_m2,
+        }
+    }
+
+    /// Carried `dt_s` [s] on: the velocity corrections move the position by `dv dt`
+    /// (the position-velocity block of the transition, to first order).
+    pub fn carried(&self, dt_s: T) -> Self {
+        Self {
+            position_ned_m: self.position_ned_m + self.velocity_ned_m_s * dt_s,
+            ..*self
+        }
+    }
+
+    /// With the correction `x` of the next fix taken.
+    pub fn taken(&self, x: &StateVector<T>) -> Self {
+        Self {
+            position_ned_m: self.position_ned_m + x.fixed_rows::<3>(POS),
+            velocity_ned_m_s: self.velocity_ned_m_s + x.fixed_rows::<3>(VEL),
+            fixes: self.fixes + 1,
+            ..*self
+        }
+    }
+
+    /// True once [`WINDOW`] fixes have been taken since the restart.
+    pub fn is_confirmed(&self) -> bool {
+        self.fixes >= WINDOW
+    }
+
+    /// The doubt on the position `dt_s` [s] after the last fix, when the filter's position
+    /// covariance is `p_pos_m2` [m^2] (module docs): the covariance of the two hypotheses,
+    /// equally likely, about the solution, `(P_0 + P) / 2 + d d^T / 2` with `d` what the
+    /// fixes moved it by and `P_0` [`Self::before_m2`], less `P` [m^2].
+    pub fn doubt(&self, dt_s: T, p_pos_m2: &Matrix3<T>) -> Matrix3<T> {
+        let d = self.carried(dt_s).position_ned_m;
+        (self.before_m2 - p_pos_m2 + d * d.transpose()) * T::c(0.5)
     }
 }
 
@@ -604,6 +688,39 @@ mod tests {
         let d = r.doubt();
         assert!((d[(1, 1)].sqrt() * 2.0 - 19.0).abs() < 1e-12);
         assert_eq!(d[(0, 0)], 0.0);
+    }
+
+    /// The fixes taken after a restart moved the solution 1 m east and by 0.1 m/s east,
+    /// then 0.5 m east a second later: 2 s after that, 1.5 m plus 3 s of the velocity, 1.8 m,
+    /// is the offset of the other hypothesis; confirmed after a window of fixes.
+    #[test]
+    fn a_restarts_doubt_carries_its_velocity_corrections() {
+        let mut x1 = StateVector::<f64>::zeros();
+        x1[POS + 1] = 1.0;
+        x1[VEL + 1] = 0.1;
+        let mut x2 = StateVector::<f64>::zeros();
+        x2[POS + 1] = 0.5;
+        let before = Matrix3::from_diagonal_element(0.25);
+        let r = Restart::new(before).taken(&x1).carried(1.0).taken(&x2);
+        assert!((r.position_ned_m - Vector3::new(0.0, 1.6, 0.0)).norm() < 1e-12);
+        // The filter's own 1-sigma shrank from 0.5 to 0.1 m: the mixture's variance east is
+        // (0.25 + 0.01) / 2 + 1.8^2 / 2.
+        let p = Matrix3::from_diagonal_element(0.01);
+        let reported = p + r.doubt(2.0, &p);
+        assert!(
+            (reported[(1, 1)] - (0.13 + 1.62)).abs() < 1e-12,
+            "{reported}"
+        );
+        assert!((reported[(0, 0)] - 0.13).abs() < 1e-12, "{reported}");
+        assert!(reported.cholesky().is_some());
+        assert!(!r.is_confirmed());
+        let mut full = r;
+        for _ in 2..WINDOW {
+            full = full.carried(1.0).taken(&StateVector::zeros());
+        }
+        assert!(full.is_confirmed());
+        // Nothing moved and nothing learnt: no doubt.
+        assert_eq!(Restart::new(before).doubt(5.0, &before), Matrix3::zeros());
     }
 
     /// A drift of velocity variance `v` [m^2/s^2] and curvature variance `k` [m^2] over 1 s.
