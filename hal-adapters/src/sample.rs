@@ -112,12 +112,14 @@ pub struct ImuSample {
 /// one sample to the next its size changes far less than the factor `periods` (gravity
 /// dominates it for any vehicle short of free fall), so the previous sample's `delta_v_prev`
 /// (one period) decides, at the midpoint: covering when `|delta_v| >= (1 + periods) / 2 *
-/// |delta_v_prev|`. Near free fall both are small and the record's definition (covering)
-/// stands.
+/// |delta_v_prev|`. Near free fall both are small, and for a non-finite increment (flagged as
+/// such) nothing can be said: the record's definition (covering) stands.
+// NaN-safe on purpose: a NaN norm must leave the definition standing.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn increment_spans_interval(delta_v: &[f32; 3], delta_v_prev: &[f32; 3], periods: f64) -> bool {
     let norm2 = |v: &[f32; 3]| v.iter().map(|x| f64::from(*x) * f64::from(*x)).sum::<f64>();
     let k = 0.5 * (1.0 + periods);
-    norm2(delta_v) >= k * k * norm2(delta_v_prev)
+    !(norm2(delta_v) < k * k * norm2(delta_v_prev))
 }
 
 impl ImuSample {
@@ -158,7 +160,20 @@ impl ImuSample {
 
 #[cfg(test)]
 mod tests {
-    use super::{ImuSample, Motion, SampleFlags};
+    use super::{ImuSample, Motion, SampleFlags, increment_spans_interval};
+
+    /// One period's increment after a 3-period interval is short; three periods' covers it;
+    /// in free fall, or for a NaN, the definition (covering) stands.
+    #[test]
+    fn an_increment_spans_its_interval_by_its_size() {
+        let one = [0.0, 0.0, -0.049];
+        assert!(!increment_spans_interval(&one, &one, 3.0));
+        assert!(increment_spans_interval(&one.map(|x| 3.0 * x), &one, 3.0));
+        // A braking car (0.3 g more for the sample) is still one period.
+        assert!(!increment_spans_interval(&[0.015, 0.0, -0.049], &one, 2.0));
+        assert!(increment_spans_interval(&[0.0; 3], &[0.0; 3], 3.0));
+        assert!(increment_spans_interval(&[f32::NAN, 0.0, 0.0], &one, 3.0));
+    }
     use crate::drivers::Mounting;
 
     /// Both kinds of motion are turned, both vectors; the rest of the sample is kept.

@@ -382,6 +382,9 @@ fn binary_counts(bytes: &[u8]) -> Result<BinCounts, String> {
         ..BinCounts::default()
     };
     let mut prev_t_ns = u64_at(h, 24);
+    let increments = u16_at(h, 14) == 0;
+    // The previous record's accelerometer field when it was a regular one (one period).
+    let mut prev_regular_accel: Option<[f64; 3]> = None;
     for (k, r) in bytes[HEADER_LEN..].chunks_exact(RECORD_LEN).enumerate() {
         if u32::from_le_bytes(r[36..40].try_into().unwrap()) != CRC32.checksum(&r[..36]) {
             return Err(format!("record {k}: CRC"));
@@ -390,16 +393,31 @@ fn binary_counts(bytes: &[u8]) -> Result<BinCounts, String> {
         let non_finite = r[8..32]
             .chunks_exact(4)
             .any(|v| !f32::from_le_bytes(v.try_into().unwrap()).is_finite());
+        let accel: [f64; 3] = core::array::from_fn(|i| {
+            f64::from(f32::from_le_bytes(
+                r[20 + 4 * i..24 + 4 * i].try_into().unwrap(),
+            ))
+        });
         let mut bad_interval = t_ns <= prev_t_ns;
+        let mut gap = false;
         if t_ns > prev_t_ns {
             let delta_ns = (t_ns - prev_t_ns) as f64;
             if delta_ns > 10.0 * period_ns {
                 bad_interval = true;
             } else if delta_ns > 1.5 * period_ns {
+                gap = true;
                 c.missed += ((delta_ns / period_ns).round() as u32).max(2) - 1;
+                // An increment of one period where the interval is longer (docs/
+                // recording-format.md): its size against the previous regular record's.
+                if increments && let Some(p) = prev_regular_accel {
+                    let norm2 = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>();
+                    let k = 0.5 * (1.0 + delta_ns / period_ns);
+                    bad_interval = norm2(&accel) < k * k * norm2(&p);
+                }
             }
         }
         prev_t_ns = t_ns;
+        prev_regular_accel = (!(bad_interval || gap || non_finite)).then_some(accel);
         c.non_finite += u32::from(non_finite);
         c.bad_interval += u32::from(bad_interval);
         c.flagged += u32::from(non_finite || bad_interval);
