@@ -562,6 +562,8 @@ impl<R: Read> Replay<R> {
     /// The sample for `record`, which is record number `self.next_index`; updates the counters.
     fn make_sample(&mut self, record: &Record) -> ImuSample {
         let mut flags = SampleFlags::empty();
+        // The record's increment covers one period: on time, or judged short after a gap.
+        let mut one_period = false;
         let dt_s = if record.t_ns > self.prev_t_ns {
             let delta_ns = (record.t_ns - self.prev_t_ns) as f64;
             if delta_ns > BAD_INTERVAL_PERIODS * self.period_ns {
@@ -572,6 +574,7 @@ impl<R: Read> Replay<R> {
                     && self.prev_delta_v.is_some_and(|p| {
                         !increment_spans_interval(&record.accel, &p, delta_ns / self.period_ns)
                     });
+                one_period = short;
                 flags |= if short {
                     SampleFlags::BAD_INTERVAL
                 } else {
@@ -604,7 +607,13 @@ impl<R: Read> Replay<R> {
             self.stats.bad_interval = self.stats.bad_interval.saturating_add(1);
         }
         self.prev_t_ns = record.t_ns;
-        self.prev_delta_v = flags.is_empty().then_some(record.accel);
+        // The last increment of one period stays the reference for the next gap: a run of
+        // gaps (a logger dropping every other record) is judged record by record, not taken
+        // as covering from the second one on (was: a second of half-rate records lost half
+        // its increments, 5 m/s of vertical velocity, silently).
+        if (flags.is_empty() || one_period) && !flags.contains(SampleFlags::NON_FINITE) {
+            self.prev_delta_v = Some(record.accel);
+        }
 
         let motion = match self.header.kind {
             Kind::Increments => Motion::Increments {

@@ -104,10 +104,12 @@ pub struct UpdateRecord {
     pub velocity: Option<AidResult<f64>>,
 }
 
-/// IMU time not covered by a navigated sample: the spans between a navigated sample and the
-/// next whose samples were unusable (a gap beyond the reader's limit, a bad interval) or
-/// refused, less the intervals navigated. The navigation bridges them (`nav_core::gap`: the
-/// rates either side, the filter's 1-sigma widened, a span beyond
+/// IMU time not covered by a navigated sample: the time between a navigated sample and the
+/// next one that its interval does not cover (samples lost, unusable or refused between them),
+/// measured as `nav_core::gap::GapDetector` measures the gaps the navigation bridges: from the
+/// last navigated sample, so that a time tag gone backwards (an unusable sample) loses nothing
+/// and the samples after it are not taken for a gap. The navigation bridges them
+/// (`nav_core::gap`: the rates either side, the filter's 1-sigma widened, a span beyond
 /// [`nav_core::gap::MAX_BRIDGED_S`] lost); this is the data's account of them for the terminal.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LostImuTime {
@@ -119,8 +121,12 @@ pub struct LostImuTime {
     pub longest_s: f64,
     /// End of the longest [s].
     pub longest_end_s: f64,
-    prev_t_us: Option<u64>,
-    open_s: f64,
+    /// The first sample's end [us].
+    first_us: Option<u64>,
+    /// The last navigated sample's end [us].
+    navigated_us: Option<u64>,
+    /// The latest end of a sample seen since the last navigated one (or the first) [us].
+    latest_us: Option<u64>,
 }
 
 /// A lost span shorter than this is not reported [s] (rounding of the time tags).
@@ -129,33 +135,38 @@ const LOST_TOLERANCE_S: f64 = 1e-4;
 impl LostImuTime {
     /// One sample ending at `t_us` [us]: navigated over `navigated_dt_s` [s], or not (`None`).
     pub fn note(&mut self, t_us: u64, navigated_dt_s: Option<f64>) {
-        let Some(prev) = self.prev_t_us.replace(t_us) else {
+        let first = *self.first_us.get_or_insert(t_us);
+        let Some(dt_s) = navigated_dt_s else {
+            self.latest_us = Some(self.latest_us.map_or(t_us, |l| l.max(t_us)));
             return;
         };
-        let interval_s = t_us.saturating_sub(prev) as f64 * 1e-6;
-        self.open_s += (interval_s - navigated_dt_s.unwrap_or(0.0)).max(0.0);
-        if navigated_dt_s.is_some() {
-            self.close(t_us);
+        self.latest_us = Some(t_us);
+        let from = self.navigated_us.replace(t_us).unwrap_or(first);
+        let lost_s = t_us.saturating_sub(from) as f64 * 1e-6 - dt_s;
+        // Within half the sample's interval: time-tag jitter (the gap detector's rule).
+        if lost_s > (0.5 * dt_s).max(LOST_TOLERANCE_S) {
+            self.add(lost_s, t_us);
         }
     }
 
-    /// Ends the open span at `t_us` [us] (a navigated sample, or the end of the data).
-    fn close(&mut self, t_us: u64) {
-        let lost_s = core::mem::take(&mut self.open_s);
-        if lost_s > LOST_TOLERANCE_S {
-            self.gaps += 1;
-            self.total_s += lost_s;
-            if lost_s > self.longest_s {
-                self.longest_s = lost_s;
-                self.longest_end_s = t_us as f64 * 1e-6;
-            }
+    fn add(&mut self, lost_s: f64, end_us: u64) {
+        self.gaps += 1;
+        self.total_s += lost_s;
+        if lost_s > self.longest_s {
+            self.longest_s = lost_s;
+            self.longest_end_s = end_us as f64 * 1e-6;
         }
     }
 
-    /// Ends the data.
+    /// Ends the data: the samples after the last navigated one, if any, were lost.
     pub fn finish(&mut self) {
-        if let Some(t_us) = self.prev_t_us {
-            self.close(t_us);
+        let (Some(first), Some(latest)) = (self.first_us, self.latest_us) else {
+            return;
+        };
+        let from = self.navigated_us.take().unwrap_or(first);
+        let lost_s = latest.saturating_sub(from) as f64 * 1e-6;
+        if lost_s > LOST_TOLERANCE_S {
+            self.add(lost_s, latest);
         }
     }
 
@@ -463,4 +474,73 @@ pub fn run_source<T: Scalar, S: Imu>(
         seq,
         sink,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::LostImuTime;
+
+    const P_US: u64 = 2_500;
+    const P_S: f64 = 0.0025;
+
+    /// Notes samples `(t_us, navigated)`, each navigated one over one period.
+    fn lost(samples: &[(u64, bool)]) -> LostImuTime {
+        let mut l = LostImuTime::default();
+        for &(t_us, navigated) in samples {
+            l.note(t_us, navigated.then_some(P_S));
+        }
+        l.finish();
+        l
+    }
+
+    /// One time tag 1 s back (unusable), and the next one unusable too (its interval from the
+    /// tag gone back): two samples' time lost, as the navigation bridges it, not the second
+    /// the tags spanned (was: 1.003 s reported missing and bridged).
+    #[test]
+    fn a_time_tag_gone_back_loses_only_its_samples() {
+        let t = 100_000_000;
+        let l = lost(&[
+            (t, true),
+            (t + P_US - 1_000_000, false),
+            (t + 2 * P_US, false),
+            (t + 3 * P_US, true),
+            (t + 4 * P_US, true),
+        ]);
+        assert_eq!(l.gaps, 1, "{l:?}");
+        assert!((l.total_s - 2.0 * P_S).abs() < 1e-9, "{l:?}");
+        // The clock stepped back for good: nothing lost.
+        let l = lost(&[
+            (t, true),
+            (t - 1_000_000 + P_US, false),
+            (t - 1_000_000 + 2 * P_US, true),
+        ]);
+        assert_eq!(l.gaps, 0, "{l:?}");
+    }
+
+    /// A second of records missing, the first after it unusable; unusable samples at the start
+    /// and at the end.
+    #[test]
+    fn lost_spans_are_counted_from_the_last_navigated_sample() {
+        let l = lost(&[
+            (0, true),
+            (P_US, true),
+            (1_000_000 + 2 * P_US, false),
+            (1_000_000 + 3 * P_US, true),
+        ]);
+        assert_eq!(l.gaps, 1, "{l:?}");
+        assert!((l.longest_s - (1.0 + P_S)).abs() < 1e-9, "{l:?}");
+        assert!((l.longest_end_s - (1.0 + 3.0 * P_S)).abs() < 1e-9, "{l:?}");
+        let l = lost(&[
+            (0, false),
+            (P_US, false),
+            (2 * P_US, true),
+            (3 * P_US, true),
+            (4 * P_US, false),
+        ]);
+        assert_eq!(l.gaps, 2, "{l:?}");
+        assert!((l.total_s - 2.0 * P_S).abs() < 1e-9, "{l:?}");
+        // Every sample on time: nothing.
+        let l = lost(&[(0, true), (P_US, true), (2 * P_US, true)]);
+        assert_eq!(l.gaps, 0, "{l:?}");
+    }
 }

@@ -174,7 +174,7 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
     let nominal_dt = 1.0 / c.imu_rate_hz;
     let (t_start, t_end) = (c.start_time_s, c.end_time_s.unwrap_or(f64::INFINITY));
     let mut prev_t: Option<f64> = None;
-    // The previous epoch's velocity increment, when it covered one interval.
+    // The last epoch's velocity increment that covered one interval.
     let mut prev_dv: Option<[f32; 3]> = None;
     let mut outside_window = 0_u64;
     // Intervals off `imudatarate` by more than a quarter of its interval, of all intervals (a
@@ -200,7 +200,11 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
                 && prev_dv.is_some_and(|p| {
                     !hal_adapters::sample::increment_spans_interval(&dv, &p, dt / nominal_dt)
                 });
-            prev_dv = (!gap).then_some(dv);
+            // The last increment of one period stays the reference (the reader's rule: a run
+            // of gaps is judged epoch by epoch).
+            if !gap || short {
+                prev_dv = Some(dv);
+            }
             // KF-GINS starts at the first epoch at or after `starttime`: its initpos, initvel
             // and initatt hold at that epoch, whose increment (over the interval before it)
             // is not integrated (`kf_gins.cpp` adds it as `imupre_` only) and which gets no

@@ -443,6 +443,26 @@ fn three_period_gap() {
     assert_eq!(samples[2].flags, SampleFlags::empty());
 }
 
+/// A logger that drops every other record for a while: every increment after a gap covers
+/// one period and is a bad interval, the second and later ones too (was: taken as covering
+/// their two periods, half the increments lost).
+#[test]
+fn every_increment_of_one_period_in_a_run_of_gaps_is_a_bad_interval() {
+    let records = [
+        record(T0_NS + PERIOD_NS),
+        record(T0_NS + 3 * PERIOD_NS),
+        record(T0_NS + 5 * PERIOD_NS),
+        record(T0_NS + 7 * PERIOD_NS),
+        record(T0_NS + 8 * PERIOD_NS),
+    ];
+    let (samples, end) = replay_all(&file(&header(Kind::Increments, 5), &records));
+    for s in &samples[1..4] {
+        assert_eq!(s.flags, SampleFlags::BAD_INTERVAL, "{s:?}");
+    }
+    assert_eq!(samples[4].flags, SampleFlags::empty());
+    assert_eq!(end.unwrap().bad_interval, 3);
+}
+
 /// Records dropped by a logger: the increment after the gap covers one period, not the three
 /// of its interval. Integrated over the interval it would lose gravity's balance for two
 /// periods; it is refused as a bad interval (the navigation bridges the time), and counted.
