@@ -383,7 +383,7 @@ fn binary_counts(bytes: &[u8]) -> Result<BinCounts, String> {
     };
     let mut prev_t_ns = u64_at(h, 24);
     let increments = u16_at(h, 14) == 0;
-    // The previous record's accelerometer field when it was a regular one (one period).
+    // The accelerometer field of the last record of one period.
     let mut prev_regular_accel: Option<[f64; 3]> = None;
     for (k, r) in bytes[HEADER_LEN..].chunks_exact(RECORD_LEN).enumerate() {
         if u32::from_le_bytes(r[36..40].try_into().unwrap()) != CRC32.checksum(&r[..36]) {
@@ -400,6 +400,7 @@ fn binary_counts(bytes: &[u8]) -> Result<BinCounts, String> {
         });
         let mut bad_interval = t_ns <= prev_t_ns;
         let mut gap = false;
+        let mut short = false;
         if t_ns > prev_t_ns {
             let delta_ns = (t_ns - prev_t_ns) as f64;
             if delta_ns > 10.0 * period_ns {
@@ -412,12 +413,17 @@ fn binary_counts(bytes: &[u8]) -> Result<BinCounts, String> {
                 if increments && let Some(p) = prev_regular_accel {
                     let norm2 = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>();
                     let k = 0.5 * (1.0 + delta_ns / period_ns);
-                    bad_interval = norm2(&accel) < k * k * norm2(&p);
+                    short = norm2(&accel) < k * k * norm2(&p);
+                    bad_interval = short;
                 }
             }
         }
         prev_t_ns = t_ns;
-        prev_regular_accel = (!(bad_interval || gap || non_finite)).then_some(accel);
+        // The last increment of one period (on time, or short after a gap) stays the
+        // reference across a run of gaps.
+        if (short || !(bad_interval || gap)) && !non_finite {
+            prev_regular_accel = Some(accel);
+        }
         c.non_finite += u32::from(non_finite);
         c.bad_interval += u32::from(bad_interval);
         c.flagged += u32::from(non_finite || bad_interval);
