@@ -51,6 +51,11 @@ impl Format for Nav<'_> {
                 n_align,
                 Unused(counters)
             ),
+            NavError::GapDuringAlignment { samples, lost_us } => write!(
+                f,
+                "{=u64} us of IMU data missing after {=u32} samples of the alignment: its method integrates the body's attitude, which a gap breaks (align where the data have no gap, or with the static method on a still base)",
+                lost_us, samples
+            ),
             // Only a build with the filter has it (its text has no float).
             NavError::Filter(e) => {
                 if AIDED_COMPILED_IN {

@@ -153,7 +153,7 @@ pub fn filter(r: &FilterReport<f32>, fixes: &FixCounters, unused: u32, after_dat
         }
     }
     defmt::info!(
-        "  fixes: {=u32} received while aided, {=u32} out of order, {=u32} beyond the queue, {=u32} late; {=u32} before the aided phase, {=u32} after the data",
+        "  fixes: {=u32} received while aided, {=u32} out of order, {=u32} dropped from a full queue, {=u32} late; {=u32} before the aided phase, {=u32} after the data",
         fixes.received,
         fixes.out_of_order,
         fixes.queue_full,

@@ -392,6 +392,7 @@ mod app {
                     }
                 }
                 Step::Rejected(_) => {}
+                Step::Failed(e) => failed(&e, &imu),
                 // Not reached: every answer is awaited before the next sample.
                 Step::NotReady => defmt::panic!("navigator not ready"),
             }
@@ -787,6 +788,7 @@ mod app {
             NavError::NothingNavigated { .. } => ExitCode::NothingNavigated,
             NavError::Alignment { .. }
             | NavError::EndedDuringAlignment { .. }
+            | NavError::GapDuringAlignment { .. }
             | NavError::Filter(_) => ExitCode::Alignment,
         })
     }

@@ -209,6 +209,7 @@ pub fn config_in<T: Scalar>(c: &FilterConfig<f64>) -> FilterConfig<T> {
         gap_dynamics: nav_core::gap::GapDynamics {
             omega_sigma_rad_s: T::c(c.gap_dynamics.omega_sigma_rad_s),
             f_sigma_mps2: T::c(c.gap_dynamics.f_sigma_mps2),
+            omega_accel_rad_s2: T::c(c.gap_dynamics.omega_accel_rad_s2),
         },
         rejections_to_degrade: c.rejections_to_degrade,
         max_horizontal_sigma_m: T::c(c.max_horizontal_sigma_m),
@@ -473,7 +474,7 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
         line("zero velocity", &c.zero_velocity),
         line("zero rate", &c.zero_rate),
         format!(
-            "fixes: {} received, {} before/after the IMU data, {} bad time tags, {} out of order, {} beyond the queue, {} late, {} used by the start",
+            "fixes: {} received, {} before/after the IMU data, {} bad time tags, {} out of order, {} dropped from a full queue, {} late, {} used by the start",
             r.fixes.received,
             r.outside_imu_data,
             r.bad_time_tags,

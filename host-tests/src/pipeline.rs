@@ -176,7 +176,7 @@ impl fmt::Display for AidedOutcome {
         let x = &self.fixes;
         writeln!(
             f,
-            "  fixes: {} received while aided, {} out of order, {} beyond the queue, {} late; {} before the aided phase, {} after the data",
+            "  fixes: {} received while aided, {} out of order, {} dropped from a full queue, {} late; {} before the aided phase, {} after the data",
             x.received,
             x.out_of_order,
             x.queue_full,

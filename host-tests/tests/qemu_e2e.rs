@@ -1419,7 +1419,7 @@ fn firmware_navigates_aided_like_the_harness() {
     // handed over); every one in between used.
     assert_eq!(
         fw_lines[5],
-        "fixes: 225 received while aided, 0 out of order, 0 beyond the queue, 0 late; 76 before the aided phase, 0 after the data"
+        "fixes: 225 received while aided, 0 out of order, 0 dropped from a full queue, 0 late; 76 before the aided phase, 0 after the data"
     );
     assert!(
         fw_lines[1].starts_with("GNSS position: 225 accepted"),

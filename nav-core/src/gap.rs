@@ -76,28 +76,35 @@ impl<T: Scalar> ImuGap<T> {
 
 /// The motion a bridge cannot know: the body rate and specific force are taken to differ from
 /// the interpolated ones by a random constant over the gap, whose 1-sigma is the vehicle's
-/// (`omega_sigma_rad_s`, `f_sigma_mps2`, every axis) plus what a step between the two sides at
+/// (`omega_sigma_rad_s`, `f_sigma_mps2`, every axis), plus what a step between the two sides at
 /// an unknown time inside the gap leaves (`|after - before| / sqrt(12)`: the step's time
-/// uniform over the gap). Over a gap of `L` seconds the attitude is then off by `sigma_omega L`
-/// and the velocity by `sigma_f L` (1-sigma per axis), which the filter adds to its covariance
-/// as extra driving noise over the propagation interval that holds the gap.
+/// uniform over the gap), plus a turn that starts and ends unseen inside the gap: a rate
+/// pulse rising and falling at `omega_accel_rad_s2` peaks at `alpha L / 2` and turns the body
+/// by `alpha L^2 / 4`, a mean rate of `alpha L / 4` (a car's turn at 21 deg/s whose peak fell
+/// in a 4.9 s gap turned it by 38 deg that both edges missed). Over a gap of `L` seconds the
+/// attitude is then off by `sigma_omega L` and the velocity by `sigma_f L` (1-sigma per axis),
+/// which the filter adds to its covariance as extra driving noise over the propagation
+/// interval that holds the gap.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GapDynamics<T: Scalar> {
     /// Body rate the interpolation may miss, 1-sigma per axis [rad/s].
     pub omega_sigma_rad_s: T,
     /// Specific force the interpolation may miss, 1-sigma per axis [m/s^2].
     pub f_sigma_mps2: T,
+    /// Angular acceleration of a turn the gap may hide, 1-sigma [rad/s^2].
+    pub omega_accel_rad_s2: T,
 }
 
 impl<T: Scalar> Default for GapDynamics<T> {
-    /// 1 deg/s and 0.5 m/s^2: a land vehicle's or an aircraft's manoeuvre starting and ending
-    /// unseen within a second of a gap (a change seen across it is the `|after - before|`
-    /// term). `nav bench gaps` measures the errors against this: on the simulated land vehicle
-    /// they are a fraction of it.
+    /// 1 deg/s, 0.5 m/s^2 and 5 deg/s^2: a land vehicle's or an aircraft's manoeuvre
+    /// starting and ending unseen within a gap (a change seen across it is the `|after -
+    /// before|` term). `nav bench gaps` measures the errors against this: on the simulated
+    /// land vehicle's gentle stretches they are a fraction of it.
     fn default() -> Self {
         Self {
             omega_sigma_rad_s: T::c(1.0f64.to_radians()),
             f_sigma_mps2: T::c(0.5),
+            omega_accel_rad_s2: T::c(5.0f64.to_radians()),
         }
     }
 }
@@ -112,7 +119,9 @@ impl<T: Scalar> GapDynamics<T> {
         let twelfth = T::c(1.0 / 12.0);
         let d_omega = (gap.omega_after_ib_b - gap.omega_before_ib_b).norm_squared();
         let d_f = (gap.f_after_ib_b - gap.f_before_ib_b).norm_squared();
-        let omega2 = self.omega_sigma_rad_s * self.omega_sigma_rad_s + d_omega * twelfth;
+        let turn = self.omega_accel_rad_s2 * l * T::c(0.25);
+        let omega2 =
+            self.omega_sigma_rad_s * self.omega_sigma_rad_s + d_omega * twelfth + turn * turn;
         let f2 = self.f_sigma_mps2 * self.f_sigma_mps2 + d_f * twelfth;
         (omega2 * l2, f2 * l2)
     }
@@ -217,7 +226,8 @@ mod tests {
         let dynamics = GapDynamics::<f64>::default();
         let (att, vel) = dynamics.variances(&g);
         let (s_omega, s_f) = (dynamics.omega_sigma_rad_s, dynamics.f_sigma_mps2);
-        assert!((att - (s_omega * s_omega + 0.04 / 12.0)).abs() < 1e-12);
+        let turn = dynamics.omega_accel_rad_s2 * 0.25;
+        assert!((att - (s_omega * s_omega + 0.04 / 12.0 + turn * turn)).abs() < 1e-12);
         assert!((vel - (s_f * s_f + 1.0 / 12.0)).abs() < 1e-12);
     }
 

@@ -61,8 +61,9 @@ pub struct FixCounters {
     pub received: u32,
     /// Refused: not later than the previous fix.
     pub out_of_order: u32,
-    /// Refused: the queue was full (more fixes due than it holds before the next sample:
-    /// fixes denser than the samples, or a gap in the IMU data).
+    /// Dropped from a full queue, the oldest first (more fixes due than it holds before the
+    /// next sample: fixes denser than the samples, or a gap in the IMU data; the oldest would
+    /// be late first).
     pub queue_full: u32,
     /// Refused: applied later than [`MAX_LAG_US`] after their time.
     pub late: u32,
@@ -108,19 +109,28 @@ impl<T: Scalar> FixQueue<T> {
     }
 
     /// Holds a fix until its sample. Fixes must come in time order; a fix not later than the
-    /// previous one is refused (counted in [`FixCounters::out_of_order`]), and so is one
-    /// beyond the queue ([`FixCounters::queue_full`]); `false` returned then.
+    /// previous one is refused (counted in [`FixCounters::out_of_order`]) and `false`
+    /// returned. A full queue drops its oldest fix for the new one
+    /// ([`FixCounters::queue_full`]).
     pub fn push(&mut self, fix: GnssFixInput<T>) -> bool {
         self.counters.received = self.counters.received.saturating_add(1);
         if self.last_fix_us.is_some_and(|t| fix.t_us <= t) {
             self.counters.out_of_order = self.counters.out_of_order.saturating_add(1);
             return false;
         }
-        let Some(slot) = self.queue.iter_mut().find(|s| s.is_none()) else {
-            self.counters.queue_full = self.counters.queue_full.saturating_add(1);
-            return false;
+        let slot = match self.queue.iter().position(|s| s.is_none()) {
+            Some(i) => i,
+            None => {
+                self.counters.queue_full = self.counters.queue_full.saturating_add(1);
+                // Full: every slot holds a fix; the oldest goes.
+                self.queue
+                    .iter()
+                    .enumerate()
+                    .min_by_key(|(_, f)| f.map_or(0, |f| f.t_us))
+                    .map_or(0, |(i, _)| i)
+            }
         };
-        *slot = Some(fix);
+        self.queue[slot] = Some(fix);
         self.last_fix_us = Some(fix.t_us);
         true
     }
@@ -245,8 +255,8 @@ impl<T: Scalar> Sequencer<T> {
     }
 
     /// Hands over a fix; it is applied at the first sample at or after its time. Fixes must
-    /// come in time order; a fix older than the previous one, or beyond the queue, is refused
-    /// (counted) and `false` returned.
+    /// come in time order; a fix older than the previous one is refused (counted) and `false`
+    /// returned; a full queue drops its oldest ([`FixQueue::push`]).
     pub fn push_fix(&mut self, fix: GnssFixInput<T>) -> bool {
         self.fixes.push(fix)
     }
@@ -343,20 +353,23 @@ mod tests {
         }
     }
 
-    /// A repeated time is out of order; a fix beyond the full queue is counted apart (fixes
-    /// due faster than samples come: it is no ordering fault of the receiver's).
+    /// A repeated time is out of order; a full queue drops its oldest fix for the new one,
+    /// counted apart (fixes due faster than samples come, e.g. across a gap in the IMU data:
+    /// the oldest would be late first, the newest is the one the next sample can use).
     #[test]
-    fn a_full_queue_is_not_an_ordering_fault() {
+    fn a_full_queue_drops_its_oldest_fix() {
         let mut q = FixQueue::<f64>::new();
         for k in 1..=QUEUE as u64 {
             assert!(q.push(fix(k * 100_000)));
         }
         assert!(!q.push(fix(QUEUE as u64 * 100_000)));
-        assert!(!q.push(fix(10_000_000)));
+        assert!(q.push(fix(10_000_000)));
         let c = q.counters();
         assert_eq!((c.received, c.out_of_order, c.queue_full), (6, 1, 1));
-        // The queue empties at its samples and takes fixes again.
-        assert!(q.pop_due(100_000).is_some());
-        assert!(q.push(fix(10_000_000)));
+        // The oldest (0.1 s) is gone: at 10 s the due fixes are 0.2 s onwards, the late
+        // ones dropped, the newest applied.
+        let (f, lag) = q.pop_due(10_000_000).unwrap();
+        assert_eq!((f.t_us, lag), (10_000_000, 0.0));
+        assert_eq!(q.counters().late, 3);
     }
 }

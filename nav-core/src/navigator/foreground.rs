@@ -6,7 +6,7 @@
 use super::background::{Background, FilterReport, FromBackground, ToBackground, initial_sigma};
 use super::setup::Setup;
 use crate::Scalar;
-use crate::alignment::{AlignFailure, AlignOutcome};
+use crate::alignment::{AlignFailure, AlignMethod, AlignOutcome};
 use crate::calibration::ImuCompensation;
 use crate::gap::{GapCounters, GapDetector, ImuGap};
 use crate::increment::{ImuIncrement, InputError, InputLimits};
@@ -202,6 +202,8 @@ pub enum Step<T: Scalar> {
     /// previous sample's work is not all taken ([`Navigator::next_message`]), or the run
     /// failed. Deliver the answer or take the work, then push the sample again.
     NotReady,
+    /// The sample ended the run ([`NavError::GapDuringAlignment`]).
+    Failed(NavError),
 }
 
 /// Why a run ended without navigating to the end of its data.
@@ -233,6 +235,15 @@ pub enum NavError {
     },
     /// The alignment finished but the navigation filter cannot start from its outcome.
     Filter(FilterError),
+    /// Time was lost inside the window of an alignment that integrates the body's attitude
+    /// (inertial, fine, sway: an attitude step across the gap is as large as the Earth-rate
+    /// signal the heading comes from); the static method's averages do not mind one.
+    GapDuringAlignment {
+        /// Samples forwarded to the alignment before the gap.
+        samples: u32,
+        /// The time lost [us].
+        lost_us: u64,
+    },
 }
 
 impl fmt::Display for NavError {
@@ -259,6 +270,12 @@ impl fmt::Display for NavError {
             Self::Filter(e) => write!(
                 f,
                 "the navigation filter cannot start from the alignment's outcome: {e}"
+            ),
+            Self::GapDuringAlignment { samples, lost_us } => write!(
+                f,
+                "{lost_us} us of IMU data missing after {samples} samples of the alignment: \
+                 its method integrates the body's attitude, which a gap breaks (align where \
+                 the data have no gap, or with the static method on a still base)"
             ),
         }
     }
@@ -381,6 +398,7 @@ pub struct Navigator<T: Scalar> {
     mechanization: MechanizationConfig<T>,
     log_every: u32,
     n_align: u32,
+    align_method: AlignMethod,
     phase: Phase<T>,
     counters: Counters,
     /// Increments forwarded to the alignment, and the time of the last one [us].
@@ -415,6 +433,7 @@ impl<T: Scalar> Navigator<T> {
             mechanization: setup.mechanization,
             log_every: setup.log_every,
             n_align: setup.n_align(),
+            align_method: setup.align.method,
             phase: Phase::Aligning,
             counters: Counters::default(),
             forwarded: 0,
@@ -434,8 +453,9 @@ impl<T: Scalar> Navigator<T> {
 
     /// Hands over a GNSS fix (time order; at most a few ahead of the samples: hand each over
     /// before the first sample at or after its time). In the aided phase it is held until
-    /// that sample and applied there ([`FixQueue`]: a fix out of order or beyond the queue is
-    /// refused and counted, one applied more than 0.1 s late dropped and counted); otherwise
+    /// that sample and applied there ([`FixQueue`]: a fix out of order is refused and counted,
+    /// a full queue drops its oldest, one applied more than 0.1 s late is dropped and
+    /// counted); otherwise
     /// it is counted in [`Counters::fixes_unused`]. Returns whether it was taken.
     pub fn push_fix(&mut self, fix: GnssFixInput<T>) -> bool {
         if matches!(self.phase, Phase::Aided(_)) {
@@ -474,6 +494,13 @@ impl<T: Scalar> Navigator<T> {
         }
         let gap = self.gaps.note(input.t_us, &inc);
         if let Some(gap) = &gap {
+            if matches!(self.phase, Phase::Aligning) && self.align_method != AlignMethod::Static {
+                let e = NavError::GapDuringAlignment {
+                    samples: self.forwarded,
+                    lost_us: (gap.lost_s.to_f64() * 1e6) as u64,
+                };
+                return Step::Failed(self.fail(e));
+            }
             self.bridge(gap);
         }
         match &mut self.phase {
@@ -749,6 +776,7 @@ impl<T: Scalar> Navigator<T> {
                 _ => Ok(None),
             },
             Step::Flagged | Step::Rejected(_) => Ok(None),
+            Step::Failed(e) => Err(e),
         }
     }
 
