@@ -196,7 +196,10 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
             let dv = row.delta_v_ib_b.map(|x| x as f32);
             // After a gap, an increment of the last interval alone (a logger that dropped
             // epochs) is not integrated over the gap: the navigation bridges it.
+            // Within the reader's gap limit (10 intervals; a longer interval is refused by the
+            // increment limits or is no interval of `imudatarate`'s, which is checked below).
             let short = gap
+                && dt <= 10.0 * nominal_dt
                 && prev_dv.is_some_and(|p| {
                     !hal_adapters::sample::increment_spans_interval(&dv, &p, dt / nominal_dt)
                 });
