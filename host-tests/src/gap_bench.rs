@@ -6,7 +6,7 @@
 
 use crate::aided::{self, AidedSink};
 use crate::aided_bench::{Case, navigation_covariance, nees, prepare, state_error};
-use crate::gnss_sim::GnssSimOptions;
+use crate::gnss_bench::outlier_case;
 use crate::recording_io::ReplaySource;
 use crate::report::interpolate;
 use crate::sensor_model::Grade;
@@ -48,26 +48,12 @@ pub struct GapOutcome {
 /// The gap run: a land vehicle of `grade`, 300 s at 200 Hz, 1 Hz fixes of 0.5 m (1 m down)
 /// through a 0.8 / -0.3 / -1.1 m lever arm, the filter's noise model the simulated sensor's.
 pub fn gap_case(grade: Grade, seed: u64) -> Case {
-    Case {
-        scenario: "land-vehicle".into(),
-        grade,
-        seconds: 300.0,
-        imu_rate_hz: 200.0,
-        zero_motion: true,
-        in_run_noise: true,
-        without: Vec::new(),
-        gnss: GnssSimOptions {
-            rate_hz: 1.0,
-            sigma_ned_m: [0.5, 0.5, 1.0],
-            sigma_v_ned_m_s: None,
-            lever_arm_b_m: [0.8, -0.3, -1.1],
-            outages: Vec::new(),
-            outliers: Vec::new(),
-            correlated: None,
-            seed,
-        },
-        seed,
-    }
+    // The outlier run's vehicle and receiver, shorter, without outliers or outages.
+    let mut case = outlier_case(grade, seed);
+    case.seconds = 300.0;
+    case.gnss.outages.clear();
+    case.gnss.outliers.clear();
+    case
 }
 
 /// The start of the gap of `case`'s seed: uniform over 60-240 s (moving, the filter settled).

@@ -72,6 +72,17 @@ impl<T: Scalar> ImuGap<T> {
             },
         )
     }
+
+    /// Integrates the bridge ([`Self::step`]) with `step_once`, stopping at its first refusal
+    /// (the mean of two checked samples' rates passes the same limits: not expected).
+    pub fn integrate<E>(&self, mut step_once: impl FnMut(&ImuIncrement<T>) -> Result<(), E>) {
+        let (n, step) = self.step();
+        for _ in 0..n {
+            if step_once(&step).is_err() {
+                break;
+            }
+        }
+    }
 }
 
 /// The motion a bridge cannot know: the body rate and specific force are taken to differ from

@@ -168,13 +168,7 @@ impl<T: Scalar> AidedMechanization<T> {
     /// [`Self::step`].
     pub fn bridge(&mut self, gap: &ImuGap<T>) {
         self.restart_increments();
-        let (n, step) = gap.step();
-        for _ in 0..n {
-            // The mean of two checked samples' rates passes the same limits.
-            if self.integrate(&step).is_err() {
-                break;
-            }
-        }
+        gap.integrate(|inc| self.integrate(inc).map(|_| ()));
         let (att, vel) = self.gap_dynamics.variances(gap);
         let b = &mut self.acc_bridged;
         b.attitude_var_rad2 += att;

@@ -908,13 +908,7 @@ impl<T: Scalar> Navigator<T> {
         match &mut self.phase {
             Phase::Navigating(nav) => {
                 nav.restart_increments();
-                let (n, step) = gap.step();
-                for _ in 0..n {
-                    // The mean of two checked samples' rates passes the same limits.
-                    if nav.step(&step).is_err() {
-                        break;
-                    }
-                }
+                gap.integrate(|inc| nav.step(inc));
             }
             Phase::Aided(mech) => mech.bridge(gap),
             _ => return,
