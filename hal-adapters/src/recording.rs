@@ -570,7 +570,14 @@ impl<R: Read> Replay<R> {
                 flags |= SampleFlags::BAD_INTERVAL;
             } else if delta_ns > GAP_PERIODS * self.period_ns {
                 // An increment of the last period alone cannot be integrated over the gap.
+                // A non-finite record is flagged as such alone.
+                let finite = record
+                    .gyro
+                    .iter()
+                    .chain(&record.accel)
+                    .all(|v| v.is_finite());
                 let short = self.header.kind == Kind::Increments
+                    && finite
                     && self.prev_delta_v.is_some_and(|p| {
                         !increment_spans_interval(&record.accel, &p, delta_ns / self.period_ns)
                     });

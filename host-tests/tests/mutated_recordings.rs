@@ -410,7 +410,10 @@ fn binary_counts(bytes: &[u8]) -> Result<BinCounts, String> {
                 c.missed += ((delta_ns / period_ns).round() as u32).max(2) - 1;
                 // An increment of one period where the interval is longer (docs/
                 // recording-format.md): its size against the previous regular record's.
-                if increments && let Some(p) = prev_regular_accel {
+                if increments
+                    && !non_finite
+                    && let Some(p) = prev_regular_accel
+                {
                     let norm2 = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>();
                     let k = 0.5 * (1.0 + delta_ns / period_ns);
                     short = norm2(&accel) < k * k * norm2(&p);
