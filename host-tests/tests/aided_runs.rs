@@ -333,10 +333,15 @@ fn a_spike_taken_after_an_outage_is_undone_by_the_next_fix() {
 /// sigma now holds it (declared white, 14 sigma), and every other outlier is refused or
 /// bounded as before. Seed 5 stops while a held 30 m offset is refused: the stop's
 /// zero-velocity update moved the drifted position by 10 m, which broke the refused cluster's
-/// chain and let the offset be taken; the cluster now follows the correction.
+/// chain and let the offset be taken; the cluster now follows the correction. On seeds 8 and
+/// 17 one member of the held offset strayed beyond the gate from the last (the white noise and
+/// the correlated error's change between two fixes): it started a cluster that was not gross
+/// (the filter's covariance had grown by then), which was released as typical and taken, a
+/// 30 m offset followed at 12.8 sigma; a gross cluster is now continued by a fix closer to it
+/// than to the prediction, and the fixes' correlated error is part of their distance.
 #[test]
 fn a_declared_correlated_error_bounds_the_slow_ramp() {
-    for seed in [1, 5] {
+    for seed in [1, 5, 8, 17] {
         let out = outliers(&outlier_case_code_receiver(Grade::MemsTactical, seed)).unwrap();
         for o in &out {
             assert!(o.max_error_per_sigma < 3.0, "seed {seed}: {o:?}");

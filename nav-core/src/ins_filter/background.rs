@@ -518,7 +518,9 @@ impl<T: Scalar> ErrorFilter<T> {
         if nis > gate {
             // Continues the cluster it agrees with, or starts one.
             let cluster = match &self.cluster {
-                Some(c) if c.contains(&m.z, &m.r, &drift, gate) => c.followed_by(m.z, m.r, dt),
+                Some(c) if c.continued_by(&m.z, &m.r, &drift, nis, gate) => {
+                    c.followed_by(m.z, m.r, dt)
+                }
                 previous => RefusedCluster::start(
                     m.z,
                     m.r,
@@ -615,17 +617,19 @@ impl<T: Scalar> ErrorFilter<T> {
     }
 
     /// The filter's own drift over the `dt` [s] since the previous fix
-    /// ([`integrity::FixDrift`]): the velocity variance times `dt^2`, and a bound of the
-    /// acceleration error's variance, `g^2` [m/s^2] times the attitude variances plus the
-    /// accelerometer bias variances (isotropic: a tilt or a heading error times the specific
-    /// force, a bias in any axis), times `dt^4`.
+    /// ([`integrity::FixDrift`]): the velocity variance times `dt^2` plus the change of a
+    /// declared correlated GNSS error over `dt` (two fixes of one offset differ by it as
+    /// well), and a bound of the acceleration error's variance, `g^2` [m/s^2] times the
+    /// attitude variances plus the accelerometer bias variances (isotropic: a tilt or a
+    /// heading error times the specific force, a bias in any axis), times `dt^4`.
     fn fix_drift(&self, dt: T, g: T) -> integrity::FixDrift<T> {
         let var = |at: usize| (0..3).fold(T::zero(), |a, k| a + self.p[(at + k, at + k)]);
         let accel_var = g * g * var(ATT) + var(BA);
         let dt2 = dt * dt;
         integrity::FixDrift {
             dt_s: dt,
-            var_m2: Vector3::from_fn(|k, _| self.p[(VEL + k, VEL + k)]) * dt2,
+            var_m2: Vector3::from_fn(|k, _| self.p[(VEL + k, VEL + k)]) * dt2
+                + self.consider.gnss_error_change_variance(dt),
             curvature_var_m2: Vector3::repeat(accel_var * dt2 * dt2),
         }
     }

@@ -166,6 +166,15 @@ impl<T: Scalar> ConsiderModel<T> {
     pub fn gyro_bias_instability_variance(&self) -> T {
         self.variance[GB]
     }
+
+    /// Variance of the change of the declared GNSS error between two fixes `dt_s` [s] apart,
+    /// per NED axis [m^2]: `2 sigma^2 (1 - e^(-dt/tau))` of a first-order Gauss–Markov
+    /// process [Groves, §14.3.2], bounded here by `2 sigma^2 min(dt/tau, 1)`; zero when the
+    /// fixes are declared white.
+    pub fn gnss_error_change_variance(&self, dt_s: T) -> Vector3<T> {
+        let x = (dt_s * self.gnss_decay_rate).min(T::one()).max(T::zero());
+        Vector3::from_fn(|k, _| T::c(2.0) * self.variance[GP + k] * x)
+    }
 }
 
 /// The sensitivities `e_g = J_g c`, `e_a = J_a c` of the gyro and accelerometer errors to the
@@ -622,5 +631,23 @@ mod tests {
         assert_eq!(m.gyro_bias_instability_variance(), 0.0);
         let m = ConsiderModel::of(&n, Some(&gnss()));
         assert!(m.is_active() && m.has_gnss_error());
+    }
+
+    /// Two fixes of a Gauss–Markov error differ by `2 sigma^2 dt / tau` in variance over a
+    /// short interval, by no more than two independent draws over a long one, and not at all
+    /// when the fixes are declared white.
+    #[test]
+    fn a_declared_error_changes_between_fixes() {
+        let g = gnss();
+        let m = ConsiderModel::of(&noise(), Some(&g));
+        let short = m.gnss_error_change_variance(1.0);
+        let long = m.gnss_error_change_variance(1e6);
+        for k in 0..3 {
+            let s2 = g.sigma_ned_m[k] * g.sigma_ned_m[k];
+            assert!((short[k] - 2.0 * s2 / g.correlation_time_s).abs() < 1e-12);
+            assert!((long[k] - 2.0 * s2).abs() < 1e-12);
+        }
+        let white = ConsiderModel::of(&noise(), None);
+        assert_eq!(white.gnss_error_change_variance(1.0), Vector3::zeros());
     }
 }
