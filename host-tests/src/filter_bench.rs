@@ -261,7 +261,13 @@ pub struct FilterBenchReport {
 pub fn run(data: &DataSet) -> Result<FilterBenchReport> {
     let started = std::time::Instant::now();
     let cpu_started = thread_cpu_s();
-    let run = kf_gins_run::run(&data.config, Some(&data.out))?;
+    let run = kf_gins_run::run(
+        &data.config,
+        &kf_gins_run::Outputs {
+            nav: Some(data.out.clone()),
+            ..Default::default()
+        },
+    )?;
     let cpu_seconds = thread_cpu_s()
         .zip(cpu_started)
         .map(|(end, start)| end - start);

@@ -3,6 +3,18 @@
 //! antenna lever arm — through this project's filter, writing KF-GINS's 11-column `.nav`
 //! trajectory, one row per IMU epoch after the start (an epoch at `starttime` is the start's,
 //! as in KF-GINS: not integrated, no row), in `f64`.
+//!
+//! On request ([`Outputs`]) also KF-GINS's two other files, one row per `.nav` row, in its
+//! units (`kf_gins.cpp` `writeNavResult`, `writeSTD`):
+//! - the IMU errors (`KF_GINS_IMU_ERR.txt`, 13 columns): time [s], gyro biases [deg/h],
+//!   accelerometer biases [mGal], gyro and accelerometer scale factors [ppm], as compensated
+//!   (KF-GINS's signs: the bias is subtracted, the scale factor divides);
+//! - the 1-sigma (`KF_GINS_STD.txt`, 22 columns): time [s], position north, east, down [m]
+//!   (the reported covariance: the filter's own plus the doubt of its integrity tests),
+//!   velocity north, east, down [m/s], attitude [deg], then the same four sensor errors in the
+//!   same units. The attitude columns are the 1-sigma of the `.nav`'s roll, pitch and yaw
+//!   (KF-GINS writes its misalignment angles' about north, east, down; for a level vehicle
+//!   heading north they are the same, and the yaw is the down one in any heading).
 
 use crate::aided::{self, AidedReport, AidedSample, AidedSink};
 use crate::aided_cmd::{AidedStart, GivenStart, sequencer};
@@ -13,7 +25,7 @@ use crate::nav_writer::{NavRow, NavWriter};
 use anyhow::{Context, Result, bail};
 use nav_core::attitude::euler;
 use nav_core::ins_filter::model::FilterNoise;
-use nav_core::ins_filter::{ATT, AidedIns, FilterConfig, SensorErrors};
+use nav_core::ins_filter::{ATT, AidedIns, BA, BG, FilterConfig, POS, SA, SG, SensorErrors, VEL};
 use nav_core::number::Number;
 use nav_core::{ImuIncrement, Vector3};
 use std::fs::File;
@@ -22,6 +34,23 @@ use std::path::{Path, PathBuf};
 
 /// The name KF-GINS gives its trajectory in `outputpath`.
 pub const KF_GINS_NAV_NAME: &str = "KF_GINS_Navresult.nav";
+
+/// The name KF-GINS gives its IMU error file in `outputpath`.
+pub const KF_GINS_IMU_ERR_NAME: &str = "KF_GINS_IMU_ERR.txt";
+
+/// The name KF-GINS gives its 1-sigma file in `outputpath`.
+pub const KF_GINS_STD_NAME: &str = "KF_GINS_STD.txt";
+
+/// The files a run writes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Outputs {
+    /// The trajectory; `None`: KF-GINS's `outputpath/KF_GINS_Navresult.nav`.
+    pub nav: Option<PathBuf>,
+    /// The IMU errors, if wanted.
+    pub imu_err: Option<PathBuf>,
+    /// The 1-sigma, if wanted.
+    pub std: Option<PathBuf>,
+}
 
 /// What a KF-GINS run did.
 #[derive(Clone, Debug, PartialEq)]
@@ -32,12 +61,16 @@ pub struct KfGinsRun {
     pub rows: u64,
     /// The trajectory written.
     pub out: PathBuf,
+    /// The IMU error file written, as asked.
+    pub imu_err: Option<PathBuf>,
+    /// The 1-sigma file written, as asked.
+    pub std: Option<PathBuf>,
     /// The configuration's warnings (keys not used).
     pub warnings: Vec<String>,
     /// IMU rows skipped before `starttime` or after `endtime`.
     pub outside_window: u64,
-    /// Time spent storing the trajectory once written, syncing it to the disk and renaming
-    /// it into place [s]: a wait on the disk, not processing (KF-GINS does not sync its
+    /// Time spent storing the files once written, syncing them to the disk and renaming
+    /// them into place [s]: a wait on the disk, not processing (KF-GINS does not sync its
     /// output).
     pub store_s: f64,
     /// The filter's own 1-sigma over the trajectory's rows.
@@ -108,11 +141,39 @@ pub fn start(c: &KfGinsConfig) -> GivenStart {
     }
 }
 
-/// Every filter sample as a `.nav` row, and the sums of [`SigmaRms`].
+/// Every filter sample as a `.nav` row (and the IMU error and 1-sigma rows, when asked for),
+/// and the sums of [`SigmaRms`].
 struct NavRows {
     writer: NavWriter,
+    imu_err: Option<NavWriter>,
+    std: Option<NavWriter>,
     /// Sums of the horizontal position variance [m^2] and the heading's [rad^2], and rows.
     variance_sums: (f64, f64, u64),
+}
+
+/// rad/s -> deg/h.
+const DEG_H_PER_RAD_S: f64 = 180.0 / core::f64::consts::PI * 3600.0;
+/// m/s^2 -> mGal.
+const MGAL_PER_M_S2: f64 = 1e5;
+/// [-] -> ppm.
+const PPM: f64 = 1e6;
+
+/// The 12 sensor-error fields of KF-GINS's files in its units: gyro biases [deg/h],
+/// accelerometer biases [mGal], gyro and accelerometer scale factors [ppm].
+fn sensor_fields(
+    gb: &Vector3<f64>,
+    ab: &Vector3<f64>,
+    gs: &Vector3<f64>,
+    sa: &Vector3<f64>,
+) -> [f64; 12] {
+    let mut out = [0.0; 12];
+    for k in 0..3 {
+        out[k] = gb[k] * DEG_H_PER_RAD_S;
+        out[3 + k] = ab[k] * MGAL_PER_M_S2;
+        out[6 + k] = gs[k] * PPM;
+        out[9 + k] = sa[k] * PPM;
+    }
+    out
 }
 
 impl NavRows {
@@ -144,25 +205,89 @@ impl AidedSink<f64> for NavRows {
             v_eb_n_m_s: [s.v_eb_n.x, s.v_eb_n.y, s.v_eb_n.z],
             euler_rad: [roll, pitch, yaw],
         })?;
+        let t_s = t_us as f64 * 1e-6;
+        if let Some(w) = &mut self.imu_err {
+            let e = ins.sensor_errors();
+            let f = sensor_fields(
+                &e.gyro_bias_rad_s,
+                &e.accel_bias_mps2,
+                &e.gyro_scale,
+                &e.accel_scale,
+            );
+            let mut row = [0.0; 13];
+            row[0] = t_s;
+            row[1..].copy_from_slice(&f);
+            w.write_fields(&row)?;
+        }
+        if let Some(w) = &mut self.std {
+            let sigma = |at| ins.sigma(at);
+            let f = sensor_fields(&sigma(BG), &sigma(BA), &sigma(SG), &sigma(SA));
+            let (pos, vel) = (sigma(POS), sigma(VEL));
+            let att = ins.attitude_sigma_rad();
+            let mut row = [0.0; 22];
+            row[0] = t_s;
+            for k in 0..3 {
+                row[1 + k] = pos[k];
+                row[4 + k] = vel[k];
+                row[7 + k] = att[k].to_degrees();
+            }
+            row[10..].copy_from_slice(&f);
+            w.write_fields(&row)?;
+        }
         Ok(())
     }
 }
 
-/// Runs the configuration at `config_path`; the trajectory goes to `out`, or to KF-GINS's
-/// `outputpath/KF_GINS_Navresult.nav`.
-pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
-    let (c, warnings) = kf_gins_config::load(config_path)?;
-    let out = out.map_or_else(|| c.output_dir.join(KF_GINS_NAV_NAME), Path::to_path_buf);
-    crate::atomic::refuse_same_file(&[config_path, &c.imu_path, &c.gnss_path], &out)?;
-    // Before the run, not after it: the folder the trajectory goes to.
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty())
-        && !dir.is_dir()
-    {
-        bail!(
-            "the output folder {} does not exist (outputpath, or --out's folder)",
-            dir.display()
-        );
+/// Refuses two outputs that name one file (the later would replace the earlier).
+fn refuse_shared_outputs(outputs: &[(&str, &Path)]) -> Result<()> {
+    // The folder canonicalised (it exists: checked before), the name as given.
+    let key = |p: &Path| {
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
+        let dir = dir.map_or_else(|| Path::new(".").canonicalize(), Path::canonicalize);
+        (dir.ok(), p.file_name().map(ToOwned::to_owned))
+    };
+    for (i, (a_name, a)) in outputs.iter().enumerate() {
+        for (b_name, b) in &outputs[i + 1..] {
+            if key(a) == key(b) {
+                bail!(
+                    "{a_name} and {b_name} name the same file {}: each output needs its own",
+                    b.display()
+                );
+            }
+        }
     }
+    Ok(())
+}
+
+/// Runs the configuration at `config_path`; the trajectory goes to `outputs.nav`, or to
+/// KF-GINS's `outputpath/KF_GINS_Navresult.nav`, and the IMU error and 1-sigma files where
+/// `outputs` asks.
+pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
+    let (c, warnings) = kf_gins_config::load(config_path)?;
+    let out = outputs
+        .nav
+        .clone()
+        .unwrap_or_else(|| c.output_dir.join(KF_GINS_NAV_NAME));
+    let named = [
+        Some(("the trajectory (--out)", out.as_path())),
+        outputs.imu_err.as_deref().map(|p| ("--imu-err", p)),
+        outputs.std.as_deref().map(|p| ("--std", p)),
+    ];
+    let named: Vec<(&str, &Path)> = named.into_iter().flatten().collect();
+    for (name, path) in &named {
+        crate::atomic::refuse_same_file(&[config_path, &c.imu_path, &c.gnss_path], path)?;
+        // Before the run, not after it: the folder each file goes to.
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty())
+            && !dir.is_dir()
+        {
+            bail!(
+                "the output folder {} of {name} does not exist (outputpath, or the option's \
+                 folder)",
+                dir.display()
+            );
+        }
+    }
+    refuse_shared_outputs(&named)?;
     let fixes: Vec<GnssFix> = gnss::read_gnss(&c.gnss_path)
         .with_context(|| format!("GNSS file {} (gnsspath)", c.gnss_path.display()))?;
     let config = filter_config(&c);
@@ -233,8 +358,11 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
             }));
         }
     };
+    let create = |p: &Option<PathBuf>| p.as_deref().map(NavWriter::create).transpose();
     let mut sink = NavRows {
         writer: NavWriter::create(&out)?,
+        imu_err: create(&outputs.imu_err)?,
+        std: create(&outputs.std)?,
         variance_sums: (0.0, 0.0, 0),
     };
     let report = aided::run(samples, &fixes, seq, &mut sink)?;
@@ -266,11 +394,16 @@ pub fn run(config_path: &Path, out: Option<&Path>) -> Result<KfGinsRun> {
         );
     }
     let sigma_rms = sink.sigma_rms();
-    let (rows, store_s) = sink.writer.finish_timed()?;
+    let (rows, mut store_s) = sink.writer.finish_timed()?;
+    for w in [sink.imu_err, sink.std].into_iter().flatten() {
+        store_s += w.finish_timed()?.1;
+    }
     Ok(KfGinsRun {
         report,
         rows,
         out,
+        imu_err: outputs.imu_err.clone(),
+        std: outputs.std.clone(),
         warnings,
         outside_window,
         store_s,

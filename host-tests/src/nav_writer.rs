@@ -18,6 +18,9 @@
 //! more (beyond the fixed-point integer) go through Rust's formatter. NaN and infinities are
 //! written as C writes them (`nan`, `inf`, `-inf`, `-nan`); the reader refuses such lines.
 //!
+//! The same writer writes KF-GINS's other text files, row by row of plain fields
+//! ([`NavWriter::write_fields`]: `KF_GINS_IMU_ERR.txt`, `KF_GINS_STD.txt`).
+//!
 //! **Atomic.** Rows go to a temporary file beside the output ([`crate::atomic::AtomicFile`]),
 //! renamed into place by [`NavWriter::finish`]; a writer dropped without `finish` (an error, a
 //! panic) leaves no file, and an existing file at the path untouched.
@@ -99,8 +102,8 @@ const WIDTH: usize = 15;
 /// The most bytes a common field takes: '-', 10 integer digits, '.', 9 decimals, the blank.
 const FIELD_BYTES: usize = 22;
 
-/// The fields of one row.
-const ROW_FIELDS: usize = 11;
+/// The fields of the widest row KF-GINS writes (its 1-sigma file, `KF_GINS_STD.txt`).
+const MAX_ROW_FIELDS: usize = 22;
 
 /// `"00".."99"`: two digits a lookup.
 const PAIRS: &[u8; 200] = b"\
@@ -110,12 +113,13 @@ const PAIRS: &[u8; 200] = b"\
 6061626364656667686970717273747576777879\
 8081828384858687888990919293949596979899";
 
-/// Appends each of `fields` (at most [`ROW_FIELDS`]) as C's `%-15.9lf ` does: the common
-/// ones straight into blanks reserved at the end of `line` (no copy of the row), a rare one
-/// ([`format_rare`]) on its own.
+/// Appends each of `fields` as C's `%-15.9lf ` does: the common ones straight into blanks
+/// reserved at the end of `line` (no copy of the row), a rare one ([`format_rare`]) on its
+/// own.
 fn append_fields(fields: &[f64], line: &mut Vec<u8>) {
+    let reserved = fields.len() * FIELD_BYTES;
     let mut start = line.len();
-    line.resize(start + ROW_FIELDS * FIELD_BYTES, b' ');
+    line.resize(start + reserved, b' ');
     let mut at = 0;
     for &x in fields {
         if x.is_finite() && x.abs() < 9.0e9 {
@@ -128,7 +132,7 @@ fn append_fields(fields: &[f64], line: &mut Vec<u8>) {
             format_rare(x, line);
             start = line.len();
             at = 0;
-            line.resize(start + ROW_FIELDS * FIELD_BYTES, b' ');
+            line.resize(start + reserved, b' ');
         }
     }
     line.truncate(start + at);
@@ -276,7 +280,7 @@ impl NavWriter {
         Ok(Self {
             file: AtomicFile::create(path).map_err(|e| TextError::io(path, e))?,
             path: path.to_owned(),
-            pending: Vec::with_capacity(CHUNK_BYTES + ROW_FIELDS * FIELD_BYTES + 1),
+            pending: Vec::with_capacity(CHUNK_BYTES + MAX_ROW_FIELDS * FIELD_BYTES + 1),
             rows: 0,
         })
     }
@@ -284,6 +288,19 @@ impl NavWriter {
     /// Writes one row (to the file once `CHUNK_BYTES` are gathered).
     pub fn write_row(&mut self, row: &NavRow) -> Result<(), TextError> {
         format_row(row, &mut self.pending);
+        self.rows += 1;
+        if self.pending.len() >= CHUNK_BYTES {
+            self.write_pending()?;
+        }
+        Ok(())
+    }
+
+    /// Writes one row of `fields` as KF-GINS's `FileSaver` writes its other text files (the
+    /// IMU errors, the 1-sigma): each field `%-15.9lf `, then `\n`; at most 22 fields.
+    pub fn write_fields(&mut self, fields: &[f64]) -> Result<(), TextError> {
+        debug_assert!(fields.len() <= MAX_ROW_FIELDS);
+        append_fields(fields, &mut self.pending);
+        self.pending.push(b'\n');
         self.rows += 1;
         if self.pending.len() >= CHUNK_BYTES {
             self.write_pending()?;

@@ -425,6 +425,110 @@ fn kf_gins_runs_a_configuration_as_it_is() {
     assert!(dir.path().join("KF_GINS_Navresult.nav").exists());
 }
 
+/// `nav kf-gins --imu-err --std`: KF-GINS's two other files, one row per `.nav` row at its
+/// time, in KF-GINS's units (the first 1-sigma row is the configuration's `init*std`), and a
+/// 1-sigma that tells the trajectory's error against the truth.
+#[test]
+fn kf_gins_writes_its_imu_error_and_sigma_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = data_set(dir.path(), 300.0);
+    let (err, std) = (dir.path().join("err.txt"), dir.path().join("std.txt"));
+    let text = run_ok(
+        nav()
+            .arg("kf-gins")
+            .arg(&data.config)
+            .arg("--out")
+            .arg(&data.out)
+            .arg("--imu-err")
+            .arg(&err)
+            .arg("--std")
+            .arg(&std),
+    );
+    assert!(text.contains("1-sigma: "), "{text}");
+    let table = |p: &Path, columns: usize| -> Vec<Vec<f64>> {
+        let rows: Vec<Vec<f64>> = std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .map(|l| l.split_whitespace().map(|f| f.parse().unwrap()).collect())
+            .collect();
+        assert_eq!(rows.len() as u64, data.imu_rows, "{}", p.display());
+        assert!(rows.iter().all(|r| r.len() == columns), "{}", p.display());
+        rows
+    };
+    let (err_rows, std_rows) = (table(&err, 13), table(&std, 22));
+    let nav_rows = host_tests::kf_gins::read_truth(&data.out).unwrap();
+    for ((n, e), s) in nav_rows.iter().zip(&err_rows).zip(&std_rows) {
+        assert_eq!((e[0], s[0]), (n.t_s, n.t_s));
+        assert!(s[1..].iter().all(|v| v.is_finite() && *v >= 0.0), "{s:?}");
+        assert!(e[1..].iter().all(|v| v.is_finite()), "{e:?}");
+    }
+    // The first row, one interval after the start: the configuration's 1-sigma in KF-GINS's
+    // units (metres, m/s, deg, deg/h, mGal, ppm).
+    let (c, _) = host_tests::kf_gins_config::load(&data.config).unwrap();
+    let first = &std_rows[0];
+    let deg_h = 180.0 / std::f64::consts::PI * 3600.0;
+    for k in 0..3 {
+        let expected = [
+            (1, c.init_pos_std_ned_m[k]),
+            (4, c.init_vel_std_ned_m_s[k]),
+            (10, c.init_gyro_bias_std_rad_s[k] * deg_h),
+            (13, c.init_accel_bias_std_m_s2[k] * 1e5),
+            (16, c.init_gyro_scale_std[k] * 1e6),
+            (19, c.init_accel_scale_std[k] * 1e6),
+        ];
+        for (at, want) in expected {
+            let got = first[at + k];
+            assert!(
+                (got - want).abs() <= 0.01 * want,
+                "column {}: {got} vs {want}",
+                at + k + 1
+            );
+        }
+    }
+    // The horizontal 1-sigma tells the error against the truth.
+    let truth = host_tests::kf_gins::read_truth(&data.truth).unwrap();
+    let at: std::collections::HashMap<u64, &Truth> = truth
+        .iter()
+        .map(|t| ((t.t_s * 1e3).round() as u64, t))
+        .collect();
+    let (mut n, mut inside, mut e2, mut s2) = (0_u32, 0_u32, 0.0, 0.0);
+    for (row, s) in nav_rows.iter().zip(&std_rows) {
+        let Some(t) = at.get(&((row.t_s * 1e3).round() as u64)) else {
+            continue;
+        };
+        let dn = (row.lat - t.lat) * 6.357e6;
+        let de = (row.lon - t.lon) * 6.378e6 * t.lat.cos();
+        let (e, sigma) = (dn.hypot(de), s[1].hypot(s[2]));
+        n += 1;
+        inside += u32::from(e <= 3.0 * sigma);
+        e2 += e * e;
+        s2 += sigma * sigma;
+    }
+    assert!(n > 10_000, "{n} rows at truth epochs");
+    let ratio = (e2 / s2).sqrt();
+    assert!(
+        f64::from(inside) >= 0.95 * f64::from(n),
+        "{inside} of {n} within 3 sigma"
+    );
+    assert!(
+        (1.0 / 3.0..3.0).contains(&ratio),
+        "RMS error / RMS sigma {ratio}"
+    );
+    // Two outputs naming one file are refused before anything is written.
+    let other = dir.path().join("same.txt");
+    let e = run_err(
+        nav()
+            .arg("kf-gins")
+            .arg(&data.config)
+            .arg("--out")
+            .arg(&other)
+            .arg("--std")
+            .arg(&other),
+    );
+    assert!(e.contains("name the same file"), "{e}");
+    assert!(!other.exists());
+}
+
 /// A KF-GINS IMU file from a logger that dropped epochs (5 in a row, every 20 s): the epoch
 /// after each dropout holds its own interval's increments, not the dropout's. Integrated
 /// over the whole interval, each left the vertical velocity off by g times 25 ms, against RTK

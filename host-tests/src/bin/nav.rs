@@ -298,6 +298,16 @@ enum Command {
         /// The trajectory to write [default: OUTPUTPATH/KF_GINS_Navresult.nav].
         #[arg(long, value_name = "FILE.nav")]
         out: Option<PathBuf>,
+        /// Also write KF-GINS's IMU error file here (13 columns: time, gyro biases [deg/h],
+        /// accelerometer biases [mGal], gyro and accelerometer scale factors [ppm]; KF-GINS
+        /// names it OUTPUTPATH/KF_GINS_IMU_ERR.txt).
+        #[arg(long, value_name = "FILE")]
+        imu_err: Option<PathBuf>,
+        /// Also write KF-GINS's 1-sigma file here (22 columns: time, position north, east,
+        /// down [m], velocity [m/s], roll, pitch, yaw [deg], then the sensor errors' in the IMU
+        /// error file's units; KF-GINS names it OUTPUTPATH/KF_GINS_STD.txt).
+        #[arg(long, value_name = "FILE")]
+        std: Option<PathBuf>,
     },
     /// Align and navigate over a recording (any format), writing the solution log as CSV.
     #[command(allow_negative_numbers = true)]
@@ -2024,9 +2034,19 @@ fn run(cli: Cli) -> Result<()> {
         Command::Replay(args) => replay(args),
         Command::Decode(args) => host_tests::decode::run(&args),
         Command::Config(args) => host_tests::config_cmd::run(&args),
-        Command::KfGins { config, out } => {
+        Command::KfGins {
+            config,
+            out,
+            imu_err,
+            std,
+        } => {
             let started = std::time::Instant::now();
-            let run = host_tests::kf_gins_run::run(&config, out.as_deref())
+            let outputs = host_tests::kf_gins_run::Outputs {
+                nav: out,
+                imu_err,
+                std,
+            };
+            let run = host_tests::kf_gins_run::run(&config, &outputs)
                 .with_context(|| format!("KF-GINS configuration {}", config.display()))?;
             let seconds = started.elapsed().as_secs_f64();
             for w in &run.warnings {
@@ -2036,6 +2056,11 @@ fn run(cli: Cli) -> Result<()> {
                 "{}",
                 host_tests::aided_cmd::summary(&run.report, run.rows, &config, &run.out)
             );
+            for (what, path) in [("IMU errors", &run.imu_err), ("1-sigma", &run.std)] {
+                if let Some(p) = path {
+                    println!("{what}: {} ({} rows)", p.display(), run.rows);
+                }
+            }
             println!(
                 "IMU epochs outside starttime..endtime: {}",
                 run.outside_window
