@@ -286,7 +286,7 @@ impl<T: Scalar> Sequencer<T> {
             }
             None => {
                 if let Some(m) = &mut self.motion {
-                    m.add_imu(&inc.delta_v_ib_b, inc.dt);
+                    m.add_imu(inc);
                 }
             }
         }
