@@ -271,6 +271,23 @@ impl<T: Scalar> AidedIns<T> {
         Ok(Self { mech, filter })
     }
 
+    /// Restarts from `state` with the 1-sigma `sigma` of its position, velocity and attitude
+    /// after a gap in the IMU data too long to bridge destroyed `lost`'s solution (a
+    /// re-alignment in motion, [`sequencer`]): `lost`'s sensor-error estimates are compensated
+    /// from the start, and their covariance kept, grown over the `elapsed_s` [s] since
+    /// `lost`'s last propagation ([`ErrorFilter::take_sensors_from`]); the sensor fields of
+    /// `sigma` are only checked (the noise model's figures pass). The counters go on.
+    pub fn resume(
+        state: NavState<T>,
+        sigma: &InitialSigma<T>,
+        lost: &AidedIns<T>,
+        elapsed_s: T,
+    ) -> Result<Self, FilterError> {
+        let mut ins = Self::new(state, *lost.sensor_errors(), sigma, *lost.config())?;
+        ins.filter.take_sensors_from(&lost.filter, elapsed_s);
+        Ok(ins)
+    }
+
     /// The navigation solution (NED frame).
     pub fn state(&self) -> &NavState<T> {
         self.mech.state()
