@@ -10,12 +10,15 @@
 //! starts in motion ([`super::motion`]: level over a quasi-static interval between two fixes,
 //! heading from the GNSS track above the speed threshold, then the filter with their 1-sigma):
 //! at the first fix due after the gap the lost filter is set aside and the phase is
-//! [`Phase::Starting`] again (no filter, so no solution row: not navigated), the samples go to
-//! the start compensated with the sensor errors the lost filter had estimated, and once level
-//! and heading are known the filter restarts ([`super::AidedIns::resume`]) from the start's
-//! position, velocity and attitude with the sensor-error estimates and their covariance kept,
-//! grown by their driving noise over the time not propagated; its status is that of a fresh
-//! start (NAV once its 1-sigma is within the limits). The gap cannot destroy what the sensors
+//! [`Phase::Starting`] again ([`Sequencer::filter`] is `None`: nothing navigated), the samples
+//! go to the start compensated with the sensor errors the lost filter had estimated, and once
+//! level and heading are known the filter restarts ([`super::AidedIns::resume`]) from the
+//! start's position, velocity and attitude with the sensor-error estimates and their
+//! covariance kept, grown by their driving noise over the lost time it never propagated; its
+//! status is that of a fresh start (NAV once its 1-sigma is within the limits). Meanwhile the
+//! lost filter set aside ([`Sequencer::lost_filter`]) goes on free-inertial, fixes withheld,
+//! its status DEGRADED ([`FilterStatus::ImuLost`](super::FilterStatus::ImuLost)): a log may
+//! write its rows, flagged so, as it did before the re-alignment began. The gap cannot destroy what the sensors
 //! are, only where the body is and how it is turned: a bias or scale factor is a property of
 //! the part (its turn-on value and in-run drift, [Groves, §4.4]), and its Gauss–Markov state
 //! says how much it wanders over the unpropagated time [Groves, §14.2]; nothing bounds the
@@ -123,14 +126,12 @@ impl Realignments {
     }
 }
 
-/// The lost filter set aside while re-aligning: its sensor-error estimates and covariance go
-/// to the restarted filter.
+/// The lost filter set aside while re-aligning (free-inertial, DEGRADED): its sensor-error
+/// estimates and covariance go to the restarted filter.
 #[derive(Clone, Debug)]
 struct SetAside<T: Scalar> {
     ins: AidedIns<T>,
-    /// The sample its covariance was last brought to [us].
-    at_us: u64,
-    /// Lost time before it that its covariance was not propagated over [s].
+    /// Lost time its covariance was not propagated over [s].
     unpropagated_s: T,
 }
 
@@ -310,8 +311,8 @@ impl<T: Scalar> Sequencer<T> {
         })
     }
 
-    /// The lost filter set aside while re-aligning (module docs): its solution is not
-    /// navigated; its counters are the run's so far.
+    /// The lost filter set aside while re-aligning (module docs): free-inertial since, its
+    /// status DEGRADED ([`super::FilterStatus::ImuLost`]); its counters are the run's so far.
     pub fn lost_filter(&self) -> Option<&AidedIns<T>> {
         self.set_aside.as_ref().map(|s| &s.ins)
     }
@@ -402,6 +403,17 @@ impl<T: Scalar> Sequencer<T> {
                 ins.step(inc)?;
             }
             None => {
+                if let Some(lost) = &mut self.set_aside {
+                    // The lost solution goes on free-inertial (its rows DEGRADED).
+                    if let Some(gap) = &gap {
+                        lost.ins.bridge(gap);
+                    }
+                    if let Some(gap) = &lost_gap {
+                        lost.unpropagated_s += gap.lost_s;
+                    }
+                    // Checked above against the same limits.
+                    let _ = lost.ins.step(inc);
+                }
                 if let Some(gap) = &lost_gap {
                     // The level's interval would span the gap: the start begins again.
                     self.motion = Some(MotionAlign::new(
@@ -454,17 +466,15 @@ impl<T: Scalar> Sequencer<T> {
         Ok(self.phase())
     }
 
-    /// A fix after a lost gap: the lost filter set aside, its covariance brought up to the
-    /// sample `t_us` [us], and the start in motion begun with its sensor errors.
+    /// A fix after a lost gap: the lost filter set aside and the start in motion begun with
+    /// its sensor errors.
     fn begin_realignment(&mut self, t_us: u64) {
-        let (Some(unpropagated_s), Some(mut ins)) = (self.lost.take(), self.ins.take()) else {
+        let (Some(unpropagated_s), Some(ins)) = (self.lost.take(), self.ins.take()) else {
             return;
         };
-        ins.propagate();
         self.sensors = *ins.sensor_errors();
         self.set_aside = Some(SetAside {
             ins,
-            at_us: t_us,
             unpropagated_s,
         });
         self.motion = Some(MotionAlign::new(
@@ -490,11 +500,12 @@ impl<T: Scalar> Sequencer<T> {
             .position
             .offset_ned([d.x.to_f64(), d.y.to_f64(), d.z.to_f64()]);
         // Checked at construction: only the start's own values can fail here (not finite).
-        let ins = match &self.set_aside {
+        let ins = match &mut self.set_aside {
             None => AidedIns::new(state, SensorErrors::default(), &sigma, self.config),
             Some(lost) => {
-                let elapsed_s = T::c(t_us.saturating_sub(lost.at_us) as f64 * 1e-6);
-                AidedIns::resume(state, &sigma, &lost.ins, elapsed_s + lost.unpropagated_s)
+                // Its covariance up to this sample; the lost time was never propagated.
+                lost.ins.propagate();
+                AidedIns::resume(state, &sigma, &lost.ins, lost.unpropagated_s)
             }
         };
         if let Ok(ins) = ins {
@@ -671,8 +682,7 @@ mod tests {
             after_gap(&mut seq, 20.0, 26.0);
             assert_eq!(seq.phase(), Phase::Starting);
             assert!(seq.realigning() && seq.filter().is_none());
-            let lost = seq.lost_filter().unwrap().clone();
-            assert_eq!(lost.status(), FilterStatus::ImuLost);
+            assert_eq!(seq.lost_filter().unwrap().status(), FilterStatus::ImuLost);
             let r = *seq.realignments();
             assert_eq!((r.begun, r.completed, r.begun_us), (1, 0, 26_010_000));
             assert!((r.gap_us as f64 - 6e6).abs() < 20.0, "{r:?}");
@@ -681,7 +691,12 @@ mod tests {
             // heading at the third fix, as a start in motion.
             drive(&mut seq, 26.01, 27.0, |_| true);
             assert_eq!(seq.phase(), Phase::Starting);
-            drive(&mut seq, 27.0, 28.0, |_| true);
+            drive(&mut seq, 27.0, 27.99, |_| true);
+            // The lost filter went on free-inertial, fixes withheld.
+            let lost = seq.lost_filter().unwrap().clone();
+            assert_eq!(lost.status(), FilterStatus::ImuLost);
+            assert_eq!(lost.counters().position.accepted, accepted);
+            drive(&mut seq, 27.99, 28.0, |_| true);
             assert_eq!(seq.phase(), Phase::Navigating);
             let r = *seq.realignments();
             assert_eq!((r.begun, r.completed, r.navigating_us), (1, 1, 28_000_000));
