@@ -182,7 +182,7 @@ pub fn gap_run(case: &Case, at_s: f64, lost_s: f64) -> Result<GapOutcome> {
         refused,
         fixes: watched.len(),
         status: sink.status,
-        realigned_after_s: (report.realignments.completed > 0).then(|| {
+        realigned_after_s: (report.realignments.completed > 0).then_some({
             (report.realignments.navigating_us as f64 - report.realignments.gap_end_us as f64)
                 * 1e-6
         }),

@@ -545,7 +545,7 @@ mod tests {
         use crate::ins_filter::{FilterStatus, POS};
         use crate::{Position, attitude, earth};
 
-        const LAT: f64 = 0.785_398_163_397_448_3;
+        const LAT: f64 = core::f64::consts::FRAC_PI_4;
         const H: f64 = 100.0;
         const V_E: f64 = 10.0;
         /// Sample interval [us].
