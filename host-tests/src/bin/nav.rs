@@ -365,7 +365,8 @@ enum BenchKind {
     Outages,
     /// GNSS outliers.
     Outliers,
-    /// Gaps in the IMU data.
+    /// Gaps in the IMU data: bridged up to 5 s, beyond lost and the filter re-aligned in
+    /// motion on the fixes after it.
     Gaps,
 }
 
@@ -757,7 +758,9 @@ fn bench_outliers(runs: usize, first_seed: u64) -> Result<()> {
 }
 
 /// `nav bench gaps`: per grade and gap length, `runs` land-vehicle runs (seeds `first_seed
-/// ..`), each with one gap of its IMU records at a time drawn from its seed.
+/// ..`), each with one gap of its IMU records at a time drawn from its seed; the gaps beyond
+/// the bridge with positions alone and with fixes that carry a velocity (the re-alignment in
+/// motion finds its level from those).
 fn bench_gaps(runs: usize, first_seed: u64) -> Result<()> {
     use host_tests::gap_bench::{
         GapOutcome, WATCH_S, gap_case, gap_case_with_velocity, gap_run, gap_start_s,

@@ -230,7 +230,9 @@ pub enum FilterStatus {
     /// The covariance lost a positive variance (it has been reset to its diagonal).
     CovarianceFault,
     /// A gap in the IMU data was too long to bridge ([`crate::gap::MAX_BRIDGED_S`]): the
-    /// solution is lost for the rest of the run.
+    /// solution is lost for the rest of this filter's run (the sequencer re-aligns in motion
+    /// on the fixes after it and restarts a filter, [`sequencer`]; the navigator's aided phase
+    /// does not, [`crate::navigator`]).
     ImuLost,
 }
 
