@@ -1334,6 +1334,71 @@ fn lost_imu_time_is_reported() {
     assert!(!text.contains("missing in"), "{text}");
 }
 
+/// `nav replay` of a land vehicle whose fixes carry a velocity, 6 s of IMU records lost at
+/// 30 s: from a given start the run re-aligns in motion on the fixes after the gap, says so
+/// with the gap's length, and ends NAV with the sensor errors it had estimated; its rows in
+/// between are the lost solution's, DEGRADED. After the alignment (the navigator's aided
+/// phase, the firmware's) it stays DEGRADED. Was: DEGRADED to the end from either start.
+#[test]
+fn a_replay_realigns_after_a_lost_gap() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run_ok(
+        nav()
+            .args(["sim", "land-vehicle", "--grade", "fog", "--seconds", "60"])
+            .args(["--gnss-rate", "1", "--gnss-velocity-sigma", "0.05,0.05,0.1"])
+            .args(["--format", "bin", "--out"])
+            .arg(d),
+    );
+    let out = d.join("sol.csv");
+    let mut rec = host_tests::recording_io::read(&d.join("imu.bin")).unwrap();
+    rec.records.drain(12_000..14_400);
+    let imu = d.join("gap.bin");
+    std::fs::write(&imu, rec.to_bytes().unwrap()).unwrap();
+    for start in [&GIVEN[..], &ALIGNED[..]] {
+        let text = run_ok(&mut replay_gnss(&imu, &d.join("gnss.csv"), &out, start));
+        let given = start == &GIVEN[..];
+        assert_eq!(
+            text.contains(
+                "re-aligned in motion 1 time(s) after IMU data lost beyond the bridge (the \
+                 last: a lost IMU gap of 6.00"
+            ) && text.contains(
+                "s ending at t = 36.005 s): the filter navigates again from t = 38.000 s"
+            ),
+            given,
+            "{start:?}: {text}"
+        );
+        let log = std::fs::read_to_string(&out).unwrap();
+        let rows: Vec<&str> = log.lines().filter(|l| !l.starts_with('#')).collect();
+        let status = if given { "NAV" } else { "DEGRADED" };
+        assert!(rows[rows.len() - 1].ends_with(status), "{start:?}: {log}");
+        if given {
+            // Rows DEGRADED from the gap to the restart, then NAV.
+            let after: Vec<&str> = rows
+                .iter()
+                .filter(|r| {
+                    r.split(',')
+                        .next()
+                        .unwrap()
+                        .parse::<f64>()
+                        .is_ok_and(|t| t > 36.0)
+                })
+                .copied()
+                .collect();
+            let first_nav = after.iter().position(|r| r.ends_with("NAV")).unwrap();
+            assert!(first_nav > 0, "{log}");
+            assert!(
+                after[..first_nav].iter().all(|r| r.ends_with("DEGRADED")),
+                "{log}"
+            );
+            assert!(
+                after[first_nav..].iter().all(|r| r.ends_with("NAV")),
+                "{log}"
+            );
+        }
+    }
+}
+
 /// Gaps in the IMU data over a family (grades, seeds, gap times drawn from the seed): a gap
 /// within the bridge leaves an error its widened covariance covers (the NEES of position,
 /// velocity and attitude at the first sample after it within the 99.9 % point of chi^2(9),
