@@ -260,7 +260,7 @@ impl<T: Scalar> ErrorFilter<T> {
     /// `lost` did not propagate (the lost time and the re-alignment), the sensor variances grow
     /// by their driving noise `q elapsed` (at least the Gauss–Markov growth `(sigma^2 - P)(1 -
     /// exp(-2 t / tau))`), and the correlations with a decaying consider state decay.
-    pub(crate) fn take_sensors_from(&mut self, lost: &Self, elapsed_s: T) {
+    pub fn take_sensors_from(&mut self, lost: &Self, elapsed_s: T) {
         let elapsed_s = elapsed_s.max(T::zero());
         let q = model::noise_density(&self.config.noise, self.config.scale_factors);
         for i in BG..N {

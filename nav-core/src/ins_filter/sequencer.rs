@@ -375,6 +375,9 @@ impl<T: Scalar> Sequencer<T> {
         if let Some(ins) = &mut self.ins {
             ins.restart_increments();
         }
+        if let Some(lost) = &mut self.set_aside {
+            lost.ins.restart_increments();
+        }
     }
 
     /// One IMU sample ending at `t_us` [us]: the time lost since the previous one bridged
