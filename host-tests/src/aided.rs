@@ -9,7 +9,7 @@
 use crate::gnss::GnssFix;
 use anyhow::{Result, anyhow};
 use hal_adapters::{Imu, ImuSample, SampleFlags};
-use nav_core::ins_filter::sequencer::{FixCounters, GnssFixInput, Phase, Sequencer};
+use nav_core::ins_filter::sequencer::{FixCounters, GnssFixInput, Phase, Realignments, Sequencer};
 use nav_core::ins_filter::{
     AidResult, AidedIns, FilterCounters, GnssPosition, GnssVelocity, POS, VEL,
 };
@@ -223,6 +223,9 @@ pub struct AidedReport {
     pub updates: Vec<UpdateRecord>,
     /// IMU time not navigated.
     pub lost: LostImuTime,
+    /// Re-alignments in motion after gaps in the IMU data too long to bridge (no rows while
+    /// one runs).
+    pub realignments: Realignments,
 }
 
 fn wide(r: &AidResult<impl Scalar>) -> AidResult<f64> {
@@ -428,7 +431,14 @@ pub fn run<T: Scalar, E: fmt::Display>(
                 report.rejected += 1;
                 continue;
             }
-            Ok(Phase::Starting) => continue,
+            // Starting in motion: nothing navigated, no row. Re-aligning after a lost gap:
+            // the lost solution's rows go on, DEGRADED, as before the re-alignment began.
+            Ok(Phase::Starting) => {
+                if let Some(ins) = seq.lost_filter() {
+                    sink.sample(s.t_us, ins)?;
+                }
+                continue;
+            }
             Ok(Phase::Navigating) => {}
         }
         let mut updated = false;
@@ -453,11 +463,13 @@ pub fn run<T: Scalar, E: fmt::Display>(
     report.lost.finish();
     sink.finish()?;
     report.outside_imu_data += (fixes.len() - next_fix) as u64;
-    if let Some(ins) = seq.filter() {
+    // Re-aligning at the end: the lost filter set aside holds the run's counters.
+    if let Some(ins) = seq.filter().or(seq.lost_filter()) {
         report.counters = *ins.counters();
         report.covariance_faults = ins.covariance_faults();
     }
     report.fixes = *seq.fix_counters();
+    report.realignments = *seq.realignments();
     Ok(report)
 }
 

@@ -11,7 +11,7 @@ use hal_adapters::drivers::NoiseSpec;
 use nav_core::ins_filter::limits::MIN_BIAS_INSTABILITY_TIME_S;
 use nav_core::ins_filter::model::FilterNoise;
 use nav_core::ins_filter::motion::MotionAlignConfig;
-use nav_core::ins_filter::sequencer::{Sequencer, Start};
+use nav_core::ins_filter::sequencer::{Realignments, Sequencer, Start};
 use nav_core::ins_filter::{FilterConfig, InitialSigma, SensorErrors};
 use nav_core::navigator::config::{MAX_HEIGHT_M, MIN_HEIGHT_M};
 use nav_core::number::{Number, Rounded};
@@ -489,9 +489,46 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
         ),
     ]
     .into_iter()
+    .chain(realignment_line(&r.realignments))
     .chain(aiding_warnings(r))
     .collect::<Vec<_>>()
     .join("\n")
+}
+
+/// The line of a run that re-aligned in motion after gaps in the IMU data too long to bridge
+/// (`nav_core::ins_filter::sequencer`), or is still re-aligning at its end; `None` without one.
+pub fn realignment_line(r: &Realignments) -> Option<String> {
+    (r.begun > 0).then(|| {
+        let us = |t: u64| format!("{:.3}", t as f64 * 1e-6);
+        let cause = format!(
+            "the last: a lost IMU gap of {} s ending at t = {} s",
+            us(r.gap_us),
+            us(r.gap_end_us)
+        );
+        let over = match r.started_over {
+            0 => String::new(),
+            n => format!(", {n} started over by another lost gap"),
+        };
+        if r.completed == r.begun {
+            format!(
+                "re-aligned in motion {} time(s) after IMU data lost beyond the bridge ({cause}{over}): \
+                 the filter navigates again from t = {} s with the sensor errors it had \
+                 estimated; from t = {} s until then the rows are the lost solution's, DEGRADED",
+                r.completed,
+                us(r.navigating_us),
+                us(r.begun_us)
+            )
+        } else {
+            format!(
+                "WARNING: re-aligning in motion since t = {} s after IMU data lost beyond the \
+                 bridge ({cause}{over}), not completed at the end of the data (no level over a \
+                 quasi-static interval, or no speed above the heading threshold: positions \
+                 alone seldom show a quasi-static interval in motion, fixes with a velocity do): \
+                 the rows since are the lost solution's, DEGRADED",
+                us(r.begun_us)
+            )
+        }
+    })
 }
 
 /// Warnings for a run whose GNSS aiding did not work as the user meant: IMU time not

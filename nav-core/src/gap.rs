@@ -8,7 +8,13 @@
 //! [`MAX_STEP_S`] ([`ImuGap::step`]), and the navigation filter widens its covariance for what
 //! the interpolation cannot know ([`GapDynamics`]). A gap longer than [`MAX_BRIDGED_S`] is not
 //! integrated: over seconds the interpolation says nothing of the motion, and the solution is
-//! lost ([`ImuGap::bridged`]: the filter then reports itself degraded for good).
+//! lost ([`ImuGap::bridged`]: the filter then reports itself degraded,
+//! [`FilterStatus::ImuLost`](crate::ins_filter::FilterStatus::ImuLost), from the first sample
+//! after the gap). The sequencer of an aided run re-aligns in motion on the GNSS fixes after
+//! it and restarts the filter with the sensor errors it had estimated
+//! ([`crate::ins_filter::sequencer`]); without fixes, and in the navigator's aided phase (the
+//! firmware's, which has no start in motion, [`crate::navigator`]), it stays degraded to the
+//! end of the run.
 //!
 //! The rule is the same in every run: [`GapDetector`] sees every navigated sample, in the
 //! firmware's navigator and in the harness's sequencer alike.

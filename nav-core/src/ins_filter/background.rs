@@ -250,6 +250,34 @@ impl<T: Scalar> ErrorFilter<T> {
         }
     }
 
+    /// Takes over from `lost`, a filter of the same settings whose solution a gap in the IMU
+    /// data too long to bridge destroyed ([`crate::gap`]), what the gap did not destroy, at a
+    /// re-alignment in motion ([`super::sequencer`]): the sensor errors' block of the
+    /// covariance and their cross-covariance with the consider states (the sensors are the
+    /// same; their estimates go with it, [`super::AidedIns::resume`]), and the counters. The
+    /// navigation block stays this filter's start, uncorrelated with the sensors (the gap left
+    /// nothing of the old position, velocity and attitude). Over the `elapsed_s` [s] that
+    /// `lost` did not propagate (the lost time and the re-alignment), the sensor variances grow
+    /// by their driving noise `q elapsed` (at least the Gauss–Markov growth `(sigma^2 - P)(1 -
+    /// exp(-2 t / tau))`), and the correlations with a decaying consider state decay.
+    pub fn take_sensors_from(&mut self, lost: &Self, elapsed_s: T) {
+        let elapsed_s = elapsed_s.max(T::zero());
+        let q = model::noise_density(&self.config.noise, self.config.scale_factors);
+        for i in BG..N {
+            for j in BG..N {
+                self.p[(i, j)] = lost.p[(i, j)];
+            }
+            self.p[(i, i)] += q[i] * elapsed_s;
+            for c in 0..consider::NC {
+                self.p_ac[(i, c)] = lost.p_ac[(i, c)] * self.consider.decay_over(c, elapsed_s);
+            }
+        }
+        self.counters = lost.counters;
+        self.covariance_faults = lost.covariance_faults;
+        self.fault_latched = lost.fault_latched;
+        self.check_covariance();
+    }
+
     fn last_state(&self) -> usize {
         if self.config.scale_factors { N } else { SG }
     }

@@ -141,6 +141,14 @@ impl<T: Scalar> ConsiderModel<T> {
         }
     }
 
+    /// What is left of a correlation with consider state `c` after `dt_s` [s] unpropagated:
+    /// `exp(-dt / tau)`, here `1 / (1 + x + x^2 / 2)`, `x = dt / tau` (the same to second
+    /// order, and towards zero, not negative, when `dt` is many `tau`); one for the constants.
+    pub(crate) fn decay_over(&self, c: usize, dt_s: T) -> T {
+        let x = self.decay(c) * dt_s;
+        T::one() / (T::one() + x + x * x * T::c(0.5))
+    }
+
     /// True when the GNSS error is modelled.
     pub fn has_gnss_error(&self) -> bool {
         self.gnss_decay_rate > T::zero()

@@ -228,8 +228,11 @@ impl<T: Scalar> AidedMechanization<T> {
             ),
             None => None,
         };
-        // A stop's updates flush the interval themselves (Events::still).
-        let propagation = if still.is_none() && self.acc_dt >= self.interval_s {
+        // A stop's updates flush the interval themselves (Events::still). A lost gap is
+        // flushed at once: the filter's status says so from the first sample after it (it said
+        // NAV for up to an interval).
+        let due = self.acc_dt >= self.interval_s || self.acc_bridged.lost;
+        let propagation = if still.is_none() && due {
             self.flush()
         } else {
             None

@@ -230,7 +230,9 @@ pub enum FilterStatus {
     /// The covariance lost a positive variance (it has been reset to its diagonal).
     CovarianceFault,
     /// A gap in the IMU data was too long to bridge ([`crate::gap::MAX_BRIDGED_S`]): the
-    /// solution is lost for the rest of the run.
+    /// solution is lost for the rest of this filter's run (the sequencer re-aligns in motion
+    /// on the fixes after it and restarts a filter, [`sequencer`]; the navigator's aided phase
+    /// does not, [`crate::navigator`]).
     ImuLost,
 }
 
@@ -269,6 +271,23 @@ impl<T: Scalar> AidedIns<T> {
         let yaw = mech.state().euler().2;
         let filter = ErrorFilter::new(sigma, yaw, config)?;
         Ok(Self { mech, filter })
+    }
+
+    /// Restarts from `state` with the 1-sigma `sigma` of its position, velocity and attitude
+    /// after a gap in the IMU data too long to bridge destroyed `lost`'s solution (a
+    /// re-alignment in motion, [`sequencer`]): `lost`'s sensor-error estimates are compensated
+    /// from the start, and their covariance kept, grown over the `elapsed_s` [s] since
+    /// `lost`'s last propagation ([`ErrorFilter::take_sensors_from`]); the sensor fields of
+    /// `sigma` are only checked (the noise model's figures pass). The counters go on.
+    pub fn resume(
+        state: NavState<T>,
+        sigma: &InitialSigma<T>,
+        lost: &AidedIns<T>,
+        elapsed_s: T,
+    ) -> Result<Self, FilterError> {
+        let mut ins = Self::new(state, *lost.sensor_errors(), sigma, *lost.config())?;
+        ins.filter.take_sensors_from(&lost.filter, elapsed_s);
+        Ok(ins)
     }
 
     /// The navigation solution (NED frame).

@@ -3,10 +3,38 @@
 //! tag and applied there with its lag ([`super::AidedIns::aid_position`]); before the filter
 //! runs, the fixes and samples feed the in-motion start ([`super::motion`]) when the run starts
 //! that way.
+//!
+//! A gap in the IMU data too long to bridge ([`crate::gap::MAX_BRIDGED_S`]) destroys the
+//! solution: the filter reports [`FilterStatus::ImuLost`](super::FilterStatus::ImuLost)
+//! (DEGRADED) from there. When GNSS fixes come after it, the sequencer re-aligns the way a run
+//! starts in motion ([`super::motion`]: level over a quasi-static interval between two fixes,
+//! heading from the GNSS track above the speed threshold, then the filter with their 1-sigma):
+//! at the first fix due after the gap the lost filter is set aside and the phase is
+//! [`Phase::Starting`] again ([`Sequencer::filter`] is `None`: nothing navigated), the samples
+//! go to the start compensated with the sensor errors the lost filter had estimated, and once
+//! level and heading are known the filter restarts ([`super::AidedIns::resume`]) from the
+//! start's position, velocity and attitude with the sensor-error estimates and their
+//! covariance kept, grown by their driving noise over the lost time it never propagated; its
+//! status is that of a fresh start (NAV once its 1-sigma is within the limits). Meanwhile the
+//! lost filter set aside ([`Sequencer::lost_filter`]) goes on free-inertial, fixes withheld,
+//! its status DEGRADED ([`FilterStatus::ImuLost`](super::FilterStatus::ImuLost)): a log may
+//! write its rows, flagged so, as it did before the re-alignment began. The gap cannot destroy what the sensors
+//! are, only where the body is and how it is turned: a bias or scale factor is a property of
+//! the part (its turn-on value and in-run drift, [Groves, §4.4]), and its Gauss–Markov state
+//! says how much it wanders over the unpropagated time [Groves, §14.2]; nothing bounds the
+//! position, velocity and attitude after seconds of unknown motion, so none of them is kept
+//! (the filter re-initialised, the recovery of [Groves, ch. 17]). A lost gap during a re-alignment starts it over (the level's interval would span
+//! it). Without fixes after the gap (a free-inertial run) the lost filter goes on, DEGRADED
+//! to the end. [`Realignments`] counts them, with the gap that caused the last one.
+//!
+//! The firmware's aided phase is not this sequencer but the navigator's split filter
+//! ([`crate::navigator`]), which starts from an IMU alignment at rest and has no start in
+//! motion: after a lost gap it stays DEGRADED to the end of the run.
 
 use super::aiding::{AidResult, GnssPosition, GnssVelocity};
 use super::motion::{MotionAlign, MotionAlignConfig, MotionStart};
 use super::{AidedIns, FilterConfig, FilterError, InitialSigma, SensorErrors};
+use crate::gap::ImuGap;
 use crate::gap::{GapCounters, GapDetector};
 use crate::{ImuIncrement, InputError, NavState, Scalar};
 use nalgebra::Vector3;
@@ -48,7 +76,8 @@ pub enum Start<T: Scalar> {
 /// What the sequencer did with one sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Phase {
-    /// Waiting for the in-motion start (level and heading).
+    /// Waiting for the in-motion start (level and heading): at the run's start, or
+    /// re-aligning after a gap in the IMU data too long to bridge ([`Sequencer::realigning`]).
     Starting,
     /// The filter runs.
     Navigating,
@@ -67,8 +96,43 @@ pub struct FixCounters {
     pub queue_full: u32,
     /// Refused: applied later than [`MAX_LAG_US`] after their time.
     pub late: u32,
-    /// Used by the in-motion start.
+    /// Used by the in-motion start or a re-alignment.
     pub for_start: u32,
+}
+
+/// Re-alignments in motion after gaps in the IMU data too long to bridge (module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Realignments {
+    /// Begun: a fix came after a lost gap, and the lost filter was set aside.
+    pub begun: u32,
+    /// Started over by another lost gap during a re-alignment.
+    pub started_over: u32,
+    /// Completed: the filter navigates again.
+    pub completed: u32,
+    /// The last lost gap that caused or started over one: its length [us] (0: none).
+    pub gap_us: u64,
+    /// Its end, the first sample after it [us].
+    pub gap_end_us: u64,
+    /// When the last one began [us].
+    pub begun_us: u64,
+    /// When the last completed one navigated again [us] (0: none).
+    pub navigating_us: u64,
+}
+
+impl Realignments {
+    fn cause<T: Scalar>(&mut self, gap: &ImuGap<T>, end_us: u64) {
+        self.gap_us = (gap.lost_s.to_f64() * 1e6) as u64;
+        self.gap_end_us = end_us;
+    }
+}
+
+/// The lost filter set aside while re-aligning (free-inertial, DEGRADED): its sensor-error
+/// estimates and covariance go to the restarted filter.
+#[derive(Clone, Debug)]
+struct SetAside<T: Scalar> {
+    ins: AidedIns<T>,
+    /// Lost time its covariance was not propagated over [s].
+    unpropagated_s: T,
 }
 
 /// Fixes held until the first sample at or after their time tag (the rule of the module
@@ -174,10 +238,23 @@ pub struct Sequencer<T: Scalar> {
     gap_counters: GapCounters,
     /// Results of the fixes applied at the last sample (position, velocity).
     last_results: [Option<FixResult<T>>; QUEUE],
+    /// The start in motion's settings, for a re-alignment.
+    realign: MotionAlignConfig<T>,
+    /// The sensor errors the in-motion start's samples are compensated with (none at the
+    /// run's start; the lost filter's in a re-alignment).
+    sensors: SensorErrors<T>,
+    /// Lost time not propagated since the filter's solution was lost [s] (`Some`: lost, no
+    /// fix since).
+    lost: Option<T>,
+    set_aside: Option<SetAside<T>>,
+    realignments: Realignments,
 }
 
 impl<T: Scalar> Sequencer<T> {
-    /// A run with `config` starting as `start` (a given start is checked at once).
+    /// A run with `config` starting as `start` (a given start is checked at once). A
+    /// re-alignment (module docs) takes the start in motion's settings, or for a given start
+    /// [`MotionAlignConfig::default`] with the accelerometer bias of the noise model when
+    /// larger.
     pub fn new(config: FilterConfig<T>, start: Start<T>) -> Result<Self, FilterError> {
         let (motion, ins) = match start {
             Start::Given {
@@ -207,6 +284,16 @@ impl<T: Scalar> Sequencer<T> {
                 )
             }
         };
+        let realign = match start {
+            Start::Motion(m) => m,
+            Start::Given { .. } => {
+                let d = MotionAlignConfig::<T>::default();
+                MotionAlignConfig {
+                    accel_bias_mps2: d.accel_bias_mps2.max(config.noise.accel_bias_mps2),
+                    ..d
+                }
+            }
+        };
         Ok(Self {
             config,
             start,
@@ -216,7 +303,28 @@ impl<T: Scalar> Sequencer<T> {
             gaps: GapDetector::new(),
             gap_counters: GapCounters::default(),
             last_results: [None; QUEUE],
+            realign,
+            sensors: SensorErrors::default(),
+            lost: None,
+            set_aside: None,
+            realignments: Realignments::default(),
         })
+    }
+
+    /// The lost filter set aside while re-aligning (module docs): free-inertial since, its
+    /// status DEGRADED ([`super::FilterStatus::ImuLost`]); its counters are the run's so far.
+    pub fn lost_filter(&self) -> Option<&AidedIns<T>> {
+        self.set_aside.as_ref().map(|s| &s.ins)
+    }
+
+    /// True while re-aligning after a lost gap (module docs).
+    pub fn realigning(&self) -> bool {
+        self.set_aside.is_some()
+    }
+
+    /// The re-alignments' counters.
+    pub fn realignments(&self) -> &Realignments {
+        &self.realignments
     }
 
     /// The filter, once it runs.
@@ -243,7 +351,8 @@ impl<T: Scalar> Sequencer<T> {
         self.fixes.counters()
     }
 
-    /// The gaps in the IMU data found while the filter ran ([`crate::gap`]).
+    /// The gaps in the IMU data found ([`crate::gap`]; while the filter runs they are bridged,
+    /// or lost).
     pub fn gap_counters(&self) -> &GapCounters {
         &self.gap_counters
     }
@@ -266,33 +375,87 @@ impl<T: Scalar> Sequencer<T> {
         if let Some(ins) = &mut self.ins {
             ins.restart_increments();
         }
+        if let Some(lost) = &mut self.set_aside {
+            lost.ins.restart_increments();
+        }
     }
 
     /// One IMU sample ending at `t_us` [us]: the time lost since the previous one bridged
     /// ([`crate::gap`]), the sample integrated (or given to the in-motion start), then every
-    /// held fix due at it applied. A refused increment is returned as the error (the fixes
-    /// wait for the next sample).
+    /// held fix due at it applied (the first after a lost gap begins a re-alignment, module
+    /// docs). A refused increment is returned as the error (the fixes wait for the next
+    /// sample).
     pub fn on_sample(&mut self, t_us: u64, inc: &ImuIncrement<T>) -> Result<Phase, InputError> {
         self.last_results = [None; QUEUE];
         inc.check(&self.config.mechanization.limits)?;
         let gap = self.gaps.note(t_us, inc);
+        if let Some(gap) = &gap {
+            self.gap_counters.add(gap);
+        }
+        let lost_gap = gap.filter(|g| !g.bridged());
         match &mut self.ins {
             Some(ins) => {
                 if let Some(gap) = &gap {
                     ins.bridge(gap);
-                    self.gap_counters.add(gap);
+                }
+                if let Some(gap) = &lost_gap {
+                    // Not propagated over: the sensor states' growth is added at a restart.
+                    self.lost = Some(self.lost.unwrap_or_else(T::zero) + gap.lost_s);
+                    self.realignments.cause(gap, t_us);
                 }
                 ins.step(inc)?;
             }
             None => {
+                if let Some(lost) = &mut self.set_aside {
+                    // The lost solution goes on free-inertial (its rows DEGRADED).
+                    if let Some(gap) = &gap {
+                        lost.ins.bridge(gap);
+                    }
+                    if let Some(gap) = &lost_gap {
+                        lost.unpropagated_s += gap.lost_s;
+                    }
+                    // Checked above against the same limits.
+                    let _ = lost.ins.step(inc);
+                }
+                if let Some(gap) = &lost_gap {
+                    // The level's interval would span the gap: the start begins again.
+                    self.motion = Some(MotionAlign::new(
+                        self.realign,
+                        self.config.antenna_lever_arm_b_m,
+                    ));
+                    if self.set_aside.is_some() {
+                        let r = &mut self.realignments;
+                        r.started_over = r.started_over.saturating_add(1);
+                        r.cause(gap, t_us);
+                    }
+                }
                 if let Some(m) = &mut self.motion {
-                    m.add_imu(inc);
+                    let s = &self.sensors;
+                    let apply = SensorErrors::apply;
+                    m.add_imu(&ImuIncrement {
+                        delta_theta_ib_b: apply(
+                            &inc.delta_theta_ib_b,
+                            &s.gyro_bias_rad_s,
+                            &s.gyro_scale,
+                            inc.dt,
+                        ),
+                        delta_v_ib_b: apply(
+                            &inc.delta_v_ib_b,
+                            &s.accel_bias_mps2,
+                            &s.accel_scale,
+                            inc.dt,
+                        ),
+                        dt: inc.dt,
+                    });
                 }
             }
         }
         // Due fixes, oldest first.
         let mut k = 0;
         while let Some((fix, lag)) = self.fixes.pop_due(t_us) {
+            if self.lost.is_some() {
+                self.begin_realignment(t_us);
+            }
             match &mut self.ins {
                 Some(ins) => {
                     let p = ins.aid_position(&fix.position, lag);
@@ -307,7 +470,7 @@ impl<T: Scalar> Sequencer<T> {
                         m.add_fix(fix.t_us as f64 * 1e-6, &fix.position, fix.velocity.as_ref())
                     });
                     if let Some(s) = found {
-                        self.start_in_motion(s, lag);
+                        self.start_in_motion(s, lag, t_us);
                     }
                 }
             }
@@ -315,7 +478,27 @@ impl<T: Scalar> Sequencer<T> {
         Ok(self.phase())
     }
 
-    fn start_in_motion(&mut self, s: MotionStart<T>, lag: T) {
+    /// A fix after a lost gap: the lost filter set aside and the start in motion begun with
+    /// its sensor errors.
+    fn begin_realignment(&mut self, t_us: u64) {
+        let (Some(unpropagated_s), Some(ins)) = (self.lost.take(), self.ins.take()) else {
+            return;
+        };
+        self.sensors = *ins.sensor_errors();
+        self.set_aside = Some(SetAside {
+            ins,
+            unpropagated_s,
+        });
+        self.motion = Some(MotionAlign::new(
+            self.realign,
+            self.config.antenna_lever_arm_b_m,
+        ));
+        let r = &mut self.realignments;
+        r.begun = r.begun.saturating_add(1);
+        r.begun_us = t_us;
+    }
+
+    fn start_in_motion(&mut self, s: MotionStart<T>, lag: T, t_us: u64) {
         let n = &self.config.noise;
         let mut sigma = s.sigma;
         sigma.gyro_bias_rad_s = Vector3::repeat(n.gyro_bias_rad_s);
@@ -329,9 +512,22 @@ impl<T: Scalar> Sequencer<T> {
             .position
             .offset_ned([d.x.to_f64(), d.y.to_f64(), d.z.to_f64()]);
         // Checked at construction: only the start's own values can fail here (not finite).
-        if let Ok(ins) = AidedIns::new(state, SensorErrors::default(), &sigma, self.config) {
+        let ins = match &mut self.set_aside {
+            None => AidedIns::new(state, SensorErrors::default(), &sigma, self.config),
+            Some(lost) => {
+                // Its covariance up to this sample; the lost time was never propagated.
+                lost.ins.propagate();
+                AidedIns::resume(state, &sigma, &lost.ins, lost.unpropagated_s)
+            }
+        };
+        if let Ok(ins) = ins {
             self.ins = Some(ins);
             self.motion = None;
+            if self.set_aside.take().is_some() {
+                let r = &mut self.realignments;
+                r.completed = r.completed.saturating_add(1);
+                r.navigating_us = t_us;
+            }
         }
     }
 }
@@ -350,6 +546,234 @@ mod tests {
                 sigma_ned_m: Vector3::repeat(0.5),
             },
             velocity: None,
+        }
+    }
+
+    /// A land vehicle driving east at 10 m/s, level, at 45 deg N: its IMU at 100 Hz (Earth
+    /// rate, transport rate and Coriolis in), 1 Hz fixes of position and velocity.
+    mod drive {
+        use super::*;
+        use crate::ins_filter::model::FilterNoise;
+        use crate::ins_filter::{FilterStatus, POS};
+        use crate::{Position, attitude, earth};
+
+        const LAT: f64 = core::f64::consts::FRAC_PI_4;
+        const H: f64 = 100.0;
+        const V_E: f64 = 10.0;
+        /// Sample interval [us].
+        const DT_US: u64 = 10_000;
+
+        fn position(t_s: f64) -> Position {
+            Position::from_radians(LAT, 0.13, H).offset_ned([0.0, V_E * t_s, 0.0])
+        }
+
+        fn truth(t_s: f64) -> NavState<f64> {
+            NavState {
+                q_b_n: attitude::from_euler(0.0, 0.0, core::f64::consts::FRAC_PI_2),
+                v_eb_n: Vector3::new(0.0, V_E, 0.0),
+                position: position(t_s),
+            }
+        }
+
+        /// The sample's increment: body forward = east, right = south.
+        fn increment() -> ImuIncrement<f64> {
+            let (omega, r) = (7.292_115e-5, 6_388_838.0 + H);
+            let (s, c) = (LAT.sin(), LAT.cos());
+            let w_in = Vector3::new(omega * c + V_E / r, 0.0, -omega * s - V_E * s / c / r);
+            let w = Vector3::new(2.0 * omega * c + V_E / r, 0.0, -2.0 * omega * s);
+            let w = w + Vector3::new(0.0, 0.0, -V_E * s / c / r);
+            let g = earth::normal_gravity(LAT, H);
+            let f_n = Vector3::new(-w.z * V_E, 0.0, w.x * V_E - g);
+            let to_b = |n: Vector3<f64>| Vector3::new(n.y, -n.x, n.z);
+            let dt = DT_US as f64 * 1e-6;
+            ImuIncrement {
+                delta_theta_ib_b: to_b(w_in) * dt,
+                delta_v_ib_b: to_b(f_n) * dt,
+                dt,
+            }
+        }
+
+        fn fix(t_s: u64) -> GnssFixInput<f64> {
+            let p = position(t_s as f64);
+            GnssFixInput {
+                t_us: t_s * 1_000_000,
+                position: GnssPosition {
+                    lat_rad: p.lat_f64(),
+                    lon_rad: p.lon_f64(),
+                    h_m: p.h_f64(),
+                    sigma_ned_m: Vector3::repeat(0.5),
+                },
+                velocity: Some(GnssVelocity {
+                    v_ned_m_s: Vector3::new(0.0, V_E, 0.0),
+                    sigma_ned_m_s: Vector3::repeat(0.05),
+                }),
+            }
+        }
+
+        fn sequencer() -> Sequencer<f64> {
+            let noise = FilterNoise {
+                arw_rad_per_sqrt_s: 1e-4,
+                vrw_mps_per_sqrt_s: 1e-3,
+                gyro_bias_rad_s: 1e-5,
+                accel_bias_mps2: 1e-3,
+                gyro_scale: 1e-4,
+                accel_scale: 1e-4,
+                correlation_time_s: 3600.0,
+                gyro_cross_coupling_rad: 0.0,
+                accel_cross_coupling_rad: 0.0,
+                gyro_g_sensitivity: 0.0,
+                gyro_bias_instability_rad_s: 0.0,
+                gyro_bias_instability_time_s: 0.0,
+            };
+            let sigma = InitialSigma {
+                position_ned_m: Vector3::repeat(1.0),
+                velocity_ned_m_s: Vector3::repeat(0.1),
+                attitude_rad: Vector3::repeat(0.01),
+                gyro_bias_rad_s: Vector3::repeat(noise.gyro_bias_rad_s),
+                accel_bias_mps2: Vector3::repeat(noise.accel_bias_mps2),
+                gyro_scale: Vector3::repeat(noise.gyro_scale),
+                accel_scale: Vector3::repeat(noise.accel_scale),
+            };
+            let start = Start::Given {
+                state: truth(0.0),
+                sensors: SensorErrors::default(),
+                sigma,
+            };
+            Sequencer::new(FilterConfig::new(noise), start).unwrap()
+        }
+
+        /// The run: the samples ending after `from_s` up to `to_s` [s], each after the fixes
+        /// due at it (at whole seconds, while `fixes` says so), as the harness feeds them.
+        fn drive(seq: &mut Sequencer<f64>, from_s: f64, to_s: f64, fixes: impl Fn(u64) -> bool) {
+            let (a, b) = (
+                (from_s * 100.0).round() as u64,
+                (to_s * 100.0).round() as u64,
+            );
+            for k in a + 1..=b {
+                let t_us = k * DT_US;
+                if t_us.is_multiple_of(1_000_000) && fixes(t_us / 1_000_000) {
+                    seq.push_fix(fix(t_us / 1_000_000));
+                }
+                seq.on_sample(t_us, &increment()).unwrap();
+            }
+        }
+
+        /// Samples after the gap `[from_s, to_s)`: the fixes of the gap pushed at the first
+        /// of them, as the harness does (the queue keeps the last 4, the late ones dropped).
+        fn after_gap(seq: &mut Sequencer<f64>, from_s: f64, to_s: f64) {
+            for t_s in from_s.ceil() as u64..=to_s as u64 {
+                seq.push_fix(fix(t_s));
+            }
+            let t_us = (to_s * 1e6).round() as u64 + DT_US;
+            seq.on_sample(t_us, &increment()).unwrap();
+        }
+
+        /// Horizontal error [m] and its reported 1-sigma [m] at `t_s`.
+        fn error(seq: &Sequencer<f64>, t_s: f64) -> (f64, f64) {
+            let ins = seq.filter().unwrap();
+            let e = position(t_s).ned_to(&ins.state().position);
+            let p = ins.position_covariance();
+            (
+                (e[0] * e[0] + e[1] * e[1]).sqrt(),
+                (p[(0, 0)] + p[(1, 1)]).sqrt(),
+            )
+        }
+
+        /// A 6 s gap: beyond the bridge, DEGRADED; the first fix after it sets the lost filter
+        /// aside (not navigated), the next two find level and heading, and the filter
+        /// navigates again (NAV) with the lost filter's sensor estimates, their 1-sigma not
+        /// shrunk, its counters going on, and an error within its 1-sigma. Was: DEGRADED to
+        /// the end, and the fixes refused.
+        #[test]
+        fn a_lost_gap_with_fixes_after_it_realigns_and_navigates_again() {
+            let mut seq = sequencer();
+            drive(&mut seq, 0.0, 20.0, |_| true);
+            assert_eq!(seq.filter().unwrap().status(), FilterStatus::Nominal);
+            let accepted = seq.filter().unwrap().counters().position.accepted;
+            assert_eq!(accepted, 20);
+            after_gap(&mut seq, 20.0, 26.0);
+            assert_eq!(seq.phase(), Phase::Starting);
+            assert!(seq.realigning() && seq.filter().is_none());
+            assert_eq!(seq.lost_filter().unwrap().status(), FilterStatus::ImuLost);
+            let r = *seq.realignments();
+            assert_eq!((r.begun, r.completed, r.begun_us), (1, 0, 26_010_000));
+            assert!((r.gap_us as f64 - 6e6).abs() < 20.0, "{r:?}");
+            assert_eq!(seq.gap_counters().lost, 1);
+            // The first fix's velocity, then a quasi-static interval to the next: level and
+            // heading at the third fix, as a start in motion.
+            drive(&mut seq, 26.01, 27.0, |_| true);
+            assert_eq!(seq.phase(), Phase::Starting);
+            drive(&mut seq, 27.0, 27.99, |_| true);
+            // The lost filter went on free-inertial, fixes withheld.
+            let lost = seq.lost_filter().unwrap().clone();
+            assert_eq!(lost.status(), FilterStatus::ImuLost);
+            assert_eq!(lost.counters().position.accepted, accepted);
+            drive(&mut seq, 27.99, 28.0, |_| true);
+            assert_eq!(seq.phase(), Phase::Navigating);
+            let r = *seq.realignments();
+            assert_eq!((r.begun, r.completed, r.navigating_us), (1, 1, 28_000_000));
+            let ins = seq.filter().unwrap();
+            assert_eq!(ins.status(), FilterStatus::Nominal);
+            assert_eq!(ins.sensor_errors(), lost.sensor_errors());
+            for at in [crate::ins_filter::BG, crate::ins_filter::BA] {
+                let (new, old) = (ins.sigma(at), lost.sigma(at));
+                assert!((0..3).all(|k| new[k] >= old[k]), "{new} {old}");
+                assert!((0..3).all(|k| new[k] < 1.01 * old[k]), "{new} {old}");
+            }
+            assert_eq!(ins.counters().position.accepted, accepted);
+            assert!(ins.sigma(POS).x < 1.0, "{}", ins.sigma(POS));
+            drive(&mut seq, 28.0, 60.0, |_| true);
+            let ins = seq.filter().unwrap();
+            assert_eq!(ins.status(), FilterStatus::Nominal);
+            assert_eq!(ins.counters().position.accepted, accepted + 32);
+            let (e, sigma) = error(&seq, 60.0);
+            assert!(e < 3.0 * sigma, "{e} m against {sigma} m");
+        }
+
+        /// A second lost gap before the re-alignment found level and heading starts it over;
+        /// it completes after that gap.
+        #[test]
+        fn a_lost_gap_during_a_realignment_starts_it_over() {
+            let mut seq = sequencer();
+            drive(&mut seq, 0.0, 20.0, |_| true);
+            after_gap(&mut seq, 20.0, 26.0);
+            drive(&mut seq, 26.01, 26.5, |_| true);
+            assert!(seq.realigning());
+            after_gap(&mut seq, 26.5, 33.0);
+            let r = *seq.realignments();
+            assert_eq!((r.begun, r.started_over, r.completed), (1, 1, 0), "{r:?}");
+            assert!((r.gap_us as f64 - 6.5e6).abs() < 20.0, "{r:?}");
+            assert_eq!(seq.phase(), Phase::Starting);
+            drive(&mut seq, 33.01, 34.0, |_| true);
+            assert_eq!(seq.phase(), Phase::Starting);
+            drive(&mut seq, 34.0, 35.0, |_| true);
+            assert_eq!(seq.phase(), Phase::Navigating);
+            assert_eq!(seq.realignments().completed, 1);
+            assert_eq!(seq.gap_counters().lost, 2);
+            drive(&mut seq, 35.0, 60.0, |_| true);
+            assert_eq!(seq.filter().unwrap().status(), FilterStatus::Nominal);
+            let (e, sigma) = error(&seq, 60.0);
+            assert!(e < 3.0 * sigma, "{e} m against {sigma} m");
+        }
+
+        /// Without fixes after a lost gap (free inertial) nothing re-aligns: the filter goes
+        /// on, DEGRADED to the end.
+        #[test]
+        fn without_fixes_after_a_lost_gap_the_filter_stays_degraded() {
+            let mut seq = sequencer();
+            drive(&mut seq, 0.0, 20.0, |_| true);
+            seq.on_sample(26_010_000, &increment()).unwrap();
+            drive(&mut seq, 26.01, 60.0, |_| false);
+            assert_eq!(seq.phase(), Phase::Navigating);
+            assert_eq!(seq.filter().unwrap().status(), FilterStatus::ImuLost);
+            assert_eq!(
+                *seq.realignments(),
+                Realignments {
+                    gap_us: seq.realignments().gap_us,
+                    gap_end_us: 26_010_000,
+                    ..Realignments::default()
+                }
+            );
         }
     }
 

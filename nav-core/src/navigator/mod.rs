@@ -63,10 +63,24 @@
 //! [`Navigator::end_of_data`] asks for the last step's row and report. Fixes handed over
 //! outside the aided phase count in [`Counters::fixes_unused`].
 //!
+//! A gap in the IMU data too long to bridge ([`crate::gap::MAX_BRIDGED_S`]) leaves the aided
+//! phase DEGRADED (IMU_LOST) to the end of the run, even with fixes after it: the sequencer's
+//! re-alignment in motion ([`crate::ins_filter::sequencer`], `nav replay` from a given start or
+//! in motion) is not this navigator's. Its aided phase starts only from an IMU alignment at
+//! rest at the given site and takes fixes only in that phase (others count in
+//! [`Counters::fixes_unused`]); it has no in-motion start ([`MotionAlign`]) to feed, the
+//! covariance whose sensor block a restart keeps lives in the background task, which no
+//! message restarts, and the status protocol has no stage for a re-alignment in motion (its
+//! ALIGN stages are the IMU alignment's). Re-aligning there means those three (a foreground
+//! start in motion, a restart message keeping the sensor block, a protocol stage) and the
+//! harness-firmware bit-identity of the QEMU runs checked again; until then the honest
+//! DEGRADED stays.
+//!
 //! The run's settings are one plain [`RunConfig`] (the CLI's and the firmware's arguments),
 //! checked and converted for the data's rate into a [`Setup`] from which both halves are built.
 //!
 //! [`ImuCompensation`]: crate::calibration::ImuCompensation
+//! [`MotionAlign`]: crate::ins_filter::motion::MotionAlign
 //! [`ImuIncrement::check`]: crate::increment::ImuIncrement::check
 //! [`InputLimits`]: crate::increment::InputLimits
 
