@@ -1,15 +1,18 @@
 //! Starting in motion from GNSS, for IMUs that cannot find north by gyrocompassing (MEMS).
 //!
 //! - Level: over a span of fixes in which the body turns at a mean rate below
-//!   [`MAX_SPAN_RATE_RAD_S`] and the GNSS velocity changes by less than [`MotionAlignConfig::max_accel_mps2`] times
-//!   the span, even at two sigma of the velocities' noise (quasi-static: the mean specific
-//!   force is gravity), roll and pitch from the mean specific force (Groves eq. 5.101); their
-//!   1-sigma is the acceleration bound plus the accelerometer bias over `g`. The span grows
-//!   fix by fix until its mean acceleration is known well enough: one interval with the
-//!   receiver's velocity (0.05 m/s), some ten seconds with velocities differenced from 0.5 m
-//!   positions (0.7 m/s each: over one second their difference is 1 m/s^2 of noise, and a
-//!   single interval never showed a vehicle standing still as quasi-static). A span that
-//!   turns, accelerates beyond doubt, or passes [`MAX_SPAN_S`] starts again at its last fix.
+//!   [`MAX_SPAN_RATE_RAD_S`] and the span's mean GNSS acceleration, its RMS with the noise of
+//!   the velocities it is differenced from, is within [`MotionAlignConfig::max_accel_mps2`]
+//!   (quasi-static: the mean specific force is gravity), roll and pitch from the mean specific
+//!   force (Groves eq. 5.101); their 1-sigma is the acceleration bound plus the accelerometer
+//!   bias over `g` (the mean specific force is the mean acceleration less gravity: a mean
+//!   horizontal acceleration `a` tilts the level by `a / g`; the bound, not the RMS, also
+//!   covers the body's pitching within the span). The span grows fix by fix until its mean
+//!   acceleration is known well enough: one interval with the receiver's velocity (0.05 m/s),
+//!   a few seconds with velocities differenced from 0.5 m positions (0.7 m/s each: over one
+//!   second their difference is 1 m/s^2 of noise, and a single interval never showed a
+//!   vehicle standing still as quasi-static). A span that turns, accelerates beyond doubt
+//!   (three sigma), or passes [`MAX_SPAN_S`] starts again at its last fix.
 //! - Heading: once the horizontal speed exceeds [`MotionAlignConfig::min_speed_m_s`], the
 //!   ground track `atan2(v_E, v_N)` (a land vehicle moves along its forward axis); 1-sigma from
 //!   the velocity's 1-sigma over the speed and the sideslip allowance.
@@ -266,7 +269,9 @@ impl<T: Scalar> MotionAlign<T> {
         let (v0, sv0) = span.v0;
         let accel = (v - v0).norm() / t;
         let accel_sigma = (sv * sv + sv0 * sv0).sqrt() / t;
-        if accel + T::c(2.0) * accel_sigma <= c.max_accel_mps2 {
+        // The span's mean acceleration, as the GNSS knows it: its RMS with the noise.
+        let accel_rms = (accel * accel + accel_sigma * accel_sigma).sqrt();
+        if accel_rms <= c.max_accel_mps2 {
             let f = span.sum_dv / span.sum_dt;
             let g = f.norm();
             let roll = (-f.y).patan2(-f.z);
