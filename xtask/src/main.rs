@@ -929,10 +929,13 @@ fn fuzz(args: &[String]) -> Result<()> {
     let count = |i: usize, default: u32| -> Result<String> {
         match args.get(i) {
             None => Ok(default.to_string()),
+            // 0 cases would pass without fuzzing anything.
             Some(a) => a
                 .parse::<u32>()
+                .ok()
+                .filter(|&n| n > 0)
                 .map(|n| n.to_string())
-                .with_context(|| format!("fuzz: case count {a:?} is not a number")),
+                .with_context(|| format!("fuzz: case count {a:?} is not a positive number")),
         }
     };
     let (decoders, recordings) = (count(0, 100_000)?, count(1, 1000)?);
@@ -1081,5 +1084,10 @@ mod tests {
         assert!(check_arguments("fuzz", &words(&["10", "2"])).is_ok());
         let e = check_arguments("fuzz", &words(&["10", "2", "3"])).unwrap_err();
         assert!(e.to_string().contains("at most 2"), "{e}");
+        // Refused before anything is built.
+        for counts in [["0", "5"], ["5", "0"], ["-1", "5"], ["x", "5"]] {
+            let e = fuzz(&words(&counts)).unwrap_err();
+            assert!(e.to_string().contains("not a positive number"), "{e}");
+        }
     }
 }
