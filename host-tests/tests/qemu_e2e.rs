@@ -732,6 +732,92 @@ fn firmware_and_host_fail_alike_when_nothing_is_navigated() {
     }
 }
 
+/// An output that is an input however its path is written is refused (exit 3) and the input
+/// left untouched: `rec.bin ./rec.bin` truncated the recording (the paths were compared as
+/// bytes), and OUT_FILE over the calibration or the configuration frame was not checked at all
+/// (the frame, truncated before it was read, left the compiled-in configuration running).
+#[test]
+fn an_output_over_an_input_is_refused_however_its_path_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("sub")).unwrap();
+    let bytes = static_recording(2.0, Grade::Ideal).to_bytes().unwrap();
+    std::fs::write(d.join("rec.bin"), &bytes).unwrap();
+    std::fs::write(d.join("cal.txt"), CALIBRATION).unwrap();
+    let mut fixes = hal_adapters::gnss_record::MAGIC.to_vec();
+    fixes.extend_from_slice(b"the rest of a fix file");
+    std::fs::write(d.join("fixes.bin"), &fixes).unwrap();
+    let frame = b"not read: refused before".to_vec();
+    std::fs::write(d.join("frame.bin"), &frame).unwrap();
+    let abs = |name: &str| d.join(name).to_str().unwrap().to_owned();
+    let (abs_rec, abs_fixes) = (abs("rec.bin"), abs("fixes.bin"));
+    let site = ["45", "7.5", "150", "10"];
+    for (options, out, rest, expect) in [
+        (&[][..], "./rec.bin", &[][..], "OUT_FILE is IMU_FILE"),
+        (&[], "sub/../rec.bin", &[], "OUT_FILE is IMU_FILE"),
+        (&[], ".//rec.bin", &[], "OUT_FILE is IMU_FILE"),
+        (&[], abs_rec.as_str(), &[], "holds an IMU recording"),
+        (&[], abs_fixes.as_str(), &[], "holds a GNSS fix file"),
+        (&[], "./cal.txt", &["40", "cal.txt"], "OUT_FILE is CAL_FILE"),
+        (
+            &["--config-frame", "frame.bin"],
+            "sub/../frame.bin",
+            &[],
+            "OUT_FILE is the --config-frame FILE",
+        ),
+        (
+            &["--stream", "./rec.bin"],
+            "out.csv",
+            &[],
+            "--stream FILE is an input",
+        ),
+        (
+            &["--stream", abs_rec.as_str()],
+            "out.csv",
+            &[],
+            "--stream FILE",
+        ),
+    ] {
+        let mut args = options.to_vec();
+        args.extend_from_slice(&["rec.bin", out]);
+        args.extend_from_slice(&site);
+        args.extend_from_slice(rest);
+        let (code, log) = run_firmware(d, &args);
+        assert_eq!(code, 3, "{args:?}: {log}");
+        assert!(
+            log.contains(expect) && log.contains("refusing to overwrite"),
+            "{args:?}: expected '{expect}' in:\n{log}"
+        );
+        assert_eq!(std::fs::read(d.join("rec.bin")).unwrap(), bytes, "{args:?}");
+        assert_eq!(
+            std::fs::read(d.join("fixes.bin")).unwrap(),
+            fixes,
+            "{args:?}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(d.join("cal.txt")).unwrap(),
+            CALIBRATION,
+            "{args:?}"
+        );
+        assert_eq!(
+            std::fs::read(d.join("frame.bin")).unwrap(),
+            frame,
+            "{args:?}"
+        );
+    }
+    // A solution log of an earlier run is overwritten as before.
+    std::fs::write(d.join("out.csv"), "t_s,old\n").unwrap();
+    let mut args = vec!["rec.bin", "./sub/../out.csv"];
+    args.extend_from_slice(&site);
+    let (code, log) = run_firmware(d, &args);
+    assert_ne!(code, 3, "{log}");
+    assert!(
+        !std::fs::read_to_string(d.join("out.csv"))
+            .unwrap()
+            .contains("old")
+    );
+}
+
 /// A truncated and a corrupt recording stop the firmware with the recording exit code (4) and a
 /// defmt error naming the byte offset.
 #[test]

@@ -113,6 +113,10 @@ pub fn init(
         exit(ExitCode::Recording)
     });
     defmt::info!("IMU: {} over a simulated SPI device", device);
+    refuse_overwriting_data(args.out_cstr(), "OUT_FILE");
+    if let Some(path) = args.stream_cstr() {
+        refuse_overwriting_data(path, "--stream FILE");
+    }
     let out = SemihostingFile::create(args.out_cstr()).unwrap_or_else(|_| {
         defmt::error!(
             "cannot create the solution log {=[u8]:a}",
@@ -188,6 +192,36 @@ fn read_args() -> Args {
         );
         exit(ExitCode::Config)
     })
+}
+
+/// Exits with [`ExitCode::Config`] when the output `path` (`name` in the usage) already holds
+/// a recording or a GNSS fix file (their magic): an input reached by a path that
+/// [`Args::parse`]'s comparison as written does not see (absolute against relative, a link)
+/// would be truncated before it is read.
+fn refuse_overwriting_data(path: &core::ffi::CStr, name: &str) {
+    let Ok(mut file) = SemihostingFile::open(path) else {
+        return;
+    };
+    let mut head = [0_u8; 8];
+    let mut len = 0;
+    while len < head.len() {
+        match embedded_io::Read::read(&mut file, &mut head[len..]) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => len += n,
+        }
+    }
+    let kind = match head {
+        hal_adapters::recording::MAGIC => "an IMU recording",
+        hal_adapters::gnss_record::MAGIC => "a GNSS fix file",
+        _ => return,
+    };
+    defmt::error!(
+        "bad arguments ({=str} {=[u8]:a} holds {=str}: refusing to overwrite it)",
+        name,
+        path.to_bytes(),
+        kind
+    );
+    exit(ExitCode::Config)
 }
 
 /// Logs a refused run configuration and exits with [`ExitCode::Config`].
