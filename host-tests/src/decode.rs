@@ -229,6 +229,14 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
             };
             match received.message {
                 Message::NavSolution(s) => {
+                    // Solution frames after an end of run, written or refused (a second run's
+                    // rows go back in time): the log is not complete.
+                    if let Some(e) = summary.end.take() {
+                        summary.early_end.get_or_insert((e, 0));
+                    }
+                    if let Some((_, after)) = &mut summary.early_end {
+                        *after += 1;
+                    }
                     // A frame whose CRC holds but whose content no navigator writes.
                     if let Some(why) = implausible(&s.row, last_t_us) {
                         summary.implausible += 1;
@@ -262,13 +270,6 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
                     }
                     writeln!(out, "{}", s.row)?;
                     summary.rows += 1;
-                    // Rows after an end of run: the log is not complete.
-                    if let Some(e) = summary.end.take() {
-                        summary.early_end.get_or_insert((e, 0));
-                    }
-                    if let Some((_, after)) = &mut summary.early_end {
-                        *after += 1;
-                    }
                 }
                 Message::EndOfRun(e) => summary.end = Some(e),
                 _ => {}
