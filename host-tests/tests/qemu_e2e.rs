@@ -818,6 +818,58 @@ fn an_output_over_an_input_is_refused_however_its_path_is_written() {
     );
 }
 
+/// A recording at another rate than the simulated IMU's 400 Hz is refused by the firmware
+/// (exit 4) and by `nav replay --device`, with one message: each record reached the driver as a
+/// gap of several output periods, and a valid 100 Hz or 200 Hz recording failed its alignment
+/// for a reason it did not have ("window not complete", "base not still", ...).
+#[test]
+fn a_recording_not_at_the_devices_rate_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for rate_hz in [100.0, 200.0, 450.0] {
+        let mut opts = SimOptions::new(Scenario::by_name("static").unwrap(), Grade::Fog);
+        opts.seconds = Some(12.0);
+        opts.rate_hz = rate_hz;
+        let rec = simulate(&opts, |_, _| {}).unwrap().recording;
+        recording_io::write(&d.join("rec.bin"), &rec).unwrap();
+        let expect = format!(
+            "the recording's rate {rate_hz} Hz is not the simulated IMU's output rate of 400 Hz"
+        );
+        let (code, log) = run_firmware(d, &["rec.bin", "fw.csv", "45", "7.5", "150", "10"]);
+        assert_eq!(code, 4, "{rate_hz} Hz: {log}");
+        assert!(log.contains(&expect), "{rate_hz} Hz: {log}");
+        for device in ["adis16505", "icm42688", "bmi088"] {
+            let o = nav(
+                d,
+                &[
+                    "replay",
+                    "--imu",
+                    "rec.bin",
+                    "--out",
+                    "host.csv",
+                    "--lat",
+                    "45",
+                    "--lon",
+                    "7.5",
+                    "--h",
+                    "150",
+                    "--align-seconds",
+                    "10",
+                    "--device",
+                    device,
+                ],
+            );
+            let stderr = String::from_utf8_lossy(&o.stderr);
+            assert!(!o.status.success(), "{rate_hz} Hz, {device}: {stderr}");
+            assert!(
+                stderr.contains(&format!("--device {device}: {expect}")),
+                "{rate_hz} Hz, {device}: {stderr}"
+            );
+            assert!(!d.join("host.csv").exists());
+        }
+    }
+}
+
 /// A truncated and a corrupt recording stop the firmware with the recording exit code (4) and a
 /// defmt error naming the byte offset.
 #[test]

@@ -104,6 +104,14 @@ pub fn init(
         header.sample_count,
         header.rate_hz
     );
+    if let Err(e) = hal_adapters::sim::check_source_rate(header.rate_hz) {
+        defmt::error!(
+            "recording {=[u8]:a}: {}",
+            args.imu_path.as_slice(),
+            defmt::Display2Format(&e)
+        );
+        exit(ExitCode::Recording)
+    }
     if let Err(e) = Setup::<f32>::new(&run, header.rate_hz) {
         bad_config(&e)
     }
