@@ -1386,6 +1386,105 @@ fn assert_same_lines(fw: &str, host: &str) {
     );
 }
 
+/// Fixes on another clock than the recording's (none within the IMU data's time span) end
+/// the firmware's run with the recording's exit code (4), named as the harness names them and
+/// without the end record; before, the run exited 0 with a complete-looking free-inertial log
+/// that said NAV. Fixes that all come before the aided phase are warned of in the harness's
+/// words (the firmware said nothing).
+#[test]
+fn firmware_refuses_fixes_on_another_clock_and_warns_of_unused_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    aided_drive(d, 25.0, &aided_receiver());
+    let csv = std::fs::read_to_string(d.join("gnss.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    let rows: Vec<(f64, &str)> = lines
+        .map(|l| {
+            let (t, rest) = l.split_once(',').unwrap();
+            (t.parse().unwrap(), rest)
+        })
+        .collect();
+    let write = |name: &str, rows: &mut dyn Iterator<Item = (f64, &str)>| {
+        let text: String = rows.map(|(t, rest)| format!("{t},{rest}\n")).collect();
+        let file = d.join(format!("{name}.csv"));
+        std::fs::write(&file, format!("{header}\n{text}")).unwrap();
+        host_tests::gnss_file::convert(&file, &d.join(format!("{name}.bin")), None).unwrap();
+    };
+    write("later", &mut rows.iter().map(|&(t, r)| (t + 1000.0, r)));
+    write(
+        "early",
+        &mut rows.iter().copied().filter(|&(t, _)| t < 10.0),
+    );
+    let run = |fixes: &str| {
+        run_firmware(
+            d,
+            &[
+                "--imu-noise",
+                "fog",
+                "--gnss",
+                fixes,
+                "rec.bin",
+                "fw.csv",
+                "45",
+                "7.5",
+                "250",
+                "15",
+            ],
+        )
+    };
+    let (code, log) = run("later.bin");
+    assert_eq!(code, 4, "{log}");
+    assert!(
+        log.contains("no GNSS fix within the IMU data's time span")
+            && log.contains("another clock than the recording's"),
+        "{log}"
+    );
+    assert!(
+        !std::fs::read_to_string(d.join("fw.csv"))
+            .unwrap()
+            .contains("# end")
+    );
+    let (code, log) = run("early.bin");
+    assert_eq!(code, 0, "{log}");
+    assert!(
+        log.contains("WARN")
+            && log.contains("no GNSS position fix was used (0 refused, 0 invalid, 50 before the aided phase, 0 after the data): the solution is free-inertial"),
+        "{log}"
+    );
+    // The harness says the same of the same files.
+    let o = nav(
+        d,
+        &[
+            "replay",
+            "--imu",
+            "rec.bin",
+            "--gnss",
+            "early.csv",
+            "--imu-noise",
+            "fog",
+            "--lat",
+            "45",
+            "--lon",
+            "7.5",
+            "--h",
+            "250",
+            "--align-seconds",
+            "15",
+            "--device",
+            "adis16505",
+            "--out",
+            "host.csv",
+        ],
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("no GNSS position fix was used (0 refused, 0 invalid, 50 before the aided phase, 0 after the data)"),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
 /// The aided runs' receiver: 5 Hz fixes of 0.5/0.5/1 m, the antenna at 0.8, -0.3, -1.1 m.
 fn aided_receiver() -> host_tests::gnss_sim::GnssSimOptions {
     host_tests::gnss_sim::GnssSimOptions {

@@ -144,10 +144,10 @@ pub fn init(
             exit(ExitCode::Recording)
         };
         // Checked whole before anything is navigated, then read as the samples come.
-        let count = crate::gnss::check(path).unwrap_or_else(|e| fail(&e));
-        let fixes = Fixes::open(path).unwrap_or_else(|e| fail(&e));
-        log::gnss(count, &run, crate::FILTER_CAP);
-        (fixes, count)
+        let summary = crate::gnss::check(path).unwrap_or_else(|e| fail(&e));
+        let fixes = Fixes::open(path, &summary).unwrap_or_else(|e| fail(&e));
+        log::gnss(summary.count, &run, crate::FILTER_CAP);
+        (fixes, summary.count)
     });
     let stream = args.stream_cstr().map(|path| {
         let file = SemihostingFile::create(path).unwrap_or_else(|_| {
