@@ -482,6 +482,14 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
             "align-seconds = 5\n# c\n\nlat-deg = 45\nlon-deg = 7\n",
             "bad-window2.txt:1,4: refused (reason code 8): alignment window 5 s",
         ),
+        // No key at all (an empty or truncated file, comments only): the frame would carry the
+        // compiled-in configuration as the host's, without the DEFAULT_CONFIG flag.
+        ("empty", "", "bad-empty.txt: no 'key = value' line"),
+        (
+            "comments",
+            "# the roof antenna board\n\n   \n# lat-deg = 45\n",
+            "bad-comments.txt: no 'key = value' line",
+        ),
         // A comment after a value; a rate no IMU has.
         (
             "inline",
