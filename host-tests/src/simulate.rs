@@ -293,6 +293,41 @@ pub(crate) fn write_files(
     })
 }
 
+/// The files `nav sim` writes into its output directory: the recordings, the truth, the
+/// description and the simulated receiver's fixes.
+pub const SIM_FILE_NAMES: [&str; 6] = [
+    "imu.bin",
+    "imu.csv",
+    "truth.csv",
+    "scenario.txt",
+    "gnss.csv",
+    "gnss.bin",
+];
+
+/// Removes the files of [`SIM_FILE_NAMES`] in `dir` that this run did not write (`written`)
+/// and returns them: an earlier run's `imu.csv` or `gnss.csv` left beside this run's truth
+/// made a set that looked whole (`nav sim static --format bin` into the directory of a
+/// `land-vehicle --gnss-rate 1` run kept the car's CSV recording and fixes). Called after
+/// this run's files are written, so a failed run leaves the earlier set as it was.
+pub fn remove_stale(dir: &Path, written: &[&Path]) -> Result<Vec<PathBuf>> {
+    let mut removed = Vec::new();
+    for name in SIM_FILE_NAMES {
+        let path = dir.join(name);
+        if written.iter().any(|w| *w == path) {
+            continue;
+        }
+        match fs::remove_file(&path) {
+            Ok(()) => removed.push(path),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => {
+                return Err(e)
+                    .with_context(|| format!("removing {} (an earlier run's)", path.display()));
+            }
+        }
+    }
+    Ok(removed)
+}
+
 /// The `scenario.txt` text.
 pub fn describe(opts: &SimOptions, sim: &Simulated, imu: &Path) -> Result<String> {
     let Some(start) = sim.truth.first() else {

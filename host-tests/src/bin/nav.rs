@@ -1490,6 +1490,29 @@ fn sim_family(a: SimArgs) -> Result<()> {
     }
     println!("  truth      {}", files.truth.display());
     println!("  scenario   {}", files.description.display());
+    print_removed(&out, &files, &[])
+}
+
+/// Removes the files an earlier `nav sim` left in `out` that this run (`files`, `more`) did
+/// not write ([`host_tests::simulate::remove_stale`]), and says so.
+fn print_removed(
+    out: &std::path::Path,
+    files: &host_tests::simulate::SimFiles,
+    more: &[&std::path::Path],
+) -> Result<()> {
+    let mut written: Vec<&std::path::Path> = [&files.binary, &files.csv]
+        .into_iter()
+        .flatten()
+        .map(PathBuf::as_path)
+        .collect();
+    written.extend([files.truth.as_path(), files.description.as_path()]);
+    written.extend_from_slice(more);
+    for p in host_tests::simulate::remove_stale(out, &written)? {
+        println!(
+            "  removed    {} (an earlier run's, not this one's)",
+            p.display()
+        );
+    }
     Ok(())
 }
 
@@ -1558,6 +1581,8 @@ fn sim(a: SimArgs) -> Result<()> {
         None => None,
     };
     let files = write(&out, &opts, &sim)?;
+    let (gnss_csv, gnss_bin) = (out.join("gnss.csv"), out.join("gnss.bin"));
+    let gnss_files = [gnss_csv.as_path(), gnss_bin.as_path()];
     if let Some((g, receiver)) = receiver {
         let path = out.join("gnss.csv");
         host_tests::gnss::write_gnss_csv(&path, &receiver.fixes)?;
@@ -1586,6 +1611,15 @@ fn sim(a: SimArgs) -> Result<()> {
     }
     println!("  truth      {}", files.truth.display());
     println!("  scenario   {}", files.description.display());
+    print_removed(
+        &out,
+        &files,
+        if a.gnss_rate.is_some() {
+            &gnss_files
+        } else {
+            &[]
+        },
+    )?;
     let c = sim.counters;
     if c.gyro_saturated + c.accel_saturated > 0 {
         println!(
