@@ -250,12 +250,37 @@ pub struct SimFiles {
 /// Writes `sim` of `opts` into `dir` (created if missing). Every file's content is made
 /// before the first is written, and each is written whole or not at all ([`crate::atomic`]).
 pub fn write(dir: &Path, opts: &SimOptions, sim: &Simulated) -> Result<SimFiles> {
+    write_with_receiver(dir, opts, sim, None)
+}
+
+/// [`write`], with the simulated receiver's settings (`receiver`: the text to add, and the
+/// `nav replay` options that read its fixes) at the end of `scenario.txt`, and its replay line
+/// taking the fixes.
+pub fn write_with_receiver(
+    dir: &Path,
+    opts: &SimOptions,
+    sim: &Simulated,
+    receiver: Option<(&str, &str)>,
+) -> Result<SimFiles> {
     let replay_file = if opts.formats != Formats::Csv {
         dir.join("imu.bin")
     } else {
         dir.join("imu.csv")
     };
-    let description = describe(opts, sim, &replay_file)?;
+    let mut description = describe(opts, sim, &replay_file)?;
+    if let Some((text, replay_options)) = receiver {
+        const END: &str = " --out solution.csv";
+        description = description
+            .lines()
+            .map(|l| match l.strip_suffix(END) {
+                Some(head) if l.starts_with("# replay: nav replay") => {
+                    format!("{head} {replay_options}{END}\n")
+                }
+                _ => format!("{l}\n"),
+            })
+            .collect();
+        description.push_str(text);
+    }
     write_files(dir, opts.formats, sim, &description)
 }
 

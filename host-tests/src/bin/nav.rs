@@ -1517,7 +1517,7 @@ fn print_removed(
 }
 
 fn sim(a: SimArgs) -> Result<()> {
-    use host_tests::simulate::{SimOptions, simulate, write};
+    use host_tests::simulate::{SimOptions, simulate, write_with_receiver};
     use host_tests::simulate_family::{SCENARIO_NAME, sim_scenario_names};
     use host_tests::trajectory::scenarios::Scenario;
     if a.scenario == SCENARIO_NAME {
@@ -1580,7 +1580,41 @@ fn sim(a: SimArgs) -> Result<()> {
         }
         None => None,
     };
-    let files = write(&out, &opts, &sim)?;
+    // The receiver's settings and the replay that takes its fixes, in scenario.txt.
+    let receiver_text = receiver.as_ref().map(|(g, r)| {
+        let v3 = |v: [f64; 3]| format!("{},{},{}", v[0], v[1], v[2]);
+        let mut text = format!(
+            "# GNSS receiver (gnss.csv, gnss.bin)\ngnss_rate_hz = {}\ngnss_sigma_ned_m = {}\n\
+             gnss_velocity_sigma_ned_m_s = {}\ngnss_lever_arm_b_m = {}\n",
+            g.rate_hz,
+            v3(g.sigma_ned_m),
+            g.sigma_v_ned_m_s.map_or_else(|| "none".to_owned(), v3),
+            v3(g.lever_arm_b_m),
+        );
+        for line in r.describe(g).lines() {
+            text.push_str(&format!("# {line}\n"));
+        }
+        let mut options = format!("--gnss {}", out.join("gnss.csv").display());
+        if g.lever_arm_b_m != [0.0; 3] {
+            options.push_str(&format!(" --gnss-lever-arm {}", v3(g.lever_arm_b_m)));
+        }
+        if let Some(c) = &g.correlated {
+            options.push_str(&format!(
+                " --gnss-correlated {} --gnss-correlated-time {}",
+                v3(c.sigma_ned_m),
+                c.time_s
+            ));
+        }
+        (text, options)
+    });
+    let files = write_with_receiver(
+        &out,
+        &opts,
+        &sim,
+        receiver_text
+            .as_ref()
+            .map(|(t, o)| (t.as_str(), o.as_str())),
+    )?;
     let (gnss_csv, gnss_bin) = (out.join("gnss.csv"), out.join("gnss.bin"));
     let gnss_files = [gnss_csv.as_path(), gnss_bin.as_path()];
     if let Some((g, receiver)) = receiver {
