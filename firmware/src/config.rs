@@ -76,6 +76,9 @@ pub enum ArgError<'a> {
     SameFile,
     /// The solution log would overwrite the GNSS file.
     GnssSameFile,
+    /// The solution log would overwrite the calibration or the configuration frame (the
+    /// option or argument).
+    InputSameFile(&'static str),
     /// `--gnss FILE` is not a valid path.
     BadGnssPath,
     /// `--stream FILE` or `--config-frame FILE` is not a valid path (the option).
@@ -122,6 +125,9 @@ impl fmt::Display for ArgError<'_> {
             }
             Self::GnssSameFile => {
                 f.write_str("OUT_FILE is the GNSS file: refusing to overwrite the fixes")
+            }
+            Self::InputSameFile(name) => {
+                write!(f, "OUT_FILE is {name}: refusing to overwrite it")
             }
             Self::BadGnssPath => f.write_str("--gnss FILE is not a valid path"),
             Self::BadPath(option) => write!(f, "{option} FILE is not a valid path"),
@@ -239,11 +245,21 @@ impl Args {
         if let Some(extra) = args.next() {
             return Err(ArgError::Extra(extra));
         }
-        if imu_path == out_path {
+        // Compared as written (`same_path`): the board refuses to overwrite a recording or a
+        // fix file reached another way (an absolute path, a link).
+        let is_out =
+            |p: Option<&heapless::Vec<u8, MAX_PATH>>| p.is_some_and(|p| same_path(p, &out_path));
+        if is_out(Some(&imu_path)) {
             return Err(ArgError::SameFile);
         }
-        if gnss_path.as_ref() == Some(&out_path) {
+        if is_out(gnss_path.as_ref()) {
             return Err(ArgError::GnssSameFile);
+        }
+        if is_out(cal_path.as_ref()) {
+            return Err(ArgError::InputSameFile("CAL_FILE"));
+        }
+        if is_out(config_frame_path.as_ref()) {
+            return Err(ArgError::InputSameFile("the --config-frame FILE"));
         }
         if let Some(stream) = &stream_path
             && [
@@ -253,7 +269,9 @@ impl Args {
                 cal_path.as_ref(),
                 config_frame_path.as_ref(),
             ]
-            .contains(&Some(stream))
+            .into_iter()
+            .flatten()
+            .any(|p| same_path(p, stream))
         {
             return Err(ArgError::StreamSameFile);
         }
@@ -315,6 +333,37 @@ impl Args {
     /// The solution log's path as a C string.
     pub fn out_cstr(&self) -> &CStr {
         CStr::from_bytes_with_nul(&self.out_path).unwrap_or(c"")
+    }
+}
+
+/// Whether the paths `a` and `b` (a trailing NUL ignored) name one file as written: compared
+/// component by component, `.` and empty components left out and `name/..` resolved, so
+/// `./rec.bin`, `logs//../rec.bin` and `rec.bin` are one file (the firmware overwrote the
+/// recording given as `rec.bin ./rec.bin`). Absolute against relative paths and links are not
+/// resolved here (the guest knows no working directory).
+pub fn same_path(a: &[u8], b: &[u8]) -> bool {
+    /// A path's absoluteness and its resolved components; `None` when it has more than fit.
+    fn resolved(p: &[u8]) -> Option<(bool, heapless::Vec<&[u8], MAX_PATH>)> {
+        let p = p.strip_suffix(&[0]).unwrap_or(p);
+        let absolute = p.first() == Some(&b'/');
+        let mut parts: heapless::Vec<&[u8], MAX_PATH> = heapless::Vec::new();
+        for part in p.split(|&c| c == b'/') {
+            match part {
+                b"" | b"." => {}
+                b".." if parts.last().is_some_and(|&l| l != b"..") => {
+                    parts.pop();
+                }
+                // Above the root is the root.
+                b".." if absolute => {}
+                part => parts.push(part).ok()?,
+            }
+        }
+        Some((absolute, parts))
+    }
+    match (resolved(a), resolved(b)) {
+        (Some(a), Some(b)) => a == b,
+        // Not reached: a path of at most MAX_PATH bytes has fewer components.
+        _ => a == b,
     }
 }
 

@@ -45,14 +45,26 @@ fn open(path: &CStr) -> Result<Reader, GnssFileError> {
     GnssReader::new(Buffered::new(file)).map_err(GnssFileError::Read)
 }
 
-/// Reads the whole file once, checking every rule of the format: the number of fixes.
-pub fn check(path: &CStr) -> Result<u32, GnssFileError> {
+/// What [`check`] found in a fix file.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FileSummary {
+    /// The number of fixes.
+    pub count: u32,
+    /// The first and the last fix's time [us] (`None`: no fix).
+    pub span_us: Option<(u64, u64)>,
+}
+
+/// Reads the whole file once, checking every rule of the format: the number of fixes and
+/// their time span.
+pub fn check(path: &CStr) -> Result<FileSummary, GnssFileError> {
     let mut reader = open(path)?;
-    let mut n = 0;
-    while reader.next_fix().map_err(GnssFileError::Read)?.is_some() {
-        n += 1;
+    let mut summary = FileSummary::default();
+    while let Some(r) = reader.next_fix().map_err(GnssFileError::Read)? {
+        summary.count += 1;
+        let first = summary.span_us.map_or(r.t_us, |(a, _)| a);
+        summary.span_us = Some((first, r.t_us));
     }
-    Ok(n)
+    Ok(summary)
 }
 
 /// nav-core's fix of a record, in `f32` (the values rounded as the harness rounds the same
@@ -80,15 +92,24 @@ pub struct Fixes {
     next: Option<GnssFixInput<f32>>,
     /// Fixes read so far.
     pub read: u32,
+    /// The time of the first sample [us] (the first [`Fixes::due`] call's).
+    data_start_us: Option<u64>,
+    /// Fixes handed over at or after the first sample's time: within the IMU data's span.
+    pub in_span: u32,
+    /// The file's first and last fix time [us] ([`FileSummary::span_us`]).
+    file_span_us: Option<(u64, u64)>,
 }
 
 impl Fixes {
-    /// The file's fixes from the first (checked by [`check`] before).
-    pub fn open(path: &CStr) -> Result<Self, GnssFileError> {
+    /// The file's fixes from the first (checked by [`check`] before, which found `summary`).
+    pub fn open(path: &CStr, summary: &FileSummary) -> Result<Self, GnssFileError> {
         let mut fixes = Self {
             reader: open(path)?,
             next: None,
             read: 0,
+            data_start_us: None,
+            in_span: 0,
+            file_span_us: summary.span_us,
         };
         fixes.advance()?;
         Ok(fixes)
@@ -106,9 +127,11 @@ impl Fixes {
 
     /// The next fix if it is due at a sample ending at `t_us` [us] (its time at or before it).
     pub fn due(&mut self, t_us: u64) -> Result<Option<GnssFixInput<f32>>, GnssFileError> {
+        let start = *self.data_start_us.get_or_insert(t_us);
         match self.next {
             Some(f) if f.t_us <= t_us => {
                 self.advance()?;
+                self.in_span += u32::from(f.t_us >= start);
                 Ok(Some(f))
             }
             _ => Ok(None),
@@ -118,5 +141,16 @@ impl Fixes {
     /// Fixes not handed over (after the last sample).
     pub fn remaining(&self, total: u32) -> u32 {
         total - self.read + u32::from(self.next.is_some())
+    }
+
+    /// The fixes' span and the IMU data's (the first sample's time to `last_sample_us`) [us]
+    /// when the file has fixes and not one of them lies within the data's span: the two files'
+    /// time tags are on different clocks (GNSS seconds of week against a recording that starts
+    /// at 0), and the run was free-inertial while looking aided (the harness refuses the
+    /// same, `host_tests::aided::check_fixes_in_span`).
+    pub fn none_in_span(&self, last_sample_us: u64) -> Option<[(u64, u64); 2]> {
+        let start = self.data_start_us?;
+        let file = self.file_span_us?;
+        (self.in_span == 0).then_some([file, (start, last_sample_us)])
     }
 }

@@ -161,6 +161,24 @@ pub fn filter(r: &FilterReport<f32>, fixes: &FixCounters, unused: u32, after_dat
         unused,
         after_data
     );
+    // The harness's warnings (`host_tests::aided_cmd::position_warning`), in its words.
+    let p = &c.position;
+    if p.accepted == 0 {
+        defmt::warn!(
+            "no GNSS position fix was used ({=u32} refused, {=u32} invalid, {=u32} before the aided phase, {=u32} after the data): the solution is free-inertial",
+            p.rejected,
+            p.invalid,
+            unused,
+            after_data
+        );
+    } else if p.rejected + p.invalid > p.accepted {
+        defmt::warn!(
+            "more GNSS position fixes refused ({=u32}) or invalid ({=u32}) than used ({=u32}): the filter's IMU noise (--imu-noise, imunoise), the start and its 1-sigma (--init-*, init*, or the alignment's), the antenna lever arm or the fixes' 1-sigma do not match the data, and the solution may be far off",
+            p.rejected,
+            p.invalid,
+            p.accepted
+        );
+    }
     let (p, v, a) = (r.sigma_ned_m, r.sigma_v_ned_m_s, r.sigma_att_rad);
     defmt::info!(
         "  final 1-sigma: position {=f32} {=f32} {=f32} m, velocity {=f32} {=f32} {=f32} m/s (N E D), roll {=f32} pitch {=f32} yaw {=f32} deg",

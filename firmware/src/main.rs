@@ -293,6 +293,9 @@ mod app {
         let mut aided = AidedCosts::default();
         let mut imu = ImuStats::default();
         let mut last_ready_us = 0_u64;
+        // The recording's time of the last sample [us] (the qemu board's fix-file check).
+        #[cfg(feature = "qemu")]
+        let mut last_sample_us = 0_u64;
         loop {
             let Ok(msg) = samples_rx.recv().await else {
                 defmt::panic!("sample channel closed");
@@ -317,6 +320,10 @@ mod app {
                 }
             };
             last_ready_us = t_ready_us;
+            #[cfg(feature = "qemu")]
+            {
+                last_sample_us = sample.t_us;
+            }
             // An early failure of the alignment (its success comes when awaited, below).
             if navigator.is_aligning()
                 && let Ok(answer) = from_background.try_recv()
@@ -420,6 +427,22 @@ mod app {
         });
         if let Some(row) = summary.final_row {
             out.row(row);
+        }
+        // Fixes on another clock than the recording's: refused, as the harness does (no end
+        // record: the log does not look complete). A fix file is the qemu board's.
+        #[cfg(feature = "qemu")]
+        if let Some([fixes, data]) = gnss
+            .as_ref()
+            .and_then(|(f, _)| f.none_in_span(last_sample_us))
+        {
+            defmt::error!(
+                "GNSS file: no GNSS fix within the IMU data's time span: the fixes are at {=f64} .. {=f64} s, the IMU samples at {=f64} .. {=f64} s: the GNSS time tags are on another clock than the recording's (e.g. GNSS seconds of week against a recording that starts at 0); give the fixes the recording's time",
+                fixes.0 as f64 * 1e-6,
+                fixes.1 as f64 * 1e-6,
+                data.0 as f64 * 1e-6,
+                data.1 as f64 * 1e-6
+            );
+            exit(ExitCode::Recording)
         }
         if board::CSV_LOG {
             write_line(&mut out.out, summary.end_record());

@@ -495,3 +495,33 @@ fn bmi088_sim_accelerometer_needs_the_switch_to_spi() {
         .unwrap();
     assert_eq!(device.samples_served(), 0);
 }
+
+/// A source is served by a simulated device only at the devices' 400 Hz (within 1 %): each
+/// data read takes the next sample, so a 100 Hz recording reached the driver as gaps of four
+/// output periods.
+#[test]
+fn a_source_at_another_rate_than_the_devices_is_refused() {
+    use hal_adapters::sim::{DEVICE_RATE_HZ, check_source_rate};
+    assert_eq!(PERIOD_NS as f64, 1e9 / DEVICE_RATE_HZ);
+    for ok in [400.0, 396.5, 403.5] {
+        assert!(check_source_rate(ok).is_ok(), "{ok}");
+    }
+    for bad in [
+        100.0,
+        200.0,
+        395.0,
+        405.0,
+        800.0,
+        0.0,
+        -400.0,
+        f64::NAN,
+        f64::INFINITY,
+    ] {
+        let e = check_source_rate(bad).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("is not the simulated IMU's output rate of 400 Hz"),
+            "{bad}: {e}"
+        );
+    }
+}

@@ -38,6 +38,16 @@ pub fn parse(name: &Path, text: &str) -> Result<DeviceConfig> {
             line_of.insert(key, n);
         }
     }
+    // A file without a key is an empty or truncated one, or the wrong one: its frame would
+    // carry the compiled-in configuration as the host's, and the board would not flag it
+    // DEFAULT_CONFIG.
+    if line_of.is_empty() {
+        bail!(
+            "{}: no 'key = value' line: a frame of the compiled-in configuration would reach the \
+             board as the host's (not flagged DEFAULT_CONFIG); give the keys, or send no frame",
+            name.display()
+        );
+    }
     if let Err(refusal) = config.validate() {
         // The lines of the file's keys the refusal is about, in file order.
         let mut lines: Vec<(usize, &str)> = keys_of(&refusal)

@@ -51,6 +51,11 @@ pub struct DecodeSummary {
     pub implausible: u32,
     /// The first of them (up to [`MAX_LISTED`]), with the byte offset after the frame.
     pub refused_rows: Vec<(u64, String)>,
+    /// Solution frames written, by status flag set in them (name, count; in the order
+    /// first seen): the CSV has no column for them, and a run on the board's compiled-in
+    /// configuration (`DEFAULT_CONFIG`), or one that lost its IMU data (`IMU_LOST`), looked like
+    /// any other.
+    pub flags: Vec<(&'static str, u32)>,
 }
 
 /// Why a solution row that passed its frame's checks is not a navigator's: time not after the
@@ -154,6 +159,31 @@ impl fmt::Display for DecodeSummary {
         if self.cut_off_bytes > 0 {
             writeln!(f, "last frame cut off: {} bytes", self.cut_off_bytes)?;
         }
+        if !self.flags.is_empty() {
+            let flags: Vec<String> = self
+                .flags
+                .iter()
+                .map(|(name, n)| format!("{name} {n}"))
+                .collect();
+            writeln!(
+                f,
+                "status flags of the solution rows (frames with each): {}",
+                flags.join(", ")
+            )?;
+        }
+        if let Some((_, n)) = self
+            .flags
+            .iter()
+            .find(|(name, _)| *name == "DEFAULT_CONFIG")
+        {
+            writeln!(
+                f,
+                "WARNING: {n} of {} rows from the board's compiled-in configuration \
+                 (DEFAULT_CONFIG: no configuration frame accepted in its standby window): not \
+                 the host's site, alignment or mounting",
+                self.rows
+            )?;
+        }
         match (self.end, self.early_end) {
             (_, Some((e, after))) => write!(
                 f,
@@ -229,6 +259,14 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
             };
             match received.message {
                 Message::NavSolution(s) => {
+                    // Solution frames after an end of run, written or refused (a second run's
+                    // rows go back in time): the log is not complete.
+                    if let Some(e) = summary.end.take() {
+                        summary.early_end.get_or_insert((e, 0));
+                    }
+                    if let Some((_, after)) = &mut summary.early_end {
+                        *after += 1;
+                    }
                     // A frame whose CRC holds but whose content no navigator writes.
                     if let Some(why) = implausible(&s.row, last_t_us) {
                         summary.implausible += 1;
@@ -262,12 +300,11 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
                     }
                     writeln!(out, "{}", s.row)?;
                     summary.rows += 1;
-                    // Rows after an end of run: the log is not complete.
-                    if let Some(e) = summary.end.take() {
-                        summary.early_end.get_or_insert((e, 0));
-                    }
-                    if let Some((_, after)) = &mut summary.early_end {
-                        *after += 1;
+                    for (name, _) in s.flags.iter_names() {
+                        match summary.flags.iter_mut().find(|(n, _)| *n == name) {
+                            Some((_, count)) => *count += 1,
+                            None => summary.flags.push((name, 1)),
+                        }
                     }
                 }
                 Message::EndOfRun(e) => summary.end = Some(e),
@@ -405,6 +442,42 @@ mod tests {
             assert!(!out.exists());
             assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
         }
+    }
+
+    /// The status flags of the written rows are counted and named (the CSV has no column for
+    /// them): a run on the board's compiled-in configuration is warned of.
+    #[test]
+    fn the_rows_status_flags_are_counted_and_a_default_configuration_warned_of() {
+        let at = |k: u64, flags: StatusFlags| {
+            Message::NavSolution(NavSolution {
+                row: Row::Free(Solution {
+                    t_us: S.t_us + k * 2500,
+                    ..S
+                }),
+                status: NavStatus::Nav,
+                flags,
+            })
+        };
+        let messages = [
+            at(0, StatusFlags::DEFAULT_CONFIG | StatusFlags::FREE_INERTIAL),
+            at(1, StatusFlags::DEFAULT_CONFIG),
+            at(2, StatusFlags::empty()),
+            Message::EndOfRun(EndOfRun { rows: 3 }),
+        ];
+        let s = decode(&mut frames(&messages).as_slice(), &mut Vec::new()).unwrap();
+        assert_eq!(s.flags, [("FREE_INERTIAL", 1), ("DEFAULT_CONFIG", 2)]);
+        let text = s.to_string();
+        assert!(
+            text.contains("status flags of the solution rows (frames with each): FREE_INERTIAL 1, DEFAULT_CONFIG 2")
+                && text.contains("WARNING: 2 of 3 rows from the board's compiled-in configuration"),
+            "{text}"
+        );
+        let plain = [
+            at(0, StatusFlags::empty()),
+            Message::EndOfRun(EndOfRun { rows: 1 }),
+        ];
+        let s = decode(&mut frames(&plain).as_slice(), &mut Vec::new()).unwrap();
+        assert!(!s.to_string().contains("flags"), "{s}");
     }
 
     /// Frames whose CRC holds but whose content no navigator writes are refused, counted,

@@ -152,6 +152,13 @@ pub fn replay_file_with_fixes<T: Scalar, W: Write>(
         check_psins_site(path, h, &options.run)?;
     }
     let rate_hz = source.header().rate_hz;
+    if options.device != ImuDevice::Recording {
+        hal_adapters::sim::check_source_rate(rate_hz).map_err(|e| {
+            let device = clap::ValueEnum::to_possible_value(&options.device)
+                .map_or_else(String::new, |v| v.get_name().to_owned());
+            anyhow!("recording {}: --device {device}: {e}", path.display())
+        })?;
+    }
     let config = (&options.run, rate_hz, fixes);
     let (run, driver, stats) = match options.device {
         ImuDevice::Recording => {

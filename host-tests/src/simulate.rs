@@ -250,12 +250,37 @@ pub struct SimFiles {
 /// Writes `sim` of `opts` into `dir` (created if missing). Every file's content is made
 /// before the first is written, and each is written whole or not at all ([`crate::atomic`]).
 pub fn write(dir: &Path, opts: &SimOptions, sim: &Simulated) -> Result<SimFiles> {
+    write_with_receiver(dir, opts, sim, None)
+}
+
+/// [`write`], with the simulated receiver's settings (`receiver`: the text to add, and the
+/// `nav replay` options that read its fixes) at the end of `scenario.txt`, and its replay line
+/// taking the fixes.
+pub fn write_with_receiver(
+    dir: &Path,
+    opts: &SimOptions,
+    sim: &Simulated,
+    receiver: Option<(&str, &str)>,
+) -> Result<SimFiles> {
     let replay_file = if opts.formats != Formats::Csv {
         dir.join("imu.bin")
     } else {
         dir.join("imu.csv")
     };
-    let description = describe(opts, sim, &replay_file)?;
+    let mut description = describe(opts, sim, &replay_file)?;
+    if let Some((text, replay_options)) = receiver {
+        const END: &str = " --out solution.csv";
+        description = description
+            .lines()
+            .map(|l| match l.strip_suffix(END) {
+                Some(head) if l.starts_with("# replay: nav replay") => {
+                    format!("{head} {replay_options}{END}\n")
+                }
+                _ => format!("{l}\n"),
+            })
+            .collect();
+        description.push_str(text);
+    }
     write_files(dir, opts.formats, sim, &description)
 }
 
@@ -291,6 +316,41 @@ pub(crate) fn write_files(
         truth,
         description: description_path,
     })
+}
+
+/// The files `nav sim` writes into its output directory: the recordings, the truth, the
+/// description and the simulated receiver's fixes.
+pub const SIM_FILE_NAMES: [&str; 6] = [
+    "imu.bin",
+    "imu.csv",
+    "truth.csv",
+    "scenario.txt",
+    "gnss.csv",
+    "gnss.bin",
+];
+
+/// Removes the files of [`SIM_FILE_NAMES`] in `dir` that this run did not write (`written`)
+/// and returns them: an earlier run's `imu.csv` or `gnss.csv` left beside this run's truth
+/// made a set that looked whole (`nav sim static --format bin` into the directory of a
+/// `land-vehicle --gnss-rate 1` run kept the car's CSV recording and fixes). Called after
+/// this run's files are written, so a failed run leaves the earlier set as it was.
+pub fn remove_stale(dir: &Path, written: &[&Path]) -> Result<Vec<PathBuf>> {
+    let mut removed = Vec::new();
+    for name in SIM_FILE_NAMES {
+        let path = dir.join(name);
+        if written.iter().any(|w| *w == path) {
+            continue;
+        }
+        match fs::remove_file(&path) {
+            Ok(()) => removed.push(path),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => {
+                return Err(e)
+                    .with_context(|| format!("removing {} (an earlier run's)", path.display()));
+            }
+        }
+    }
+    Ok(removed)
 }
 
 /// The `scenario.txt` text.

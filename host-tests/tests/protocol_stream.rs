@@ -366,6 +366,22 @@ fn early_end_of_run_and_repeated_frames_are_named() {
         "{report}"
     );
     assert!(report.contains("complete (2 rows)"), "{report}");
+
+    // Two runs' streams one after the other (a capture across a restart): the second run's
+    // rows go back in time and are refused; they still follow the first run's end, and the
+    // summary says so (it said "2 rows, but the end-of-run frame says 2: incomplete").
+    let run = encode(&[&solution(0), &solution(1), &end]).concat();
+    let two = d.join("two-runs.bin");
+    std::fs::write(&two, [run.clone(), run].concat()).unwrap();
+    let report = run_ok(&["decode", two.to_str().unwrap(), "--out", out_s]);
+    assert!(
+        report.contains("end-of-run frame (saying 2 rows) came before the end of the stream")
+            && report.contains("2 solution frames follow it"),
+        "{report}"
+    );
+    let log = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(log.lines().count(), 3, "{log}");
+    assert!(!log.contains("# end"), "{log}");
 }
 
 #[test]
@@ -465,6 +481,14 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
             "window2",
             "align-seconds = 5\n# c\n\nlat-deg = 45\nlon-deg = 7\n",
             "bad-window2.txt:1,4: refused (reason code 8): alignment window 5 s",
+        ),
+        // No key at all (an empty or truncated file, comments only): the frame would carry the
+        // compiled-in configuration as the host's, without the DEFAULT_CONFIG flag.
+        ("empty", "", "bad-empty.txt: no 'key = value' line"),
+        (
+            "comments",
+            "# the roof antenna board\n\n   \n# lat-deg = 45\n",
+            "bad-comments.txt: no 'key = value' line",
         ),
         // A comment after a value; a rate no IMU has.
         (

@@ -732,6 +732,144 @@ fn firmware_and_host_fail_alike_when_nothing_is_navigated() {
     }
 }
 
+/// An output that is an input however its path is written is refused (exit 3) and the input
+/// left untouched: `rec.bin ./rec.bin` truncated the recording (the paths were compared as
+/// bytes), and OUT_FILE over the calibration or the configuration frame was not checked at all
+/// (the frame, truncated before it was read, left the compiled-in configuration running).
+#[test]
+fn an_output_over_an_input_is_refused_however_its_path_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("sub")).unwrap();
+    let bytes = static_recording(2.0, Grade::Ideal).to_bytes().unwrap();
+    std::fs::write(d.join("rec.bin"), &bytes).unwrap();
+    std::fs::write(d.join("cal.txt"), CALIBRATION).unwrap();
+    let mut fixes = hal_adapters::gnss_record::MAGIC.to_vec();
+    fixes.extend_from_slice(b"the rest of a fix file");
+    std::fs::write(d.join("fixes.bin"), &fixes).unwrap();
+    let frame = b"not read: refused before".to_vec();
+    std::fs::write(d.join("frame.bin"), &frame).unwrap();
+    let abs = |name: &str| d.join(name).to_str().unwrap().to_owned();
+    let (abs_rec, abs_fixes) = (abs("rec.bin"), abs("fixes.bin"));
+    let site = ["45", "7.5", "150", "10"];
+    for (options, out, rest, expect) in [
+        (&[][..], "./rec.bin", &[][..], "OUT_FILE is IMU_FILE"),
+        (&[], "sub/../rec.bin", &[], "OUT_FILE is IMU_FILE"),
+        (&[], ".//rec.bin", &[], "OUT_FILE is IMU_FILE"),
+        (&[], abs_rec.as_str(), &[], "holds an IMU recording"),
+        (&[], abs_fixes.as_str(), &[], "holds a GNSS fix file"),
+        (&[], "./cal.txt", &["40", "cal.txt"], "OUT_FILE is CAL_FILE"),
+        (
+            &["--config-frame", "frame.bin"],
+            "sub/../frame.bin",
+            &[],
+            "OUT_FILE is the --config-frame FILE",
+        ),
+        (
+            &["--stream", "./rec.bin"],
+            "out.csv",
+            &[],
+            "--stream FILE is an input",
+        ),
+        (
+            &["--stream", abs_rec.as_str()],
+            "out.csv",
+            &[],
+            "--stream FILE",
+        ),
+    ] {
+        let mut args = options.to_vec();
+        args.extend_from_slice(&["rec.bin", out]);
+        args.extend_from_slice(&site);
+        args.extend_from_slice(rest);
+        let (code, log) = run_firmware(d, &args);
+        assert_eq!(code, 3, "{args:?}: {log}");
+        assert!(
+            log.contains(expect) && log.contains("refusing to overwrite"),
+            "{args:?}: expected '{expect}' in:\n{log}"
+        );
+        assert_eq!(std::fs::read(d.join("rec.bin")).unwrap(), bytes, "{args:?}");
+        assert_eq!(
+            std::fs::read(d.join("fixes.bin")).unwrap(),
+            fixes,
+            "{args:?}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(d.join("cal.txt")).unwrap(),
+            CALIBRATION,
+            "{args:?}"
+        );
+        assert_eq!(
+            std::fs::read(d.join("frame.bin")).unwrap(),
+            frame,
+            "{args:?}"
+        );
+    }
+    // A solution log of an earlier run is overwritten as before.
+    std::fs::write(d.join("out.csv"), "t_s,old\n").unwrap();
+    let mut args = vec!["rec.bin", "./sub/../out.csv"];
+    args.extend_from_slice(&site);
+    let (code, log) = run_firmware(d, &args);
+    assert_ne!(code, 3, "{log}");
+    assert!(
+        !std::fs::read_to_string(d.join("out.csv"))
+            .unwrap()
+            .contains("old")
+    );
+}
+
+/// A recording at another rate than the simulated IMU's 400 Hz is refused by the firmware
+/// (exit 4) and by `nav replay --device`, with one message: each record reached the driver as a
+/// gap of several output periods, and a valid 100 Hz or 200 Hz recording failed its alignment
+/// for a reason it did not have ("window not complete", "base not still", ...).
+#[test]
+fn a_recording_not_at_the_devices_rate_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for rate_hz in [100.0, 200.0, 450.0] {
+        let mut opts = SimOptions::new(Scenario::by_name("static").unwrap(), Grade::Fog);
+        opts.seconds = Some(12.0);
+        opts.rate_hz = rate_hz;
+        let rec = simulate(&opts, |_, _| {}).unwrap().recording;
+        recording_io::write(&d.join("rec.bin"), &rec).unwrap();
+        let expect = format!(
+            "the recording's rate {rate_hz} Hz is not the simulated IMU's output rate of 400 Hz"
+        );
+        let (code, log) = run_firmware(d, &["rec.bin", "fw.csv", "45", "7.5", "150", "10"]);
+        assert_eq!(code, 4, "{rate_hz} Hz: {log}");
+        assert!(log.contains(&expect), "{rate_hz} Hz: {log}");
+        for device in ["adis16505", "icm42688", "bmi088"] {
+            let o = nav(
+                d,
+                &[
+                    "replay",
+                    "--imu",
+                    "rec.bin",
+                    "--out",
+                    "host.csv",
+                    "--lat",
+                    "45",
+                    "--lon",
+                    "7.5",
+                    "--h",
+                    "150",
+                    "--align-seconds",
+                    "10",
+                    "--device",
+                    device,
+                ],
+            );
+            let stderr = String::from_utf8_lossy(&o.stderr);
+            assert!(!o.status.success(), "{rate_hz} Hz, {device}: {stderr}");
+            assert!(
+                stderr.contains(&format!("--device {device}: {expect}")),
+                "{rate_hz} Hz, {device}: {stderr}"
+            );
+            assert!(!d.join("host.csv").exists());
+        }
+    }
+}
+
 /// A truncated and a corrupt recording stop the firmware with the recording exit code (4) and a
 /// defmt error naming the byte offset.
 #[test]
@@ -1245,6 +1383,105 @@ fn assert_same_lines(fw: &str, host: &str) {
         fw.lines().count(),
         host.lines().count(),
         "row counts differ"
+    );
+}
+
+/// Fixes on another clock than the recording's (none within the IMU data's time span) end
+/// the firmware's run with the recording's exit code (4), named as the harness names them and
+/// without the end record; before, the run exited 0 with a complete-looking free-inertial log
+/// that said NAV. Fixes that all come before the aided phase are warned of in the harness's
+/// words (the firmware said nothing).
+#[test]
+fn firmware_refuses_fixes_on_another_clock_and_warns_of_unused_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    aided_drive(d, 25.0, &aided_receiver());
+    let csv = std::fs::read_to_string(d.join("gnss.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    let rows: Vec<(f64, &str)> = lines
+        .map(|l| {
+            let (t, rest) = l.split_once(',').unwrap();
+            (t.parse().unwrap(), rest)
+        })
+        .collect();
+    let write = |name: &str, rows: &mut dyn Iterator<Item = (f64, &str)>| {
+        let text: String = rows.map(|(t, rest)| format!("{t},{rest}\n")).collect();
+        let file = d.join(format!("{name}.csv"));
+        std::fs::write(&file, format!("{header}\n{text}")).unwrap();
+        host_tests::gnss_file::convert(&file, &d.join(format!("{name}.bin")), None).unwrap();
+    };
+    write("later", &mut rows.iter().map(|&(t, r)| (t + 1000.0, r)));
+    write(
+        "early",
+        &mut rows.iter().copied().filter(|&(t, _)| t < 10.0),
+    );
+    let run = |fixes: &str| {
+        run_firmware(
+            d,
+            &[
+                "--imu-noise",
+                "fog",
+                "--gnss",
+                fixes,
+                "rec.bin",
+                "fw.csv",
+                "45",
+                "7.5",
+                "250",
+                "15",
+            ],
+        )
+    };
+    let (code, log) = run("later.bin");
+    assert_eq!(code, 4, "{log}");
+    assert!(
+        log.contains("no GNSS fix within the IMU data's time span")
+            && log.contains("another clock than the recording's"),
+        "{log}"
+    );
+    assert!(
+        !std::fs::read_to_string(d.join("fw.csv"))
+            .unwrap()
+            .contains("# end")
+    );
+    let (code, log) = run("early.bin");
+    assert_eq!(code, 0, "{log}");
+    assert!(
+        log.contains("WARN")
+            && log.contains("no GNSS position fix was used (0 refused, 0 invalid, 50 before the aided phase, 0 after the data): the solution is free-inertial"),
+        "{log}"
+    );
+    // The harness says the same of the same files.
+    let o = nav(
+        d,
+        &[
+            "replay",
+            "--imu",
+            "rec.bin",
+            "--gnss",
+            "early.csv",
+            "--imu-noise",
+            "fog",
+            "--lat",
+            "45",
+            "--lon",
+            "7.5",
+            "--h",
+            "250",
+            "--align-seconds",
+            "15",
+            "--device",
+            "adis16505",
+            "--out",
+            "host.csv",
+        ],
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("no GNSS position fix was used (0 refused, 0 invalid, 50 before the aided phase, 0 after the data)"),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
     );
 }
 

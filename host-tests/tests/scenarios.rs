@@ -332,6 +332,71 @@ fn the_land_vehicle_replay_hint_runs() {
     );
 }
 
+/// With a simulated receiver, scenario.txt records its settings and what was injected, and
+/// its replay hint takes the fixes (with the antenna's lever arm): before, the receiver was
+/// missing from the description and the hint ran free-inertial beside the fixes it wrote.
+#[test]
+fn the_replay_hint_takes_the_simulated_receivers_fixes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let out_s = out.to_str().unwrap();
+    let (ok, text) = nav(&[
+        "sim",
+        "land-vehicle",
+        "--grade",
+        "fog",
+        "--seconds",
+        "40",
+        "--gnss-rate",
+        "1",
+        "--gnss-lever-arm",
+        "0.5,0,-1",
+        "--gnss-spike",
+        "30,5,0,0",
+        "--format",
+        "bin",
+        "--out",
+        out_s,
+    ]);
+    assert!(ok, "{text}");
+    let text = std::fs::read_to_string(out.join("scenario.txt")).unwrap();
+    for want in [
+        "\ngnss_rate_hz = 1\n",
+        "\ngnss_sigma_ned_m = 0.5,0.5,1\n",
+        "\ngnss_lever_arm_b_m = 0.5,0,-1\n",
+        "spike #0: N 5.000",
+    ] {
+        assert!(text.contains(want), "{want:?} in\n{text}");
+    }
+    let line = text
+        .lines()
+        .find_map(|l| l.strip_prefix("# replay: nav "))
+        .unwrap_or_else(|| panic!("no replay line in\n{text}"));
+    let gnss = out.join("gnss.csv");
+    assert!(
+        line.ends_with(&format!(
+            " --gnss {} --gnss-lever-arm 0.5,0,-1 --out solution.csv",
+            gnss.display()
+        )),
+        "{line}"
+    );
+    let solution = dir.path().join("solution.csv");
+    let args: Vec<String> = line
+        .split_whitespace()
+        .map(|a| match a {
+            "solution.csv" => solution.to_str().unwrap().to_owned(),
+            _ => a.to_owned(),
+        })
+        .collect();
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (ok, report) = nav(&args);
+    assert!(ok, "{line}\n{report}");
+    assert!(report.contains("GNSS position: "), "{report}");
+    assert!(std::fs::read_to_string(&solution).unwrap().starts_with(
+        "t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,pitch_deg,yaw_deg,sigma_n_m"
+    ));
+}
+
 /// `nav sim ... --list-params | head -1`: the reader closes the pipe before `nav` has written
 /// everything; `nav` ends as command-line tools do, without a panic message.
 #[test]

@@ -121,6 +121,60 @@ fn sim_refuses_the_first_row_past_the_pole_and_keeps_the_old_files() {
     );
 }
 
+/// A run into the directory of an earlier one leaves no file of the earlier run: `nav sim
+/// static --format bin` into a `land-vehicle --gnss-rate 1` directory kept the car's
+/// `imu.csv` and fixes beside the static truth, a set that looked whole. A user file of
+/// another name stays.
+#[test]
+fn sim_removes_an_earlier_runs_files_it_does_not_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let car = nav(&[
+        "sim",
+        "land-vehicle",
+        "--seconds",
+        "10",
+        "--gnss-rate",
+        "1",
+        "--out",
+        s(&out),
+    ]);
+    assert!(car.status.success(), "{}", text(&car));
+    std::fs::write(out.join("notes.txt"), "mine\n").unwrap();
+    let car_truth = std::fs::read_to_string(out.join("truth.csv")).unwrap();
+    let o = nav(&[
+        "sim",
+        "static",
+        "--seconds",
+        "5",
+        "--format",
+        "bin",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(
+        names(&out),
+        ["imu.bin", "notes.txt", "scenario.txt", "truth.csv"]
+    );
+    assert_ne!(
+        std::fs::read_to_string(out.join("truth.csv")).unwrap(),
+        car_truth
+    );
+    for name in ["imu.csv", "gnss.csv", "gnss.bin"] {
+        assert!(
+            text(&o).contains(&format!("removed    {}", s(&out.join(name)))),
+            "{name}: {}",
+            text(&o)
+        );
+    }
+    // A refused run changes nothing.
+    let before = names(&out);
+    let o = nav(&["sim", "static", "--seconds", "0", "--out", s(&out)]);
+    assert_refused(&o, "the length must be positive");
+    assert_eq!(names(&out), before);
+}
+
 /// A still truth of 600 s at 1 Hz, from `nav sim static`.
 fn still_truth(dir: &Path) -> PathBuf {
     let sim = dir.join("still");

@@ -53,7 +53,13 @@ fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let root = workspace_root();
     std::env::set_current_dir(&root)?;
-    match args.first().map(String::as_str) {
+    let command = args.first().map(String::as_str);
+    // Only `fuzz` takes arguments: another command's would be ignored, and the run would not be
+    // the one asked for.
+    if let Some(name) = command.filter(|c| COMMANDS.contains(c)) {
+        check_arguments(name, &args[1..])?;
+    }
+    match command {
         Some("setup") => setup(),
         Some("demo") => demo(&root),
         Some("test") => test(&root),
@@ -67,6 +73,36 @@ fn main() -> Result<()> {
             std::process::exit(2)
         }
     }
+}
+
+/// The commands; only `fuzz` takes arguments (at most two case counts).
+const COMMANDS: [&str; 8] = [
+    "setup",
+    "demo",
+    "test",
+    "bench",
+    "size",
+    "build-board",
+    "lint",
+    "fuzz",
+];
+
+/// Refuses arguments a command does not take (`cargo xtask demo other.bin` ran the demo on its
+/// own recording without a word).
+fn check_arguments(command: &str, args: &[String]) -> Result<()> {
+    let most = if command == "fuzz" { 2 } else { 0 };
+    if args.len() > most {
+        bail!(
+            "cargo xtask {command} takes {}: unexpected {:?}",
+            if most == 0 {
+                "no argument".to_owned()
+            } else {
+                format!("at most {most} arguments (CASES [RECORDING_CASES])")
+            },
+            &args[most..]
+        );
+    }
+    Ok(())
 }
 
 fn workspace_root() -> PathBuf {
@@ -167,8 +203,7 @@ fn is_root() -> bool {
 /// Builds the firmware (release) and returns its ELF path.
 fn build_firmware(root: &Path) -> Result<PathBuf> {
     run(cargo().args(["build", "--release", "-p", "firmware", "--target", THUMB]))?;
-    Ok(root
-        .join("target")
+    Ok(target_dir(root, &mut cargo())?
         .join(THUMB)
         .join("release")
         .join("firmware"))
@@ -176,7 +211,52 @@ fn build_firmware(root: &Path) -> Result<PathBuf> {
 
 fn nav_bin(root: &Path) -> Result<PathBuf> {
     run(cargo().args(["build", "--release", "-p", "host-tests", "--bin", "nav"]))?;
-    Ok(root.join("target/release/nav"))
+    Ok(target_dir(root, &mut cargo())?.join("release").join("nav"))
+}
+
+/// The directory the builds of `cargo` (the command, with its environment) go to, as cargo
+/// resolves it (`CARGO_TARGET_DIR`, `build.target-dir`, else `target/`), through `cargo
+/// metadata`; relative paths are taken from the workspace `root`. Taking `target/` instead ran
+/// a missing or stale `nav` and firmware when `CARGO_TARGET_DIR` was set.
+fn target_dir(root: &Path, cargo: &mut Command) -> Result<PathBuf> {
+    let out = cargo
+        .args(["metadata", "--no-deps", "--format-version", "1"])
+        .current_dir(root)
+        .output()
+        .context("cannot start cargo metadata")?;
+    if !out.status.success() {
+        bail!(
+            "cargo metadata failed with {}:\n{}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    Ok(root.join(json_string_field(
+        &String::from_utf8_lossy(&out.stdout),
+        "target_directory",
+    )?))
+}
+
+/// The value of the string field `key` in a JSON text (its first occurrence; the escapes cargo
+/// writes in a path: `\\`, `\"`, `\/`).
+fn json_string_field(json: &str, key: &str) -> Result<String> {
+    let pattern = format!("\"{key}\":\"");
+    let at = json
+        .find(&pattern)
+        .with_context(|| format!("no string field {key:?} in cargo's output"))?;
+    let mut value = String::new();
+    let mut chars = json[at + pattern.len()..].chars();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' => return Ok(value),
+            '\\' => match chars.next() {
+                Some(e @ ('\\' | '"' | '/')) => value.push(e),
+                e => bail!("field {key:?}: escape \\{e:?} in a path"),
+            },
+            c => value.push(c),
+        }
+    }
+    bail!("field {key:?}: the string does not end")
 }
 
 /// The main job: demo recording -> firmware in QEMU -> decoded log and solution.
@@ -704,8 +784,7 @@ fn build_board(root: &Path) -> Result<()> {
         );
     }
     run(&mut build)?;
-    let elf = root
-        .join("target")
+    let elf = target_dir(root, &mut cargo())?
         .join(THUMB)
         .join("board")
         .join("firmware");
@@ -850,10 +929,13 @@ fn fuzz(args: &[String]) -> Result<()> {
     let count = |i: usize, default: u32| -> Result<String> {
         match args.get(i) {
             None => Ok(default.to_string()),
+            // 0 cases would pass without fuzzing anything.
             Some(a) => a
                 .parse::<u32>()
+                .ok()
+                .filter(|&n| n > 0)
                 .map(|n| n.to_string())
-                .with_context(|| format!("fuzz: case count {a:?} is not a number")),
+                .with_context(|| format!("fuzz: case count {a:?} is not a positive number")),
         }
     };
     let (decoders, recordings) = (count(0, 100_000)?, count(1, 1000)?);
@@ -966,4 +1048,46 @@ fn lint() -> Result<()> {
             "xtask",
         ])
         .env("RUSTDOCFLAGS", "-D warnings"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_builds_are_found_where_cargo_puts_them() {
+        let root = workspace_root();
+        let elsewhere = std::env::temp_dir().join("xtask-target \"dir\"");
+        let dir = target_dir(&root, cargo().env("CARGO_TARGET_DIR", &elsewhere)).unwrap();
+        assert_eq!(dir, elsewhere);
+        let relative = target_dir(&root, cargo().env("CARGO_TARGET_DIR", "t2")).unwrap();
+        assert_eq!(relative, root.join("t2"));
+    }
+
+    #[test]
+    fn a_json_path_is_unescaped() {
+        let json = r#"{"packages":[],"target_directory":"C:\\a \"b\"\/c","version":1}"#;
+        assert_eq!(
+            json_string_field(json, "target_directory").unwrap(),
+            r#"C:\a "b"/c"#
+        );
+        assert!(json_string_field(r#"{"target_directory":"abc"#, "target_directory").is_err());
+        assert!(json_string_field("{}", "target_directory").is_err());
+    }
+
+    #[test]
+    fn arguments_a_command_does_not_take_are_refused() {
+        let words = |w: &[&str]| w.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let e = check_arguments("demo", &words(&["other.bin"])).unwrap_err();
+        assert!(e.to_string().contains("takes no argument"), "{e}");
+        assert!(check_arguments("demo", &[]).is_ok());
+        assert!(check_arguments("fuzz", &words(&["10", "2"])).is_ok());
+        let e = check_arguments("fuzz", &words(&["10", "2", "3"])).unwrap_err();
+        assert!(e.to_string().contains("at most 2"), "{e}");
+        // Refused before anything is built.
+        for counts in [["0", "5"], ["5", "0"], ["-1", "5"], ["x", "5"]] {
+            let e = fuzz(&words(&counts)).unwrap_err();
+            assert!(e.to_string().contains("not a positive number"), "{e}");
+        }
+    }
 }

@@ -104,6 +104,14 @@ pub fn init(
         header.sample_count,
         header.rate_hz
     );
+    if let Err(e) = hal_adapters::sim::check_source_rate(header.rate_hz) {
+        defmt::error!(
+            "recording {=[u8]:a}: {}",
+            args.imu_path.as_slice(),
+            defmt::Display2Format(&e)
+        );
+        exit(ExitCode::Recording)
+    }
     if let Err(e) = Setup::<f32>::new(&run, header.rate_hz) {
         bad_config(&e)
     }
@@ -113,6 +121,10 @@ pub fn init(
         exit(ExitCode::Recording)
     });
     defmt::info!("IMU: {} over a simulated SPI device", device);
+    refuse_overwriting_data(args.out_cstr(), "OUT_FILE");
+    if let Some(path) = args.stream_cstr() {
+        refuse_overwriting_data(path, "--stream FILE");
+    }
     let out = SemihostingFile::create(args.out_cstr()).unwrap_or_else(|_| {
         defmt::error!(
             "cannot create the solution log {=[u8]:a}",
@@ -132,10 +144,10 @@ pub fn init(
             exit(ExitCode::Recording)
         };
         // Checked whole before anything is navigated, then read as the samples come.
-        let count = crate::gnss::check(path).unwrap_or_else(|e| fail(&e));
-        let fixes = Fixes::open(path).unwrap_or_else(|e| fail(&e));
-        log::gnss(count, &run, crate::FILTER_CAP);
-        (fixes, count)
+        let summary = crate::gnss::check(path).unwrap_or_else(|e| fail(&e));
+        let fixes = Fixes::open(path, &summary).unwrap_or_else(|e| fail(&e));
+        log::gnss(summary.count, &run, crate::FILTER_CAP);
+        (fixes, summary.count)
     });
     let stream = args.stream_cstr().map(|path| {
         let file = SemihostingFile::create(path).unwrap_or_else(|_| {
@@ -188,6 +200,36 @@ fn read_args() -> Args {
         );
         exit(ExitCode::Config)
     })
+}
+
+/// Exits with [`ExitCode::Config`] when the output `path` (`name` in the usage) already holds
+/// a recording or a GNSS fix file (their magic): an input reached by a path that
+/// [`Args::parse`]'s comparison as written does not see (absolute against relative, a link)
+/// would be truncated before it is read.
+fn refuse_overwriting_data(path: &core::ffi::CStr, name: &str) {
+    let Ok(mut file) = SemihostingFile::open(path) else {
+        return;
+    };
+    let mut head = [0_u8; 8];
+    let mut len = 0;
+    while len < head.len() {
+        match embedded_io::Read::read(&mut file, &mut head[len..]) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => len += n,
+        }
+    }
+    let kind = match head {
+        hal_adapters::recording::MAGIC => "an IMU recording",
+        hal_adapters::gnss_record::MAGIC => "a GNSS fix file",
+        _ => return,
+    };
+    defmt::error!(
+        "bad arguments ({=str} {=[u8]:a} holds {=str}: refusing to overwrite it)",
+        name,
+        path.to_bytes(),
+        kind
+    );
+    exit(ExitCode::Config)
 }
 
 /// Logs a refused run configuration and exits with [`ExitCode::Config`].

@@ -129,6 +129,49 @@ impl<E: fmt::Display> fmt::Display for SimError<E> {
     }
 }
 
+/// The simulated devices' output rate [Hz]: each answers one source sample per output period
+/// of 2.5 ms (the ADIS16505's, ICM-42688-P's and BMI088's `OUTPUT_PERIOD_S`), and the qemu
+/// board raises its data-ready line at that rate.
+pub const DEVICE_RATE_HZ: f64 = 400.0;
+
+/// Farthest a source's rate may be from [`DEVICE_RATE_HZ`], relative (a binary recording's
+/// header rate is held to its time tags within the same 1 %).
+pub const DEVICE_RATE_TOLERANCE: f64 = 0.01;
+
+/// A source whose rate is not the simulated devices' output rate ([`check_source_rate`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RateMismatch {
+    /// The source's rate [Hz].
+    pub rate_hz: f64,
+}
+
+impl fmt::Display for RateMismatch {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "the recording's rate {} Hz is not the simulated IMU's output rate of {} Hz: each \
+             sample would reach the driver as a gap of several output periods (a recording read \
+             through a device must be at its rate)",
+            nav_core::number::Number(self.rate_hz),
+            DEVICE_RATE_HZ
+        )
+    }
+}
+
+/// Checks that a source at `rate_hz` can be served by a simulated device: within
+/// [`DEVICE_RATE_TOLERANCE`] of [`DEVICE_RATE_HZ`]. Each data read takes the next source
+/// sample, so a 100 Hz recording became samples four output periods apart: its alignment
+/// failed for a reason that was not the recording's ("window not complete", "base not still",
+/// "horizontal Earth rate not measurable") on the ICM-42688-P and BMI088, and an inertial one on
+/// the ADIS16505.
+pub fn check_source_rate(rate_hz: f64) -> Result<(), RateMismatch> {
+    if (rate_hz / DEVICE_RATE_HZ - 1.0).abs() <= DEVICE_RATE_TOLERANCE {
+        Ok(())
+    } else {
+        Err(RateMismatch { rate_hz })
+    }
+}
+
 /// A simulated device: which source sample it serves.
 pub trait SimulatedBus {
     /// The source sample behind the latest data read (its `t_us` is the recording's clock).

@@ -1530,11 +1530,34 @@ fn sim_family(a: SimArgs) -> Result<()> {
     }
     println!("  truth      {}", files.truth.display());
     println!("  scenario   {}", files.description.display());
+    print_removed(&out, &files, &[])
+}
+
+/// Removes the files an earlier `nav sim` left in `out` that this run (`files`, `more`) did
+/// not write ([`host_tests::simulate::remove_stale`]), and says so.
+fn print_removed(
+    out: &std::path::Path,
+    files: &host_tests::simulate::SimFiles,
+    more: &[&std::path::Path],
+) -> Result<()> {
+    let mut written: Vec<&std::path::Path> = [&files.binary, &files.csv]
+        .into_iter()
+        .flatten()
+        .map(PathBuf::as_path)
+        .collect();
+    written.extend([files.truth.as_path(), files.description.as_path()]);
+    written.extend_from_slice(more);
+    for p in host_tests::simulate::remove_stale(out, &written)? {
+        println!(
+            "  removed    {} (an earlier run's, not this one's)",
+            p.display()
+        );
+    }
     Ok(())
 }
 
 fn sim(a: SimArgs) -> Result<()> {
-    use host_tests::simulate::{SimOptions, simulate, write};
+    use host_tests::simulate::{SimOptions, simulate, write_with_receiver};
     use host_tests::simulate_family::{SCENARIO_NAME, sim_scenario_names};
     use host_tests::trajectory::scenarios::Scenario;
     if a.scenario == SCENARIO_NAME {
@@ -1597,7 +1620,43 @@ fn sim(a: SimArgs) -> Result<()> {
         }
         None => None,
     };
-    let files = write(&out, &opts, &sim)?;
+    // The receiver's settings and the replay that takes its fixes, in scenario.txt.
+    let receiver_text = receiver.as_ref().map(|(g, r)| {
+        let v3 = |v: [f64; 3]| format!("{},{},{}", v[0], v[1], v[2]);
+        let mut text = format!(
+            "# GNSS receiver (gnss.csv, gnss.bin)\ngnss_rate_hz = {}\ngnss_sigma_ned_m = {}\n\
+             gnss_velocity_sigma_ned_m_s = {}\ngnss_lever_arm_b_m = {}\n",
+            g.rate_hz,
+            v3(g.sigma_ned_m),
+            g.sigma_v_ned_m_s.map_or_else(|| "none".to_owned(), v3),
+            v3(g.lever_arm_b_m),
+        );
+        for line in r.describe(g).lines() {
+            text.push_str(&format!("# {line}\n"));
+        }
+        let mut options = format!("--gnss {}", out.join("gnss.csv").display());
+        if g.lever_arm_b_m != [0.0; 3] {
+            options.push_str(&format!(" --gnss-lever-arm {}", v3(g.lever_arm_b_m)));
+        }
+        if let Some(c) = &g.correlated {
+            options.push_str(&format!(
+                " --gnss-correlated {} --gnss-correlated-time {}",
+                v3(c.sigma_ned_m),
+                c.time_s
+            ));
+        }
+        (text, options)
+    });
+    let files = write_with_receiver(
+        &out,
+        &opts,
+        &sim,
+        receiver_text
+            .as_ref()
+            .map(|(t, o)| (t.as_str(), o.as_str())),
+    )?;
+    let (gnss_csv, gnss_bin) = (out.join("gnss.csv"), out.join("gnss.bin"));
+    let gnss_files = [gnss_csv.as_path(), gnss_bin.as_path()];
     if let Some((g, receiver)) = receiver {
         let path = out.join("gnss.csv");
         host_tests::gnss::write_gnss_csv(&path, &receiver.fixes)?;
@@ -1626,6 +1685,15 @@ fn sim(a: SimArgs) -> Result<()> {
     }
     println!("  truth      {}", files.truth.display());
     println!("  scenario   {}", files.description.display());
+    print_removed(
+        &out,
+        &files,
+        if a.gnss_rate.is_some() {
+            &gnss_files
+        } else {
+            &[]
+        },
+    )?;
     let c = sim.counters;
     if c.gyro_saturated + c.accel_saturated > 0 {
         println!(
