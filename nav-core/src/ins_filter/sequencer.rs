@@ -7,8 +7,8 @@
 //! A gap in the IMU data too long to bridge ([`crate::gap::MAX_BRIDGED_S`]) destroys the
 //! solution: the filter reports [`FilterStatus::ImuLost`](super::FilterStatus::ImuLost)
 //! (DEGRADED) from there. When GNSS fixes come after it, the sequencer re-aligns the way a run
-//! starts in motion ([`super::motion`]: level over a quasi-static interval between two fixes,
-//! heading from the GNSS track above the speed threshold, then the filter with their 1-sigma):
+//! starts in motion ([`super::motion`]: level over a quasi-static span of fixes, heading from
+//! the GNSS track above the speed threshold, then the filter with their 1-sigma):
 //! at the first fix due after the gap the lost filter is set aside and the phase is
 //! [`Phase::Starting`] again ([`Sequencer::filter`] is `None`: nothing navigated), the samples
 //! go to the start compensated with the sensor errors the lost filter had estimated, and once
@@ -18,13 +18,13 @@
 //! status is that of a fresh start (NAV once its 1-sigma is within the limits). Meanwhile the
 //! lost filter set aside ([`Sequencer::lost_filter`]) goes on free-inertial, fixes withheld,
 //! its status DEGRADED ([`FilterStatus::ImuLost`](super::FilterStatus::ImuLost)): a log may
-//! write its rows, flagged so, as it did before the re-alignment began. The gap cannot destroy what the sensors
-//! are, only where the body is and how it is turned: a bias or scale factor is a property of
+//! write its rows, flagged so, as it did before the re-alignment began. The gap cannot
+//! destroy what the sensors are, only where the body is and how it is turned: a bias or scale factor is a property of
 //! the part (its turn-on value and in-run drift, [Groves, §4.4]), and its Gauss–Markov state
 //! says how much it wanders over the unpropagated time [Groves, §14.2]; nothing bounds the
 //! position, velocity and attitude after seconds of unknown motion, so none of them is kept
-//! (the filter re-initialised, the recovery of [Groves, ch. 17]). A lost gap during a re-alignment starts it over (the level's interval would span
-//! it). Without fixes after the gap (a free-inertial run) the lost filter goes on, DEGRADED
+//! (the filter re-initialised, the recovery of [Groves, ch. 17]). A lost gap during a
+//! re-alignment starts it over (the level's span would cross it). Without fixes after the gap (a free-inertial run) the lost filter goes on, DEGRADED
 //! to the end. [`Realignments`] counts them, with the gap that caused the last one.
 //!
 //! The firmware's aided phase is not this sequencer but the navigator's split filter
@@ -418,7 +418,7 @@ impl<T: Scalar> Sequencer<T> {
                     let _ = lost.ins.step(inc);
                 }
                 if let Some(gap) = &lost_gap {
-                    // The level's interval would span the gap: the start begins again.
+                    // The level's span would cross the gap: the start begins again.
                     self.motion = Some(MotionAlign::new(
                         self.realign,
                         self.config.antenna_lever_arm_b_m,
