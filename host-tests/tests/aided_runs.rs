@@ -1544,14 +1544,8 @@ fn gaps_in_the_imu_data_are_bridged_within_their_sigma() {
             }
         }
     }
-    // Beyond the bridge the solution is lost: NAV again only after a re-alignment (with
-    // positions alone the level takes a span of fixes: `a_lost_gap_is_recovered_by_a_realignment`).
-    let o = gap_run(&gap_case(Grade::Fog, 1), gap_start_s(1), 6.0).unwrap();
-    assert_eq!(
-        o.status == FilterStatus::Nominal,
-        o.realigned_after_s.is_some(),
-        "{o:?}"
-    );
+    // Beyond the bridge the solution is lost: NAV again only after a re-alignment
+    // (`a_lost_gap_is_recovered_by_a_realignment`).
 }
 
 /// A gap in the IMU data beyond the bridge (6, 12 and 20 s) in an aided land-vehicle run whose
@@ -1564,7 +1558,7 @@ fn gaps_in_the_imu_data_are_bridged_within_their_sigma() {
 /// (median) to 440 m off and most later fixes refused (`nav bench gaps`).
 #[test]
 fn a_lost_gap_is_recovered_by_a_realignment() {
-    use host_tests::gap_bench::{gap_case_with_velocity, gap_run, gap_start_s};
+    use host_tests::gap_bench::{gap_case, gap_case_with_velocity, gap_run, gap_start_s};
     const NEES9_999: f64 = 27.877;
     for grade in [Grade::Fog, Grade::MemsConsumer] {
         for seed in 1..=3 {
@@ -1578,6 +1572,19 @@ fn a_lost_gap_is_recovered_by_a_realignment() {
                 assert!(o.max_error_per_sigma < 3.0, "{what}");
                 assert_eq!(o.refused, 0, "{what}");
             }
+        }
+    }
+    // Positions alone (0.5 m at 1 Hz): the level takes a span of fixes (velocities
+    // differenced from the positions are noisy to 1 m/s^2 over one interval), so the
+    // re-alignment takes longer, within a minute. Was: 2 of 10 runs, after about 100 s.
+    for grade in [Grade::Fog, Grade::MemsConsumer] {
+        for seed in 1..=3 {
+            let o = gap_run(&gap_case(grade, seed), gap_start_s(seed), 6.0).unwrap();
+            let what = format!("{grade} seed {seed}, positions alone: {o:?}");
+            assert!(o.realigned_after_s.is_some_and(|t| t < 60.0), "{what}");
+            assert_eq!(o.status, FilterStatus::Nominal, "{what}");
+            assert!(o.max_error_per_sigma < 3.0, "{what}");
+            assert!(o.refused <= 1, "{what}");
         }
     }
 }
