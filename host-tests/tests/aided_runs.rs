@@ -712,6 +712,19 @@ fn sim_refuses_a_receiver_the_filter_could_not_use() {
         (["--gnss-jump", "-3,1,0,0,0"], "times must be >= 0"),
         // A fix at the pole with its usual sigma was written.
         (["--gnss-spike", "2,1e300,0,0"], "offsets within 100000 m"),
+        // Past the run's end: nothing injected, said only on the terminal.
+        (
+            ["--gnss-spike", "20,5,0,0"],
+            "--gnss-spike at 20 s reaches no fix",
+        ),
+        (
+            ["--gnss-jump", "30,5,1,0,0"],
+            "--gnss-jump at 30 s reaches no fix",
+        ),
+        (
+            ["--gnss-outages", "20,5,12"],
+            "the first outage at 12 s is past the run's end",
+        ),
     ] {
         let msg = run_err(
             nav()

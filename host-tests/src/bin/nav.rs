@@ -1616,6 +1616,30 @@ fn sim(a: SimArgs) -> Result<()> {
             let g = gnss_options(&a, rate, n as f64 / opts.rate_hz)?;
             let r = host_tests::gnss_sim::simulate(&sim.truth, &g)
                 .context("simulated GNSS receiver")?;
+            // An outlier or outage that reaches no fix injects nothing: a receiver that is not
+            // the one asked for (a time past the run's end, or a typo), refused before
+            // anything is written.
+            let run_s = n as f64 / opts.rate_hz;
+            if let Some(&k) = r.missed_outliers.first() {
+                let o = &g.outliers[k];
+                anyhow::bail!(
+                    "--gnss-{} at {} s reaches no fix (the run is {} s long and its fixes in \
+                     outages are dropped): nothing would be injected",
+                    o.name().to_lowercase(),
+                    nav_core::number::Number(o.start_s()),
+                    nav_core::number::Number(run_s)
+                );
+            }
+            if let Some([_, _, first]) = a.gnss_outages
+                && g.outages.iter().all(|o| o.start_s >= run_s)
+            {
+                anyhow::bail!(
+                    "--gnss-outages: the first outage at {} s is past the run's end ({} s): \
+                     it would drop no fix",
+                    nav_core::number::Number(first),
+                    nav_core::number::Number(run_s)
+                );
+            }
             Some((g, r))
         }
         None => None,
