@@ -14,8 +14,7 @@ use hal_adapters::sim::{
     NoDelay, SimAdis16505, SimBmi088, SimBmi088Accel, SimBmi088Gyro, SimError, SimIcm42688,
     SimulatedBus, flag_unrepresentable,
 };
-use hal_adapters::{Imu, ImuSample, SampleFlags};
-use nav_core::navigator::{ImuInput, Unusable};
+use hal_adapters::{Imu, ImuSample};
 
 /// The simulated IMUs' mounting: their axes are the body's.
 pub const MOUNTING: Mounting = Mounting::IDENTITY;
@@ -187,34 +186,4 @@ impl<S: Imu + 'static> BoardImu<S> {
             Self::Bmi(d) => SimulatedBus::last_source_sample(d.bus()),
         }
     }
-}
-
-/// The navigator's input of a driver's sample: its increments, and why it is not usable / after
-/// a gap from its flags (as the host harness converts them).
-pub fn nav_input(s: &ImuSample) -> ImuInput {
-    let (delta_theta_ib_b, delta_v_ib_b) = s.increments();
-    ImuInput::new(
-        s.t_us,
-        delta_theta_ib_b,
-        delta_v_ib_b,
-        s.dt_s,
-        unusable(s.flags),
-        s.flags.contains(SampleFlags::GAP),
-    )
-}
-
-/// Why `flags` make a sample unusable, in nav-core's terms (`None`: usable).
-pub fn unusable(flags: SampleFlags) -> Option<Unusable> {
-    let cause = flags.unusable_cause()?;
-    Some(if cause == SampleFlags::NON_FINITE {
-        Unusable::NonFinite
-    } else if cause == SampleFlags::BAD_INTERVAL {
-        Unusable::BadInterval
-    } else if cause == SampleFlags::STALE {
-        Unusable::Stale
-    } else if cause == SampleFlags::DEVICE_FAULT {
-        Unusable::DeviceFault
-    } else {
-        Unusable::Other
-    })
 }

@@ -42,7 +42,6 @@ mod app {
     use firmware::board::{
         self, ConfigInput, DataReady, Fixes, Imu, ImuSlot, Output, Watchdog, instructions_since,
     };
-    use firmware::imu::nav_input;
     use firmware::run_config::RunState;
     use firmware::stream::{BoardCounters, Telemetry};
     use firmware::{
@@ -58,7 +57,7 @@ mod app {
     use nav_core::ins_filter::FilterStatus;
     use nav_core::navigator::{
         AIDED_COMPILED_IN, Background, FromBackground, NavError, Navigator, Setup, Step, Summary,
-        ToBackground,
+        ToBackground, Unusable,
     };
     use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, Row, Solution};
     use rtic_sync::channel::{Receiver, Sender};
@@ -351,7 +350,7 @@ mod app {
                 Some(r) => sample.remounted(r),
                 None => sample,
             };
-            let step = navigator.push(&nav_input(&sample));
+            let step = navigator.push(&sample.nav_input());
             let spent = instructions_since(start);
             match step {
                 Step::Navigated(None) => cost.add(spent),
@@ -378,9 +377,9 @@ mod app {
                     // The first ten, then every thousandth: a failing sensor must not flood the log.
                     if n <= 10 || n.is_multiple_of(1000) {
                         defmt::warn!(
-                            "sample {=u32} flagged {}: not navigated ({=u32} so far)",
+                            "sample {=u32} flagged {=str}: not navigated ({=u32} so far)",
                             sample.seq,
-                            sample.flags,
+                            sample.flags.unusable().map_or("usable", Unusable::name),
                             n
                         );
                     }

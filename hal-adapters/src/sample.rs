@@ -1,6 +1,7 @@
 //! The IMU sample type.
 
 use bitflags::bitflags;
+use nav_core::navigator::{ImuInput, Unusable};
 
 /// The inertial measurement of one sample, body axes forward-right-down (FRD).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -155,6 +156,40 @@ impl ImuSample {
                 f_ib_b.map(|f| f * self.dt_s),
             ),
         }
+    }
+
+    /// The navigator's input of this sample: its increments, and why it is not usable / that
+    /// samples were lost before it, from its flags. The one conversion, for the firmware and
+    /// the harness alike.
+    pub fn nav_input(&self) -> ImuInput {
+        let (delta_theta_ib_b, delta_v_ib_b) = self.increments();
+        ImuInput::new(
+            self.t_us,
+            delta_theta_ib_b,
+            delta_v_ib_b,
+            self.dt_s,
+            self.flags.unusable(),
+            self.flags.contains(SampleFlags::GAP),
+        )
+    }
+}
+
+impl SampleFlags {
+    /// Why these flags make a sample unusable, in nav-core's terms ([`Self::unusable_cause`];
+    /// `None`: usable).
+    pub fn unusable(self) -> Option<Unusable> {
+        let cause = self.unusable_cause()?;
+        Some(if cause == Self::NON_FINITE {
+            Unusable::NonFinite
+        } else if cause == Self::BAD_INTERVAL {
+            Unusable::BadInterval
+        } else if cause == Self::STALE {
+            Unusable::Stale
+        } else if cause == Self::DEVICE_FAULT {
+            Unusable::DeviceFault
+        } else {
+            Unusable::Other
+        })
     }
 }
 

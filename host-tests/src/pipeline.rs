@@ -5,19 +5,18 @@
 //! the logging cadence, the aided phase's fix timing and filter work) is the navigator's; the
 //! firmware's tasks drive the same navigator across their channels, and an end-to-end test
 //! compares the two logs line by line. This module only reads samples, converts them
-//! ([`input_of`]), hands each GNSS fix over before the first sample at or after its time (as
+//! ([`hal_adapters::ImuSample::nav_input`]), hands each GNSS fix over before the first sample at or after its time (as
 //! the firmware does), writes [`CSV_HEADER`] (an aided run: [`AIDED_CSV_HEADER`]), one row
 //! (its `Display`) per line and the end record ([`nav_core::output::EndRecord`]), and reports
 //! in output units.
 
+use hal_adapters::Imu;
 use hal_adapters::drivers::Health;
-use hal_adapters::{Imu, ImuSample, SampleFlags};
 use nav_core::alignment::{AlignMethod, AlignNote, AlignOutcome};
 use nav_core::ins_filter::sequencer::{FixCounters, GnssFixInput};
 use nav_core::ins_filter::{FilterCounters, FilterStatus};
 use nav_core::navigator::{
-    Background, ConfigError, FilterReport, FlaggedCounts, ImuInput, NavError, Navigator, Setup,
-    Unusable,
+    Background, ConfigError, FilterReport, FlaggedCounts, NavError, Navigator, Setup,
 };
 use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, Row};
 use nav_core::{Scalar, Solution};
@@ -30,36 +29,6 @@ pub use nav_core::navigator::config::{DEFAULT_LOG_EVERY, MechanizationChoices};
 /// nav-core's noise model of a part's (or grade's) figures (one definition, the protocol's
 /// configuration uses it too).
 pub use hal_adapters::protocol::config::sensor_noise;
-
-/// The navigator's input of a source's sample: its increments, and why it is not usable / after
-/// a gap from its flags (as the firmware converts them).
-pub fn input_of(s: &ImuSample) -> ImuInput {
-    let (delta_theta_ib_b, delta_v_ib_b) = s.increments();
-    ImuInput::new(
-        s.t_us,
-        delta_theta_ib_b,
-        delta_v_ib_b,
-        s.dt_s,
-        unusable(s.flags),
-        s.flags.contains(SampleFlags::GAP),
-    )
-}
-
-/// Why `flags` make a sample unusable, in nav-core's terms (`None`: usable).
-pub fn unusable(flags: SampleFlags) -> Option<Unusable> {
-    let cause = flags.unusable_cause()?;
-    Some(if cause == SampleFlags::NON_FINITE {
-        Unusable::NonFinite
-    } else if cause == SampleFlags::BAD_INTERVAL {
-        Unusable::BadInterval
-    } else if cause == SampleFlags::STALE {
-        Unusable::Stale
-    } else if cause == SampleFlags::DEVICE_FAULT {
-        Unusable::DeviceFault
-    } else {
-        Unusable::Other
-    })
-}
 
 /// The alignment result in output units.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -301,13 +270,13 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
     let mut lost = crate::aided::LostImuTime::default();
     while let Some(s) = source.read_sample().map_err(PipelineError::Source)? {
         span_us = Some((span_us.map_or(s.t_us, |(a, _)| a), s.t_us));
-        let usable = unusable(s.flags).is_none();
+        let usable = s.flags.usable();
         lost.note(s.t_us, usable.then_some(f64::from(s.dt_s)));
         while let Some(f) = next_fix.next_if(|f| f.t_us <= s.t_us) {
             navigator.push_fix(crate::gnss_file::narrow::<T>(f));
         }
         let logged = navigator
-            .push_inline(&mut background, &input_of(&s))
+            .push_inline(&mut background, &s.nav_input())
             .map_err(PipelineError::Navigation)?;
         if let Some(r) = logged {
             row(&mut out, &r)?;

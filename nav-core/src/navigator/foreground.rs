@@ -52,6 +52,19 @@ pub enum Unusable {
     Other,
 }
 
+impl Unusable {
+    /// Its name in logs and summaries, e.g. `non-finite`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::NonFinite => "non-finite",
+            Self::BadInterval => "bad interval",
+            Self::Stale => "stale",
+            Self::DeviceFault => "device fault",
+            Self::Other => "other",
+        }
+    }
+}
+
 /// Flagged samples by cause ([`Unusable`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FlaggedCounts {
@@ -83,11 +96,11 @@ impl FlaggedCounts {
     /// The counts with their names, in [`Unusable`]'s order.
     pub fn by_name(&self) -> [(&'static str, u32); 5] {
         [
-            ("non-finite", self.non_finite),
-            ("bad interval", self.bad_interval),
-            ("stale", self.stale),
-            ("device fault", self.device_fault),
-            ("other", self.other),
+            (Unusable::NonFinite.name(), self.non_finite),
+            (Unusable::BadInterval.name(), self.bad_interval),
+            (Unusable::Stale.name(), self.stale),
+            (Unusable::DeviceFault.name(), self.device_fault),
+            (Unusable::Other.name(), self.other),
         ]
     }
 }
