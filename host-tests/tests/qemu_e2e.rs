@@ -324,8 +324,14 @@ fn firmware_in_qemu_matches_host_replay() {
     assert!(log.contains("flagged 2 (non-finite 1, stale 1)"), "{log}");
     // Each flagged sample's warning names its cause as the summary does (was the flags' bits,
     // `SampleFlags(0x0010)`).
-    assert!(log.contains(" flagged non-finite: not navigated (1 so far)"), "{log}");
-    assert!(log.contains(" flagged stale: not navigated (2 so far)"), "{log}");
+    assert!(
+        log.contains(" flagged non-finite: not navigated (1 so far)"),
+        "{log}"
+    );
+    assert!(
+        log.contains(" flagged stale: not navigated (2 so far)"),
+        "{log}"
+    );
     assert_eq!(field(&log, "checksum errors"), 1, "the NaN record's frame");
     assert_eq!(field(&log, "bus errors"), 0);
     // Data-ready k (from 1) fires at k * 2.5 ms of SysTick time: exactly 400 Hz under icount.
