@@ -180,22 +180,7 @@ impl<T: Scalar> AidedMechanization<T> {
     /// returns the compensated increment.
     fn integrate(&mut self, inc: &ImuIncrement<T>) -> Result<ImuIncrement<T>, InputError> {
         let dt = inc.dt;
-        let s = &self.sensors;
-        let comp = ImuIncrement {
-            delta_theta_ib_b: SensorErrors::apply(
-                &inc.delta_theta_ib_b,
-                &s.gyro_bias_rad_s,
-                &s.gyro_scale,
-                dt,
-            ),
-            delta_v_ib_b: SensorErrors::apply(
-                &inc.delta_v_ib_b,
-                &s.accel_bias_mps2,
-                &s.accel_scale,
-                dt,
-            ),
-            dt,
-        };
+        let comp = self.sensors.compensate(inc);
         self.nav.step(&comp)?;
         self.acc_theta += comp.delta_theta_ib_b;
         self.acc_v += comp.delta_v_ib_b;

@@ -206,6 +206,27 @@ impl<T: Scalar> SensorErrors<T> {
         .all(|v| v.iter().all(|x| x.finite()))
     }
 
+    /// The increment `inc` compensated: gyro and accelerometer, each [`Self::apply`].
+    #[inline]
+    pub fn compensate(&self, inc: &ImuIncrement<T>) -> ImuIncrement<T> {
+        let dt = inc.dt;
+        ImuIncrement {
+            delta_theta_ib_b: Self::apply(
+                &inc.delta_theta_ib_b,
+                &self.gyro_bias_rad_s,
+                &self.gyro_scale,
+                dt,
+            ),
+            delta_v_ib_b: Self::apply(
+                &inc.delta_v_ib_b,
+                &self.accel_bias_mps2,
+                &self.accel_scale,
+                dt,
+            ),
+            dt,
+        }
+    }
+
     /// Compensates an increment `measured` [rad or m/s] over `dt` [s].
     #[inline]
     pub(crate) fn apply(

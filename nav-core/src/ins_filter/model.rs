@@ -228,11 +228,12 @@ pub(crate) fn all_finite<T: Scalar>(m: &Covariance<T>) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::ins_filter::states::N;
 
-    fn noise() -> FilterNoise<f64> {
+    /// A tactical-grade noise figure set for the filter's unit tests.
+    pub(crate) fn noise() -> FilterNoise<f64> {
         FilterNoise {
             arw_rad_per_sqrt_s: 1e-4,
             vrw_mps_per_sqrt_s: 1e-3,

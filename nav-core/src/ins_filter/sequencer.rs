@@ -430,23 +430,7 @@ impl<T: Scalar> Sequencer<T> {
                     }
                 }
                 if let Some(m) = &mut self.motion {
-                    let s = &self.sensors;
-                    let apply = SensorErrors::apply;
-                    m.add_imu(&ImuIncrement {
-                        delta_theta_ib_b: apply(
-                            &inc.delta_theta_ib_b,
-                            &s.gyro_bias_rad_s,
-                            &s.gyro_scale,
-                            inc.dt,
-                        ),
-                        delta_v_ib_b: apply(
-                            &inc.delta_v_ib_b,
-                            &s.accel_bias_mps2,
-                            &s.accel_scale,
-                            inc.dt,
-                        ),
-                        dt: inc.dt,
-                    });
+                    m.add_imu(&self.sensors.compensate(inc));
                 }
             }
         }
@@ -553,7 +537,6 @@ mod tests {
     /// rate, transport rate and Coriolis in), 1 Hz fixes of position and velocity.
     mod drive {
         use super::*;
-        use crate::ins_filter::model::FilterNoise;
         use crate::ins_filter::{FilterStatus, POS};
         use crate::{Position, attitude, earth};
 
@@ -611,20 +594,7 @@ mod tests {
         }
 
         fn sequencer() -> Sequencer<f64> {
-            let noise = FilterNoise {
-                arw_rad_per_sqrt_s: 1e-4,
-                vrw_mps_per_sqrt_s: 1e-3,
-                gyro_bias_rad_s: 1e-5,
-                accel_bias_mps2: 1e-3,
-                gyro_scale: 1e-4,
-                accel_scale: 1e-4,
-                correlation_time_s: 3600.0,
-                gyro_cross_coupling_rad: 0.0,
-                accel_cross_coupling_rad: 0.0,
-                gyro_g_sensitivity: 0.0,
-                gyro_bias_instability_rad_s: 0.0,
-                gyro_bias_instability_time_s: 0.0,
-            };
+            let noise = crate::ins_filter::model::tests::noise();
             let sigma = InitialSigma {
                 position_ned_m: Vector3::repeat(1.0),
                 velocity_ned_m_s: Vector3::repeat(0.1),
