@@ -206,7 +206,8 @@ impl<T: Scalar> SensorErrors<T> {
         .all(|v| v.iter().all(|x| x.finite()))
     }
 
-    /// The increment `inc` compensated: gyro and accelerometer, each [`Self::apply`].
+    /// The increment `inc` compensated: each component less its bias times `dt`, divided by
+    /// one plus its scale-factor error.
     #[inline]
     pub fn compensate(&self, inc: &ImuIncrement<T>) -> ImuIncrement<T> {
         let dt = inc.dt;
