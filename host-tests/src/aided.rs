@@ -189,7 +189,8 @@ impl LostImuTime {
                 } else {
                     format!(
                         "a gap beyond {} s is not bridged: the solution is lost from there (an \
-                         aided run's status DEGRADED)",
+                         aided run's status DEGRADED, its position carried across the gap at the \
+                         velocity before it, its 1-sigma widened for the motion the gap hid)",
                         nav_core::gap::MAX_BRIDGED_S
                     )
                 }

@@ -51,6 +51,10 @@ pub struct GapOutcome {
     /// After a lost gap, the time from its end until the filter navigated again [s] (`None`:
     /// no re-alignment completed).
     pub realigned_after_s: Option<f64>,
+    /// Largest ratio of the horizontal error to the reported horizontal 1-sigma over the lost
+    /// filter's rows (DEGRADED) within [`WATCH_S`] after the gap [-] (NaN: none, the gap
+    /// bridged).
+    pub lost_max_error_per_sigma: f64,
 }
 
 /// The gap run: a land vehicle of `grade`, 300 s at 200 Hz, 1 Hz fixes of 0.5 m (1 m down)
@@ -88,6 +92,7 @@ struct AfterGap<'a> {
     first: Option<(f64, f64)>,
     max_ratio: f64,
     max_error_m: f64,
+    lost_max_ratio: f64,
     status: FilterStatus,
 }
 
@@ -95,14 +100,11 @@ impl AidedSink<f64> for AfterGap<'_> {
     fn sample(&mut self, t_us: u64, ins: &AidedIns<f64>) -> Result<()> {
         let t_s = t_us as f64 * 1e-6;
         self.status = ins.status();
-        // A lost filter's rows (DEGRADED, until the first fix sets it aside) claim nothing.
-        if t_s < self.gap_end_s
-            || t_s > self.gap_end_s + WATCH_S
-            || self.status == FilterStatus::ImuLost
-        {
+        if t_s < self.gap_end_s || t_s > self.gap_end_s + WATCH_S {
             return Ok(());
         }
-        let first = self.first.is_none();
+        let lost = self.status == FilterStatus::ImuLost;
+        let first = self.first.is_none() && !lost;
         // Every 0.1 s is enough for the maximum.
         if (first || (t_us / 1000).is_multiple_of(100))
             && let Some(truth) = interpolate(self.truth, t_s)
@@ -111,6 +113,12 @@ impl AidedSink<f64> for AfterGap<'_> {
             let h = (e[0] * e[0] + e[1] * e[1]).sqrt();
             let p = ins.position_covariance();
             let sigma = (p[(0, 0)] + p[(1, 1)]).sqrt();
+            // The lost filter's rows (DEGRADED, until a re-alignment restarts the filter)
+            // are watched apart: their 1-sigma must still tell their error.
+            if lost {
+                self.lost_max_ratio = self.lost_max_ratio.max(h / sigma);
+                return Ok(());
+            }
             if first {
                 self.first = Some((nees(&navigation_covariance(ins), &e), h));
             }
@@ -147,6 +155,7 @@ pub fn gap_run(case: &Case, at_s: f64, lost_s: f64) -> Result<GapOutcome> {
         first: None,
         max_ratio: 0.0,
         max_error_m: 0.0,
+        lost_max_ratio: f64::NAN,
         status: FilterStatus::Nominal,
     };
     // Through the recording reader, as `nav replay` reads a file: its rules for gaps apply.
@@ -186,5 +195,6 @@ pub fn gap_run(case: &Case, at_s: f64, lost_s: f64) -> Result<GapOutcome> {
             (report.realignments.navigating_us as f64 - report.realignments.gap_end_us as f64)
                 * 1e-6
         }),
+        lost_max_error_per_sigma: sink.lost_max_ratio,
     })
 }

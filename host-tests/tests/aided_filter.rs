@@ -327,3 +327,49 @@ fn easing_to_a_stop_takes_no_zero_velocity_before_the_car_stands() {
     assert!(ins.is_still());
     assert!(ins.state().v_eb_n.norm() < 0.02, "{}", ins.state().v_eb_n);
 }
+
+/// A car cruising straight and level at a constant 10 m/s looks still to the IMU (its specific
+/// force differs from gravity's by the Coriolis term, 1e-3 m/s^2), so the stop detector takes
+/// it for a stop; a filter that knows its velocity refuses that zero velocity at its gate. A
+/// filter that does not, after a gap in the IMU data (here started at rest with a 5 m/s
+/// velocity 1-sigma), would take it (10 m/s is 2 sigma) and believe it stands with a 0.02 m/s
+/// 1-sigma: no stop is taken while the horizontal velocity's 1-sigma exceeds the speed a stop
+/// may have ([`nav_core::ins_filter::ZeroMotionConfig::max_speed_m_s`]).
+#[test]
+fn a_cruise_is_no_stop_while_the_velocity_is_unknown() {
+    let (lat, lon, h, speed_m_s, dt) = (0.8, 0.1, 100.0, 10.0, 0.0025);
+    let earth = nav_core::earth::LocalEarth::new(lat, h);
+    let v_eb_n = Vector3::new(speed_m_s, 0.0, 0.0);
+    // Level, heading north: f = 2 omega_ie x v - g, omega = omega_ie + the transport rate.
+    let inc = ImuIncrement {
+        delta_theta_ib_b: (earth.omega_ie_n()
+            + Vector3::new(0.0, -speed_m_s / (earth.r_meridian + h), 0.0))
+            * dt,
+        delta_v_ib_b: (2.0 * earth.omega_ie_n().cross(&v_eb_n) - Vector3::new(0.0, 0.0, earth.g))
+            * dt,
+        dt,
+    };
+    let start = NavState {
+        q_b_n: nav_core::UnitQuaternion::identity(),
+        v_eb_n: Vector3::zeros(),
+        position: Position::from_radians(lat, lon, h),
+    };
+    let sigma = InitialSigma {
+        velocity_ned_m_s: Vector3::repeat(5.0),
+        ..sigma0()
+    };
+    let mut ins = AidedIns::new(
+        start,
+        SensorErrors::default(),
+        &sigma,
+        FilterConfig::new(noise()),
+    )
+    .unwrap();
+    for _ in 0..400 * 20 {
+        ins.step(&inc).unwrap();
+    }
+    let c = ins.counters();
+    assert!(ins.is_still(), "the detector sees the cruise as a stop");
+    assert_eq!(c.zero_velocity.accepted, 0, "{c:?}");
+    assert!(ins.sigma(VEL).x > 1.0, "{}", ins.sigma(VEL));
+}

@@ -10,7 +10,9 @@
 //! integrated: over seconds the interpolation says nothing of the motion, and the solution is
 //! lost ([`ImuGap::bridged`]: the filter then reports itself degraded,
 //! [`FilterStatus::ImuLost`](crate::ins_filter::FilterStatus::ImuLost), from the first sample
-//! after the gap). The sequencer of an aided run re-aligns in motion on the GNSS fixes after
+//! after the gap). Its position is carried across the gap at the velocity before it, and the
+//! filter's covariance takes [`GapDynamics`] over the whole gap at once
+//! ([`crate::ins_filter::LostGap`]), so that the lost solution's 1-sigma still tells its error. The sequencer of an aided run re-aligns in motion on the GNSS fixes after
 //! it and restarts the filter with the sensor errors it had estimated
 //! ([`crate::ins_filter::sequencer`]); without fixes, and in the navigator's aided phase (the
 //! firmware's, which has no start in motion, [`crate::navigator`]), it stays degraded to the
@@ -126,12 +128,17 @@ impl<T: Scalar> Default for GapDynamics<T> {
     }
 }
 
+/// Largest attitude variance a gap adds per axis [rad^2]: 1 rad of doubt, beyond which the
+/// linear error model says nothing more (a lost gap's, [`ImuGap::bridged`]; a bridged gap
+/// stays below it, about 0.55 rad at [`MAX_BRIDGED_S`]).
+pub const MAX_ATTITUDE_VAR_RAD2: f64 = 1.0;
+
 impl<T: Scalar> GapDynamics<T> {
-    /// The variances a gap leaves per axis: attitude [rad^2] and velocity [m^2/s^2] (doc
-    /// above). A gap that is not bridged counts as [`MAX_BRIDGED_S`]: its solution is lost,
-    /// and no variance describes that.
+    /// The variances a gap leaves per axis: attitude [rad^2], at most
+    /// [`MAX_ATTITUDE_VAR_RAD2`], and velocity [m^2/s^2] (doc above), over the whole gap,
+    /// bridged or lost.
     pub fn variances(&self, gap: &ImuGap<T>) -> (T, T) {
-        let l = gap.lost_s.min(T::c(MAX_BRIDGED_S));
+        let l = gap.lost_s;
         let l2 = l * l;
         let twelfth = T::c(1.0 / 12.0);
         let d_omega = (gap.omega_after_ib_b - gap.omega_before_ib_b).norm_squared();
@@ -140,7 +147,7 @@ impl<T: Scalar> GapDynamics<T> {
         let omega2 =
             self.omega_sigma_rad_s * self.omega_sigma_rad_s + d_omega * twelfth + turn * turn;
         let f2 = self.f_sigma_mps2 * self.f_sigma_mps2 + d_f * twelfth;
-        (omega2 * l2, f2 * l2)
+        ((omega2 * l2).min(T::c(MAX_ATTITUDE_VAR_RAD2)), f2 * l2)
     }
 }
 

@@ -7,7 +7,7 @@
 use super::aiding::{AidCounters, AidResult, FilterCounters, GnssPosition, GnssVelocity};
 use super::consider::{self, ConsiderModel, CrossCovariance};
 use super::covariance::{self, Transition};
-use super::foreground::Propagation;
+use super::foreground::{LostGap, Propagation};
 use super::integrity::{
     self, InnovationWindow, Reacquisition, RefusedCluster, Restart, WindowVerdict, whiten,
 };
@@ -295,7 +295,10 @@ impl<T: Scalar> ErrorFilter<T> {
             q[ATT + k] += b.attitude_var_rad2 / prop.dt;
             q[VEL + k] += b.velocity_var_m2_s2 / prop.dt;
         }
-        self.imu_lost |= b.lost;
+        if let Some(lost) = &b.lost {
+            self.lose(lost);
+            self.imu_lost = true;
+        }
         let phi_ac = self
             .consider
             .is_active()
@@ -314,6 +317,41 @@ impl<T: Scalar> ErrorFilter<T> {
         self.counters.propagations = self.counters.propagations.wrapping_add(1);
         self.since_fix_s += prop.dt;
         self.check_covariance();
+    }
+
+    /// The covariance across a gap too long to bridge ([`LostGap`]): the position carried at
+    /// the velocity over `L` (`Phi = I + L` from velocity to position, `P <- Phi P Phi^T`),
+    /// then an unknown constant acceleration over it, whose velocity variance `s2` gives the
+    /// position `s2 L^2 / 4` and their covariance `s2 L / 2`, and the attitude's variance.
+    /// The sensor states are not propagated over the gap (the sequencer adds their growth at
+    /// a re-alignment).
+    fn lose(&mut self, lost: &LostGap<T>) {
+        let l = lost.lost_s;
+        for k in 0..3 {
+            let (r, v) = (POS + k, VEL + k);
+            for j in 0..N {
+                let p_vj = self.p[(v, j)];
+                self.p[(r, j)] += l * p_vj;
+            }
+            for i in 0..N {
+                let p_iv = self.p[(i, v)];
+                self.p[(i, r)] += l * p_iv;
+            }
+            for c in 0..self.p_ac.ncols() {
+                let p_vc = self.p_ac[(v, c)];
+                self.p_ac[(r, c)] += l * p_vc;
+            }
+        }
+        let s2 = lost.velocity_var_m2_s2;
+        let half = T::c(0.5);
+        for k in 0..3 {
+            let (r, v, a) = (POS + k, VEL + k, ATT + k);
+            self.p[(v, v)] += s2;
+            self.p[(r, r)] += s2 * l * l * half * half;
+            self.p[(r, v)] += s2 * l * half;
+            self.p[(v, r)] += s2 * l * half;
+            self.p[(a, a)] += lost.attitude_var_rad2;
+        }
     }
 
     /// A variance that is not positive and finite (rounding in `f32` after a long
@@ -755,9 +793,13 @@ impl<T: Scalar> ErrorFilter<T> {
         let Some(zm) = self.config.zero_motion else {
             return (AidResult::Invalid, AidResult::Invalid, None);
         };
-        // Zero velocity of the IMU, if the solution is slow enough to be stopped.
+        // Zero velocity of the IMU, if the solution is slow enough to be stopped and knows
+        // its horizontal velocity to within that speed (after a gap in the IMU data, a
+        // cruise the detector takes for a stop would pass the gate).
         let z = snap.state.v_eb_n;
-        if !(z.norm() <= zm.max_speed_m_s) {
+        let max2 = zm.max_speed_m_s * zm.max_speed_m_s;
+        let known = self.p[(VEL, VEL)] <= max2 && self.p[(VEL + 1, VEL + 1)] <= max2;
+        if !(z.norm() <= zm.max_speed_m_s && known) {
             self.counters.zero_velocity.count(&AidResult::<T>::Invalid);
             return (AidResult::Invalid, AidResult::Invalid, None);
         }

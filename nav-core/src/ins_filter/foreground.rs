@@ -8,7 +8,7 @@ use super::stationarity::{Stationarity, StillWindow};
 use super::{ATT, BA, BG, FilterConfig, FilterError, POS, SA, SG, SensorErrors, VEL};
 use crate::attitude::rotation_vector_quat;
 use crate::earth::LocalEarth;
-use crate::gap::{GapDynamics, ImuGap};
+use crate::gap::{GapDynamics, ImuGap, MAX_ATTITUDE_VAR_RAD2};
 use crate::{ImuIncrement, InputError, MechanizationConfig, NavFrame, NavState, Scalar, Strapdown};
 use nalgebra::Vector3;
 
@@ -31,8 +31,22 @@ pub struct Bridged<T: Scalar> {
     pub attitude_var_rad2: T,
     /// Velocity variance per axis [m^2/s^2].
     pub velocity_var_m2_s2: T,
-    /// A gap was too long to bridge: the solution is lost.
-    pub lost: bool,
+    /// A gap too long to bridge: the solution is lost.
+    pub lost: Option<LostGap<T>>,
+}
+
+/// A gap too long to bridge ([`crate::gap::MAX_BRIDGED_S`]): the position was carried across
+/// it at the velocity before it (dead reckoning; the velocity and attitude held), and what
+/// that cannot know joins the covariance at once ([`GapDynamics::variances`] over the whole
+/// gap: an unknown constant acceleration and rate).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LostGap<T: Scalar> {
+    /// The gap [s].
+    pub lost_s: T,
+    /// Attitude variance per axis [rad^2].
+    pub attitude_var_rad2: T,
+    /// Velocity variance per axis [m^2/s^2].
+    pub velocity_var_m2_s2: T,
 }
 
 impl<T: Scalar> Bridged<T> {
@@ -41,7 +55,7 @@ impl<T: Scalar> Bridged<T> {
         Self {
             attitude_var_rad2: T::zero(),
             velocity_var_m2_s2: T::zero(),
-            lost: false,
+            lost: None,
         }
     }
 }
@@ -164,16 +178,33 @@ impl<T: Scalar> AidedMechanization<T> {
     /// Integrates the time lost before the next sample ([`crate::gap`]): the mean rates
     /// either side, compensated as every sample, in short steps; the variances the bridge
     /// cannot know join the current propagation interval ([`Bridged`]). A gap too long to
-    /// bridge is not integrated and marks the interval lost. Call before that sample's
-    /// [`Self::step`].
+    /// bridge is not integrated: the position is carried across it at the last velocity, and
+    /// the interval is marked lost with what that cannot know ([`LostGap`]). Call before that
+    /// sample's [`Self::step`].
     pub fn bridge(&mut self, gap: &ImuGap<T>) {
         self.restart_increments();
-        gap.integrate(|inc| self.integrate(inc).map(|_| ()));
         let (att, vel) = self.gap_dynamics.variances(gap);
-        let b = &mut self.acc_bridged;
-        b.attitude_var_rad2 += att;
-        b.velocity_var_m2_s2 += vel;
-        b.lost |= !gap.bridged();
+        if gap.bridged() {
+            gap.integrate(|inc| self.integrate(inc).map(|_| ()));
+            let b = &mut self.acc_bridged;
+            b.attitude_var_rad2 += att;
+            b.velocity_var_m2_s2 += vel;
+            return;
+        }
+        let mut st = *self.nav.state();
+        let d_r_n = st.v_eb_n * gap.lost_s;
+        st.position =
+            st.position
+                .offset_ned([d_r_n.x.to_f64(), d_r_n.y.to_f64(), d_r_n.z.to_f64()]);
+        self.nav.set_state(st);
+        let lost = self.acc_bridged.lost.get_or_insert(LostGap {
+            lost_s: T::zero(),
+            attitude_var_rad2: T::zero(),
+            velocity_var_m2_s2: T::zero(),
+        });
+        lost.lost_s += gap.lost_s;
+        lost.attitude_var_rad2 = (lost.attitude_var_rad2 + att).min(T::c(MAX_ATTITUDE_VAR_RAD2));
+        lost.velocity_var_m2_s2 += vel;
     }
 
     /// Compensates and integrates one increment and accumulates it for the propagation;
@@ -216,7 +247,7 @@ impl<T: Scalar> AidedMechanization<T> {
         // A stop's updates flush the interval themselves (Events::still). A lost gap is
         // flushed at once: the filter's status says so from the first sample after it (it said
         // NAV for up to an interval).
-        let due = self.acc_dt >= self.interval_s || self.acc_bridged.lost;
+        let due = self.acc_dt >= self.interval_s || self.acc_bridged.lost.is_some();
         let propagation = if still.is_none() && due {
             self.flush()
         } else {

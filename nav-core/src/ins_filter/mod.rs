@@ -49,7 +49,7 @@ pub use aiding::{
 };
 pub use background::{Correction, ErrorFilter, Snapshot};
 pub use consider::GnssCorrelatedError;
-pub use foreground::{AidedMechanization, Bridged, Events, Propagation};
+pub use foreground::{AidedMechanization, Bridged, Events, LostGap, Propagation};
 use model::FilterNoise;
 use nalgebra::{Matrix3, Vector3};
 pub use states::{ATT, BA, BG, Covariance, InitialSigma, N, POS, SA, SG, StateVector, VEL};
@@ -64,9 +64,10 @@ pub struct ZeroMotionConfig<T: Scalar> {
     pub velocity_sigma_m_s: T,
     /// 1-sigma of the zero rate beyond the window mean's white noise [rad/s].
     pub rate_sigma_rad_s: T,
-    /// Largest solution speed at which a stop is believed [m/s]: a vehicle cruising straight
-    /// at constant speed looks still to the IMU, and once the velocity's 1-sigma has grown
-    /// (a GNSS outage) the chi-square gate alone would let such a ZUPT in.
+    /// Largest solution speed at which a stop is believed [m/s], and largest horizontal
+    /// velocity 1-sigma per axis: a vehicle cruising straight at constant speed looks still
+    /// to the IMU, and once the velocity's 1-sigma has grown (a GNSS outage, a gap in the IMU
+    /// data) the chi-square gate alone would let such a ZUPT in.
     pub max_speed_m_s: T,
 }
 

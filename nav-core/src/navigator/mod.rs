@@ -74,7 +74,9 @@
 //! ALIGN stages are the IMU alignment's). Re-aligning there means those three (a foreground
 //! start in motion, a restart message keeping the sensor block, a protocol stage) and the
 //! harness-firmware bit-identity of the QEMU runs checked again; until then the honest
-//! DEGRADED stays.
+//! DEGRADED stays. Its filter goes on taking the fixes after the gap from the covariance the
+//! gap widened ([`crate::ins_filter::LostGap`]: position carried at the last velocity,
+//! attitude doubt up to 1 rad per axis), so the solution returns to the fixes, still flagged.
 //!
 //! The run's settings are one plain [`RunConfig`] (the CLI's and the firmware's arguments),
 //! checked and converted for the data's rate into a [`Setup`] from which both halves are built.
