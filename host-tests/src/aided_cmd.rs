@@ -409,6 +409,7 @@ pub fn sequencer<T: Scalar>(
                 max_accel_mps2: T::c(d.max_accel_mps2),
                 sideslip_rad: T::c(d.sideslip_rad),
                 accel_bias_mps2: T::c(config.noise.accel_bias_mps2.max(d.accel_bias_mps2)),
+                gyro_bias_rad_s: T::c(config.noise.gyro_bias_rad_s),
             })
         }
     };

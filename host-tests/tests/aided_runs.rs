@@ -1142,6 +1142,75 @@ fn start_in_motion_from_gnss() {
     }
 }
 
+/// A start in motion with the receiver's correlated error declared (`--gnss-correlated`): the
+/// start's position is a fix's, so its error holds that error, and the filter's fixes, which
+/// share it, never shrink it. Its 1-sigma carries it from the start to the end (was: the
+/// fixes' white 0.5 m, 3-18 sigma off for the whole run on a 3 m correlated error).
+#[test]
+fn a_start_in_motion_carries_the_declared_correlated_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let correlated = [
+        "--gnss-correlated",
+        "3,3,5",
+        "--gnss-correlated-time",
+        "120",
+    ];
+    run_ok(
+        nav()
+            .args(["sim", "land-vehicle", "--grade", "mems-consumer"])
+            .args(["--seconds", "150", "--gnss-rate", "5"])
+            .args(["--gnss-velocity-sigma", "0.05,0.05,0.1"])
+            .args(correlated)
+            .args(["--format", "bin", "--out"])
+            .arg(d),
+    );
+    let out = d.join("sol.csv");
+    let text = run_ok(
+        nav()
+            .arg("replay")
+            .arg("--imu")
+            .arg(d.join("imu.bin"))
+            .arg("--gnss")
+            .arg(d.join("gnss.csv"))
+            .args(["--imu-noise", "mems-consumer", "--start-in-motion"])
+            .args(correlated)
+            .args(["--log-every", "400", "--out"])
+            .arg(&out),
+    );
+    assert!(text.contains("filter started at t = "), "{text}");
+    let truth = host_tests::truth_csv::read(&d.join("truth.csv")).unwrap();
+    let log = std::fs::read_to_string(&out).unwrap();
+    let rows: Vec<Vec<f64>> = log
+        .lines()
+        .skip(1)
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| l.split(',').filter_map(|v| v.parse().ok()).collect())
+        .collect();
+    assert!(rows.len() > 100, "{} rows", rows.len());
+    for row in &rows {
+        let tr = host_tests::report::interpolate(&truth, row[0]).unwrap();
+        let truth_at = nav_core::Position::from_radians(tr.lat, tr.lon, tr.h);
+        let solution = nav_core::Position::from_degrees(row[1], row[2], row[3]);
+        let e_ned = truth_at.ned_to(&solution);
+        for axis in 0..2 {
+            let sigma = row[10 + axis];
+            assert!(
+                sigma > 0.9 * 3.0,
+                "t = {} s: horizontal 1-sigma {sigma} m below the declared 3 m",
+                row[0]
+            );
+            assert!(
+                e_ned[axis].abs() < 4.0 * sigma,
+                "t = {} s: error {:?} m, 1-sigma {:?} m",
+                row[0],
+                e_ned,
+                &row[10..13]
+            );
+        }
+    }
+}
+
 /// `nav bench consistency --families`: one row per family, on consecutive seeds, and the
 /// families' inside fractions with their mean.
 /// `nav bench outliers --runs N --first-seed S`: the table of seed S, then each outlier over

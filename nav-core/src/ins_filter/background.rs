@@ -278,6 +278,26 @@ impl<T: Scalar> ErrorFilter<T> {
         self.check_covariance();
     }
 
+    /// The start's position is a GNSS fix's (a start in motion, [`super::motion`]): its error
+    /// holds, besides the fix's white part (the start's 1-sigma), the receiver's declared
+    /// correlated error `b` ([`consider::GP`]): the position error is `b + w`, so
+    /// its variance gains `P_bb` and its cross-covariance with `b` is `P_bb` (the fixes see
+    /// `-b`, [`consider::POSITION_SENSITIVITY`]; the first one's innovation is then `w0 - w1`,
+    /// as it is). Without it the start claimed the white part alone and the fixes, sharing
+    /// `b`, never showed otherwise: the position error stayed at `b`, 2-6 sigma, for minutes.
+    /// Nothing without a declared correlated error.
+    pub fn start_position_from_fix(&mut self) {
+        if !self.consider.has_gnss_error() {
+            return;
+        }
+        for i in 0..3 {
+            let var_b = self.consider.variance()[consider::GP + i];
+            self.p[(POS + i, POS + i)] += var_b;
+            self.p_ac[(POS + i, consider::GP + i)] = var_b;
+        }
+        self.check_covariance();
+    }
+
     fn last_state(&self) -> usize {
         if self.config.scale_factors { N } else { SG }
     }

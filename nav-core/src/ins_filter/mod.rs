@@ -313,6 +313,12 @@ impl<T: Scalar> AidedIns<T> {
         Ok(ins)
     }
 
+    /// The start's position is a GNSS fix's: its error holds the receiver's declared
+    /// correlated error ([`ErrorFilter::start_position_from_fix`]).
+    pub fn start_position_from_fix(&mut self) {
+        self.filter.start_position_from_fix();
+    }
+
     /// The navigation solution (NED frame).
     pub fn state(&self) -> &NavState<T> {
         self.mech.state()

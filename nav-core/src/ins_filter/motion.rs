@@ -16,7 +16,16 @@
 //! - Heading: once the horizontal speed exceeds [`MotionAlignConfig::min_speed_m_s`], the
 //!   ground track `atan2(v_E, v_N)` (a land vehicle moves along its forward axis); 1-sigma from
 //!   the velocity's 1-sigma over the speed and the sideslip allowance.
-//! - Velocity: the GNSS velocity, or the difference of two positions over their interval.
+//! - Velocity: the GNSS velocity, or the difference of two positions at least
+//!   [`MIN_DIFFERENCE_INTERVAL_S`] apart (a 10 Hz receiver's consecutive positions, 0.5 m
+//!   each, differ by 7 m/s of noise: no span of 30 s was quasi-static beyond that doubt, and
+//!   the start never came), less
+//!   the antenna's lever-arm velocity `C_b_n (omega_ib_b x l_b)` (Groves eq. 14.134, Earth rate
+//!   neglected), the body rate from the gyros (the last increment for a receiver's velocity, the
+//!   mean over the interval for a differenced one): a car body rocking at 1 Hz turns at tens of
+//!   deg/s, which moves an antenna 2 m away by decimetres per second against the receiver's
+//!   centimetres. Its 1-sigma adds the lever arm times the gyro bias and `|omega x l|` times
+//!   the attitude's 1-sigma.
 //!
 //! - Fixes farther apart than [`MAX_FIX_INTERVAL_S`] (an outage) are not an interval: their
 //!   position difference is the mean velocity over the outage, not the velocity at the fix, and
@@ -37,6 +46,11 @@ use nalgebra::Vector3;
 /// (a position-differenced velocity over a 57 s outage, at a turn, once started the filter 54
 /// deg off in heading with a 5 deg 1-sigma).
 pub const MAX_FIX_INTERVAL_S: f64 = 2.0;
+
+/// Shortest interval two positions are differenced over for a velocity [s] (a 1 Hz
+/// receiver's, its time tags' jitter allowed): the velocity's noise falls as the interval
+/// grows, its lag behind the fix (half the interval) grows with it.
+pub const MIN_DIFFERENCE_INTERVAL_S: f64 = 0.95;
 
 /// Longest span of fixes the level is taken over [s].
 pub const MAX_SPAN_S: f64 = 30.0;
@@ -61,16 +75,19 @@ pub struct MotionAlignConfig<T: Scalar> {
     pub sideslip_rad: T,
     /// Accelerometer bias 1-sigma [m/s^2] (for the level's 1-sigma).
     pub accel_bias_mps2: T,
+    /// Gyro bias 1-sigma [rad/s] (for the lever-arm velocity's 1-sigma).
+    pub gyro_bias_rad_s: T,
 }
 
 impl<T: Scalar> Default for MotionAlignConfig<T> {
-    /// 5 m/s, 0.3 m/s^2, 3 deg, 0.02 m/s^2.
+    /// 5 m/s, 0.3 m/s^2, 3 deg, 0.02 m/s^2, 0.5 deg/s (a consumer part's turn-on bias).
     fn default() -> Self {
         Self {
             min_speed_m_s: T::c(5.0),
             max_accel_mps2: T::c(0.3),
             sideslip_rad: T::c(3f64.to_radians()),
             accel_bias_mps2: T::c(0.02),
+            gyro_bias_rad_s: T::c(0.5f64.to_radians()),
         }
     }
 }
@@ -123,10 +140,17 @@ pub struct MotionAlign<T: Scalar> {
     config: MotionAlignConfig<T>,
     lever_arm_b_m: Vector3<T>,
     last: Option<Fix<T>>,
+    /// The fix the next position-differenced velocity starts from.
+    base: Option<Fix<T>>,
     /// The span the level is sought over, from the last fix whose velocity is known.
     span: Option<Span<T>>,
     /// Roll, pitch [rad] and their 1-sigma [rad].
     level: Option<(T, T, T)>,
+    /// Body rate of the last increment [rad/s].
+    rate_ib_b_rad_s: Vector3<T>,
+    /// Sum of the rotation increments [rad] and of their intervals [s] since `base`.
+    turn_since_fix_rad: Vector3<T>,
+    dt_since_fix_s: T,
 }
 
 impl<T: Scalar> MotionAlign<T> {
@@ -136,8 +160,12 @@ impl<T: Scalar> MotionAlign<T> {
             config,
             lever_arm_b_m,
             last: None,
+            base: None,
             span: None,
             level: None,
+            rate_ib_b_rad_s: Vector3::zeros(),
+            turn_since_fix_rad: Vector3::zeros(),
+            dt_since_fix_s: T::zero(),
         }
     }
 
@@ -148,11 +176,13 @@ impl<T: Scalar> MotionAlign<T> {
             .iter()
             .chain(inc.delta_theta_ib_b.iter())
             .all(|v| v.finite());
-        if let Some(span) = &mut self.span
-            && finite
-            && inc.dt.finite()
-            && inc.dt > T::zero()
-        {
+        if !(finite && inc.dt.finite() && inc.dt > T::zero()) {
+            return;
+        }
+        self.rate_ib_b_rad_s = inc.delta_theta_ib_b / inc.dt;
+        self.turn_since_fix_rad += inc.delta_theta_ib_b;
+        self.dt_since_fix_s += inc.dt;
+        if let Some(span) = &mut self.span {
             span.sum_dv += inc.delta_v_ib_b;
             span.sum_dt += inc.dt;
             span.turn_rad += inc.delta_theta_ib_b;
@@ -175,23 +205,46 @@ impl<T: Scalar> MotionAlign<T> {
             return None;
         }
         let vel = vel.filter(|v| v.is_valid()).copied();
+        // The body rate at this fix: the last increment's for a receiver's velocity, the mean
+        // over the interval for a differenced one (module docs).
+        let rate_ib_b = match vel {
+            Some(_) => self.rate_ib_b_rad_s,
+            None if self.dt_since_fix_s > T::zero() => {
+                self.turn_since_fix_rad / self.dt_since_fix_s
+            }
+            None => self.rate_ib_b_rad_s,
+        };
         let fix = Fix {
             t_s,
             pos: *pos,
             vel,
         };
-        let prev = self.last.replace(fix);
-        let prev = prev?;
-        let dt = T::c(t_s - prev.t_s);
-        if !(dt > T::zero()) {
+        let Some(prev) = self.last.replace(fix) else {
+            self.restart_base(fix);
+            return None;
+        };
+        if !(t_s - prev.t_s > 0.0) {
             return None;
         }
         if t_s - prev.t_s > MAX_FIX_INTERVAL_S {
             // An outage: what was known before it is stale (module docs).
             self.span = None;
             self.level = None;
+            self.restart_base(fix);
             return None;
         }
+        let prev = match (vel, self.base) {
+            (Some(_), _) => prev,
+            (None, Some(base)) if t_s - base.t_s >= MIN_DIFFERENCE_INTERVAL_S => base,
+            // Too close to the base for a velocity: the next fix may be.
+            (None, Some(_)) => return None,
+            (None, None) => {
+                self.restart_base(fix);
+                return None;
+            }
+        };
+        self.restart_base(fix);
+        let dt = T::c(t_s - prev.t_s);
         // Velocity at this fix and its 1-sigma (RMS over the axes).
         let (v, sv) = match vel {
             Some(v) => (
@@ -213,15 +266,27 @@ impl<T: Scalar> MotionAlign<T> {
         };
         self.level_over_span(t_s, v, sv);
         let (roll, pitch, tilt_sigma) = self.level?;
+        // The antenna's lever-arm velocity in body axes; taken out in NED with the attitude
+        // found from the track, twice: the track of the IMU's velocity, not the antenna's.
+        let lever_v_b = rate_ib_b.cross(&self.lever_arm_b_m);
+        let mut q_b_n = attitude::from_euler(roll, pitch, v.y.patan2(v.x));
+        for _ in 0..2 {
+            let v_imu = v - q_b_n * lever_v_b;
+            q_b_n = attitude::from_euler(roll, pitch, v_imu.y.patan2(v_imu.x));
+        }
+        let v = v - q_b_n * lever_v_b;
         let speed = (v.x * v.x + v.y * v.y).sqrt();
         if !(speed >= self.config.min_speed_m_s) {
             return None;
         }
-        let yaw = v.y.patan2(v.x);
         let yaw_sigma = ((sv / speed) * (sv / speed)
             + self.config.sideslip_rad * self.config.sideslip_rad)
             .sqrt();
-        let q_b_n = attitude::from_euler(roll, pitch, yaw);
+        // The lever-arm velocity's 1-sigma: the gyro bias's share and the attitude's.
+        let lever_sigma_b = self.lever_arm_b_m.norm() * self.config.gyro_bias_rad_s;
+        let lever_sigma_att = lever_v_b.norm() * tilt_sigma.max(yaw_sigma);
+        let sv =
+            (sv * sv + lever_sigma_b * lever_sigma_b + lever_sigma_att * lever_sigma_att).sqrt();
         let l_n = q_b_n * self.lever_arm_b_m;
         let antenna = Position::from_radians(pos.lat_rad, pos.lon_rad, pos.h_m);
         let position = antenna.offset_ned([-l_n.x.to_f64(), -l_n.y.to_f64(), -l_n.z.to_f64()]);
@@ -250,6 +315,13 @@ impl<T: Scalar> MotionAlign<T> {
 }
 
 impl<T: Scalar> MotionAlign<T> {
+    /// `fix` the start of the next position difference.
+    fn restart_base(&mut self, fix: Fix<T>) {
+        self.base = Some(fix);
+        self.turn_since_fix_rad = Vector3::zeros();
+        self.dt_since_fix_s = T::zero();
+    }
+
     /// The span's test at a fix of velocity `v` [m/s] (1-sigma `sv` [m/s]) at `t_s` [s]
     /// (module docs): the level when the span was quasi-static; a new span from this fix when
     /// it turned, accelerated beyond doubt or grew too long.
@@ -319,14 +391,21 @@ mod tests {
     /// differenced from the positions are noisy to 0.7 m/s, and one interval never told a
     /// car standing still from one accelerating at 1 m/s^2. The span finds it level at rest.
     fn start_on_positions(still_s: u32) -> Option<MotionStart<f64>> {
+        start_on_positions_at(still_s, 1)
+    }
+
+    /// [`start_on_positions`] with `per_s` fixes per second.
+    fn start_on_positions_at(still_s: u32, per_s: u32) -> Option<MotionStart<f64>> {
         let mut m = MotionAlign::new(MotionAlignConfig::default(), Vector3::zeros());
         let pitch = 2f64.to_radians();
-        let f_b = [9.8 * pitch.sin(), 0.0, -9.8 * pitch.cos()];
-        for k in 0..u64::from(still_s) + 5 {
-            let moving_s = (k as f64 - f64::from(still_s)).max(0.0);
-            m.add_imu(&ImuIncrement::new([0.0; 3], f_b, 1.0));
+        let dt = 1.0 / f64::from(per_s);
+        let f_b = [9.8 * pitch.sin() * dt, 0.0, -9.8 * pitch.cos() * dt];
+        for k in 0..u64::from((still_s + 5) * per_s) {
+            let t = k as f64 * dt;
+            let moving_s = (t - f64::from(still_s)).max(0.0);
+            m.add_imu(&ImuIncrement::new([0.0; 3], f_b, dt));
             let at = fix(0.5 * noise(k, 0), 10.0 * moving_s + 0.5 * noise(k, 1));
-            if let Some(s) = m.add_fix(k as f64, &at, None) {
+            if let Some(s) = m.add_fix(t, &at, None) {
                 return Some(s);
             }
         }
@@ -345,6 +424,18 @@ mod tests {
         );
         // Two seconds still are not enough to tell it from a car accelerating.
         assert_eq!(start_on_positions(2), None);
+    }
+
+    /// The same car with a 10 Hz receiver: its positions are differenced over a second, not
+    /// over 0.1 s (7 m/s of noise: it never started), and the start's velocity 1-sigma is a
+    /// second's.
+    #[test]
+    fn a_10_hz_receiver_starts_as_a_1_hz_one() {
+        let s = start_on_positions_at(20, 10).expect("a start once the car moves");
+        let (roll, pitch, _) = s.state.euler();
+        assert!(roll.abs() < 1e-9 && (pitch.to_degrees() - 2.0).abs() < 1e-9);
+        assert!(s.sigma.velocity_ned_m_s.x < 1.0, "{:?}", s.sigma);
+        assert!((s.state.v_eb_n.y - 10.0).abs() < 3.0 * s.sigma.velocity_ned_m_s.y);
     }
 
     /// A car accelerating at 0.6 m/s^2 (its specific force tilted by 3.5 deg against gravity)
@@ -401,6 +492,60 @@ mod tests {
         assert!(m.has_level());
         m.add_imu(&still_for(dt_s));
         m.add_fix(2.0 + dt_s, &fix(0.0, 14.0 * dt_s), None)
+    }
+
+    /// Level at rest, then a fix with the receiver's velocity while the body rolls at 0.5
+    /// rad/s (a car rocking on rough ground) and the antenna sits 2 m above the IMU: the
+    /// antenna moves 1 m/s sideways relative to the IMU. The start's velocity is the IMU's,
+    /// within 3 of its 1-sigma, and so is its heading (was: the antenna's, 20 sigma off, and the
+    /// track 6 deg off).
+    #[test]
+    fn the_start_takes_out_the_lever_arm_velocity() {
+        let lever_arm_b_m = Vector3::new(0.0, 0.0, -2.0);
+        let mut m = MotionAlign::new(MotionAlignConfig::default(), lever_arm_b_m);
+        let still = GnssVelocity {
+            v_ned_m_s: Vector3::zeros(),
+            sigma_ned_m_s: Vector3::repeat(0.05),
+        };
+        for k in 0..3 {
+            m.add_imu(&still_for(0.01));
+            assert!(
+                m.add_fix(f64::from(k), &fix(0.0, 0.0), Some(&still))
+                    .is_none()
+            );
+        }
+        assert!(m.has_level());
+        // Heading north at 10 m/s, rolling right at 0.5 rad/s: omega x l = (0, 1, 0) m/s.
+        let roll_rate = 0.5;
+        let dt = 0.01;
+        m.add_imu(&ImuIncrement::new(
+            [roll_rate * dt, 0.0, 0.0],
+            [0.0, 0.0, -9.8 * dt],
+            dt,
+        ));
+        let v_imu = Vector3::new(10.0, 0.0, 0.0);
+        let antenna = GnssVelocity {
+            v_ned_m_s: v_imu + Vector3::new(roll_rate, 0.0, 0.0).cross(&lever_arm_b_m),
+            sigma_ned_m_s: Vector3::repeat(0.05),
+        };
+        let s = m
+            .add_fix(3.0, &fix(10.0, 0.0), Some(&antenna))
+            .expect("level and moving: a start");
+        let err = s.state.v_eb_n - v_imu;
+        for i in 0..3 {
+            assert!(
+                err[i].abs() < 3.0 * s.sigma.velocity_ned_m_s[i],
+                "velocity error {err:?} against 1-sigma {:?}",
+                s.sigma.velocity_ned_m_s
+            );
+        }
+        let (_, _, yaw) = s.state.euler();
+        assert!(
+            yaw.abs() < 3.0 * s.sigma.attitude_rad.z,
+            "yaw {} deg, 1-sigma {} deg",
+            yaw.to_degrees(),
+            s.sigma.attitude_rad.z.to_degrees()
+        );
     }
 
     #[test]

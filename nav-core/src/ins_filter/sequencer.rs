@@ -504,7 +504,8 @@ impl<T: Scalar> Sequencer<T> {
                 AidedIns::resume(state, &sigma, &lost.ins, lost.unpropagated_s)
             }
         };
-        if let Ok(ins) = ins {
+        if let Ok(mut ins) = ins {
+            ins.start_position_from_fix();
             self.ins = Some(ins);
             self.motion = None;
             if self.set_aside.take().is_some() {
