@@ -238,10 +238,18 @@ impl AidedSink<f64> for NavRows {
     }
 }
 
-/// Refuses two outputs that name one file (the later would replace the earlier).
+/// Refuses two outputs that name one file (the later would replace the earlier), under any
+/// name: a symbolic link is written through to its target (`crate::atomic`).
 fn refuse_shared_outputs(outputs: &[(&str, &Path)]) -> Result<()> {
-    // The folder canonicalised (it exists: checked before), the name as given.
+    // An existing file (or link) resolved; else the folder canonicalised (it exists: checked
+    // before) and the name as given.
     let key = |p: &Path| {
+        if let Ok(file) = p.canonicalize() {
+            return (
+                file.parent().map(ToOwned::to_owned),
+                file.file_name().map(ToOwned::to_owned),
+            );
+        }
         let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
         let dir = dir.map_or_else(|| Path::new(".").canonicalize(), Path::canonicalize);
         (dir.ok(), p.file_name().map(ToOwned::to_owned))
@@ -409,4 +417,28 @@ pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
         store_s,
         sigma_rms,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An output that is a link to another output is that file: refused, not written twice
+    /// (the 1-sigma rows replaced the trajectory, reported as written).
+    #[test]
+    fn an_output_linked_to_another_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let nav = dir.path().join("a.nav");
+        let link = dir.path().join("link.txt");
+        std::fs::write(&nav, "old\n").unwrap();
+        std::os::unix::fs::symlink("a.nav", &link).unwrap();
+        let e = refuse_shared_outputs(&[("the trajectory (--out)", &nav), ("--std", &link)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("name the same file"), "{e}");
+        // Two files, one not there yet: not the same.
+        let other = dir.path().join("std.txt");
+        refuse_shared_outputs(&[("the trajectory (--out)", &nav), ("--std", &other)]).unwrap();
+        refuse_shared_outputs(&[("--std", &other), ("the trajectory (--out)", &nav)]).unwrap();
+    }
 }
