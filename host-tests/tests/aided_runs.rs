@@ -1142,6 +1142,35 @@ fn start_in_motion_from_gnss() {
     }
 }
 
+/// A start in motion on fixes 5 s apart cannot start (it takes two fixes as an interval only
+/// within 2 s): the refusal says so, and leaves no log. Was: "no GNSS fix found the vehicle
+/// level", as if the motion were to blame.
+#[test]
+fn start_in_motion_on_sparse_fixes_names_their_interval() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run_ok(
+        nav()
+            .args(["sim", "land-vehicle", "--grade", "fog", "--seconds", "60"])
+            .args(["--gnss-rate", "0.2", "--format", "bin", "--out"])
+            .arg(d),
+    );
+    let out = d.join("sol.csv");
+    let e = run_err(&mut replay_gnss(
+        &d.join("imu.bin"),
+        &d.join("gnss.csv"),
+        &out,
+        &["--start-in-motion"],
+    ));
+    assert!(
+        e.contains(
+            "no two GNSS fixes are within 2 s of each other (the closest are 5.000 s apart)"
+        ),
+        "{e}"
+    );
+    assert!(!out.exists());
+}
+
 /// `nav bench consistency --families`: one row per family, on consecutive seeds, and the
 /// families' inside fractions with their mean.
 /// `nav bench outliers --runs N --first-seed S`: the table of seed S, then each outlier over
