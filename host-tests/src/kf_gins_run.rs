@@ -67,8 +67,11 @@ pub struct KfGinsRun {
     pub std: Option<PathBuf>,
     /// The configuration's warnings (keys not used).
     pub warnings: Vec<String>,
-    /// IMU rows skipped before `starttime` or after `endtime`.
-    pub outside_window: u64,
+    /// IMU rows skipped before `starttime`.
+    pub before_start: u64,
+    /// The time of the first IMU row after `endtime` [s], where the run stopped reading the
+    /// file (the rows from it on are not read, so not counted); `None`: read to its end.
+    pub stopped_after_end_s: Option<f64>,
     /// Time spent storing the files once written, syncing them to the disk and renaming
     /// them into place [s]: a wait on the disk, not processing (KF-GINS does not sync its
     /// output).
@@ -309,7 +312,8 @@ pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
     let mut prev_t: Option<f64> = None;
     // The last epoch's velocity increment that covered one interval.
     let mut prev_dv: Option<[f32; 3]> = None;
-    let mut outside_window = 0_u64;
+    let mut before_start = 0_u64;
+    let mut stopped_after_end_s = None;
     // Intervals off `imudatarate` by more than a quarter of its interval, of all intervals (a
     // rate off by a factor of 2 or 4/3 is caught; a receiver's jitter of a few percent is not).
     let (mut off_rate, mut intervals) = (0_u64, 0_u64);
@@ -348,14 +352,14 @@ pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
             // `starttime`, every later epoch is integrated from it); integrating it moved
             // the whole trajectory one IMU interval ahead (6 cm at 12 m/s and 200 Hz).
             if row.t_s < t_start {
-                outside_window += 1;
+                before_start += 1;
                 continue;
             }
             if row.t_s == t_start {
                 continue;
             }
             if row.t_s > t_end {
-                outside_window += 1;
+                stopped_after_end_s = Some(row.t_s);
                 return Ok(None);
             }
             return Ok(Some(AidedSample {
@@ -413,7 +417,8 @@ pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
         imu_err: outputs.imu_err.clone(),
         std: outputs.std.clone(),
         warnings,
-        outside_window,
+        before_start,
+        stopped_after_end_s,
         store_s,
         sigma_rms,
     })

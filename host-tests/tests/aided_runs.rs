@@ -425,6 +425,35 @@ fn kf_gins_runs_a_configuration_as_it_is() {
     assert!(dir.path().join("KF_GINS_Navresult.nav").exists());
 }
 
+/// `nav kf-gins` with an `endtime` inside the data: the epochs before `starttime` are counted,
+/// and the run says where it stopped reading rather than counting the rows after `endtime`
+/// (it read one of them: "IMU epochs outside starttime..endtime: 1" with 2000 beyond it).
+#[test]
+fn kf_gins_says_where_it_stopped_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = data_set(dir.path(), 20.0);
+    let start = FilterBenchOptions::default().start_sow_s;
+    let text = std::fs::read_to_string(&data.config).unwrap();
+    let config = dir.path().join("window.yaml");
+    let with_end = text.replace("endtime: -1", &format!("endtime: {}", start + 10.0));
+    assert_ne!(with_end, text);
+    std::fs::write(&config, with_end).unwrap();
+    let out = dir.path().join("window.nav");
+    let printed = run_ok(nav().arg("kf-gins").arg(&config).arg("--out").arg(&out));
+    assert!(
+        printed.contains("IMU epochs before starttime: 0"),
+        "{printed}"
+    );
+    assert!(
+        printed.contains(&format!(
+            "IMU file read up to endtime: the epochs from t = {:.3} s on were not read",
+            start + 10.005
+        )),
+        "{printed}"
+    );
+    assert!(!printed.contains("outside starttime"), "{printed}");
+}
+
 /// `nav kf-gins --imu-err --std`: KF-GINS's two other files, one row per `.nav` row at its
 /// time, in KF-GINS's units (the first 1-sigma row is the configuration's `init*std`), and a
 /// 1-sigma that tells the trajectory's error against the truth.

@@ -2183,10 +2183,12 @@ fn run(cli: Cli) -> Result<()> {
                     println!("{what}: {} ({} rows)", p.display(), run.rows);
                 }
             }
-            println!(
-                "IMU epochs outside starttime..endtime: {}",
-                run.outside_window
-            );
+            println!("IMU epochs before starttime: {}", run.before_start);
+            if let Some(t) = run.stopped_after_end_s {
+                println!(
+                    "IMU file read up to endtime: the epochs from t = {t:.3} s on were not read"
+                );
+            }
             println!(
                 "the filter's 1-sigma, RMS over the rows: horizontal {:.4} m, yaw {:.4} deg",
                 run.sigma_rms.horizontal_m, run.sigma_rms.yaw_deg
