@@ -1571,8 +1571,19 @@ fn sim(a: SimArgs) -> Result<()> {
         );
     }
     let mut scenario = Scenario::by_name(&a.scenario)?;
-    for (k, v) in key_values(&a.set)? {
+    let set = key_values(&a.set)?;
+    for &(k, v) in &set {
         scenario.set(k, v)?;
+    }
+    // Two lengths that disagree: --seconds took precedence without a word.
+    if let (Some(given), Some(&(_, v))) = (a.seconds, set.iter().rfind(|(k, _)| *k == "seconds"))
+        && given != v
+    {
+        anyhow::bail!(
+            "--seconds {} and --set seconds={}: two lengths; give one",
+            nav_core::number::Number(given),
+            nav_core::number::Number(v)
+        );
     }
     if a.list_params {
         println!("{} parameters:", scenario.name());
