@@ -1526,6 +1526,37 @@ fn lost_imu_time_is_reported() {
     assert!(!text.contains("missing in"), "{text}");
 }
 
+/// 6 s of IMU records lost inside the static alignment's window (its averages take them):
+/// said as such, not as a solution lost ("a gap beyond 5 s is not bridged: the solution is
+/// lost from there", of a run that navigated well from the alignment on).
+#[test]
+fn lost_imu_time_inside_the_alignment_is_not_a_lost_solution() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    lv_fog(d);
+    let mut rec = host_tests::recording_io::read(&d.join("imu.bin")).unwrap();
+    rec.records.drain(800..800 + 2_400);
+    let imu = d.join("gap.bin");
+    std::fs::write(&imu, rec.to_bytes().unwrap()).unwrap();
+    let text = run_ok(
+        nav()
+            .arg("replay")
+            .arg("--imu")
+            .arg(&imu)
+            .args(["--imu-noise", "fog"])
+            // 10 s of samples: the window ends at 16 s, before the car starts (20 s).
+            .args(&ALIGNED[..6])
+            .args(["--align-seconds", "10"])
+            .arg("--out")
+            .arg(d.join("sol.csv")),
+    );
+    assert!(
+        text.contains("s of IMU data missing in 1 gap(s) inside the alignment window"),
+        "{text}"
+    );
+    assert!(!text.contains("is not bridged"), "{text}");
+}
+
 /// `nav replay` of a land vehicle whose fixes carry a velocity, 6 s of IMU records lost at
 /// 30 s: from a given start the run re-aligns in motion on the fixes after the gap, says so
 /// with the gap's length, and ends NAV with the sensor errors it had estimated; its rows in
