@@ -418,6 +418,7 @@ pub fn sequencer<T: Scalar>(
 /// Runs an aided replay in precision `T`, writing the log atomically.
 pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
     atomic::refuse_same_file(&[&a.imu, &a.gnss], &a.out)?;
+    crate::gnss_file::refuse_the_imu_recording(&a.gnss, &a.imu)?;
     let fixes: Vec<GnssFix> = crate::gnss_file::read_as_text_fixes(&a.gnss, a.gnss_sigma.as_ref())?;
     let seq = sequencer::<T>(&a.config, &a.start)?;
     let (mut source, _format) = ReplaySource::open(&a.imu)?;

@@ -299,6 +299,8 @@ pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
         }
     }
     refuse_shared_outputs(&named)?;
+    crate::gnss_file::refuse_the_imu_recording(&c.gnss_path, &c.imu_path)
+        .context("gnsspath and imupath")?;
     let fixes: Vec<GnssFix> = gnss::read_gnss(&c.gnss_path)
         .with_context(|| format!("GNSS file {} (gnsspath)", c.gnss_path.display()))?;
     let config = filter_config(&c);

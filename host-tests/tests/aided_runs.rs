@@ -454,6 +454,33 @@ fn kf_gins_says_where_it_stopped_reading() {
     assert!(!printed.contains("outside starttime"), "{printed}");
 }
 
+/// A GNSS file that is the IMU recording (KF-GINS's IMU and GNSS files both have 7 columns)
+/// is refused, by `nav kf-gins` and `nav replay` alike. Was: read as fixes at latitude 0 with
+/// negative 1-sigmas, every one refused, a free-inertial trajectory with status 0.
+#[test]
+fn the_imu_recording_as_the_gnss_file_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = data_set(dir.path(), 20.0);
+    let text = std::fs::read_to_string(&data.config).unwrap();
+    let imu = dir.path().join("imu.txt");
+    let gnss_line = text.lines().find(|l| l.starts_with("gnsspath:")).unwrap();
+    let config = dir.path().join("same.yaml");
+    std::fs::write(
+        &config,
+        text.replace(gnss_line, &format!("gnsspath: \"{}\"", imu.display())),
+    )
+    .unwrap();
+    let out = dir.path().join("same.nav");
+    let e = run_err(nav().arg("kf-gins").arg(&config).arg("--out").arg(&out));
+    assert!(e.contains("gnsspath and imupath: the GNSS file"), "{e}");
+    assert!(e.contains("is the IMU recording"), "{e}");
+    assert!(!out.exists());
+    let out = dir.path().join("same.csv");
+    let e = run_err(&mut replay_gnss(&imu, &imu, &out, &GIVEN));
+    assert!(e.contains("is the IMU recording"), "{e}");
+    assert!(!out.exists());
+}
+
 /// `nav kf-gins --imu-err --std`: KF-GINS's two other files, one row per `.nav` row at its
 /// time, in KF-GINS's units (the first 1-sigma row is the configuration's `init*std`), and a
 /// 1-sigma that tells the trajectory's error against the truth.
