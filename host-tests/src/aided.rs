@@ -127,13 +127,13 @@ pub struct LostImuTime {
     navigated_us: Option<u64>,
     /// The latest end of a sample seen since the last navigated one (or the first) [us].
     latest_us: Option<u64>,
-    /// Spans that ended on a sample the alignment took, before navigation started (not in
-    /// [`Self::gaps`]: no solution to lose yet; the alignment takes them or fails, naming the
-    /// gap).
+    /// Spans that ended before navigation started, on a sample the alignment or the start in
+    /// motion took (not in [`Self::gaps`]: no solution to lose yet; the alignment takes them
+    /// or fails naming the gap, the start in motion begins again after them).
     pub alignment_gaps: u32,
     /// Their sum [s].
     pub alignment_s: f64,
-    /// The samples noted go to the alignment ([`Self::set_aligning`]).
+    /// The samples noted come before navigation ([`Self::set_aligning`]).
     aligning: bool,
 }
 
@@ -157,7 +157,8 @@ impl LostImuTime {
         }
     }
 
-    /// The samples noted from now on go to the alignment (`true`), or are navigated.
+    /// The samples noted from now on come before navigation (`true`: the alignment's or the
+    /// start in motion's), or are navigated.
     pub fn set_aligning(&mut self, aligning: bool) {
         self.aligning = aligning;
     }
@@ -192,8 +193,8 @@ impl LostImuTime {
     pub fn warning(&self) -> Option<String> {
         let aligning = (self.alignment_gaps > 0).then(|| {
             format!(
-                "WARNING: {:.3} s of IMU data missing in {} gap(s) inside the alignment \
-                 window, before navigation started: the alignment took them",
+                "WARNING: {:.3} s of IMU data missing in {} gap(s) before navigation started \
+                 (the alignment or the start in motion took them): no solution was lost",
                 self.alignment_s, self.alignment_gaps
             )
         });
@@ -457,6 +458,8 @@ pub fn run<T: Scalar, E: fmt::Display>(
             seq.restart_increments();
         }
         let navigated = seq.on_sample(s.t_us, &s.increment);
+        // Before the first start no solution exists to lose (a re-alignment has the lost one).
+        report.lost.set_aligning(report.start_s.is_none());
         report
             .lost
             .note(s.t_us, navigated.is_ok().then(|| s.increment.dt.to_f64()));

@@ -1553,11 +1553,11 @@ fn lost_imu_time_is_reported() {
     assert!(!text.contains("missing in"), "{text}");
 }
 
-/// 6 s of IMU records lost inside the static alignment's window (its averages take them):
-/// said as such, not as a solution lost ("a gap beyond 5 s is not bridged: the solution is
-/// lost from there", of a run that navigated well from the alignment on).
+/// 6 s of IMU records lost inside the static alignment's window (its averages take them), or
+/// before a start in motion: said as such, not as a solution lost ("a gap beyond 5 s is not
+/// bridged: the solution is lost from there", of a run that navigated well from its start).
 #[test]
-fn lost_imu_time_inside_the_alignment_is_not_a_lost_solution() {
+fn lost_imu_time_before_navigation_is_not_a_lost_solution() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     lv_fog(d);
@@ -1577,10 +1577,18 @@ fn lost_imu_time_inside_the_alignment_is_not_a_lost_solution() {
             .arg("--out")
             .arg(d.join("sol.csv")),
     );
-    assert!(
-        text.contains("s of IMU data missing in 1 gap(s) inside the alignment window"),
-        "{text}"
-    );
+    let before = "s of IMU data missing in 1 gap(s) before navigation started";
+    assert!(text.contains(before), "{text}");
+    assert!(!text.contains("is not bridged"), "{text}");
+    let out = d.join("motion.csv");
+    let text = run_ok(&mut replay_gnss(
+        &imu,
+        &d.join("gnss.csv"),
+        &out,
+        &["--start-in-motion"],
+    ));
+    assert!(text.contains("filter started at t = "), "{text}");
+    assert!(text.contains(before), "{text}");
     assert!(!text.contains("is not bridged"), "{text}");
 }
 
