@@ -127,6 +127,14 @@ pub struct LostImuTime {
     navigated_us: Option<u64>,
     /// The latest end of a sample seen since the last navigated one (or the first) [us].
     latest_us: Option<u64>,
+    /// Spans that ended before navigation started, on a sample the alignment or the start in
+    /// motion took (not in [`Self::gaps`]: no solution to lose yet; the alignment takes them
+    /// or fails naming the gap, the start in motion begins again after them).
+    pub alignment_gaps: u32,
+    /// Their sum [s].
+    pub alignment_s: f64,
+    /// The samples noted come before navigation ([`Self::set_aligning`]).
+    aligning: bool,
 }
 
 /// A lost span shorter than this is not reported [s] (rounding of the time tags).
@@ -149,7 +157,18 @@ impl LostImuTime {
         }
     }
 
+    /// The samples noted from now on come before navigation (`true`: the alignment's or the
+    /// start in motion's), or are navigated.
+    pub fn set_aligning(&mut self, aligning: bool) {
+        self.aligning = aligning;
+    }
+
     fn add(&mut self, lost_s: f64, end_us: u64) {
+        if self.aligning {
+            self.alignment_gaps += 1;
+            self.alignment_s += lost_s;
+            return;
+        }
         self.gaps += 1;
         self.total_s += lost_s;
         if lost_s > self.longest_s {
@@ -170,8 +189,24 @@ impl LostImuTime {
         }
     }
 
-    /// The warning for the terminal, when time was lost.
+    /// The warnings for the terminal, when time was lost.
     pub fn warning(&self) -> Option<String> {
+        let aligning = (self.alignment_gaps > 0).then(|| {
+            format!(
+                "WARNING: {:.3} s of IMU data missing in {} gap(s) before navigation started \
+                 (the alignment or the start in motion took them): no solution was lost",
+                self.alignment_s, self.alignment_gaps
+            )
+        });
+        let navigating = self.navigation_warning();
+        match (aligning, navigating) {
+            (Some(a), Some(n)) => Some(format!("{a}\n{n}")),
+            (a, n) => a.or(n),
+        }
+    }
+
+    /// The warning for time lost while navigating.
+    fn navigation_warning(&self) -> Option<String> {
         (self.gaps > 0).then(|| {
             format!(
                 "WARNING: {:.3} s of IMU data missing in {} gap(s) (the longest {:.3} s, ending \
@@ -424,6 +459,8 @@ pub fn run<T: Scalar, E: fmt::Display>(
             seq.restart_increments();
         }
         let navigated = seq.on_sample(s.t_us, &s.increment);
+        // Before the first start no solution exists to lose (a re-alignment has the lost one).
+        report.lost.set_aligning(report.start_s.is_none());
         report
             .lost
             .note(s.t_us, navigated.is_ok().then(|| s.increment.dt.to_f64()));

@@ -10,7 +10,7 @@ use anyhow::{Result, anyhow, bail};
 use hal_adapters::drivers::NoiseSpec;
 use nav_core::ins_filter::limits::MIN_BIAS_INSTABILITY_TIME_S;
 use nav_core::ins_filter::model::FilterNoise;
-use nav_core::ins_filter::motion::MotionAlignConfig;
+use nav_core::ins_filter::motion::{MAX_FIX_INTERVAL_S, MotionAlignConfig};
 use nav_core::ins_filter::sequencer::{Realignments, Sequencer, Start};
 use nav_core::ins_filter::{FilterConfig, InitialSigma, SensorErrors};
 use nav_core::navigator::config::{MAX_HEIGHT_M, MIN_HEIGHT_M};
@@ -419,6 +419,7 @@ pub fn sequencer<T: Scalar>(
 /// Runs an aided replay in precision `T`, writing the log atomically.
 pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
     atomic::refuse_same_file(&[&a.imu, &a.gnss], &a.out)?;
+    crate::gnss_file::refuse_the_imu_recording(&a.gnss, &a.imu)?;
     let fixes: Vec<GnssFix> = crate::gnss_file::read_as_text_fixes(&a.gnss, a.gnss_sigma.as_ref())?;
     let seq = sequencer::<T>(&a.config, &a.start)?;
     let (mut source, _format) = ReplaySource::open(&a.imu)?;
@@ -434,8 +435,9 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
             bail!(
                 "the filter never started: {}",
                 match a.start {
-                    AidedStart::Motion =>
-                        "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold (5 m/s)".to_owned(),
+                    AidedStart::Motion => sparse_fixes(&fixes).unwrap_or_else(|| {
+                        "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold (5 m/s)".to_owned()
+                    }),
                     AidedStart::Given(_) => aided::no_usable_sample(&report),
                 }
             );
@@ -450,6 +452,35 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
         Ok((report, n_rows))
     })?;
     Ok(report)
+}
+
+/// Why a start in motion cannot start on `fixes` whatever the motion: no two consecutive
+/// fixes with a finite place are within [`MAX_FIX_INTERVAL_S`] of each other (the start takes
+/// fixes farther apart as an outage, `nav_core::ins_filter::motion`); `None` when two are.
+pub fn sparse_fixes(fixes: &[GnssFix]) -> Option<String> {
+    let placed: Vec<f64> = fixes
+        .iter()
+        .filter(|f| [f.lat_rad, f.lon_rad, f.h_m].iter().all(|v| v.is_finite()))
+        .map(|f| f.t_s)
+        .collect();
+    let closest_s = placed
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .fold(f64::INFINITY, f64::min);
+    (closest_s > MAX_FIX_INTERVAL_S).then(|| {
+        let closest = if closest_s.is_finite() {
+            format!("the closest are {} s apart", Rounded(closest_s))
+        } else {
+            "there is one fix".to_owned()
+        };
+        format!(
+            "no two GNSS fixes are within {MAX_FIX_INTERVAL_S} s of each other ({closest}): the \
+             start in motion takes a velocity from two fixes at most {MAX_FIX_INTERVAL_S} s \
+             apart (farther apart, their position difference is the mean velocity of an \
+             outage); give fixes at 0.5 Hz or faster, or a given start (--init-pos, --init-vel, \
+             --init-att)"
+        )
+    })
 }
 
 /// The report's lines for the terminal.

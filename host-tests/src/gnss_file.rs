@@ -29,6 +29,24 @@ pub struct GnssFixes {
     pub bad_time_tags: u32,
 }
 
+/// Refuses a GNSS file that is the IMU recording itself (the same file under any name): a
+/// KF-GINS IMU file has the 7 columns of its GNSS file and read as fixes at latitude 0 with
+/// negative 1-sigmas, every one refused by the filter, a free-inertial run. A gnss-ins-sim
+/// output folder holds both and may be given for both.
+pub fn refuse_the_imu_recording(gnss: &Path, imu: &Path) -> Result<()> {
+    if gnss.is_file()
+        && let (Ok(g), Ok(i)) = (gnss.canonicalize(), imu.canonicalize())
+        && g == i
+    {
+        bail!(
+            "the GNSS file {} is the IMU recording {}: give the receiver's fixes",
+            gnss.display(),
+            imu.display()
+        );
+    }
+    Ok(())
+}
+
 /// True when `path` starts like a binary fix file ([`gnss_record::MAGIC`]).
 pub fn is_record_file(path: &Path) -> Result<bool> {
     let mut head = [0_u8; 8];

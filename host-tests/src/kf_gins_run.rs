@@ -67,8 +67,11 @@ pub struct KfGinsRun {
     pub std: Option<PathBuf>,
     /// The configuration's warnings (keys not used).
     pub warnings: Vec<String>,
-    /// IMU rows skipped before `starttime` or after `endtime`.
-    pub outside_window: u64,
+    /// IMU rows skipped before `starttime`.
+    pub before_start: u64,
+    /// The time of the first IMU row after `endtime` [s], where the run stopped reading the
+    /// file (the rows from it on are not read, so not counted); `None`: read to its end.
+    pub stopped_after_end_s: Option<f64>,
     /// Time spent storing the files once written, syncing them to the disk and renaming
     /// them into place [s]: a wait on the disk, not processing (KF-GINS does not sync its
     /// output).
@@ -238,10 +241,18 @@ impl AidedSink<f64> for NavRows {
     }
 }
 
-/// Refuses two outputs that name one file (the later would replace the earlier).
+/// Refuses two outputs that name one file (the later would replace the earlier), under any
+/// name: a symbolic link is written through to its target (`crate::atomic`).
 fn refuse_shared_outputs(outputs: &[(&str, &Path)]) -> Result<()> {
-    // The folder canonicalised (it exists: checked before), the name as given.
+    // An existing file (or link) resolved; else the folder canonicalised (it exists: checked
+    // before) and the name as given.
     let key = |p: &Path| {
+        if let Ok(file) = p.canonicalize() {
+            return (
+                file.parent().map(ToOwned::to_owned),
+                file.file_name().map(ToOwned::to_owned),
+            );
+        }
         let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
         let dir = dir.map_or_else(|| Path::new(".").canonicalize(), Path::canonicalize);
         (dir.ok(), p.file_name().map(ToOwned::to_owned))
@@ -288,6 +299,8 @@ pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
         }
     }
     refuse_shared_outputs(&named)?;
+    crate::gnss_file::refuse_the_imu_recording(&c.gnss_path, &c.imu_path)
+        .context("gnsspath and imupath")?;
     let fixes: Vec<GnssFix> = gnss::read_gnss(&c.gnss_path)
         .with_context(|| format!("GNSS file {} (gnsspath)", c.gnss_path.display()))?;
     let config = filter_config(&c);
@@ -301,7 +314,8 @@ pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
     let mut prev_t: Option<f64> = None;
     // The last epoch's velocity increment that covered one interval.
     let mut prev_dv: Option<[f32; 3]> = None;
-    let mut outside_window = 0_u64;
+    let mut before_start = 0_u64;
+    let mut stopped_after_end_s = None;
     // Intervals off `imudatarate` by more than a quarter of its interval, of all intervals (a
     // rate off by a factor of 2 or 4/3 is caught; a receiver's jitter of a few percent is not).
     let (mut off_rate, mut intervals) = (0_u64, 0_u64);
@@ -340,14 +354,14 @@ pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
             // `starttime`, every later epoch is integrated from it); integrating it moved
             // the whole trajectory one IMU interval ahead (6 cm at 12 m/s and 200 Hz).
             if row.t_s < t_start {
-                outside_window += 1;
+                before_start += 1;
                 continue;
             }
             if row.t_s == t_start {
                 continue;
             }
             if row.t_s > t_end {
-                outside_window += 1;
+                stopped_after_end_s = Some(row.t_s);
                 return Ok(None);
             }
             return Ok(Some(AidedSample {
@@ -405,8 +419,33 @@ pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
         imu_err: outputs.imu_err.clone(),
         std: outputs.std.clone(),
         warnings,
-        outside_window,
+        before_start,
+        stopped_after_end_s,
         store_s,
         sigma_rms,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An output that is a link to another output is that file: refused, not written twice
+    /// (the 1-sigma rows replaced the trajectory, reported as written).
+    #[test]
+    fn an_output_linked_to_another_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let nav = dir.path().join("a.nav");
+        let link = dir.path().join("link.txt");
+        std::fs::write(&nav, "old\n").unwrap();
+        std::os::unix::fs::symlink("a.nav", &link).unwrap();
+        let e = refuse_shared_outputs(&[("the trajectory (--out)", &nav), ("--std", &link)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("name the same file"), "{e}");
+        // Two files, one not there yet: not the same.
+        let other = dir.path().join("std.txt");
+        refuse_shared_outputs(&[("the trajectory (--out)", &nav), ("--std", &other)]).unwrap();
+        refuse_shared_outputs(&[("--std", &other), ("the trajectory (--out)", &nav)]).unwrap();
+    }
 }

@@ -271,6 +271,7 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
     while let Some(s) = source.read_sample().map_err(PipelineError::Source)? {
         span_us = Some((span_us.map_or(s.t_us, |(a, _)| a), s.t_us));
         let usable = s.flags.usable();
+        lost.set_aligning(navigator.is_aligning());
         lost.note(s.t_us, usable.then_some(f64::from(s.dt_s)));
         while let Some(f) = next_fix.next_if(|f| f.t_us <= s.t_us) {
             navigator.push_fix(crate::gnss_file::narrow::<T>(f));

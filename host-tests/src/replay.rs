@@ -285,6 +285,7 @@ pub fn replay_aided<T: Scalar>(
         return Err(anyhow!("an aided replay needs the run's aiding settings").into());
     }
     crate::atomic::refuse_same_file(&[imu, gnss], out)?;
+    gnss_file::refuse_the_imu_recording(gnss, imu)?;
     let GnssFixes {
         fixes,
         bad_time_tags,

@@ -37,7 +37,7 @@ use plotters::prelude::*;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::fs::File;
-use std::io::{self, BufRead, BufReader, IsTerminal, Read};
+use std::io::{self, BufRead, BufReader, IsTerminal, Read, Write as _};
 use std::path::{Path, PathBuf};
 
 /// Slack [s] at the ends of the truth's span: the solution log's time resolution.
@@ -765,7 +765,7 @@ pub fn report_files(
     }
     out.push_str(&format_table(&series, at_s));
     if let Some(dir) = plots {
-        for path in write_plots(&series, dir)? {
+        for path in write_plots(&series, dir, &[solution, truth])? {
             let _ = writeln!(out, "plot: {}", path.display());
         }
     }
@@ -819,9 +819,11 @@ const COLORS: [RGBColor; 4] = [
 
 /// Writes `attitude_errors.svg`, `velocity_errors.svg` and `position_errors.svg` into `dir`
 /// (created if missing): the errors against time since [`ErrorSeries::t_start_s`], with the
-/// ±3-sigma envelope of each quantity whose 1-sigma the solution carries. Returns the files
-/// written.
-pub fn write_plots(series: &ErrorSeries, dir: &Path) -> Result<Vec<PathBuf>> {
+/// ±3-sigma envelope of each quantity whose 1-sigma the solution carries. Each is drawn
+/// first, then written whole ([`crate::atomic`]); a plot's path that is one of `inputs` (the
+/// same file under any name, a link to it) is refused before any is written. Returns the
+/// files written.
+pub fn write_plots(series: &ErrorSeries, dir: &Path, inputs: &[&Path]) -> Result<Vec<PathBuf>> {
     ensure!(!series.samples.is_empty(), "no errors to plot");
     ensure!(
         !dir.exists() || dir.is_dir(),
@@ -829,17 +831,27 @@ pub fn write_plots(series: &ErrorSeries, dir: &Path) -> Result<Vec<PathBuf>> {
         dir.display()
     );
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    PLOTS
+    let drawn = PLOTS
         .iter()
         .map(|spec| {
             let path = dir.join(spec.file);
-            plot(&path, spec, series).map_err(|e| anyhow!("writing {}: {e}", path.display()))?;
+            crate::atomic::refuse_same_file(inputs, &path)?;
+            let svg = plot(spec, series).map_err(|e| anyhow!("drawing {}: {e}", path.display()))?;
+            Ok((path, svg))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    drawn
+        .into_iter()
+        .map(|(path, svg)| {
+            crate::atomic::write(&path, |w| w.write_all(svg.as_bytes()))
+                .with_context(|| format!("writing {}", path.display()))?;
             Ok(path)
         })
         .collect()
 }
 
-fn plot(path: &Path, spec: &PlotSpec, series: &ErrorSeries) -> Result<(), String> {
+/// One plot, as SVG text.
+fn plot(spec: &PlotSpec, series: &ErrorSeries) -> Result<String, String> {
     let t0 = series.t_start_s;
     let lines: Vec<(Quantity, Vec<(f64, f64)>)> = spec
         .lines
@@ -885,7 +897,8 @@ fn plot(path: &Path, spec: &PlotSpec, series: &ErrorSeries) -> Result<(), String
             });
 
     let e = |e: &dyn std::fmt::Display| e.to_string();
-    let root = SVGBackend::new(path, (1000, 600)).into_drawing_area();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (1000, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(|x| e(&x))?;
     let mut chart = ChartBuilder::on(&root)
         .caption(spec.title, ("sans-serif", 22))
@@ -931,7 +944,10 @@ fn plot(path: &Path, spec: &PlotSpec, series: &ErrorSeries) -> Result<(), String
         .border_style(BLACK)
         .draw()
         .map_err(|x| e(&x))?;
-    root.present().map_err(|x| e(&x))
+    root.present().map_err(|x| e(&x))?;
+    drop(chart);
+    drop(root);
+    Ok(svg)
 }
 
 /// A tick label for `y` on an axis spanning `span`: enough decimals for ticks a tenth of the
@@ -1020,7 +1036,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let file = dir.path().join("plots");
         std::fs::write(&file, "not a directory").unwrap();
-        let e = write_plots(&series, &file).unwrap_err().to_string();
+        let e = write_plots(&series, &file, &[]).unwrap_err().to_string();
         assert!(e.contains("is a file, not a directory"), "{e}");
         assert_eq!(std::fs::read_to_string(&file).unwrap(), "not a directory");
     }

@@ -425,6 +425,62 @@ fn kf_gins_runs_a_configuration_as_it_is() {
     assert!(dir.path().join("KF_GINS_Navresult.nav").exists());
 }
 
+/// `nav kf-gins` with an `endtime` inside the data: the epochs before `starttime` are counted,
+/// and the run says where it stopped reading rather than counting the rows after `endtime`
+/// (it read one of them: "IMU epochs outside starttime..endtime: 1" with 2000 beyond it).
+#[test]
+fn kf_gins_says_where_it_stopped_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = data_set(dir.path(), 20.0);
+    let start = FilterBenchOptions::default().start_sow_s;
+    let text = std::fs::read_to_string(&data.config).unwrap();
+    let config = dir.path().join("window.yaml");
+    let with_end = text.replace("endtime: -1", &format!("endtime: {}", start + 10.0));
+    assert_ne!(with_end, text);
+    std::fs::write(&config, with_end).unwrap();
+    let out = dir.path().join("window.nav");
+    let printed = run_ok(nav().arg("kf-gins").arg(&config).arg("--out").arg(&out));
+    assert!(
+        printed.contains("IMU epochs before starttime: 0"),
+        "{printed}"
+    );
+    assert!(
+        printed.contains(&format!(
+            "IMU file read up to endtime: the epochs from t = {:.3} s on were not read",
+            start + 10.005
+        )),
+        "{printed}"
+    );
+    assert!(!printed.contains("outside starttime"), "{printed}");
+}
+
+/// A GNSS file that is the IMU recording (KF-GINS's IMU and GNSS files both have 7 columns)
+/// is refused, by `nav kf-gins` and `nav replay` alike. Was: read as fixes at latitude 0 with
+/// negative 1-sigmas, every one refused, a free-inertial trajectory with status 0.
+#[test]
+fn the_imu_recording_as_the_gnss_file_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = data_set(dir.path(), 20.0);
+    let text = std::fs::read_to_string(&data.config).unwrap();
+    let imu = dir.path().join("imu.txt");
+    let gnss_line = text.lines().find(|l| l.starts_with("gnsspath:")).unwrap();
+    let config = dir.path().join("same.yaml");
+    std::fs::write(
+        &config,
+        text.replace(gnss_line, &format!("gnsspath: \"{}\"", imu.display())),
+    )
+    .unwrap();
+    let out = dir.path().join("same.nav");
+    let e = run_err(nav().arg("kf-gins").arg(&config).arg("--out").arg(&out));
+    assert!(e.contains("gnsspath and imupath: the GNSS file"), "{e}");
+    assert!(e.contains("is the IMU recording"), "{e}");
+    assert!(!out.exists());
+    let out = dir.path().join("same.csv");
+    let e = run_err(&mut replay_gnss(&imu, &imu, &out, &GIVEN));
+    assert!(e.contains("is the IMU recording"), "{e}");
+    assert!(!out.exists());
+}
+
 /// `nav kf-gins --imu-err --std`: KF-GINS's two other files, one row per `.nav` row at its
 /// time, in KF-GINS's units (the first 1-sigma row is the configuration's `init*std`), and a
 /// 1-sigma that tells the trajectory's error against the truth.
@@ -1211,6 +1267,35 @@ fn a_start_in_motion_carries_the_declared_correlated_error() {
     }
 }
 
+/// A start in motion on fixes 5 s apart cannot start (it takes two fixes as an interval only
+/// within 2 s): the refusal says so, and leaves no log. Was: "no GNSS fix found the vehicle
+/// level", as if the motion were to blame.
+#[test]
+fn start_in_motion_on_sparse_fixes_names_their_interval() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run_ok(
+        nav()
+            .args(["sim", "land-vehicle", "--grade", "fog", "--seconds", "60"])
+            .args(["--gnss-rate", "0.2", "--format", "bin", "--out"])
+            .arg(d),
+    );
+    let out = d.join("sol.csv");
+    let e = run_err(&mut replay_gnss(
+        &d.join("imu.bin"),
+        &d.join("gnss.csv"),
+        &out,
+        &["--start-in-motion"],
+    ));
+    assert!(
+        e.contains(
+            "no two GNSS fixes are within 2 s of each other (the closest are 5.000 s apart)"
+        ),
+        "{e}"
+    );
+    assert!(!out.exists());
+}
+
 /// `nav bench consistency --families`: one row per family, on consecutive seeds, and the
 /// families' inside fractions with their mean.
 /// `nav bench outliers --runs N --first-seed S`: the table of seed S, then each outlier over
@@ -1535,6 +1620,45 @@ fn lost_imu_time_is_reported() {
         &GIVEN,
     ));
     assert!(!text.contains("missing in"), "{text}");
+}
+
+/// 6 s of IMU records lost inside the static alignment's window (its averages take them), or
+/// before a start in motion: said as such, not as a solution lost ("a gap beyond 5 s is not
+/// bridged: the solution is lost from there", of a run that navigated well from its start).
+#[test]
+fn lost_imu_time_before_navigation_is_not_a_lost_solution() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    lv_fog(d);
+    let mut rec = host_tests::recording_io::read(&d.join("imu.bin")).unwrap();
+    rec.records.drain(800..800 + 2_400);
+    let imu = d.join("gap.bin");
+    std::fs::write(&imu, rec.to_bytes().unwrap()).unwrap();
+    let text = run_ok(
+        nav()
+            .arg("replay")
+            .arg("--imu")
+            .arg(&imu)
+            .args(["--imu-noise", "fog"])
+            // 10 s of samples: the window ends at 16 s, before the car starts (20 s).
+            .args(&ALIGNED[..6])
+            .args(["--align-seconds", "10"])
+            .arg("--out")
+            .arg(d.join("sol.csv")),
+    );
+    let before = "s of IMU data missing in 1 gap(s) before navigation started";
+    assert!(text.contains(before), "{text}");
+    assert!(!text.contains("is not bridged"), "{text}");
+    let out = d.join("motion.csv");
+    let text = run_ok(&mut replay_gnss(
+        &imu,
+        &d.join("gnss.csv"),
+        &out,
+        &["--start-in-motion"],
+    ));
+    assert!(text.contains("filter started at t = "), "{text}");
+    assert!(text.contains(before), "{text}");
+    assert!(!text.contains("is not bridged"), "{text}");
 }
 
 /// `nav replay` of a land vehicle whose fixes carry a velocity, 6 s of IMU records lost at

@@ -312,17 +312,19 @@ fn scenario_lengths_beyond_range_are_refused() {
             "roll_phase_deg -1e300 is not within [-360, 360] deg",
         ),
     ] {
+        // A length given by --set alone (with --seconds too, two lengths are refused).
+        let seconds: &[&str] = if set.starts_with("seconds=") {
+            &[]
+        } else {
+            &["--seconds", "5"]
+        };
         refused(
             &[
-                "sim",
-                scenario,
-                "--out",
-                out,
-                "--seconds",
-                "5",
-                "--set",
-                set,
-            ],
+                &["sim", scenario, "--out", out][..],
+                seconds,
+                &["--set", set],
+            ]
+            .concat(),
             &[expected],
         );
     }
@@ -341,6 +343,23 @@ fn scenario_lengths_beyond_range_are_refused() {
         ],
         &["seconds must be at most 1e6"],
     );
+}
+
+/// `nav sim --seconds S --set seconds=T`: two lengths that disagree are refused (--seconds
+/// was taken without a word); the same length twice is one.
+#[test]
+fn scenario_lengths_given_twice_must_agree() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let out = out.to_str().unwrap();
+    let sim = ["sim", "static", "--out", out, "--seconds", "5", "--set"];
+    refused(
+        &[&sim[..], &["seconds=20"]].concat(),
+        &["--seconds 5 and --set seconds=20: two lengths; give one"],
+    );
+    assert!(!dir.path().join("sim").exists());
+    let o = nav(&[&sim[..], &["seconds=5"]].concat());
+    assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
 }
 
 /// `nav bench consistency --cells 0,9` printed an empty table with status 0.

@@ -106,3 +106,60 @@ fn implausible_longitude_and_height_are_refused() {
         assert!(!out.exists());
     }
 }
+
+/// `nav report --plots DIR` where a plot's name is a link to the solution: refused before any
+/// plot is written, the solution kept. Was: the plot written through the link over the
+/// solution log (plots were written in place, not whole).
+#[test]
+fn a_plot_over_an_input_is_refused_and_the_input_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let header = "t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,pitch_deg,yaw_deg";
+    let rows: String = (0..5)
+        .map(|k| format!("{k},45,7.5,150,0,0,0,1,2,{}\n", 30 + k))
+        .collect();
+    let log = format!("{header}\n{rows}# end: 5 rows, ok\n");
+    let solution = dir.path().join("sol.csv");
+    std::fs::write(&solution, &log).unwrap();
+    let truth = dir.path().join("truth.csv");
+    std::fs::write(&truth, format!("{header}\n{rows}")).unwrap();
+    let plots = dir.path().join("plots");
+    std::fs::create_dir(&plots).unwrap();
+    std::os::unix::fs::symlink("../sol.csv", plots.join("position_errors.svg")).unwrap();
+    let path = |p: &Path| p.to_str().unwrap().to_owned();
+    let o = nav(&[
+        "report",
+        "--solution",
+        &path(&solution),
+        "--truth",
+        &path(&truth),
+        "--plots",
+        &path(&plots),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("is the input"), "{}", text(&o));
+    assert_eq!(std::fs::read_to_string(&solution).unwrap(), log);
+    assert!(!plots.join("attitude_errors.svg").exists());
+    // Without the link: the three plots.
+    std::fs::remove_file(plots.join("position_errors.svg")).unwrap();
+    let o = nav(&[
+        "report",
+        "--solution",
+        &path(&solution),
+        "--truth",
+        &path(&truth),
+        "--plots",
+        &path(&plots),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    for name in [
+        "attitude_errors.svg",
+        "velocity_errors.svg",
+        "position_errors.svg",
+    ] {
+        let svg = std::fs::read_to_string(plots.join(name)).unwrap();
+        assert!(
+            svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
+            "{name}"
+        );
+    }
+}

@@ -1572,8 +1572,19 @@ fn sim(a: SimArgs) -> Result<()> {
         );
     }
     let mut scenario = Scenario::by_name(&a.scenario)?;
-    for (k, v) in key_values(&a.set)? {
+    let set = key_values(&a.set)?;
+    for &(k, v) in &set {
         scenario.set(k, v)?;
+    }
+    // Two lengths that disagree: --seconds took precedence without a word.
+    if let (Some(given), Some(&(_, v))) = (a.seconds, set.iter().rfind(|(k, _)| *k == "seconds"))
+        && given != v
+    {
+        anyhow::bail!(
+            "--seconds {} and --set seconds={}: two lengths; give one",
+            nav_core::number::Number(given),
+            nav_core::number::Number(v)
+        );
     }
     if a.list_params {
         println!("{} parameters:", scenario.name());
@@ -2184,10 +2195,12 @@ fn run(cli: Cli) -> Result<()> {
                     println!("{what}: {} ({} rows)", p.display(), run.rows);
                 }
             }
-            println!(
-                "IMU epochs outside starttime..endtime: {}",
-                run.outside_window
-            );
+            println!("IMU epochs before starttime: {}", run.before_start);
+            if let Some(t) = run.stopped_after_end_s {
+                println!(
+                    "IMU file read up to endtime: the epochs from t = {t:.3} s on were not read"
+                );
+            }
             println!(
                 "the filter's 1-sigma, RMS over the rows: horizontal {:.4} m, yaw {:.4} deg",
                 run.sigma_rms.horizontal_m, run.sigma_rms.yaw_deg
