@@ -28,10 +28,15 @@ pub fn noise_of_spec(n: &NoiseSpec) -> FilterNoise<f64> {
 /// The filter's assumptions for a grade: its white noise, and per axis the largest of the
 /// fixed bias, the turn-on 1-sigma and the Gauss–Markov 1-sigma (as the alignment's);
 /// scale factors: the largest fixed scale error; cross-axis coupling: the RMS of the six
-/// misalignment elements ([`off_diagonal_rms`]); correlation time 1 h. The start's sensor 1-sigma is the same figure, the
+/// misalignment elements ([`off_diagonal_rms`]); correlation time
+/// [`FILTER_CORRELATION_TIME_S`]. The start's sensor 1-sigma is the same figure, the
 /// process's stationary one, so its covariance does not decay; conservative (the turn-on
-/// spread is let wander in-run as well), used by `nav replay --imu-noise`, whose starts in
-/// motion and from the alignment take the sensor 1-sigma from the noise model alone.
+/// spread is let wander in-run as well, at `sigma sqrt(2 / tau)`: a consumer gyro's 0.5 deg/s
+/// wanders 255 deg/h per sqrt(h), against the grade's 10), used by `nav replay --imu-noise`,
+/// whose starts in motion and from the alignment take the sensor 1-sigma from the noise model
+/// alone. With 1 h it wandered 100 times faster (a consumer gyro's bias 0.14 deg/s in 150 s):
+/// on a straight flight the filter's heading walked with its bias estimate, 25-50 deg off
+/// after 900 s against a 16 deg 1-sigma, from a perfect IMU.
 pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {
     let m = grade.model();
     let spec = grade.noise_spec();
@@ -43,7 +48,7 @@ pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {
         accel_bias_mps2: spec.accel_bias_mps2.max(1e-7),
         gyro_scale: scale(&m.gyro),
         accel_scale: scale(&m.accel),
-        correlation_time_s: 3600.0,
+        correlation_time_s: FILTER_CORRELATION_TIME_S,
         gyro_cross_coupling_rad: off_diagonal_rms(&m.gyro.misalignment),
         accel_cross_coupling_rad: off_diagonal_rms(&m.accel.misalignment),
         gyro_g_sensitivity: m.g_sensitivity_rad_s_per_m_s2.amax(),
