@@ -66,8 +66,9 @@ pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {
 /// `1 - exp(-2 t / tau)` of itself, 86 % in an hour with KF-GINS's usual `corrtime` of 1 h,
 /// while the true constant stays. That made the bias blocks' NEES grow 7-fold over 1 h runs
 /// (fog, rlg) and the attitude overconfident with them. With 100 h it loses 2 % in an hour;
-/// the drive `2 sigma^2 / tau` stays the grade's in-run drift (sigma follows tau).
-pub const FILTER_CORRELATION_TIME_S: f64 = 360_000.0;
+/// the drive `2 sigma^2 / tau` stays the grade's in-run drift (sigma follows tau). The same
+/// as the navigator's default for a data sheet's figures (the firmware's).
+pub const FILTER_CORRELATION_TIME_S: f64 = nav_core::navigator::config::DEFAULT_CORRELATION_TIME_S;
 
 /// A simulated Gauss–Markov bias shorter than this [s] is not a drift of the bias state (it
 /// decorrelates between a few GNSS fixes): a gyro's is the filter's bias-instability consider

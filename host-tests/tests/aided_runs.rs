@@ -1896,7 +1896,15 @@ fn a_consumer_model_keeps_the_heading_honest_on_a_straight_flight() {
     run_ok(
         nav()
             .args(["sim", "flight", "--grade", "ideal", "--seconds", "900"])
-            .args(["--rate", "100", "--gnss-rate", "2", "--format", "bin", "--out"])
+            .args([
+                "--rate",
+                "100",
+                "--gnss-rate",
+                "2",
+                "--format",
+                "bin",
+                "--out",
+            ])
             .arg(d),
     );
     let truth = std::fs::read_to_string(d.join("truth.csv")).unwrap();

@@ -92,9 +92,14 @@ pub fn filter_noise_of<T: Scalar>(n: &SensorNoise<f64>) -> FilterNoise<T> {
 /// Default scale-factor 1-sigma of the aided phase's filter [-] (1000 ppm: the noise model
 /// has no scale-factor figure).
 pub const DEFAULT_SCALE_SIGMA: f64 = 1e-3;
-/// Default correlation time of the filter's Gauss–Markov sensor errors [s] (1 h, KF-GINS's
-/// usual `corrtime`).
-pub const DEFAULT_CORRELATION_TIME_S: f64 = 3600.0;
+/// Default correlation time of the filter's Gauss–Markov sensor errors [s]: 100 h, far
+/// beyond a run. A data sheet's bias figure is mostly a turn-on spread (a constant); the
+/// Gauss–Markov drive `2 sigma^2 / tau` lets the estimate wander at `sigma sqrt(2 / tau)`,
+/// still far beyond a part's in-run drift (a consumer gyro's 0.5 deg/s: 255 deg/h per
+/// sqrt(h)). With KF-GINS's usual 1 h it wandered ten times faster still (0.14 deg/s in
+/// 150 s), and on a straight flight the heading walked with the gyro-bias estimate: 25-50
+/// deg off against a 16 deg 1-sigma, from a perfect consumer-grade IMU (BMI088, ICM-42688).
+pub const DEFAULT_CORRELATION_TIME_S: f64 = 360_000.0;
 /// Default cross-axis coupling (misalignment) 1-sigma of gyros and accelerometers [rad]
 /// (0.1 deg, what tactical MEMS data sheets give).
 pub const DEFAULT_CROSS_COUPLING_RAD: f64 = 1.745e-3;
