@@ -168,7 +168,7 @@ impl Format for Static<'_> {
             AlignError::SpecificForceNotGravity(m) => write!(f, "{}", Gravity(m)),
             AlignError::BaseRotating => write!(
                 f,
-                "mean angular rate exceeds the Earth rate (base turning?)"
+                "mean angular rate exceeds the Earth rate: the base turning, or gyro biases beyond the Earth rate (a part that cannot find north: start in motion, or from a given attitude)"
             ),
             AlignError::HeadingUnobservable => write!(
                 f,

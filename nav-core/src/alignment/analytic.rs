@@ -67,7 +67,11 @@ impl core::fmt::Display for AlignError {
             Self::NoSamples => f.write_str("no samples to align on"),
             Self::SpecificForceNotGravity(m) => write!(f, "{m}"),
             Self::BaseRotating => {
-                f.write_str("mean angular rate exceeds the Earth rate (base turning?)")
+                f.write_str(
+                    "mean angular rate exceeds the Earth rate: the base turning, or gyro biases beyond \
+                     the Earth rate (a part that cannot find north: start in motion, or from a given \
+                     attitude)",
+                )
             }
             Self::HeadingUnobservable => f.write_str(
                 "horizontal Earth rate not measurable for gyrocompassing (near a pole, or gyros too coarse or biased)",
