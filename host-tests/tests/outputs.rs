@@ -126,30 +126,25 @@ fn a_plot_over_an_input_is_refused_and_the_input_kept() {
     std::fs::create_dir(&plots).unwrap();
     std::os::unix::fs::symlink("../sol.csv", plots.join("position_errors.svg")).unwrap();
     let path = |p: &Path| p.to_str().unwrap().to_owned();
-    let o = nav(&[
-        "report",
-        "--solution",
-        &path(&solution),
-        "--truth",
-        &path(&truth),
-        "--plots",
-        &path(&plots),
-    ]);
+    let report = || {
+        nav(&[
+            "report",
+            "--solution",
+            &path(&solution),
+            "--truth",
+            &path(&truth),
+            "--plots",
+            &path(&plots),
+        ])
+    };
+    let o = report();
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(text(&o).contains("is the input"), "{}", text(&o));
     assert_eq!(std::fs::read_to_string(&solution).unwrap(), log);
     assert!(!plots.join("attitude_errors.svg").exists());
     // Without the link: the three plots.
     std::fs::remove_file(plots.join("position_errors.svg")).unwrap();
-    let o = nav(&[
-        "report",
-        "--solution",
-        &path(&solution),
-        "--truth",
-        &path(&truth),
-        "--plots",
-        &path(&plots),
-    ]);
+    let o = report();
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     for name in [
         "attitude_errors.svg",

@@ -473,35 +473,8 @@ mod tests {
         assert!(!m.has_level());
     }
 
-    /// Level at rest, then `dt_s` later a fix 14 m/s east on average: a start at once when the
-    /// fixes are consecutive, none across an outage (its mean velocity is not the velocity at
-    /// the fix, and the vehicle may have turned and climbed meanwhile).
-    fn start_after(dt_s: f64) -> Option<MotionStart<f64>> {
-        let mut m = MotionAlign::new(MotionAlignConfig::default(), Vector3::zeros());
-        let still = GnssVelocity {
-            v_ned_m_s: Vector3::zeros(),
-            sigma_ned_m_s: Vector3::repeat(0.05),
-        };
-        for k in 0..3 {
-            m.add_imu(&still_for(0.01));
-            assert!(
-                m.add_fix(f64::from(k), &fix(0.0, 0.0), Some(&still))
-                    .is_none()
-            );
-        }
-        assert!(m.has_level());
-        m.add_imu(&still_for(dt_s));
-        m.add_fix(2.0 + dt_s, &fix(0.0, 14.0 * dt_s), None)
-    }
-
-    /// Level at rest, then a fix with the receiver's velocity while the body rolls at 0.5
-    /// rad/s (a car rocking on rough ground) and the antenna sits 2 m above the IMU: the
-    /// antenna moves 1 m/s sideways relative to the IMU. The start's velocity is the IMU's,
-    /// within 3 of its 1-sigma, and so is its heading (was: the antenna's, 20 sigma off, and the
-    /// track 6 deg off).
-    #[test]
-    fn the_start_takes_out_the_lever_arm_velocity() {
-        let lever_arm_b_m = Vector3::new(0.0, 0.0, -2.0);
+    /// A start that found the level over 2 s at rest with the receiver's velocity.
+    fn levelled_at_rest(lever_arm_b_m: Vector3<f64>) -> MotionAlign<f64> {
         let mut m = MotionAlign::new(MotionAlignConfig::default(), lever_arm_b_m);
         let still = GnssVelocity {
             v_ned_m_s: Vector3::zeros(),
@@ -515,6 +488,27 @@ mod tests {
             );
         }
         assert!(m.has_level());
+        m
+    }
+
+    /// Level at rest, then `dt_s` later a fix 14 m/s east on average: a start at once when the
+    /// fixes are consecutive, none across an outage (its mean velocity is not the velocity at
+    /// the fix, and the vehicle may have turned and climbed meanwhile).
+    fn start_after(dt_s: f64) -> Option<MotionStart<f64>> {
+        let mut m = levelled_at_rest(Vector3::zeros());
+        m.add_imu(&still_for(dt_s));
+        m.add_fix(2.0 + dt_s, &fix(0.0, 14.0 * dt_s), None)
+    }
+
+    /// Level at rest, then a fix with the receiver's velocity while the body rolls at 0.5
+    /// rad/s (a car rocking on rough ground) and the antenna sits 2 m above the IMU: the
+    /// antenna moves 1 m/s sideways relative to the IMU. The start's velocity is the IMU's,
+    /// within 3 of its 1-sigma, and so is its heading (was: the antenna's, 20 sigma off, and the
+    /// track 6 deg off).
+    #[test]
+    fn the_start_takes_out_the_lever_arm_velocity() {
+        let lever_arm_b_m = Vector3::new(0.0, 0.0, -2.0);
+        let mut m = levelled_at_rest(lever_arm_b_m);
         // Heading north at 10 m/s, rolling right at 0.5 rad/s: omega x l = (0, 1, 0) m/s.
         let roll_rate = 0.5;
         let dt = 0.01;
