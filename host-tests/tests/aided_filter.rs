@@ -5,7 +5,7 @@ use host_tests::truth::{MeridianFlight, Stationary};
 use nav_core::attitude::{from_euler, rotation_vector_of, rotation_vector_quat};
 use nav_core::ins_filter::model::FilterNoise;
 use nav_core::ins_filter::{
-    ATT, AidResult, AidedIns, FilterConfig, GnssPosition, InitialSigma, POS, SensorErrors, VEL,
+    ATT, AidResult, AidedIns, BG, FilterConfig, GnssPosition, InitialSigma, POS, SensorErrors, VEL,
 };
 use nav_core::{ImuIncrement, NavState, Position, Vector3};
 use rand::SeedableRng;
@@ -245,6 +245,86 @@ fn a_stop_is_detected_and_zero_velocity_updates_bound_the_velocity() {
     assert!(c.zero_rate.accepted >= 110, "{c:?}");
     assert!(ins.state().v_eb_n.norm() < 0.01, "{}", ins.state().v_eb_n);
     assert!(ins.sigma(VEL).x < 0.02);
+}
+
+/// A consumer gyro at rest, its 1 deg/s bias on the vertical axis twice its 0.5 deg/s prior
+/// 1-sigma, and the solution started 1 deg off level (the levelled specific force reads
+/// 0.17 m/s^2 of it): both beyond the stop detector's own thresholds (0.5 deg/s, 0.1 m/s^2),
+/// which widen by the filter's 1-sigmas of what they measure. Without that the detector never
+/// declared the stop whose zero-rate update alone finds the bias (a consumer flight's first
+/// minute on the ground turned its heading by 60 deg against a 16 deg 1-sigma). The stop is
+/// taken, the bias found within its 1-sigma and the heading kept.
+#[test]
+fn a_consumer_gyro_bias_beyond_the_rate_threshold_is_found_at_a_stop() {
+    let (lat, h) = (0.98, 80.0);
+    let body = Stationary {
+        lat,
+        lon: 0.7,
+        h,
+        q_b_ned: from_euler(0.0, 0.0, -1.0),
+    };
+    let truth = NavState::at_rest(Position::from_radians(lat, 0.7, h), body.q_b_ned);
+    let consumer = FilterNoise {
+        arw_rad_per_sqrt_s: 0.168f64.to_radians() / 60.0,
+        vrw_mps_per_sqrt_s: 70e-6 * 9.81,
+        gyro_bias_rad_s: 0.5f64.to_radians(),
+        accel_bias_mps2: 0.02 * 9.81,
+        gyro_scale: 5e-3,
+        accel_scale: 5e-3,
+        ..noise()
+    };
+    let sigma = InitialSigma {
+        attitude_rad: Vector3::new(1.0, 1.0, 2.0).map(f64::to_radians),
+        gyro_bias_rad_s: Vector3::repeat(consumer.gyro_bias_rad_s),
+        accel_bias_mps2: Vector3::repeat(consumer.accel_bias_mps2),
+        gyro_scale: Vector3::repeat(consumer.gyro_scale),
+        accel_scale: Vector3::repeat(consumer.accel_scale),
+        ..sigma0()
+    };
+    let start = NavState {
+        q_b_n: from_euler(1f64.to_radians(), 0.0, -1.0),
+        ..truth
+    };
+    let mut ins = AidedIns::new(
+        start,
+        SensorErrors::default(),
+        &sigma,
+        FilterConfig::new(consumer),
+    )
+    .unwrap();
+    let b_g = Vector3::new(0.2, -0.3, 1.0).map(f64::to_radians);
+    let dt = 0.0025;
+    let exact = body.increment(dt);
+    let inc = ImuIncrement {
+        delta_theta_ib_b: exact.delta_theta_ib_b + b_g * dt,
+        ..exact
+    };
+    for _ in 0..400 * 30 {
+        ins.step(&inc).unwrap();
+    }
+    let c = ins.counters();
+    assert!(ins.is_still());
+    // 0.5 s windows: 59 in 30 s, the first update after two.
+    assert!(c.zero_rate.accepted >= 50, "{c:?}");
+    let (b_hat, s_bg) = (ins.sensor_errors().gyro_bias_rad_s, ins.sigma(BG));
+    for k in 0..3 {
+        let e = b_hat[k] - b_g[k];
+        assert!(
+            e.abs() < 3.0 * s_bg[k],
+            "axis {k}: error {e:e} rad/s, 1-sigma {:e}",
+            s_bg[k]
+        );
+        assert!(
+            s_bg[k] < 0.02f64.to_radians(),
+            "axis {k}: 1-sigma {:e}",
+            s_bg[k]
+        );
+    }
+    // The heading drifted only until the first stop (1 s at 1 deg/s), within its 1-sigma.
+    let z = z_scores(&ins, &truth);
+    assert!(z[8].abs() < 3.0, "{z:?}");
+    let yaw_error = (ins.state().euler().2 - truth.euler().2).abs().to_degrees();
+    assert!(yaw_error < 2.0, "yaw off by {yaw_error} deg");
 }
 
 /// A car easing to a stop: 2 m/s north, braking `a(t) = A sin^2(pi t / D)` over `D` = 10 s

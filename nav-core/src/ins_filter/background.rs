@@ -13,7 +13,7 @@ use super::integrity::{
 };
 use super::limits;
 use super::model;
-use super::stationarity::StillWindow;
+use super::stationarity::{StillWindow, Uncertainty};
 use super::{
     ATT, BA, BG, Covariance, FilterConfig, FilterError, FilterStatus, InitialSigma, N, POS, SG,
     StateVector, VEL,
@@ -54,6 +54,9 @@ pub struct Snapshot<T: Scalar> {
 pub struct Correction<T: Scalar> {
     /// The error state.
     pub x: StateVector<T>,
+    /// The filter's gyro-bias and tilt 1-sigmas after the update (the stop detector's
+    /// allowance, [`Uncertainty`]).
+    pub uncertainty: Uncertainty<T>,
 }
 
 /// A measurement `z = H x + v`, `v ~ N(0, diag(r))`, `z` predicted minus measured; row `i`
@@ -111,6 +114,10 @@ pub struct ErrorFilter<T: Scalar> {
     /// The consider states' model and cross-covariance `P_ac` ([`consider`]).
     consider: ConsiderModel<T>,
     p_ac: CrossCovariance<T>,
+    /// The last propagation's attitude `C_b_n` and specific force `f_ib_n` [m/s^2] (the stop
+    /// detector's allowance, [`Self::uncertainty`]).
+    c_b_n: Matrix3<T>,
+    f_ib_n: Vector3<T>,
 }
 
 impl<T: Scalar> ErrorFilter<T> {
@@ -156,6 +163,8 @@ impl<T: Scalar> ErrorFilter<T> {
             restart: None,
             consider,
             p_ac,
+            c_b_n: *nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), yaw).matrix(),
+            f_ib_n: Vector3::new(T::zero(), T::zero(), -T::c(crate::earth::GAMMA_EQUATOR)),
         })
     }
 
@@ -195,6 +204,36 @@ impl<T: Scalar> ErrorFilter<T> {
         };
         Vector3::from_fn(|k, _| self.p[(at + k, at + k)] + doubt[k])
             .map(|v| v.max(T::zero()).sqrt())
+    }
+
+    /// What the stop detector allows for ([`Uncertainty`]): the largest gyro-bias 1-sigma, and
+    /// the largest 1-sigma of the north and east specific-force errors, the velocity error's
+    /// rate `[f_n x] phi + C_b_n b_a` of the system matrix ([`model::system_matrix`]) at the
+    /// last propagation, with the tilt and bias correlations the stops have built.
+    pub fn uncertainty(&self) -> Uncertainty<T> {
+        let mut h = SMatrix::<T, 2, 6>::zeros();
+        let skew_f = model::skew(&self.f_ib_n);
+        h.fixed_view_mut::<2, 3>(0, 0)
+            .copy_from(&skew_f.fixed_rows::<2>(0));
+        h.fixed_view_mut::<2, 3>(0, 3)
+            .copy_from(&self.c_b_n.fixed_rows::<2>(0));
+        let mut p = SMatrix::<T, 6, 6>::zeros();
+        for (i, a) in [ATT, ATT + 1, ATT + 2, BA, BA + 1, BA + 2]
+            .into_iter()
+            .enumerate()
+        {
+            for (j, b) in [ATT, ATT + 1, ATT + 2, BA, BA + 1, BA + 2]
+                .into_iter()
+                .enumerate()
+            {
+                p[(i, j)] = self.p[(a, b)];
+            }
+        }
+        let var = (h * p * h.transpose()).diagonal();
+        Uncertainty {
+            gyro_bias_rad_s: self.sigma(BG).max(),
+            horizontal_force_mps2: var.max().max(T::zero()).sqrt(),
+        }
     }
 
     /// The doubt on the position, NED [m^2]: of a refused cluster that is not gross
@@ -307,6 +346,8 @@ impl<T: Scalar> ErrorFilter<T> {
     pub fn propagate(&mut self, prop: &Propagation<T>) {
         let f = model::system_matrix(&prop.lin, &self.config.noise, self.config.scale_factors);
         let phi = Transition::new(&f, prop.dt);
+        self.c_b_n = prop.lin.c_b_n;
+        self.f_ib_n = prop.lin.c_b_n * prop.lin.f_ib_b;
         let mut q = model::noise_density(&self.config.noise, self.config.scale_factors);
         // A bridged gap's unknown motion, spread as driving noise over the interval
         // ([`crate::gap::GapDynamics`]).
@@ -537,7 +578,10 @@ impl<T: Scalar> ErrorFilter<T> {
                 consider::update(&mut self.p_ac, k, &hi, seen, &self.consider);
             }
         }
-        let correction = Correction { x: self.x };
+        let correction = Correction {
+            x: self.x,
+            uncertainty: self.uncertainty(),
+        };
         if let Some(c) = &self.cluster {
             // Another aid's correction while fixes are refused (a position fix's ends the
             // cluster before its update).
@@ -861,7 +905,10 @@ impl<T: Scalar> ErrorFilter<T> {
         let (rr, cr) = self.update(&Measurement::of_states(z, h, r));
         self.counters.zero_rate.count(&rr);
         let c = match (cv, cr) {
-            (Some(a), Some(b)) => Some(Correction { x: a.x + b.x }),
+            (Some(a), Some(b)) => Some(Correction {
+                x: a.x + b.x,
+                uncertainty: b.uncertainty,
+            }),
             (a, b) => a.or(b),
         };
         (rv, rr, c)

@@ -4,7 +4,7 @@
 
 use super::background::{Correction, Snapshot};
 use super::model::Linearisation;
-use super::stationarity::{Stationarity, StillWindow};
+use super::stationarity::{Stationarity, StillWindow, Uncertainty};
 use super::{ATT, BA, BG, FilterConfig, FilterError, POS, SA, SG, SensorErrors, VEL};
 use crate::attitude::rotation_vector_quat;
 use crate::earth::LocalEarth;
@@ -167,6 +167,14 @@ impl<T: Scalar> AidedMechanization<T> {
         self.detector.as_ref().is_some_and(|d| d.is_still())
     }
 
+    /// Gives the stop detector the filter's uncertainty ([`Uncertainty`]); every correction
+    /// brings the current one, a start the initial 1-sigmas.
+    pub fn allow_for(&mut self, u: Uncertainty<T>) {
+        if let Some(d) = &mut self.detector {
+            d.allow_for(u);
+        }
+    }
+
     /// Forgets the previous increment after a gap in the data.
     pub fn restart_increments(&mut self) {
         self.nav.restart_increments();
@@ -302,5 +310,6 @@ impl<T: Scalar> AidedMechanization<T> {
         let st = *self.nav.state();
         self.snapshot.state = st;
         self.snapshot.earth = local_earth(&st);
+        self.allow_for(c.uncertainty);
     }
 }

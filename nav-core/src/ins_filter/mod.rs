@@ -290,9 +290,10 @@ impl<T: Scalar> AidedIns<T> {
         sigma: &InitialSigma<T>,
         config: FilterConfig<T>,
     ) -> Result<Self, FilterError> {
-        let mech = AidedMechanization::new(state, sensors, &config)?;
+        let mut mech = AidedMechanization::new(state, sensors, &config)?;
         let yaw = mech.state().euler().2;
         let filter = ErrorFilter::new(sigma, yaw, config)?;
+        mech.allow_for(sigma.uncertainty(mech.snapshot().earth.g));
         Ok(Self { mech, filter })
     }
 
@@ -310,6 +311,7 @@ impl<T: Scalar> AidedIns<T> {
     ) -> Result<Self, FilterError> {
         let mut ins = Self::new(state, *lost.sensor_errors(), sigma, *lost.config())?;
         ins.filter.take_sensors_from(&lost.filter, elapsed_s);
+        ins.mech.allow_for(ins.filter.uncertainty());
         Ok(ins)
     }
 

@@ -1,6 +1,7 @@
 //! The navigation filter's error state vector: named offsets, sizes and the initial
 //! uncertainty.
 
+use super::stationarity::Uncertainty;
 use crate::Scalar;
 use nalgebra::{SMatrix, SVector, Vector3};
 
@@ -46,6 +47,19 @@ pub struct InitialSigma<T: Scalar> {
 }
 
 impl<T: Scalar> InitialSigma<T> {
+    /// What the stop detector allows for at the start ([`Uncertainty`]): the largest gyro-bias
+    /// 1-sigma; the largest tilt's at gravity `g` [m/s^2] with the largest accelerometer
+    /// bias's (independent at the start).
+    pub fn uncertainty(&self, g: T) -> Uncertainty<T> {
+        let att = &self.attitude_rad;
+        let tilt = g * att.x.max(att.y);
+        let ba = self.accel_bias_mps2.max();
+        Uncertainty {
+            gyro_bias_rad_s: self.gyro_bias_rad_s.max(),
+            horizontal_force_mps2: (tilt * tilt + ba * ba).sqrt(),
+        }
+    }
+
     /// The start covariance of a body at heading `yaw` [rad]: diagonal but for the tilt pair
     /// (roll and pitch errors are tilts about the body's forward and right axes: turned by the
     /// yaw into north and east ones); the scale-factor states are zero when not modelled.

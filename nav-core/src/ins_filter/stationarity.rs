@@ -5,7 +5,9 @@
 //! (`vrw^2 / dt` and `arw^2 / dt` per axis; a floor stands for vibration of a stopped engine);
 //! the mean rate must be below [`StationarityConfig::max_rate_rad_s`] and the mean specific force
 //! within [`StationarityConfig::max_gravity_error_mps2`] of gravity [Groves, §15.3.3, the
-//! acceleration-magnitude and variance tests]. The magnitude test is blind to a horizontal
+//! acceleration-magnitude and variance tests]. The rate and horizontal-force thresholds widen by
+//! the filter's own 1-sigmas of what they measure ([`Uncertainty`]): a stop must be seen before
+//! its zero-rate update can find a consumer gyro's bias. The magnitude test is blind to a horizontal
 //! acceleration `a` (it sees `a^2 / 2g`: 0.002 m/s^2 of a 0.2 m/s^2 braking), so the mean
 //! specific force is also levelled by the solution's attitude and its horizontal part held
 //! below [`StationarityConfig::max_horizontal_specific_force_mps2`]: a vehicle easing to a stop
@@ -61,6 +63,45 @@ impl<T: Scalar> Default for StationarityConfig<T> {
     }
 }
 
+/// How many 1-sigmas of the filter's own uncertainty the rate and horizontal-force tests allow
+/// beyond their thresholds [-]: about the 99.9 % radius of a 3-axis error (4.03).
+pub const UNCERTAINTY_SIGMAS: f64 = 4.0;
+
+/// The filter's 1-sigmas the detector allows for ([`Stationarity::allow_for`]): the compensated
+/// rate still holds the gyro-bias error, the levelled specific force the tilt and
+/// accelerometer-bias errors (`g phi` plus the bias: at a stop their sum is what the zero
+/// velocity sees, well known even while each alone is not). A consumer gyro's 0.5 deg/s
+/// turn-on bias, or a tilt not yet levelled to 0.58 deg, would otherwise fail a true stop
+/// until the zero-rate update that only a stop gives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Uncertainty<T: Scalar> {
+    /// Largest per-axis gyro-bias 1-sigma [rad/s].
+    pub gyro_bias_rad_s: T,
+    /// Largest 1-sigma of the levelled mean specific force's north and east components at a
+    /// stop [m/s^2].
+    pub horizontal_force_mps2: T,
+}
+
+impl<T: Scalar> Uncertainty<T> {
+    /// None: the thresholds as configured.
+    pub fn none() -> Self {
+        Self {
+            gyro_bias_rad_s: T::zero(),
+            horizontal_force_mps2: T::zero(),
+        }
+    }
+
+    /// Both figures finite and non-negative (anything else is taken as none).
+    fn sane(self) -> Self {
+        let ok = |v: T| v.finite() && v >= T::zero();
+        if ok(self.gyro_bias_rad_s) && ok(self.horizontal_force_mps2) {
+            self
+        } else {
+            Self::none()
+        }
+    }
+}
+
 /// A finished window that the detector found still: its mean compensated rate (for the
 /// zero-angular-rate update) and its length.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -86,6 +127,7 @@ pub struct Stationarity<T: Scalar> {
     sum_w: Vector3<T>,
     sum_w2: Vector3<T>,
     still_windows: u32,
+    uncertainty: Uncertainty<T>,
 }
 
 impl<T: Scalar> Stationarity<T> {
@@ -102,7 +144,14 @@ impl<T: Scalar> Stationarity<T> {
             sum_w: Vector3::zeros(),
             sum_w2: Vector3::zeros(),
             still_windows: 0,
+            uncertainty: Uncertainty::none(),
         }
+    }
+
+    /// The filter's current uncertainty, which the rate and horizontal-force tests allow
+    /// [`UNCERTAINTY_SIGMAS`] times for from the next window end on.
+    pub fn allow_for(&mut self, u: Uncertainty<T>) {
+        self.uncertainty = u.sane();
     }
 
     /// True while the last windows were still (at least `windows_to_declare` of them).
@@ -112,7 +161,10 @@ impl<T: Scalar> Stationarity<T> {
 
     /// Forgets the current window and the still count (after a gap in the data).
     pub fn restart(&mut self) {
-        *self = Self::new(self.config);
+        *self = Self {
+            uncertainty: self.uncertainty,
+            ..Self::new(self.config)
+        };
     }
 
     /// Adds one compensated sample: rate `omega_ib_b` [rad/s], specific force `f_ib_b`
@@ -161,11 +213,14 @@ impl<T: Scalar> Stationarity<T> {
         // The mean specific force in the navigation frame: at a stop `-g_n`, whatever the
         // slope the vehicle stands on; a horizontal part is an acceleration (or a tilt error).
         let f_n = q_b_n * mean_f;
+        let k = T::c(UNCERTAINTY_SIGMAS);
+        let u = &self.uncertainty;
         let still = var_ok(&self.sum_f2, &mean_df, vrw, c.accel_floor_mps2_sq)
             && var_ok(&self.sum_w2, &mean_dw, arw, c.gyro_floor_rad_s_sq)
-            && mean_w.norm() <= c.max_rate_rad_s
+            && mean_w.norm() <= c.max_rate_rad_s + k * u.gyro_bias_rad_s
             && (mean_f.norm() - g).abs() <= c.max_gravity_error_mps2
-            && (f_n.x * f_n.x + f_n.y * f_n.y).sqrt() <= c.max_horizontal_specific_force_mps2;
+            && (f_n.x * f_n.x + f_n.y * f_n.y).sqrt()
+                <= c.max_horizontal_specific_force_mps2 + k * u.horizontal_force_mps2;
         let window = StillWindow {
             omega_ib_b: mean_w,
             duration_s: self.t,
@@ -175,7 +230,7 @@ impl<T: Scalar> Stationarity<T> {
         } else {
             0
         };
-        *self = Self::new(self.config);
+        self.restart();
         self.still_windows = still_windows;
         self.is_still().then_some(window)
     }
@@ -212,6 +267,37 @@ mod tests {
         for _ in 0..400 {
             assert!(d.add(&w, &acc, &level, 0.0025, g, 1e-4, 1e-3).is_none());
         }
+    }
+
+    /// A gyro bias of 1 deg/s and a tilt error of 1 deg fail a stop without the filter's
+    /// uncertainty and pass with it (0.5 deg/s, 0.2 m/s^2 1-sigmas), also after a restart; a
+    /// non-finite allowance is none.
+    #[test]
+    fn the_thresholds_widen_by_the_filter_uncertainty() {
+        let g = 9.8;
+        let w = Vector3::new(0.0, 0.0, 1f64.to_radians());
+        let tilted = UnitQuaternion::from_euler_angles(1f64.to_radians(), 0.0, 0.0);
+        let f = Vector3::new(0.0, 0.0, -g);
+        let run = |d: &mut Stationarity<f64>| {
+            (0..800)
+                .filter(|_| d.add(&w, &f, &tilted, 0.0025, g, 1e-4, 1e-3).is_some())
+                .count()
+        };
+        let mut d = Stationarity::<f64>::new(StationarityConfig::default());
+        assert_eq!(run(&mut d), 0);
+        let u = Uncertainty {
+            gyro_bias_rad_s: 0.5f64.to_radians(),
+            horizontal_force_mps2: 0.2,
+        };
+        d.allow_for(u);
+        assert_eq!(run(&mut d), 3);
+        d.restart();
+        assert_eq!(run(&mut d), 3);
+        d.allow_for(Uncertainty {
+            horizontal_force_mps2: f64::NAN,
+            ..u
+        });
+        assert_eq!(run(&mut d), 0);
     }
 
     /// Easing to a stop: 0.2 m/s^2 of braking, level, with the specific force's magnitude

@@ -608,13 +608,14 @@ impl<T: Scalar> Navigator<T> {
                         Row::Free(row)
                     }
                     Some(config) => {
-                        let mech = AidedMechanization::new(
+                        let mut mech = AidedMechanization::new(
                             outcome.state,
                             SensorErrors::default(),
                             &config,
                         )
                         .map_err(|e| self.fail(NavError::Filter(e)))?;
                         let sigma = initial_sigma(&outcome, &config);
+                        mech.allow_for(sigma.uncertainty(mech.snapshot().earth.g));
                         let columns = columns(
                             &sigma.position_ned_m,
                             &sigma.velocity_ned_m_s,
