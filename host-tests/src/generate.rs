@@ -53,6 +53,22 @@ impl Default for Stationary {
 /// Highest sampling rate accepted [Hz] (as `nav sim`'s): timestamps are whole nanoseconds.
 pub const MAX_RATE_HZ: f64 = 100_000.0;
 
+/// Why a recording's sampling rate `rate_hz` [Hz] is not one to write (`nav generate`, `nav
+/// sim`): not finite, above [`MAX_RATE_HZ`], or so low that every increment is longer than
+/// the navigator accepts (`nav_core::InputLimits::max_dt`, 0.1 s: 10 Hz), a recording whose
+/// every sample a replay would refuse.
+pub fn check_rate(rate_hz: f64) -> Result<()> {
+    let max_dt_s = nav_core::InputLimits::<f64>::default().max_dt;
+    let min_hz = 1.0 / max_dt_s;
+    ensure!(
+        rate_hz.is_finite() && rate_hz >= min_hz && rate_hz <= MAX_RATE_HZ,
+        "the rate must be within [{min_hz}, {MAX_RATE_HZ}] Hz, not {} (below {min_hz} Hz every \
+         increment is longer than the {max_dt_s} s the navigator accepts)",
+        Number(rate_hz)
+    );
+    Ok(())
+}
+
 /// Sensor temperature written into synthetic records [deg C].
 pub const TEMPERATURE_C: f32 = 25.0;
 
@@ -87,16 +103,12 @@ impl Stationary {
     /// (with `t_ns(-1) = 0`), which is what the replay measures as `dt`; at rates dividing 1e9
     /// every interval is the nominal one.
     ///
-    /// Refused: a rate outside (0, [`MAX_RATE_HZ`]] Hz, a length giving no sample (or more
+    /// Refused: a rate [`check_rate`] refuses, a length giving no sample (or more
     /// than [`crate::simulate::MAX_SAMPLES`]), a site `nav replay` would refuse (latitude, longitude,
     /// height range), a roll, pitch or yaw beyond +-180, +-90 or +-360 deg; and, independently, any record that is not finite
     /// or not after the previous one ([`crate::output_check::check_records`]).
     pub fn recording(&self) -> Result<Recording> {
-        ensure!(
-            self.rate_hz.is_finite() && self.rate_hz > 0.0 && self.rate_hz <= MAX_RATE_HZ,
-            "the rate must be within (0, {MAX_RATE_HZ}] Hz, not {}",
-            Number(self.rate_hz)
-        );
+        check_rate(self.rate_hz)?;
         ensure!(
             self.seconds.is_finite() && self.seconds > 0.0,
             "the duration must be positive, not {} s",

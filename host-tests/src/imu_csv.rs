@@ -8,6 +8,7 @@
 //! Each row holds the angle increment `delta_theta_ib_b` [rad] and the velocity increment
 //! `delta_v_ib_b` [m/s] over the interval that ENDS at `t_s` [s], body axes forward-right-down.
 //! The optional `temp_c` column is the sensor temperature [deg C] (empty or `NaN`: unknown).
+//! A line that starts with `#` is a comment, before the header or between rows.
 //!
 //! NaN and infinite increments are parsed, not refused (the replay flags them), and so is time
 //! that does not increase (the replay flags the interval); a time that is negative, not a number

@@ -127,11 +127,7 @@ pub fn simulate(opts: &SimOptions, progress: impl FnMut(u64, u64)) -> Result<Sim
 /// The sampling of `seconds` [s] at `rate_hz` [Hz] and the number of samples between truth
 /// rows at `truth_rate_hz` [Hz], or why the three do not make a run.
 pub(crate) fn plan(rate_hz: f64, truth_rate_hz: f64, seconds: f64) -> Result<(Sampling, u64)> {
-    ensure!(
-        rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= 100_000.0,
-        "the rate must be within (0, 100000] Hz, not {}",
-        Number(rate_hz)
-    );
+    crate::generate::check_rate(rate_hz)?;
     let every = (rate_hz / truth_rate_hz).round();
     ensure!(
         truth_rate_hz > 0.0

@@ -49,7 +49,8 @@ enum Ahead {
 }
 
 /// The CSV records of a file as the project's CSV formats read them (rows of any length, fields
-/// trimmed), one at a time, one record read ahead so the last one is known as such.
+/// trimmed, lines that start with `#` comments wherever they are), one at a time, one record
+/// read ahead so the last one is known as such.
 #[derive(Debug)]
 pub struct CsvRecords<R: Read> {
     reader: csv::Reader<LastByte<R>>,
@@ -84,6 +85,8 @@ impl<R: Read> CsvRecords<R> {
             .has_headers(false)
             .flexible(true)
             .trim(csv::Trim::All)
+            // Numbers only: a quote is a character (one in a comment opens no field).
+            .quoting(false)
             .from_reader(LastByte {
                 inner: reader,
                 last: None,
@@ -111,11 +114,16 @@ impl<R: Read> CsvRecords<R> {
         }
     }
 
+    /// Reads the next record that is not a comment (its first field starts with `#`: read as
+    /// a record, not by the reader's own comment rule, so that the line numbers count it).
     fn read_ahead(&mut self) {
-        self.ahead = match self.reader.read_record(&mut self.ahead_record) {
-            Ok(true) => Ahead::Record,
-            Ok(false) => Ahead::End,
-            Err(e) => Ahead::Error(e),
+        self.ahead = loop {
+            match self.reader.read_record(&mut self.ahead_record) {
+                Ok(true) if self.ahead_record.get(0).is_some_and(|f| f.starts_with('#')) => {}
+                Ok(true) => break Ahead::Record,
+                Ok(false) => break Ahead::End,
+                Err(e) => break Ahead::Error(e),
+            }
         };
     }
 

@@ -100,7 +100,20 @@ fn recording_lengths_beyond_memory_are_refused() {
     assert!(!dir.path().join("g.bin").exists());
     refused(
         &["sim", "static", "--out", out, "--rate", "1e300"],
-        &["the rate must be within (0, 100000] Hz, not 1e300"],
+        &["the rate must be within [10, 100000] Hz, not 1e300"],
+    );
+    refused(
+        &[
+            "sim",
+            "static",
+            "--out",
+            out,
+            "--rate",
+            "5",
+            "--truth-rate",
+            "5",
+        ],
+        &["below 10 Hz every increment is longer than the 0.1 s the navigator accepts"],
     );
     refused(
         &["sim", "static", "--out", out, "--truth-rate", "1e300"],

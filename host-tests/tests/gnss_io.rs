@@ -73,6 +73,18 @@ fn read_gnss_detects_both_formats() {
         })
     );
     assert_eq!(fixes[1].lat_rad, 45.00001_f64.to_radians());
+    // `#` comment lines before the header and between rows are skipped: the same fixes.
+    let commented = dir.path().join("commented.csv");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let (head, rows) = text.split_once('\n').unwrap();
+    let (first, second) = rows.split_once('\n').unwrap();
+    std::fs::write(
+        &commented,
+        format!("# receiver X, antenna on the roof\n{head}\n{first}\n# restarted\n{second}"),
+    )
+    .unwrap();
+    assert_eq!(gnss::detect(&commented).unwrap(), GnssFormat::Csv);
+    assert_eq!(gnss::read_gnss(&commented).unwrap(), fixes);
 }
 
 #[test]
@@ -115,6 +127,12 @@ fn bad_gnss_files_name_file_line_and_column() {
             "word.csv",
             &format!("{header}\n2,45,7.5,high,0.5,0.5,1\n"),
             "word.csv: line 2: column h_m: expected a number, found 'high'",
+        ),
+        // Comment lines count in the line numbers.
+        (
+            "comment.csv",
+            &format!("# a receiver\n{header}\n# a comment\n2,45,7.5,high,0.5,0.5,1\n"),
+            "comment.csv: line 4: column h_m: expected a number, found 'high'",
         ),
     ];
     for (name, text, expected) in cases {

@@ -452,6 +452,35 @@ fn a_csv_cut_inside_its_last_field_is_refused_and_nothing_is_left_at_out() {
     assert_eq!(fr.report.samples, 8000);
 }
 
+/// `#` comment lines in a CSV recording, before the header and between rows, are skipped by
+/// the replay and by `nav convert` alike: the same samples and the same solution.
+#[test]
+fn comment_lines_in_a_csv_recording_are_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = scenario_csv(dir.path());
+    let lines: Vec<&str> = text.lines().collect();
+    let mut commented = String::from("# a bench recording\n");
+    for (k, line) in lines.iter().enumerate() {
+        if k == 4000 {
+            commented.push_str("# the IMU was re-seated here\n");
+        }
+        commented.push_str(line);
+        commented.push('\n');
+    }
+    let (plain, with) = (dir.path().join("plain.csv"), dir.path().join("with.csv"));
+    std::fs::write(&plain, &text).unwrap();
+    std::fs::write(&with, commented).unwrap();
+    let (a, log_a) = replay::<f32>(&plain, &options());
+    let (b, log_b) = replay::<f32>(&with, &options());
+    assert_eq!((a.report.samples, b.report.samples), (8000, 8000));
+    assert_eq!(log_a, log_b);
+    let (ra, rb) = (
+        recording_io::read(&plain).unwrap(),
+        recording_io::read(&with).unwrap(),
+    );
+    assert_eq!(ra.records, rb.records);
+}
+
 #[test]
 fn every_text_format_refuses_a_cut_last_line() {
     let dir = tempfile::tempdir().unwrap();

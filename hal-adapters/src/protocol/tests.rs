@@ -482,9 +482,9 @@ fn malformed_config_payloads_are_refused() {
     );
 }
 
-/// The GNSS correlated error travels in the frame: declared (1-sigma and time) or not (its
-/// time kept all the same), bit for bit; the text keys set it and a refusal of it names
-/// them; an unknown aiding bit is malformed.
+/// The GNSS correlated error travels in the frame: declared (1-sigma and time) or not (the
+/// default time), bit for bit; the text keys set it and a refusal of it names them (a time
+/// without the error is one); an unknown aiding bit is malformed.
 #[test]
 fn the_gnss_correlated_error_round_trips_and_its_keys_are_named() {
     let mut c = DeviceConfig::default();
@@ -497,9 +497,18 @@ fn the_gnss_correlated_error_round_trips_and_its_keys_are_named() {
     let mut without = c;
     without.run.aiding = Some(nav_core::navigator::AidingConfig {
         gnss_correlated_sigma_ned_m: None,
-        gnss_correlated_time_s: 30.0,
+        gnss_correlated_time_s: nav_core::navigator::config::DEFAULT_GNSS_CORRELATION_TIME_S,
         ..a
     });
+    // A time of its own without the error is refused (it would be silently ignored).
+    let mut lone = DeviceConfig::default();
+    lone.apply_line("gnss-correlated-time = 30").unwrap();
+    let r = lone.validate().unwrap_err();
+    assert_eq!(r.code(), ReasonCode::Aiding, "{r}");
+    assert!(
+        std::format!("{r}").contains("gnss-correlated-time needs gnss-correlated"),
+        "{r}"
+    );
     for config in [c, without] {
         assert_eq!(config.validate(), Ok(()));
         let m = Message::Config(config);

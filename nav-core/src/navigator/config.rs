@@ -301,6 +301,15 @@ impl RunConfig {
             if let Some(why) = limits::gnss_error_out_of_range(&declared) {
                 return Err(ConfigError::Aiding(why));
             }
+            // A correlation time of no declared error would be silently ignored (the default
+            // time given alone cannot be told from no time given).
+            if a.gnss_correlated_sigma_ned_m.is_none()
+                && a.gnss_correlated_time_s != DEFAULT_GNSS_CORRELATION_TIME_S
+            {
+                return Err(ConfigError::Aiding(
+                    "gnss-correlated-time needs gnss-correlated (the error it is the correlation time of)",
+                ));
+            }
             let n = &self.noise;
             let figures = [
                 n.arw_rad_per_sqrt_s,
@@ -810,6 +819,14 @@ mod tests {
                     ..AidingConfig::default()
                 }),
                 "GNSS aiding: the GNSS correlated error's correlation time must be 1 s to 86,400 s",
+            ),
+            // A time in range without the error: nothing to apply it to.
+            (
+                aided(AidingConfig {
+                    gnss_correlated_time_s: 90.0,
+                    ..AidingConfig::default()
+                }),
+                "GNSS aiding: gnss-correlated-time needs gnss-correlated (the error it is the correlation time of)",
             ),
             (
                 RunConfig {
