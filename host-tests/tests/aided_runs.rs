@@ -14,7 +14,7 @@ use host_tests::report::interpolate;
 use host_tests::sensor_model::Grade;
 use host_tests::truth::Truth;
 use nav_core::ins_filter::{AidedIns, FilterStatus};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn nav() -> Command {
@@ -1130,6 +1130,34 @@ fn sim_and_replay_with_gnss() {
     assert!(!d.join("x.csv").exists());
 }
 
+/// `nav sim SIM --format bin --out DIR`, then `nav replay` of its recording and fixes with a
+/// consumer part's noise, started in motion (`REPLAY` added): its solution log (`DIR/sol.csv`),
+/// the filter found started.
+fn sim_and_start_in_motion(d: &Path, sim: &[&str], replay: &[&str]) -> PathBuf {
+    run_ok(
+        nav()
+            .arg("sim")
+            .args(sim)
+            .args(["--format", "bin", "--out"])
+            .arg(d),
+    );
+    let out = d.join("sol.csv");
+    let text = run_ok(
+        nav()
+            .arg("replay")
+            .arg("--imu")
+            .arg(d.join("imu.bin"))
+            .arg("--gnss")
+            .arg(d.join("gnss.csv"))
+            .args(["--imu-noise", "mems-consumer", "--start-in-motion"])
+            .args(replay)
+            .arg("--out")
+            .arg(&out),
+    );
+    assert!(text.contains("filter started at t = "), "{sim:?}: {text}");
+    out
+}
+
 /// The start in motion from GNSS (a consumer MEMS cannot gyrocompass): level while the
 /// vehicle is quasi-static, heading from the track once it moves, then the filter; with the
 /// receiver's velocity at 5 Hz, and with 1 Hz positions alone (velocities differenced from
@@ -1144,36 +1172,17 @@ fn start_in_motion_from_gnss() {
     for receiver in receivers {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
-        run_ok(
-            nav()
-                .args(["sim", "land-vehicle", "--grade", "mems-consumer"])
-                .args(["--seconds", "150"])
-                .args(receiver)
-                .args(["--format", "bin", "--out"])
-                .arg(d),
-        );
-        let out = d.join("sol.csv");
-        let text = run_ok(
-            nav()
-                .arg("replay")
-                .arg("--imu")
-                .arg(d.join("imu.bin"))
-                .arg("--gnss")
-                .arg(d.join("gnss.csv"))
-                .args([
-                    "--imu-noise",
-                    "mems-consumer",
-                    "--start-in-motion",
-                    "--log-every",
-                    "400",
-                ])
-                .arg("--out")
-                .arg(&out),
-        );
-        assert!(
-            text.contains("filter started at t = "),
-            "{receiver:?}: {text}"
-        );
+        let sim = [
+            &[
+                "land-vehicle",
+                "--grade",
+                "mems-consumer",
+                "--seconds",
+                "150",
+            ][..],
+            receiver,
+        ];
+        let out = sim_and_start_in_motion(d, &sim.concat(), &["--log-every", "400"]);
         // The last row's yaw within 3 of its own 1-sigma of the truth's.
         let log = std::fs::read_to_string(&out).unwrap();
         let last: Vec<f64> = log
@@ -1198,6 +1207,57 @@ fn start_in_motion_from_gnss() {
     }
 }
 
+/// Consumer flights started in motion, lever arm and all: the start's heading is 10 deg off
+/// and its gyro biases unknown by 0.8 deg/s, so the first fixes correct the attitude by tens of
+/// degrees. The level is the accelerometer bias's error (the start's tilt correlated with it)
+/// and each correction turns the attitude's covariance with the attitude (the error state's
+/// reset); taken otherwise, on seed 9685, the filter took the turned correlations for
+/// information on the biases: heading 22 deg RMS with 26 % of the rows outside 3 sigma, north
+/// 22 % outside. Heading and position now within 3 of their 1-sigma on 95 % of the rows
+/// of every member. (The roll of some members is not: the note of the filter's issue.)
+#[test]
+fn consumer_flights_started_in_motion_keep_heading_and_position_within_their_sigma() {
+    for seed in ["9685", "21", "22", "23"] {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let lever = ["--gnss-lever-arm", "0.56,-1.4,0.54"];
+        let sim = [
+            &["flight", "--grade", "mems-consumer", "--seed", seed][..],
+            &["--seconds", "600", "--rate", "200", "--gnss-rate", "10"],
+            &lever,
+        ];
+        let out = sim_and_start_in_motion(d, &sim.concat(), &lever);
+        let truth = host_tests::truth_csv::read(&d.join("truth.csv")).unwrap();
+        let log = std::fs::read_to_string(&out).unwrap();
+        let (mut rows, mut outside) = (0usize, [0usize; 3]);
+        for line in log.lines().skip(1).filter(|l| !l.starts_with('#')) {
+            let row: Vec<f64> = line.split(',').filter_map(|v| v.parse().ok()).collect();
+            let tr = host_tests::report::interpolate(&truth, row[0]).unwrap();
+            let truth_at = nav_core::Position::from_radians(tr.lat, tr.lon, tr.h);
+            let e_ned = truth_at.ned_to(&nav_core::Position::from_degrees(row[1], row[2], row[3]));
+            let (_, _, yaw) = nav_core::attitude::euler(&tr.q_b_ned);
+            let mut e_yaw = row[9] - yaw.to_degrees();
+            e_yaw -= 360.0 * (e_yaw / 360.0).round();
+            rows += 1;
+            for (k, (e, sigma)) in [(e_ned[0], row[10]), (e_ned[1], row[11]), (e_yaw, row[18])]
+                .into_iter()
+                .enumerate()
+            {
+                outside[k] += usize::from(e.abs() > 3.0 * sigma);
+            }
+        }
+        assert!(rows > 2000, "{seed}: {rows} rows");
+        for (k, name) in ["north", "east", "heading"].iter().enumerate() {
+            let fraction = outside[k] as f64 / rows as f64;
+            assert!(
+                fraction <= 0.05,
+                "seed {seed}: {name} outside 3 sigma on {:.1} % of {rows} rows",
+                100.0 * fraction
+            );
+        }
+    }
+}
+
 /// A start in motion with the receiver's correlated error declared (`--gnss-correlated`): the
 /// start's position is a fix's, so its error holds that error, and the filter's fixes, which
 /// share it, never shrink it. Its 1-sigma carries it from the start to the end (was: the
@@ -1212,29 +1272,19 @@ fn a_start_in_motion_carries_the_declared_correlated_error() {
         "--gnss-correlated-time",
         "120",
     ];
-    run_ok(
-        nav()
-            .args(["sim", "land-vehicle", "--grade", "mems-consumer"])
-            .args(["--seconds", "150", "--gnss-rate", "5"])
-            .args(["--gnss-velocity-sigma", "0.05,0.05,0.1"])
-            .args(correlated)
-            .args(["--format", "bin", "--out"])
-            .arg(d),
-    );
-    let out = d.join("sol.csv");
-    let text = run_ok(
-        nav()
-            .arg("replay")
-            .arg("--imu")
-            .arg(d.join("imu.bin"))
-            .arg("--gnss")
-            .arg(d.join("gnss.csv"))
-            .args(["--imu-noise", "mems-consumer", "--start-in-motion"])
-            .args(correlated)
-            .args(["--log-every", "400", "--out"])
-            .arg(&out),
-    );
-    assert!(text.contains("filter started at t = "), "{text}");
+    let sim = [
+        &[
+            "land-vehicle",
+            "--grade",
+            "mems-consumer",
+            "--seconds",
+            "150",
+        ][..],
+        &["--gnss-rate", "5", "--gnss-velocity-sigma", "0.05,0.05,0.1"],
+        &correlated,
+    ];
+    let replay = [&correlated[..], &["--log-every", "400"]];
+    let out = sim_and_start_in_motion(d, &sim.concat(), &replay.concat());
     let truth = host_tests::truth_csv::read(&d.join("truth.csv")).unwrap();
     let log = std::fs::read_to_string(&out).unwrap();
     let rows: Vec<Vec<f64>> = log

@@ -556,8 +556,9 @@ fn apply_csv(text: &mut Vec<u8>, m: &CsvMutation) {
     *text = lines.join(&b"\n"[..]);
 }
 
-/// What an accepted CSV file must give: its data rows (non-empty records after the header; the
-/// csv crate ends a record at `\n`, `\r` or `\r\n`) and those with a non-finite increment.
+/// What an accepted CSV file must give: its data rows (non-empty records after the header, not
+/// comments; the csv crate ends a record at `\n`, `\r` or `\r\n`) and those with a non-finite
+/// increment.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct CsvCounts {
     records: u32,
@@ -566,7 +567,11 @@ struct CsvCounts {
 
 fn csv_counts(text: &[u8]) -> CsvCounts {
     let text = String::from_utf8_lossy(text);
-    let rows = text.split(['\n', '\r']).filter(|l| !l.is_empty()).skip(1);
+    // A line whose first field, trimmed, starts with `#` is a comment, before the header too.
+    let rows = text
+        .split(['\n', '\r'])
+        .filter(|l| !l.is_empty() && !l.trim_start().starts_with('#'))
+        .skip(1);
     let mut c = CsvCounts {
         records: 0,
         non_finite: 0,

@@ -321,6 +321,18 @@ impl<T: Scalar> AidedIns<T> {
         self.filter.start_position_from_fix();
     }
 
+    /// The start's level was found from the accelerometers, within the span's mean
+    /// acceleration of 1-sigma `acceleration_sigma_mps2` [m/s^2]: its tilt error is the
+    /// accelerometer-bias error's ([`ErrorFilter::level_on_accelerometers`]); the stop
+    /// detector allows for the covariance that leaves.
+    pub fn level_on_accelerometers(&mut self, acceleration_sigma_mps2: T) {
+        let c_b_n = self.mech.state().q_b_n.to_rotation_matrix().into_inner();
+        let g = self.mech.snapshot().earth.g;
+        self.filter
+            .level_on_accelerometers(&c_b_n, g, acceleration_sigma_mps2);
+        self.mech.allow_for(self.filter.uncertainty());
+    }
+
     /// The navigation solution (NED frame).
     pub fn state(&self) -> &NavState<T> {
         self.mech.state()

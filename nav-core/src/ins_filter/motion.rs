@@ -4,10 +4,12 @@
 //!   [`MAX_SPAN_RATE_RAD_S`] and the span's mean GNSS acceleration, its RMS with the noise of
 //!   the velocities it is differenced from, is within [`MotionAlignConfig::max_accel_mps2`]
 //!   (quasi-static: the mean specific force is gravity), roll and pitch from the mean specific
-//!   force (Groves eq. 5.101); their 1-sigma is the acceleration bound plus the accelerometer
-//!   bias over `g` (the mean specific force is the mean acceleration less gravity: a mean
-//!   horizontal acceleration `a` tilts the level by `a / g`; the bound, not the RMS, also
-//!   covers the body's pitching within the span). The span grows fix by fix until its mean
+//!   force (Groves eq. 5.101); their 1-sigma is the acceleration bound and the accelerometer
+//!   bias over `g`, in quadrature (the mean specific force is the mean acceleration less
+//!   gravity: a mean horizontal acceleration `a` tilts the level by `a / g`; the bound, not the
+//!   RMS, also covers the body's pitching within the span). The bias's share is the bias
+//!   error's own: the filter starts with the tilt correlated with it
+//!   ([`super::AidedIns::level_on_accelerometers`]). The span grows fix by fix until its mean
 //!   acceleration is known well enough: one interval with the receiver's velocity (0.05 m/s),
 //!   a few seconds with velocities differenced from 0.5 m positions (0.7 m/s each: over one
 //!   second their difference is 1 m/s^2 of noise, and a single interval never showed a
@@ -99,6 +101,9 @@ pub struct MotionStart<T: Scalar> {
     pub state: NavState<T>,
     /// Its 1-sigma (biases and scale factors left at zero: the caller's noise model).
     pub sigma: InitialSigma<T>,
+    /// 1-sigma of the level span's mean acceleration per axis [m/s^2]: the level's error
+    /// besides the accelerometer bias's ([`super::AidedIns::level_on_accelerometers`]).
+    pub level_acceleration_mps2: T,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -310,6 +315,7 @@ impl<T: Scalar> MotionAlign<T> {
                 gyro_scale: Vector3::zeros(),
                 accel_scale: Vector3::zeros(),
             },
+            level_acceleration_mps2: self.config.max_accel_mps2,
         })
     }
 }
@@ -348,7 +354,10 @@ impl<T: Scalar> MotionAlign<T> {
             let g = f.norm();
             let roll = (-f.y).patan2(-f.z);
             let pitch = f.x.patan2((f.y * f.y + f.z * f.z).sqrt());
-            let sigma = (c.max_accel_mps2 + c.accel_bias_mps2) / g;
+            let sigma = (c.max_accel_mps2 * c.max_accel_mps2
+                + c.accel_bias_mps2 * c.accel_bias_mps2)
+                .sqrt()
+                / g;
             self.level = Some((roll, pitch, sigma));
             return;
         }

@@ -506,6 +506,7 @@ impl<T: Scalar> Sequencer<T> {
         };
         if let Ok(mut ins) = ins {
             ins.start_position_from_fix();
+            ins.level_on_accelerometers(s.level_acceleration_mps2);
             self.ins = Some(ins);
             self.motion = None;
             if self.set_aside.take().is_some() {
