@@ -72,14 +72,15 @@ impl NavRow {
 /// Appends `row` to `line` as one `.nav` line, `\n` included.
 pub fn format_row(row: &NavRow, line: &mut Vec<u8>) {
     // In [0, 360) as written: a yaw a hair below 0 (or 360) is written 0, not 360.000000000.
-    let mut yaw_deg = row.euler_rad[2].to_degrees().rem_euclid(360.0);
+    let mut yaw_deg = rem_360(row.euler_rad[2].to_degrees());
     if yaw_deg >= 360.0 - 0.5e-9 {
         yaw_deg = 0.0;
     }
     let v = &row.v_eb_n_m_s;
+    // The week column never changes: its text once (a tenth of a row's formatting).
+    line.extend_from_slice(WEEK_FIELD);
     append_fields(
         &[
-            KF_GINS_WEEK,
             row.t_s,
             row.lat_rad.to_degrees(),
             row.lon_rad.to_degrees(),
@@ -95,6 +96,21 @@ pub fn format_row(row: &NavRow, line: &mut Vec<u8>) {
     );
     line.push(b'\n');
 }
+
+/// `x.rem_euclid(360.0)`, without its `fmod` (a library call) for an `x` within a turn
+/// either side of 0 (every yaw): `x % 360` is `x` itself there, plus 360 when negative.
+fn rem_360(x: f64) -> f64 {
+    if (0.0..360.0).contains(&x) {
+        x
+    } else if x > -360.0 && x < 0.0 {
+        x + 360.0
+    } else {
+        x.rem_euclid(360.0)
+    }
+}
+
+/// [`KF_GINS_WEEK`] as C's `%-15.9lf ` writes it (checked in the tests).
+const WEEK_FIELD: &[u8] = b"0.000000000     ";
 
 /// The width C's `%-15.9lf` pads a field to.
 const WIDTH: usize = 15;
@@ -122,7 +138,8 @@ fn append_fields(fields: &[f64], line: &mut Vec<u8>) {
     line.resize(start + reserved, b' ');
     let mut at = 0;
     for &x in fields {
-        if x.is_finite() && x.abs() < 9.0e9 {
+        // False for NaN and the infinities too.
+        if x.abs() < 9.0e9 {
             let field: &mut [u8; FIELD_BYTES] = (&mut line[start + at..][..FIELD_BYTES])
                 .try_into()
                 .expect("FIELD_BYTES long");
@@ -404,6 +421,43 @@ mod tests {
         let each: String = xs.iter().map(|x| field(*x)).collect();
         assert_eq!(String::from_utf8(line).unwrap(), each);
         assert_eq!(field(-0.125), "-0.125000000    ");
+    }
+
+    /// The week column's constant text is the week's field.
+    #[test]
+    fn the_week_field_is_the_weeks() {
+        assert_eq!(field(KF_GINS_WEEK).as_bytes(), WEEK_FIELD);
+    }
+
+    #[test]
+    fn rem_360_is_rem_euclid() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let unit = Uniform::new(-1.0, 1.0).unwrap();
+        let edges = [
+            0.0,
+            -0.0,
+            -1e-300,
+            1e-300,
+            360.0,
+            -360.0,
+            360.0_f64.next_down(),
+            (-360.0_f64).next_up(),
+            180.0,
+            -180.0,
+            720.5,
+            -1e6,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        let random = (0..100_000).map(|k| unit.sample(&mut rng) * [1.0, 180.0, 400.0, 1e9][k % 4]);
+        for x in edges.into_iter().chain(random) {
+            let (got, want) = (rem_360(x), x.rem_euclid(360.0));
+            assert!(
+                got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()),
+                "{x:e}"
+            );
+        }
     }
 
     #[test]

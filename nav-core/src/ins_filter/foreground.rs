@@ -83,8 +83,18 @@ pub struct AidedMechanization<T: Scalar> {
     acc_dt: T,
     acc_bridged: Bridged<T>,
     gap_dynamics: GapDynamics<T>,
-    snapshot: Snapshot<T>,
+    current: Current<T>,
     detector: Option<Stationarity<T>>,
+}
+
+/// A [`Snapshot`] of the current sample without its Earth quantities: those follow from the
+/// state ([`local_earth`]) and are computed where they are used (a snapshot handed out, a
+/// propagation, a stop window's end), not at every sample.
+#[derive(Clone, Copy, Debug)]
+struct Current<T: Scalar> {
+    state: NavState<T>,
+    omega_ib_b: Vector3<T>,
+    a_eb_n: Vector3<T>,
 }
 
 fn local_earth<T: Scalar>(st: &NavState<T>) -> LocalEarth<T> {
@@ -128,9 +138,8 @@ impl<T: Scalar> AidedMechanization<T> {
             acc_dt: T::zero(),
             acc_bridged: Bridged::none(),
             gap_dynamics: config.gap_dynamics,
-            snapshot: Snapshot {
+            current: Current {
                 state: st,
-                earth: local_earth(&st),
                 omega_ib_b: Vector3::zeros(),
                 a_eb_n: Vector3::zeros(),
             },
@@ -155,11 +164,18 @@ impl<T: Scalar> AidedMechanization<T> {
 
     /// What the background's updates need of the current sample.
     pub fn snapshot(&self) -> Snapshot<T> {
-        self.snapshot
+        let c = &self.current;
+        Snapshot {
+            state: c.state,
+            earth: local_earth(&c.state),
+            omega_ib_b: c.omega_ib_b,
+            a_eb_n: c.a_eb_n,
+        }
     }
 
-    pub(crate) fn snapshot_ref(&self) -> &Snapshot<T> {
-        &self.snapshot
+    /// The current sample's compensated rate `omega_ib_b` [rad/s].
+    pub(crate) fn omega_ib_b(&self) -> &Vector3<T> {
+        &self.current.omega_ib_b
     }
 
     /// True while the stop detector sees the vehicle still.
@@ -234,19 +250,18 @@ impl<T: Scalar> AidedMechanization<T> {
         let v_before = self.nav.state().v_eb_n;
         let comp = self.integrate(inc)?;
         let st = *self.nav.state();
-        self.snapshot = Snapshot {
+        self.current = Current {
             state: st,
-            earth: local_earth(&st),
             omega_ib_b: comp.delta_theta_ib_b / dt,
             a_eb_n: (st.v_eb_n - v_before) / dt,
         };
         let still = match &mut self.detector {
-            Some(det) => det.add(
-                &self.snapshot.omega_ib_b,
+            Some(det) => det.add_with_gravity(
+                &self.current.omega_ib_b,
                 &(comp.delta_v_ib_b / dt),
-                &self.snapshot.state.q_b_n,
+                &self.current.state.q_b_n,
                 dt,
-                self.snapshot.earth.g,
+                || local_earth(&st).g,
                 self.arw,
                 self.vrw,
             ),
@@ -269,10 +284,10 @@ impl<T: Scalar> AidedMechanization<T> {
         if self.acc_dt <= T::zero() {
             return None;
         }
-        let st = &self.snapshot.state;
+        let st = &self.current.state;
         let p = Propagation {
             lin: Linearisation {
-                earth: self.snapshot.earth,
+                earth: local_earth(st),
                 v_eb_n: st.v_eb_n,
                 c_b_n: st.q_b_n.to_rotation_matrix().into_inner(),
                 f_ib_b: self.acc_v / self.acc_dt,
@@ -307,9 +322,7 @@ impl<T: Scalar> AidedMechanization<T> {
         s.gyro_scale += x.fixed_rows::<3>(SG);
         s.accel_scale += x.fixed_rows::<3>(SA);
         self.nav.set_state(st);
-        let st = *self.nav.state();
-        self.snapshot.state = st;
-        self.snapshot.earth = local_earth(&st);
+        self.current.state = *self.nav.state();
         self.allow_for(c.uncertainty);
     }
 }

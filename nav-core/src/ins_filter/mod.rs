@@ -466,6 +466,6 @@ impl<T: Scalar> AidedIns<T> {
 
     /// The current sample's compensated rate `omega_ib_b` [rad/s].
     pub fn omega_ib_b(&self) -> &Vector3<T> {
-        &self.mech.snapshot_ref().omega_ib_b
+        self.mech.omega_ib_b()
     }
 }

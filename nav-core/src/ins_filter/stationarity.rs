@@ -183,6 +183,23 @@ impl<T: Scalar> Stationarity<T> {
         arw: T,
         vrw: T,
     ) -> Option<StillWindow<T>> {
+        self.add_with_gravity(omega_ib_b, f_ib_b, q_b_n, dt, || g, arw, vrw)
+    }
+
+    /// [`Self::add`] with the local gravity computed by `g()` at a window's end only, the
+    /// one sample of a window that uses it (a mechanization's is a square root and three
+    /// divisions: [`crate::earth::LocalEarth::from_sin_lat`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_with_gravity(
+        &mut self,
+        omega_ib_b: &Vector3<T>,
+        f_ib_b: &Vector3<T>,
+        q_b_n: &UnitQuaternion<T>,
+        dt: T,
+        g: impl FnOnce() -> T,
+        arw: T,
+        vrw: T,
+    ) -> Option<StillWindow<T>> {
         if self.n == 0 {
             (self.ref_f, self.ref_w) = (*f_ib_b, *omega_ib_b);
         }
@@ -213,6 +230,7 @@ impl<T: Scalar> Stationarity<T> {
         // The mean specific force in the navigation frame: at a stop `-g_n`, whatever the
         // slope the vehicle stands on; a horizontal part is an acceleration (or a tilt error).
         let f_n = q_b_n * mean_f;
+        let g = g();
         let k = T::c(UNCERTAINTY_SIGMAS);
         let u = &self.uncertainty;
         let still = var_ok(&self.sum_f2, &mean_df, vrw, c.accel_floor_mps2_sq)
