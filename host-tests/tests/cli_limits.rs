@@ -420,6 +420,31 @@ fn bench_runs_threads_and_families_are_bounded() {
     }
 }
 
+/// A recording below 10 Hz (every increment longer than the 0.1 s the navigator takes) ended
+/// its alignment with "0 of 50 samples used (100 rejected)", its rate unnamed; a PSINS interval
+/// of 1e9 ms was refused as "alignment window 1e6 s is longer than 86400 s" for a 10 s window.
+/// Refused now with the rate, before the alignment, and nothing written.
+#[test]
+fn a_recording_below_10_hz_is_refused_with_its_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = dir.path().join("slow.csv");
+    let mut text =
+        String::from("t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,dv_y_mps,dv_z_mps\n");
+    for k in 1..=100 {
+        text.push_str(&format!("{},0,0,0,0,0,-1.961\n", f64::from(k) * 0.2));
+    }
+    std::fs::write(&imu, text).unwrap();
+    let out = dir.path().join("sol.csv");
+    let (imu, out_s) = (imu.to_str().unwrap(), out.to_str().unwrap());
+    refused(
+        &replay_args(imu, out_s, &[]),
+        &[
+            "sampling rate 5 Hz is not within [10, 40000] Hz (below 10 Hz every increment is longer than the 0.1 s the navigator accepts)",
+        ],
+    );
+    assert!(!out.exists());
+}
+
 /// `nav align-bench family --seconds 1e300` printed the window in 301 digits.
 #[test]
 fn align_bench_window_reads_as_typed() {
