@@ -454,6 +454,57 @@ fn align_bench_window_reads_as_typed() {
     );
 }
 
+/// An option of another `nav align-bench` table was ignored without a word (`seed003 --seconds
+/// 5` ran its default 50 runs; `lasergyro --runs 5` the whole recording; `family --member 3
+/// --runs 200` one member), and `--threads 0` or 1000 ran on 1 or 64 threads. Refused now,
+/// before anything runs, as `nav bench` refuses its own.
+#[test]
+fn align_bench_options_of_another_table_are_refused() {
+    for (args, expected) in [
+        (
+            &["seed003", "--seconds", "5"][..],
+            "--seconds is an option of `nav align-bench family`, not of `nav align-bench seed003`",
+        ),
+        (
+            &["lasergyro", "--runs", "5"],
+            "--runs is an option of `nav align-bench seed002` and `nav align-bench seed003` and \
+             `nav align-bench family`, not of `nav align-bench lasergyro`",
+        ),
+        (
+            &["seed002", "--threads", "8"],
+            "--threads is an option of `nav align-bench seed003` and `nav align-bench family`",
+        ),
+        (
+            &["family", "--grade", "rlg"],
+            "--grade is an option of `nav align-bench seed002`",
+        ),
+        (
+            &["seed002", "--data", "x.imu"],
+            "--data is an option of `nav align-bench lasergyro`",
+        ),
+        (
+            &["seed003", "--member", "3"],
+            "--member is an option of `nav align-bench family`",
+        ),
+        (
+            &["family", "--member", "3", "--runs", "200"],
+            "--runs is not an option of `nav align-bench family --member K`",
+        ),
+        (
+            &["family", "--threads", "0"],
+            "--threads must be from 1 to 64, not 0",
+        ),
+        (
+            &["seed003", "--threads", "1000"],
+            "--threads must be from 1 to 64, not 1000",
+        ),
+    ] {
+        let mut argv = vec!["align-bench"];
+        argv.extend(args);
+        refused(&argv, &[expected]);
+    }
+}
+
 /// A KF-GINS configuration whose files need not exist: refusals of `nav kf-gins` that come
 /// before it opens them.
 const KF_GINS_CONFIG: &str = "imupath: imu.txt
