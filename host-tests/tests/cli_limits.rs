@@ -581,6 +581,30 @@ fn configuration_inputs_are_not_overwritten_by_the_output() {
     unchanged();
 }
 
+/// `nav kf-gins` whose output folder is a file (outputpath, or `--out`'s folder) said the
+/// folder "does not exist", beside the file a user can see; it says what the path is now.
+#[test]
+fn a_kf_gins_output_folder_that_is_a_file_is_named_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (config, file) = (path("ok.yaml"), path("file.txt"));
+    std::fs::write(&config, KF_GINS_CONFIG).unwrap();
+    std::fs::write(&file, "not a folder\n").unwrap();
+    let inside = format!("{file}/result.nav");
+    refused(
+        &["kf-gins", &config, "--out", &inside],
+        &[
+            "the output folder",
+            "file.txt of the trajectory (--out) is not a folder",
+        ],
+    );
+    let missing = path("missing/result.nav");
+    refused(
+        &["kf-gins", &config, "--out", &missing],
+        &["missing of the trajectory (--out) does not exist"],
+    );
+}
+
 /// Figures of `nav sim`'s receiver and of `nav kf-gins` printed in hundreds of digits:
 /// `--gnss-rate 1e300` ("a 1000... Hz receiver"), `--gnss-lever-arm 1e300,0,0`,
 /// `imudatarate: 1e300`; a 1e300 m spike's line (355 characters) of a run that succeeded.
