@@ -13,7 +13,8 @@ use hal_adapters::drivers::Health;
 use hal_adapters::protocol::config::{ConfigRefusal, MOUNTING_TOL};
 use nav_core::alignment::fine::FineRefusal;
 use nav_core::alignment::machine::{
-    AlignFailure, AlignMethod, MAX_LEVER_ARM_M, MAX_RATE_HZ, MAX_WINDOW_S, SettingsError,
+    AlignFailure, AlignMethod, MAX_LEVER_ARM_M, MAX_RATE_HZ, MAX_WINDOW_S, MIN_RATE_HZ,
+    SettingsError,
 };
 use nav_core::alignment::sway::MAX_YAW_SWAY_RAD;
 use nav_core::alignment::{AlignError, GravityMismatch, InertialAlignError};
@@ -341,8 +342,9 @@ impl Format for Settings<'_> {
             ),
             SettingsError::BadRate(r) => write!(
                 f,
-                "sampling rate {=f64} Hz is not a positive number up to {=f64} Hz",
-                r, MAX_RATE_HZ
+                "sampling rate {=f64} Hz is not within [{=f64}, {=f64}] Hz (below {=f64} Hz every \
+                 increment is longer than the 0.1 s the navigator accepts)",
+                r, MIN_RATE_HZ, MAX_RATE_HZ, MIN_RATE_HZ
             ),
             SettingsError::WindowTooLong { seconds } => write!(
                 f,

@@ -198,6 +198,14 @@ impl fmt::Display for DecodeSummary {
                     self.rows, e.rows
                 )
             }
+            // Every row the board counted, but frames refused besides them: the board sent
+            // more solution frames than rows (one repeated, or one it never logged).
+            (Some(e), None) if e.rows == self.rows => write!(
+                f,
+                "{} rows, as the end-of-run frame says, but {} more solution frames refused for \
+                 their content: incomplete (no end record written)",
+                self.rows, self.implausible
+            ),
             (Some(e), None) => write!(
                 f,
                 "{} rows, but the end-of-run frame says {}: incomplete (no end record written)",
@@ -566,6 +574,28 @@ mod tests {
         )
         .unwrap();
         assert_eq!(why, "yaw 540 deg not within [-180, 180]");
+    }
+
+    /// A solution frame sent twice (a capture that repeated it): the repeat is refused as not
+    /// after the previous row and the log left incomplete, which the summary said as "451
+    /// rows, but the end-of-run frame says 451", the counts it calls different equal. It names
+    /// the refused frames now.
+    #[test]
+    fn a_repeated_solution_frame_is_named_as_the_reason_for_an_incomplete_log() {
+        let row = solution(Row::Free(S));
+        let messages = [row, row, Message::EndOfRun(EndOfRun { rows: 1 })];
+        let mut out = Vec::new();
+        let s = decode(&mut frames(&messages).as_slice(), &mut out).unwrap();
+        assert_eq!((s.rows, s.implausible, s.complete()), (1, 1, false));
+        let text = s.to_string();
+        assert!(
+            text.contains(
+                "1 rows, as the end-of-run frame says, but 1 more solution frames refused for \
+                 their content: incomplete (no end record written)"
+            ),
+            "{text}"
+        );
+        assert!(!text.contains("but the end-of-run frame says 1"), "{text}");
     }
 
     /// Times of 2^63 us and more printed as negative (an i64 on the way): `u64::MAX` us was

@@ -216,9 +216,11 @@ impl EmulatorErrors {
 
     /// Overrides the quantities named in `text` (the error file format), keeping the others:
     /// e.g. a preset with one quantity changed. On an error `self` is unchanged.
+    /// A byte-order mark before the first line (an editor's on Windows) is not part of its key.
     pub fn apply_text(&mut self, text: &str) -> Result<(), ParseError> {
         let mut next = *self;
         let mut seen = [false; Quantity::COUNT];
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
             let content = raw.split('#').next().unwrap_or("").trim();
@@ -1112,8 +1114,19 @@ pub fn write_errors_csv(path: &Path, errors: &[ErrorSample]) -> anyhow::Result<(
 
 #[cfg(test)]
 mod tests {
-    use super::Vertical;
+    use super::{EmulatorErrors, Vertical};
     use clap::ValueEnum;
+
+    /// An error file saved with a byte-order mark (Notepad's UTF-8) was refused as "line 1:
+    /// unknown key `gyro_drift_deg_h`", the mark invisible inside the quotes.
+    #[test]
+    fn a_byte_order_mark_is_not_part_of_the_first_key() {
+        let text = "\u{feff}gyro_drift_deg_h = 0.01 0.01 0.01\r\n";
+        assert_eq!(
+            EmulatorErrors::parse(text).unwrap(),
+            EmulatorErrors::parse("gyro_drift_deg_h = 0.01 0.01 0.01").unwrap()
+        );
+    }
 
     /// The summary names the vertical channel as `--vertical` takes it.
     #[test]

@@ -27,6 +27,9 @@
 //! line and the column; so is a file without a fix. A NaN or infinite position or velocity value,
 //! and a sigma that is zero, negative, NaN or infinite, are **not** file errors: the fix is kept
 //! as read, for the navigation filter to reject and count (a receiver does output such fixes).
+//! A file none of whose fixes is usable so (neither its position, nav-core's
+//! `GnssPosition::is_valid`, nor its velocity, `GnssVelocity::is_valid`) is an error: no
+//! receiver records only those, and a KF-GINS IMU text file, 7 columns too, reads so.
 //!
 //! The writer prints floats in their shortest round-trip form (degrees keep the full f64
 //! resolution); reading back is exact for time, height, velocity and sigmas, and within an ulp
@@ -37,6 +40,8 @@ use crate::kf_gins::{
 };
 use crate::text_error::{Record, TextError, TextErrorKind, seconds_to_ns};
 use crate::text_stream::{CsvRecords, CutCheck, LineReader};
+use nav_core::ins_filter::aiding::{GnssPosition, GnssVelocity as NavGnssVelocity};
+use nav_core::number::Number;
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read, Write};
 use std::path::Path;
@@ -166,7 +171,9 @@ pub fn read_gnss_assuming(
                 path.display()
             );
         };
-        return crate::gnss_ins_sim::read_gps(path, assumed);
+        let fixes = crate::gnss_ins_sim::read_gps(path, assumed)?;
+        refuse_without_a_usable_fix(path, &fixes)?;
+        return Ok(fixes);
     }
     anyhow::ensure!(
         assumed.is_none(),
@@ -174,7 +181,55 @@ pub fn read_gnss_assuming(
          GPS file, which has none",
         path.display()
     );
-    read_text_gnss(path)
+    let fixes = read_text_gnss(path)?;
+    refuse_without_a_usable_fix(path, &fixes)?;
+    Ok(fixes)
+}
+
+/// Refuses a file none of whose fixes the filter can use: no usable position (nav-core's
+/// rule, [`GnssPosition::is_valid`]) and no usable velocity ([`NavGnssVelocity::is_valid`]; the
+/// navigator applies a fix's velocity when its position is refused). Such a file would run
+/// free-inertial (or, converted, make a fix file of nothing but refused fixes). No receiver
+/// records that; a KF-GINS IMU text file given for the fixes does: it has the GNSS text's 7
+/// columns, its angle increments read as a place near latitude 0 and its velocity increments as
+/// 1-sigmas, the vertical one negative on every line.
+fn refuse_without_a_usable_fix(path: &Path, fixes: &[GnssFix]) -> anyhow::Result<()> {
+    let usable = |f: &GnssFix| {
+        let position = GnssPosition::<f64> {
+            lat_rad: f.lat_rad,
+            lon_rad: f.lon_rad,
+            h_m: f.h_m,
+            sigma_ned_m: f.sigma_ned_m.into(),
+        };
+        let velocity = f.velocity.map(|v| NavGnssVelocity::<f64> {
+            v_ned_m_s: v.v_ned_m_s.into(),
+            sigma_ned_m_s: v.sigma_ned_m_s.into(),
+        });
+        position.is_valid() || velocity.is_some_and(|v| v.is_valid())
+    };
+    let Some(first) = fixes.first() else {
+        return Ok(()); // the readers refuse a file without a fix
+    };
+    if fixes.iter().any(usable) {
+        return Ok(());
+    }
+    let s = first.sigma_ned_m;
+    anyhow::bail!(
+        "{}: none of its {} fixes is usable (a finite place with latitude within +-90 deg and \
+         height within 10000 km, every 1-sigma positive and finite; or such a velocity): the \
+         first, at t = {} s, is at {} deg, {} deg, {} m with 1-sigma {}, {}, {} m; not a \
+         receiver's fixes (a KF-GINS IMU file has the GNSS text's 7 columns: its increments read \
+         as a place near latitude 0 and as 1-sigmas)",
+        path.display(),
+        fixes.len(),
+        Number(first.t_s),
+        Number(first.lat_rad.to_degrees()),
+        Number(first.lon_rad.to_degrees()),
+        Number(first.h_m),
+        Number(s[0]),
+        Number(s[1]),
+        Number(s[2]),
+    )
 }
 
 /// The project's CSV or KF-GINS's text ([`detect`]).
@@ -552,6 +607,58 @@ mod tests {
             2
         );
         assert!(msg("1 45 7 100 1 1 1\n2 45 7 100 1 1").contains("truncated: last line 2"));
+    }
+
+    /// A KF-GINS IMU text file given as the GNSS file (another copy than the replay's
+    /// recording) was read as fixes near latitude 0 with a negative down 1-sigma, converted and
+    /// navigated as such (every fix refused by the filter: a free-inertial run, no word why).
+    #[test]
+    fn a_file_without_a_usable_fix_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = |name: &str, text: &str| {
+            let p = dir.path().join(name);
+            std::fs::write(&p, text).unwrap();
+            p
+        };
+        let imu = file(
+            "imu.txt",
+            "432000.0025 1.2e-7 -8.5e-8 -1.4e-7 -1.6e-5 -1.3e-5 -0.0245934\n\
+             432000.0050 2.3e-7 6.1e-8 -2.1e-7 7.7e-6 4.1e-5 -0.0244789\n",
+        );
+        let m = read_gnss(&imu).unwrap_err().to_string();
+        assert!(
+            m.contains("imu.txt: none of its 2 fixes is usable")
+                && m.contains("1-sigma -1.6e-5, -1.3e-5, -0.0245934 m")
+                && m.contains("KF-GINS IMU file"),
+            "{m}"
+        );
+        let out = dir.path().join("gnss.bin");
+        let m = format!(
+            "{:#}",
+            crate::gnss_file::convert(&imu, &out, None).unwrap_err()
+        );
+        assert!(m.contains("none of its 2 fixes is usable"), "{m}");
+        assert!(!out.exists());
+        // Every fix bad (zero, NaN 1-sigmas; NaN place) in the project's CSV too.
+        let header = CSV_COLUMNS.join(",");
+        let csv = file(
+            "bad.csv",
+            &format!("{header}\n1,45,7,100,0,1,1\n2,NaN,7,100,1,1,1\n3,45,7,100,1,NaN,1\n"),
+        );
+        let m = read_gnss(&csv).unwrap_err().to_string();
+        assert!(m.contains("none of its 3 fixes is usable"), "{m}");
+        // One usable fix among bad ones: the file is read, the bad fixes kept for the filter.
+        let csv = file(
+            "one.csv",
+            &format!("{header}\n1,45,7,100,0,1,1\n2,45,7,100,1,1,1\n"),
+        );
+        assert_eq!(read_gnss(&csv).unwrap().len(), 2);
+        // No usable position but a usable velocity (the navigator applies it): read.
+        let csv = file(
+            "velocity.csv",
+            &format!("{header},{CSV_VELOCITY_TAIL}\n1,45,7,100,0,1,1,1,0,0,0.1,0.1,0.1\n"),
+        );
+        assert_eq!(read_gnss(&csv).unwrap().len(), 1);
     }
 
     #[test]

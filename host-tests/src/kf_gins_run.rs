@@ -291,9 +291,13 @@ pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty())
             && !dir.is_dir()
         {
+            let what = if dir.exists() {
+                "is not a folder"
+            } else {
+                "does not exist"
+            };
             bail!(
-                "the output folder {} of {name} does not exist (outputpath, or the option's \
-                 folder)",
+                "the output folder {} of {name} {what} (outputpath, or the option's folder)",
                 dir.display()
             );
         }

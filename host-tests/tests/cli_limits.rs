@@ -420,6 +420,31 @@ fn bench_runs_threads_and_families_are_bounded() {
     }
 }
 
+/// A recording below 10 Hz (every increment longer than the 0.1 s the navigator takes) ended
+/// its alignment with "0 of 50 samples used (100 rejected)", its rate unnamed; a PSINS interval
+/// of 1e9 ms was refused as "alignment window 1e6 s is longer than 86400 s" for a 10 s window.
+/// Refused now with the rate, before the alignment, and nothing written.
+#[test]
+fn a_recording_below_10_hz_is_refused_with_its_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = dir.path().join("slow.csv");
+    let mut text =
+        String::from("t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,dv_y_mps,dv_z_mps\n");
+    for k in 1..=100 {
+        text.push_str(&format!("{},0,0,0,0,0,-1.961\n", f64::from(k) * 0.2));
+    }
+    std::fs::write(&imu, text).unwrap();
+    let out = dir.path().join("sol.csv");
+    let (imu, out_s) = (imu.to_str().unwrap(), out.to_str().unwrap());
+    refused(
+        &replay_args(imu, out_s, &[]),
+        &[
+            "sampling rate 5 Hz is not within [10, 40000] Hz (below 10 Hz every increment is longer than the 0.1 s the navigator accepts)",
+        ],
+    );
+    assert!(!out.exists());
+}
+
 /// `nav align-bench family --seconds 1e300` printed the window in 301 digits.
 #[test]
 fn align_bench_window_reads_as_typed() {
@@ -427,6 +452,57 @@ fn align_bench_window_reads_as_typed() {
         &["align-bench", "family", "--runs", "1", "--seconds", "1e300"],
         &["alignment windows must be within (0, 300] s, not 1e300"],
     );
+}
+
+/// An option of another `nav align-bench` table was ignored without a word (`seed003 --seconds
+/// 5` ran its default 50 runs; `lasergyro --runs 5` the whole recording; `family --member 3
+/// --runs 200` one member), and `--threads 0` or 1000 ran on 1 or 64 threads. Refused now,
+/// before anything runs, as `nav bench` refuses its own.
+#[test]
+fn align_bench_options_of_another_table_are_refused() {
+    for (args, expected) in [
+        (
+            &["seed003", "--seconds", "5"][..],
+            "--seconds is an option of `nav align-bench family`, not of `nav align-bench seed003`",
+        ),
+        (
+            &["lasergyro", "--runs", "5"],
+            "--runs is an option of `nav align-bench seed002` and `nav align-bench seed003` and \
+             `nav align-bench family`, not of `nav align-bench lasergyro`",
+        ),
+        (
+            &["seed002", "--threads", "8"],
+            "--threads is an option of `nav align-bench seed003` and `nav align-bench family`",
+        ),
+        (
+            &["family", "--grade", "rlg"],
+            "--grade is an option of `nav align-bench seed002`",
+        ),
+        (
+            &["seed002", "--data", "x.imu"],
+            "--data is an option of `nav align-bench lasergyro`",
+        ),
+        (
+            &["seed003", "--member", "3"],
+            "--member is an option of `nav align-bench family`",
+        ),
+        (
+            &["family", "--member", "3", "--runs", "200"],
+            "--runs is not an option of `nav align-bench family --member K`",
+        ),
+        (
+            &["family", "--threads", "0"],
+            "--threads must be from 1 to 64, not 0",
+        ),
+        (
+            &["seed003", "--threads", "1000"],
+            "--threads must be from 1 to 64, not 1000",
+        ),
+    ] {
+        let mut argv = vec!["align-bench"];
+        argv.extend(args);
+        refused(&argv, &[expected]);
+    }
 }
 
 /// A KF-GINS configuration whose files need not exist: refusals of `nav kf-gins` that come
@@ -503,6 +579,30 @@ fn configuration_inputs_are_not_overwritten_by_the_output() {
     let args = replay_args(&imu, &calibration, &["--calibration", &calibration]);
     refused(&args, &["is the input", "cal.txt"]);
     unchanged();
+}
+
+/// `nav kf-gins` whose output folder is a file (outputpath, or `--out`'s folder) said the
+/// folder "does not exist", beside the file a user can see; it says what the path is now.
+#[test]
+fn a_kf_gins_output_folder_that_is_a_file_is_named_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (config, file) = (path("ok.yaml"), path("file.txt"));
+    std::fs::write(&config, KF_GINS_CONFIG).unwrap();
+    std::fs::write(&file, "not a folder\n").unwrap();
+    let inside = format!("{file}/result.nav");
+    refused(
+        &["kf-gins", &config, "--out", &inside],
+        &[
+            "the output folder",
+            "file.txt of the trajectory (--out) is not a folder",
+        ],
+    );
+    let missing = path("missing/result.nav");
+    refused(
+        &["kf-gins", &config, "--out", &missing],
+        &["missing of the trajectory (--out) does not exist"],
+    );
 }
 
 /// Figures of `nav sim`'s receiver and of `nav kf-gins` printed in hundreds of digits:

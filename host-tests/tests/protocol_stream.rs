@@ -499,7 +499,15 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
         (
             "rate",
             "imu-rate-hz = 1e12\n",
-            "not a positive number up to 40000 Hz",
+            "bad-rate.txt:1: refused (reason code 8): sampling rate 9.99999995904e11 Hz is not \
+             within [10, 40000] Hz",
+        ),
+        // Below 10 Hz every increment is longer than the navigator takes: the board aligned on
+        // none of them.
+        (
+            "slow",
+            "imu-rate-hz = 5\n",
+            "bad-slow.txt:1: refused (reason code 8): sampling rate 5 Hz is not within [10, 40000] Hz",
         ),
         // Noise densities of zero (an overconfident filter) or beyond any IMU's.
         (

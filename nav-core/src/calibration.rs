@@ -147,10 +147,12 @@ const KEYS: [&str; 6] = [
 ];
 
 impl ImuCalibration {
-    /// Parses the text form (see the module docs).
+    /// Parses the text form (see the module docs). A UTF-8 byte-order mark before the first
+    /// line (an editor's on Windows) is not part of its key.
     pub fn parse(text: &str) -> Result<Self, CalibrationError> {
         let mut cal = Self::default();
         let mut seen = [false; KEYS.len()];
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
             let content = raw.split('#').next().unwrap_or("").trim();
@@ -333,6 +335,21 @@ mod tests {
         assert_eq!(
             ImuCalibration::parse("").unwrap(),
             ImuCalibration::default()
+        );
+    }
+
+    /// A file saved with a byte-order mark (Notepad's UTF-8) was refused as "calibration line
+    /// 1: unknown key", its first key read with the mark; its CRLF lines were read.
+    #[test]
+    fn a_byte_order_mark_is_not_part_of_the_first_key() {
+        let text = "\u{feff}gyro_bias_rad_s = 1e-6 0 0\r\naccel_scale = 1e-4 0 0\r\n";
+        let cal = ImuCalibration::parse(text).unwrap();
+        assert_eq!(cal.gyro.bias, [1e-6, 0.0, 0.0]);
+        assert_eq!(cal.accel.scale, [1e-4, 0.0, 0.0]);
+        // Only at the start: elsewhere it is a character of a key.
+        assert_eq!(
+            ImuCalibration::parse("gyro_scale = 0 0 0\n\u{feff}accel_scale = 0 0 0"),
+            Err(CalibrationError::UnknownKey { line: 2 })
         );
     }
 

@@ -350,7 +350,7 @@ enum Precision {
 }
 
 /// `nav align-bench` tables.
-#[derive(Clone, Copy, ValueEnum)]
+#[derive(Clone, Copy, PartialEq, Eq, Debug, ValueEnum)]
 enum AlignBenchKind {
     /// Level alignment on a rocking ship [Ship alignment].
     Seed002,
@@ -1806,6 +1806,75 @@ fn main() -> ExitCode {
     }
 }
 
+/// Refuses an option of `nav align-bench` given with other than its default to a benchmark
+/// that does not use it (it was ignored: `nav align-bench seed003 --seconds 5` ran the
+/// default benchmark without a word), and a `--threads` the benchmarks do not run (0, or more
+/// than 64: they took 1 and 64).
+fn refuse_unused_align_bench_options(command: &Command) -> Result<()> {
+    let Command::AlignBench {
+        which,
+        runs,
+        grade,
+        threads,
+        data,
+        family_seed,
+        seconds,
+        member,
+        ablate,
+    } = command
+    else {
+        return Ok(());
+    };
+    use AlignBenchKind::{Family as F, Lasergyro as L, Seed002 as S2, Seed003 as S3};
+    // (option, given with other than its default, the benchmarks that use it)
+    let options: [(&str, bool, &[AlignBenchKind]); 8] = [
+        ("--runs", *runs != 50, &[S2, S3, F]),
+        (
+            "--grade",
+            *grade != host_tests::sensor_model::Grade::Fog,
+            &[S2],
+        ),
+        ("--threads", *threads != 2, &[S3, F]),
+        ("--data", data.is_some(), &[L]),
+        ("--family-seed", *family_seed != 1, &[F]),
+        (
+            "--seconds",
+            seconds.as_slice() != host_tests::align_bench::family::WINDOWS_S,
+            &[F],
+        ),
+        ("--member", member.is_some(), &[F]),
+        ("--ablate", !ablate.is_empty(), &[F]),
+    ];
+    for (name, given, kinds) in options {
+        if !given {
+            continue;
+        }
+        if !kinds.contains(which) {
+            let names: Vec<String> = kinds
+                .iter()
+                .map(|k| format!("{k:?}").to_lowercase())
+                .collect();
+            anyhow::bail!(
+                "{name} is an option of `nav align-bench {}`, not of `nav align-bench {}`",
+                names.join("` and `nav align-bench "),
+                format!("{which:?}").to_lowercase()
+            );
+        }
+        // One member: its numbers alone, on one thread.
+        if member.is_some() && ["--runs", "--threads"].contains(&name) {
+            anyhow::bail!(
+                "{name} is not an option of `nav align-bench family --member K` (one member's \
+                 numbers, on one thread)"
+            );
+        }
+    }
+    anyhow::ensure!(
+        (1..=64).contains(threads),
+        "--threads must be from 1 to 64, not {threads}"
+    );
+    Ok(())
+}
+
 /// Refuses an option of `nav bench` given with other than its default to a measurement that
 /// does not use it (it was ignored).
 fn refuse_unused_bench_options(command: &Command) -> Result<()> {
@@ -1873,6 +1942,7 @@ fn refuse_unused_bench_options(command: &Command) -> Result<()> {
 
 fn run(cli: Cli) -> Result<()> {
     refuse_unused_bench_options(&cli.command)?;
+    refuse_unused_align_bench_options(&cli.command)?;
     match cli.command {
         Command::AlignBench {
             which,

@@ -342,6 +342,11 @@ pub const MAX_LEVER_ARM_M: f64 = 100.0;
 pub const BASE_TRANSLATION_OUT_OF_RANGE: &str =
     "the base translation 1-sigma must be 0 to 100 m (waves move a hull's centre by metres)";
 
+/// Lowest IMU sampling rate an alignment accepts [Hz]: `1 / InputLimits::max_dt` (0.1 s, the
+/// navigator's default limits, [`crate::InputLimits`]). Below it every increment is longer than
+/// the navigator takes, each refused: a 5 Hz recording ended its alignment with "0 of 100
+/// samples used (3086 rejected)" and no word of its rate.
+pub const MIN_RATE_HZ: f64 = 10.0;
 /// Highest IMU sampling rate an alignment accepts [Hz] (no IMU samples faster; a rate
 /// beyond it is a unit or typing error). A day's window at this rate still fits the sample
 /// counter.
@@ -363,7 +368,7 @@ pub enum SettingsError {
         /// The method's minimum [s].
         min_s: f64,
     },
-    /// The sampling rate is not a positive finite number up to [`MAX_RATE_HZ`] [Hz].
+    /// The sampling rate is not a finite number within [`MIN_RATE_HZ`] to [`MAX_RATE_HZ`] [Hz].
     BadRate(f64),
     /// The window is longer than [`MAX_WINDOW_S`] [s].
     WindowTooLong {
@@ -422,7 +427,9 @@ impl core::fmt::Display for SettingsError {
             ),
             Self::BadRate(r) => write!(
                 f,
-                "sampling rate {} Hz is not a positive number up to {MAX_RATE_HZ} Hz",
+                "sampling rate {} Hz is not within [{MIN_RATE_HZ}, {MAX_RATE_HZ}] Hz (below \
+                 {MIN_RATE_HZ} Hz every increment is longer than the 0.1 s the navigator \
+                 accepts)",
                 Number(*r)
             ),
             Self::WindowTooLong { seconds } => write!(
@@ -530,7 +537,7 @@ impl<T: Scalar> AlignSettings<T> {
         rate_hz: f64,
         noise: SensorNoise<T>,
     ) -> Result<Self, SettingsError> {
-        if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= MAX_RATE_HZ) {
+        if !(rate_hz.is_finite() && (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz)) {
             return Err(SettingsError::BadRate(rate_hz));
         }
         if seconds > MAX_WINDOW_S {
@@ -610,7 +617,7 @@ impl<T: Scalar> AlignSettings<T> {
         if !self.method.compiled_in() {
             return Err(SettingsError::NotCompiledIn(self.method));
         }
-        if !(self.rate_hz.is_finite() && self.rate_hz > 0.0 && self.rate_hz <= MAX_RATE_HZ) {
+        if !(self.rate_hz.is_finite() && (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&self.rate_hz)) {
             return Err(SettingsError::BadRate(self.rate_hz));
         }
         if self.seconds() > MAX_WINDOW_S {
@@ -1429,6 +1436,21 @@ mod tests {
         assert!(
             AlignSettings::new(AlignMethod::Static, site, MAX_WINDOW_S, MAX_RATE_HZ, noise).is_ok()
         );
+        // Below the navigator's longest interval's rate every increment is refused: a 5 Hz
+        // recording aligned on none of them ("0 of 100 samples used") without naming its rate;
+        // a 1e-6 Hz one (a PSINS interval of 1e9 ms) was refused for a window of 1e6 s.
+        let max_dt = crate::InputLimits::<f64>::default().max_dt;
+        assert_eq!(MIN_RATE_HZ, 1.0 / max_dt);
+        for rate in [5.0, 1e-6, MIN_RATE_HZ - 1e-9] {
+            let slow = AlignSettings::new(AlignMethod::Static, site, 20.0, rate, noise);
+            assert!(matches!(slow, Err(SettingsError::BadRate(_))), "{rate}");
+        }
+        assert_eq!(
+            std::format!("{}", SettingsError::BadRate(5.0)),
+            "sampling rate 5 Hz is not within [10, 40000] Hz (below 10 Hz every increment is \
+             longer than the 0.1 s the navigator accepts)"
+        );
+        assert!(AlignSettings::new(AlignMethod::Static, site, 20.0, MIN_RATE_HZ, noise).is_ok());
         // A window shorter than the method's minimum: refused by the settings, and by the
         // machine from the increments' own intervals when the settings were built by hand.
         for method in AlignMethod::ALL {
