@@ -1033,53 +1033,36 @@ fn replay_refuses_an_impossible_start() {
 fn sim_and_replay_with_gnss() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    run_ok(
-        nav()
-            .args([
-                "sim",
-                "land-vehicle",
-                "--grade",
-                "mems-tactical",
-                "--seconds",
-                "120",
-            ])
-            .args([
-                "--gnss-rate",
-                "2",
-                "--gnss-lever-arm",
-                "0.5,0,-1",
-                "--gnss-nan",
-                "60",
-            ])
-            .args(["--gnss-jump", "80,5,40,0,0", "--format", "bin", "--out"])
-            .arg(d),
-    );
+    let sim = [
+        &[
+            "land-vehicle",
+            "--grade",
+            "mems-tactical",
+            "--seconds",
+            "120",
+        ][..],
+        &[
+            "--gnss-rate",
+            "2",
+            "--gnss-lever-arm",
+            "0.5,0,-1",
+            "--gnss-nan",
+            "60",
+        ],
+        &["--gnss-jump", "80,5,40,0,0"],
+    ];
+    let replay = [
+        &[
+            "--gnss-lever-arm",
+            "0.5,0,-1",
+            "--imu-noise",
+            "mems-tactical",
+        ][..],
+        &GIVEN,
+        &["--log-every", "400"],
+    ];
+    let (text, out) = sim_and_replay(d, &sim.concat(), &replay.concat());
     assert!(d.join("gnss.csv").exists());
-    let out = d.join("sol.csv");
-    let text = run_ok(
-        nav()
-            .arg("replay")
-            .arg("--imu")
-            .arg(d.join("imu.bin"))
-            .arg("--gnss")
-            .arg(d.join("gnss.csv"))
-            .args([
-                "--gnss-lever-arm",
-                "0.5,0,-1",
-                "--imu-noise",
-                "mems-tactical",
-            ])
-            .args([
-                "--init-pos",
-                "45,7.5,250",
-                "--init-vel",
-                "0,0,0",
-                "--init-att",
-                "0,0,0",
-            ])
-            .args(["--log-every", "400", "--out"])
-            .arg(&out),
-    );
     assert!(text.contains("1 invalid"), "{text}");
     let log = std::fs::read_to_string(&out).unwrap();
     assert!(
@@ -1130,10 +1113,9 @@ fn sim_and_replay_with_gnss() {
     assert!(!d.join("x.csv").exists());
 }
 
-/// `nav sim SIM --format bin --out DIR`, then `nav replay` of its recording and fixes with a
-/// consumer part's noise, started in motion (`REPLAY` added): its solution log (`DIR/sol.csv`),
-/// the filter found started.
-fn sim_and_start_in_motion(d: &Path, sim: &[&str], replay: &[&str]) -> PathBuf {
+/// `nav sim SIM --format bin --out DIR`, then `nav replay REPLAY` of its recording and fixes:
+/// the replay's output and its solution log (`DIR/sol.csv`).
+fn sim_and_replay(d: &Path, sim: &[&str], replay: &[&str]) -> (String, PathBuf) {
     run_ok(
         nav()
             .arg("sim")
@@ -1149,11 +1131,21 @@ fn sim_and_start_in_motion(d: &Path, sim: &[&str], replay: &[&str]) -> PathBuf {
             .arg(d.join("imu.bin"))
             .arg("--gnss")
             .arg(d.join("gnss.csv"))
-            .args(["--imu-noise", "mems-consumer", "--start-in-motion"])
             .args(replay)
             .arg("--out")
             .arg(&out),
     );
+    (text, out)
+}
+
+/// [`sim_and_replay`] with a consumer part's noise, started in motion (`REPLAY` added): the
+/// solution log, the filter found started.
+fn sim_and_start_in_motion(d: &Path, sim: &[&str], replay: &[&str]) -> PathBuf {
+    let replay = [
+        &["--imu-noise", "mems-consumer", "--start-in-motion"][..],
+        replay,
+    ];
+    let (text, out) = sim_and_replay(d, sim, &replay.concat());
     assert!(text.contains("filter started at t = "), "{sim:?}: {text}");
     out
 }
