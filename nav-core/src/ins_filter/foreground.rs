@@ -173,6 +173,11 @@ impl<T: Scalar> AidedMechanization<T> {
         }
     }
 
+    /// The local gravity at the current state [m/s^2].
+    pub fn gravity(&self) -> T {
+        local_earth(&self.current.state).g
+    }
+
     /// The current sample's compensated rate `omega_ib_b` [rad/s].
     pub(crate) fn omega_ib_b(&self) -> &Vector3<T> {
         &self.current.omega_ib_b

@@ -293,7 +293,7 @@ impl<T: Scalar> AidedIns<T> {
         let mut mech = AidedMechanization::new(state, sensors, &config)?;
         let yaw = mech.state().euler().2;
         let filter = ErrorFilter::new(sigma, yaw, config)?;
-        mech.allow_for(sigma.uncertainty(mech.snapshot().earth.g));
+        mech.allow_for(sigma.uncertainty(mech.gravity()));
         Ok(Self { mech, filter })
     }
 
@@ -327,7 +327,7 @@ impl<T: Scalar> AidedIns<T> {
     /// detector allows for the covariance that leaves.
     pub fn level_on_accelerometers(&mut self, acceleration_sigma_mps2: T) {
         let c_b_n = self.mech.state().q_b_n.to_rotation_matrix().into_inner();
-        let g = self.mech.snapshot().earth.g;
+        let g = self.mech.gravity();
         self.filter
             .level_on_accelerometers(&c_b_n, g, acceleration_sigma_mps2);
         self.mech.allow_for(self.filter.uncertainty());

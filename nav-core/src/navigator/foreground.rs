@@ -615,7 +615,7 @@ impl<T: Scalar> Navigator<T> {
                         )
                         .map_err(|e| self.fail(NavError::Filter(e)))?;
                         let sigma = initial_sigma(&outcome, &config);
-                        mech.allow_for(sigma.uncertainty(mech.snapshot().earth.g));
+                        mech.allow_for(sigma.uncertainty(mech.gravity()));
                         let columns = columns(
                             &sigma.position_ned_m,
                             &sigma.velocity_ned_m_s,
