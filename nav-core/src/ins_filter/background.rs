@@ -394,10 +394,15 @@ impl<T: Scalar> ErrorFilter<T> {
         let mut q = model::noise_density(&self.config.noise, self.config.scale_factors);
         // A bridged gap's unknown motion, spread as driving noise over the interval
         // ([`crate::gap::GapDynamics`]).
+        let second_order = model::second_order_velocity_density(
+            &self.p,
+            &prop.lin.f_ib_b,
+            self.config.scale_factors,
+        );
         let b = &prop.bridged;
         for k in 0..3 {
             q[ATT + k] += b.attitude_var_rad2 / prop.dt;
-            q[VEL + k] += b.velocity_var_m2_s2 / prop.dt;
+            q[VEL + k] += b.velocity_var_m2_s2 / prop.dt + second_order;
         }
         if let Some(lost) = &b.lost {
             self.lose(lost);
