@@ -394,15 +394,14 @@ impl<T: Scalar> ErrorFilter<T> {
         let mut q = model::noise_density(&self.config.noise, self.config.scale_factors);
         // A bridged gap's unknown motion, spread as driving noise over the interval
         // ([`crate::gap::GapDynamics`]).
-        let second_order = model::second_order_velocity_density(
-            &self.p,
-            &prop.lin.f_ib_b,
-            self.config.scale_factors,
-        );
+        let sf = self.config.scale_factors;
+        let second_order_v = model::second_order_velocity_density(&self.p, &prop.lin.f_ib_b, sf);
+        let second_order_a =
+            model::second_order_attitude_density(&self.p, &prop.lin.omega_ib_b, sf);
         let b = &prop.bridged;
         for k in 0..3 {
-            q[ATT + k] += b.attitude_var_rad2 / prop.dt;
-            q[VEL + k] += b.velocity_var_m2_s2 / prop.dt + second_order;
+            q[ATT + k] += b.attitude_var_rad2 / prop.dt + second_order_a;
+            q[VEL + k] += b.velocity_var_m2_s2 / prop.dt + second_order_v;
         }
         if let Some(lost) = &b.lost {
             self.lose(lost);

@@ -22,9 +22,10 @@
 //!
 //! where `W_ie = d omega_ie_n / d dr`, `W_en_r = d omega_en_n / d dr`,
 //! `W_en_v = d omega_en_n / d dv`; the sensor errors decay as `-x / tau` driven by white noise
-//! of density `2 sigma^2 / tau` (Groves eq. 14.80). The product of the attitude and
-//! accelerometer errors the linearisation drops enters `w_v` as a noise of its size
-//! ([`second_order_velocity_density`]).
+//! of density `2 sigma^2 / tau` (Groves eq. 14.80). The products of the attitude error with
+//! the accelerometer and gyro errors, which the linearisation drops, enter `w_v` and `w_phi`
+//! as noises of their size ([`second_order_velocity_density`],
+//! [`second_order_attitude_density`]).
 //!
 //! Discretisation over the propagation interval `dt` (the increments accumulated in between):
 //! `Phi = I + F dt + (F dt)^2 / 2` (second order; F at the interval's end, the specific force
@@ -252,6 +253,32 @@ pub fn second_order_velocity_density<T: Scalar>(
     T::c(2.0 * SECOND_ORDER_TIME_S) * attitude * accel
 }
 
+/// Spectral density [rad^2/s] of an attitude noise per axis that stands for the gyros' share
+/// of the same dropped product: the computed rate `C~_b_n (omega + e_g)`, `e_g = b_g +
+/// diag(omega_b) s_g`, whose product `-[phi x] C_b_n e_g` [`system_matrix`] leaves out; the
+/// largest attitude 1-sigma times the largest gyro error 1-sigma (`omega_ib_b` the body rate
+/// [rad/s]), spread as [`second_order_velocity_density`] does. A consumer part started in
+/// motion carries a heading error of ten degrees and gyro biases known to a tenth of a degree
+/// per second: the product turns the tilt by a degree a minute, which taken as known let a
+/// straight flight's roll 1-sigma fall to a third of its error.
+pub fn second_order_attitude_density<T: Scalar>(
+    p: &Covariance<T>,
+    omega_ib_b: &Vector3<T>,
+    scale_factors: bool,
+) -> T {
+    let mut attitude = T::zero();
+    let mut gyro = T::zero();
+    for k in 0..3 {
+        attitude = attitude.max(p[(ATT + k, ATT + k)]);
+        let mut e = p[(BG + k, BG + k)];
+        if scale_factors {
+            e += p[(SG + k, SG + k)] * omega_ib_b[k] * omega_ib_b[k];
+        }
+        gyro = gyro.max(e);
+    }
+    T::c(2.0 * SECOND_ORDER_TIME_S) * attitude * gyro
+}
+
 const _: () = assert!(N.is_multiple_of(7));
 
 /// True when no element is NaN or infinite: `x * 0` is `0` for a finite `x` and NaN for any
@@ -372,11 +399,11 @@ pub(crate) mod tests {
         assert!(q.rows(SG, 6).iter().all(|x| *x == 0.0));
     }
 
-    /// The second-order velocity noise is `2 tau` times the largest attitude variance times
-    /// the largest accelerometer error variance (bias, and the scale factor times the specific
-    /// force when modelled), and nothing when either is zero.
+    /// The second-order velocity (attitude) noise is `2 tau` times the largest attitude
+    /// variance times the largest accelerometer (gyro) error variance: bias, and the scale
+    /// factor times the specific force (body rate) when modelled; nothing when either is zero.
     #[test]
-    fn second_order_noise_is_the_product_of_the_largest_errors() {
+    fn second_order_noises_are_the_products_of_the_largest_errors() {
         let mut p = Covariance::<f64>::zeros();
         let f = Vector3::new(0.5, 0.0, -9.8);
         assert_eq!(second_order_velocity_density(&p, &f, true), 0.0);
@@ -392,5 +419,15 @@ pub(crate) mod tests {
         let with = second_order_velocity_density(&p, &f, true);
         let accel = 2e-2 + 1e-4 * 9.8 * 9.8;
         assert!((with - tau2 * 4e-2 * accel).abs() < 1e-15, "{with}");
+        // The gyros' share: the gyro bias and scale-factor variances at the body rate.
+        let w = Vector3::new(0.0, 0.5, 0.0);
+        assert_eq!(second_order_attitude_density(&p, &w, true), 0.0);
+        p[(BG + 1, BG + 1)] = 1e-6;
+        p[(SG + 1, SG + 1)] = 4e-6;
+        let gyro = 1e-6 + 4e-6 * 0.25;
+        let with = second_order_attitude_density(&p, &w, true);
+        assert!((with - tau2 * 4e-2 * gyro).abs() < 1e-18, "{with}");
+        let without = second_order_attitude_density(&p, &w, false);
+        assert!((without - tau2 * 4e-2 * 1e-6).abs() < 1e-18, "{without}");
     }
 }
