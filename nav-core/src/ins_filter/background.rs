@@ -117,6 +117,9 @@ pub struct ErrorFilter<T: Scalar> {
     /// [`integrity::WINDOW_REFUSALS_MAX`] refusals, until confirmed ([`integrity`] module
     /// docs).
     restart: Option<Restart<T>>,
+    /// A full window of fixes has passed the tests since the start: the position is the
+    /// filter's own, and a fix the gate refuses may start a refused cluster ([`integrity`]).
+    confirmed: bool,
     /// The consider states' model and cross-covariance `P_ac` ([`consider`]).
     consider: ConsiderModel<T>,
     p_ac: CrossCovariance<T>,
@@ -167,6 +170,7 @@ impl<T: Scalar> ErrorFilter<T> {
             since_fix_s: T::zero(),
             reacquired: None,
             restart: None,
+            confirmed: false,
             consider,
             p_ac,
             c_b_n: *nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), yaw).matrix(),
@@ -724,6 +728,11 @@ impl<T: Scalar> ErrorFilter<T> {
         let drift = self.fix_drift(dt, g);
         self.restart = self.restart.map(|r| r.carried(dt));
         let mut recovered = false;
+        if nis > gate && self.cluster.is_none() && !self.confirmed {
+            // Refused by the gate, but no cluster: a full window has not yet confirmed the
+            // filter's position since its start ([`integrity`] module docs).
+            return (AidResult::Rejected { nis }, None);
+        }
         if nis > gate {
             // Continues the cluster it agrees with, or starts one.
             let cluster = match &self.cluster {
@@ -774,6 +783,7 @@ impl<T: Scalar> ErrorFilter<T> {
         // filter did not see.
         if !recovered {
             self.window.push(w);
+            self.confirmed |= self.window.len() == integrity::WINDOW;
         }
         let local = !self.consider.has_gnss_error();
         if !recovered && self.window.verdict(gate, local) != WindowVerdict::Consistent {

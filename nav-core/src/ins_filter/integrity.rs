@@ -57,7 +57,13 @@
 //! when the growing covariance would let it pass the gate: the filter refused that cluster while
 //! it still knew its own position, and a wider covariance is no evidence for it. A fix that
 //! leaves the cluster (the fault ended) is judged by the gate alone: that is the re-acquisition
-//! from the filter's own growing sigma. Only refusals by the per-fix gate start a cluster (the
+//! from the filter's own growing sigma. A cluster needs a filter that knew its position: none
+//! starts before a full window of fixes has passed the tests since the filter's start (a start
+//! in motion on a consumer part, during a take-off run, had its first fix refused at a
+//! normalised square of 16.6 against the 16.3 gate, then its next 19 fixes as that fix's
+//! cluster while its own drift grew to 200 m: DEGRADED for 20 s, pitch 8 sigma off for
+//! the rest of the flight); until then a refused fix is refused alone. Only refusals by the
+//! per-fix gate start a cluster (the
 //! windowed test's refusals do not: after a slow fault the true fixes are refused by it for a
 //! while, and must not become a cluster). The cluster is released when its offset has become a
 //! typical error of the filter (its normalised square within the median of `chi^2(3)`): the
