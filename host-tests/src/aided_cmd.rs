@@ -416,6 +416,7 @@ pub fn sequencer<T: Scalar>(
                 sideslip_rad: T::c(d.sideslip_rad),
                 accel_bias_mps2: T::c(config.noise.accel_bias_mps2.max(d.accel_bias_mps2)),
                 gyro_bias_rad_s: T::c(config.noise.gyro_bias_rad_s),
+                arw_rad_per_sqrt_s: T::c(config.noise.arw_rad_per_sqrt_s),
             })
         }
     };

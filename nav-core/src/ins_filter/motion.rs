@@ -15,6 +15,15 @@
 //!   second their difference is 1 m/s^2 of noise, and a single interval never showed a
 //!   vehicle standing still as quasi-static). A span that turns, accelerates beyond doubt
 //!   (three sigma), or passes [`MAX_SPAN_S`] starts again at its last fix.
+//! - Gyro bias: while the level spans find the vehicle standing still (the antenna moved by
+//!   no more than three times the fixes' noise and [`REST_DISPLACEMENT_M`]), their rotation
+//!   increments are summed; after [`MIN_REST_S`] their mean rate, less the Earth rate's
+//!   vertical part, is the gyro bias, 1-sigma from the angle random walk, a rocking of
+//!   [`REST_ROCKING_RAD`] over the time summed and the Earth rate's horizontal part (the
+//!   heading is not known yet). A consumer part's turn-on bias of a degree per second,
+//!   unknown at the start, turned the heading by tens of degrees before the fixes found it,
+//!   and the filter linearised about that took false information on the roll. A body that
+//!   turns in place while its antenna stands still (a turntable) is outside this model.
 //! - Heading: once the horizontal speed exceeds [`MotionAlignConfig::min_speed_m_s`], the
 //!   ground track `atan2(v_E, v_N)` (a land vehicle moves along its forward axis); 1-sigma from
 //!   the velocity's 1-sigma over the speed and the sideslip allowance.
@@ -66,6 +75,31 @@ pub const MAX_SPAN_S: f64 = 30.0;
 /// that changes the GNSS velocity over the span beyond the acceleration bound.
 pub const MAX_SPAN_RATE_RAD_S: f64 = 0.087;
 
+/// Shortest time at rest the gyro bias is taken over [s].
+pub const MIN_REST_S: f64 = 10.0;
+
+/// Largest net rotation of a vehicle standing still over the time its gyro bias is taken
+/// over [rad] (1 deg: a parked car rocked by its passengers, a ship at anchor); divided by that
+/// time, a share of the bias's 1-sigma.
+pub const REST_ROCKING_RAD: f64 = 0.017_453_292_519_943_295;
+
+/// Largest horizontal displacement of a span that stood still [m], beyond three times the
+/// two fixes' noise (a parked car moves by centimetres; one creeping at 0.1 m/s moves 1 m in
+/// 10 s).
+pub const REST_DISPLACEMENT_M: f64 = 0.3;
+
+/// True when the antenna moved between the fixes `a` and `b` by no more horizontally than
+/// their noise (three times it) and [`REST_DISPLACEMENT_M`] allow: the vehicle stood still
+/// (module docs).
+fn stood_still<T: Scalar>(a: &GnssPosition<T>, b: &GnssPosition<T>) -> bool {
+    let pa = Position::from_radians(a.lat_rad, a.lon_rad, a.h_m);
+    let pb = Position::from_radians(b.lat_rad, b.lon_rad, b.h_m);
+    let d = pa.ned_to(&pb);
+    let horizontal = (T::c(d[0]) * T::c(d[0]) + T::c(d[1]) * T::c(d[1])).sqrt();
+    let noise = |p: &GnssPosition<T>| p.sigma_ned_m.fixed_rows::<2>(0).norm_squared();
+    horizontal <= T::c(3.0) * (noise(a) + noise(b)).sqrt() + T::c(REST_DISPLACEMENT_M)
+}
+
 /// The start-in-motion thresholds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MotionAlignConfig<T: Scalar> {
@@ -79,10 +113,13 @@ pub struct MotionAlignConfig<T: Scalar> {
     pub accel_bias_mps2: T,
     /// Gyro bias 1-sigma [rad/s] (for the lever-arm velocity's 1-sigma).
     pub gyro_bias_rad_s: T,
+    /// Angle random walk [rad/sqrt(s)] (the noise of the gyro bias found at rest).
+    pub arw_rad_per_sqrt_s: T,
 }
 
 impl<T: Scalar> Default for MotionAlignConfig<T> {
-    /// 5 m/s, 0.3 m/s^2, 3 deg, 0.02 m/s^2, 0.5 deg/s (a consumer part's turn-on bias).
+    /// 5 m/s, 0.3 m/s^2, 3 deg, 0.02 m/s^2, 0.5 deg/s (a consumer part's turn-on bias),
+    /// 0.17 deg/sqrt(h) (its angle random walk).
     fn default() -> Self {
         Self {
             min_speed_m_s: T::c(5.0),
@@ -90,6 +127,7 @@ impl<T: Scalar> Default for MotionAlignConfig<T> {
             sideslip_rad: T::c(3f64.to_radians()),
             accel_bias_mps2: T::c(0.02),
             gyro_bias_rad_s: T::c(0.5f64.to_radians()),
+            arw_rad_per_sqrt_s: T::c(0.17f64.to_radians() / 60.0),
         }
     }
 }
@@ -104,6 +142,9 @@ pub struct MotionStart<T: Scalar> {
     /// 1-sigma of the level span's mean acceleration per axis [m/s^2]: the level's error
     /// besides the accelerometer bias's ([`super::AidedIns::level_on_accelerometers`]).
     pub level_acceleration_mps2: T,
+    /// The gyro bias found while the vehicle stood still, and its 1-sigma per axis [rad/s]
+    /// (module docs); `None` when it never stood still long enough.
+    pub gyro_bias_at_rest: Option<(Vector3<T>, Vector3<T>)>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -118,6 +159,8 @@ struct Fix<T: Scalar> {
 struct Span<T: Scalar> {
     /// Time of its first fix [s].
     t0_s: f64,
+    /// Its first fix's position.
+    p0: GnssPosition<T>,
     /// Velocity at its first fix [m/s] and its 1-sigma [m/s].
     v0: (Vector3<T>, T),
     /// Sum of the velocity increments since [m/s] and of their intervals [s].
@@ -128,9 +171,10 @@ struct Span<T: Scalar> {
 }
 
 impl<T: Scalar> Span<T> {
-    fn at(t0_s: f64, v0: (Vector3<T>, T)) -> Self {
+    fn at(t0_s: f64, p0: GnssPosition<T>, v0: (Vector3<T>, T)) -> Self {
         Self {
             t0_s,
+            p0,
             v0,
             sum_dv: Vector3::zeros(),
             sum_dt: T::zero(),
@@ -158,6 +202,9 @@ pub struct MotionAlign<T: Scalar> {
     dt_since_fix_s: T,
     /// Sum of the velocity increments since `base` [m/s].
     dv_since_fix_b: Vector3<T>,
+    /// The rotation increments [rad] and their intervals [s] summed over the consecutive
+    /// level spans the vehicle stood still in (module docs).
+    rest: Option<(Vector3<T>, T)>,
 }
 
 impl<T: Scalar> MotionAlign<T> {
@@ -174,6 +221,7 @@ impl<T: Scalar> MotionAlign<T> {
             turn_since_fix_rad: Vector3::zeros(),
             dt_since_fix_s: T::zero(),
             dv_since_fix_b: Vector3::zeros(),
+            rest: None,
         }
     }
 
@@ -242,6 +290,7 @@ impl<T: Scalar> MotionAlign<T> {
             // An outage: what was known before it is stale (module docs).
             self.span = None;
             self.level = None;
+            self.rest = None;
             self.restart_base(fix);
             return None;
         }
@@ -275,7 +324,7 @@ impl<T: Scalar> MotionAlign<T> {
             }
         };
         // The span's test takes one 1-sigma, the RMS over the axes.
-        self.level_over_span(t_s, v, sv_ned.norm() / T::c(1.732_050_807_568_877_2));
+        self.level_over_span(t_s, pos, v, sv_ned.norm() / T::c(1.732_050_807_568_877_2));
         let (roll, pitch, tilt_sigma) = self.level?;
         // A difference is the mean velocity over its interval, half an interval behind the fix:
         // carried to the fix by the IMU's mean acceleration `C_b_n f + g` times `dt / 2`
@@ -348,11 +397,40 @@ impl<T: Scalar> MotionAlign<T> {
                 accel_scale: Vector3::zeros(),
             },
             level_acceleration_mps2: self.config.max_accel_mps2,
+            gyro_bias_at_rest: self.gyro_bias_at_rest(pos, roll, pitch),
         })
     }
 }
 
 impl<T: Scalar> MotionAlign<T> {
+    /// The gyro bias from the rest spans (module docs): their mean rate less the Earth rate's
+    /// vertical part in body axes (level `roll`, `pitch` [rad] at the fix `pos`), and its
+    /// 1-sigma per axis: the angle random walk over the time summed, a body that rocks by
+    /// [`REST_ROCKING_RAD`] over it, and the Earth rate's horizontal part (the heading is not
+    /// known). `None` below [`MIN_REST_S`].
+    fn gyro_bias_at_rest(
+        &self,
+        pos: &GnssPosition<T>,
+        roll: T,
+        pitch: T,
+    ) -> Option<(Vector3<T>, Vector3<T>)> {
+        let (turn, dt) = self.rest?;
+        if !(dt >= T::c(MIN_REST_S)) {
+            return None;
+        }
+        let w = crate::earth::OMEGA_IE;
+        let lat = T::c(pos.lat_rad.to_f64());
+        let (sin_lat, cos_lat) = (lat.psin(), lat.pcos());
+        let down_rate_n = Vector3::new(T::zero(), T::zero(), -T::c(w) * sin_lat);
+        let c_n_b = attitude::from_euler(roll, pitch, T::zero()).inverse();
+        let bias = turn / dt - c_n_b * down_rate_n;
+        let arw = self.config.arw_rad_per_sqrt_s;
+        let rock = T::c(REST_ROCKING_RAD) / dt;
+        let earth = T::c(w) * cos_lat;
+        let sigma = (arw * arw / dt + rock * rock + earth * earth).sqrt();
+        Some((bias, Vector3::repeat(sigma)))
+    }
+
     /// `fix` the start of the next position difference.
     fn restart_base(&mut self, fix: Fix<T>) {
         self.base = Some(fix);
@@ -364,8 +442,8 @@ impl<T: Scalar> MotionAlign<T> {
     /// The span's test at a fix of velocity `v` [m/s] (1-sigma `sv` [m/s]) at `t_s` [s]
     /// (module docs): the level when the span was quasi-static; a new span from this fix when
     /// it turned, accelerated beyond doubt or grew too long.
-    fn level_over_span(&mut self, t_s: f64, v: Vector3<T>, sv: T) {
-        let here = Span::at(t_s, (v, sv));
+    fn level_over_span(&mut self, t_s: f64, pos: &GnssPosition<T>, v: Vector3<T>, sv: T) {
+        let here = Span::at(t_s, *pos, (v, sv));
         let Some(span) = self.span.replace(here) else {
             return;
         };
@@ -392,6 +470,14 @@ impl<T: Scalar> MotionAlign<T> {
                 .sqrt()
                 / g;
             self.level = Some((roll, pitch, sigma));
+            // Still, or moving without a turn the GNSS can bound: only the first sums the gyro
+            // bias (module docs).
+            self.rest = if stood_still(&span.p0, pos) {
+                let (turn, dt) = self.rest.unwrap_or((Vector3::zeros(), T::zero()));
+                Some((turn + span.turn_rad, dt + span.sum_dt))
+            } else {
+                None
+            };
             return;
         }
         // Undecided: the span goes on (it is not quasi-static beyond doubt, nor too long).
@@ -632,5 +718,51 @@ mod tests {
         for k in 0..2 {
             assert!(sv[k] >= horizontal && sv[k] < horizontal * 1.1, "{sv:?}");
         }
+    }
+
+    /// A car standing still for `still_s` seconds with gyro biases `bias` [rad/s], then
+    /// driving east at 10 m/s on 1 Hz fixes of exact positions: the start.
+    fn start_after_standing(still_s: u32, bias: Vector3<f64>) -> MotionStart<f64> {
+        let mut m = MotionAlign::new(MotionAlignConfig::default(), Vector3::zeros());
+        for k in 0..(still_s + 10) {
+            let t = f64::from(k);
+            let moving_s = (t - f64::from(still_s)).max(0.0);
+            m.add_imu(&ImuIncrement::new(bias.into(), [0.0, 0.0, -9.8], 1.0));
+            if let Some(s) = m.add_fix(t, &fix(0.0, 10.0 * moving_s), None) {
+                return s;
+            }
+        }
+        panic!("no start");
+    }
+
+    /// Standing still for 30 s, the mean gyro output is the bias (less the Earth rate's
+    /// vertical part; its horizontal part, the body's rocking and the angle random walk in the
+    /// 1-sigma): the start carries it within 3 of a 1-sigma of hundredths of a degree per
+    /// second. Standing for 5 s gives none (below [`MIN_REST_S`]), and neither does a car
+    /// that drove at a constant velocity all along (quasi-static, level, but not still: its
+    /// gyros may see a slow turn).
+    #[test]
+    fn a_vehicle_that_stood_still_gives_its_gyro_bias() {
+        let bias = Vector3::new(0.3, -0.2, 1.45).map(f64::to_radians);
+        let s = start_after_standing(30, bias);
+        let (b, sigma) = s.gyro_bias_at_rest.expect("a bias at rest");
+        let earth = Vector3::new(0.0, 0.0, crate::earth::OMEGA_IE * 45f64.to_radians().sin());
+        for k in 0..3 {
+            assert!(sigma[k] < 0.05f64.to_radians(), "{sigma:?}");
+            let e = b[k] - (bias[k] + earth[k]);
+            assert!(
+                e.abs() < 3.0 * sigma[k],
+                "{b:?} against {bias:?}: {sigma:?}"
+            );
+        }
+        assert_eq!(start_after_standing(5, bias).gyro_bias_at_rest, None);
+        let mut m = MotionAlign::new(MotionAlignConfig::default(), Vector3::zeros());
+        let mut start = None;
+        for k in 0..60 {
+            m.add_imu(&ImuIncrement::new(bias.into(), [0.0, 0.0, -9.8], 1.0));
+            start = start.or(m.add_fix(f64::from(k), &fix(0.0, 10.0 * f64::from(k)), None));
+        }
+        let s = start.expect("a start on the move");
+        assert_eq!(s.gyro_bias_at_rest, None);
     }
 }

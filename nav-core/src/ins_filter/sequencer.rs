@@ -290,6 +290,7 @@ impl<T: Scalar> Sequencer<T> {
                 let d = MotionAlignConfig::<T>::default();
                 MotionAlignConfig {
                     accel_bias_mps2: d.accel_bias_mps2.max(config.noise.accel_bias_mps2),
+                    arw_rad_per_sqrt_s: config.noise.arw_rad_per_sqrt_s,
                     ..d
                 }
             }
@@ -495,9 +496,21 @@ impl<T: Scalar> Sequencer<T> {
         state.position = state
             .position
             .offset_ned([d.x.to_f64(), d.y.to_f64(), d.z.to_f64()]);
+        // The gyro bias found at rest, combined with the noise model's (a first start only:
+        // a re-alignment's increments are already compensated by the lost filter's estimate).
+        let mut sensors = SensorErrors::default();
+        if let Some((b, s_rest)) = s.gyro_bias_at_rest.filter(|_| self.set_aside.is_none()) {
+            for k in 0..3 {
+                let (p2, r2) = (sigma.gyro_bias_rad_s[k].powi(2), s_rest[k] * s_rest[k]);
+                if r2 > T::zero() && p2 > T::zero() {
+                    sensors.gyro_bias_rad_s[k] = b[k] * p2 / (p2 + r2);
+                    sigma.gyro_bias_rad_s[k] = (p2 * r2 / (p2 + r2)).sqrt();
+                }
+            }
+        }
         // Checked at construction: only the start's own values can fail here (not finite).
         let ins = match &mut self.set_aside {
-            None => AidedIns::new(state, SensorErrors::default(), &sigma, self.config),
+            None => AidedIns::new(state, sensors, &sigma, self.config),
             Some(lost) => {
                 // Its covariance up to this sample; the lost time was never propagated.
                 lost.ins.propagate();
