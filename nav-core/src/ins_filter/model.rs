@@ -240,17 +240,7 @@ pub fn second_order_velocity_density<T: Scalar>(
     f_ib_b: &Vector3<T>,
     scale_factors: bool,
 ) -> T {
-    let mut attitude = T::zero();
-    let mut accel = T::zero();
-    for k in 0..3 {
-        attitude = attitude.max(p[(ATT + k, ATT + k)]);
-        let mut e = p[(BA + k, BA + k)];
-        if scale_factors {
-            e += p[(SA + k, SA + k)] * f_ib_b[k] * f_ib_b[k];
-        }
-        accel = accel.max(e);
-    }
-    T::c(2.0 * SECOND_ORDER_TIME_S) * attitude * accel
+    second_order_density(p, BA, SA, f_ib_b, scale_factors)
 }
 
 /// Spectral density [rad^2/s] of an attitude noise per axis that stands for the gyros' share
@@ -266,17 +256,30 @@ pub fn second_order_attitude_density<T: Scalar>(
     omega_ib_b: &Vector3<T>,
     scale_factors: bool,
 ) -> T {
+    second_order_density(p, BG, SG, omega_ib_b, scale_factors)
+}
+
+/// `2 tau` times the largest attitude variance times the largest variance of a sensor
+/// triad's error: its bias states from `bias`, plus its scale-factor states from `scale`
+/// times the measured `x` squared when modelled.
+fn second_order_density<T: Scalar>(
+    p: &Covariance<T>,
+    bias: usize,
+    scale: usize,
+    x: &Vector3<T>,
+    scale_factors: bool,
+) -> T {
     let mut attitude = T::zero();
-    let mut gyro = T::zero();
+    let mut sensor = T::zero();
     for k in 0..3 {
         attitude = attitude.max(p[(ATT + k, ATT + k)]);
-        let mut e = p[(BG + k, BG + k)];
+        let mut e = p[(bias + k, bias + k)];
         if scale_factors {
-            e += p[(SG + k, SG + k)] * omega_ib_b[k] * omega_ib_b[k];
+            e += p[(scale + k, scale + k)] * x[k] * x[k];
         }
-        gyro = gyro.max(e);
+        sensor = sensor.max(e);
     }
-    T::c(2.0 * SECOND_ORDER_TIME_S) * attitude * gyro
+    T::c(2.0 * SECOND_ORDER_TIME_S) * attitude * sensor
 }
 
 const _: () = assert!(N.is_multiple_of(7));
