@@ -1113,9 +1113,8 @@ fn sim_and_replay_with_gnss() {
     assert!(!d.join("x.csv").exists());
 }
 
-/// `nav sim SIM --format bin --out DIR`, then `nav replay REPLAY` of its recording and fixes:
-/// the replay's output and its solution log (`DIR/sol.csv`).
-fn sim_and_replay(d: &Path, sim: &[&str], replay: &[&str]) -> (String, PathBuf) {
+/// `nav sim SIM` writing its binary recording, truth and GNSS files into `d`.
+fn sim_into(d: &Path, sim: &[&str]) {
     run_ok(
         nav()
             .arg("sim")
@@ -1123,6 +1122,12 @@ fn sim_and_replay(d: &Path, sim: &[&str], replay: &[&str]) -> (String, PathBuf) 
             .args(["--format", "bin", "--out"])
             .arg(d),
     );
+}
+
+/// `nav sim SIM --format bin --out DIR`, then `nav replay REPLAY` of its recording and fixes:
+/// the replay's output and its solution log (`DIR/sol.csv`).
+fn sim_and_replay(d: &Path, sim: &[&str], replay: &[&str]) -> (String, PathBuf) {
+    sim_into(d, sim);
     let out = d.join("sol.csv");
     let text = run_ok(
         nav()
@@ -2171,24 +2176,22 @@ fn a_lateral_bias_the_level_hides_is_not_taken_for_information() {
     use nav_core::ins_filter::{BA, FilterConfig};
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let sim = [
-        "sim",
-        "flight",
-        "--grade",
-        "ideal",
-        "--seed",
-        "9685",
-        "--seconds",
-        "600",
-        "--rate",
-        "200",
-        "--gnss-rate",
-        "10",
-        "--format",
-        "bin",
-        "--out",
-    ];
-    run_ok(nav().args(sim).arg(d));
+    sim_into(
+        d,
+        &[
+            "flight",
+            "--grade",
+            "ideal",
+            "--seed",
+            "9685",
+            "--seconds",
+            "600",
+            "--rate",
+            "200",
+            "--gnss-rate",
+            "10",
+        ],
+    );
     let fixes = host_tests::gnss_file::read_as_text_fixes(&d.join("gnss.csv"), None).unwrap();
     struct Bias {
         every_us: u64,

@@ -333,7 +333,7 @@ impl<T: Scalar> MotionAlign<T> {
         let (v, sv_ned) = match (vel, f_mean_b) {
             (None, Some(f_b)) => {
                 let q0 = attitude::from_euler(roll, pitch, v.y.patan2(v.x));
-                let g = crate::earth::LocalEarth::new(pos.lat_rad, pos.h_m).g;
+                let g = crate::earth::normal_gravity(pos.lat_rad, pos.h_m);
                 let a_n = q0 * f_b + Vector3::new(T::zero(), T::zero(), T::c(g));
                 let half = dt * T::c(0.5);
                 let speed0 = (v.x * v.x + v.y * v.y).sqrt().max(T::c(1e-3));
@@ -418,15 +418,13 @@ impl<T: Scalar> MotionAlign<T> {
         if !(dt >= T::c(MIN_REST_S)) {
             return None;
         }
-        let w = crate::earth::OMEGA_IE;
-        let lat = T::c(pos.lat_rad.to_f64());
-        let (sin_lat, cos_lat) = (lat.psin(), lat.pcos());
-        let down_rate_n = Vector3::new(T::zero(), T::zero(), -T::c(w) * sin_lat);
+        let w_ie_n = crate::earth::omega_ie_n(T::c(pos.lat_rad.to_f64()));
+        let down_rate_n = Vector3::new(T::zero(), T::zero(), w_ie_n.z);
         let c_n_b = attitude::from_euler(roll, pitch, T::zero()).inverse();
         let bias = turn / dt - c_n_b * down_rate_n;
         let arw = self.config.arw_rad_per_sqrt_s;
         let rock = T::c(REST_ROCKING_RAD) / dt;
-        let earth = T::c(w) * cos_lat;
+        let earth = w_ie_n.x;
         let sigma = (arw * arw / dt + rock * rock + earth * earth).sqrt();
         Some((bias, Vector3::repeat(sigma)))
     }
