@@ -195,6 +195,7 @@ impl Format for Inertial<'_> {
                     InputError::NonFinite => "increment contains NaN or infinity",
                     InputError::BadInterval => "sampling interval is not positive or too long",
                     InputError::OutOfRange => "rate or specific force beyond the plausible range",
+                    InputError::OutOfOrder => "time not after the last navigated sample's",
                 }
             ),
             I::NearPole => write!(f, "latitude too close to a pole (or not finite)"),

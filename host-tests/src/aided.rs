@@ -14,7 +14,7 @@ use nav_core::ins_filter::{
     AidResult, AidedIns, FilterCounters, GnssPosition, GnssVelocity, POS, VEL,
 };
 use nav_core::output::CSV_HEADER;
-use nav_core::{ImuIncrement, Scalar, Solution, Vector3};
+use nav_core::{ImuIncrement, InputError, Scalar, Solution, Vector3};
 use std::fmt;
 
 /// The columns the aided solution adds to [`CSV_HEADER`]: 1-sigma of position [m], velocity
@@ -135,6 +135,9 @@ pub struct LostImuTime {
     pub alignment_s: f64,
     /// The samples noted come before navigation ([`Self::set_aligning`]).
     aligning: bool,
+    /// Intervals of the samples the navigation skipped as out of time order since the last
+    /// navigated one [s] ([`Self::out_of_order`]).
+    skipped_s: f64,
 }
 
 /// A lost span shorter than this is not reported [s] (rounding of the time tags).
@@ -150,11 +153,19 @@ impl LostImuTime {
         };
         self.latest_us = Some(t_us);
         let from = self.navigated_us.replace(t_us).unwrap_or(first);
-        let lost_s = t_us.saturating_sub(from) as f64 * 1e-6 - dt_s;
+        let skipped_s = std::mem::take(&mut self.skipped_s);
+        let lost_s = (t_us.saturating_sub(from) as f64 * 1e-6 - dt_s).max(skipped_s);
         // Within half the sample's interval: time-tag jitter (the gap detector's rule).
         if lost_s > (0.5 * dt_s).max(LOST_TOLERANCE_S) {
             self.add(lost_s, t_us);
         }
+    }
+
+    /// A sample the navigation skipped as out of time order (`nav_core::gap`: a clock that
+    /// stepped back), of interval `dt_s` [s]: the time it covered is lost, though its tag
+    /// does not show it.
+    pub fn out_of_order(&mut self, dt_s: f64) {
+        self.skipped_s += dt_s;
     }
 
     /// The samples noted from now on come before navigation (`true`: the alignment's or the
@@ -243,6 +254,8 @@ pub struct AidedReport {
     pub flagged: u64,
     /// Increments refused by nav-core's limits.
     pub rejected: u64,
+    /// Samples whose time is not after the last navigated one's (`nav_core::gap`), skipped.
+    pub out_of_order: u64,
     /// Fixes whose time tag is not on the IMU clock.
     pub bad_time_tags: u64,
     /// Fixes before the first sample or after the last.
@@ -461,6 +474,11 @@ pub fn run<T: Scalar, E: fmt::Display>(
         let navigated = seq.on_sample(s.t_us, &s.increment);
         // Before the first start no solution exists to lose (a re-alignment has the lost one).
         report.lost.set_aligning(report.start_s.is_none());
+        if navigated == Err(InputError::OutOfOrder) {
+            report.out_of_order += 1;
+            report.lost.out_of_order(s.increment.dt.to_f64());
+            continue;
+        }
         report
             .lost
             .note(s.t_us, navigated.is_ok().then(|| s.increment.dt.to_f64()));

@@ -496,11 +496,12 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
     let line = |name: &str, a: &nav_core::ins_filter::AidCounters| format!("{name}: {a}");
     [
         format!(
-            "{}: {} samples ({} flagged, {} refused), {} rows -> {}",
+            "{}: {} samples ({} flagged, {} refused, {} out of time order), {} rows -> {}",
             imu.display(),
             r.samples,
             r.flagged,
             r.rejected,
+            r.out_of_order,
             rows,
             out.display()
         ),

@@ -272,13 +272,19 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
         span_us = Some((span_us.map_or(s.t_us, |(a, _)| a), s.t_us));
         let usable = s.flags.usable();
         lost.set_aligning(navigator.is_aligning());
-        lost.note(s.t_us, usable.then_some(f64::from(s.dt_s)));
         while let Some(f) = next_fix.next_if(|f| f.t_us <= s.t_us) {
             navigator.push_fix(crate::gnss_file::narrow::<T>(f));
         }
+        let out_of_order = navigator.counters().flagged_by.out_of_order;
         let logged = navigator
             .push_inline(&mut background, &s.nav_input())
             .map_err(PipelineError::Navigation)?;
+        // The navigator's word on the sample's time (nav_core::gap).
+        if navigator.counters().flagged_by.out_of_order > out_of_order {
+            lost.out_of_order(f64::from(s.dt_s));
+        } else {
+            lost.note(s.t_us, usable.then_some(f64::from(s.dt_s)));
+        }
         if let Some(r) = logged {
             row(&mut out, &r)?;
         }

@@ -327,8 +327,15 @@ pub fn summary(imu: &Path, out: &Path, precision: &str, fr: &FileReport) -> Stri
     );
     let _ = writeln!(
         s,
-        "samples {}: flagged {} (non-finite {}, bad interval {}), rejected {}, missed {}; navigation steps {}",
-        r.samples, r.flagged, c.non_finite, c.bad_interval, r.rejected, c.missed, r.nav_steps
+        "samples {}: flagged {} (non-finite {}, bad interval {}, time out of order {}), rejected {}, missed {}; navigation steps {}",
+        r.samples,
+        r.flagged,
+        c.non_finite,
+        c.bad_interval,
+        r.flagged_by.out_of_order,
+        r.rejected,
+        c.missed,
+        r.nav_steps
     );
     if let Some(h) = r.driver {
         let _ = writeln!(s, "IMU driver: {h}");

@@ -1920,6 +1920,50 @@ fn a_replay_realigns_after_a_lost_gap() {
     }
 }
 
+/// A recording whose clock steps back by 6 s and stays behind: the samples whose time is not
+/// after the last navigated one are skipped and counted, the rows stay in time order, and the
+/// 6 s they covered are lost IMU time (a lost gap: the filter re-aligns in motion on the
+/// fixes after it). Navigated, they put the rows 6 s back in time.
+#[test]
+fn a_replay_whose_clock_steps_back_skips_the_samples_behind_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run_ok(
+        nav()
+            .args(["sim", "land-vehicle", "--grade", "fog", "--seconds", "60"])
+            .args(["--gnss-rate", "1", "--gnss-velocity-sigma", "0.05,0.05,0.1"])
+            .args(["--format", "bin", "--out"])
+            .arg(d),
+    );
+    let mut rec = host_tests::recording_io::read(&d.join("imu.bin")).unwrap();
+    for r in &mut rec.records[12_000..] {
+        r.t_ns -= 6_000_000_000;
+    }
+    let imu = d.join("stepped.bin");
+    std::fs::write(&imu, rec.to_bytes().unwrap()).unwrap();
+    let out = d.join("sol.csv");
+    let text = run_ok(&mut replay_gnss(&imu, &d.join("gnss.csv"), &out, &GIVEN));
+    // The first sample behind is the source's bad interval, the 2399 after it the
+    // navigation's.
+    assert!(
+        text.contains("24000 samples (1 flagged, 0 refused, 2399 out of time order)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("5.997 s of IMU data missing in 1 gap(s)"),
+        "{text}"
+    );
+    assert!(text.contains("re-aligned in motion 1 time(s)"), "{text}");
+    let log = std::fs::read_to_string(&out).unwrap();
+    let times: Vec<f64> = log
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert!(times.windows(2).all(|w| w[0] < w[1]), "{log}");
+}
+
 /// Gaps in the IMU data over a family (grades, seeds, gap times drawn from the seed): a gap
 /// within the bridge leaves an error its widened covariance covers (the NEES of position,
 /// velocity and attitude at the first sample after it within the 99.9 % point of chi^2(9),

@@ -342,6 +342,10 @@ struct BinCounts {
     /// Samples with either flag (a sample can have both).
     flagged: u32,
     missed: u32,
+    /// Unflagged samples whose time (in whole microseconds, as the navigator takes it) is not
+    /// after the last unflagged one's: the navigation's out-of-order samples when it refuses
+    /// no increment (a refused one does not move the navigation's last time).
+    out_of_order: u32,
 }
 
 fn u16_at(b: &[u8], at: usize) -> u16 {
@@ -385,6 +389,7 @@ fn binary_counts(bytes: &[u8]) -> Result<BinCounts, String> {
     let increments = u16_at(h, 14) == 0;
     // The accelerometer field of the last record of one period.
     let mut prev_regular_accel: Option<[f64; 3]> = None;
+    let mut last_us: Option<u64> = None;
     for (k, r) in bytes[HEADER_LEN..].chunks_exact(RECORD_LEN).enumerate() {
         if u32::from_le_bytes(r[36..40].try_into().unwrap()) != CRC32.checksum(&r[..36]) {
             return Err(format!("record {k}: CRC"));
@@ -430,6 +435,14 @@ fn binary_counts(bytes: &[u8]) -> Result<BinCounts, String> {
         c.non_finite += u32::from(non_finite);
         c.bad_interval += u32::from(bad_interval);
         c.flagged += u32::from(non_finite || bad_interval);
+        if !(non_finite || bad_interval) {
+            let t_us = t_ns / 1000;
+            if last_us.is_some_and(|l| t_us <= l) {
+                c.out_of_order += 1;
+            } else {
+                last_us = Some(t_us);
+            }
+        }
     }
     Ok(c)
 }
@@ -651,6 +664,8 @@ struct Summary {
     flagged: u32,
     non_finite: u32,
     bad_interval: u32,
+    /// Samples the navigation skipped as out of time order (`nav_core::gap`).
+    out_of_order: u32,
     rejected: u32,
     missed: u32,
     nav_steps: u32,
@@ -665,8 +680,8 @@ fn numbers(s: &str) -> Vec<u32> {
         .collect()
 }
 
-/// Parses the lines `samples N: flagged F (non-finite A, bad interval B), rejected R, missed M;
-/// navigation steps S`, `alignment (...) over N samples (...` and `log: PATH (N rows)`.
+/// Parses the lines `samples N: flagged F (non-finite A, bad interval B, time out of order O),
+/// rejected R, missed M; navigation steps S`, `alignment (...) over N samples (...` and `log: PATH (N rows)`.
 fn parse_summary(stdout: &str) -> Summary {
     let line = |start: &str| {
         stdout
@@ -675,7 +690,7 @@ fn parse_summary(stdout: &str) -> Summary {
             .unwrap_or_else(|| panic!("no line starting {start:?} in\n{stdout}"))
     };
     let counts = numbers(line("samples "));
-    assert_eq!(counts.len(), 7, "{stdout}");
+    assert_eq!(counts.len(), 8, "{stdout}");
     let alignment = line("alignment (");
     let aligned = alignment
         .split_once(" over ")
@@ -693,9 +708,10 @@ fn parse_summary(stdout: &str) -> Summary {
         flagged: counts[1],
         non_finite: counts[2],
         bad_interval: counts[3],
-        rejected: counts[4],
-        missed: counts[5],
-        nav_steps: counts[6],
+        out_of_order: counts[4],
+        rejected: counts[5],
+        missed: counts[6],
+        nav_steps: counts[7],
         aligned,
         rows,
     }
@@ -783,6 +799,8 @@ fn check_outcome(case: &Case) -> Result<Option<Summary>, TestCaseError> {
                 );
                 prop_assert!(r.lat_deg.abs() <= 90.0 && r.lon_deg.abs() <= 180.0, "{r:?}");
             }
+            // In time order, whatever the recording's clock did (nav_core::gap).
+            prop_assert!(rows.windows(2).all(|w| w[0].t_s < w[1].t_s), "{}", text());
             let mut expected_names = vec![imu_name, "log.csv".to_owned()];
             expected_names.sort();
             prop_assert_eq!(names, expected_names);
@@ -882,11 +900,16 @@ fn mutated_binary_recordings() {
             match (summary, expected) {
                 (Some(s), Ok(c)) => {
                     prop_assert_eq!(
-                        (s.samples, s.flagged, s.non_finite, s.bad_interval, s.missed),
-                        (c.records, c.flagged, c.non_finite, c.bad_interval, c.missed),
+                        (s.samples, s.non_finite, s.bad_interval, s.missed),
+                        (c.records, c.non_finite, c.bad_interval, c.missed),
                         "{}",
                         case.run.stdout
                     );
+                    // Flagged: by the source, or out of time order by the navigation.
+                    prop_assert_eq!(s.flagged, c.flagged + s.out_of_order, "{}", case.run.stdout);
+                    if s.rejected == 0 {
+                        prop_assert_eq!(s.out_of_order, c.out_of_order, "{}", case.run.stdout);
+                    }
                 }
                 (Some(_), Err(why)) => {
                     prop_assert!(
@@ -921,8 +944,8 @@ fn mutated_csv_recordings() {
             prop_assert_eq!(s.non_finite, c.non_finite, "{}", case.run.stdout);
             // Flagged by cause: each flagged sample has at least one of the two causes.
             prop_assert!(
-                s.flagged >= s.non_finite.max(s.bad_interval)
-                    && s.flagged <= s.non_finite + s.bad_interval,
+                s.flagged >= s.non_finite.max(s.bad_interval).max(s.out_of_order)
+                    && s.flagged <= s.non_finite + s.bad_interval + s.out_of_order,
                 "{}",
                 case.run.stdout
             );

@@ -18,6 +18,17 @@
 //! firmware's, which has no start in motion, [`crate::navigator`]), it stays degraded to the
 //! end of the run.
 //!
+//! **A clock that steps back.** A sample whose time is not after the last navigated one's is
+//! out of order ([`GapDetector::out_of_order`]): its increment is real, but its time is not,
+//! and the GNSS fixes are matched by time, so it is not navigated (the caller flags it). A
+//! single late or repeated time tag costs that sample; a clock that stepped back for good
+//! (a logger's clock reset, a timer that wrapped) costs every sample until its time passes
+//! the last navigated one, and the time those samples covered, the sum of their measured
+//! intervals, is lost time the clock cannot show: the next navigated sample's gap is at least
+//! that ([`GapDetector::note`]), bridged or lost as any other. Navigating them under a clock
+//! that runs behind would put the solution's rows out of time order and apply the fixes to
+//! the wrong samples.
+//!
 //! The rule is the same in every run: [`GapDetector`] sees every navigated sample, in the
 //! firmware's navigator and in the harness's sequencer alike.
 
@@ -184,21 +195,39 @@ impl GapCounters {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GapDetector<T: Scalar> {
     last: Option<(u64, ImuIncrement<T>)>,
+    /// Intervals of the out-of-order samples since the last navigated one [s].
+    skipped_s: T,
 }
 
 impl<T: Scalar> GapDetector<T> {
     /// Nothing seen yet.
-    pub const fn new() -> Self {
-        Self { last: None }
+    pub fn new() -> Self {
+        Self {
+            last: None,
+            skipped_s: T::zero(),
+        }
+    }
+
+    /// True when a sample ending at `t_us` [us] is out of order: its time is not after the
+    /// last navigated sample's (module docs). It is then not to be navigated, and its
+    /// interval `dt` [s] counts as time lost before the next navigated sample.
+    pub fn out_of_order(&mut self, t_us: u64, dt: T) -> bool {
+        let behind = self.last.is_some_and(|(last_us, _)| t_us <= last_us);
+        if behind {
+            self.skipped_s += dt;
+        }
+        behind
     }
 
     /// A navigated sample ending at `t_us` [us] with the increment `inc` (as navigated): the
-    /// gap before it, if time was lost since the previous one.
+    /// gap before it, if time was lost since the previous one: the time its tags show, or the
+    /// intervals of the out-of-order samples skipped since, whichever is longer.
     pub fn note(&mut self, t_us: u64, inc: &ImuIncrement<T>) -> Option<ImuGap<T>> {
+        let skipped_s = core::mem::replace(&mut self.skipped_s, T::zero());
         let (prev_us, before) = self.last.replace((t_us, *inc))?;
         // The count of microseconds is exact in f32 up to 2^24 (16 s), within 1 us beyond.
         let span_s = T::of_f32(t_us.saturating_sub(prev_us) as f32) * T::c(1e-6);
-        let lost_s = span_s - inc.dt;
+        let lost_s = (span_s - inc.dt).max(skipped_s);
         let tolerance_s = (inc.dt * T::c(0.5)).max(T::c(TOLERANCE_S));
         (lost_s > tolerance_s).then(|| ImuGap {
             lost_s,
@@ -269,5 +298,44 @@ mod tests {
         let g = d.note(5_010_000, &inc([0.0; 3], [0.0; 3], 0.01)).unwrap();
         assert!(g.bridged());
         assert_eq!(g.step().0, 250);
+    }
+
+    #[test]
+    fn a_sample_not_after_the_last_navigated_one_is_out_of_order() {
+        let mut d = GapDetector::new();
+        let still = inc([0.0; 3], [0.0; 3], 0.0025);
+        // Nothing navigated yet: nothing is out of order.
+        assert!(!d.out_of_order(1_000_000, 0.0025));
+        assert_eq!(d.note(1_000_000, &still), None);
+        // A repeated and an earlier time tag.
+        assert!(d.out_of_order(1_000_000, 0.0025));
+        assert!(d.out_of_order(999_000, 0.0025));
+        assert!(!d.out_of_order(1_002_500, 0.0025));
+    }
+
+    #[test]
+    fn a_clock_that_stepped_back_loses_the_time_its_samples_covered() {
+        let mut d = GapDetector::new();
+        let still = inc([0.0; 3], [0.0; 3], 0.0025);
+        d.note(50_000_000, &still);
+        // The clock steps back by 10 s: its samples until it passes 50 s are out of order,
+        // 10 s of data the clock does not show.
+        let mut skipped = 0;
+        let mut t_us = 40_002_500;
+        while d.out_of_order(t_us, 0.0025) {
+            skipped += 1;
+            t_us += 2_500;
+        }
+        assert_eq!((skipped, t_us), (4_000, 50_002_500));
+        // The first sample after it is on time by its tag, and 10 s are lost: not bridged.
+        let g = d.note(t_us, &still).unwrap();
+        assert!((g.lost_s - 10.0).abs() < 1e-9, "{}", g.lost_s);
+        assert!(!g.bridged());
+        // The skipped time is counted once.
+        assert_eq!(d.note(t_us + 2_500, &still), None);
+        // One late tag costs its own interval, bridged as a gap of one sample.
+        assert!(d.out_of_order(t_us, 0.0025));
+        let g = d.note(t_us + 5_000, &still).unwrap();
+        assert!((g.lost_s - 0.0025).abs() < 1e-9 && g.bridged());
     }
 }

@@ -75,6 +75,8 @@ pub enum InputError {
     BadInterval,
     /// A rate or specific force beyond [`InputLimits`].
     OutOfRange,
+    /// The sample's time is not after the last navigated sample's ([`crate::gap`]).
+    OutOfOrder,
 }
 
 impl core::fmt::Display for InputError {
@@ -83,6 +85,7 @@ impl core::fmt::Display for InputError {
             Self::NonFinite => "increment contains NaN or infinity",
             Self::BadInterval => "sampling interval is not positive or too long",
             Self::OutOfRange => "rate or specific force beyond the plausible range",
+            Self::OutOfOrder => "time not after the last navigated sample's",
         })
     }
 }

@@ -384,11 +384,16 @@ impl<T: Scalar> Sequencer<T> {
     /// One IMU sample ending at `t_us` [us]: the time lost since the previous one bridged
     /// ([`crate::gap`]), the sample integrated (or given to the in-motion start), then every
     /// held fix due at it applied (the first after a lost gap begins a re-alignment, module
-    /// docs). A refused increment is returned as the error (the fixes wait for the next
-    /// sample).
+    /// docs). A refused increment is returned as the error, and so is a sample out of time
+    /// order ([`InputError::OutOfOrder`], [`crate::gap`]: its interval is lost time before
+    /// the next); the fixes wait for the next sample.
     pub fn on_sample(&mut self, t_us: u64, inc: &ImuIncrement<T>) -> Result<Phase, InputError> {
         self.last_results = [None; QUEUE];
         inc.check(&self.config.mechanization.limits)?;
+        if self.gaps.out_of_order(t_us, inc.dt) {
+            self.restart_increments();
+            return Err(InputError::OutOfOrder);
+        }
         let gap = self.gaps.note(t_us, inc);
         if let Some(gap) = &gap {
             self.gap_counters.add(gap);

@@ -50,6 +50,9 @@ pub enum Unusable {
     DeviceFault,
     /// Another reason of the source's.
     Other,
+    /// Its time is not after the last navigated sample's (the navigator's own rule: a clock
+    /// that stepped back, [`crate::gap`]).
+    OutOfOrder,
 }
 
 impl Unusable {
@@ -61,6 +64,7 @@ impl Unusable {
             Self::Stale => "stale",
             Self::DeviceFault => "device fault",
             Self::Other => "other",
+            Self::OutOfOrder => "time out of order",
         }
     }
 }
@@ -78,6 +82,8 @@ pub struct FlaggedCounts {
     pub device_fault: u32,
     /// Other causes.
     pub other: u32,
+    /// Times not after the last navigated sample's.
+    pub out_of_order: u32,
 }
 
 impl FlaggedCounts {
@@ -89,18 +95,20 @@ impl FlaggedCounts {
             Unusable::Stale => &mut self.stale,
             Unusable::DeviceFault => &mut self.device_fault,
             Unusable::Other => &mut self.other,
+            Unusable::OutOfOrder => &mut self.out_of_order,
         };
         *n = n.saturating_add(1);
     }
 
     /// The counts with their names, in [`Unusable`]'s order.
-    pub fn by_name(&self) -> [(&'static str, u32); 5] {
+    pub fn by_name(&self) -> [(&'static str, u32); 6] {
         [
             (Unusable::NonFinite.name(), self.non_finite),
             (Unusable::BadInterval.name(), self.bad_interval),
             (Unusable::Stale.name(), self.stale),
             (Unusable::DeviceFault.name(), self.device_fault),
             (Unusable::Other.name(), self.other),
+            (Unusable::OutOfOrder.name(), self.out_of_order),
         ]
     }
 }
@@ -504,6 +512,12 @@ impl<T: Scalar> Navigator<T> {
             // As the strapdown does for an increment it refuses.
             self.restart_increments();
             return Step::Rejected(e);
+        }
+        if self.gaps.out_of_order(input.t_us, inc.dt) {
+            self.restart_increments();
+            self.counters.flagged = self.counters.flagged.saturating_add(1);
+            self.counters.flagged_by.add(Unusable::OutOfOrder);
+            return Step::Flagged;
         }
         let gap = self.gaps.note(input.t_us, &inc);
         if let Some(gap) = &gap {

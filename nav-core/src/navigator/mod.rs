@@ -25,6 +25,10 @@
 //!   identity compensation);
 //! - an increment failing [`ImuIncrement::check`] against the default [`InputLimits`] counts
 //!   in `rejected` (navigating, it also restarts the two-sample history);
+//! - a sample whose time is not after the last taken sample's is out of order
+//!   ([`crate::gap`]): flagged ([`Unusable::OutOfOrder`]), skipped, and the history restarted;
+//!   the time such samples covered is lost time before the next taken sample (bridged, or lost
+//!   beyond [`MAX_BRIDGED_S`](crate::gap::MAX_BRIDGED_S));
 //! - aligning: the accepted increments go to the background; after the `n_align`-th (the
 //!   alignment's sample count, [`samples_for`](crate::alignment::samples_for)) the foreground
 //!   waits for the background's answer: aligned, navigation starts from the alignment's state,

@@ -920,3 +920,34 @@ fn a_gap_inside_an_integrating_alignment_ends_the_run() {
     let (_, s) = run::<f64>(&config(15.0, 100), gapped());
     assert!(s.is_ok(), "{s:?}");
 }
+
+/// A clock that steps back for good while navigating: its samples are flagged out of order
+/// until their time passes the last navigated one, the rows stay in time order, and the time
+/// the skipped samples covered is a gap before the next navigated sample: bridged for 2 s,
+/// lost for 6 s.
+#[test]
+fn a_clock_that_steps_back_is_flagged_and_its_time_is_a_gap() {
+    for (step_back_us, skipped, bridged, lost) in [(2_000_000, 200, 1, 0), (6_000_000, 600, 0, 1)] {
+        let inputs = still(3000).map(|mut i| {
+            if i.t_us >= 15_000_000 {
+                i.t_us -= step_back_us;
+            }
+            i
+        });
+        let (rows, summary) = run::<f64>(&config(10.0, 40), inputs);
+        let s = summary.unwrap();
+        let c = s.counters;
+        assert_eq!(
+            (c.flagged, c.flagged_by.out_of_order),
+            (skipped, skipped),
+            "{c:?}"
+        );
+        assert_eq!(c.nav_steps, 2000 - skipped);
+        assert_eq!((c.gaps.bridged, c.gaps.lost), (bridged, lost), "{c:?}");
+        let lost_us = u64::from(skipped) * 10_000;
+        assert!(c.gaps.longest_us.abs_diff(lost_us) <= 1, "{c:?}");
+        assert!(rows.windows(2).all(|w| w[0].t_us < w[1].t_us));
+        let by_cause = std::string::ToString::to_string(&c.flagged_by);
+        assert_eq!(by_cause, std::format!("time out of order {skipped}"));
+    }
+}
