@@ -1342,10 +1342,6 @@ fn a_drawn_family_of_starts_in_motion_is_consistent() {
                 let (text, out) = sim_and_replay(d, &sim, &replay);
                 assert!(text.contains("filter started at t = "), "{sim:?}: {text}");
                 let rows = errors_over_sigma(d, &out);
-                eprintln!(
-                    "DBG {sim:?} roll {:.3}",
-                    fraction_outside_3_sigma(&rows, ROLL)
-                );
                 assert!(rows.len() > 500, "{sim:?}: {} rows", rows.len());
                 for (k, name) in CHANNELS.iter().enumerate() {
                     let fraction = fraction_outside_3_sigma(&rows, k);
@@ -1364,6 +1360,173 @@ fn a_drawn_family_of_starts_in_motion_is_consistent() {
         let rms = (pooled.iter().map(|r| r[k] * r[k]).sum::<f64>() / pooled.len() as f64).sqrt();
         assert!(
             fraction <= 0.05 && (0.25..=1.5).contains(&rms),
+            "{name}: {:.1} % of {} rows outside 3 sigma, RMS error/sigma {rms:.2}",
+            100.0 * fraction,
+            pooled.len()
+        );
+    }
+}
+
+/// Given and aligned starts over a drawn family: land vehicles (heading and speed drawn) and
+/// flights (airfields drawn), anywhere on the Earth (latitude within 75 deg of the equator,
+/// either hemisphere, any longitude), every grade, fix rates of 1-10 Hz, with and without
+/// the receiver's velocity, lever arms up to 2 m per axis; each run started from its truth
+/// at t = 0 moved by a draw of its declared 1-sigma (1 m, 0.1 m/s, 0.3 deg level and 2 deg
+/// heading), or, for a FOG or RLG land vehicle on half the draws, from its own static
+/// alignment. Pooled over the family, each of position north, east, down, roll, pitch and
+/// heading is within 3 of its 1-sigma on at least 97 % of the rows, with an RMS of error
+/// over 1-sigma within [0.6, 1.3]; every member ends NAV. A member's own fraction is only
+/// held to half its rows: a sensor-error draw in its tail is within the model (a FOG whose
+/// yaw-gyro bias was drawn at 2.7 of its 1-sigma drifts beyond 3 sigma on straight legs,
+/// as it should).
+#[test]
+fn a_drawn_family_of_given_and_aligned_starts_is_consistent() {
+    use rand::{RngExt, SeedableRng};
+    use rand_distr::{Distribution, StandardNormal};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let normal = |rng: &mut rand_chacha::ChaCha8Rng| -> f64 { StandardNormal.sample(rng) };
+    let mut pooled = Vec::new();
+    for _ in 0..16 {
+        let land = rng.random_bool(0.5);
+        let grade = ["fog", "rlg", "mems-tactical", "mems-consumer"][rng.random_range(0..4)];
+        let seed = rng.random_range(1..10_000u32).to_string();
+        let rate = ["1", "2", "5", "10"][rng.random_range(0..4)];
+        let lever = (0..3)
+            .map(|_| format!("{:.2}", rng.random_range(-2.0..2.0)))
+            .collect::<Vec<_>>()
+            .join(",");
+        let lat = rng.random_range(-75.0..75.0_f64);
+        let lon = rng.random_range(-180.0..180.0_f64);
+        let params = if land {
+            vec![
+                format!("lat_deg={lat:.4}"),
+                format!("lon_deg={lon:.4}"),
+                format!("heading_deg={:.1}", rng.random_range(-180.0..180.0)),
+                format!("speed_mps={:.1}", rng.random_range(3.0..30.0)),
+            ]
+        } else {
+            // Airfields 4-7 deg apart in latitude and longitude: far enough for the climb.
+            let mut away = || {
+                let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+                sign * rng.random_range(4.0..7.0)
+            };
+            let (dlat, dlon) = (away(), away());
+            vec![
+                format!("from_lat_deg={lat:.4}"),
+                format!("from_lon_deg={lon:.4}"),
+                format!("to_lat_deg={:.4}", (lat + dlat).clamp(-80.0, 80.0)),
+                format!("to_lon_deg={:.4}", (lon + dlon + 540.0) % 360.0 - 180.0),
+            ]
+        };
+        let velocity = rng.random_bool(0.5);
+        let aligned = land && matches!(grade, "fog" | "rlg") && rng.random_bool(0.5);
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let mut sim: Vec<String> = [
+            if land { "land-vehicle" } else { "flight" },
+            "--grade",
+            grade,
+            "--seed",
+            &seed,
+            "--seconds",
+            "600",
+            "--rate",
+            "200",
+            "--gnss-rate",
+            rate,
+            "--gnss-lever-arm",
+            &lever,
+        ]
+        .map(String::from)
+        .to_vec();
+        for p in &params {
+            sim.extend(["--set".into(), p.clone()]);
+        }
+        if velocity {
+            sim.extend(["--gnss-velocity-sigma".into(), "0.05,0.05,0.1".into()]);
+        }
+        let sim: Vec<&str> = sim.iter().map(String::as_str).collect();
+        sim_into(d, &sim);
+        let truth = host_tests::truth_csv::read(&d.join("truth.csv")).unwrap();
+        let t0 = &truth[0];
+        let (lat0, lon0, h0) = (t0.lat.to_degrees(), t0.lon.to_degrees(), t0.h);
+        let start: Vec<String> = if aligned {
+            [
+                "--lat",
+                &lat0.to_string(),
+                "--lon",
+                &lon0.to_string(),
+                "--h",
+                &h0.to_string(),
+                "--align-seconds",
+                "15",
+            ]
+            .map(String::from)
+            .to_vec()
+        } else {
+            // The truth moved by a draw of the declared 1-sigma.
+            let (s_p, s_v, s_level, s_yaw) = (1.0, 0.1, 0.3, 2.0);
+            let moved = nav_core::Position::from_radians(t0.lat, t0.lon, t0.h).offset_ned([
+                s_p * normal(&mut rng),
+                s_p * normal(&mut rng),
+                s_p * normal(&mut rng),
+            ]);
+            let v = t0.v_eb_ned.map(|x| x + s_v * normal(&mut rng));
+            let (roll, pitch, yaw) = nav_core::attitude::euler(&t0.q_b_ned);
+            let att = [
+                roll.to_degrees() + s_level * normal(&mut rng),
+                pitch.to_degrees() + s_level * normal(&mut rng),
+                yaw.to_degrees() + s_yaw * normal(&mut rng),
+            ];
+            vec![
+                "--init-pos".into(),
+                format!(
+                    "{:.9},{:.9},{:.3}",
+                    moved.lat_f64().to_degrees(),
+                    moved.lon_f64().to_degrees(),
+                    moved.h_f64()
+                ),
+                "--init-vel".into(),
+                format!("{:.4},{:.4},{:.4}", v.x, v.y, v.z),
+                "--init-att".into(),
+                format!("{:.4},{:.4},{:.4}", att[0], att[1], att[2]),
+                "--init-std".into(),
+                format!("{s_p},{s_p},{s_p},{s_v},{s_v},{s_v},{s_level},{s_level},{s_yaw}"),
+            ]
+        };
+        let out = d.join("sol.csv");
+        run_ok(
+            nav()
+                .arg("replay")
+                .arg("--imu")
+                .arg(d.join("imu.bin"))
+                .arg("--gnss")
+                .arg(d.join("gnss.csv"))
+                .args(["--imu-noise", grade, "--gnss-lever-arm", &lever])
+                .args(&start)
+                .arg("--out")
+                .arg(&out),
+        );
+        let log = std::fs::read_to_string(&out).unwrap();
+        let last = log.lines().rfind(|l| !l.starts_with('#')).unwrap();
+        assert!(last.ends_with(",NAV"), "{sim:?} {start:?}: {last}");
+        let rows = errors_over_sigma(d, &out);
+        assert!(rows.len() > 2000, "{sim:?}: {} rows", rows.len());
+        for (k, name) in CHANNELS.iter().enumerate() {
+            let fraction = fraction_outside_3_sigma(&rows, k);
+            assert!(
+                fraction <= 0.5,
+                "{sim:?} {start:?}: {name} outside 3 sigma on {:.1} % of the rows",
+                100.0 * fraction
+            );
+        }
+        pooled.extend(rows);
+    }
+    for (k, name) in CHANNELS.iter().enumerate() {
+        let fraction = fraction_outside_3_sigma(&pooled, k);
+        let rms = (pooled.iter().map(|r| r[k] * r[k]).sum::<f64>() / pooled.len() as f64).sqrt();
+        assert!(
+            fraction <= 0.03 && (0.6..=1.3).contains(&rms),
             "{name}: {:.1} % of {} rows outside 3 sigma, RMS error/sigma {rms:.2}",
             100.0 * fraction,
             pooled.len()
