@@ -379,7 +379,10 @@ pub enum AidedStart {
     /// From a given state.
     Given(Box<GivenStart>),
     /// In motion from GNSS.
-    Motion,
+    Motion {
+        /// Horizontal speed above which the track gives the heading [m/s].
+        min_speed_m_s: f64,
+    },
 }
 
 /// `nav replay --gnss`'s inputs.
@@ -408,10 +411,10 @@ pub fn sequencer<T: Scalar>(
 ) -> Result<Sequencer<T>> {
     let start = match start {
         AidedStart::Given(g) => g.start::<T>(&config.noise)?,
-        AidedStart::Motion => {
+        AidedStart::Motion { min_speed_m_s } => {
             let d = MotionAlignConfig::<f64>::default();
             Start::Motion(MotionAlignConfig {
-                min_speed_m_s: T::c(d.min_speed_m_s),
+                min_speed_m_s: T::c(*min_speed_m_s),
                 max_accel_mps2: T::c(d.max_accel_mps2),
                 sideslip_rad: T::c(d.sideslip_rad),
                 accel_bias_mps2: T::c(config.noise.accel_bias_mps2.max(d.accel_bias_mps2)),
@@ -442,8 +445,11 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
             bail!(
                 "the filter never started: {}",
                 match a.start {
-                    AidedStart::Motion => sparse_fixes(&fixes).unwrap_or_else(|| {
-                        "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold (5 m/s)".to_owned()
+                    AidedStart::Motion { min_speed_m_s } => sparse_fixes(&fixes).unwrap_or_else(|| {
+                        format!(
+                            "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold ({} m/s, --start-speed)",
+                            nav_core::number::Number(min_speed_m_s)
+                        )
                     }),
                     AidedStart::Given(_) => aided::no_usable_sample(&report),
                 }

@@ -725,3 +725,45 @@ fn an_output_that_is_not_a_regular_file_is_refused() {
     let kind = std::fs::symlink_metadata(&fifo).unwrap().file_type();
     assert!(kind.is_fifo());
 }
+
+/// `replay --start-speed`: the start in motion's heading threshold is bounded (0.5 to
+/// 100 m/s: below, the track's direction is noise; above, no vehicle would ever start), and
+/// it needs `--start-in-motion`.
+#[test]
+fn start_speed_out_of_range_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = dir.path().join("imu.bin");
+    generated_recording(&imu, "5");
+    let gnss = dir.path().join("gnss.csv");
+    std::fs::write(
+        &gnss,
+        "t_s,lat_deg,lon_deg,h_m,sigma_n_m,sigma_e_m,sigma_d_m\n1,45,7.5,250,1,1,2\n",
+    )
+    .unwrap();
+    let out = dir.path().join("sol.csv");
+    let base = [
+        "replay",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--gnss",
+        gnss.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--start-in-motion",
+        "--start-speed",
+    ];
+    for speed in ["0", "-1", "0.1", "NaN", "inf", "1e300", "101"] {
+        refused(
+            &[&base[..], &[speed]].concat(),
+            &["--start-speed must be within 0.5 to 100 m/s"],
+        );
+        assert!(!out.exists());
+    }
+    let o = nav(&[&base[..7], &["--start-speed", "2"]].concat());
+    assert_ne!(o.status.code(), Some(0));
+    assert!(
+        output_text(&o).contains("--start-in-motion"),
+        "{}",
+        output_text(&o)
+    );
+}

@@ -454,9 +454,15 @@ struct ReplayArgs {
     #[arg(long, value_name = "POS,VEL,ATT", requires = "init_pos", default_value = "1,0.1,1", allow_hyphen_values = true, value_parser = parse_init_std)]
     init_std: [[f64; 3]; 3],
     /// Start the filter in motion from GNSS (level when quasi-static, heading from the track
-    /// above 5 m/s): for IMUs that cannot find north (MEMS).
+    /// above --start-speed): for IMUs that cannot find north (MEMS).
     #[arg(long, requires = "gnss", conflicts_with = "init_pos")]
     start_in_motion: bool,
+    /// Horizontal speed above which the start in motion takes the heading from the track
+    /// [m/s], 0.5 to 100: lower it for a slow vehicle (a robot, a boat). The heading's 1-sigma
+    /// is the velocity's over the speed with a 3 deg sideslip, so a slow start is a start with
+    /// a wide heading 1-sigma.
+    #[arg(long, value_name = "M/S", requires = "start_in_motion", default_value_t = nav_core::ins_filter::motion::MotionAlignConfig::<f64>::default().min_speed_m_s)]
+    start_speed: f64,
     /// Leave the scale-factor states out of the filter (15 states).
     #[arg(long, requires = "gnss")]
     no_scale_factors: bool,
@@ -1128,7 +1134,16 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
             sensors: Default::default(),
             sensor_sigma: None,
         })),
-        _ if a.start_in_motion => AidedStart::Motion,
+        _ if a.start_in_motion => {
+            anyhow::ensure!(
+                a.start_speed.is_finite() && (0.5..=100.0).contains(&a.start_speed),
+                "--start-speed must be within 0.5 to 100 m/s, not {}",
+                nav_core::number::Number(a.start_speed)
+            );
+            AidedStart::Motion {
+                min_speed_m_s: a.start_speed,
+            }
+        }
         _ => {
             // From the navigator's alignment (the firmware's `--gnss` run): the run
             // configuration of a plain replay, with the aided phase after the alignment.
