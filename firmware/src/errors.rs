@@ -28,12 +28,26 @@ pub struct Nav<'a>(pub &'a NavError);
 impl Format for Nav<'_> {
     fn format(&self, f: Formatter<'_>) {
         match self.0 {
-            NavError::Alignment { samples, failure } => write!(
-                f,
-                "alignment failed after {=u32} samples: {}",
+            NavError::Alignment {
                 samples,
-                Failure(failure)
-            ),
+                failure,
+                gaps,
+            } => {
+                write!(
+                    f,
+                    "alignment failed after {=u32} samples: {}",
+                    samples,
+                    Failure(failure)
+                );
+                let n = gaps.bridged.saturating_add(gaps.lost);
+                if n > 0 {
+                    write!(
+                        f,
+                        " ({=u32} gap(s) in the IMU data inside its window, {=u64} us in all, the longest {=u64} us: its samples spanned that much more time than asked, the base may have moved in it)",
+                        n, gaps.time_us, gaps.longest_us
+                    );
+                }
+            }
             NavError::EndedDuringAlignment {
                 samples,
                 n_align,

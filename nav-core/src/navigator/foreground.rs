@@ -171,6 +171,8 @@ pub struct Counters {
     pub fixes_unused: u32,
     /// Gaps in the IMU data found while navigating ([`crate::gap`]).
     pub gaps: GapCounters,
+    /// Gaps inside a static alignment's window (its averages take them).
+    pub alignment_gaps: GapCounters,
 }
 
 impl Counters {
@@ -236,6 +238,9 @@ pub enum NavError {
         samples: u32,
         /// Why.
         failure: AlignFailure,
+        /// Gaps in the IMU data inside its window (the static method takes them: its window
+        /// of samples then spans their time too, and may reach a vehicle that set off).
+        gaps: GapCounters,
     },
     /// The data ended before the alignment had its samples.
     EndedDuringAlignment {
@@ -270,8 +275,23 @@ pub enum NavError {
 impl fmt::Display for NavError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::Alignment { samples, failure } => {
-                write!(f, "alignment failed after {samples} samples: {failure}")
+            Self::Alignment {
+                samples,
+                failure,
+                gaps,
+            } => {
+                write!(f, "alignment failed after {samples} samples: {failure}")?;
+                let n = gaps.bridged.saturating_add(gaps.lost);
+                if n > 0 {
+                    write!(
+                        f,
+                        " ({n} gap(s) in the IMU data inside its window, {} us in all, the \
+                         longest {} us: its samples spanned that much more time than asked, \
+                         the base may have moved in it)",
+                        gaps.time_us, gaps.longest_us
+                    )?;
+                }
+                Ok(())
             }
             Self::EndedDuringAlignment {
                 samples,
@@ -528,6 +548,9 @@ impl<T: Scalar> Navigator<T> {
                 };
                 return Step::Failed(self.fail(e));
             }
+            if matches!(self.phase, Phase::Aligning) {
+                self.counters.alignment_gaps.add(gap);
+            }
             self.bridge(gap);
         }
         match &mut self.phase {
@@ -644,7 +667,11 @@ impl<T: Scalar> Navigator<T> {
                 Ok(Some(self.logged(row)))
             }
             FromBackground::AlignFailed { samples, failure } => {
-                Err(self.fail(NavError::Alignment { samples, failure }))
+                Err(self.fail(NavError::Alignment {
+                    samples,
+                    failure,
+                    gaps: self.counters.alignment_gaps,
+                }))
             }
             FromBackground::FilterFailed(e) => Err(self.fail(NavError::Filter(e))),
             FromBackground::Updated(correction) => {

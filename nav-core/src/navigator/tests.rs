@@ -951,3 +951,43 @@ fn a_clock_that_steps_back_is_flagged_and_its_time_is_a_gap() {
         assert_eq!(by_cause, std::format!("time out of order {skipped}"));
     }
 }
+
+/// A static alignment takes a gap in its window (its averages do not integrate the attitude),
+/// but its window of samples then spans the gap's time too: when the base moved after the gap
+/// (here, turning at 0.2 deg/s), the refusal names the gap. Without a gap it does not.
+#[test]
+fn a_static_alignment_that_fails_after_a_gap_names_it() {
+    let still_then_turning = |gap_us: u64| {
+        let (still_theta, dv) = at_rest(
+            &UnitQuaternion::identity(),
+            Vector3::zeros(),
+            Vector3::zeros(),
+        );
+        let (turning_theta, _) = at_rest(
+            &UnitQuaternion::identity(),
+            Vector3::new(0.0, 0.0, 0.2_f64.to_radians() * DT),
+            Vector3::zeros(),
+        );
+        (1..=1500).map(move |k| {
+            let mut i = input(k, if k <= 500 { still_theta } else { turning_theta }, dv);
+            if k > 500 {
+                i.t_us += gap_us;
+            }
+            i
+        })
+    };
+    let (_, e) = run::<f64>(&config(10.0, 40), still_then_turning(6_000_000));
+    let text = std::string::ToString::to_string(&e.unwrap_err());
+    assert!(
+        text.starts_with("alignment failed after 1000 samples: ")
+            && text.ends_with(
+                "(1 gap(s) in the IMU data inside its window, 6000000 us in all, the longest \
+                 6000000 us: its samples spanned that much more time than asked, the base may \
+                 have moved in it)"
+            ),
+        "{text}"
+    );
+    let (_, e) = run::<f64>(&config(10.0, 40), still_then_turning(0));
+    let text = std::string::ToString::to_string(&e.unwrap_err());
+    assert!(!text.contains("gap"), "{text}");
+}
