@@ -194,7 +194,8 @@ impl LostImuTime {
             return;
         };
         let from = self.navigated_us.take().unwrap_or(first);
-        let lost_s = latest.saturating_sub(from) as f64 * 1e-6;
+        let skipped_s = std::mem::take(&mut self.skipped_s);
+        let lost_s = (latest.saturating_sub(from) as f64 * 1e-6).max(skipped_s);
         if lost_s > LOST_TOLERANCE_S {
             self.add(lost_s, latest);
         }
@@ -576,13 +577,34 @@ mod tests {
         ]);
         assert_eq!(l.gaps, 1, "{l:?}");
         assert!((l.total_s - 2.0 * P_S).abs() < 1e-9, "{l:?}");
-        // The clock stepped back for good: nothing lost.
-        let l = lost(&[
-            (t, true),
-            (t - 1_000_000 + P_US, false),
-            (t - 1_000_000 + 2 * P_US, true),
-        ]);
-        assert_eq!(l.gaps, 0, "{l:?}");
+    }
+
+    /// A clock that stepped back 1 s for good: the first sample behind it unusable (the
+    /// source's bad interval), the next 399 skipped by the navigation as out of time order
+    /// (`nav_core::gap`), then the clock is past the last navigated sample again: the 399
+    /// samples' intervals are lost though the tags show none. The same at the end of the
+    /// data: lost at the finish.
+    #[test]
+    fn a_clock_stepped_back_loses_the_samples_the_navigation_skipped() {
+        let t = 100_000_000;
+        let mut l = LostImuTime::default();
+        l.note(t, Some(P_S));
+        l.note(t - 1_000_000 + P_US, None);
+        for _ in 0..399 {
+            l.out_of_order(P_S);
+        }
+        l.note(t + P_US, Some(P_S));
+        l.finish();
+        assert_eq!(l.gaps, 1, "{l:?}");
+        assert!((l.total_s - 399.0 * P_S).abs() < 1e-9, "{l:?}");
+        let mut l = LostImuTime::default();
+        l.note(t, Some(P_S));
+        for _ in 0..400 {
+            l.out_of_order(P_S);
+        }
+        l.finish();
+        assert_eq!(l.gaps, 1, "{l:?}");
+        assert!((l.total_s - 400.0 * P_S).abs() < 1e-9, "{l:?}");
     }
 
     /// A second of records missing, the first after it unusable; unusable samples at the start
