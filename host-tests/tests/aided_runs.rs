@@ -1128,19 +1128,62 @@ fn sim_into(d: &Path, sim: &[&str]) {
 /// the replay's output and its solution log (`DIR/sol.csv`).
 fn sim_and_replay(d: &Path, sim: &[&str], replay: &[&str]) -> (String, PathBuf) {
     sim_into(d, sim);
+    replay_in(d, replay)
+}
+
+/// `nav replay REPLAY` of the recording and fixes `nav sim` wrote in `d`: the replay's output
+/// and its solution log (`DIR/sol.csv`).
+fn replay_in<S: AsRef<std::ffi::OsStr>>(d: &Path, replay: &[S]) -> (String, PathBuf) {
     let out = d.join("sol.csv");
-    let text = run_ok(
-        nav()
-            .arg("replay")
-            .arg("--imu")
-            .arg(d.join("imu.bin"))
-            .arg("--gnss")
-            .arg(d.join("gnss.csv"))
-            .args(replay)
-            .arg("--out")
-            .arg(&out),
-    );
+    let text = run_ok(&mut replay_in_cmd(d, replay));
     (text, out)
+}
+
+/// The command of [`replay_in`].
+fn replay_in_cmd<S: AsRef<std::ffi::OsStr>>(d: &Path, replay: &[S]) -> Command {
+    let mut cmd = nav();
+    cmd.arg("replay")
+        .arg("--imu")
+        .arg(d.join("imu.bin"))
+        .arg("--gnss")
+        .arg(d.join("gnss.csv"))
+        .args(replay)
+        .arg("--out")
+        .arg(d.join("sol.csv"));
+    cmd
+}
+
+/// Each of [`CHANNELS`] in `rows` beyond 3 of its 1-sigma on at most `max_fraction` of them
+/// (`what` names the run in the failure).
+fn assert_each_channel_within_3_sigma(rows: &[[f64; 6]], max_fraction: f64, what: &str) {
+    for (k, name) in CHANNELS.iter().enumerate() {
+        let fraction = fraction_outside_3_sigma(rows, k);
+        assert!(
+            fraction <= max_fraction,
+            "{what}: {name} outside 3 sigma on {:.1} % of the rows",
+            100.0 * fraction
+        );
+    }
+}
+
+/// A family's rows pooled: each of [`CHANNELS`] beyond 3 of its 1-sigma on at most
+/// `max_fraction` of them, with an RMS of error over 1-sigma within `rms_range` (not
+/// over-confident, and not a 1-sigma several times the error).
+fn assert_pooled_consistent(
+    pooled: &[[f64; 6]],
+    max_fraction: f64,
+    rms_range: std::ops::RangeInclusive<f64>,
+) {
+    for (k, name) in CHANNELS.iter().enumerate() {
+        let fraction = fraction_outside_3_sigma(pooled, k);
+        let rms = (pooled.iter().map(|r| r[k] * r[k]).sum::<f64>() / pooled.len() as f64).sqrt();
+        assert!(
+            fraction <= max_fraction && rms_range.contains(&rms),
+            "{name}: {:.1} % of {} rows outside 3 sigma, RMS error/sigma {rms:.2}",
+            100.0 * fraction,
+            pooled.len()
+        );
+    }
 }
 
 /// [`sim_and_replay`] with a consumer part's noise, started in motion (`REPLAY` added): the
@@ -1343,28 +1386,12 @@ fn a_drawn_family_of_starts_in_motion_is_consistent() {
                 assert!(text.contains("filter started at t = "), "{sim:?}: {text}");
                 let rows = errors_over_sigma(d, &out);
                 assert!(rows.len() > 500, "{sim:?}: {} rows", rows.len());
-                for (k, name) in CHANNELS.iter().enumerate() {
-                    let fraction = fraction_outside_3_sigma(&rows, k);
-                    assert!(
-                        fraction <= 0.2,
-                        "{sim:?}: {name} outside 3 sigma on {:.1} % of the rows",
-                        100.0 * fraction
-                    );
-                }
+                assert_each_channel_within_3_sigma(&rows, 0.2, &format!("{sim:?}"));
                 pooled.extend(rows);
             }
         }
     }
-    for (k, name) in CHANNELS.iter().enumerate() {
-        let fraction = fraction_outside_3_sigma(&pooled, k);
-        let rms = (pooled.iter().map(|r| r[k] * r[k]).sum::<f64>() / pooled.len() as f64).sqrt();
-        assert!(
-            fraction <= 0.05 && (0.25..=1.5).contains(&rms),
-            "{name}: {:.1} % of {} rows outside 3 sigma, RMS error/sigma {rms:.2}",
-            100.0 * fraction,
-            pooled.len()
-        );
-    }
+    assert_pooled_consistent(&pooled, 0.05, 0.25..=1.5);
 }
 
 /// Given and aligned starts over a drawn family: land vehicles (heading and speed drawn) and
@@ -1494,44 +1521,21 @@ fn a_drawn_family_of_given_and_aligned_starts_is_consistent() {
                 format!("{s_p},{s_p},{s_p},{s_v},{s_v},{s_v},{s_level},{s_level},{s_yaw}"),
             ]
         };
-        let out = d.join("sol.csv");
-        run_ok(
-            nav()
-                .arg("replay")
-                .arg("--imu")
-                .arg(d.join("imu.bin"))
-                .arg("--gnss")
-                .arg(d.join("gnss.csv"))
-                .args(["--imu-noise", grade, "--gnss-lever-arm", &lever])
-                .args(&start)
-                .arg("--out")
-                .arg(&out),
-        );
+        let replay = [
+            ["--imu-noise", grade, "--gnss-lever-arm", &lever].map(String::from)[..].to_vec(),
+            start,
+        ]
+        .concat();
+        let (_, out) = replay_in(d, &replay);
         let log = std::fs::read_to_string(&out).unwrap();
         let last = log.lines().rfind(|l| !l.starts_with('#')).unwrap();
-        assert!(last.ends_with(",NAV"), "{sim:?} {start:?}: {last}");
+        assert!(last.ends_with(",NAV"), "{sim:?} {replay:?}: {last}");
         let rows = errors_over_sigma(d, &out);
         assert!(rows.len() > 2000, "{sim:?}: {} rows", rows.len());
-        for (k, name) in CHANNELS.iter().enumerate() {
-            let fraction = fraction_outside_3_sigma(&rows, k);
-            assert!(
-                fraction <= 0.5,
-                "{sim:?} {start:?}: {name} outside 3 sigma on {:.1} % of the rows",
-                100.0 * fraction
-            );
-        }
+        assert_each_channel_within_3_sigma(&rows, 0.5, &format!("{sim:?} {replay:?}"));
         pooled.extend(rows);
     }
-    for (k, name) in CHANNELS.iter().enumerate() {
-        let fraction = fraction_outside_3_sigma(&pooled, k);
-        let rms = (pooled.iter().map(|r| r[k] * r[k]).sum::<f64>() / pooled.len() as f64).sqrt();
-        assert!(
-            fraction <= 0.03 && (0.6..=1.3).contains(&rms),
-            "{name}: {:.1} % of {} rows outside 3 sigma, RMS error/sigma {rms:.2}",
-            100.0 * fraction,
-            pooled.len()
-        );
-    }
+    assert_pooled_consistent(&pooled, 0.03, 0.6..=1.3);
 }
 
 /// A car that never drives faster than 4.3 m/s (a receiver's velocity at 5 Hz: no speed
@@ -1567,36 +1571,17 @@ fn a_slow_vehicle_starts_in_motion_below_a_lowered_heading_threshold() {
             "lat_deg=-2.6",
         ],
     );
-    let replay = |extra: &[&str]| {
-        let mut cmd = nav();
-        cmd.arg("replay")
-            .arg("--imu")
-            .arg(d.join("imu.bin"))
-            .arg("--gnss")
-            .arg(d.join("gnss.csv"))
-            .args(["--imu-noise", "mems-consumer", "--start-in-motion"])
-            .args(extra)
-            .arg("--out")
-            .arg(d.join("sol.csv"));
-        cmd
-    };
-    let text = run_err(&mut replay(&[]));
+    let start = ["--imu-noise", "mems-consumer", "--start-in-motion"];
+    let text = run_err(&mut replay_in_cmd(d, &start));
     assert!(
         text.contains("the heading threshold (5 m/s, --start-speed)"),
         "{text}"
     );
-    let text = run_ok(&mut replay(&["--start-speed", "2"]));
+    let (text, out) = replay_in(d, &[&start[..], &["--start-speed", "2"]].concat());
     assert!(text.contains("filter started at t = "), "{text}");
-    let rows = errors_over_sigma(d, &d.join("sol.csv"));
+    let rows = errors_over_sigma(d, &out);
     assert!(rows.len() > 1000, "{} rows", rows.len());
-    for (k, name) in CHANNELS.iter().enumerate() {
-        let fraction = fraction_outside_3_sigma(&rows, k);
-        assert!(
-            fraction <= 0.05,
-            "{name} outside 3 sigma on {:.1} % of the rows",
-            100.0 * fraction
-        );
-    }
+    assert_each_channel_within_3_sigma(&rows, 0.05, "--start-speed 2");
 }
 
 /// A consumer flight on 1 Hz fixes started in motion during its take-off run (seed 1559: a
