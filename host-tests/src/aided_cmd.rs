@@ -379,7 +379,20 @@ pub enum AidedStart {
     /// From a given state.
     Given(Box<GivenStart>),
     /// In motion from GNSS.
-    Motion,
+    Motion {
+        /// 1-sigma of the body's forward axis off the ground track, the heading's doubt
+        /// besides the velocity's (`MotionAlignConfig::sideslip_rad`) [rad].
+        sideslip_rad: f64,
+    },
+}
+
+impl AidedStart {
+    /// In motion from GNSS, with the start's own sideslip allowance (a land vehicle's).
+    pub fn motion() -> Self {
+        AidedStart::Motion {
+            sideslip_rad: MotionAlignConfig::<f64>::default().sideslip_rad,
+        }
+    }
 }
 
 /// `nav replay --gnss`'s inputs.
@@ -408,12 +421,12 @@ pub fn sequencer<T: Scalar>(
 ) -> Result<Sequencer<T>> {
     let start = match start {
         AidedStart::Given(g) => g.start::<T>(&config.noise)?,
-        AidedStart::Motion => {
+        AidedStart::Motion { sideslip_rad } => {
             let d = MotionAlignConfig::<f64>::default();
             Start::Motion(MotionAlignConfig {
                 min_speed_m_s: T::c(d.min_speed_m_s),
                 max_accel_mps2: T::c(d.max_accel_mps2),
-                sideslip_rad: T::c(d.sideslip_rad),
+                sideslip_rad: T::c(*sideslip_rad),
                 accel_bias_mps2: T::c(config.noise.accel_bias_mps2.max(d.accel_bias_mps2)),
                 gyro_bias_rad_s: T::c(config.noise.gyro_bias_rad_s),
                 arw_rad_per_sqrt_s: T::c(config.noise.arw_rad_per_sqrt_s),
@@ -442,7 +455,7 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
             bail!(
                 "the filter never started: {}",
                 match a.start {
-                    AidedStart::Motion => sparse_fixes(&fixes).unwrap_or_else(|| {
+                    AidedStart::Motion { .. } => sparse_fixes(&fixes).unwrap_or_else(|| {
                         "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold (5 m/s)".to_owned()
                     }),
                     AidedStart::Given(_) => aided::no_usable_sample(&report),

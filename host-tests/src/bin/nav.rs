@@ -457,6 +457,14 @@ struct ReplayArgs {
     /// above 5 m/s): for IMUs that cannot find north (MEMS).
     #[arg(long, requires = "gnss", conflicts_with = "init_pos")]
     start_in_motion: bool,
+    /// With --start-in-motion: 1-sigma of the angle between the body's forward axis and the
+    /// ground track the heading is taken from [deg], at most 45. A car's sideslip is within the
+    /// default; a boat's or an aircraft's crab in a crosswind, or an IMU whose forward axis is
+    /// turned from the direction of travel, is not: its heading would start that far off with
+    /// a 3 deg 1-sigma.
+    /// (default 3).
+    #[arg(long, value_name = "DEG", value_parser = parse_sideslip_sigma)]
+    sideslip_sigma: Option<f64>,
     /// Leave the scale-factor states out of the filter (15 states).
     #[arg(long, requires = "gnss")]
     no_scale_factors: bool,
@@ -1128,7 +1136,12 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
             sensors: Default::default(),
             sensor_sigma: None,
         })),
-        _ if a.start_in_motion => AidedStart::Motion,
+        _ if a.start_in_motion => match a.sideslip_sigma {
+            Some(deg) => AidedStart::Motion {
+                sideslip_rad: deg.to_radians(),
+            },
+            None => AidedStart::motion(),
+        },
         _ => {
             // From the navigator's alignment (the firmware's `--gnss` run): the run
             // configuration of a plain replay, with the aided phase after the alignment.
@@ -1183,6 +1196,12 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
 
 /// `nav replay`.
 fn replay(a: ReplayArgs) -> Result<()> {
+    // clap's `requires` takes a flag's default `false` as present.
+    anyhow::ensure!(
+        a.sideslip_sigma.is_none() || a.start_in_motion,
+        "--sideslip-sigma is the heading's doubt of a --start-in-motion (a given start's is in \
+         --init-std, an alignment's its own)"
+    );
     if let Some(gnss) = a.gnss.clone() {
         return replay_aided(&a, &gnss);
     }
@@ -1266,6 +1285,23 @@ fn parse_vector3(s: &str) -> Result<[f64; 3], String> {
 
 /// `--init-std`: three positive 1-sigmas (position, velocity, attitude, each for all three
 /// axes) or nine (per axis).
+/// The largest `--sideslip-sigma` [deg]: the linearised filter takes a heading that far off
+/// (an IMU turned 45 deg in its mount: yaw within its 1-sigma as an unturned one's), not much
+/// more (60 deg: 17 % of the rows beyond 3 sigma; 90 deg: the fixes refused, DEGRADED).
+const MAX_SIDESLIP_SIGMA_DEG: f64 = 45.0;
+
+fn parse_sideslip_sigma(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|x| x.is_finite() && *x > 0.0 && *x <= MAX_SIDESLIP_SIGMA_DEG)
+        .ok_or_else(|| {
+            format!(
+                "expected a 1-sigma above 0 and at most {MAX_SIDESLIP_SIGMA_DEG} deg, not {s:?}"
+            )
+        })
+}
+
 fn parse_init_std(s: &str) -> Result<[[f64; 3]; 3], String> {
     let bad = || {
         format!(
