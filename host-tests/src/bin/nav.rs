@@ -308,6 +308,11 @@ enum Command {
         /// error file's units; KF-GINS names it OUTPUTPATH/KF_GINS_STD.txt).
         #[arg(long, value_name = "FILE")]
         std: Option<PathBuf>,
+        /// No zero-velocity and zero-rate updates at stops, as KF-GINS (which has none): for a
+        /// vehicle that may move straight at a steady speed below 1 m/s, which looks still to
+        /// the IMU.
+        #[arg(long)]
+        no_stops: bool,
     },
     /// Align and navigate over a recording (any format), writing the solution log as CSV.
     #[command(allow_negative_numbers = true)]
@@ -468,6 +473,12 @@ struct ReplayArgs {
     /// Leave the scale-factor states out of the filter (15 states).
     #[arg(long, requires = "gnss")]
     no_scale_factors: bool,
+    /// No zero-velocity and zero-rate updates at stops (a given start or a start in motion):
+    /// for a vehicle that may move straight at a steady speed below 1 m/s (a ship, a robot, a
+    /// crawler), which looks still to the IMU; the stops then held its solution while the
+    /// fixes that showed it moving were refused.
+    #[arg(long)]
+    no_stops: bool,
     /// Covariance propagation rate of the filter [Hz].
     #[arg(long, requires = "gnss", default_value_t = 10.0)]
     propagation_rate: f64,
@@ -1117,6 +1128,9 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
     );
     let mut config = nav_core::ins_filter::FilterConfig::new(noise);
     config.scale_factors = !a.no_scale_factors;
+    if a.no_stops {
+        config.zero_motion = None;
+    }
     config.propagation_interval_s = 1.0 / a.propagation_rate;
     config.antenna_lever_arm_b_m = a.gnss_lever_arm.unwrap_or([0.0; 3]).into();
     config.gnss_correlated_error =
@@ -1201,6 +1215,11 @@ fn replay(a: ReplayArgs) -> Result<()> {
         a.sideslip_sigma.is_none() || a.start_in_motion,
         "--sideslip-sigma is the heading's doubt of a --start-in-motion (a given start's is in \
          --init-std, an alignment's its own)"
+    );
+    anyhow::ensure!(
+        !a.no_stops || a.start_in_motion || a.init_pos.is_some(),
+        "--no-stops applies to a GNSS-aided run from a given start (--init-pos) or a start in \
+         motion (--start-in-motion)"
     );
     if let Some(gnss) = a.gnss.clone() {
         return replay_aided(&a, &gnss);
@@ -2279,6 +2298,7 @@ fn run(cli: Cli) -> Result<()> {
             out,
             imu_err,
             std,
+            no_stops,
         } => {
             let started = std::time::Instant::now();
             let outputs = host_tests::kf_gins_run::Outputs {
@@ -2286,7 +2306,7 @@ fn run(cli: Cli) -> Result<()> {
                 imu_err,
                 std,
             };
-            let run = host_tests::kf_gins_run::run(&config, &outputs)
+            let run = host_tests::kf_gins_run::run_with(&config, &outputs, !no_stops)
                 .with_context(|| format!("KF-GINS configuration {}", config.display()))?;
             let seconds = started.elapsed().as_secs_f64();
             for w in &run.warnings {
