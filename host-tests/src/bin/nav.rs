@@ -443,6 +443,10 @@ struct ReplayArgs {
     )]
     gnss_correlated_time: f64,
     /// Initial position of the IMU: latitude, longitude [deg], height [m] (KF-GINS's initpos).
+    /// The given start holds at the beginning of the first sample's interval (its time tag
+    /// less one interval): the first sample is integrated from it. KF-GINS's start holds at
+    /// its `starttime` epoch, which it does not integrate (`nav kf-gins`): a state taken at the
+    /// first sample's time tag is one interval late here (v dt: 7.5 cm at 15 m/s and 200 Hz).
     #[arg(long, value_name = "LAT,LON,H", requires_all = ["gnss", "init_vel", "init_att"], allow_hyphen_values = true, value_parser = parse_vector3)]
     init_pos: Option<[f64; 3]>,
     /// Initial velocity north, east, down [m/s] (initvel).
