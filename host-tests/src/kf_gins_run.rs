@@ -2,7 +2,10 @@
 //! files, its start (`initpos`, `initvel`, `initatt`, `init*std`), its noise (`imunoise`) and
 //! antenna lever arm — through this project's filter, writing KF-GINS's 11-column `.nav`
 //! trajectory, one row per IMU epoch after the start (an epoch at `starttime` is the start's,
-//! as in KF-GINS: not integrated, no row), in `f64`.
+//! as in KF-GINS: not integrated, no row), in `f64`. Where it differs from KF-GINS: a
+//! 13-column GNSS file's velocities are used too (KF-GINS's loader reads and drops them; a
+//! velocity in other axes shows as refused velocity fixes and a warning), and the filter's
+//! zero-velocity updates at stops stay on unless `--no-stops` ([`run_with`]).
 //!
 //! On request ([`Outputs`]) also KF-GINS's two other files, one row per `.nav` row, in its
 //! units (`kf_gins.cpp` `writeNavResult`, `writeSTD`):
