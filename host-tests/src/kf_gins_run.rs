@@ -2,7 +2,10 @@
 //! files, its start (`initpos`, `initvel`, `initatt`, `init*std`), its noise (`imunoise`) and
 //! antenna lever arm — through this project's filter, writing KF-GINS's 11-column `.nav`
 //! trajectory, one row per IMU epoch after the start (an epoch at `starttime` is the start's,
-//! as in KF-GINS: not integrated, no row), in `f64`.
+//! as in KF-GINS: not integrated, no row), in `f64`. Where it differs from KF-GINS: a
+//! 13-column GNSS file's velocities are used too (KF-GINS's loader reads and drops them; a
+//! velocity in other axes shows as refused velocity fixes and a warning), and the filter's
+//! zero-velocity updates at stops stay on unless `--no-stops` ([`run_with`]).
 //!
 //! On request ([`Outputs`]) also KF-GINS's two other files, one row per `.nav` row, in its
 //! units (`kf_gins.cpp` `writeNavResult`, `writeSTD`):
@@ -111,7 +114,9 @@ pub fn filter_config(c: &KfGinsConfig) -> FilterConfig<f64> {
         gyro_bias_instability_time_s: 0.0,
     });
     config.antenna_lever_arm_b_m = Vector3::from(c.lever_arm_b_m);
-    // KF-GINS has no stop detector; the filter's ZUPT stays on (its gate refuses a wrong one).
+    // KF-GINS has no stop detector; the filter's ZUPT stays on unless `run_with` turns it off:
+    // its gate does not refuse a wrong one (a vehicle creeping straight at 0.5 m/s looks still
+    // to the IMU, and its fixes were refused instead: 1 km off after 300 s).
     config
 }
 
@@ -274,6 +279,13 @@ fn refuse_shared_outputs(outputs: &[(&str, &Path)]) -> Result<()> {
 /// KF-GINS's `outputpath/KF_GINS_Navresult.nav`, and the IMU error and 1-sigma files where
 /// `outputs` asks.
 pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
+    run_with(config_path, outputs, true)
+}
+
+/// [`run`], with the filter's zero-velocity and zero-rate updates at stops (`stops`) or
+/// without them, as KF-GINS (`nav kf-gins --no-stops`: a vehicle that may move steadily below
+/// the 1 m/s a stop is believed at).
+pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<KfGinsRun> {
     let (c, warnings) = kf_gins_config::load(config_path)?;
     let out = outputs
         .nav
@@ -307,7 +319,10 @@ pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
         .context("gnsspath and imupath")?;
     let fixes: Vec<GnssFix> = gnss::read_gnss(&c.gnss_path)
         .with_context(|| format!("GNSS file {} (gnsspath)", c.gnss_path.display()))?;
-    let config = filter_config(&c);
+    let mut config = filter_config(&c);
+    if !stops {
+        config.zero_motion = None;
+    }
     let seq = sequencer::<f64>(&config, &AidedStart::Given(Box::new(start(&c))))?;
     let file = File::open(&c.imu_path)
         .with_context(|| format!("IMU file {} (imupath)", c.imu_path.display()))?;

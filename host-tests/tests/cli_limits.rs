@@ -759,11 +759,18 @@ fn start_speed_out_of_range_is_refused() {
         );
         assert!(!out.exists());
     }
-    let o = nav(&[&base[..7], &["--start-speed", "2"]].concat());
-    assert_ne!(o.status.code(), Some(0));
-    assert!(
-        output_text(&o).contains("--start-in-motion"),
-        "{}",
-        output_text(&o)
+    // A given start has no heading threshold.
+    let given = [
+        "--init-pos",
+        "45,7.5,250",
+        "--init-vel",
+        "0,0,0",
+        "--init-att",
+        "0,0,0",
+    ];
+    refused(
+        &[&base[..7], &given[..], &["--start-speed", "2"]].concat(),
+        &["--start-speed is the heading threshold of a --start-in-motion"],
     );
+    assert!(!out.exists());
 }

@@ -308,6 +308,11 @@ enum Command {
         /// error file's units; KF-GINS names it OUTPUTPATH/KF_GINS_STD.txt).
         #[arg(long, value_name = "FILE")]
         std: Option<PathBuf>,
+        /// No zero-velocity and zero-rate updates at stops, as KF-GINS (which has none): for a
+        /// vehicle that may move straight at a steady speed below 1 m/s, which looks still to
+        /// the IMU.
+        #[arg(long)]
+        no_stops: bool,
     },
     /// Align and navigate over a recording (any format), writing the solution log as CSV.
     #[command(allow_negative_numbers = true)]
@@ -438,6 +443,10 @@ struct ReplayArgs {
     )]
     gnss_correlated_time: f64,
     /// Initial position of the IMU: latitude, longitude [deg], height [m] (KF-GINS's initpos).
+    /// The given start holds at the beginning of the first sample's interval (its time tag
+    /// less one interval): the first sample is integrated from it. KF-GINS's start holds at
+    /// its `starttime` epoch, which it does not integrate (`nav kf-gins`): a state taken at the
+    /// first sample's time tag is one interval late here (v dt: 7.5 cm at 15 m/s and 200 Hz).
     #[arg(long, value_name = "LAT,LON,H", requires_all = ["gnss", "init_vel", "init_att"], allow_hyphen_values = true, value_parser = parse_vector3)]
     init_pos: Option<[f64; 3]>,
     /// Initial velocity north, east, down [m/s] (initvel).
@@ -457,15 +466,29 @@ struct ReplayArgs {
     /// above --start-speed): for IMUs that cannot find north (MEMS).
     #[arg(long, requires = "gnss", conflicts_with = "init_pos")]
     start_in_motion: bool,
-    /// Horizontal speed above which the start in motion takes the heading from the track
-    /// [m/s], 0.5 to 100: lower it for a slow vehicle (a robot, a boat). The heading's 1-sigma
-    /// is the velocity's over the speed with a 3 deg sideslip, so a slow start is a start with
-    /// a wide heading 1-sigma.
-    #[arg(long, value_name = "M/S", requires = "start_in_motion", default_value_t = nav_core::ins_filter::motion::MotionAlignConfig::<f64>::default().min_speed_m_s)]
-    start_speed: f64,
+    /// With --start-in-motion: the horizontal speed above which the heading is taken from the
+    /// track [m/s], 0.5 to 100 (default 5): lower it for a slow vehicle (a robot, a boat). The
+    /// heading's 1-sigma is the velocity's over the speed with the sideslip's, so a slow start
+    /// is a start with a wide heading 1-sigma.
+    #[arg(long, value_name = "M/S")]
+    start_speed: Option<f64>,
+    /// With --start-in-motion: 1-sigma of the angle between the body's forward axis and the
+    /// ground track the heading is taken from [deg], at most 45. A car's sideslip is within the
+    /// default; a boat's or an aircraft's crab in a crosswind, or an IMU whose forward axis is
+    /// turned from the direction of travel, is not: its heading would start that far off with
+    /// a 3 deg 1-sigma.
+    /// (default 3).
+    #[arg(long, value_name = "DEG", value_parser = parse_sideslip_sigma)]
+    sideslip_sigma: Option<f64>,
     /// Leave the scale-factor states out of the filter (15 states).
     #[arg(long, requires = "gnss")]
     no_scale_factors: bool,
+    /// No zero-velocity and zero-rate updates at stops (a given start or a start in motion):
+    /// for a vehicle that may move straight at a steady speed below 1 m/s (a ship, a robot, a
+    /// crawler), which looks still to the IMU; the stops then held its solution while the
+    /// fixes that showed it moving were refused.
+    #[arg(long)]
+    no_stops: bool,
     /// Covariance propagation rate of the filter [Hz].
     #[arg(long, requires = "gnss", default_value_t = 10.0)]
     propagation_rate: f64,
@@ -1115,6 +1138,9 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
     );
     let mut config = nav_core::ins_filter::FilterConfig::new(noise);
     config.scale_factors = !a.no_scale_factors;
+    if a.no_stops {
+        config.zero_motion = None;
+    }
     config.propagation_interval_s = 1.0 / a.propagation_rate;
     config.antenna_lever_arm_b_m = a.gnss_lever_arm.unwrap_or([0.0; 3]).into();
     config.gnss_correlated_error =
@@ -1135,13 +1161,16 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
             sensor_sigma: None,
         })),
         _ if a.start_in_motion => {
+            let d = nav_core::ins_filter::motion::MotionAlignConfig::<f64>::default();
+            let min_speed_m_s = a.start_speed.unwrap_or(d.min_speed_m_s);
             anyhow::ensure!(
-                a.start_speed.is_finite() && (0.5..=100.0).contains(&a.start_speed),
+                min_speed_m_s.is_finite() && (0.5..=100.0).contains(&min_speed_m_s),
                 "--start-speed must be within 0.5 to 100 m/s, not {}",
-                nav_core::number::Number(a.start_speed)
+                nav_core::number::Number(min_speed_m_s)
             );
             AidedStart::Motion {
-                min_speed_m_s: a.start_speed,
+                min_speed_m_s,
+                sideslip_rad: a.sideslip_sigma.map_or(d.sideslip_rad, f64::to_radians),
             }
         }
         _ => {
@@ -1198,6 +1227,21 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
 
 /// `nav replay`.
 fn replay(a: ReplayArgs) -> Result<()> {
+    // clap's `requires` takes a flag's default `false` as present.
+    anyhow::ensure!(
+        a.start_speed.is_none() || a.start_in_motion,
+        "--start-speed is the heading threshold of a --start-in-motion"
+    );
+    anyhow::ensure!(
+        a.sideslip_sigma.is_none() || a.start_in_motion,
+        "--sideslip-sigma is the heading's doubt of a --start-in-motion (a given start's is in \
+         --init-std, an alignment's its own)"
+    );
+    anyhow::ensure!(
+        !a.no_stops || a.start_in_motion || a.init_pos.is_some(),
+        "--no-stops applies to a GNSS-aided run from a given start (--init-pos) or a start in \
+         motion (--start-in-motion)"
+    );
     if let Some(gnss) = a.gnss.clone() {
         return replay_aided(&a, &gnss);
     }
@@ -1281,6 +1325,23 @@ fn parse_vector3(s: &str) -> Result<[f64; 3], String> {
 
 /// `--init-std`: three positive 1-sigmas (position, velocity, attitude, each for all three
 /// axes) or nine (per axis).
+/// The largest `--sideslip-sigma` [deg]: the linearised filter takes a heading that far off
+/// (an IMU turned 45 deg in its mount: yaw within its 1-sigma as an unturned one's), not much
+/// more (60 deg: 17 % of the rows beyond 3 sigma; 90 deg: the fixes refused, DEGRADED).
+const MAX_SIDESLIP_SIGMA_DEG: f64 = 45.0;
+
+fn parse_sideslip_sigma(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|x| x.is_finite() && *x > 0.0 && *x <= MAX_SIDESLIP_SIGMA_DEG)
+        .ok_or_else(|| {
+            format!(
+                "expected a 1-sigma above 0 and at most {MAX_SIDESLIP_SIGMA_DEG} deg, not {s:?}"
+            )
+        })
+}
+
 fn parse_init_std(s: &str) -> Result<[[f64; 3]; 3], String> {
     let bad = || {
         format!(
@@ -2258,6 +2319,7 @@ fn run(cli: Cli) -> Result<()> {
             out,
             imu_err,
             std,
+            no_stops,
         } => {
             let started = std::time::Instant::now();
             let outputs = host_tests::kf_gins_run::Outputs {
@@ -2265,7 +2327,7 @@ fn run(cli: Cli) -> Result<()> {
                 imu_err,
                 std,
             };
-            let run = host_tests::kf_gins_run::run(&config, &outputs)
+            let run = host_tests::kf_gins_run::run_with(&config, &outputs, !no_stops)
                 .with_context(|| format!("KF-GINS configuration {}", config.display()))?;
             let seconds = started.elapsed().as_secs_f64();
             for w in &run.warnings {
