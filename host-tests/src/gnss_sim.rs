@@ -186,13 +186,17 @@ impl Outlier {
 pub const MAX_SIGMA_M: f64 = 1000.0;
 /// Largest GNSS velocity 1-sigma `nav sim` writes [m/s].
 pub const MAX_SIGMA_V_M_S: f64 = 100.0;
-/// Largest steady-state 1-sigma of the correlated error [m].
-pub const MAX_CORRELATED_SIGMA_M: f64 = 100.0;
+/// Largest steady-state 1-sigma of the correlated error [m]: the filter's
+/// ([`nav_core::ins_filter::limits::MAX_GNSS_ERROR_SIGMA_M`]: a receiver it could not take is
+/// not simulated).
+pub const MAX_CORRELATED_SIGMA_M: f64 = nav_core::ins_filter::limits::MAX_GNSS_ERROR_SIGMA_M;
 /// Largest outlier offset `nav sim` injects, per axis [m]: 100 km, far beyond any gate, while
 /// the fix stays a point near the truth on the Earth model.
 pub const MAX_OUTLIER_OFFSET_M: f64 = 1.0e5;
-/// Longest correlation time of the correlated error [s].
-pub const MAX_CORRELATION_TIME_S: f64 = 1.0e6;
+/// Shortest and longest correlation time of the correlated error [s]: the filter's
+/// ([`nav_core::ins_filter::limits::GNSS_ERROR_TIME_S`]; was 0 to 1e6 s here, a receiver
+/// `nav replay` then refused).
+pub const CORRELATION_TIME_S: (f64, f64) = nav_core::ins_filter::limits::GNSS_ERROR_TIME_S;
 /// The ChaCha8 stream (of the same seed) the correlated error draws from.
 pub const CORRELATED_STREAM: u64 = 1;
 /// The ChaCha8 stream (of the same seed) the white noise draws from. Not stream 0: the sensor
@@ -539,7 +543,7 @@ fn effect(outlier: &Outlier, t_s: f64, mut once: impl FnMut(f64) -> bool) -> Opt
 impl GnssSimOptions {
     /// Checks the options alone (before any truth is simulated): a positive rate, positive
     /// finite sigmas, a lever arm within [`MAX_LEVER_ARM_M`], a correlated error within
-    /// [`MAX_CORRELATED_SIGMA_M`] and [`MAX_CORRELATION_TIME_S`], valid outages and outliers.
+    /// [`MAX_CORRELATED_SIGMA_M`] and [`CORRELATION_TIME_S`], valid outages and outliers.
     pub fn check(&self) -> Result<()> {
         let o = self;
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
@@ -598,10 +602,11 @@ impl GnssSimOptions {
                     list(&c.sigma_ned_m)
                 );
             }
-            if !(c.time_s > 0.0 && c.time_s <= MAX_CORRELATION_TIME_S) {
+            let (shortest_s, longest_s) = CORRELATION_TIME_S;
+            if !(shortest_s..=longest_s).contains(&c.time_s) {
                 bail!(
-                    "GNSS correlated error time {} s: must be positive and at most \
-                     {MAX_CORRELATION_TIME_S} s",
+                    "GNSS correlated error time {} s: must be within {shortest_s} to \
+                     {longest_s} s, as the filter takes it",
                     Number(c.time_s)
                 );
             }
@@ -1015,7 +1020,8 @@ mod tests {
             ..GnssSimOptions::default()
         };
         // A zero 1-sigma is allowed (no error on that axis), as are the limits.
-        assert!(with([0.0, 100.0, 1.0], 1.0e6).check().is_ok());
+        assert!(with([0.0, 100.0, 1.0], 86_400.0).check().is_ok());
+        assert!(with([1.0; 3], 1.0).check().is_ok());
         let cases = [
             (with([-0.1, 1.0, 1.0], 60.0), "1-sigma -0.1,1,1 m"),
             (with([1.0, f64::NAN, 1.0], 60.0), "1-sigma 1,NaN,1 m"),
@@ -1024,7 +1030,9 @@ mod tests {
             (with([1.0; 3], 0.0), "time 0 s"),
             (with([1.0; 3], -5.0), "time -5 s"),
             (with([1.0; 3], f64::NAN), "time NaN s"),
-            (with([1.0; 3], 2.0e6), "at most 1000000 s"),
+            (with([1.0; 3], 86_401.0), "must be within 1 to 86400 s"),
+            // Shorter than the filter takes (`nav replay` refused the receiver simulated).
+            (with([1.0; 3], 0.001), "time 0.001 s: must be within 1 to 86400 s"),
         ];
         for (bad, reason) in cases {
             let m = bad.check().unwrap_err().to_string();

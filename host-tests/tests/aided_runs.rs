@@ -781,6 +781,11 @@ fn sim_refuses_a_receiver_the_filter_could_not_use() {
             ["--gnss-outages", "20,5,12"],
             "the first outage at 12 s is past the run's end",
         ),
+        // A correlation time `nav replay --gnss-correlated-time` refuses.
+        (
+            ["--gnss-correlated=2,2,4", "--gnss-correlated-time=0.001"],
+            "GNSS correlated error time 0.001 s: must be within 1 to 86400 s",
+        ),
     ] {
         let msg = run_err(
             nav()
