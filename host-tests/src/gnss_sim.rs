@@ -1032,7 +1032,10 @@ mod tests {
             (with([1.0; 3], f64::NAN), "time NaN s"),
             (with([1.0; 3], 86_401.0), "must be within 1 to 86400 s"),
             // Shorter than the filter takes (`nav replay` refused the receiver simulated).
-            (with([1.0; 3], 0.001), "time 0.001 s: must be within 1 to 86400 s"),
+            (
+                with([1.0; 3], 0.001),
+                "time 0.001 s: must be within 1 to 86400 s",
+            ),
         ];
         for (bad, reason) in cases {
             let m = bad.check().unwrap_err().to_string();

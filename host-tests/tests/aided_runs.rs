@@ -2668,17 +2668,9 @@ fn sideslip_sigma_out_of_range_or_without_a_start_in_motion_is_refused() {
         let e = run_err(&mut replay(&["--start-in-motion", "--sideslip-sigma", v]));
         assert!(e.contains("at most 45 deg"), "{v}: {e}");
     }
-    let given = [
-        "--init-pos",
-        "45,7.5,250",
-        "--init-vel",
-        "0,0,0",
-        "--init-att",
-        "0,0,0",
-        "--sideslip-sigma",
-        "10",
-    ];
-    let e = run_err(&mut replay(&given));
+    let e = run_err(&mut replay(
+        &[&GIVEN[..], &["--sideslip-sigma", "10"]].concat(),
+    ));
     assert!(e.contains("--start-in-motion"), "{e}");
     assert!(!d.join("x.csv").exists());
 }
