@@ -666,9 +666,9 @@ fn many_refused(kind: &str, c: &nav_core::ins_filter::AidCounters) -> Option<Str
         format!(
             "WARNING: {} of {all} GNSS {kind} fixes refused ({:.0} %), where fixes as good as \
              their declared 1-sigma are refused about 0.1 % of the time: the fixes' 1-sigma may \
-             be too small, the filter's IMU noise too optimistic, the start or the lever arm \
-             wrong, or the fixes faulty (jumps, multipath); the solution's 1-sigma may then be \
-             too small",
+             be too small, the filter's IMU noise too optimistic, the start, the lever arm or \
+             the fixes' time tags (a receiver's latency) wrong, or the fixes faulty (jumps, \
+             multipath); the solution's 1-sigma may then be too small",
             c.rejected,
             100.0 * c.rejected as f64 / all as f64
         )
@@ -691,8 +691,9 @@ pub fn position_warning(p: &nav_core::ins_filter::AidCounters, unused: &str) -> 
         Some(format!(
             "WARNING: more GNSS position fixes refused ({}) or invalid ({}) than used ({}): the \
              filter's IMU noise (--imu-noise, imunoise), the start and its 1-sigma (--init-*, \
-             init*, or the alignment's), the antenna lever arm or the fixes' 1-sigma do not \
-             match the data, and the solution may be far off",
+             init*, or the alignment's), the antenna lever arm, the fixes' 1-sigma or their \
+             time tags (a receiver's output latency: fixes tagged 0.2 s late are 3 m behind a \
+             car at 15 m/s) do not match the data, and the solution may be far off",
             p.rejected, p.invalid, p.accepted
         ))
     } else {

@@ -2342,7 +2342,8 @@ fn refused_gnss_velocities_are_warned_of() {
 /// A receiver that declares 1 mm where its fixes scatter by 0.5 m: the filter refuses many of
 /// its fixes (far more than the 0.1 % a 99.9 % gate refuses of fixes as good as declared) and
 /// the run says so; the same fixes with their true 1-sigma are not warned of. Was: 45 % of the
-/// fixes refused without a word, the solution up to 17 of its 1-sigma off, status NAV.
+/// fixes refused without a word, the solution up to 17 of its 1-sigma off, status NAV. Fixes
+/// tagged 0.2 s late (a receiver's latency) are warned of with the time tags among the causes.
 #[test]
 fn fixes_refused_far_beyond_the_gates_rate_are_warned_of() {
     let dir = tempfile::tempdir().unwrap();
@@ -2380,6 +2381,14 @@ fn fixes_refused_far_beyond_the_gates_rate_are_warned_of() {
     }
     let text = run_ok(&mut replay_gnss(&imu, &d.join("gnss.csv"), &out, &GIVEN));
     assert!(!text.contains("WARNING"), "{text}");
+    // Fixes tagged 0.2 s late (a receiver's output latency): 3 m behind the car at 15 m/s,
+    // most refused; the warning names the time tags among the causes.
+    let late = shifted_gnss(d, 0.2);
+    let text = run_ok(&mut replay_gnss(&imu, &late, &out, &GIVEN));
+    assert!(
+        text.contains("time tags (a receiver's output latency"),
+        "{text}"
+    );
 }
 
 /// A 900 s flight (take-off, climb, cruise straight at 250 m/s) with a perfect IMU and 2 Hz
