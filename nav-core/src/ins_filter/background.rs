@@ -108,6 +108,10 @@ pub struct ErrorFilter<T: Scalar> {
     imu_lost: bool,
     window: InnovationWindow<T>,
     cluster: Option<RefusedCluster<T>>,
+    /// The fixes refused in a row before the filter was confirmed, as a cluster that claims
+    /// nothing: followed only to tell when a DEGRADED filter that never knew its position
+    /// re-acquires ([`integrity`] module docs).
+    refused_unconfirmed: Option<RefusedCluster<T>>,
     /// Propagated time since the last position fix [s].
     since_fix_s: T,
     /// The correction of the last position fix when it was a re-acquisition (taken alone
@@ -167,6 +171,7 @@ impl<T: Scalar> ErrorFilter<T> {
             imu_lost: false,
             window: InnovationWindow::default(),
             cluster: None,
+            refused_unconfirmed: None,
             since_fix_s: T::zero(),
             reacquired: None,
             restart: None,
@@ -247,11 +252,16 @@ impl<T: Scalar> ErrorFilter<T> {
     }
 
     /// The doubt on the position, NED [m^2]: of a refused cluster that is not gross
-    /// ([`RefusedCluster::doubt`]), of a re-acquisition not yet confirmed by the next fix
+    /// ([`RefusedCluster::doubt`]; the fixes refused before the filter was confirmed are
+    /// one), of a re-acquisition not yet confirmed by the next fix
     /// ([`Reacquisition::doubt`]) and of a window restart not yet confirmed
     /// ([`Restart::doubt`]); zero otherwise.
     pub fn position_doubt(&self) -> Matrix3<T> {
-        let cluster = self.cluster.as_ref().and_then(RefusedCluster::doubt);
+        let cluster = self
+            .cluster
+            .as_ref()
+            .or(self.refused_unconfirmed.as_ref())
+            .and_then(RefusedCluster::doubt);
         let reacquired = self.reacquired.as_ref().map(Reacquisition::doubt);
         let p_pos = self.p.fixed_view::<3, 3>(POS, POS).into_owned();
         let restarted = self.restart.map(|r| r.doubt(self.since_fix_s, &p_pos));
@@ -633,10 +643,11 @@ impl<T: Scalar> ErrorFilter<T> {
             x: self.x,
             uncertainty: self.uncertainty(),
         };
-        if let Some(c) = &self.cluster {
-            // Another aid's correction while fixes are refused (a position fix's ends the
-            // cluster before its update).
-            self.cluster = Some(c.corrected(&self.x.fixed_rows::<3>(POS).into_owned()));
+        // Another aid's correction while fixes are refused (a position fix's ends the
+        // cluster before its update).
+        let dr = self.x.fixed_rows::<3>(POS).into_owned();
+        for c in [&mut self.cluster, &mut self.refused_unconfirmed] {
+            *c = c.map(|c| c.corrected(&dr));
         }
         self.reset_attitude(&self.x.fixed_rows::<3>(ATT).into_owned());
         self.x = StateVector::zeros();
@@ -728,12 +739,35 @@ impl<T: Scalar> ErrorFilter<T> {
         let drift = self.fix_drift(dt, g);
         self.restart = self.restart.map(|r| r.carried(dt));
         let mut recovered = false;
+        let refused_unconfirmed = self.refused_unconfirmed.take();
         if nis > gate && self.cluster.is_none() && !self.confirmed {
             // Refused by the gate, but no cluster: a full window has not yet confirmed the
-            // filter's position since its start ([`integrity`] module docs).
-            return (AidResult::Rejected { nis }, None);
+            // filter's position since its start ([`integrity`] module docs). Once DEGRADED,
+            // a fix that continues the refused ones re-acquires: the filter never knew its
+            // position, and the fixes agree among themselves.
+            let tracked = match refused_unconfirmed {
+                Some(c) if c.continued_by(&m.z, &m.r, &drift, nis, gate) => {
+                    c.followed_by(m.z, m.r, dt)
+                }
+                _ => RefusedCluster::start(m.z, m.r, nis, gate, false),
+            };
+            if self.counters.position.consecutive_rejected < self.config.rejections_to_degrade
+                || tracked.previous.is_none()
+            {
+                self.refused_unconfirmed = Some(tracked);
+                return (AidResult::Rejected { nis }, None);
+            }
+            // Taken as a drifted cluster is (below): the drift's rate joins the velocity's
+            // covariance, the offset the position's [Groves, ch. 17].
+            self.cluster = Some(tracked);
+            recovered = true;
+            let v = tracked.drift_rate();
+            let mut vel = self.p.fixed_view_mut::<3, 3>(VEL, VEL);
+            vel += v * v.transpose();
+            self.window.clear();
+            self.restart = None;
         }
-        if nis > gate {
+        if nis > gate && !recovered {
             // Continues the cluster it agrees with, or starts one.
             let cluster = match &self.cluster {
                 Some(c) if c.continued_by(&m.z, &m.r, &drift, nis, gate) => {
@@ -785,8 +819,8 @@ impl<T: Scalar> ErrorFilter<T> {
             self.window.push(w);
             self.confirmed |= self.window.len() == integrity::WINDOW;
         }
-        let local = !self.consider.has_gnss_error();
-        if !recovered && self.window.verdict(gate, local) != WindowVerdict::Consistent {
+        let correlated = self.consider.has_gnss_error();
+        if !recovered && self.window.verdict(gate, correlated) != WindowVerdict::Consistent {
             if self.counters.position.consecutive_rejected < integrity::WINDOW_REFUSALS_MAX {
                 // What the window's earlier fixes pulled the filter by is now doubtful.
                 let d = self.window.take_corrections();

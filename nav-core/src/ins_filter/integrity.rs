@@ -62,7 +62,13 @@
 //! in motion on a consumer part, during a take-off run, had its first fix refused at a
 //! normalised square of 16.6 against the 16.3 gate, then its next 19 fixes as that fix's
 //! cluster while its own drift grew to 200 m: DEGRADED for 20 s, pitch 8 sigma off for
-//! the rest of the flight); until then a refused fix is refused alone. Only refusals by the
+//! the rest of the flight); until then a refused fix is refused alone, and the refused fixes
+//! are followed as a cluster that claims nothing (a fix the gate passes is taken). Their
+//! offset is the position's doubt, as a cluster's (below), and once the filter is DEGRADED
+//! (`rejections_to_degrade` refusals in a row) a refused fix that continues them
+//! ([`RefusedCluster::continued_by`]) re-acquires as a drifted cluster does (below): the
+//! filter never knew its position, and the fixes agree among themselves (a given start 100 m
+//! off under a declared 1 m took no fix in 300 s, its sigma 1 m). Only refusals by the
 //! per-fix gate start a cluster (the
 //! windowed test's refusals do not: after a slow fault the true fixes are refused by it for a
 //! while, and must not become a cluster). The cluster is released when its offset has become a
@@ -155,6 +161,10 @@ pub const WINDOW_REFUSALS_MAX: u32 = WINDOW as u32;
 
 /// 99.9 % point of chi-square with `3 * WINDOW` = 30 degrees of freedom: the global test.
 pub const CHI2_30DOF_999: f64 = 59.703;
+
+/// 99.9 % point of chi-square with `3 * (WINDOW - 1)` = 27 degrees of freedom: the global
+/// test about the window's mean, under a declared correlated GNSS error.
+pub const CHI2_27DOF_999: f64 = 55.476;
 
 /// A cluster whose first fix's normalised innovation squared exceeds the gate by this factor
 /// [-] is gross (module docs): beyond what a filter whose 1-sigma were up to 4 times
@@ -357,16 +367,32 @@ impl<T: Scalar> InnovationWindow<T> {
             .fold(T::zero(), |a, w| a + w.norm_squared())
     }
 
+    /// The global statistic about the window's mean, `sum |w - mean|^2 = sum |w|^2 - |sum
+    /// w|^2 / n` [-] (`chi^2(3 (n - 1))` for independent `w`; fewer for `w` that share a
+    /// common part, which it removes).
+    pub fn spread_about_mean_statistic(&self) -> T {
+        (self.spread_statistic() - self.bias_statistic()).max(T::zero())
+    }
+
     /// Both tests at 99.9 %: the local one against `gate_3dof` (the per-fix gate's point), the
-    /// global one against [`CHI2_30DOF_999`] once the window is full. `local` false leaves the
-    /// local test out: under a declared time-correlated GNSS error (a consider state,
-    /// [`super::consider`]) a bias common to the window is what the receiver was declared to
-    /// have, the innovations share it and are not independent, and the per-fix gate (whose
-    /// innovation covariance holds that error's variance) judges its size.
-    pub fn verdict(&self, gate_3dof: T, local: bool) -> WindowVerdict {
-        if local && self.bias_statistic() > gate_3dof {
+    /// global one against [`CHI2_30DOF_999`] once the window is full. `correlated`, under a
+    /// declared time-correlated GNSS error (a consider state, [`super::consider`]), leaves the
+    /// local test out and takes the global one about the window's mean
+    /// ([`Self::spread_about_mean_statistic`] against [`CHI2_27DOF_999`]): a bias common to the
+    /// window is what the receiver was declared to have, the innovations share it and are not
+    /// independent, and the per-fix gate (whose innovation covariance holds that error's
+    /// variance) judges its size. Taken about zero, a declared error drawn at 2.5 sigma made
+    /// every whitened innovation of the window about 2.5 long and failed the global test as
+    /// well (a tactical MEMS filter then refused the true fixes at rest and drifted 2 km).
+    pub fn verdict(&self, gate_3dof: T, correlated: bool) -> WindowVerdict {
+        let spread = if correlated {
+            self.spread_about_mean_statistic() > T::c(CHI2_27DOF_999)
+        } else {
+            self.spread_statistic() > T::c(CHI2_30DOF_999)
+        };
+        if !correlated && self.bias_statistic() > gate_3dof {
             WindowVerdict::Bias
-        } else if self.len == WINDOW && self.spread_statistic() > T::c(CHI2_30DOF_999) {
+        } else if self.len == WINDOW && spread {
             WindowVerdict::Spread
         } else {
             WindowVerdict::Consistent
@@ -696,22 +722,35 @@ mod tests {
             let s = if k % 2 == 0 { 1.0 } else { -1.0 };
             white.push(Vector3::repeat(s));
         }
-        assert_eq!(white.verdict(gate, true), WindowVerdict::Consistent);
+        assert_eq!(white.verdict(gate, false), WindowVerdict::Consistent);
         // A bias of 1.3 sigma on one axis on every fix: each fix's NIS 1.7 passes any gate,
         // the window's mean 10 * 1.69 = 16.9 does not.
         let mut biased = InnovationWindow::<f64>::default();
         for _ in 0..WINDOW {
             biased.push(Vector3::new(0.0, 1.3, 0.0));
         }
-        assert_eq!(biased.verdict(gate, true), WindowVerdict::Bias);
-        assert_eq!(biased.verdict(gate, false), WindowVerdict::Consistent);
+        assert_eq!(biased.verdict(gate, false), WindowVerdict::Bias);
+        assert_eq!(biased.verdict(gate, true), WindowVerdict::Consistent);
         // Large alternating innovations: no mean, too much spread (10 * 3 * 4 = 120 > 59.7).
         let mut wide = InnovationWindow::<f64>::default();
         for k in 0..WINDOW {
             let s = if k % 2 == 0 { 2.0 } else { -2.0 };
             wide.push(Vector3::repeat(s));
         }
+        assert_eq!(wide.verdict(gate, false), WindowVerdict::Spread);
         assert_eq!(wide.verdict(gate, true), WindowVerdict::Spread);
+        // A declared correlated error drawn at 2.5 sigma, common to the window, with white
+        // noise about it: each |w|^2 about 3 * 2.5^2 = 18.75, 187 in all, fails the global
+        // test about zero; about the mean, 10 * 3 * 0.25 = 7.5 passes.
+        let mut common = InnovationWindow::<f64>::default();
+        for k in 0..WINDOW {
+            let s = if k % 2 == 0 { 0.5 } else { -0.5 };
+            common.push(Vector3::repeat(2.5 + s));
+        }
+        assert_eq!(common.verdict(gate, false), WindowVerdict::Bias);
+        assert!(common.spread_statistic() > CHI2_30DOF_999);
+        assert!((common.spread_about_mean_statistic() - 7.5).abs() < 1e-9);
+        assert_eq!(common.verdict(gate, true), WindowVerdict::Consistent);
         // The corrections are summed once.
         let mut x = StateVector::<f64>::zeros();
         x[0] = 0.5;
@@ -722,7 +761,7 @@ mod tests {
         assert_eq!(wide.take_corrections()[0], 0.0);
         wide.clear();
         assert!(wide.is_empty());
-        assert_eq!(wide.verdict(gate, true), WindowVerdict::Consistent);
+        assert_eq!(wide.verdict(gate, false), WindowVerdict::Consistent);
     }
 
     #[test]
