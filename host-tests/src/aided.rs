@@ -276,6 +276,10 @@ pub struct AidedReport {
     /// Re-alignments in motion after gaps in the IMU data too long to bridge (no rows while
     /// one runs).
     pub realignments: Realignments,
+    /// The first sample at which the filter found itself so near a pole that its NED error
+    /// model does not hold (`nav_core::ins_filter::model::near_pole`): its time [s] and
+    /// latitude [deg]; DEGRADED from there on.
+    pub near_pole: Option<(f64, f64)>,
 }
 
 fn wide(r: &AidResult<impl Scalar>) -> AidResult<f64> {
@@ -510,6 +514,10 @@ pub fn run<T: Scalar, E: fmt::Display>(
         let Some(ins) = seq.filter() else { continue };
         if report.start_s.is_none() {
             report.start_s = Some(s.t_us as f64 * 1e-6);
+        }
+        if report.near_pole.is_none() && ins.filter().near_pole() {
+            let lat = ins.state().position.lat_f64().to_degrees();
+            report.near_pole = Some((s.t_us as f64 * 1e-6, lat));
         }
         if updated {
             sink.updated(s.t_us, ins);

@@ -612,10 +612,27 @@ pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
     r.lost
         .warning()
         .into_iter()
+        .chain(r.near_pole.map(near_pole_warning))
         .chain(position)
         .chain(velocity)
         .chain(stops)
         .collect()
+}
+
+/// The warning for a run whose filter came so near a pole (at `t_s` [s], latitude `lat_deg`
+/// [deg]) that its NED error model does not hold (`nav_core::ins_filter::model::near_pole`):
+/// the rows are DEGRADED from there on (a pass 97 m from the pole at 300 m/s was 22 sigma
+/// off with status NAV, one over it turned to NaN).
+pub fn near_pole_warning((t_s, lat_deg): (f64, f64)) -> String {
+    format!(
+        "WARNING: DEGRADED from t = {t_s:.3} s on: the solution came so near the {} Pole \
+         (latitude {lat_deg:.6} deg) that the filter's NED error model does not hold (within \
+         {} m of the polar axis, or the NED frame turning faster than {} rad/s): its solution \
+         and 1-sigma are not trusted for the rest of the run",
+        if lat_deg >= 0.0 { "North" } else { "South" },
+        nav_core::ins_filter::model::MIN_POLE_DISTANCE_M,
+        nav_core::ins_filter::model::MAX_NED_FRAME_RATE_RAD_S
+    )
 }
 
 /// The warning for a run that believed stops (zero-velocity updates accepted) while it refused

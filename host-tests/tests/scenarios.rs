@@ -221,6 +221,29 @@ fn geodesics_on_the_equator_and_a_meridian() {
     assert!((az2 - 2.0).abs() < 1e-9 && (s2 - 700e3).abs() < 1e-3);
 }
 
+/// A route over a pole (80 N, 0 E to 80 N, 180 E) is refused naming the pole (was: "the
+/// geodesic did not converge (antipodal or coincident points?)", neither of which it is); one
+/// passing 50 m from it is flown.
+#[test]
+fn a_route_over_a_pole_is_refused_naming_it() {
+    let r = |lon2_deg: f64| {
+        geodesic_inverse(
+            80_f64.to_radians(),
+            0.0,
+            80_f64.to_radians(),
+            lon2_deg.to_radians(),
+        )
+    };
+    for lon2 in [180.0, 179.999] {
+        let e = r(lon2).unwrap_err().to_string();
+        assert!(
+            e.contains("North Pole") && e.contains("at least 1 km"),
+            "{e}"
+        );
+    }
+    assert!(r(179.995).is_ok());
+}
+
 #[test]
 fn scenario_parameters_are_checked() {
     let mut s = Scenario::by_name("ship-rocking").unwrap();

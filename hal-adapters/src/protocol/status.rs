@@ -107,6 +107,9 @@ bitflags! {
         /// A gap in the IMU data too long to bridge: the solution is lost for the rest of
         /// the run (nav-core's `gap`).
         const IMU_LOST = 1 << 14;
+        /// The solution came so near a pole that the filter's NED error model does not hold:
+        /// not trusted for the rest of the run (nav-core's `ins_filter::model::near_pole`).
+        const NEAR_POLE = 1 << 15;
     }
 }
 
@@ -258,7 +261,8 @@ impl StatusModel {
             | StatusFlags::AIDING_LOST
             | StatusFlags::SIGMA_ABOVE_LIMIT
             | StatusFlags::COVARIANCE_FAULT
-            | StatusFlags::IMU_LOST;
+            | StatusFlags::IMU_LOST
+            | StatusFlags::NEAR_POLE;
         let status = if flags.intersects(failed) {
             NavStatus::Fault
         } else {
@@ -308,6 +312,7 @@ fn nav_flags(nav: NavigatorState) -> StatusFlags {
         Some(FilterStatus::SigmaAboveLimit) => f |= StatusFlags::SIGMA_ABOVE_LIMIT,
         Some(FilterStatus::CovarianceFault) => f |= StatusFlags::COVARIANCE_FAULT,
         Some(FilterStatus::ImuLost) => f |= StatusFlags::IMU_LOST,
+        Some(FilterStatus::NearPole) => f |= StatusFlags::NEAR_POLE,
     }
     f
 }
@@ -409,6 +414,11 @@ mod tests {
                 state(Stage::Aligned, Some(FilterStatus::ImuLost)),
                 NavStatus::Degraded,
                 StatusFlags::IMU_LOST,
+            ),
+            (
+                state(Stage::Aligned, Some(FilterStatus::NearPole)),
+                NavStatus::Degraded,
+                StatusFlags::NEAR_POLE,
             ),
             (
                 state(Stage::Failed, None),

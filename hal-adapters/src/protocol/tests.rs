@@ -560,6 +560,8 @@ fn a_version_1_config_frame_is_refused_by_its_version() {
         (1, Refusal::Version(1)),
         // Version 2 had this config frame; its status frames lacked IMU_LOST.
         (2, Refusal::Version(2)),
+        // Version 3 had this config frame; its status frames lacked NEAR_POLE.
+        (3, Refusal::Version(3)),
         (
             VERSION,
             Refusal::Length {
@@ -579,7 +581,7 @@ fn a_version_1_config_frame_is_refused_by_its_version() {
         std::format!("{}", Refusal::Version(1)),
         std::format!("unknown protocol version 1 (this is {VERSION})")
     );
-    assert_eq!(VERSION, 3);
+    assert_eq!(VERSION, 4);
 }
 
 mod properties {

@@ -766,8 +766,9 @@ fn dcm_jet(e: &[Jet; 3]) -> [[Jet; 3]; 3] {
 pub fn geodesic_inverse(lat1: f64, lon1: f64, lat2: f64, lon2: f64) -> Result<(f64, f64)> {
     // Spherical first guess.
     let dlon = lon2 - lon1;
-    let mut az = (dlon.sin() * lat2.cos())
+    let az0 = (dlon.sin() * lat2.cos())
         .atan2(lat1.cos() * lat2.sin() - lat1.sin() * lat2.cos() * dlon.cos());
+    let mut az = az0;
     let central = (lat1.sin() * lat2.sin() + lat1.cos() * lat2.cos() * dlon.cos()).clamp(-1.0, 1.0);
     let mut s = central.acos() * 6.371e6;
     let miss = |az: f64, s: f64| {
@@ -797,6 +798,17 @@ pub fn geodesic_inverse(lat1: f64, lon1: f64, lat2: f64, lon2: f64) -> Result<(f
         }
         az -= (j[1][1] * n0 - j[0][1] * e0) / det;
         s -= (-j[1][0] * n0 + j[0][0] * e0) / det;
+    }
+    // Clairaut: the great circle's nearest approach to the polar axis is `R |sin(az) cos(lat1)|`.
+    let axis_m = (az0.sin() * lat1.cos()).abs() * 6.371e6;
+    if axis_m < 1000.0 && (lat1.sin() * lat2.sin() > 0.0) && dlon.cos() < 0.0 {
+        bail!(
+            "the route passes about {axis_m:.0} m from the {} Pole (its ends {:.3} deg of \
+             longitude apart): the geodesic and the simulator's truth are latitude and longitude, \
+             singular there; move an end so that the route passes at least 1 km from the pole",
+            if lat1 > 0.0 { "North" } else { "South" },
+            wrap_pi(dlon).abs().to_degrees()
+        )
     }
     bail!("the geodesic did not converge (antipodal or coincident points?)")
 }

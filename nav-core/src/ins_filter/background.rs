@@ -106,6 +106,9 @@ pub struct ErrorFilter<T: Scalar> {
     fault_latched: bool,
     /// A gap in the IMU data was too long to bridge (latched).
     imu_lost: bool,
+    /// The solution came near a pole, where the NED error model does not hold
+    /// ([`model::near_pole`]; latched).
+    near_pole: bool,
     window: InnovationWindow<T>,
     cluster: Option<RefusedCluster<T>>,
     /// The fixes refused in a row before the filter was confirmed, as a cluster that claims
@@ -169,6 +172,7 @@ impl<T: Scalar> ErrorFilter<T> {
             covariance_faults: 0,
             fault_latched: false,
             imu_lost: false,
+            near_pole: false,
             window: InnovationWindow::default(),
             cluster: None,
             refused_unconfirmed: None,
@@ -290,14 +294,22 @@ impl<T: Scalar> ErrorFilter<T> {
         Vector3::new(roll2, pitch2, self.p[(ATT + 2, ATT + 2)]).map(|v| v.max(T::zero()).sqrt())
     }
 
-    /// The health: a latched covariance fault, [`FilterConfig::rejections_to_degrade`]
-    /// position fixes refused in a row, or a horizontal 1-sigma beyond
-    /// [`FilterConfig::max_horizontal_sigma_m`].
+    /// True once the solution came so near a pole that the NED error model does not hold
+    /// ([`model::near_pole`]; latched: status [`FilterStatus::NearPole`]).
+    pub fn near_pole(&self) -> bool {
+        self.near_pole
+    }
+
+    /// The health: a latched covariance fault, a lost IMU gap, the vicinity of a pole
+    /// ([`Self::near_pole`]), [`FilterConfig::rejections_to_degrade`] position fixes refused
+    /// in a row, or a horizontal 1-sigma beyond [`FilterConfig::max_horizontal_sigma_m`].
     pub fn status(&self) -> FilterStatus {
         if self.fault_latched {
             FilterStatus::CovarianceFault
         } else if self.imu_lost {
             FilterStatus::ImuLost
+        } else if self.near_pole {
+            FilterStatus::NearPole
         } else if self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade {
             FilterStatus::AidingRejected
         } else if self.position_covariance().fixed_view::<2, 2>(0, 0).trace()
@@ -401,6 +413,7 @@ impl<T: Scalar> ErrorFilter<T> {
     /// `P <- Phi P Phi^T + Q_d` over the propagation ([`model`], computed by its blocks:
     /// [`covariance`]).
     pub fn propagate(&mut self, prop: &Propagation<T>) {
+        self.near_pole |= model::near_pole(&prop.lin.earth, &prop.lin.v_eb_n);
         let f = model::system_matrix(&prop.lin, &self.config.noise, self.config.scale_factors);
         let phi = Transition::new(&f, prop.dt);
         self.c_b_n = prop.lin.c_b_n;

@@ -257,6 +257,11 @@ pub enum FilterStatus {
     /// on the fixes after it and restarts a filter, [`sequencer`]; the navigator's aided phase
     /// does not, [`crate::navigator`]).
     ImuLost,
+    /// The solution came within [`model::MIN_POLE_DISTANCE_M`] of a pole's axis, or so near
+    /// one that the NED frame turned faster than [`model::MAX_NED_FRAME_RATE_RAD_S`]
+    /// ([`model::near_pole`]): the filter's NED error model does not hold there, and its
+    /// solution and 1-sigma are not trusted for the rest of this filter's run (latched).
+    NearPole,
 }
 
 impl FilterStatus {
@@ -267,7 +272,8 @@ impl FilterStatus {
             Self::AidingRejected
             | Self::SigmaAboveLimit
             | Self::CovarianceFault
-            | Self::ImuLost => "DEGRADED",
+            | Self::ImuLost
+            | Self::NearPole => "DEGRADED",
         }
     }
 }
