@@ -132,18 +132,7 @@ fn a_correlated_error_drawn_in_its_tail_does_not_lock_the_fixes_out() {
 fn a_wrong_given_start_is_reacquired_once_degraded() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    sim_into(
-        d,
-        &[
-            "land-vehicle",
-            "--grade",
-            "fog",
-            "--seconds",
-            "240",
-            "--gnss-rate",
-            "1",
-        ],
-    );
+    sim_fog_car(d, "240");
     let mut start = GIVEN;
     start[1] = "45.0009,7.5,250";
     let (text, out) = replay_in(d, &[&start[..], &["--imu-noise", "fog"]].concat());
@@ -1201,6 +1190,22 @@ fn sim_into(d: &Path, sim: &[&str]) {
             .args(sim)
             .args(["--format", "bin", "--out"])
             .arg(d),
+    );
+}
+
+/// `nav sim` of a FOG land vehicle over `seconds` with 1 Hz fixes into `d`.
+fn sim_fog_car(d: &Path, seconds: &str) {
+    sim_into(
+        d,
+        &[
+            "land-vehicle",
+            "--grade",
+            "fog",
+            "--seconds",
+            seconds,
+            "--gnss-rate",
+            "1",
+        ],
     );
 }
 
@@ -2423,18 +2428,7 @@ fn refused_gnss_velocities_are_warned_of() {
 fn fixes_refused_far_beyond_the_gates_rate_are_warned_of() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    sim_into(
-        d,
-        &[
-            "land-vehicle",
-            "--grade",
-            "fog",
-            "--seconds",
-            "300",
-            "--gnss-rate",
-            "1",
-        ],
-    );
+    sim_fog_car(d, "300");
     let fixes = host_tests::gnss::read_gnss(&d.join("gnss.csv")).unwrap();
     let lying: Vec<_> = fixes
         .iter()

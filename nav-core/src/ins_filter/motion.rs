@@ -695,9 +695,14 @@ mod tests {
     /// NED velocity stays (0, 200, 0) while it accelerates towards the pole at 3.6 m/s^2,
     /// which its accelerometers feel. The start must not take that for gravity (was: levelled
     /// at 20 deg of roll, 1-sigma 1.8 deg).
-    #[test]
-    fn circling_a_pole_is_not_quasi_static() {
-        let (d_axis, speed, dt) = (11_000.0, 200.0, 0.1);
+    /// A level body flying east at `speed` [m/s] on the circle `d_axis` [m] from the North
+    /// Pole's axis, its NED velocity constant: latitude [rad], NED velocity [m/s], and the
+    /// body rate [rad/s] and specific force [m/s^2] it senses, body forward east, right south,
+    /// down down.
+    fn circling_the_pole(
+        d_axis: f64,
+        speed: f64,
+    ) -> (f64, Vector3<f64>, Vector3<f64>, Vector3<f64>) {
         let lat = (d_axis / 6_399_593.6_f64).acos();
         let earth = LocalEarth::new(lat, 0.0);
         let v = Vector3::new(0.0, speed, 0.0);
@@ -705,10 +710,17 @@ mod tests {
         let g = crate::earth::normal_gravity(lat, 0.0);
         // Constant NED velocity: f_n = (2 omega_ie + omega_en) x v - g.
         let f_n = (earth.omega_ie_n() + w_in).cross(&v) - Vector3::new(0.0, 0.0, g);
-        assert!((f_n.x - speed * speed / d_axis).abs() < 0.05, "{f_n:?}");
-        // Body forward east, right south, down down.
         let to_b = |n: Vector3<f64>| Vector3::new(n.y, -n.x, n.z);
-        let (w_b, f_b) = (to_b(w_in) * dt, to_b(f_n) * dt);
+        (lat, v, to_b(w_in), to_b(f_n))
+    }
+
+    #[test]
+    fn circling_a_pole_is_not_quasi_static() {
+        let (d_axis, speed, dt) = (11_000.0, 200.0, 0.1);
+        let (lat, v, w_b, f_b) = circling_the_pole(d_axis, speed);
+        // Towards the pole (body right is south).
+        assert!((-f_b.y - speed * speed / d_axis).abs() < 0.05, "{f_b:?}");
+        let (w_b, f_b) = (w_b * dt, f_b * dt);
         let mut m = MotionAlign::new(MotionAlignConfig::default(), Vector3::zeros());
         let vel = GnssVelocity {
             v_ned_m_s: v,
@@ -744,13 +756,7 @@ mod tests {
     #[test]
     fn a_differenced_velocity_near_a_pole_turns_with_the_frame() {
         let (d_axis, speed) = (11_000.0, 200.0);
-        let lat = (d_axis / 6_399_593.6_f64).acos();
-        let earth = LocalEarth::new(lat, 0.0);
-        let v = Vector3::new(0.0, speed, 0.0);
-        let w_in = earth.omega_ie_n() + earth.omega_en_n(&v);
-        let g = crate::earth::normal_gravity(lat, 0.0);
-        let f_n = (earth.omega_ie_n() + w_in).cross(&v) - Vector3::new(0.0, 0.0, g);
-        let to_b = |n: Vector3<f64>| Vector3::new(n.y, -n.x, n.z);
+        let (lat, _, w_b, f_b) = circling_the_pole(d_axis, speed);
         let at = |t_s: f64| GnssPosition {
             lat_rad: lat,
             lon_rad: speed / d_axis * t_s,
@@ -770,7 +776,7 @@ mod tests {
         m.add_imu(&still_for(1.0));
         assert!(m.add_fix(3.0, &at(0.0), None).is_none());
         assert!(m.has_level());
-        m.add_imu(&ImuIncrement::new(to_b(w_in).into(), to_b(f_n).into(), 1.0));
+        m.add_imu(&ImuIncrement::new(w_b.into(), f_b.into(), 1.0));
         let s = m
             .add_fix(4.0, &at(1.0), None)
             .expect("level and moving: a start");
