@@ -55,7 +55,11 @@
 //! to it in that measure than to the filter's prediction by its own normalised innovation
 //! squared) belongs to the same consistent cluster, and is refused even
 //! when the growing covariance would let it pass the gate: the filter refused that cluster while
-//! it still knew its own position, and a wider covariance is no evidence for it. A fix that
+//! it still knew its own position, and a wider covariance is no evidence for it. Under a
+//! declared correlated GNSS error only a gross cluster (below) claims fixes the gate passes:
+//! consecutive fixes share that error, so they agree with a refused one whether or not they
+//! are faulty (a chance refusal made the next 51 true fixes members, with the filter's
+//! innovation covariance right). A fix that
 //! leaves the cluster (the fault ended) is judged by the gate alone: that is the re-acquisition
 //! from the filter's own growing sigma. A cluster needs a filter that knew its position: none
 //! starts before a full window of fixes has passed the tests since the filter's start (a start
