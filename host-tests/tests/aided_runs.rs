@@ -2,6 +2,9 @@
 //! runs: `nav kf-gins`, `nav replay --gnss`, `nav sim --gnss-rate`. Bounds come from the
 //! filter's own covariance or the chi-square distribution, not from earlier runs.
 
+mod common;
+
+use common::GIVEN;
 use host_tests::aided::{self, AidedSink};
 use host_tests::aided_bench::{
     Case, average_chi2_bounds, consistency_cell, prepare, run_case, state_error,
@@ -2016,14 +2019,6 @@ fn replay_gnss(imu: &Path, gnss: &Path, out: &Path, args: &[&str]) -> Command {
     cmd
 }
 
-const GIVEN: [&str; 6] = [
-    "--init-pos",
-    "45,7.5,250",
-    "--init-vel",
-    "0,0,0",
-    "--init-att",
-    "0,0,0",
-];
 const ALIGNED: [&str; 8] = [
     "--lat",
     "45",
@@ -2757,18 +2752,7 @@ fn sideslip_sigma_out_of_range_or_without_a_start_in_motion_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     sim_into(d, &["land-vehicle", "--seconds", "30", "--gnss-rate", "1"]);
-    let replay = |args: &[&str]| {
-        let mut cmd = nav();
-        cmd.arg("replay")
-            .arg("--imu")
-            .arg(d.join("imu.bin"))
-            .arg("--gnss")
-            .arg(d.join("gnss.csv"))
-            .args(args)
-            .arg("--out")
-            .arg(d.join("x.csv"));
-        cmd
-    };
+    let replay = |args: &[&str]| replay_in_cmd(d, args);
     for v in ["0", "-3", "46", "90", "NaN", "inf"] {
         let e = run_err(&mut replay(&["--start-in-motion", "--sideslip-sigma", v]));
         assert!(e.contains("at most 45 deg"), "{v}: {e}");
@@ -2777,7 +2761,7 @@ fn sideslip_sigma_out_of_range_or_without_a_start_in_motion_is_refused() {
         &[&GIVEN[..], &["--sideslip-sigma", "10"]].concat(),
     ));
     assert!(e.contains("--start-in-motion"), "{e}");
-    assert!(!d.join("x.csv").exists());
+    assert!(!d.join("sol.csv").exists());
 }
 
 /// A vehicle creeping straight north at a steady 0.5 m/s (exact increments, exact fixes at

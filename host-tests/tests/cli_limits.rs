@@ -760,16 +760,8 @@ fn start_speed_out_of_range_is_refused() {
         assert!(!out.exists());
     }
     // A given start has no heading threshold.
-    let given = [
-        "--init-pos",
-        "45,7.5,250",
-        "--init-vel",
-        "0,0,0",
-        "--init-att",
-        "0,0,0",
-    ];
     refused(
-        &[&base[..7], &given[..], &["--start-speed", "2"]].concat(),
+        &[&base[..7], &common::GIVEN[..], &["--start-speed", "2"]].concat(),
         &["--start-speed is the heading threshold of a --start-in-motion"],
     );
     assert!(!out.exists());

@@ -6,6 +6,17 @@ use host_tests::replay::{FileReport, ReplayOptions, replay_file};
 use nav_core::Scalar;
 use std::path::Path;
 
+/// `nav replay`'s given start of the simulated land vehicle (`nav sim land-vehicle`'s
+/// defaults: at rest, level, facing north at 45 deg N, 7.5 deg E, 250 m).
+pub const GIVEN: [&str; 6] = [
+    "--init-pos",
+    "45,7.5,250",
+    "--init-vel",
+    "0,0,0",
+    "--init-att",
+    "0,0,0",
+];
+
 /// Mean Earth radius [m], to turn latitude/longitude differences into metres (1e-3 relative is
 /// plenty for error bounds).
 pub const EARTH_RADIUS_M: f64 = 6_371_000.0;
