@@ -22,7 +22,7 @@ use crate::trajectory::scenarios::Scenario;
 use crate::truth::Truth;
 use anyhow::{Result, anyhow};
 use nav_core::attitude::rotation_vector_of;
-use nav_core::ins_filter::sequencer::{Sequencer, Start};
+use nav_core::ins_filter::sequencer::{Realignments, Sequencer, Start};
 use nav_core::ins_filter::{
     ATT, AidResult, AidedIns, BA, BG, FilterConfig, GnssCorrelatedError, InitialSigma, POS, SA, SG,
     SensorErrors, VEL,
@@ -126,6 +126,8 @@ pub struct CaseResult {
     pub accepted: u32,
     /// Position fixes rejected.
     pub rejected: u32,
+    /// The run's re-alignments in motion (`nav_core::ins_filter::sequencer`).
+    pub realignments: Realignments,
 }
 
 /// The filter's reported covariance of position, velocity and attitude, in [`state_error`]'s
@@ -468,6 +470,7 @@ pub fn run_case(case: &Case) -> Result<CaseResult> {
         sensor_z,
         accepted: report.counters.position.accepted,
         rejected: report.counters.position.rejected,
+        realignments: report.realignments,
     })
 }
 
@@ -558,26 +561,37 @@ pub fn consistency_cell(base: &Case, runs: usize, threads: usize) -> Result<Cons
         .into_iter()
         .map(|(s, r)| r.map_err(|e| anyhow!("seed {s}: {e}")))
         .collect::<Result<_>>()?;
-    let epochs = results.iter().map(|r| r.epochs.len()).min().unwrap_or(0);
+    // Epochs matched by their time (to the microsecond): a run that re-aligned in motion
+    // has none while it did, and its later epochs are those of the others' times.
+    let key = |e: &Epoch| (e.t_s * 1e6).round() as i64;
+    let by_time: Vec<std::collections::HashMap<i64, &Epoch>> = results
+        .iter()
+        .map(|r| r.epochs.iter().map(|e| (key(e), e)).collect())
+        .collect();
+    let table: Vec<Vec<&Epoch>> = results
+        .first()
+        .map(|r| r.epochs.as_slice())
+        .unwrap_or_default()
+        .iter()
+        .filter_map(|e| by_time.iter().map(|m| m.get(&key(e)).copied()).collect())
+        .collect();
+    let epochs = table.len();
     let (lo9, hi9) = average_chi2_bounds(9.0, runs);
     let (lo3, hi3) = average_chi2_bounds(3.0, runs);
     let (mut nees_in, mut nis_in, mut nis_n) = (0, 0, 0);
     let (mut nees_sum, mut nis_sum) = (0.0, 0.0);
     let mut blocks = [0.0; 3];
-    for k in 0..epochs {
+    for row in &table {
         for (b, sum) in blocks.iter_mut().enumerate() {
-            *sum += results
-                .iter()
-                .map(|r| r.epochs[k].nees_blocks[b])
-                .sum::<f64>()
-                / (runs * epochs.max(1)) as f64;
+            *sum +=
+                row.iter().map(|e| e.nees_blocks[b]).sum::<f64>() / (runs * epochs.max(1)) as f64;
         }
-        let nees = results.iter().map(|r| r.epochs[k].nees).sum::<f64>() / runs as f64;
+        let nees = row.iter().map(|e| e.nees).sum::<f64>() / runs as f64;
         nees_sum += nees;
         if (lo9..=hi9).contains(&nees) {
             nees_in += 1;
         }
-        let nis: Vec<f64> = results.iter().filter_map(|r| r.epochs[k].nis).collect();
+        let nis: Vec<f64> = row.iter().filter_map(|e| e.nis).collect();
         if nis.len() == runs {
             let m = nis.iter().sum::<f64>() / runs as f64;
             nis_sum += m;
@@ -592,15 +606,13 @@ pub fn consistency_cell(base: &Case, runs: usize, threads: usize) -> Result<Cons
         .map(|w| {
             let (a, b) = (w * epochs / tenths, (w + 1) * epochs / tenths);
             let mut mean = [0.0; 7];
-            for r in &results {
-                for e in &r.epochs[a..b] {
-                    let all = e.nees_blocks.iter().chain(&e.nees_sensor);
-                    for (m, x) in mean.iter_mut().zip(all) {
-                        *m += x / ((b - a) * runs) as f64;
-                    }
+            for e in table[a..b].iter().flatten() {
+                let all = e.nees_blocks.iter().chain(&e.nees_sensor);
+                for (m, x) in mean.iter_mut().zip(all) {
+                    *m += x / ((b - a) * runs) as f64;
                 }
             }
-            (results[0].epochs[b - 1].t_s, mean)
+            (table[b - 1][0].t_s, mean)
         })
         .collect();
     let z: Vec<[f64; 6]> = results.iter().map(|r| r.bias_z).collect();

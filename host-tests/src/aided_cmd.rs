@@ -11,7 +11,7 @@ use hal_adapters::drivers::NoiseSpec;
 use nav_core::ins_filter::limits::MIN_BIAS_INSTABILITY_TIME_S;
 use nav_core::ins_filter::model::FilterNoise;
 use nav_core::ins_filter::motion::{MAX_FIX_INTERVAL_S, MotionAlignConfig};
-use nav_core::ins_filter::sequencer::{Realignments, Sequencer, Start};
+use nav_core::ins_filter::sequencer::{RealignCause, Realignments, Sequencer, Start};
 use nav_core::ins_filter::{FilterConfig, InitialSigma, SensorErrors};
 use nav_core::navigator::config::{MAX_HEIGHT_M, MIN_HEIGHT_M};
 use nav_core::number::{Number, Rounded};
@@ -560,35 +560,56 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
 }
 
 /// The line of a run that re-aligned in motion after gaps in the IMU data too long to bridge
-/// (`nav_core::ins_filter::sequencer`), or is still re-aligning at its end; `None` without one.
+/// or after its filter diverged (`nav_core::ins_filter::sequencer`), or is still re-aligning
+/// at its end; `None` without one.
 pub fn realignment_line(r: &Realignments) -> Option<String> {
     (r.begun > 0).then(|| {
         let us = |t: u64| format!("{:.3}", t as f64 * 1e-6);
-        let cause = format!(
-            "the last: a lost IMU gap of {} s ending at t = {} s",
-            us(r.gap_us),
-            us(r.gap_end_us)
-        );
+        let (why, sensors) = match r.last_cause {
+            RealignCause::LostGap => (
+                format!(
+                    "IMU data lost beyond the bridge (the last: a lost IMU gap of {} s ending \
+                     at t = {} s",
+                    us(r.gap_us),
+                    us(r.gap_end_us)
+                ),
+                "with the sensor errors it had estimated",
+            ),
+            RealignCause::Diverged => (
+                format!(
+                    "the filter diverged (the last at t = {} s: it refused every fix while its \
+                     own 1-sigma grew beyond the limit",
+                    us(r.begun_us)
+                ),
+                "with the sensor errors known as at the start (the diverged filter's \
+                 estimates dropped)",
+            ),
+        };
+        let diverged = match r.diverged {
+            0 => String::new(),
+            n if n == r.begun => String::new(),
+            n => format!(", {n} of them after a divergence"),
+        };
         let over = match r.started_over {
             0 => String::new(),
             n => format!(", {n} started over by another lost gap"),
         };
         if r.completed == r.begun {
             format!(
-                "re-aligned in motion {} time(s) after IMU data lost beyond the bridge ({cause}{over}): \
-                 the filter navigates again from t = {} s with the sensor errors it had \
-                 estimated; from t = {} s until then the rows are the lost solution's, DEGRADED",
+                "re-aligned in motion {} time(s) after {why}{diverged}{over}): the filter \
+                 navigates again from t = {} s {sensors}; from t = {} s until then the rows are \
+                 the set-aside solution's, DEGRADED",
                 r.completed,
                 us(r.navigating_us),
                 us(r.begun_us)
             )
         } else {
             format!(
-                "WARNING: re-aligning in motion since t = {} s after IMU data lost beyond the \
-                 bridge ({cause}{over}), not completed at the end of the data (no level over a \
-                 quasi-static interval, or no speed above the heading threshold: positions \
-                 alone seldom show a quasi-static interval in motion, fixes with a velocity do): \
-                 the rows since are the lost solution's, DEGRADED",
+                "WARNING: re-aligning in motion since t = {} s after {why}{diverged}{over}), not \
+                 completed at the end of the data (no level over a quasi-static interval, or no \
+                 speed above the heading threshold: positions alone seldom show a quasi-static \
+                 interval in motion, fixes with a velocity do): the rows since are the set-aside \
+                 solution's, DEGRADED",
                 us(r.begun_us)
             )
         }
@@ -721,6 +742,44 @@ pub fn position_warning(p: &nav_core::ins_filter::AidCounters, unused: &str) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The summary's line names the cause of the last re-alignment and what the restarted
+    /// filter kept: after a divergence, not the sensor errors it had estimated.
+    #[test]
+    fn the_realignment_line_says_why_and_what_was_kept() {
+        let gap = Realignments {
+            begun: 1,
+            completed: 1,
+            gap_us: 6_000_000,
+            gap_end_us: 36_005_000,
+            begun_us: 36_010_000,
+            navigating_us: 38_000_000,
+            ..Realignments::default()
+        };
+        let line = realignment_line(&gap).unwrap();
+        assert!(line.contains("after IMU data lost beyond the bridge (the last: a lost IMU gap of 6.000 s ending at t = 36.005 s): the filter navigates again from t = 38.000 s with the sensor errors it had estimated"), "{line}");
+        let diverged = Realignments {
+            begun: 2,
+            diverged: 1,
+            last_cause: RealignCause::Diverged,
+            begun_us: 113_000_000,
+            navigating_us: 126_000_000,
+            ..gap
+        };
+        let line = realignment_line(&diverged).unwrap();
+        assert!(line.starts_with("WARNING: re-aligning in motion since t = 113.000 s after the filter diverged (the last at t = 113.000 s"), "{line}");
+        let line = realignment_line(&Realignments {
+            completed: 2,
+            ..diverged
+        })
+        .unwrap();
+        assert!(
+            line.contains("re-aligned in motion 2 time(s) after the filter diverged"),
+            "{line}"
+        );
+        assert!(line.contains(", 1 of them after a divergence): the filter navigates again from t = 126.000 s with the sensor errors known as at the start"), "{line}");
+        assert_eq!(realignment_line(&Realignments::default()), None);
+    }
 
     /// The grades' turn-on biases are random constants: the filter's model of them must not
     /// forget them in an hour (a Gauss–Markov state of correlation time `tau` loses

@@ -321,6 +321,39 @@ impl<T: Scalar> ErrorFilter<T> {
         }
     }
 
+    /// True when the filter has diverged beyond what its fixes can bring back (the sequencer
+    /// then re-aligns in motion, [`super::sequencer`]): DEGRADED by refusals
+    /// ([`FilterConfig::rejections_to_degrade`] in a row), at least the last
+    /// [`integrity::WINDOW`] of them one refused cluster that is not gross (fixes that agree
+    /// among themselves, not a jump seen while the filter knew its position), and the
+    /// filter's own horizontal 1-sigma (its covariance, without the doubt) beyond
+    /// [`FilterConfig::max_horizontal_sigma_m`]. A filter pulled a few sigma off in a
+    /// direction its covariance holds tight (a start drawn in the tails: a tactical filter at
+    /// rest took a 0.11 deg/s gyro bias, 3.6 sigma wrong, from its first 13 fixes) drifts as
+    /// fast as its 1-sigma grows: the fixes' normalised squares stay just above the gate
+    /// (17-30) while the 1-sigma grows to kilometres, so neither the typical release nor the
+    /// drifted cluster re-acquires, and every fix of the run was refused. By then its sensor
+    /// estimates are as doubtful as its solution [Groves, ch. 17, re-initialisation].
+    pub fn diverged(&self) -> bool {
+        let max = self.config.max_horizontal_sigma_m;
+        let p_pos = Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)]);
+        let gross_drift = self.config.gate_nis * T::c(integrity::GROSS_NIS_FACTOR);
+        self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade
+            && self.cluster.as_ref().is_some_and(|c| {
+                c.members as usize >= integrity::WINDOW
+                    && (!c.gross || c.moved(&p_pos) > gross_drift)
+            })
+            && p_pos.x + p_pos.y > max * max
+    }
+
+    /// Takes the counters of `diverged`, a filter of the same settings this one restarts
+    /// after ([`Self::diverged`]); its refusals in a row end with it.
+    pub fn take_counters_from(&mut self, diverged: &Self) {
+        self.counters = diverged.counters;
+        self.counters.position.consecutive_rejected = 0;
+        self.covariance_faults = diverged.covariance_faults;
+    }
+
     /// Takes over from `lost`, a filter of the same settings whose solution a gap in the IMU
     /// data too long to bridge destroyed ([`crate::gap`]), what the gap did not destroy, at a
     /// re-alignment in motion ([`super::sequencer`]): the sensor errors' block of the

@@ -121,7 +121,11 @@
 //! by the gate alone, against the sigma the filter's drift has grown to. A filter so poor that
 //! its acceleration error blurs the jump between fixes can no longer tell, and the rule above
 //! applies. The price: a filter that an unseen fault pulled off by such a gross amount stays
-//! DEGRADED (refusing) until the fixes leave the line or its drift blurs the jump.
+//! DEGRADED (refusing) until the fixes leave the line or its drift blurs the jump, unless
+//! its offset has moved since the jump by more than [`GROSS_NIS_FACTOR`] times the gate of its
+//! own position variance ([`RefusedCluster::moved`]) while its 1-sigma is beyond the limit:
+//! then the filter, not the fixes, ran away, and the sequencer re-aligns it
+//! ([`super::ErrorFilter::diverged`]).
 //!
 //! **A re-acquisition is checked by the next fix** [Groves, ch. 17, adaptation]. After a gap
 //! (an outage, a wide start) the prediction is far wider than a fix, so the gate cannot see a
@@ -439,6 +443,8 @@ pub struct RefusedCluster<T: Scalar> {
     pub first: (Vector3<T>, Vector3<T>),
     /// Time from the first member to the last [s].
     pub age_s: T,
+    /// Members so far [-].
+    pub members: u32,
     /// The doubt of a cluster this one replaced while it was still refused [m^2] (module
     /// docs: a held offset that starts while the true fixes are refused does not clear the
     /// filter's doubt about them).
@@ -459,6 +465,7 @@ impl<T: Scalar> RefusedCluster<T> {
             gross: confirmed && nis > gate_3dof * T::c(GROSS_NIS_FACTOR),
             first: (z, r),
             age_s: T::zero(),
+            members: 1,
             carried_doubt: Matrix3::zeros(),
         }
     }
@@ -481,6 +488,7 @@ impl<T: Scalar> RefusedCluster<T> {
             r_ned_m2: r,
             previous: Some((self.z_ned_m, self.r_ned_m2, dt_s)),
             age_s: self.age_s + dt_s,
+            members: self.members.saturating_add(1),
             ..*self
         }
     }
@@ -504,9 +512,15 @@ impl<T: Scalar> RefusedCluster<T> {
     /// filter's position variances `p_pos_m2` [m^2] explain, the normalised square of
     /// `z - z_1` against `R + R_1 + P_pos` beyond the gate. Never for a gross cluster.
     pub fn drifted(&self, p_pos_m2: &Vector3<T>, gate_3dof: T) -> bool {
+        !self.gross && self.moved(p_pos_m2) > gate_3dof
+    }
+
+    /// How far the offset has moved since the first member against the filter's position
+    /// variances `p_pos_m2` [m^2]: the normalised square [-] of `z - z_1` against
+    /// `R + R_1 + P_pos`.
+    pub fn moved(&self, p_pos_m2: &Vector3<T>) -> T {
         let (z1, r1) = self.first;
-        !self.gross
-            && normalised_square(&(self.z_ned_m - z1), &(self.r_ned_m2 + r1 + p_pos_m2)) > gate_3dof
+        normalised_square(&(self.z_ned_m - z1), &(self.r_ned_m2 + r1 + p_pos_m2))
     }
 
     /// The rate at which the offset moved from the first member to the last [m/s]; zero

@@ -321,6 +321,26 @@ impl<T: Scalar> AidedIns<T> {
         Ok(ins)
     }
 
+    /// Restarts from `state` with sensor errors `sensors` and the 1-sigma `sigma` after
+    /// `diverged` diverged ([`Self::diverged`]; a re-alignment in motion, [`sequencer`]):
+    /// nothing of its estimates is kept, only its counters go on.
+    pub fn restart_after(
+        state: NavState<T>,
+        sensors: SensorErrors<T>,
+        sigma: &InitialSigma<T>,
+        diverged: &AidedIns<T>,
+    ) -> Result<Self, FilterError> {
+        let mut ins = Self::new(state, sensors, sigma, *diverged.config())?;
+        ins.filter.take_counters_from(&diverged.filter);
+        Ok(ins)
+    }
+
+    /// True when the filter diverged beyond what its fixes can bring back
+    /// ([`ErrorFilter::diverged`]).
+    pub fn diverged(&self) -> bool {
+        self.filter.diverged()
+    }
+
     /// The start's position is a GNSS fix's: its error holds the receiver's declared
     /// correlated error ([`ErrorFilter::start_position_from_fix`]).
     pub fn start_position_from_fix(&mut self) {

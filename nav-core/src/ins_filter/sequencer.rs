@@ -27,6 +27,16 @@
 //! re-alignment starts it over (the level's span would cross it). Without fixes after the gap (a free-inertial run) the lost filter goes on, DEGRADED
 //! to the end. [`Realignments`] counts them, with the gap that caused the last one.
 //!
+//! A filter that diverged beyond what its fixes can bring back ([`AidedIns::diverged`]: DEGRADED
+//! by refusals, its own horizontal 1-sigma beyond the limit, the refused fixes one cluster that
+//! agrees among itself) is set aside the same way at the fix that showed it, and the run
+//! re-aligns in motion [Groves, ch. 17, re-initialisation]; but nothing it estimated is kept,
+//! the sensor errors included (a filter pulled off at rest took a gyro bias 3.6 sigma wrong from
+//! its first fixes and ran away on it): the samples are compensated, and the restarted filter's
+//! sensor errors known, as at the run's start (a given start's sensor errors and their 1-sigma,
+//! or the noise model's), the gyro bias found at rest if the level's span was still; only its
+//! counters go on ([`AidedIns::restart_after`]).
+//!
 //! The firmware's aided phase is not this sequencer but the navigator's split filter
 //! ([`crate::navigator`]), which starts from an IMU alignment at rest and has no start in
 //! motion: after a lost gap it stays DEGRADED to the end of the run.
@@ -100,11 +110,27 @@ pub struct FixCounters {
     pub for_start: u32,
 }
 
-/// Re-alignments in motion after gaps in the IMU data too long to bridge (module docs).
+/// Why a re-alignment began (module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RealignCause {
+    /// A gap in the IMU data too long to bridge.
+    #[default]
+    LostGap,
+    /// The filter diverged beyond what its fixes could bring back ([`AidedIns::diverged`]).
+    Diverged,
+}
+
+/// Re-alignments in motion after gaps in the IMU data too long to bridge, or after the
+/// filter diverged (module docs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Realignments {
-    /// Begun: a fix came after a lost gap, and the lost filter was set aside.
+    /// Begun: a fix came after a lost gap, or the filter diverged, and the lost filter was
+    /// set aside.
     pub begun: u32,
+    /// Of those, begun because the filter diverged.
+    pub diverged: u32,
+    /// Why the last one began.
+    pub last_cause: RealignCause,
     /// Started over by another lost gap during a re-alignment.
     pub started_over: u32,
     /// Completed: the filter navigates again.
@@ -133,6 +159,8 @@ struct SetAside<T: Scalar> {
     ins: AidedIns<T>,
     /// Lost time its covariance was not propagated over [s].
     unpropagated_s: T,
+    /// It diverged: none of its estimates is kept.
+    diverged: bool,
 }
 
 /// Fixes held until the first sample at or after their time tag (the rule of the module
@@ -313,12 +341,14 @@ impl<T: Scalar> Sequencer<T> {
     }
 
     /// The lost filter set aside while re-aligning (module docs): free-inertial since, its
-    /// status DEGRADED ([`super::FilterStatus::ImuLost`]); its counters are the run's so far.
+    /// status DEGRADED ([`super::FilterStatus::ImuLost`] after a lost gap,
+    /// [`super::FilterStatus::AidingRejected`] after a divergence); its counters are the
+    /// run's so far.
     pub fn lost_filter(&self) -> Option<&AidedIns<T>> {
         self.set_aside.as_ref().map(|s| &s.ins)
     }
 
-    /// True while re-aligning after a lost gap (module docs).
+    /// True while re-aligning after a lost gap or a divergence (module docs).
     pub fn realigning(&self) -> bool {
         self.set_aside.is_some()
     }
@@ -465,6 +495,16 @@ impl<T: Scalar> Sequencer<T> {
                 }
             }
         }
+        if self.ins.as_ref().is_some_and(AidedIns::diverged)
+            && let Some(ins) = self.ins.take()
+        {
+            // Nothing it estimated is kept: the samples are compensated as at the run's start.
+            self.sensors = match self.start {
+                Start::Given { sensors, .. } => sensors,
+                Start::Motion(_) => SensorErrors::default(),
+            };
+            self.set_aside(ins, T::zero(), RealignCause::Diverged, t_us);
+        }
         Ok(self.phase())
     }
 
@@ -475,9 +515,16 @@ impl<T: Scalar> Sequencer<T> {
             return;
         };
         self.sensors = *ins.sensor_errors();
+        self.set_aside(ins, unpropagated_s, RealignCause::LostGap, t_us);
+    }
+
+    /// The filter set aside and the start in motion begun, for `cause`.
+    fn set_aside(&mut self, ins: AidedIns<T>, unpropagated_s: T, cause: RealignCause, t_us: u64) {
+        let diverged = cause == RealignCause::Diverged;
         self.set_aside = Some(SetAside {
             ins,
             unpropagated_s,
+            diverged,
         });
         self.motion = Some(MotionAlign::new(
             self.realign,
@@ -485,6 +532,8 @@ impl<T: Scalar> Sequencer<T> {
         ));
         let r = &mut self.realignments;
         r.begun = r.begun.saturating_add(1);
+        r.diverged = r.diverged.saturating_add(u32::from(diverged));
+        r.last_cause = cause;
         r.begun_us = t_us;
     }
 
@@ -495,20 +544,32 @@ impl<T: Scalar> Sequencer<T> {
         sigma.accel_bias_mps2 = Vector3::repeat(n.accel_bias_mps2);
         sigma.gyro_scale = Vector3::repeat(n.gyro_scale);
         sigma.accel_scale = Vector3::repeat(n.accel_scale);
+        // After a divergence the sensors are known as at the run's start.
+        if let (Some(a), Start::Given { sigma: given, .. }) = (&self.set_aside, &self.start)
+            && a.diverged
+        {
+            sigma.gyro_bias_rad_s = given.gyro_bias_rad_s;
+            sigma.accel_bias_mps2 = given.accel_bias_mps2;
+            sigma.gyro_scale = given.gyro_scale;
+            sigma.accel_scale = given.accel_scale;
+        }
         let mut state = s.state;
         // From the fix's time to the current sample's.
         let d = state.v_eb_n * lag;
         state.position = state
             .position
             .offset_ned([d.x.to_f64(), d.y.to_f64(), d.z.to_f64()]);
-        // The gyro bias found at rest, combined with the noise model's (a first start only:
-        // a re-alignment's increments are already compensated by the lost filter's estimate).
-        let mut sensors = SensorErrors::default();
-        if let Some((b, s_rest)) = s.gyro_bias_at_rest.filter(|_| self.set_aside.is_none()) {
+        // The gyro bias found at rest, combined with the noise model's (a fresh start only:
+        // after a lost gap the increments are already compensated by the lost filter's
+        // estimate). The samples were compensated by `self.sensors`: the bias found is what
+        // is left.
+        let fresh = self.set_aside.as_ref().is_none_or(|a| a.diverged);
+        let mut sensors = self.sensors;
+        if let Some((b, s_rest)) = s.gyro_bias_at_rest.filter(|_| fresh) {
             for k in 0..3 {
                 let (p2, r2) = (sigma.gyro_bias_rad_s[k].powi(2), s_rest[k] * s_rest[k]);
                 if r2 > T::zero() && p2 > T::zero() {
-                    sensors.gyro_bias_rad_s[k] = b[k] * p2 / (p2 + r2);
+                    sensors.gyro_bias_rad_s[k] += b[k] * p2 / (p2 + r2);
                     sigma.gyro_bias_rad_s[k] = (p2 * r2 / (p2 + r2)).sqrt();
                 }
             }
@@ -516,6 +577,9 @@ impl<T: Scalar> Sequencer<T> {
         // Checked at construction: only the start's own values can fail here (not finite).
         let ins = match &mut self.set_aside {
             None => AidedIns::new(state, sensors, &sigma, self.config),
+            Some(lost) if lost.diverged => {
+                AidedIns::restart_after(state, sensors, &sigma, &lost.ins)
+            }
             Some(lost) => {
                 // Its covariance up to this sample; the lost time was never propagated.
                 lost.ins.propagate();
@@ -744,6 +808,70 @@ mod tests {
             assert_eq!(seq.filter().unwrap().status(), FilterStatus::Nominal);
             let (e, sigma) = error(&seq, 60.0);
             assert!(e < 3.0 * sigma, "{e} m against {sigma} m");
+        }
+
+        /// A gyro bias of 0.06 deg/s for the first 60 s, a hundred times the 1-sigma the filter
+        /// was given (a transient its model does not allow), and position fixes alone: the
+        /// filter drifts away from its fixes, which it refuses from 48 s on as a jump (a
+        /// gross cluster), and its error grows far faster than its own 1-sigma (kilometres
+        /// against tens of metres). Once DEGRADED by refusals with its horizontal 1-sigma
+        /// beyond the limit, it is set aside (its rows go on, DEGRADED) and the start in
+        /// motion re-aligns on the fixes: the filter navigates again (NAV) from the start's
+        /// sensor knowledge, its counters going on, within 3 sigma to the end. Was: every fix
+        /// refused to the end, 11 km off at 300 s against a 1-sigma of 600 m.
+        #[test]
+        fn a_filter_that_diverged_is_set_aside_and_realigned() {
+            let mut seq = sequencer();
+            let (mut set_aside, mut worst) = (None, 0.0f64);
+            for k in 1..=30_000u64 {
+                let t_us = k * DT_US;
+                if t_us.is_multiple_of(1_000_000) {
+                    seq.push_fix(GnssFixInput {
+                        velocity: None,
+                        ..fix(t_us / 1_000_000)
+                    });
+                }
+                let mut inc = increment();
+                if t_us <= 60_000_000 {
+                    inc.delta_theta_ib_b.x += 1e-3 * inc.dt;
+                }
+                seq.on_sample(t_us, &inc).unwrap();
+                if set_aside.is_none() && seq.realigning() {
+                    let lost = seq.lost_filter().unwrap();
+                    assert_eq!(lost.status(), FilterStatus::AidingRejected);
+                    assert!(lost.sigma(POS).x > 30.0, "{}", lost.sigma(POS));
+                    let (e, _) = {
+                        let p = position(t_us as f64 * 1e-6).ned_to(&lost.state().position);
+                        ((p[0] * p[0] + p[1] * p[1]).sqrt(), ())
+                    };
+                    assert!(e > 20.0 * lost.sigma(POS).x, "{e} m");
+                    set_aside = Some((t_us, lost.counters().position));
+                }
+                if seq.realignments().completed > 0 && t_us.is_multiple_of(1_000_000) {
+                    let ins = seq.filter().unwrap();
+                    assert_eq!(ins.status(), FilterStatus::Nominal);
+                    let (e, sigma) = error(&seq, t_us as f64 * 1e-6);
+                    worst = worst.max(e / sigma);
+                }
+            }
+            let (at_us, counters) = set_aside.expect("never set aside");
+            assert!((100_000_000..=200_000_000).contains(&at_us), "{at_us}");
+            let r = *seq.realignments();
+            assert_eq!(
+                (r.begun, r.diverged, r.completed, r.last_cause),
+                (1, 1, 1, RealignCause::Diverged),
+                "{r:?}"
+            );
+            assert!(r.navigating_us < at_us + 10_000_000, "{r:?}");
+            let ins = seq.filter().unwrap();
+            let c = ins.counters().position;
+            assert!(counters.rejected >= 100, "{counters}");
+            assert_eq!(c.rejected, counters.rejected, "{c}");
+            assert!(c.accepted > counters.accepted + 140, "{c}");
+            // The transient is over: nothing of it is left in the restarted filter.
+            let b = ins.sensor_errors().gyro_bias_rad_s.norm();
+            assert!(b < 1e-7, "{b} rad/s");
+            assert!(worst < 3.0, "{worst}");
         }
 
         /// Without fixes after a lost gap (free inertial) nothing re-aligns: the filter goes
