@@ -283,7 +283,9 @@ impl Args {
             (None, None) => {}
         }
         // The device's datasheet figures unless a grade is given.
-        run.noise = sensor_noise(&noise.unwrap_or(device.noise()));
+        let spec = noise.unwrap_or(device.noise());
+        run.noise = sensor_noise(&spec);
+        run.figures = spec.figures;
         Ok(Self {
             imu_path,
             out_path,

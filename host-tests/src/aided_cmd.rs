@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 /// The filter's noise model of a part's data-sheet figures (nav-core's defaults for what a
 /// data sheet lacks: [`nav_core::navigator::config::filter_noise_of`]).
 pub fn noise_of_spec(n: &NoiseSpec) -> FilterNoise<f64> {
-    nav_core::navigator::config::filter_noise_of(&crate::pipeline::sensor_noise(n))
+    nav_core::navigator::config::filter_noise_of(&crate::pipeline::sensor_noise(n), &n.figures)
 }
 
 /// The filter's assumptions for a grade: its white noise, and per axis the largest of the
@@ -38,23 +38,11 @@ pub fn noise_of_spec(n: &NoiseSpec) -> FilterNoise<f64> {
 /// on a straight flight the filter's heading walked with its bias estimate, 25-50 deg off
 /// after 900 s against a 16 deg 1-sigma, from a perfect IMU.
 pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {
-    let m = grade.model();
     let spec = grade.noise_spec();
-    let scale = |t: &crate::sensor_model::TriadErrors| t.scale.amax().max(1e-6);
     FilterNoise {
-        arw_rad_per_sqrt_s: spec.gyro_arw_rad_per_sqrt_s,
-        vrw_mps_per_sqrt_s: spec.accel_vrw_mps_per_sqrt_s,
         gyro_bias_rad_s: spec.gyro_bias_rad_s.max(1e-9),
         accel_bias_mps2: spec.accel_bias_mps2.max(1e-7),
-        gyro_scale: scale(&m.gyro),
-        accel_scale: scale(&m.accel),
-        correlation_time_s: FILTER_CORRELATION_TIME_S,
-        gyro_cross_coupling_rad: off_diagonal_rms(&m.gyro.misalignment),
-        accel_cross_coupling_rad: off_diagonal_rms(&m.accel.misalignment),
-        gyro_g_sensitivity: m.g_sensitivity_rad_s_per_m_s2.amax(),
-        // The bias instability is in the bias figure.
-        gyro_bias_instability_rad_s: 0.0,
-        gyro_bias_instability_time_s: 0.0,
+        ..noise_of_spec(&spec)
     }
 }
 

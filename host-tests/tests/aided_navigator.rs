@@ -94,7 +94,9 @@ fn truth_at(truth: &[Truth], t_s: f64) -> &Truth {
 /// Runs the recording and fixes aided in precision `T`: the log's text and the report.
 fn aided_log<T: Scalar>(dir: &Path, lever_arm_b_m: [f64; 3], name: &str) -> (String, Report) {
     let mut options = ReplayOptions::new(SITE[0], SITE[1], SITE[2], 15.0);
-    options.run.noise = sensor_noise(&Grade::Fog.noise_spec());
+    let spec = Grade::Fog.noise_spec();
+    options.run.noise = sensor_noise(&spec);
+    options.run.figures = spec.figures;
     options.run.aiding = Some(AidingConfig {
         antenna_lever_arm_b_m: lever_arm_b_m,
         ..AidingConfig::default()
@@ -327,6 +329,45 @@ fn bad_fixes_are_counted_and_bad_files_refused() {
     }
 }
 
+/// The FOG drive replayed with `--imu-noise fog` through the navigator's aided phase (as the
+/// firmware runs it) assumes the grade's own scale factors, misalignment and g-sensitivity
+/// (the grade has none: scale factors at a 1 ppm floor), not the defaults standing for what a
+/// MEMS data sheet lacks (0.1 deg of cross-axis coupling, 0.01 deg/s/g, 1000 ppm): the
+/// heading's 1-sigma stays the size of its error (RMS of error / 1-sigma from 0.5 to 2 after
+/// the first minute) and every value within the filter's sigma. Was: the defaults' g-sensitivity
+/// let the modelled heading drift at 36 deg/h, its 1-sigma several times the error (over a
+/// 1500 s FOG flight, yaw RMS error / 1-sigma 0.42, the 1-sigma grown to 1.4 deg against a
+/// 0.2 deg error).
+#[test]
+fn a_grades_own_figures_keep_the_heading_sigma_the_size_of_its_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sim = drive(600.0);
+    write_inputs(d, &sim, &GnssSimOptions::default());
+    let o = replay_aligned(d, "gnss.csv", &["--out", "log.csv"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let log = std::fs::read_to_string(d.join("log.csv")).unwrap();
+    let (worst, beyond3, n) = consistency(&log, &sim.truth);
+    assert!(
+        beyond3 * 100 <= n * 9,
+        "{beyond3} of {} values beyond 3 sigma",
+        n * 9
+    );
+    assert!(worst.iter().all(|z| *z < 5.0), "{worst:?}");
+    let z: Vec<f64> = rows(&log)
+        .iter()
+        .filter(|r| r.values[0] > 75.0)
+        .map(|r| z_scores(r, truth_at(&sim.truth, r.values[0]))[8])
+        .collect();
+    let rms = (z.iter().map(|x| x * x).sum::<f64>() / z.len() as f64).sqrt();
+    println!("yaw RMS error / 1-sigma {rms:.2}, worst |error / sigma| {worst:.2?}");
+    assert!(
+        z.len() > 1000 && (0.5..=2.0).contains(&rms),
+        "yaw RMS error / 1-sigma {rms:.2} over {} rows",
+        z.len()
+    );
+}
+
 /// A code receiver's time-correlated error declared on the navigator's aided phase (after the
 /// alignment, as the firmware runs it): the options' words through nav-core's
 /// `RunConfig::set` (the firmware's argument parser and `nav config`'s text) give the
@@ -355,7 +396,9 @@ fn a_declared_gnss_correlated_error_runs_after_the_alignment() {
     write_inputs(d, &sim, &gnss);
     // The firmware's words (its `Args::parse` hands every run option to `RunConfig::set`).
     let mut options = ReplayOptions::new(SITE[0], SITE[1], SITE[2], 15.0);
-    options.run.noise = sensor_noise(&Grade::Fog.noise_spec());
+    let spec = Grade::Fog.noise_spec();
+    options.run.noise = sensor_noise(&spec);
+    options.run.figures = spec.figures;
     for (name, value) in [
         ("gnss-lever-arm", "0.8,-0.3,-1.1"),
         ("gnss-correlated-time", "60"),

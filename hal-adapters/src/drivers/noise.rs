@@ -1,7 +1,10 @@
 //! Datasheet noise and bias figures of the supported parts, in SI: what alignment filters assume
 //! for their tuning and their 1-sigma.
 
-/// White noise densities and residual (in-run, after calibration) bias levels of a part.
+use nav_core::navigator::SensorFigures;
+
+/// White noise densities and residual (in-run, after calibration) bias levels of a part, and
+/// its other errors the aided filter models.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NoiseSpec {
     /// Gyro angle random walk (white rate noise density) [rad/sqrt(s)].
@@ -12,6 +15,9 @@ pub struct NoiseSpec {
     pub gyro_bias_rad_s: f64,
     /// Accelerometer bias 1-sigma per axis [m/s^2].
     pub accel_bias_mps2: f64,
+    /// Scale factors, cross-axis coupling and g-sensitivity ([`SensorFigures::DATASHEET`] for a
+    /// part whose data sheet's noise table gives none).
+    pub figures: SensorFigures,
 }
 
 const DEG: f64 = core::f64::consts::PI / 180.0;
@@ -25,6 +31,7 @@ pub const ADIS16505: NoiseSpec = NoiseSpec {
     accel_vrw_mps_per_sqrt_s: 0.04 / 60.0,
     gyro_bias_rad_s: 2.3 * DEG / 3600.0,
     accel_bias_mps2: 1e-4 * G,
+    figures: SensorFigures::DATASHEET,
 };
 
 /// ICM-42688-P: 2.8 mdps/sqrt(Hz), 70 ug/sqrt(Hz) (datasheet); turn-on biases 0.5 deg/s and
@@ -34,6 +41,7 @@ pub const ICM42688: NoiseSpec = NoiseSpec {
     accel_vrw_mps_per_sqrt_s: 70e-6 * G,
     gyro_bias_rad_s: 0.5 * DEG,
     accel_bias_mps2: 20e-3 * G,
+    figures: SensorFigures::DATASHEET,
 };
 
 /// BMI088: gyro 0.014 deg/s/sqrt(Hz), accelerometer 175 ug/sqrt(Hz), offsets 1 deg/s and 20 mg
@@ -43,15 +51,28 @@ pub const BMI088: NoiseSpec = NoiseSpec {
     accel_vrw_mps_per_sqrt_s: 175e-6 * G,
     gyro_bias_rad_s: DEG,
     accel_bias_mps2: 20e-3 * G,
+    figures: SensorFigures::DATASHEET,
 };
 
 /// The simulator's sensor grades (`nav sim --grade`, the host's `sensor_model::Grade`): the
 /// figures an alignment assumes for each, so the firmware can be told a recording's grade
 /// (`--imu-noise GRADE`). White-noise densities, and per axis the largest of the grade's fixed
-/// bias, turn-on 1-sigma and Gauss–Markov 1-sigma; the host's `Grade::noise_spec` derives the
-/// same numbers from its error models (a test compares them).
+/// bias, turn-on 1-sigma and Gauss–Markov 1-sigma; for the aided filter the largest scale
+/// factor of each triad (at least 1 ppm), the RMS of its six misalignment elements and the
+/// largest g-sensitivity. The host's `Grade::noise_spec` derives the same numbers from its
+/// error models (a test compares them).
 pub mod grade {
-    use super::{DEG, G, NoiseSpec};
+    use super::{DEG, G, NoiseSpec, SensorFigures};
+
+    /// A grade whose error model gives no scale factor, misalignment or g-sensitivity: scale
+    /// factors at the filter's floor of 1 ppm, none of the rest.
+    const NO_FIGURES: SensorFigures = SensorFigures {
+        gyro_scale: 1e-6,
+        accel_scale: 1e-6,
+        gyro_cross_coupling_rad: 0.0,
+        accel_cross_coupling_rad: 0.0,
+        gyro_g_sensitivity: 0.0,
+    };
 
     /// `fog`: 0.003 deg/s RMS at 400 Hz (1.5e-4 deg/s/sqrt(Hz)), 0.02 m/s^2 RMS at 400 Hz
     /// (1e-3 m/s^2/sqrt(Hz)), gyro bias 0.2 deg/h, accelerometer bias 0.005 m/s^2.
@@ -60,6 +81,7 @@ pub mod grade {
         accel_vrw_mps_per_sqrt_s: 0.02 / 20.0,
         gyro_bias_rad_s: 0.2 * DEG / 3600.0,
         accel_bias_mps2: 0.005,
+        figures: NO_FIGURES,
     };
 
     /// `rlg`: ARW 0.002 deg/sqrt(h), VRW 0.005 m/s/sqrt(h), gyro bias 0.01 deg/h,
@@ -69,6 +91,7 @@ pub mod grade {
         accel_vrw_mps_per_sqrt_s: 0.005 / 60.0,
         gyro_bias_rad_s: 0.01 * DEG / 3600.0,
         accel_bias_mps2: 0.1e-3 * G,
+        figures: NO_FIGURES,
     };
 
     /// `mems-tactical` (ADIS16505 class): ARW 0.13 deg/sqrt(h), VRW 0.04 m/s/sqrt(h), turn-on
@@ -78,6 +101,13 @@ pub mod grade {
         accel_vrw_mps_per_sqrt_s: 0.04 / 60.0,
         gyro_bias_rad_s: 0.05 * DEG,
         accel_bias_mps2: 1e-3 * G,
+        figures: SensorFigures {
+            gyro_scale: 300e-6,
+            accel_scale: 250e-6,
+            gyro_cross_coupling_rad: 0.001_543_079,
+            accel_cross_coupling_rad: 0.001_290_442_5,
+            gyro_g_sensitivity: (0.005 * DEG / G) as f32,
+        },
     };
 
     /// `mems-consumer` (ICM-42688-P class): 2.8 mdps/sqrt(Hz), 70 ug/sqrt(Hz), turn-on biases
@@ -87,6 +117,13 @@ pub mod grade {
         accel_vrw_mps_per_sqrt_s: 70e-6 * G,
         gyro_bias_rad_s: 0.5 * DEG,
         accel_bias_mps2: 20e-3 * G,
+        figures: SensorFigures {
+            gyro_scale: 0.005,
+            accel_scale: 0.005,
+            gyro_cross_coupling_rad: 0.008_029_779,
+            accel_cross_coupling_rad: 0.008_029_779,
+            gyro_g_sensitivity: (0.1 * DEG / G) as f32,
+        },
     };
 
     /// Every grade with a noise model, by its command-line name.

@@ -14,10 +14,10 @@ use core::fmt;
 use nav_core::alignment::SensorNoise;
 use nav_core::alignment::machine::{AlignMethod, BaseMotion, LeverArm, SettingsError};
 use nav_core::calibration::ImuCalibration;
-use nav_core::navigator::Setup;
 use nav_core::navigator::config::{
     ATTITUDES, AidingConfig, ConfigError, FRAMES, RunConfig, VERTICALS,
 };
+use nav_core::navigator::{SensorFigures, Setup};
 use nav_core::scalar::Scalar;
 
 /// The IMUs the board's drivers support.
@@ -336,8 +336,8 @@ fn check_noise_densities(noise: &SensorNoise<f64>) -> Result<(), ConfigRefusal> 
 }
 
 /// Payload length of a configuration frame [bytes] (201 in protocol version 1, before the
-/// GNSS correlated error).
-pub const CONFIG_LEN: usize = 233;
+/// GNSS correlated error; 233 in versions 2 to 4, before the IMU's other figures).
+pub const CONFIG_LEN: usize = 253;
 
 /// The aiding bits of a configuration frame: aiding on, scale-factor states, stop updates, a
 /// GNSS correlated error declared.
@@ -444,7 +444,15 @@ impl DeviceConfig {
         w.f64(a.gnss_correlated_time_s)?;
         w.u16(self.rates.raw_every)?;
         w.u16(self.rates.health_every)?;
-        w.u16(self.rates.align_progress_every)
+        w.u16(self.rates.align_progress_every)?;
+        let f = &r.figures;
+        w.f32s(&[
+            f.gyro_scale,
+            f.accel_scale,
+            f.gyro_cross_coupling_rad,
+            f.accel_cross_coupling_rad,
+            f.gyro_g_sensitivity,
+        ])
     }
 
     /// Reads a payload written by [`Self::write`] (not validated: [`Self::validate`] does).
@@ -486,6 +494,13 @@ impl DeviceConfig {
             health_every: r.u16().ok_or(short)?,
             align_progress_every: r.u16().ok_or(short)?,
         };
+        let [
+            gyro_scale,
+            accel_scale,
+            gyro_coupling,
+            accel_coupling,
+            g_sensitivity,
+        ] = r.f32s().ok_or(short)?;
         let mut run = RunConfig::new(
             lat_deg,
             lon_deg,
@@ -498,6 +513,13 @@ impl DeviceConfig {
                 accel_bias_mps2: accel_bias,
             },
         );
+        run.figures = SensorFigures {
+            gyro_scale,
+            accel_scale,
+            gyro_cross_coupling_rad: gyro_coupling,
+            accel_cross_coupling_rad: accel_coupling,
+            gyro_g_sensitivity: g_sensitivity,
+        };
         run.align_method = align_method;
         run.bias_prior = bias_prior;
         run.lever_arm = lever_arm;

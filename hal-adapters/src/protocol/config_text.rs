@@ -104,13 +104,19 @@ impl DeviceConfig {
                 self.imu_model =
                     ImuModel::from_name(value).ok_or(bad("adis16505, icm42688 or bmi088"))?;
                 run.noise = sensor_noise(&self.imu_model.noise());
+                run.figures = self.imu_model.noise().figures;
             }
             "imu-noise" => {
-                run.noise = sensor_noise(
-                    &grade::by_name(value)
-                        .ok_or(bad("fog, rlg, mems-tactical or mems-consumer"))?,
-                );
+                let spec =
+                    grade::by_name(value).ok_or(bad("fog, rlg, mems-tactical or mems-consumer"))?;
+                run.noise = sensor_noise(&spec);
+                run.figures = spec.figures;
             }
+            "gyro-scale-sigma" => run.figures.gyro_scale = number()? as f32,
+            "accel-scale-sigma" => run.figures.accel_scale = number()? as f32,
+            "gyro-cross-coupling-rad" => run.figures.gyro_cross_coupling_rad = number()? as f32,
+            "accel-cross-coupling-rad" => run.figures.accel_cross_coupling_rad = number()? as f32,
+            "gyro-g-sensitivity" => run.figures.gyro_g_sensitivity = number()? as f32,
             "gyro-arw-rad-per-sqrt-s" => run.noise.arw_rad_per_sqrt_s = number()?,
             "accel-vrw-mps-per-sqrt-s" => run.noise.vrw_mps_per_sqrt_s = number()?,
             "gyro-bias-rad-s" => run.noise.gyro_bias_rad_s = number()?,
@@ -140,13 +146,18 @@ impl DeviceConfig {
 }
 
 /// The keys of the IMU's noise figures.
-const NOISE_KEYS: [&str; 6] = [
+const NOISE_KEYS: [&str; 11] = [
     "imu-model",
     "imu-noise",
     "gyro-arw-rad-per-sqrt-s",
     "accel-vrw-mps-per-sqrt-s",
     "gyro-bias-rad-s",
     "accel-bias-mps2",
+    "gyro-scale-sigma",
+    "accel-scale-sigma",
+    "gyro-cross-coupling-rad",
+    "accel-cross-coupling-rad",
+    "gyro-g-sensitivity",
 ];
 
 /// The text keys a refusal is about (a host names the lines that set them).

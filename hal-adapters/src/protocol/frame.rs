@@ -16,7 +16,7 @@ extern crate std;
 /// The protocol's version: the first byte of every frame. 2: the configuration frame carries
 /// the GNSS correlated error (`docs/protocol.md`, changelog); a version-1 frame is refused by
 /// version, not misread.
-pub const VERSION: u8 = 4;
+pub const VERSION: u8 = 5;
 
 /// Header bytes before the payload: version, id, sequence number, payload length.
 pub const HEADER_LEN: usize = 6;

@@ -485,6 +485,54 @@ fn malformed_config_payloads_are_refused() {
 /// The GNSS correlated error travels in the frame: declared (1-sigma and time) or not (the
 /// default time), bit for bit; the text keys set it and a refusal of it names them (a time
 /// without the error is one); an unknown aiding bit is malformed.
+/// The IMU's figures beyond its noise (scale factors, cross-axis coupling, g-sensitivity) go
+/// with `imu-noise` and `imu-model` (a grade's own, a part's data-sheet defaults), each can be
+/// set by its key, they round-trip in the frame, and an aided configuration with one out of
+/// range (or a zero scale factor, a zero variance) is refused naming the keys. Before, the
+/// frame carried the four noise figures alone and the aided phase always assumed a MEMS data
+/// sheet's defaults: a FOG's heading 1-sigma grew several times its error.
+#[test]
+fn the_imus_other_figures_follow_its_noise_and_round_trip() {
+    use crate::drivers::noise::grade;
+    use nav_core::navigator::SensorFigures;
+    let mut c = DeviceConfig::default();
+    assert_eq!(c.run.figures, SensorFigures::DATASHEET);
+    c.apply_line("aiding = on").unwrap();
+    c.apply_line("imu-noise = mems-consumer").unwrap();
+    assert_eq!(c.run.figures, grade::MEMS_CONSUMER.figures);
+    c.apply_line("imu-noise = fog").unwrap();
+    assert_eq!(c.run.figures, grade::FOG.figures);
+    c.apply_line("gyro-g-sensitivity = 2e-5").unwrap();
+    c.apply_line("accel-cross-coupling-rad = 1e-3").unwrap();
+    assert_eq!(c.run.figures.gyro_g_sensitivity, 2e-5);
+    assert_eq!(c.run.figures.accel_cross_coupling_rad, 1e-3);
+    assert_eq!(c.validate(), Ok(()));
+    let m = Message::Config(c);
+    let mut payload = [0u8; 256];
+    let n = m.write_payload(&mut payload).unwrap();
+    assert_eq!(n, super::config::CONFIG_LEN);
+    assert_eq!(
+        Message::read_payload(MessageId::Config, &payload[..n]),
+        Ok(m)
+    );
+    let mut part = c;
+    part.apply_line("imu-model = bmi088").unwrap();
+    assert_eq!(part.run.figures, SensorFigures::DATASHEET);
+    for (line, key) in [
+        ("gyro-scale-sigma = 0", "gyro-scale-sigma"),
+        ("accel-scale-sigma = -1e-3", "accel-scale-sigma"),
+        ("gyro-cross-coupling-rad = 0.5", "gyro-cross-coupling-rad"),
+        // Beyond single precision: infinite as f32, refused as out of range.
+        ("gyro-g-sensitivity = 1e300", "gyro-g-sensitivity"),
+    ] {
+        let mut bad = c;
+        bad.apply_line(line).unwrap();
+        let r = bad.validate().unwrap_err();
+        assert_eq!(r.code(), ReasonCode::Aiding, "{line}: {r}");
+        assert!(keys_of(&r).any(|k| k == key), "{line}: {r}");
+    }
+}
+
 #[test]
 fn the_gnss_correlated_error_round_trips_and_its_keys_are_named() {
     let mut c = DeviceConfig::default();
@@ -553,15 +601,19 @@ fn a_version_1_config_frame_is_refused_by_its_version() {
     let m = Message::Config(DeviceConfig::default());
     let mut payload = [0u8; 256];
     let n = m.write_payload(&mut payload).unwrap();
-    // Version 1's layout: the same fields without the correlated error's 32 bytes at 195.
-    let old: Vec<u8> = [&payload[..195], &payload[227..n]].concat();
+    // Version 1's layout: the same fields without the correlated error's 32 bytes at 195 and
+    // the IMU's other figures' 20 at 233.
+    assert_eq!(n, 253);
+    let old: Vec<u8> = [&payload[..195], &payload[227..233]].concat();
     assert_eq!(old.len(), 201);
     for (version, want) in [
         (1, Refusal::Version(1)),
         // Version 2 had this config frame; its status frames lacked IMU_LOST.
         (2, Refusal::Version(2)),
-        // Version 3 had this config frame; its status frames lacked NEAR_POLE.
+        // Version 3 had version 4's config frame; its status frames lacked NEAR_POLE.
         (3, Refusal::Version(3)),
+        // Version 4's config frame lacked the IMU's other figures.
+        (4, Refusal::Version(4)),
         (
             VERSION,
             Refusal::Length {
@@ -581,7 +633,7 @@ fn a_version_1_config_frame_is_refused_by_its_version() {
         std::format!("{}", Refusal::Version(1)),
         std::format!("unknown protocol version 1 (this is {VERSION})")
     );
-    assert_eq!(VERSION, 4);
+    assert_eq!(VERSION, 5);
 }
 
 mod properties {

@@ -563,6 +563,7 @@ impl ReplayArgs {
             .imu_noise
             .map_or(self.device.noise(), |g| g.noise_spec());
         let run = RunConfig {
+            figures: noise.figures,
             align_method: self.align_method,
             bias_prior: self.bias_prior,
             lever_arm: match self.lever_arm {

@@ -66,7 +66,9 @@ impl Grade {
     }
 
     /// The figures an alignment filter assumes for this grade: white noise densities, and per
-    /// axis the largest of the fixed bias, the turn-on 1-sigma and the Gauss–Markov 1-sigma.
+    /// axis the largest of the fixed bias, the turn-on 1-sigma and the Gauss–Markov 1-sigma;
+    /// and the aided filter's other figures: the largest scale factor of each triad (at least
+    /// 1 ppm), the RMS of its misalignment's six elements, the largest g-sensitivity.
     pub fn noise_spec(self) -> hal_adapters::drivers::NoiseSpec {
         let m = self.model();
         let bias = |t: &super::TriadErrors| {
@@ -75,11 +77,20 @@ impl Grade {
                 .max(t.turn_on_bias_sigma.amax())
                 .max(t.bias_instability.sigma)
         };
+        let scale = |t: &super::TriadErrors| t.scale.amax().max(1e-6);
+        let coupling = |t: &super::TriadErrors| crate::aided_cmd::off_diagonal_rms(&t.misalignment);
         hal_adapters::drivers::NoiseSpec {
             gyro_arw_rad_per_sqrt_s: m.gyro.white_noise.density(),
             accel_vrw_mps_per_sqrt_s: m.accel.white_noise.density(),
             gyro_bias_rad_s: bias(&m.gyro),
             accel_bias_mps2: bias(&m.accel),
+            figures: nav_core::navigator::SensorFigures {
+                gyro_scale: scale(&m.gyro) as f32,
+                accel_scale: scale(&m.accel) as f32,
+                gyro_cross_coupling_rad: coupling(&m.gyro) as f32,
+                accel_cross_coupling_rad: coupling(&m.accel) as f32,
+                gyro_g_sensitivity: m.g_sensitivity_rad_s_per_m_s2.amax() as f32,
+            },
         }
     }
 
@@ -280,6 +291,25 @@ mod tests {
                     a > 0.0 && (a / b - 1.0).abs() < 1e-12,
                     "{g} {what}: {a} vs {b}"
                 );
+            }
+            let (h, t) = (host.figures, table.figures);
+            for (what, a, b) in [
+                ("gyro scale", h.gyro_scale, t.gyro_scale),
+                ("accel scale", h.accel_scale, t.accel_scale),
+                (
+                    "gyro coupling",
+                    h.gyro_cross_coupling_rad,
+                    t.gyro_cross_coupling_rad,
+                ),
+                (
+                    "accel coupling",
+                    h.accel_cross_coupling_rad,
+                    t.accel_cross_coupling_rad,
+                ),
+                ("g-sensitivity", h.gyro_g_sensitivity, t.gyro_g_sensitivity),
+            ] {
+                // Single precision: the table's literal and the model's value round alike.
+                assert_eq!(a, b, "{g} {what}");
             }
         }
         assert_eq!(grade::ALL.len(), Grade::ALL.len() - 1);

@@ -67,21 +67,60 @@ pub const VERTICALS: [(&str, VerticalChannel); 2] = [
     ("hold", VerticalChannel::Hold),
 ];
 
-/// The aided filter's noise model of an IMU's noise figures: its white noise and biases, the
-/// default scale-factor, correlation-time, cross-coupling and g-sensitivity figures below
-/// (the figures a data sheet's noise model lacks).
-pub fn filter_noise_of<T: Scalar>(n: &SensorNoise<f64>) -> FilterNoise<T> {
+/// An IMU's errors beyond its noise and biases ([`SensorNoise`]) that the aided filter models:
+/// scale factors as states, cross-axis coupling and g-sensitivity as consider states
+/// ([`crate::ins_filter::consider`]). A data sheet's noise table seldom gives them:
+/// [`Self::DATASHEET`] stands for what it lacks; a simulator grade gives its own (the
+/// grade's error model, `hal_adapters::drivers::noise::grade`). Single precision, as the
+/// configuration frame carries them: 1-sigma figures need no more, and a configuration read
+/// back from its frame is the one written.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SensorFigures {
+    /// Gyro scale-factor 1-sigma per axis [-].
+    pub gyro_scale: f32,
+    /// Accelerometer scale-factor 1-sigma per axis [-].
+    pub accel_scale: f32,
+    /// Gyro cross-axis coupling (misalignment) 1-sigma per element [rad].
+    pub gyro_cross_coupling_rad: f32,
+    /// Accelerometer cross-axis coupling 1-sigma per element [rad].
+    pub accel_cross_coupling_rad: f32,
+    /// Gyro g-sensitivity 1-sigma per element [rad/s per m/s^2].
+    pub gyro_g_sensitivity: f32,
+}
+
+impl SensorFigures {
+    /// What a data sheet's noise table lacks: [`DEFAULT_SCALE_SIGMA`],
+    /// [`DEFAULT_CROSS_COUPLING_RAD`] and [`DEFAULT_G_SENSITIVITY`] (a tactical MEMS part's).
+    pub const DATASHEET: Self = Self {
+        gyro_scale: DEFAULT_SCALE_SIGMA as f32,
+        accel_scale: DEFAULT_SCALE_SIGMA as f32,
+        gyro_cross_coupling_rad: DEFAULT_CROSS_COUPLING_RAD as f32,
+        accel_cross_coupling_rad: DEFAULT_CROSS_COUPLING_RAD as f32,
+        gyro_g_sensitivity: DEFAULT_G_SENSITIVITY as f32,
+    };
+}
+
+impl Default for SensorFigures {
+    /// [`Self::DATASHEET`].
+    fn default() -> Self {
+        Self::DATASHEET
+    }
+}
+
+/// The aided filter's noise model of an IMU's noise figures `n` and its other errors
+/// `figures`, with [`DEFAULT_CORRELATION_TIME_S`].
+pub fn filter_noise_of<T: Scalar>(n: &SensorNoise<f64>, figures: &SensorFigures) -> FilterNoise<T> {
     FilterNoise {
         arw_rad_per_sqrt_s: T::c(n.arw_rad_per_sqrt_s),
         vrw_mps_per_sqrt_s: T::c(n.vrw_mps_per_sqrt_s),
         gyro_bias_rad_s: T::c(n.gyro_bias_rad_s),
         accel_bias_mps2: T::c(n.accel_bias_mps2),
-        gyro_scale: T::c(DEFAULT_SCALE_SIGMA),
-        accel_scale: T::c(DEFAULT_SCALE_SIGMA),
+        gyro_scale: T::c(f64::from(figures.gyro_scale)),
+        accel_scale: T::c(f64::from(figures.accel_scale)),
         correlation_time_s: T::c(DEFAULT_CORRELATION_TIME_S),
-        gyro_cross_coupling_rad: T::c(DEFAULT_CROSS_COUPLING_RAD),
-        accel_cross_coupling_rad: T::c(DEFAULT_CROSS_COUPLING_RAD),
-        gyro_g_sensitivity: T::c(DEFAULT_G_SENSITIVITY),
+        gyro_cross_coupling_rad: T::c(f64::from(figures.gyro_cross_coupling_rad)),
+        accel_cross_coupling_rad: T::c(f64::from(figures.accel_cross_coupling_rad)),
+        gyro_g_sensitivity: T::c(f64::from(figures.gyro_g_sensitivity)),
         // A data sheet's noise figures give no correlation time: the bias instability is in
         // the bias figure.
         gyro_bias_instability_rad_s: T::zero(),
@@ -187,6 +226,9 @@ pub struct RunConfig {
     /// The IMU's noise the alignment assumes (white-noise densities and bias 1-sigmas), before
     /// [`Self::bias_prior`] scales its biases.
     pub noise: SensorNoise<f64>,
+    /// The IMU's other errors the aided filter models (set with [`Self::noise`]: the same
+    /// part's or grade's).
+    pub figures: SensorFigures,
     /// Scale of the noise's bias 1-sigmas [-] (1: as given; 0: biases compensated).
     pub bias_prior: f64,
     /// Where the IMU sits relative to the site: known (body FRD [m]) or an unknown prior.
@@ -223,6 +265,7 @@ impl RunConfig {
             align_method: AlignMethod::default(),
             align_seconds,
             noise,
+            figures: SensorFigures::DATASHEET,
             bias_prior: 1.0,
             lever_arm: LeverArm::Unknown {
                 sigma_m: DEFAULT_LEVER_ARM_SIGMA_M,
@@ -310,18 +353,24 @@ impl RunConfig {
                     "gnss-correlated-time needs gnss-correlated (the error it is the correlation time of)",
                 ));
             }
-            let n = &self.noise;
+            let (n, f) = (&self.noise, &self.figures);
             let figures = [
                 n.arw_rad_per_sqrt_s,
                 n.vrw_mps_per_sqrt_s,
                 n.gyro_bias_rad_s,
                 n.accel_bias_mps2,
+                f64::from(f.gyro_scale),
+                f64::from(f.accel_scale),
             ];
-            // A zero bias 1-sigma would leave the filter a zero variance (a covariance fault).
+            // A zero bias or scale-factor 1-sigma would leave the filter a zero variance (a
+            // covariance fault).
             if !figures.iter().all(|v| v.is_finite() && *v > 0.0) {
                 return Err(ConfigError::Aiding(
-                    "the aided filter needs positive, finite noise and bias figures",
+                    "the aided filter needs positive, finite noise, bias and scale-factor figures",
                 ));
+            }
+            if let Some(why) = limits::noise_out_of_range(&self.filter_noise::<f64>()) {
+                return Err(ConfigError::Aiding(why));
             }
         }
         Ok(())
@@ -329,10 +378,9 @@ impl RunConfig {
 
     /// The aided filter's noise model ([`FilterNoise`]): the run's white noise and bias
     /// 1-sigmas ([`Self::noise`], not scaled by [`Self::bias_prior`], which is the
-    /// alignment's), [`DEFAULT_SCALE_SIGMA`], [`DEFAULT_CORRELATION_TIME_S`],
-    /// [`DEFAULT_CROSS_COUPLING_RAD`] and [`DEFAULT_G_SENSITIVITY`].
+    /// alignment's), its other errors ([`Self::figures`]) and [`DEFAULT_CORRELATION_TIME_S`].
     pub fn filter_noise<T: Scalar>(&self) -> FilterNoise<T> {
-        filter_noise_of(&self.noise)
+        filter_noise_of(&self.noise, &self.figures)
     }
 
     /// The noise the alignment assumes: [`Self::noise`] with its biases scaled by
@@ -836,7 +884,27 @@ mod tests {
                     },
                     ..aided(AidingConfig::default())
                 },
-                "GNSS aiding: the aided filter needs positive, finite noise and bias figures",
+                "GNSS aiding: the aided filter needs positive, finite noise, bias and scale-factor figures",
+            ),
+            (
+                RunConfig {
+                    figures: SensorFigures {
+                        accel_scale: 0.0,
+                        ..SensorFigures::DATASHEET
+                    },
+                    ..aided(AidingConfig::default())
+                },
+                "GNSS aiding: the aided filter needs positive, finite noise, bias and scale-factor figures",
+            ),
+            (
+                RunConfig {
+                    figures: SensorFigures {
+                        gyro_g_sensitivity: 0.5,
+                        ..SensorFigures::DATASHEET
+                    },
+                    ..aided(AidingConfig::default())
+                },
+                "GNSS aiding: a cross-coupling or g-sensitivity 1-sigma must be 0 to 0.1 (rad, rad/s per m/s^2)",
             ),
         ] {
             assert_eq!(c.validate().unwrap_err().to_string(), msg);

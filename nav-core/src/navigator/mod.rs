@@ -102,6 +102,7 @@ pub use background::{
 };
 pub use config::{
     AIDED_COMPILED_IN, AidingConfig, ConfigError, MechanizationChoices, OptionError, RunConfig,
+    SensorFigures,
 };
 pub use foreground::{
     Counters, FlaggedCounts, ImuInput, NavError, Navigator, Step, Summary, Unusable,
