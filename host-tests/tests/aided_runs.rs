@@ -90,6 +90,22 @@ fn a_family_with_a_code_receivers_correlated_error_is_consistent() {
     }
 }
 
+/// Run `seed`, `seconds` long, of the consistency bench's code-receiver cell: the family's
+/// tactical MEMS land vehicle with 1 Hz positions and [`CODE_RECEIVER_CORRELATED`] simulated
+/// and declared.
+fn code_receiver_run(seed: u64, seconds: f64) -> Case {
+    let (sigma_ned_m, time_s) = CODE_RECEIVER_CORRELATED;
+    let mut case = family_case("land-vehicle", Grade::MemsTactical, 1.0, None);
+    case.seconds = seconds;
+    case.seed = seed;
+    case.gnss.seed = seed;
+    case.gnss.correlated = Some(CorrelatedError {
+        sigma_ned_m,
+        time_s,
+    });
+    case
+}
+
 /// A code receiver's correlated error drawn far in its tail at the start (seed 1548 of the
 /// consistency bench's cell: 2.2, 3.1 and 1.5 of its 1-sigma north, east, down, a normalised
 /// square beyond 16), with the tactical MEMS filter still at rest: the window's innovations
@@ -98,15 +114,8 @@ fn a_family_with_a_code_receivers_correlated_error_is_consistent() {
 /// with its biases unsettled and never took a fix again: 591 of 600 refused, 2 km off.
 #[test]
 fn a_correlated_error_drawn_in_its_tail_does_not_lock_the_fixes_out() {
-    let (sigma_ned_m, time_s) = CODE_RECEIVER_CORRELATED;
-    let mut case = family_case("land-vehicle", Grade::MemsTactical, 1.0, None);
-    case.seconds = 120.0;
-    case.seed = 1548;
-    case.gnss.seed = 1548;
-    case.gnss.correlated = Some(CorrelatedError {
-        sigma_ned_m,
-        time_s,
-    });
+    let case = code_receiver_run(1548, 120.0);
+    let sigma_ned_m = CODE_RECEIVER_CORRELATED.0;
     let prepared = prepare(&case).unwrap();
     let b0 = prepared.gnss.correlated_ned_m[0];
     let drawn: f64 = (0..3).map(|k| (b0[k] / sigma_ned_m[k]).powi(2)).sum();
@@ -137,16 +146,7 @@ fn a_correlated_error_drawn_in_its_tail_does_not_lock_the_fixes_out() {
 /// NEES within chi-square(9) at 99.9 % on nearly every epoch.
 #[test]
 fn a_filter_pulled_off_at_rest_realigns_once_it_diverged() {
-    let (sigma_ned_m, time_s) = CODE_RECEIVER_CORRELATED;
-    let mut case = family_case("land-vehicle", Grade::MemsTactical, 1.0, None);
-    case.seconds = 600.0;
-    case.seed = 1039;
-    case.gnss.seed = 1039;
-    case.gnss.correlated = Some(CorrelatedError {
-        sigma_ned_m,
-        time_s,
-    });
-    let r = run_case(&case).unwrap();
+    let r = run_case(&code_receiver_run(1039, 600.0)).unwrap();
     let a = r.realignments;
     assert_eq!((a.begun, a.diverged, a.completed), (1, 1, 1), "{a:?}");
     let fixes = r.accepted + r.rejected;

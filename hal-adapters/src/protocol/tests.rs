@@ -485,6 +485,20 @@ fn malformed_config_payloads_are_refused() {
 /// The GNSS correlated error travels in the frame: declared (1-sigma and time) or not (the
 /// default time), bit for bit; the text keys set it and a refusal of it names them (a time
 /// without the error is one); an unknown aiding bit is malformed.
+/// `config` validates, and its frame's payload, [`super::config::CONFIG_LEN`] bytes, reads
+/// back as it.
+fn assert_valid_config_round_trips(config: DeviceConfig) {
+    assert_eq!(config.validate(), Ok(()));
+    let m = Message::Config(config);
+    let mut payload = [0u8; 256];
+    let n = m.write_payload(&mut payload).unwrap();
+    assert_eq!(n, super::config::CONFIG_LEN);
+    assert_eq!(
+        Message::read_payload(MessageId::Config, &payload[..n]),
+        Ok(m)
+    );
+}
+
 /// The IMU's figures beyond its noise (scale factors, cross-axis coupling, g-sensitivity) go
 /// with `imu-noise` and `imu-model` (a grade's own, a part's data-sheet defaults), each can be
 /// set by its key, they round-trip in the frame, and an aided configuration with one out of
@@ -506,15 +520,7 @@ fn the_imus_other_figures_follow_its_noise_and_round_trip() {
     c.apply_line("accel-cross-coupling-rad = 1e-3").unwrap();
     assert_eq!(c.run.figures.gyro_g_sensitivity, 2e-5);
     assert_eq!(c.run.figures.accel_cross_coupling_rad, 1e-3);
-    assert_eq!(c.validate(), Ok(()));
-    let m = Message::Config(c);
-    let mut payload = [0u8; 256];
-    let n = m.write_payload(&mut payload).unwrap();
-    assert_eq!(n, super::config::CONFIG_LEN);
-    assert_eq!(
-        Message::read_payload(MessageId::Config, &payload[..n]),
-        Ok(m)
-    );
+    assert_valid_config_round_trips(c);
     let mut part = c;
     part.apply_line("imu-model = bmi088").unwrap();
     assert_eq!(part.run.figures, SensorFigures::DATASHEET);
@@ -558,15 +564,7 @@ fn the_gnss_correlated_error_round_trips_and_its_keys_are_named() {
         "{r}"
     );
     for config in [c, without] {
-        assert_eq!(config.validate(), Ok(()));
-        let m = Message::Config(config);
-        let mut payload = [0u8; 256];
-        let n = m.write_payload(&mut payload).unwrap();
-        assert_eq!(n, super::config::CONFIG_LEN);
-        assert_eq!(
-            Message::read_payload(MessageId::Config, &payload[..n]),
-            Ok(m)
-        );
+        assert_valid_config_round_trips(config);
     }
     let mut bad = c;
     bad.apply_line("gnss-correlated-time = 0.5").unwrap();
