@@ -143,7 +143,6 @@ pub fn filter_model_of(m: &crate::sensor_model::ImuErrorModel) -> GradeFilterMod
     };
     let (arw, gyro_in_run, gyro_start, gyro_short) = split(&m.gyro, true);
     let (vrw, accel_in_run, accel_start, _) = split(&m.accel, false);
-    let scale = |t: &crate::sensor_model::TriadErrors| Vector3::repeat(t.scale.amax().max(1e-6));
     GradeFilterModel {
         noise: FilterNoise {
             arw_rad_per_sqrt_s: arw,
@@ -159,7 +158,12 @@ pub fn filter_model_of(m: &crate::sensor_model::ImuErrorModel) -> GradeFilterMod
             gyro_bias_instability_rad_s: gyro_short.0,
             gyro_bias_instability_time_s: gyro_short.1,
         },
-        initial: [gyro_start, accel_start, scale(&m.gyro), scale(&m.accel)],
+        initial: [
+            gyro_start,
+            accel_start,
+            Vector3::repeat(m.gyro.scale_sigma()),
+            Vector3::repeat(m.accel.scale_sigma()),
+        ],
     }
 }
 

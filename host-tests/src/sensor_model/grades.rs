@@ -77,7 +77,6 @@ impl Grade {
                 .max(t.turn_on_bias_sigma.amax())
                 .max(t.bias_instability.sigma)
         };
-        let scale = |t: &super::TriadErrors| t.scale.amax().max(1e-6);
         let coupling = |t: &super::TriadErrors| crate::aided_cmd::off_diagonal_rms(&t.misalignment);
         hal_adapters::drivers::NoiseSpec {
             gyro_arw_rad_per_sqrt_s: m.gyro.white_noise.density(),
@@ -85,8 +84,8 @@ impl Grade {
             gyro_bias_rad_s: bias(&m.gyro),
             accel_bias_mps2: bias(&m.accel),
             figures: nav_core::navigator::SensorFigures {
-                gyro_scale: scale(&m.gyro) as f32,
-                accel_scale: scale(&m.accel) as f32,
+                gyro_scale: m.gyro.scale_sigma() as f32,
+                accel_scale: m.accel.scale_sigma() as f32,
                 gyro_cross_coupling_rad: coupling(&m.gyro) as f32,
                 accel_cross_coupling_rad: coupling(&m.accel) as f32,
                 gyro_g_sensitivity: m.g_sensitivity_rad_s_per_m_s2.amax() as f32,

@@ -124,6 +124,12 @@ pub struct TriadErrors {
 }
 
 impl TriadErrors {
+    /// The filter's scale-factor 1-sigma of this triad: its largest scale error, at least
+    /// 1 ppm (a zero variance would be a covariance fault) [-].
+    pub fn scale_sigma(&self) -> f64 {
+        self.scale.amax().max(1e-6)
+    }
+
     /// A perfect triad.
     pub const IDEAL: Self = Self {
         bias: Vector3::new(0.0, 0.0, 0.0),
