@@ -137,7 +137,8 @@ impl FilterCosts {
         use nav_core::navigator::ToBackground as M;
         match message {
             M::Propagate(_) => |c| &mut c.propagation,
-            M::Position { .. } | M::Velocity { .. } => |c| &mut c.gnss,
+            // A restart is a fix's work (a re-alignment's last fix).
+            M::Position { .. } | M::Velocity { .. } | M::Restart { .. } => |c| &mut c.gnss,
             M::Still { .. } => |c| &mut c.zero_motion,
             // Alignment increments have their own figures (the `align` task's log).
             M::Report { .. } | M::Align(_) => |c| &mut c.report,

@@ -3,7 +3,7 @@
 
 use hal_adapters::drivers::Health;
 use nav_core::alignment::{AlignMethod, AlignOutcome, LeverArm};
-use nav_core::ins_filter::sequencer::FixCounters;
+use nav_core::ins_filter::sequencer::{FixCounters, Realignments};
 use nav_core::navigator::{FilterReport, RunConfig};
 use nav_core::output::Solution;
 
@@ -117,7 +117,13 @@ pub fn gnss(fixes: u32, run: &RunConfig, filter_cap: usize) {
 /// Logs the filter's final report and the fixes' counts (the lines `nav replay --gnss`
 /// prints).
 #[inline(never)]
-pub fn filter(r: &FilterReport<f32>, fixes: &FixCounters, unused: u32, after_data: u32) {
+pub fn filter(
+    r: &FilterReport<f32>,
+    fixes: &FixCounters,
+    realignments: &Realignments,
+    unused: u32,
+    after_data: u32,
+) {
     let c = &r.counters;
     defmt::info!(
         "aided navigation: status {=str}, {=u32} covariance propagations, {=u32} covariance faults",
@@ -161,6 +167,25 @@ pub fn filter(r: &FilterReport<f32>, fixes: &FixCounters, unused: u32, after_dat
         unused,
         after_data
     );
+    // The figures of the harness's line (`host_tests::aided_cmd::realignment_line`).
+    let g = realignments;
+    if g.begun > 0 && g.completed == g.begun {
+        defmt::info!(
+            "re-aligned in motion {=u32} time(s) ({=u32} after a divergence, {=u32} started over by another lost gap): the filter navigates again from t = {=u64} us; from t = {=u64} us until then the rows are the set-aside solution's, DEGRADED",
+            g.completed,
+            g.diverged,
+            g.started_over,
+            g.navigating_us,
+            g.begun_us
+        );
+    } else if g.begun > 0 {
+        defmt::warn!(
+            "re-aligning in motion since t = {=u64} us ({=u32} begun, {=u32} completed): the rows since are the set-aside solution's, DEGRADED",
+            g.begun_us,
+            g.begun,
+            g.completed
+        );
+    }
     // The harness's warnings (`host_tests::aided_cmd::position_warning`), in its words.
     let p = &c.position;
     if p.accepted == 0 {

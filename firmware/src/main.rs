@@ -54,7 +54,6 @@ mod app {
     use hal_adapters::protocol::{Decoder, Message, Received};
     use nav_core::ImuIncrement;
     use nav_core::alignment::{AlignOutcome, Stage};
-    use nav_core::ins_filter::FilterStatus;
     use nav_core::navigator::{
         AIDED_COMPILED_IN, Background, FromBackground, NavError, Navigator, Setup, Step, Summary,
         ToBackground, Unusable,
@@ -293,7 +292,8 @@ mod app {
         let mut imu = ImuStats::default();
         let mut last_ready_us = 0_u64;
         // The recording's time of the last sample [us] (the qemu board's fix-file check).
-        #[cfg(feature = "qemu")]
+        // The last sample's time: the stream's clock (a recording's may jump over a gap in its
+        // data where the data-ready clock does not).
         let mut last_sample_us = 0_u64;
         loop {
             let Ok(msg) = samples_rx.recv().await else {
@@ -319,10 +319,7 @@ mod app {
                 }
             };
             last_ready_us = t_ready_us;
-            #[cfg(feature = "qemu")]
-            {
-                last_sample_us = sample.t_us;
-            }
+            last_sample_us = sample.t_us;
             // An early failure of the alignment (its success comes when awaited, below).
             if navigator.is_aligning()
                 && let Ok(answer) = from_background.try_recv()
@@ -454,7 +451,7 @@ mod app {
         }
         out.tele.health_frame(
             &mut out.out,
-            last_ready_us,
+            last_sample_us,
             nav,
             &imu.health,
             board_counters(),
@@ -496,7 +493,13 @@ mod app {
         let mut aided_per_sample = None;
         if AIDED_COMPILED_IN && let Some(filter) = &summary.filter {
             let after_data = gnss.as_ref().map_or(0, |(f, n)| f.remaining(*n));
-            log::filter(filter, &summary.fixes, c.fixes_unused, after_data);
+            log::filter(
+                filter,
+                &summary.fixes,
+                &summary.realignments,
+                c.fixes_unused,
+                after_data,
+            );
             let costs = cx.shared.costs.lock(|c| *c);
             aided_per_sample = Some(log_aided_costs(&aided, &costs, &summary));
         }
@@ -526,11 +529,7 @@ mod app {
         };
         NavigatorState {
             stage,
-            filter: navigator.is_aided().then(|| {
-                navigator
-                    .filter_report()
-                    .map_or(FilterStatus::Nominal, |r| r.status)
-            }),
+            filter: navigator.filter_status(),
             config,
         }
     }

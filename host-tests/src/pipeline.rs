@@ -13,7 +13,7 @@
 use hal_adapters::Imu;
 use hal_adapters::drivers::Health;
 use nav_core::alignment::{AlignMethod, AlignNote, AlignOutcome};
-use nav_core::ins_filter::sequencer::{FixCounters, GnssFixInput};
+use nav_core::ins_filter::sequencer::{FixCounters, GnssFixInput, Realignments};
 use nav_core::ins_filter::{FilterCounters, FilterStatus};
 use nav_core::navigator::{
     Background, ConfigError, FilterReport, FlaggedCounts, NavError, Navigator, Setup,
@@ -103,10 +103,18 @@ pub struct AidedOutcome {
     pub fixes_unused: u32,
     /// Fixes of the file after the last sample (never handed over).
     pub fixes_after_data: u32,
+    /// Re-alignments in motion after a lost IMU gap or a divergence.
+    pub realignments: Realignments,
 }
 
 impl AidedOutcome {
-    fn new<T: Scalar>(r: &FilterReport<T>, fixes: FixCounters, unused: u32, after: u32) -> Self {
+    fn new<T: Scalar>(
+        r: &FilterReport<T>,
+        fixes: FixCounters,
+        realignments: Realignments,
+        unused: u32,
+        after: u32,
+    ) -> Self {
         let wide = |v: &nav_core::Vector3<T>| [v.x, v.y, v.z].map(T::to_f64);
         Self {
             sigma_ned_m: wide(&r.sigma_ned_m),
@@ -118,6 +126,7 @@ impl AidedOutcome {
             fixes,
             fixes_unused: unused,
             fixes_after_data: after,
+            realignments,
         }
     }
 }
@@ -322,6 +331,7 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
             AidedOutcome::new(
                 &r,
                 summary.fixes,
+                summary.realignments,
                 c.fixes_unused,
                 u32::try_from(next_fix.count()).unwrap_or(u32::MAX),
             )

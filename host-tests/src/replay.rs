@@ -429,7 +429,8 @@ pub fn replay_aided_cli(
         );
         let position = crate::aided_cmd::position_warning(&a.counters.position, &unused);
         let velocity = crate::aided_cmd::velocity_warning(&a.counters.velocity);
-        for w in position.into_iter().chain(velocity) {
+        let realigned = crate::aided_cmd::realignment_line(&a.realignments);
+        for w in realigned.into_iter().chain(position).chain(velocity) {
             println!("{w}");
         }
     }

@@ -1495,6 +1495,87 @@ fn firmware_refuses_fixes_on_another_clock_and_warns_of_unused_ones() {
     );
 }
 
+/// 6 s of IMU records lost at 30 s of the aided drive (1 Hz fixes): in the
+/// firmware as in the harness, the aided phase is DEGRADED (IMU_LOST) from the gap, the
+/// first fix after it sets the filter aside, the fixes after it re-align it in motion, and it
+/// navigates again (NAV); the firmware's rows are the harness's line for line, its stream's
+/// health frames say DEGRADED with IMU_LOST in between and NAV at the end, and its log says
+/// it re-aligned. Was: DEGRADED to the end of the run in the firmware.
+#[test]
+fn firmware_realigns_after_a_lost_gap_like_the_harness() {
+    use host_tests::gnss_sim::GnssSimOptions;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    aided_drive(
+        d,
+        60.0,
+        &GnssSimOptions {
+            sigma_v_ned_m_s: Some([0.05, 0.05, 0.1]),
+            // 1 Hz: the re-alignment's fixes span health frames.
+            rate_hz: 1.0,
+            ..aided_receiver()
+        },
+    );
+    let mut rec = recording_io::read(&d.join("rec.bin")).unwrap();
+    rec.records.drain(12_000..14_400);
+    std::fs::write(d.join("rec.bin"), rec.to_bytes().unwrap()).unwrap();
+    let options = ["--imu-noise", "fog", "--gnss-lever-arm", "0.8,-0.3,-1.1"];
+    let mut args = vec!["--gnss", "gnss.bin", "--stream", "fw.bin"];
+    args.extend_from_slice(&options);
+    args.extend_from_slice(&["rec.bin", "fw.csv", "45", "7.5", "250", "15"]);
+    let (code, log) = run_firmware_at(d, &args, 3);
+    assert_eq!(code, 0, "firmware exit code {code}; log:\n{log}");
+    assert_eq!(field(&log, "missed"), 0, "missed data-ready interrupts");
+    assert_eq!(field(&log, "channel overruns"), 0, "channel overruns");
+    assert!(
+        log.contains("re-aligned in motion 1 time(s) (0 after a divergence, 0 started over"),
+        "{log}"
+    );
+    let o = replay_like_the_firmware(d, &options);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        stdout.contains("re-aligned in motion 1 time(s) after IMU data lost beyond the bridge"),
+        "{stdout}"
+    );
+    let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
+    let host = std::fs::read_to_string(d.join("host.csv")).unwrap();
+    assert_same_lines(&fw, &host);
+    // Rows: NAV to the gap, DEGRADED from it to the restart, NAV from there to the end.
+    let statuses: Vec<(f64, &str)> = host
+        .lines()
+        .filter(|l| !l.starts_with('#') && l.contains(','))
+        .filter_map(|l| Some((l.split(',').next()?.parse().ok()?, l.rsplit(',').next()?)))
+        .collect();
+    let degraded: Vec<f64> = statuses
+        .iter()
+        .filter(|(_, s)| *s == "DEGRADED")
+        .map(|(t, _)| *t)
+        .collect();
+    assert!(!degraded.is_empty(), "{host}");
+    assert!(
+        degraded[0] > 35.9 && degraded[degraded.len() - 1] < 42.0,
+        "{degraded:?}"
+    );
+    assert!(
+        statuses
+            .iter()
+            .all(|(t, s)| *s == "NAV" || (*t >= degraded[0] && *t <= degraded[degraded.len() - 1])),
+        "{statuses:?}"
+    );
+    assert_eq!(statuses.last().unwrap().1, "NAV");
+    let health = health_frames(&stream_messages(&d.join("fw.bin")));
+    assert!(
+        health
+            .iter()
+            .any(|h| h.status == NavStatus::Degraded && h.flags.contains(StatusFlags::IMU_LOST)),
+        "{health:?}"
+    );
+    let last = health.last().unwrap();
+    assert_eq!(last.status, NavStatus::Nav, "{last:?}");
+    assert!(!last.flags.contains(StatusFlags::IMU_LOST), "{last:?}");
+}
+
 /// The aided runs' receiver: 5 Hz fixes of 0.5/0.5/1 m, the antenna at 0.8, -0.3, -1.1 m.
 fn aided_receiver() -> host_tests::gnss_sim::GnssSimOptions {
     host_tests::gnss_sim::GnssSimOptions {

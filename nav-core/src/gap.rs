@@ -12,11 +12,11 @@
 //! [`FilterStatus::ImuLost`](crate::ins_filter::FilterStatus::ImuLost), from the first sample
 //! after the gap). Its position is carried across the gap at the velocity before it, and the
 //! filter's covariance takes [`GapDynamics`] over the whole gap at once
-//! ([`crate::ins_filter::LostGap`]), so that the lost solution's 1-sigma still tells its error. The sequencer of an aided run re-aligns in motion on the GNSS fixes after
-//! it and restarts the filter with the sensor errors it had estimated
-//! ([`crate::ins_filter::sequencer`]); without fixes, and in the navigator's aided phase (the
-//! firmware's, which has no start in motion, [`crate::navigator`]), it stays degraded to the
-//! end of the run.
+//! ([`crate::ins_filter::LostGap`]), so that the lost solution's 1-sigma still tells its error.
+//! An aided run (the sequencer, [`crate::ins_filter::sequencer`], and the navigator's aided
+//! phase, the firmware's, [`crate::navigator`]) re-aligns in motion on the GNSS fixes after
+//! it and restarts the filter with the sensor errors it had estimated; without fixes it stays
+//! degraded to the end of the run.
 //!
 //! **A clock that steps back.** A sample whose time is not after the last navigated one's is
 //! out of order ([`GapDetector::out_of_order`]): its increment is real, but its time is not,

@@ -38,6 +38,7 @@ pub mod integrity;
 pub mod limits;
 pub mod model;
 pub mod motion;
+pub mod restart;
 pub mod sequencer;
 pub mod states;
 pub mod stationarity;
@@ -52,6 +53,7 @@ pub use consider::GnssCorrelatedError;
 pub use foreground::{AidedMechanization, Bridged, Events, LostGap, Propagation};
 use model::FilterNoise;
 use nalgebra::{Matrix3, Vector3};
+use restart::Restart;
 pub use states::{ATT, BA, BG, Covariance, InitialSigma, N, POS, SA, SG, StateVector, VEL};
 use stationarity::StationarityConfig;
 
@@ -253,9 +255,9 @@ pub enum FilterStatus {
     /// The covariance lost a positive variance (it has been reset to its diagonal).
     CovarianceFault,
     /// A gap in the IMU data was too long to bridge ([`crate::gap::MAX_BRIDGED_S`]): the
-    /// solution is lost for the rest of this filter's run (the sequencer re-aligns in motion
-    /// on the fixes after it and restarts a filter, [`sequencer`]; the navigator's aided phase
-    /// does not, [`crate::navigator`]).
+    /// solution is lost for the rest of this filter's run (the sequencer and the navigator's
+    /// aided phase re-align in motion on the fixes after it and restart a filter,
+    /// [`sequencer`], [`crate::navigator`]).
     ImuLost,
     /// The solution came within [`model::MIN_POLE_DISTANCE_M`] of a pole's axis, or so near
     /// one that the NED frame turned faster than [`model::MAX_NED_FRAME_RATE_RAD_S`]
@@ -303,60 +305,29 @@ impl<T: Scalar> AidedIns<T> {
         Ok(Self { mech, filter })
     }
 
-    /// Restarts from `state` with the 1-sigma `sigma` of its position, velocity and attitude
-    /// after a gap in the IMU data too long to bridge destroyed `lost`'s solution (a
-    /// re-alignment in motion, [`sequencer`]): `lost`'s sensor-error estimates are compensated
-    /// from the start, and their covariance kept, grown over the `elapsed_s` [s] since
-    /// `lost`'s last propagation ([`ErrorFilter::take_sensors_from`]); the sensor fields of
-    /// `sigma` are only checked (the noise model's figures pass). The counters go on.
-    pub fn resume(
-        state: NavState<T>,
-        sigma: &InitialSigma<T>,
-        lost: &AidedIns<T>,
-        elapsed_s: T,
+    /// Starts in motion as `start` says ([`restart`]), in place of `replaced` (`None` at the
+    /// run's first start): after a lost gap its sensor estimates and their covariance go on,
+    /// after a divergence only its counters.
+    pub fn start(
+        start: &Restart<T>,
+        config: FilterConfig<T>,
+        replaced: Option<&AidedIns<T>>,
     ) -> Result<Self, FilterError> {
-        let mut ins = Self::new(state, *lost.sensor_errors(), sigma, *lost.config())?;
-        ins.filter.take_sensors_from(&lost.filter, elapsed_s);
-        ins.mech.allow_for(ins.filter.uncertainty());
-        Ok(ins)
-    }
-
-    /// Restarts from `state` with sensor errors `sensors` and the 1-sigma `sigma` after
-    /// `diverged` diverged ([`Self::diverged`]; a re-alignment in motion, [`sequencer`]):
-    /// nothing of its estimates is kept, only its counters go on.
-    pub fn restart_after(
-        state: NavState<T>,
-        sensors: SensorErrors<T>,
-        sigma: &InitialSigma<T>,
-        diverged: &AidedIns<T>,
-    ) -> Result<Self, FilterError> {
-        let mut ins = Self::new(state, sensors, sigma, *diverged.config())?;
-        ins.filter.take_counters_from(&diverged.filter);
-        Ok(ins)
+        let mut mech = AidedMechanization::new(start.state, start.sensors, &config)?;
+        let filter = start.filter(
+            config,
+            replaced.map(|r| &r.filter),
+            mech.state(),
+            mech.gravity(),
+        )?;
+        mech.allow_for(filter.uncertainty());
+        Ok(Self { mech, filter })
     }
 
     /// True when the filter diverged beyond what its fixes can bring back
     /// ([`ErrorFilter::diverged`]).
     pub fn diverged(&self) -> bool {
         self.filter.diverged()
-    }
-
-    /// The start's position is a GNSS fix's: its error holds the receiver's declared
-    /// correlated error ([`ErrorFilter::start_position_from_fix`]).
-    pub fn start_position_from_fix(&mut self) {
-        self.filter.start_position_from_fix();
-    }
-
-    /// The start's level was found from the accelerometers, within the span's mean
-    /// acceleration of 1-sigma `acceleration_sigma_mps2` [m/s^2]: its tilt error is the
-    /// accelerometer-bias error's ([`ErrorFilter::level_on_accelerometers`]); the stop
-    /// detector allows for the covariance that leaves.
-    pub fn level_on_accelerometers(&mut self, acceleration_sigma_mps2: T) {
-        let c_b_n = self.mech.state().q_b_n.to_rotation_matrix().into_inner();
-        let g = self.mech.gravity();
-        self.filter
-            .level_on_accelerometers(&c_b_n, g, acceleration_sigma_mps2);
-        self.mech.allow_for(self.filter.uncertainty());
     }
 
     /// The navigation solution (NED frame).

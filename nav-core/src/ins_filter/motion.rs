@@ -49,6 +49,7 @@
 //! turns.
 
 use super::aiding::{GnssPosition, GnssVelocity};
+use super::model::FilterNoise;
 use super::states::InitialSigma;
 use crate::earth::LocalEarth;
 use crate::{ImuIncrement, NavState, Position, Scalar, attitude};
@@ -129,6 +130,20 @@ impl<T: Scalar> Default for MotionAlignConfig<T> {
             accel_bias_mps2: T::c(0.02),
             gyro_bias_rad_s: T::c(0.5f64.to_radians()),
             arw_rad_per_sqrt_s: T::c(0.17f64.to_radians() / 60.0),
+        }
+    }
+}
+
+impl<T: Scalar> MotionAlignConfig<T> {
+    /// The settings of a re-alignment in motion of a run that did not start in motion (a
+    /// given start's, the navigator's alignment at rest): the defaults, with the noise
+    /// model's angle random walk and its accelerometer bias when larger.
+    pub fn for_realignment(noise: &FilterNoise<T>) -> Self {
+        let d = Self::default();
+        Self {
+            accel_bias_mps2: d.accel_bias_mps2.max(noise.accel_bias_mps2),
+            arw_rad_per_sqrt_s: noise.arw_rad_per_sqrt_s,
+            ..d
         }
     }
 }

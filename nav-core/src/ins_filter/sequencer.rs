@@ -37,12 +37,14 @@
 //! or the noise model's), the gyro bias found at rest if the level's span was still; only its
 //! counters go on ([`AidedIns::restart_after`]).
 //!
-//! The firmware's aided phase is not this sequencer but the navigator's split filter
-//! ([`crate::navigator`]), which starts from an IMU alignment at rest and has no start in
-//! motion: after a lost gap it stays DEGRADED to the end of the run.
+//! The divergence is checked after the GNSS updates of a sample. The firmware's aided phase is
+//! not this sequencer but the navigator's split filter ([`crate::navigator`]), started from an
+//! IMU alignment at rest; it re-aligns by the same rule, with the same start in motion and
+//! restart ([`super::restart`]), to the same result (a navigator test checks it to the bit).
 
 use super::aiding::{AidResult, GnssPosition, GnssVelocity};
 use super::motion::{MotionAlign, MotionAlignConfig, MotionStart};
+use super::restart::{Carried, Restart};
 use super::{AidedIns, FilterConfig, FilterError, InitialSigma, SensorErrors};
 use crate::gap::ImuGap;
 use crate::gap::{GapCounters, GapDetector};
@@ -146,7 +148,7 @@ pub struct Realignments {
 }
 
 impl Realignments {
-    fn cause<T: Scalar>(&mut self, gap: &ImuGap<T>, end_us: u64) {
+    pub(crate) fn cause<T: Scalar>(&mut self, gap: &ImuGap<T>, end_us: u64) {
         self.gap_us = (gap.lost_s.to_f64() * 1e6) as u64;
         self.gap_end_us = end_us;
     }
@@ -225,6 +227,12 @@ impl<T: Scalar> FixQueue<T> {
         self.queue[slot] = Some(fix);
         self.last_fix_us = Some(fix.t_us);
         true
+    }
+
+    /// Counts a fix used by a start in motion or a re-alignment.
+    pub(crate) fn count_for_start(&mut self) {
+        let n = &mut self.counters.for_start;
+        *n = n.saturating_add(1);
     }
 
     /// The oldest fix due at the sample ending at `t_us` [us] (its time tag at or before it),
@@ -314,14 +322,7 @@ impl<T: Scalar> Sequencer<T> {
         };
         let realign = match start {
             Start::Motion(m) => m,
-            Start::Given { .. } => {
-                let d = MotionAlignConfig::<T>::default();
-                MotionAlignConfig {
-                    accel_bias_mps2: d.accel_bias_mps2.max(config.noise.accel_bias_mps2),
-                    arw_rad_per_sqrt_s: config.noise.arw_rad_per_sqrt_s,
-                    ..d
-                }
-            }
+            Start::Given { .. } => MotionAlignConfig::for_realignment(&config.noise),
         };
         Ok(Self {
             config,
@@ -484,8 +485,7 @@ impl<T: Scalar> Sequencer<T> {
                     k += 1;
                 }
                 None => {
-                    let n = &mut self.fixes.counters.for_start;
-                    *n = n.saturating_add(1);
+                    self.fixes.count_for_start();
                     let found = self.motion.as_mut().and_then(|m| {
                         m.add_fix(fix.t_us as f64 * 1e-6, &fix.position, fix.velocity.as_ref())
                     });
@@ -495,7 +495,10 @@ impl<T: Scalar> Sequencer<T> {
                 }
             }
         }
-        if self.ins.as_ref().is_some_and(AidedIns::diverged)
+        // Checked after the GNSS updates (the navigator's aided phase hears it with their
+        // answers).
+        if k > 0
+            && self.ins.as_ref().is_some_and(AidedIns::diverged)
             && let Some(ins) = self.ins.take()
         {
             // Nothing it estimated is kept: the samples are compensated as at the run's start.
@@ -538,57 +541,27 @@ impl<T: Scalar> Sequencer<T> {
     }
 
     fn start_in_motion(&mut self, s: MotionStart<T>, lag: T, t_us: u64) {
-        let n = &self.config.noise;
-        let mut sigma = s.sigma;
-        sigma.gyro_bias_rad_s = Vector3::repeat(n.gyro_bias_rad_s);
-        sigma.accel_bias_mps2 = Vector3::repeat(n.accel_bias_mps2);
-        sigma.gyro_scale = Vector3::repeat(n.gyro_scale);
-        sigma.accel_scale = Vector3::repeat(n.accel_scale);
-        // After a divergence the sensors are known as at the run's start.
-        if let (Some(a), Start::Given { sigma: given, .. }) = (&self.set_aside, &self.start)
-            && a.diverged
-        {
-            sigma.gyro_bias_rad_s = given.gyro_bias_rad_s;
-            sigma.accel_bias_mps2 = given.accel_bias_mps2;
-            sigma.gyro_scale = given.gyro_scale;
-            sigma.accel_scale = given.accel_scale;
-        }
-        let mut state = s.state;
-        // From the fix's time to the current sample's.
-        let d = state.v_eb_n * lag;
-        state.position = state
-            .position
-            .offset_ned([d.x.to_f64(), d.y.to_f64(), d.z.to_f64()]);
-        // The gyro bias found at rest, combined with the noise model's (a fresh start only:
-        // after a lost gap the increments are already compensated by the lost filter's
-        // estimate). The samples were compensated by `self.sensors`: the bias found is what
-        // is left.
-        let fresh = self.set_aside.as_ref().is_none_or(|a| a.diverged);
-        let mut sensors = self.sensors;
-        if let Some((b, s_rest)) = s.gyro_bias_at_rest.filter(|_| fresh) {
-            for k in 0..3 {
-                let (p2, r2) = (sigma.gyro_bias_rad_s[k].powi(2), s_rest[k] * s_rest[k]);
-                if r2 > T::zero() && p2 > T::zero() {
-                    sensors.gyro_bias_rad_s[k] += b[k] * p2 / (p2 + r2);
-                    sigma.gyro_bias_rad_s[k] = (p2 * r2 / (p2 + r2)).sqrt();
-                }
-            }
-        }
-        // Checked at construction: only the start's own values can fail here (not finite).
-        let ins = match &mut self.set_aside {
-            None => AidedIns::new(state, sensors, &sigma, self.config),
-            Some(lost) if lost.diverged => {
-                AidedIns::restart_after(state, sensors, &sigma, &lost.ins)
-            }
+        let given = match &self.start {
+            Start::Given { sigma, .. } => Some(sigma),
+            Start::Motion(_) => None,
+        };
+        let (carried, sensors) = match &mut self.set_aside {
+            None => (Carried::Nothing, self.sensors),
+            Some(lost) if lost.diverged => (Carried::Counters, self.sensors),
             Some(lost) => {
                 // Its covariance up to this sample; the lost time was never propagated.
                 lost.ins.propagate();
-                AidedIns::resume(state, &sigma, &lost.ins, lost.unpropagated_s)
+                let unpropagated_s = lost.unpropagated_s;
+                (
+                    Carried::Sensors { unpropagated_s },
+                    *lost.ins.sensor_errors(),
+                )
             }
         };
-        if let Ok(mut ins) = ins {
-            ins.start_position_from_fix();
-            ins.level_on_accelerometers(s.level_acceleration_mps2);
+        let start = Restart::plan(&s, lag, &self.config, sensors, given, carried);
+        // Checked at construction: only the start's own values can fail here (not finite).
+        let replaced = self.set_aside.as_ref().map(|a| &a.ins);
+        if let Ok(ins) = AidedIns::start(&start, self.config, replaced) {
             self.ins = Some(ins);
             self.motion = None;
             if self.set_aside.take().is_some() {
@@ -601,7 +574,7 @@ impl<T: Scalar> Sequencer<T> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn fix(t_us: u64) -> GnssFixInput<f64> {
@@ -619,7 +592,7 @@ mod tests {
 
     /// A land vehicle driving east at 10 m/s, level, at 45 deg N: its IMU at 100 Hz (Earth
     /// rate, transport rate and Coriolis in), 1 Hz fixes of position and velocity.
-    mod drive {
+    pub(crate) mod drive {
         use super::*;
         use crate::ins_filter::{FilterStatus, POS};
         use crate::{Position, attitude, earth};
@@ -642,22 +615,27 @@ mod tests {
             }
         }
 
-        /// The sample's increment: body forward = east, right = south.
-        fn increment() -> ImuIncrement<f64> {
-            let (omega, r) = (7.292_115e-5, 6_388_838.0 + H);
-            let (s, c) = (LAT.sin(), LAT.cos());
-            let w_in = Vector3::new(omega * c + V_E / r, 0.0, -omega * s - V_E * s / c / r);
-            let w = Vector3::new(2.0 * omega * c + V_E / r, 0.0, -2.0 * omega * s);
-            let w = w + Vector3::new(0.0, 0.0, -V_E * s / c / r);
-            let g = earth::normal_gravity(LAT, H);
-            let f_n = Vector3::new(-w.z * V_E, 0.0, w.x * V_E - g);
+        /// The increment over `dt` [s] of a level body driving east at `v_e` [m/s] at latitude
+        /// `lat` [rad], height `h` [m]: body forward = east, right = south.
+        pub(crate) fn east_increment(lat: f64, h: f64, v_e: f64, dt: f64) -> ImuIncrement<f64> {
+            let (omega, r) = (7.292_115e-5, 6_388_838.0 + h);
+            let (s, c) = (lat.sin(), lat.cos());
+            let w_in = Vector3::new(omega * c + v_e / r, 0.0, -omega * s - v_e * s / c / r);
+            let w = Vector3::new(2.0 * omega * c + v_e / r, 0.0, -2.0 * omega * s);
+            let w = w + Vector3::new(0.0, 0.0, -v_e * s / c / r);
+            let g = earth::normal_gravity(lat, h);
+            let f_n = Vector3::new(-w.z * v_e, 0.0, w.x * v_e - g);
             let to_b = |n: Vector3<f64>| Vector3::new(n.y, -n.x, n.z);
-            let dt = DT_US as f64 * 1e-6;
             ImuIncrement {
                 delta_theta_ib_b: to_b(w_in) * dt,
                 delta_v_ib_b: to_b(f_n) * dt,
                 dt,
             }
+        }
+
+        /// The sample's increment.
+        fn increment() -> ImuIncrement<f64> {
+            east_increment(LAT, H, V_E, DT_US as f64 * 1e-6)
         }
 
         fn fix(t_s: u64) -> GnssFixInput<f64> {

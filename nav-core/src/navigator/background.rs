@@ -4,10 +4,13 @@
 
 use super::config::AIDED_COMPILED_IN;
 use super::setup::Setup;
+use crate::NavState;
 use crate::Scalar;
 use crate::alignment::{AlignFailure, AlignOutcome, AlignSettings, Aligner, Progress, Stage};
 use crate::increment::ImuIncrement;
+use crate::ins_filter::restart::Restart;
 use crate::ins_filter::stationarity::StillWindow;
+use crate::ins_filter::stationarity::Uncertainty;
 use crate::ins_filter::{
     Correction, ErrorFilter, FilterConfig, FilterCounters, FilterError, FilterStatus, GnssPosition,
     GnssVelocity, InitialSigma, POS, Propagation, Snapshot, VEL,
@@ -52,6 +55,17 @@ pub enum ToBackground<T: Scalar> {
         snapshot: Snapshot<T>,
         /// The window.
         window: StillWindow<T>,
+    },
+    /// A re-alignment in motion found its start ([`crate::ins_filter::restart`]): the filter
+    /// restarts from it in place of the one set aside (its covariance brought up to the
+    /// sample first), taking over what [`Restart::carried`] says.
+    Restart {
+        /// The start.
+        start: Restart<T>,
+        /// Its state as the foreground's new mechanization took it.
+        mech_state: NavState<T>,
+        /// Gravity at its position [m/s^2].
+        gravity_mps2: T,
     },
     /// The filter's 1-sigmas and status for a row, the attitude's at heading `yaw_rad` [rad].
     Report {
@@ -114,9 +128,19 @@ pub enum FromBackground<T: Scalar> {
     },
     /// The alignment is done but the filter cannot start from its outcome.
     FilterFailed(FilterError),
-    /// An update's outcome: the estimate to feed back (`None`: the measurement was refused,
-    /// counted in the filter's counters).
-    Updated(Option<Correction<T>>),
+    /// An update's outcome.
+    Updated {
+        /// The estimate to feed back (`None`: the measurement was refused, counted in the
+        /// filter's counters).
+        correction: Option<Correction<T>>,
+        /// After a GNSS update: the filter has diverged beyond what its fixes can bring back
+        /// ([`ErrorFilter::diverged`]; the foreground sets it aside and re-aligns in motion).
+        diverged: bool,
+    },
+    /// The filter restarted ([`ToBackground::Restart`]): the stop detector's allowance
+    /// ([`Uncertainty`]), or `None` when the start was refused (not finite): the filter set
+    /// aside goes on.
+    Restarted(Option<Uncertainty<T>>),
     /// The filter's report ([`ToBackground::Report`]).
     Report(FilterReport<T>),
 }
@@ -143,6 +167,23 @@ pub fn initial_sigma<T: Scalar>(
         accel_bias_mps2: Vector3::repeat(n.accel_bias_mps2),
         gyro_scale: Vector3::repeat(n.gyro_scale),
         accel_scale: Vector3::repeat(n.accel_scale),
+    }
+}
+
+/// A GNSS update's answer: `update`'s correction, and whether the filter has diverged after it.
+fn gnss_updated<T: Scalar>(
+    filter: Option<&mut ErrorFilter<T>>,
+    update: impl FnOnce(&mut ErrorFilter<T>) -> Option<Correction<T>>,
+) -> FromBackground<T> {
+    match filter {
+        Some(f) => FromBackground::Updated {
+            correction: update(f),
+            diverged: f.diverged(),
+        },
+        None => FromBackground::Updated {
+            correction: None,
+            diverged: false,
+        },
     }
 }
 
@@ -216,19 +257,32 @@ impl<T: Scalar> Background<T> {
                 snapshot,
                 fix,
                 lag_s,
-            } => Some(FromBackground::Updated(
-                filter.and_then(|f| f.position(&snapshot, &fix, lag_s).1),
-            )),
+            } => Some(gnss_updated(filter, |f| {
+                f.position(&snapshot, &fix, lag_s).1
+            })),
             ToBackground::Velocity {
                 snapshot,
                 fix,
                 lag_s,
-            } => Some(FromBackground::Updated(
-                filter.and_then(|f| f.velocity(&snapshot, &fix, lag_s).1),
-            )),
-            ToBackground::Still { snapshot, window } => Some(FromBackground::Updated(
-                filter.and_then(|f| f.zero_motion(&snapshot, &window).2),
-            )),
+            } => Some(gnss_updated(filter, |f| {
+                f.velocity(&snapshot, &fix, lag_s).1
+            })),
+            ToBackground::Still { snapshot, window } => Some(FromBackground::Updated {
+                correction: filter.and_then(|f| f.zero_motion(&snapshot, &window).2),
+                diverged: false,
+            }),
+            ToBackground::Restart {
+                start,
+                mech_state,
+                gravity_mps2,
+            } => Some(FromBackground::Restarted(filter.and_then(|f| {
+                let config = self.filter_config?;
+                let restarted = start.filter(config, Some(f), &mech_state, gravity_mps2);
+                restarted.ok().map(|r| {
+                    *f = r;
+                    f.uncertainty()
+                })
+            }))),
             ToBackground::Report { yaw_rad } => match filter {
                 Some(f) => Some(FromBackground::Report(FilterReport::of(f, yaw_rad))),
                 // Not reached: the foreground asks only once the filter runs.

@@ -10,7 +10,11 @@ use crate::alignment::{AlignFailure, AlignMethod, AlignOutcome};
 use crate::calibration::ImuCompensation;
 use crate::gap::{GapCounters, GapDetector, ImuGap};
 use crate::increment::{ImuIncrement, InputError, InputLimits};
-use crate::ins_filter::sequencer::{FixCounters, FixQueue, GnssFixInput};
+use crate::ins_filter::motion::{MotionAlign, MotionAlignConfig};
+use crate::ins_filter::restart::{Carried, Restart};
+use crate::ins_filter::sequencer::{
+    FixCounters, FixQueue, GnssFixInput, RealignCause, Realignments,
+};
 use crate::ins_filter::stationarity::StillWindow;
 use crate::ins_filter::{
     AidedMechanization, FilterConfig, FilterError, FilterStatus, GnssVelocity, Propagation,
@@ -339,6 +343,8 @@ pub struct Summary<T: Scalar> {
     pub filter: Option<FilterReport<T>>,
     /// The GNSS fixes' counters of the aided phase.
     pub fixes: FixCounters,
+    /// The aided phase's re-alignments in motion (after a lost gap or a divergence).
+    pub realignments: Realignments,
 }
 
 impl<T: Scalar> Summary<T> {
@@ -373,6 +379,39 @@ enum FixStage<T: Scalar> {
     Position(GnssFixInput<T>, T),
     /// The velocity update is next (the position's correction fed back).
     Velocity(GnssVelocity<T>, T),
+    /// Re-aligning: the fix (with its lag [s]) goes to the start in motion.
+    ForStart(GnssFixInput<T>, T),
+    /// Re-aligning: the start is found; the filter restarts from it next.
+    Restart(Restart<T>),
+    /// The restart is asked for; the new mechanization starts from it with the answer.
+    Restarting(Restart<T>),
+}
+
+/// The aided phase's re-alignment in motion (the sequencer's rule,
+/// [`crate::ins_filter::sequencer`]): after a gap in the IMU data too long to bridge, at the
+/// first fix after it, or once the filter diverged, the filter is set aside (it goes on
+/// free-inertial, fixes withheld, its rows DEGRADED) and the fixes and samples go to a start in
+/// motion; once level and heading are known, the filter restarts from it.
+struct Realign<T: Scalar> {
+    /// The start in motion's settings.
+    settings: MotionAlignConfig<T>,
+    /// The antenna's position from the IMU, body FRD [m].
+    lever_arm_b_m: Vector3<T>,
+    /// Lost time since a lost gap, before the first fix after it [s] (`Some`: lost).
+    lost_s: Option<T>,
+    /// Under way.
+    under_way: Option<UnderWay<T>>,
+    counters: Realignments,
+}
+
+/// A re-alignment under way.
+struct UnderWay<T: Scalar> {
+    motion: MotionAlign<T>,
+    /// The sensor errors the start's samples are compensated with.
+    sensors: SensorErrors<T>,
+    /// Lost time the filter set aside did not propagate over [s].
+    unpropagated_s: T,
+    cause: RealignCause,
 }
 
 /// When the current aided sample's row is due.
@@ -400,6 +439,8 @@ struct Work<T: Scalar> {
     /// The fix queue may hold fixes due at this sample.
     fixes_due: bool,
     fix: FixStage<T>,
+    /// A GNSS update of this sample found the filter diverged.
+    diverged: bool,
     row: RowStage,
 }
 
@@ -410,6 +451,7 @@ impl<T: Scalar> Work<T> {
         propagation: None,
         fixes_due: false,
         fix: FixStage::Idle,
+        diverged: false,
         row: RowStage::None,
     };
 
@@ -427,6 +469,8 @@ impl<T: Scalar> Work<T> {
 enum Awaiting {
     /// An update's ([`FromBackground::Updated`]).
     Update,
+    /// A restart's ([`FromBackground::Restarted`]).
+    Restart,
     /// The report ([`FromBackground::Report`]).
     Report,
 }
@@ -463,11 +507,14 @@ pub struct Navigator<T: Scalar> {
     awaiting: Option<Awaiting>,
     /// The filter's last report.
     report: Option<FilterReport<T>>,
+    /// Re-alignments in motion.
+    realign: Realign<T>,
 }
 
 impl<T: Scalar> Navigator<T> {
     /// The foreground of a run of `setup`, at the start of the alignment.
     pub fn new(setup: &Setup<T>) -> Self {
+        let aided = setup.filter.filter(|_| super::config::AIDED_COMPILED_IN);
         Self {
             compensation: setup.compensation,
             limits: setup.limits,
@@ -489,6 +536,15 @@ impl<T: Scalar> Navigator<T> {
             work: Work::NONE,
             awaiting: None,
             report: None,
+            realign: Realign {
+                settings: aided
+                    .map(|f| MotionAlignConfig::for_realignment(&f.noise))
+                    .unwrap_or_default(),
+                lever_arm_b_m: aided.map_or_else(Vector3::zeros, |f| f.antenna_lever_arm_b_m),
+                lost_s: None,
+                under_way: None,
+                counters: Realignments::default(),
+            },
         }
     }
 
@@ -551,7 +607,7 @@ impl<T: Scalar> Navigator<T> {
             if matches!(self.phase, Phase::Aligning) {
                 self.counters.alignment_gaps.add(gap);
             }
-            self.bridge(gap);
+            self.bridge(gap, input.t_us);
         }
         match &mut self.phase {
             Phase::Navigating(nav) => {
@@ -605,6 +661,9 @@ impl<T: Scalar> Navigator<T> {
                 return Step::Rejected(e);
             }
         };
+        if let Some(u) = &mut self.realign.under_way {
+            u.motion.add_imu(&u.sensors.compensate(inc));
+        }
         self.counters.nav_steps += 1;
         self.last_step_us = t_us;
         let row_due = self.counters.nav_steps.is_multiple_of(self.log_every);
@@ -614,6 +673,7 @@ impl<T: Scalar> Navigator<T> {
             propagation: events.propagation,
             fixes_due: true,
             fix: FixStage::Idle,
+            diverged: false,
             row: if row_due {
                 RowStage::Due(t_us)
             } else {
@@ -674,12 +734,23 @@ impl<T: Scalar> Navigator<T> {
                 }))
             }
             FromBackground::FilterFailed(e) => Err(self.fail(NavError::Filter(e))),
-            FromBackground::Updated(correction) => {
+            FromBackground::Updated {
+                correction,
+                diverged,
+            } => {
                 if self.awaiting == Some(Awaiting::Update) {
                     self.awaiting = None;
+                    self.work.diverged |= diverged;
                     if let (Some(c), Phase::Aided(mech)) = (correction, &mut self.phase) {
                         mech.apply(&c);
                     }
+                }
+                Ok(None)
+            }
+            FromBackground::Restarted(allowance) => {
+                if self.awaiting == Some(Awaiting::Restart) {
+                    self.awaiting = None;
+                    self.restarted(allowance);
                 }
                 Ok(None)
             }
@@ -715,7 +786,8 @@ impl<T: Scalar> Navigator<T> {
     /// every message before the next sample (the firmware sends them over its channel; the
     /// harness hands them over in line, [`Self::push_inline`]).
     pub fn next_message(&mut self) -> Option<ToBackground<T>> {
-        if self.awaiting.is_some() {
+        // Without the aided filter there is no aided phase: the constant leaves its work out.
+        if self.awaiting.is_some() || !super::config::AIDED_COMPILED_IN {
             return None;
         }
         let Phase::Aided(mech) = &mut self.phase else {
@@ -742,11 +814,81 @@ impl<T: Scalar> Navigator<T> {
                     if !w.fixes_due {
                         break;
                     }
-                    match self.fixes.pop_due(w.t_us) {
-                        Some((fix, lag)) => w.fix = FixStage::Position(fix, lag),
-                        None => w.fixes_due = false,
+                    let Some((fix, lag)) = self.fixes.pop_due(w.t_us) else {
+                        w.fixes_due = false;
+                        if core::mem::take(&mut w.diverged) {
+                            let r = &mut self.realign;
+                            r.begin(
+                                SensorErrors::default(),
+                                T::zero(),
+                                RealignCause::Diverged,
+                                w.t_us,
+                            );
+                        }
+                        continue;
+                    };
+                    if let Some(lost_s) = self.realign.lost_s.take() {
+                        let sensors = *mech.sensor_errors();
+                        self.realign
+                            .begin(sensors, lost_s, RealignCause::LostGap, w.t_us);
                     }
+                    w.fix = match self.realign.under_way {
+                        Some(_) => FixStage::ForStart(fix, lag),
+                        None => FixStage::Position(fix, lag),
+                    };
                 }
+                FixStage::ForStart(fix, lag_s) => {
+                    self.fixes.count_for_start();
+                    w.fix = FixStage::Idle;
+                    let Some(u) = &mut self.realign.under_way else {
+                        continue;
+                    };
+                    let t_s = fix.t_us as f64 * 1e-6;
+                    let Some(found) = u.motion.add_fix(t_s, &fix.position, fix.velocity.as_ref())
+                    else {
+                        continue;
+                    };
+                    let Some(config) = self.filter else { continue };
+                    let (carried, sensors) = match u.cause {
+                        RealignCause::LostGap => (
+                            Carried::Sensors {
+                                unpropagated_s: u.unpropagated_s,
+                            },
+                            *mech.sensor_errors(),
+                        ),
+                        RealignCause::Diverged => (Carried::Counters, u.sensors),
+                    };
+                    let start = Restart::plan(&found, lag_s, &config, sensors, None, carried);
+                    w.fix = FixStage::Restart(start);
+                }
+                FixStage::Restart(start) => {
+                    // The covariance set aside brought up to the sample first, when its
+                    // sensor block is carried.
+                    if matches!(start.carried, Carried::Sensors { .. })
+                        && let Some(p) = mech.flush()
+                    {
+                        return Some(ToBackground::Propagate(p));
+                    }
+                    let Some(config) = self.filter else {
+                        w.fix = FixStage::Idle;
+                        continue;
+                    };
+                    // Built here for the state as it takes it, again with the answer.
+                    let Ok(new) = AidedMechanization::new(start.state, start.sensors, &config)
+                    else {
+                        w.fix = FixStage::Idle;
+                        continue;
+                    };
+                    w.fix = FixStage::Restarting(start);
+                    self.awaiting = Some(Awaiting::Restart);
+                    return Some(ToBackground::Restart {
+                        start,
+                        mech_state: *new.state(),
+                        gravity_mps2: new.gravity(),
+                    });
+                }
+                // Not reached: the answer is awaited first.
+                FixStage::Restarting(_) => return None,
                 FixStage::Position(fix, lag_s) => {
                     // The covariance brought up to the sample first.
                     if let Some(p) = mech.flush() {
@@ -892,6 +1034,7 @@ impl<T: Scalar> Navigator<T> {
                 alignment,
                 filter: self.report,
                 fixes: *self.fixes.counters(),
+                realignments: self.realign.counters,
             }),
             // Navigating implies both (the aligned row is logged at the hand-over).
             _ => Err(ended_during_alignment),
@@ -932,6 +1075,35 @@ impl<T: Scalar> Navigator<T> {
         }
     }
 
+    /// The aided phase's re-alignments in motion so far.
+    pub fn realignments(&self) -> &Realignments {
+        &self.realign.counters
+    }
+
+    /// True while the aided phase re-aligns in motion (the filter set aside, its rows
+    /// DEGRADED).
+    pub fn realigning(&self) -> bool {
+        self.realign.under_way.is_some()
+    }
+
+    /// The aided phase's filter status (`None` outside it): the last report's, but from the
+    /// first sample after a gap too long to bridge, before a report has said so,
+    /// [`FilterStatus::ImuLost`], and while re-aligning the filter set aside's (DEGRADED:
+    /// [`FilterStatus::ImuLost`] after a lost gap, by refusals after a divergence).
+    pub fn filter_status(&self) -> Option<FilterStatus> {
+        if !self.is_aided() || !super::config::AIDED_COMPILED_IN {
+            return None;
+        }
+        let reported = self.report.map_or(FilterStatus::Nominal, |r| r.status);
+        let r = &self.realign;
+        Some(match (r.lost_s, &r.under_way) {
+            (Some(_), _) => FilterStatus::ImuLost,
+            (None, Some(u)) if u.cause == RealignCause::LostGap => FilterStatus::ImuLost,
+            (None, Some(_)) if reported == FilterStatus::Nominal => FilterStatus::AidingRejected,
+            _ => reported,
+        })
+    }
+
     /// The filter's last report (aided phase).
     pub fn filter_report(&self) -> Option<&FilterReport<T>> {
         self.report.as_ref()
@@ -959,16 +1131,46 @@ impl<T: Scalar> Navigator<T> {
     /// Integrates the time lost before the current sample, navigating ([`crate::gap`]): free
     /// inertial, the strapdown over the interpolated rates; aided, the filter's mechanization,
     /// which widens the covariance. Counted in [`Counters::gaps`].
-    fn bridge(&mut self, gap: &ImuGap<T>) {
+    fn bridge(&mut self, gap: &ImuGap<T>, t_us: u64) {
         match &mut self.phase {
             Phase::Navigating(nav) => {
                 nav.restart_increments();
                 gap.integrate(|inc| nav.step(inc));
             }
-            Phase::Aided(mech) => mech.bridge(gap),
+            Phase::Aided(mech) => {
+                mech.bridge(gap);
+                if super::config::AIDED_COMPILED_IN && !gap.bridged() {
+                    self.realign.lost(gap, t_us);
+                }
+            }
             _ => return,
         }
         self.counters.gaps.add(gap);
+    }
+
+    /// The filter restarted ([`FromBackground::Restarted`]): the new mechanization from the
+    /// start, with the stop detector's allowance; refused, the filter set aside goes on.
+    fn restarted(&mut self, allowance: Option<crate::ins_filter::stationarity::Uncertainty<T>>) {
+        let FixStage::Restarting(start) = self.work.fix else {
+            return;
+        };
+        if !super::config::AIDED_COMPILED_IN {
+            return;
+        }
+        self.work.fix = FixStage::Idle;
+        let (Some(u), Some(config)) = (allowance, self.filter) else {
+            return;
+        };
+        // Built before the message from the same values: it does not fail here.
+        let Ok(mut mech) = AidedMechanization::new(start.state, start.sensors, &config) else {
+            return;
+        };
+        mech.allow_for(u);
+        self.phase = Phase::Aided(mech);
+        let r = &mut self.realign;
+        r.under_way = None;
+        r.counters.completed = r.counters.completed.saturating_add(1);
+        r.counters.navigating_us = self.work.t_us;
     }
 
     fn restart_increments(&mut self) {
@@ -999,6 +1201,47 @@ impl<T: Scalar> Navigator<T> {
         self.counters.rows += 1;
         self.last_row = Some(row);
         row
+    }
+}
+
+impl<T: Scalar> Realign<T> {
+    /// A gap too long to bridge ended at `t_us` [us]: lost until the next fix; during a
+    /// re-alignment, it starts over (the level's span would cross the gap).
+    fn lost(&mut self, gap: &ImuGap<T>, t_us: u64) {
+        match &mut self.under_way {
+            None => self.lost_s = Some(self.lost_s.unwrap_or_else(T::zero) + gap.lost_s),
+            Some(u) => {
+                u.unpropagated_s += gap.lost_s;
+                u.motion = MotionAlign::new(self.settings, self.lever_arm_b_m);
+                let c = &mut self.counters;
+                c.started_over = c.started_over.saturating_add(1);
+            }
+        }
+        self.counters.cause(gap, t_us);
+    }
+
+    /// The filter is set aside at `t_us` [us] for `cause`; the start in motion begins,
+    /// its samples compensated with `sensors`.
+    fn begin(
+        &mut self,
+        sensors: SensorErrors<T>,
+        unpropagated_s: T,
+        cause: RealignCause,
+        t_us: u64,
+    ) {
+        self.under_way = Some(UnderWay {
+            motion: MotionAlign::new(self.settings, self.lever_arm_b_m),
+            sensors,
+            unpropagated_s,
+            cause,
+        });
+        let c = &mut self.counters;
+        c.begun = c.begun.saturating_add(1);
+        c.diverged = c
+            .diverged
+            .saturating_add(u32::from(cause == RealignCause::Diverged));
+        c.last_cause = cause;
+        c.begun_us = t_us;
     }
 }
 

@@ -67,26 +67,29 @@
 //! [`Navigator::end_of_data`] asks for the last step's row and report. Fixes handed over
 //! outside the aided phase count in [`Counters::fixes_unused`].
 //!
-//! A gap in the IMU data too long to bridge ([`crate::gap::MAX_BRIDGED_S`]) leaves the aided
-//! phase DEGRADED (IMU_LOST) to the end of the run, even with fixes after it: the sequencer's
-//! re-alignment in motion ([`crate::ins_filter::sequencer`], `nav replay` from a given start or
-//! in motion) is not this navigator's. Its aided phase starts only from an IMU alignment at
-//! rest at the given site and takes fixes only in that phase (others count in
-//! [`Counters::fixes_unused`]); it has no in-motion start ([`MotionAlign`]) to feed, the
-//! covariance whose sensor block a restart keeps lives in the background task, which no
-//! message restarts, and the status protocol has no stage for a re-alignment in motion (its
-//! ALIGN stages are the IMU alignment's). Re-aligning there means those three (a foreground
-//! start in motion, a restart message keeping the sensor block, a protocol stage) and the
-//! harness-firmware bit-identity of the QEMU runs checked again; until then the honest
-//! DEGRADED stays. Its filter goes on taking the fixes after the gap from the covariance the
-//! gap widened ([`crate::ins_filter::LostGap`]: position carried at the last velocity,
-//! attitude doubt up to 1 rad per axis), so the solution returns to the fixes, still flagged.
+//! The aided phase re-aligns in motion as the sequencer does ([`crate::ins_filter::sequencer`],
+//! the same rule and the same code: [`MotionAlign`], [`Restart`]), after a gap in the IMU data
+//! too long to bridge ([`crate::gap::MAX_BRIDGED_S`]: DEGRADED, IMU_LOST, from the first sample
+//! after it) at the first fix after it, or once a GNSS update's answer says the filter diverged
+//! ([`FromBackground::Updated`]`::diverged`, checked after the sample's fixes): the filter is
+//! set aside (its mechanization and covariance go on free-inertial, fixes withheld, its rows
+//! and [`Navigator::filter_status`] DEGRADED) and the foreground feeds the fixes and the
+//! samples to a start in motion; once level and heading are known it sends
+//! [`ToBackground::Restart`] (after the propagation so far when the sensor block is kept), the
+//! background restarts the filter from the start with what [`Restart::carried`] says (after a
+//! lost gap the sensor errors' estimates and covariance, after a divergence the counters
+//! only), and with its answer the foreground's mechanization restarts (NAV once the 1-sigma is
+//! within the limits). A lost gap during a re-alignment starts it over. The protocol has no
+//! stage of its own for it: DEGRADED with the set-aside filter's flags until the restart.
+//! [`Summary::realignments`] counts them.
 //!
 //! The run's settings are one plain [`RunConfig`] (the CLI's and the firmware's arguments),
 //! checked and converted for the data's rate into a [`Setup`] from which both halves are built.
 //!
 //! [`ImuCompensation`]: crate::calibration::ImuCompensation
 //! [`MotionAlign`]: crate::ins_filter::motion::MotionAlign
+//! [`Restart`]: crate::ins_filter::restart::Restart
+//! [`Restart::carried`]: crate::ins_filter::restart::Restart::carried
 //! [`ImuIncrement::check`]: crate::increment::ImuIncrement::check
 //! [`InputLimits`]: crate::increment::InputLimits
 

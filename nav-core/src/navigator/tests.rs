@@ -707,29 +707,21 @@ fn the_aided_phase_is_the_sequencer_started_from_the_alignment() {
     check::<f32>();
 }
 
-/// The firmware's way in the aided phase: propagations queue up behind the foreground,
-/// answered messages are waited for. Same rows as in line; fixes refused by the queue and
-/// bad fixes counted, never a panic.
-#[test]
-fn an_aided_split_run_gives_the_inline_result_and_counts_bad_fixes() {
-    let mut fixes = site_fixes::<f32>(25);
-    // A NaN fix, and one that repeats its predecessor's time.
-    fixes[14].position.lat_rad = f64::NAN;
-    fixes.insert(16, fixes[15]);
-    let c = aided_config(40);
-    let (inline, s) = run_aided::<f32>(&c, still(2500), &fixes);
-    let f = s.filter.unwrap();
-    assert_eq!(f.counters.position.invalid, 1, "{:?}", f.counters);
-    assert_eq!(s.fixes.out_of_order, 1);
-
-    let setup = Setup::<f32>::new(&c, RATE_HZ).unwrap();
+/// [`run_aided`] the firmware's way: the background lags one message per sample behind
+/// the foreground, which waits for the answered messages; returns the rows and the summary.
+fn run_split<T: Scalar>(
+    config: &RunConfig,
+    inputs: impl Iterator<Item = ImuInput>,
+    fixes: &[GnssFixInput<T>],
+) -> (Vec<Row>, Summary<T>) {
+    let setup = Setup::<T>::new(config, RATE_HZ).unwrap();
     let (mut nav, mut bg) = (Navigator::new(&setup), Background::new(&setup));
-    let mut queue: VecDeque<ToBackground<f32>> = VecDeque::new();
+    let mut queue: VecDeque<ToBackground<T>> = VecDeque::new();
     let mut rows = Vec::new();
     let mut next = fixes.iter().peekable();
-    let answered = |nav: &mut Navigator<f32>,
-                    queue: &mut VecDeque<ToBackground<f32>>,
-                    bg: &mut Background<f32>,
+    let answered = |nav: &mut Navigator<T>,
+                    queue: &mut VecDeque<ToBackground<T>>,
+                    bg: &mut Background<T>,
                     rows: &mut Vec<Row>| {
         // The queue in order up to the awaited message's answer.
         let answer = core::iter::from_fn(|| queue.pop_front())
@@ -737,7 +729,7 @@ fn an_aided_split_run_gives_the_inline_result_and_counts_bad_fixes() {
             .unwrap();
         rows.extend(nav.on_background(answer).unwrap());
     };
-    for i in still(2500) {
+    for i in inputs {
         // The background lags: one message per sample between the foreground's turns.
         if let Some(m) = queue.pop_front() {
             assert!(!m.is_answered());
@@ -779,6 +771,25 @@ fn an_aided_split_run_gives_the_inline_result_and_counts_bad_fixes() {
     }
     let split = nav.finish().unwrap();
     rows.extend(split.final_row);
+    (rows, split)
+}
+
+/// The firmware's way in the aided phase: propagations queue up behind the foreground,
+/// answered messages are waited for. Same rows as in line; fixes refused by the queue and
+/// bad fixes counted, never a panic.
+#[test]
+fn an_aided_split_run_gives_the_inline_result_and_counts_bad_fixes() {
+    let mut fixes = site_fixes::<f32>(25);
+    // A NaN fix, and one that repeats its predecessor's time.
+    fixes[14].position.lat_rad = f64::NAN;
+    fixes.insert(16, fixes[15]);
+    let c = aided_config(40);
+    let (inline, s) = run_aided::<f32>(&c, still(2500), &fixes);
+    let f = s.filter.unwrap();
+    assert_eq!(f.counters.position.invalid, 1, "{:?}", f.counters);
+    assert_eq!(s.fixes.out_of_order, 1);
+
+    let (rows, split) = run_split::<f32>(&c, still(2500), &fixes);
     assert_eq!(rows, inline);
     assert_eq!(split.filter, s.filter);
 }
@@ -990,4 +1001,247 @@ fn a_static_alignment_that_fails_after_a_gap_names_it() {
     let (_, e) = run::<f64>(&config(10.0, 40), still_then_turning(0));
     let text = std::string::ToString::to_string(&e.unwrap_err());
     assert!(!text.contains("gap"), "{text}");
+}
+
+/// The aided phase re-aligns in motion as the sequencer does ([`crate::ins_filter::sequencer`]):
+/// after a gap in the IMU data too long to bridge, and after the filter diverged.
+mod realign {
+    use super::*;
+    use crate::ins_filter::sequencer::tests::drive::east_increment;
+    use crate::ins_filter::sequencer::{RealignCause, Sequencer, Start};
+
+    /// Speed once driving [m/s] (east, body forward).
+    const V_E: f64 = 10.0;
+
+    fn heading_east() -> UnitQuaternion<f64> {
+        from_euler(0.0, 0.0, core::f64::consts::FRAC_PI_2)
+    }
+
+    /// A fix at `t_us` of the site moved `east_m` [m] east, 1-sigma 0.5 m, with the
+    /// velocity `v_e` [m/s] east (`None`: position only).
+    fn fix_at<T: Scalar>(t_us: u64, east_m: f64, v_e: Option<f64>) -> GnssFixInput<T> {
+        let p = Position::from_degrees(LAT_DEG, 0.0, 0.0).offset_ned([0.0, east_m, 0.0]);
+        GnssFixInput {
+            t_us,
+            position: GnssPosition {
+                lat_rad: p.lat_f64(),
+                lon_rad: p.lon_f64(),
+                h_m: p.h_f64(),
+                sigma_ned_m: Vector3::repeat(T::c(0.5)),
+            },
+            velocity: v_e.map(|v| GnssVelocity {
+                v_ned_m_s: Vector3::new(T::zero(), T::c(v), T::zero()),
+                sigma_ned_m_s: Vector3::repeat(T::c(0.05)),
+            }),
+        }
+    }
+
+    /// The navigator's run (in line, and the firmware's way with a lagging background: the
+    /// same rows) and the sequencer's, started from its alignment, on the same samples and
+    /// fixes: both end on the same state, counters and re-alignments. Returns the navigator's
+    /// rows and summary.
+    fn navigator_and_sequencer<T: Scalar>(
+        inputs: &[ImuInput],
+        fixes: &[GnssFixInput<T>],
+    ) -> (Vec<Row>, Summary<T>) {
+        let c = aided_config(100);
+        let (rows, s) = run_aided::<T>(&c, inputs.iter().copied(), fixes);
+        // The firmware's way: the same rows.
+        let (split_rows, split) = run_split::<T>(&c, inputs.iter().copied(), fixes);
+        assert_eq!(split_rows, rows);
+        assert_eq!(split.realignments, s.realignments);
+        let setup = Setup::<T>::new(&c, RATE_HZ).unwrap();
+        let config = setup.filter.unwrap();
+        let start = Start::Given {
+            state: s.alignment.state,
+            sensors: crate::ins_filter::SensorErrors::default(),
+            sigma: initial_sigma(&s.alignment, &config),
+        };
+        let mut seq = Sequencer::new(config, start).unwrap();
+        let aligned_us = 10_000_000;
+        let mut next = fixes.iter().filter(|f| f.t_us > aligned_us).peekable();
+        for i in inputs.iter().filter(|i| i.t_us > aligned_us) {
+            while let Some(f) = next.next_if(|f| f.t_us <= i.t_us) {
+                seq.push_fix(*f);
+            }
+            let inc = ImuIncrement {
+                delta_theta_ib_b: i.increment.delta_theta_ib_b.map(T::of_f32),
+                delta_v_ib_b: i.increment.delta_v_ib_b.map(T::of_f32),
+                dt: T::of_f32(i.increment.dt),
+            };
+            seq.on_sample(i.t_us, &inc).unwrap();
+        }
+        let ins = seq.filter().unwrap();
+        let t_end = inputs.last().unwrap().t_us;
+        assert_eq!(
+            *rows.last().unwrap().solution(),
+            Solution::from_state(t_end, ins.state())
+        );
+        assert_eq!(s.filter.unwrap().counters, *ins.counters());
+        assert_eq!(s.realignments, *seq.realignments());
+        assert_eq!(s.fixes.for_start, seq.fix_counters().for_start);
+        (rows, s)
+    }
+
+    /// Horizontal error [m] of `row` against the site moved `east_m` east, and the row's
+    /// horizontal 1-sigma [m].
+    fn horizontal(row: &Row, east_m: f64) -> (f64, f64) {
+        let sol = row.solution();
+        let at = Position::from_degrees(
+            sol.lat_ndeg as f64 * 1e-9,
+            sol.lon_ndeg as f64 * 1e-9,
+            sol.h_m,
+        );
+        let d = Position::from_degrees(LAT_DEG, 0.0, 0.0)
+            .offset_ned([0.0, east_m, 0.0])
+            .ned_to(&at);
+        let c = row.filter().unwrap();
+        let s = c.sigma_ned_m.map(f64::from);
+        (
+            (d[0] * d[0] + d[1] * d[1]).sqrt(),
+            (s[0] * s[0] + s[1] * s[1]).sqrt(),
+        )
+    }
+
+    /// Aligned at rest heading east, aided by fixes at rest to 20 s; the IMU data lost from
+    /// 20 to 26 s, while the vehicle drove off (30 m east at 26 s, 10 m/s); fixes of the drive
+    /// from 26 s. The first fix after the gap sets the filter aside (its rows DEGRADED), the
+    /// next ones find level and heading, and the filter navigates again (NAV) within 3 sigma
+    /// to the end, as the sequencer does to the last bit. Was: DEGRADED (IMU_LOST) to the end.
+    #[test]
+    fn a_lost_gap_with_fixes_after_it_realigns_the_aided_phase() {
+        let q = heading_east();
+        let (rest_theta, rest_v) = at_rest(&q, Vector3::zeros(), Vector3::zeros());
+        let drive = east_increment(LAT_DEG.to_radians(), 0.0, V_E, DT);
+        let inputs: Vec<ImuInput> = (1..=2000)
+            .map(|k| input(k, rest_theta, rest_v))
+            .chain(
+                (2601..=6000)
+                    .map(|k| input(k, drive.delta_theta_ib_b.into(), drive.delta_v_ib_b.into())),
+            )
+            .collect();
+        let east_at = |t_s: f64| {
+            if t_s <= 20.0 {
+                0.0
+            } else {
+                30.0 + V_E * (t_s - 26.0)
+            }
+        };
+        fn fixes<T: Scalar>(east_at: impl Fn(f64) -> f64) -> Vec<GnssFixInput<T>> {
+            (1..=20)
+                .chain(26..=60)
+                .map(|k| match k {
+                    1..=20 => site_fix(k * 1_000_000 + 300, 0.5),
+                    _ => fix_at(k * 1_000_000 + 300, east_at(k as f64 + 3e-4), Some(V_E)),
+                })
+                .collect()
+        }
+        // At the first sample after the gap the filter is set aside (the fix at 26 s is due):
+        // the status is the lost solution's, before any report says so.
+        let setup = Setup::<f64>::new(&aided_config(100), RATE_HZ).unwrap();
+        let (mut nav, mut bg) = (Navigator::new(&setup), Background::new(&setup));
+        let all = fixes::<f64>(east_at);
+        let mut next = all.iter().peekable();
+        for i in &inputs[..2001] {
+            while let Some(f) = next.next_if(|f| f.t_us <= i.t_us) {
+                nav.push_fix(*f);
+            }
+            nav.push_inline(&mut bg, i).unwrap();
+        }
+        assert!(nav.realigning());
+        assert_eq!(nav.filter_status(), Some(FilterStatus::ImuLost));
+        assert_eq!(nav.filter_report().unwrap().status, FilterStatus::Nominal);
+        // In the MCU's precision too.
+        let (_, s32) = navigator_and_sequencer::<f32>(&inputs, &fixes(east_at));
+        let (rows, s) = navigator_and_sequencer::<f64>(&inputs, &fixes(east_at));
+        assert_eq!(s32.realignments.completed, 1, "{:?}", s32.realignments);
+        let r = s.realignments;
+        assert_eq!(
+            (r.begun, r.completed, r.started_over, r.last_cause),
+            (1, 1, 0, RealignCause::LostGap),
+            "{r:?}"
+        );
+        assert_eq!(
+            (r.begun_us, r.gap_end_us),
+            (26_010_000, 26_010_000),
+            "{r:?}"
+        );
+        assert!((r.gap_us as f64 - 6e6).abs() < 20.0, "{r:?}");
+        assert!(r.navigating_us <= 30_010_000, "{r:?}");
+        assert!(s.fixes.for_start >= 2, "{:?}", s.fixes);
+        for row in &rows {
+            let t = row.solution().t_us;
+            let status = row.filter().unwrap().status;
+            if t > 20_000_000 && t < r.navigating_us {
+                assert_eq!(status, "DEGRADED", "{row}");
+            }
+            if t >= r.navigating_us {
+                assert_eq!(status, "NAV", "{row}");
+                let (e, sigma) = horizontal(row, east_at(t as f64 * 1e-6));
+                assert!(e < 3.0 * sigma, "{e} m against {sigma} m at {t} us");
+            }
+        }
+        assert_eq!(s.filter.unwrap().status, FilterStatus::Nominal);
+    }
+
+    /// Aligned at rest heading east, then 10 s at 1 m/s^2 east and driving at 10 m/s; fixes
+    /// of position only from 11 s; a gyro transient of 1e-3 rad/s (a thousand times the
+    /// model's bias 1-sigma) from 10 to 70 s. The filter runs away from its fixes and refuses
+    /// them; once DEGRADED by refusals with its own horizontal 1-sigma beyond the limit it is
+    /// set aside, and the re-alignment in motion on the fixes restarts it (NAV) with the
+    /// sensors known as at the start, as the sequencer does to the last bit. Was: every fix
+    /// refused to the end.
+    #[test]
+    fn a_filter_that_diverged_is_set_aside_and_the_aided_phase_realigns() {
+        let q = heading_east();
+        let east_at = |t_s: f64| match t_s {
+            t if t <= 10.0 => 0.0,
+            t if t <= 20.0 => 0.5 * (t - 10.0) * (t - 10.0),
+            t => 50.0 + V_E * (t - 20.0),
+        };
+        let drive = east_increment(LAT_DEG.to_radians(), 0.0, V_E, DT);
+        let inputs: Vec<ImuInput> = (1..=30_000u32)
+            .map(|k| {
+                let t_s = f64::from(k) * DT;
+                let transient = if t_s > 10.0 && t_s <= 70.0 {
+                    1e-3 * DT
+                } else {
+                    0.0
+                };
+                let (mut dtheta, dv) = if t_s <= 20.0 {
+                    let a = if t_s > 10.0 { 1.0 } else { 0.0 };
+                    at_rest(&q, Vector3::zeros(), Vector3::new(a * DT, 0.0, 0.0))
+                } else {
+                    (drive.delta_theta_ib_b.into(), drive.delta_v_ib_b.into())
+                };
+                dtheta[0] += transient;
+                input(k, dtheta, dv)
+            })
+            .collect();
+        let fixes: Vec<GnssFixInput<f64>> = (11..=300)
+            .map(|k| fix_at(k * 1_000_000 + 300, east_at(k as f64 + 3e-4), None))
+            .collect();
+        let (rows, s) = navigator_and_sequencer::<f64>(&inputs, &fixes);
+        let r = s.realignments;
+        assert_eq!(
+            (r.begun, r.diverged, r.completed, r.last_cause),
+            (1, 1, 1, RealignCause::Diverged),
+            "{r:?}"
+        );
+        assert!((70_000_000..=290_000_000).contains(&r.begun_us), "{r:?}");
+        assert!(r.navigating_us < r.begun_us + 10_000_000, "{r:?}");
+        let p = s.filter.unwrap().counters.position;
+        assert!(p.rejected >= 100 && p.consecutive_rejected == 0, "{p}");
+        for row in rows.iter().filter(|row| row.solution().t_us > r.begun_us) {
+            let t = row.solution().t_us;
+            let status = row.filter().unwrap().status;
+            if t < r.navigating_us {
+                assert_eq!(status, "DEGRADED", "{row}");
+            } else {
+                assert_eq!(status, "NAV", "{row}");
+                let (e, sigma) = horizontal(row, east_at(t as f64 * 1e-6));
+                assert!(e < 3.0 * sigma, "{e} m against {sigma} m at {t} us");
+            }
+        }
+    }
 }
