@@ -1503,19 +1503,10 @@ fn firmware_refuses_fixes_on_another_clock_and_warns_of_unused_ones() {
 /// it re-aligned. Was: DEGRADED to the end of the run in the firmware.
 #[test]
 fn firmware_realigns_after_a_lost_gap_like_the_harness() {
-    use host_tests::gnss_sim::GnssSimOptions;
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    aided_drive(
-        d,
-        60.0,
-        &GnssSimOptions {
-            sigma_v_ned_m_s: Some([0.05, 0.05, 0.1]),
-            // 1 Hz: the re-alignment's fixes span health frames.
-            rate_hz: 1.0,
-            ..aided_receiver()
-        },
-    );
+    // 1 Hz: the re-alignment's fixes span health frames.
+    aided_drive(d, 60.0, &velocity_receiver(1.0));
     let mut rec = recording_io::read(&d.join("rec.bin")).unwrap();
     rec.records.drain(12_000..14_400);
     std::fs::write(d.join("rec.bin"), rec.to_bytes().unwrap()).unwrap();
@@ -1587,6 +1578,15 @@ fn aided_receiver() -> host_tests::gnss_sim::GnssSimOptions {
     }
 }
 
+/// [`aided_receiver`] at `rate_hz` [Hz], with velocities of 0.05/0.05/0.1 m/s.
+fn velocity_receiver(rate_hz: f64) -> host_tests::gnss_sim::GnssSimOptions {
+    host_tests::gnss_sim::GnssSimOptions {
+        rate_hz,
+        sigma_v_ned_m_s: Some([0.05, 0.05, 0.1]),
+        ..aided_receiver()
+    }
+}
+
 /// Writes `seconds` [s] of the demo's drive (FOG grade, seed 7, at 45 deg N, 7.5 deg E, 250 m)
 /// into `d` as `rec.bin`, and the fixes of `gnss` along it as `gnss.csv` and the binary fix
 /// file `gnss.bin`.
@@ -1645,17 +1645,9 @@ fn replay_like_the_firmware(d: &Path, options: &[&str]) -> std::process::Output 
 /// file and aided options without `--gnss` are refused before anything is navigated.
 #[test]
 fn firmware_navigates_aided_like_the_harness() {
-    use host_tests::gnss_sim::GnssSimOptions;
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    aided_drive(
-        d,
-        60.0,
-        &GnssSimOptions {
-            sigma_v_ned_m_s: Some([0.05, 0.05, 0.1]),
-            ..aided_receiver()
-        },
-    );
+    aided_drive(d, 60.0, &velocity_receiver(5.0));
     let options = ["--imu-noise", "fog", "--gnss-lever-arm", "0.8,-0.3,-1.1"];
     let site = ["45", "7.5", "250", "15"];
 

@@ -644,13 +644,45 @@ fn an_aided_run_logs_the_filter_and_counts_the_fixes() {
     }
 }
 
+/// The sequencer started from the alignment of `s` (a run of `c` aligned over its first
+/// 10 s) as the navigator's aided phase starts, fed the samples and fixes after it as the
+/// navigator was.
+fn sequencer_from_alignment<T: Scalar>(
+    c: &RunConfig,
+    s: &Summary<T>,
+    inputs: impl Iterator<Item = ImuInput>,
+    fixes: &[GnssFixInput<T>],
+) -> crate::ins_filter::sequencer::Sequencer<T> {
+    use crate::ins_filter::sequencer::{Sequencer, Start};
+    let config = Setup::<T>::new(c, RATE_HZ).unwrap().filter.unwrap();
+    let start = Start::Given {
+        state: s.alignment.state,
+        sensors: crate::ins_filter::SensorErrors::default(),
+        sigma: initial_sigma(&s.alignment, &config),
+    };
+    let mut seq = Sequencer::new(config, start).unwrap();
+    let aligned_us = 10_000_000;
+    let mut next = fixes.iter().filter(|f| f.t_us > aligned_us).peekable();
+    for i in inputs.filter(|i| i.t_us > aligned_us) {
+        while let Some(f) = next.next_if(|f| f.t_us <= i.t_us) {
+            seq.push_fix(*f);
+        }
+        let inc = ImuIncrement {
+            delta_theta_ib_b: i.increment.delta_theta_ib_b.map(T::of_f32),
+            delta_v_ib_b: i.increment.delta_v_ib_b.map(T::of_f32),
+            dt: T::of_f32(i.increment.dt),
+        };
+        seq.on_sample(i.t_us, &inc).unwrap();
+    }
+    seq
+}
+
 /// The navigator's aided phase is the filter run in line ([`crate::ins_filter::AidedIns`]
 /// under the [`crate::ins_filter::sequencer::Sequencer`]) started from the alignment's
 /// outcome: the same state to the last bit, in both precisions.
 #[test]
 fn the_aided_phase_is_the_sequencer_started_from_the_alignment() {
     fn check<T: Scalar>() {
-        use crate::ins_filter::sequencer::{Sequencer, Start};
         let q = from_euler(0.01, -0.02, 0.7);
         // Turning and accelerating gently after the alignment.
         let sample = |k: u32| {
@@ -669,28 +701,7 @@ fn the_aided_phase_is_the_sequencer_started_from_the_alignment() {
         let c = aided_config(7);
         let fixes = site_fixes::<T>(30);
         let (rows, s) = run_aided::<T>(&c, (1..=3000).map(sample), &fixes);
-        let setup = Setup::<T>::new(&c, RATE_HZ).unwrap();
-        let config = setup.filter.unwrap();
-        let sigma = initial_sigma(&s.alignment, &config);
-        let start = Start::Given {
-            state: s.alignment.state,
-            sensors: crate::ins_filter::SensorErrors::default(),
-            sigma,
-        };
-        let mut seq = Sequencer::new(config, start).unwrap();
-        let mut next = fixes.iter().filter(|f| f.t_us > 10_000_000).peekable();
-        for k in 1001..=3000 {
-            let i = sample(k);
-            while let Some(f) = next.next_if(|f| f.t_us <= i.t_us) {
-                seq.push_fix(*f);
-            }
-            let inc = ImuIncrement {
-                delta_theta_ib_b: i.increment.delta_theta_ib_b.map(T::of_f32),
-                delta_v_ib_b: i.increment.delta_v_ib_b.map(T::of_f32),
-                dt: T::of_f32(i.increment.dt),
-            };
-            seq.on_sample(i.t_us, &inc).unwrap();
-        }
+        let seq = sequencer_from_alignment(&c, &s, (1..=3000).map(sample), &fixes);
         let ins = seq.filter().unwrap();
         let last = Solution::from_state(30_000_000, ins.state());
         assert_eq!(*rows.last().unwrap().solution(), last);
@@ -1007,8 +1018,8 @@ fn a_static_alignment_that_fails_after_a_gap_names_it() {
 /// after a gap in the IMU data too long to bridge, and after the filter diverged.
 mod realign {
     use super::*;
+    use crate::ins_filter::sequencer::RealignCause;
     use crate::ins_filter::sequencer::tests::drive::east_increment;
-    use crate::ins_filter::sequencer::{RealignCause, Sequencer, Start};
 
     /// Speed once driving [m/s] (east, body forward).
     const V_E: f64 = 10.0;
@@ -1050,27 +1061,7 @@ mod realign {
         let (split_rows, split) = run_split::<T>(&c, inputs.iter().copied(), fixes);
         assert_eq!(split_rows, rows);
         assert_eq!(split.realignments, s.realignments);
-        let setup = Setup::<T>::new(&c, RATE_HZ).unwrap();
-        let config = setup.filter.unwrap();
-        let start = Start::Given {
-            state: s.alignment.state,
-            sensors: crate::ins_filter::SensorErrors::default(),
-            sigma: initial_sigma(&s.alignment, &config),
-        };
-        let mut seq = Sequencer::new(config, start).unwrap();
-        let aligned_us = 10_000_000;
-        let mut next = fixes.iter().filter(|f| f.t_us > aligned_us).peekable();
-        for i in inputs.iter().filter(|i| i.t_us > aligned_us) {
-            while let Some(f) = next.next_if(|f| f.t_us <= i.t_us) {
-                seq.push_fix(*f);
-            }
-            let inc = ImuIncrement {
-                delta_theta_ib_b: i.increment.delta_theta_ib_b.map(T::of_f32),
-                delta_v_ib_b: i.increment.delta_v_ib_b.map(T::of_f32),
-                dt: T::of_f32(i.increment.dt),
-            };
-            seq.on_sample(i.t_us, &inc).unwrap();
-        }
+        let seq = sequencer_from_alignment(&c, &s, inputs.iter().copied(), fixes);
         let ins = seq.filter().unwrap();
         let t_end = inputs.last().unwrap().t_us;
         assert_eq!(
