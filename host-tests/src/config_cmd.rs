@@ -34,8 +34,14 @@ pub fn parse(name: &Path, text: &str) -> Result<DeviceConfig> {
         config
             .apply_line(line)
             .map_err(|e| anyhow::anyhow!("{}:{n}: {e}", name.display()))?;
-        if let Some(key) = key_of(line) {
-            line_of.insert(key, n);
+        if let Some(key) = key_of(line)
+            && let Some(first) = line_of.insert(key, n)
+        {
+            // Which one the user meant is not for the encoder to guess.
+            bail!(
+                "{}:{n}: key '{key}' given again (first on line {first})",
+                name.display()
+            );
         }
     }
     // A file without a key is an empty or truncated one, or the wrong one: its frame would
@@ -121,5 +127,45 @@ mod tests {
         let text = "lat-deg = 10\nlon-deg = 20\n";
         let with_bom = format!("\u{feff}{text}");
         assert_eq!(parse(name, &with_bom).unwrap(), parse(name, text).unwrap());
+    }
+
+    /// A key given twice was encoded with its last value, and the aided filter's figures out
+    /// of range were encoded as valid while aiding was off (found by a probe): both refused,
+    /// naming the line.
+    #[test]
+    fn a_repeated_key_and_figures_out_of_range_are_refused_without_aiding() {
+        let name = Path::new("run.txt");
+        let e = parse(
+            name,
+            "lat-deg = 10
+lon-deg = 20
+lat-deg = 11
+",
+        )
+        .unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("run.txt:3: key 'lat-deg' given again (first on line 1)"),
+            "{e}"
+        );
+        for (key, value) in [
+            ("gyro-scale-sigma", "-1"),
+            ("gyro-scale-sigma", "1e300"),
+            ("accel-scale-sigma", "0.5"),
+            ("gyro-cross-coupling-rad", "1e10"),
+            ("gyro-g-sensitivity", "-5"),
+        ] {
+            let e = parse(name, &format!("lat-deg = 10\n{key} = {value}\n")).unwrap_err();
+            let text = e.to_string();
+            assert!(
+                text.starts_with("run.txt:2: refused"),
+                "{key} = {value}: {text}"
+            );
+            assert!(
+                text.contains("1-sigma must be 0 to 0.1"),
+                "{key} = {value}: {text}"
+            );
+        }
+        assert!(parse(name, "lat-deg = 10\ngyro-scale-sigma = 0.001\n").is_ok());
     }
 }

@@ -286,7 +286,7 @@ pub fn run(config_path: &Path, outputs: &Outputs) -> Result<KfGinsRun> {
 /// without them, as KF-GINS (`nav kf-gins --no-stops`: a vehicle that may move steadily below
 /// the 1 m/s a stop is believed at).
 pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<KfGinsRun> {
-    let (c, warnings) = kf_gins_config::load(config_path)?;
+    let (c, mut warnings) = kf_gins_config::load(config_path)?;
     let out = outputs
         .nav
         .clone()
@@ -338,6 +338,8 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
     // Intervals off `imudatarate` by more than a quarter of its interval, of all intervals (a
     // rate off by a factor of 2 or 4/3 is caught; a receiver's jitter of a few percent is not).
     let (mut off_rate, mut intervals) = (0_u64, 0_u64);
+    // Their sum [s], for the rate the file has.
+    let mut sum_dt = 0.0_f64;
     let samples = || -> Result<Option<AidedSample<f64>>> {
         loop {
             let Some(row) = rows.next() else {
@@ -347,6 +349,7 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
             let dt = prev_t.map_or(nominal_dt, |p| row.t_s - p);
             if prev_t.is_some() {
                 intervals += 1;
+                sum_dt += dt;
                 off_rate += u64::from((dt - nominal_dt).abs() > 0.25 * nominal_dt);
             }
             prev_t = Some(row.t_s);
@@ -425,6 +428,18 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
             c.imu_path.display(),
             Number(nominal_dt)
         );
+    }
+    // Within that, a rate the file does not have is said: the intervals are the time
+    // column's, `imudatarate` only judges them (and the first epoch's).
+    let file_hz = intervals as f64 / sum_dt;
+    if intervals > 0 && (file_hz - c.imu_rate_hz).abs() > 0.02 * c.imu_rate_hz {
+        warnings.push(format!(
+            "imudatarate {} Hz, but the epochs of {} come at {:.1} Hz on average: the intervals \
+             are taken from its time column",
+            Number(c.imu_rate_hz),
+            c.imu_path.display(),
+            file_hz
+        ));
     }
     let sigma_rms = sink.sigma_rms();
     let (rows, mut store_s) = sink.writer.finish_timed()?;

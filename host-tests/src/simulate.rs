@@ -264,6 +264,20 @@ pub fn write_with_receiver(
         dir.join("imu.csv")
     };
     let mut description = describe(opts, sim, &replay_file)?;
+    if receiver.is_none() {
+        // A start in motion needs the fixes.
+        let bias_deg_h = opts.grade.noise_spec().gyro_bias_rad_s.to_degrees() * 3600.0;
+        description = description
+            .lines()
+            .map(|l| match l.starts_with("# replay: nav replay") && l.contains(" --start-in-motion") {
+                true => format!(
+                    "# replay: none: a {} part's gyro bias ({bias_deg_h:.1} deg/h) hides the Earth rate, so it cannot find north at rest; simulate GNSS fixes (--gnss-rate) to start in motion\n",
+                    opts.grade
+                ),
+                false => format!("{l}\n"),
+            })
+            .collect();
+    }
     if let Some((text, replay_options)) = receiver {
         const END: &str = " --out solution.csv";
         description = description
@@ -393,7 +407,23 @@ pub fn describe(opts: &SimOptions, sim: &Simulated, imu: &Path) -> Result<String
     writeln!(s, "start_yaw_deg = {}", yaw.to_degrees())?;
     let hint = ReplayHint::of(&opts.scenario, opts.grade);
     let window_s = hint.window_s(&opts.scenario, seconds);
-    if window_s >= hint.shortest_s {
+    let bias_deg_h = opts.grade.noise_spec().gyro_bias_rad_s.to_degrees() * 3600.0;
+    let moves = still_at_start_s(&opts.scenario).is_some();
+    if !hint.finds_north && moves {
+        // Its GNSS options are added where the fixes are written; without fixes, none.
+        writeln!(
+            s,
+            "# replay: nav replay --imu {} --start-in-motion --imu-noise {} --out solution.csv",
+            imu.display(),
+            opts.grade
+        )?;
+    } else if !hint.finds_north {
+        writeln!(
+            s,
+            "# replay: none: a {} part's gyro bias ({bias_deg_h:.1} deg/h) hides the Earth rate, so it cannot find north at rest, and this scenario does not move for a start in motion",
+            opts.grade
+        )?;
+    } else if window_s >= hint.shortest_s {
         writeln!(
             s,
             "# replay: nav replay --imu {} --lat {} --lon {} --h {} --align-seconds {window_s}{} --out solution.csv",
@@ -440,6 +470,9 @@ struct ReplayHint {
     longest_s: f64,
     /// Shortest window that aligns on this scenario [s].
     shortest_s: f64,
+    /// The grade's gyros can find north at rest: their bias 1-sigma within a tenth of the
+    /// Earth rate (a tenth of a radian of heading at most; MEMS parts' are tens of deg/h).
+    finds_north: bool,
 }
 
 impl ReplayHint {
@@ -482,6 +515,7 @@ impl ReplayHint {
             options,
             longest_s,
             shortest_s,
+            finds_north: grade.noise_spec().gyro_bias_rad_s < 0.1 * nav_core::earth::OMEGA_IE,
         }
     }
 

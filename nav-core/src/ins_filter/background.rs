@@ -847,9 +847,11 @@ impl<T: Scalar> ErrorFilter<T> {
             // DEGRADED, and the refused fixes moved away from the filter faster than its own
             // covariance allows: the filter is the one drifting ([`integrity`] module docs).
             let p_pos = Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)]);
+            let p_vel = self.p.fixed_view::<3, 3>(VEL, VEL).into_owned();
             recovered = self.counters.position.consecutive_rejected
                 >= self.config.rejections_to_degrade
-                && cluster.drifted(&p_pos, gate);
+                && cluster.drifted(&p_pos, gate)
+                && cluster.drift_is_plausible(&p_vel, gate);
             if !recovered {
                 return (AidResult::Rejected { nis }, None);
             }

@@ -99,7 +99,11 @@
 //! `R + R_1 + P_pos` beyond the gate) is taken as the filter's own drift: the drift's rate
 //! `v` joins the velocity covariance as `v v^T`, the offset joins the position's as after any
 //! cluster, the window restarts, and the fix is used. A held offset does not move (it stays
-//! refused until it is typical, above), and a gross cluster is never taken this way.
+//! refused until it is typical, above), and a gross cluster is never taken this way; nor a
+//! drift whose rate the filter's own velocity could not have
+//! ([`RefusedCluster::drift_is_plausible`]: beyond [`GROSS_NIS_FACTOR`] times the gate of its
+//! velocity covariance, the optimism a jump is allowed): then the fixes are the ones moving,
+//! a multipath ramp the filter refused from its start.
 //!
 //! **A gross cluster** is not released that way. Its first fix was beyond
 //! [`GROSS_NIS_FACTOR`] times the gate, a jump no plausible optimism of the filter's own
@@ -513,6 +517,21 @@ impl<T: Scalar> RefusedCluster<T> {
     /// `z - z_1` against `R + R_1 + P_pos` beyond the gate. Never for a gross cluster.
     pub fn drifted(&self, p_pos_m2: &Vector3<T>, gate_3dof: T) -> bool {
         !self.gross && self.moved(p_pos_m2) > gate_3dof
+    }
+
+    /// True when the cluster's drift rate ([`Self::drift_rate`]) is one the filter's own
+    /// velocity could have: its normalised square against the velocity covariance `p_vel`
+    /// [m^2/s^2] within [`GROSS_NIS_FACTOR`] times the gate, the optimism a jump is allowed
+    /// (module docs). Beyond it the fixes, not the filter, are moving: a multipath ramp of
+    /// 0.5 m/s that an RLG filter (velocity 1-sigma 5 mm/s) refused from its start would
+    /// otherwise be taken as the filter's own drift once DEGRADED, and the filter captured
+    /// by it (13 m off with a 0.4 m 1-sigma, then the true fixes refused as a jump).
+    pub fn drift_is_plausible(&self, p_vel: &Matrix3<T>, gate_3dof: T) -> bool {
+        let v = self.drift_rate();
+        let Some(inv) = p_vel.try_inverse() else {
+            return false;
+        };
+        (v.transpose() * inv * v)[(0, 0)] <= gate_3dof * T::c(GROSS_NIS_FACTOR)
     }
 
     /// How far the offset has moved since the first member against the filter's position
@@ -965,6 +984,13 @@ mod tests {
         // A correction by another aid moves every member alike: the drift is unchanged.
         let dr = Vector3::new(0.0, 3.0, 0.0);
         assert!((moving.corrected(&dr).drift_rate() - moving.drift_rate()).norm() < 1e-12);
+        // 0.2 m/s is 4 sigma of a velocity known to 5 cm/s (a filter that may be that
+        // optimistic), 40 sigma of one known to 5 mm/s (beyond the gross factor's 16): only
+        // the first could be the filter's own drift.
+        let p_vel = |sigma: f64| Matrix3::from_diagonal_element(sigma * sigma);
+        assert!(moving.drift_is_plausible(&p_vel(0.05), gate));
+        assert!(!moving.drift_is_plausible(&p_vel(0.005), gate));
+        assert!(!moving.drift_is_plausible(&Matrix3::zeros(), gate));
     }
 
     /// A gross cluster that starts while a cluster of 3 m was refused keeps its doubt; one

@@ -68,13 +68,15 @@ pub fn noise_out_of_range<T: Scalar>(n: &FilterNoise<T>) -> Option<&'static str>
         Some("the gyro bias 1-sigma must be 0 to 0.1 rad/s (20,600 deg/h)")
     } else if !within(n.accel_bias_mps2, MAX_ACCEL_BIAS_MPS2) {
         Some("the accelerometer bias 1-sigma must be 0 to 10 m/s^2 (1,000,000 mGal)")
-    } else if !(within(n.gyro_scale, MAX_SCALE) && within(n.accel_scale, MAX_SCALE)) {
-        Some("a scale-factor 1-sigma must be 0 to 0.1 (100,000 ppm)")
-    } else if !(within(n.gyro_cross_coupling_rad, MAX_COUPLING)
-        && within(n.accel_cross_coupling_rad, MAX_COUPLING)
-        && within(n.gyro_g_sensitivity, MAX_COUPLING))
-    {
-        Some("a cross-coupling or g-sensitivity 1-sigma must be 0 to 0.1 (rad, rad/s per m/s^2)")
+    } else if let Some(why) = figures_out_of_range(
+        [n.gyro_scale, n.accel_scale],
+        [
+            n.gyro_cross_coupling_rad,
+            n.accel_cross_coupling_rad,
+            n.gyro_g_sensitivity,
+        ],
+    ) {
+        Some(why)
     } else if !(within(n.gyro_bias_instability_rad_s, MAX_GYRO_BIAS_RAD_S)
         && n.gyro_bias_instability_time_s.finite()
         && n.gyro_bias_instability_time_s >= T::zero()
@@ -88,6 +90,19 @@ pub fn noise_out_of_range<T: Scalar>(n: &FilterNoise<T>) -> Option<&'static str>
         && n.correlation_time_s.to_f64() >= MIN_CORRELATION_TIME_S)
     {
         Some("the correlation time must be finite and at least 1 s")
+    } else {
+        None
+    }
+}
+
+/// Why an IMU's scale-factor 1-sigmas `scale` [-] (gyro, accelerometer) or its
+/// cross-coupling and g-sensitivity 1-sigmas `coupling` (gyro, accelerometer [rad]; gyro
+/// g-sensitivity [rad/s per m/s^2]) are out of range (the refusal's text).
+pub fn figures_out_of_range<T: Scalar>(scale: [T; 2], coupling: [T; 3]) -> Option<&'static str> {
+    if !scale.iter().all(|v| sigma_within(*v, MAX_SCALE)) {
+        Some("a scale-factor 1-sigma must be 0 to 0.1 (100,000 ppm)")
+    } else if !coupling.iter().all(|v| sigma_within(*v, MAX_COUPLING)) {
+        Some("a cross-coupling or g-sensitivity 1-sigma must be 0 to 0.1 (rad, rad/s per m/s^2)")
     } else {
         None
     }

@@ -320,6 +320,19 @@ impl RunConfig {
         self.calibration
             .compensation::<f64>()
             .map_err(ConfigError::Calibration)?;
+        // The aided filter's figures, checked with or without aiding: a frame carries them,
+        // and a value out of range is refused, not carried as valid until aiding is on.
+        let f = &self.figures;
+        if let Some(why) = limits::figures_out_of_range(
+            [f.gyro_scale, f.accel_scale],
+            [
+                f.gyro_cross_coupling_rad,
+                f.accel_cross_coupling_rad,
+                f.gyro_g_sensitivity,
+            ],
+        ) {
+            return Err(ConfigError::Aiding(why));
+        }
         if let Some(a) = &self.aiding {
             if !AIDED_COMPILED_IN {
                 return Err(ConfigError::Aiding(
