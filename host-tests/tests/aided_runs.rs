@@ -393,16 +393,7 @@ fn a_ramp_faster_than_the_filter_could_drift_is_not_taken_as_its_drift() {
             "--gnss-ramp",
             "200,30,15,0,0",
         ],
-        &[
-            "--imu-noise",
-            "rlg",
-            "--init-pos",
-            "45,7.5,250",
-            "--init-vel",
-            "0,0,0",
-            "--init-att",
-            "0,0,0",
-        ],
+        &[&["--imu-noise", "rlg"][..], &GIVEN].concat(),
     );
     let rows = errors_over_sigma(d, &out);
     let worst = rows
