@@ -9,7 +9,7 @@ use super::consider::{self, ConsiderModel, CrossCovariance};
 use super::covariance::{self, Transition};
 use super::foreground::{LostGap, Propagation};
 use super::integrity::{
-    self, InnovationWindow, Reacquisition, RefusedCluster, Restart, WindowVerdict, whiten,
+    self, InnovationWindow, Pull, Reacquisition, RefusedCluster, Restart, WindowVerdict, whiten,
 };
 use super::limits;
 use super::model;
@@ -124,6 +124,9 @@ pub struct ErrorFilter<T: Scalar> {
     /// [`integrity::WINDOW_REFUSALS_MAX`] refusals, until confirmed ([`integrity`] module
     /// docs).
     restart: Option<Restart<T>>,
+    /// What the accepted position fixes of the last minutes moved the solution by
+    /// ([`integrity`] module docs).
+    pull: Pull<T>,
     /// A full window of fixes has passed the tests since the start: the position is the
     /// filter's own, and a fix the gate refuses may start a refused cluster ([`integrity`]).
     confirmed: bool,
@@ -179,6 +182,7 @@ impl<T: Scalar> ErrorFilter<T> {
             since_fix_s: T::zero(),
             reacquired: None,
             restart: None,
+            pull: Pull::none(),
             confirmed: false,
             consider,
             p_ac,
@@ -799,7 +803,31 @@ impl<T: Scalar> ErrorFilter<T> {
         let dt = core::mem::replace(&mut self.since_fix_s, T::zero());
         let drift = self.fix_drift(dt, g);
         self.restart = self.restart.map(|r| r.carried(dt));
+        self.pull = self.pull.carried(dt);
         let mut recovered = false;
+        // DEGRADED by refusals, and this one refused but where the solution would be had the
+        // fixes of the last minutes not pulled it: a fault it followed has ended, and the
+        // pull is doubtful ([`integrity`] module docs, [Groves, ch. 17]).
+        if nis > gate
+            && self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade
+            && self.pull.explains(&m.z, &s, gate)
+        {
+            let d = self.pull.position_ned_m;
+            let mut pos = self.p.fixed_view_mut::<3, 3>(POS, POS);
+            pos += d * d.transpose();
+            self.check_covariance();
+            self.pull = Pull::none();
+            let Some(again) = self.innovation(m) else {
+                return (AidResult::Invalid, None);
+            };
+            (s, nis) = again;
+            recovered = nis <= gate;
+            if recovered {
+                self.cluster = None;
+                self.window.clear();
+                self.restart = None;
+            }
+        }
         let refused_unconfirmed = self.refused_unconfirmed.take();
         if nis > gate && self.cluster.is_none() && !self.confirmed {
             // Refused by the gate, but no cluster: a full window has not yet confirmed the
@@ -922,6 +950,7 @@ impl<T: Scalar> ErrorFilter<T> {
         let basis = self.shrink_basis(m, &s);
         let out = self.apply(m, &basis, nis);
         if let Some(c) = &out.1 {
+            self.pull = self.pull.taken(&c.x);
             self.window.set_last_correction(&c.x);
             self.restart = self
                 .restart

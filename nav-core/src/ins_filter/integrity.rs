@@ -105,6 +105,18 @@
 //! velocity covariance, the optimism a jump is allowed): then the fixes are the ones moving,
 //! a multipath ramp the filter refused from its start.
 //!
+//! **A DEGRADED filter that a fault pulled recovers** [Groves, ch. 17, fault recovery by
+//! covariance increase]. Under a declared correlated GNSS error the position may move with
+//! the fixes while velocity fixes hold the velocity, and a filter followed a 15 m multipath
+//! ramp that way; when the ramp ended the true fixes lay 14 m from it, a held offset that no
+//! rule above releases (it does not move, and the filter's covariance does not grow to it):
+//! DEGRADED to the end. So the position corrections of the accepted fixes are remembered
+//! over minutes ([`Pull`]), and once the filter is DEGRADED by refusals, a refused fix that
+//! agrees with the solution as it was before that pull, the pull itself beyond the fixes'
+//! noise ([`Pull::explains`]), re-acquires: the pull `d` joins the position's covariance as
+//! `d d^T` (what those fixes moved it by is doubtful), and the fix is judged again. A held
+//! offset seen while nothing pulled the filter is not explained, and stays refused.
+//!
 //! **A gross cluster** is not released that way. Its first fix was beyond
 //! [`GROSS_NIS_FACTOR`] times the gate, a jump no plausible optimism of the filter's own
 //! covariance explains (a 30 m offset against a 0.3 m sigma), at a time the filter's position
@@ -285,6 +297,58 @@ impl<T: Scalar> Restart<T> {
     pub fn doubt(&self, dt_s: T, p_pos_m2: &Matrix3<T>) -> Matrix3<T> {
         let d = self.carried(dt_s).position_ned_m;
         (self.before_m2 - p_pos_m2 + d * d.transpose()) * T::c(0.5)
+    }
+}
+
+/// How long the accepted fixes' corrections are remembered by [`Pull`] [s] (their weight
+/// falls to about a half after it: a minute-long fault followed is still there when it ends).
+pub const PULL_MEMORY_S: f64 = 120.0;
+
+/// What the accepted position fixes of the last minutes moved the solution's position by
+/// (module docs): their position corrections, with a memory of [`PULL_MEMORY_S`] (the
+/// velocity corrections are left out: carried on over minutes, the small corrections of a
+/// consistent filter's velocity added up to metres, and a held offset passed for them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pull<T: Scalar> {
+    /// The position corrections (error state: the solution moved by minus this), NED [m].
+    pub position_ned_m: Vector3<T>,
+}
+
+impl<T: Scalar> Pull<T> {
+    /// Nothing pulled.
+    pub fn none() -> Self {
+        Self {
+            position_ned_m: Vector3::zeros(),
+        }
+    }
+
+    /// Forgotten over `dt_s` [s] by `1 / (1 + x + x^2 / 2)`, `x = dt / PULL_MEMORY_S` (the
+    /// consider states' decay, to second order).
+    pub fn carried(&self, dt_s: T) -> Self {
+        let x = dt_s / T::c(PULL_MEMORY_S);
+        let k = T::one() / (T::one() + x + x * x * T::c(0.5));
+        Self {
+            position_ned_m: self.position_ned_m * k,
+        }
+    }
+
+    /// With the correction `x` of a fix taken.
+    pub fn taken(&self, x: &StateVector<T>) -> Self {
+        Self {
+            position_ned_m: self.position_ned_m + x.fixed_rows::<3>(POS),
+        }
+    }
+
+    /// True when a fix of innovation `z` (predicted minus measured) [m] and innovation
+    /// covariance `s` [m^2], refused by the gate, agrees with the solution as it was before
+    /// this pull (`z + d` within `gate_3dof`), and the pull `d` is itself beyond what the
+    /// fix's noise explains (`d` beyond `gate_3dof`): the fixes that pulled it were a fault
+    /// that has ended (a multipath ramp the filter followed under a declared correlated
+    /// error, then refused the true fixes as a jump, DEGRADED to the end 14 m off).
+    pub fn explains(&self, z: &Vector3<T>, s: &Matrix3<T>, gate_3dof: T) -> bool {
+        let d = &self.position_ned_m;
+        let beyond = whiten(s, d).is_some_and(|w| w.norm_squared() > gate_3dof);
+        beyond && whiten(s, &(z + d)).is_some_and(|w| w.norm_squared() <= gate_3dof)
     }
 }
 
@@ -991,6 +1055,29 @@ mod tests {
         assert!(moving.drift_is_plausible(&p_vel(0.05), gate));
         assert!(!moving.drift_is_plausible(&p_vel(0.005), gate));
         assert!(!moving.drift_is_plausible(&Matrix3::zeros(), gate));
+    }
+
+    /// Fixes that moved the solution 12 m north over 24 s (error-state corrections of -12 m,
+    /// 11 m of it remembered) explain a refused fix 11.5 m south of it (the ramp ended), not one further north (the ramp goes
+    /// on); a pull within the fixes' noise explains nothing; the pull is forgotten over
+    /// minutes.
+    #[test]
+    fn a_pull_explains_the_fix_that_undoes_it() {
+        let gate = 16.27;
+        let s = Matrix3::from_diagonal_element(1.2 * 1.2);
+        let mut x = StateVector::<f64>::zeros();
+        x[POS] = -0.1;
+        let pull = (0..120).fold(Pull::none(), |p, _| p.carried(0.2).taken(&x));
+        assert!(pull.position_ned_m.x < -10.5, "{:?}", pull.position_ned_m);
+        // Predicted minus measured: the true fix south of the pulled solution, +12 m.
+        assert!(pull.explains(&Vector3::new(11.5, 0.0, 0.0), &s, gate));
+        assert!(!pull.explains(&Vector3::new(-6.0, 0.0, 0.0), &s, gate));
+        let small = Pull {
+            position_ned_m: Vector3::new(-2.0, 0.0, 0.0),
+        };
+        assert!(!small.explains(&Vector3::new(6.0, 0.0, 0.0), &s, gate));
+        let later = pull.carried(600.0);
+        assert!(later.position_ned_m.norm() < 0.1 * pull.position_ned_m.norm());
     }
 
     /// A gross cluster that starts while a cluster of 3 m was refused keeps its doubt; one
