@@ -393,10 +393,6 @@ enum FixStage<T: Scalar> {
 /// free-inertial, fixes withheld, its rows DEGRADED) and the fixes and samples go to a start in
 /// motion; once level and heading are known, the filter restarts from it.
 struct Realign<T: Scalar> {
-    /// The start in motion's settings.
-    settings: MotionAlignConfig<T>,
-    /// The antenna's position from the IMU, body FRD [m].
-    lever_arm_b_m: Vector3<T>,
     /// Lost time since a lost gap, before the first fix after it [s] (`Some`: lost).
     lost_s: Option<T>,
     /// Under way.
@@ -514,7 +510,6 @@ pub struct Navigator<T: Scalar> {
 impl<T: Scalar> Navigator<T> {
     /// The foreground of a run of `setup`, at the start of the alignment.
     pub fn new(setup: &Setup<T>) -> Self {
-        let aided = setup.filter.filter(|_| super::config::AIDED_COMPILED_IN);
         Self {
             compensation: setup.compensation,
             limits: setup.limits,
@@ -537,10 +532,6 @@ impl<T: Scalar> Navigator<T> {
             awaiting: None,
             report: None,
             realign: Realign {
-                settings: aided
-                    .map(|f| MotionAlignConfig::for_realignment(&f.noise))
-                    .unwrap_or_default(),
-                lever_arm_b_m: aided.map_or_else(Vector3::zeros, |f| f.antenna_lever_arm_b_m),
                 lost_s: None,
                 under_way: None,
                 counters: Realignments::default(),
@@ -819,6 +810,7 @@ impl<T: Scalar> Navigator<T> {
                         if core::mem::take(&mut w.diverged) {
                             let r = &mut self.realign;
                             r.begin(
+                                self.filter.as_ref(),
                                 SensorErrors::default(),
                                 T::zero(),
                                 RealignCause::Diverged,
@@ -829,8 +821,13 @@ impl<T: Scalar> Navigator<T> {
                     };
                     if let Some(lost_s) = self.realign.lost_s.take() {
                         let sensors = *mech.sensor_errors();
-                        self.realign
-                            .begin(sensors, lost_s, RealignCause::LostGap, w.t_us);
+                        self.realign.begin(
+                            self.filter.as_ref(),
+                            sensors,
+                            lost_s,
+                            RealignCause::LostGap,
+                            w.t_us,
+                        );
                     }
                     w.fix = match self.realign.under_way {
                         Some(_) => FixStage::ForStart(fix, lag),
@@ -1140,7 +1137,7 @@ impl<T: Scalar> Navigator<T> {
             Phase::Aided(mech) => {
                 mech.bridge(gap);
                 if super::config::AIDED_COMPILED_IN && !gap.bridged() {
-                    self.realign.lost(gap, t_us);
+                    self.realign.lost(gap, t_us, self.filter.as_ref());
                 }
             }
             _ => return,
@@ -1207,12 +1204,12 @@ impl<T: Scalar> Navigator<T> {
 impl<T: Scalar> Realign<T> {
     /// A gap too long to bridge ended at `t_us` [us]: lost until the next fix; during a
     /// re-alignment, it starts over (the level's span would cross the gap).
-    fn lost(&mut self, gap: &ImuGap<T>, t_us: u64) {
+    fn lost(&mut self, gap: &ImuGap<T>, t_us: u64, config: Option<&FilterConfig<T>>) {
         match &mut self.under_way {
             None => self.lost_s = Some(self.lost_s.unwrap_or_else(T::zero) + gap.lost_s),
             Some(u) => {
                 u.unpropagated_s += gap.lost_s;
-                u.motion = MotionAlign::new(self.settings, self.lever_arm_b_m);
+                u.motion = start_in_motion(config);
                 let c = &mut self.counters;
                 c.started_over = c.started_over.saturating_add(1);
             }
@@ -1224,13 +1221,14 @@ impl<T: Scalar> Realign<T> {
     /// its samples compensated with `sensors`.
     fn begin(
         &mut self,
+        config: Option<&FilterConfig<T>>,
         sensors: SensorErrors<T>,
         unpropagated_s: T,
         cause: RealignCause,
         t_us: u64,
     ) {
         self.under_way = Some(UnderWay {
-            motion: MotionAlign::new(self.settings, self.lever_arm_b_m),
+            motion: start_in_motion(config),
             sensors,
             unpropagated_s,
             cause,
@@ -1242,6 +1240,18 @@ impl<T: Scalar> Realign<T> {
             .saturating_add(u32::from(cause == RealignCause::Diverged));
         c.last_cause = cause;
         c.begun_us = t_us;
+    }
+}
+
+/// A re-alignment's start in motion, for the aided filter of `config`: its lever arm, the
+/// settings of a run that did not start in motion.
+fn start_in_motion<T: Scalar>(config: Option<&FilterConfig<T>>) -> MotionAlign<T> {
+    match config {
+        Some(c) => MotionAlign::new(
+            MotionAlignConfig::for_realignment(&c.noise),
+            c.antenna_lever_arm_b_m,
+        ),
+        None => MotionAlign::new(MotionAlignConfig::default(), Vector3::zeros()),
     }
 }
 
