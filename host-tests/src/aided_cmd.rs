@@ -210,6 +210,7 @@ pub fn config_in<T: Scalar>(c: &FilterConfig<f64>) -> FilterConfig<T> {
             omega_accel_rad_s2: T::c(c.gap_dynamics.omega_accel_rad_s2),
         },
         rejections_to_degrade: c.rejections_to_degrade,
+        refused_time_to_degrade_s: T::c(c.refused_time_to_degrade_s),
         max_horizontal_sigma_m: T::c(c.max_horizontal_sigma_m),
         zero_motion: c
             .zero_motion

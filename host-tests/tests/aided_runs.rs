@@ -218,6 +218,65 @@ fn a_wrong_given_start_is_reacquired_once_degraded() {
     assert!(last[0].abs() < 3.0, "{last:?}");
 }
 
+/// A given start whose heading is 90 deg off under a declared 0.1 deg (a FOG land vehicle,
+/// still for its first 20 s): once the car drives, every fix is refused as the filter runs
+/// away from them at its speed. Before, its rows said NAV with a 3 m 1-sigma while they were
+/// hundreds of metres off, for the 100 s the count of refusals took (found by a probe). Now
+/// the rows say DEGRADED after 5 s of refusals, and from the second refused fix of the run
+/// away the reported 1-sigma carries the fixes' offset: no row beyond 4 sigma from 4.5 s
+/// after its error first passed 4 sigma (at 21.9 s, between the last fix taken and the first
+/// refused one; the third refused fix starts a gross cluster, the fourth shows it running away),
+/// and NAV,
+/// within 3 sigma, at the end (after the re-alignment that the divergence starts).
+#[test]
+fn a_wrong_given_heading_is_not_reported_as_nav() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    sim_fog_car(d, "240");
+    let mut start = GIVEN;
+    start[5] = "0,0,90";
+    let (text, out) = replay_in(
+        d,
+        &[
+            &start[..],
+            &["--init-std", "1,0.1,0.1", "--imu-noise", "fog"],
+        ]
+        .concat(),
+    );
+    assert!(text.contains("re-aligned in motion"), "{text}");
+    let rows = errors_over_sigma(d, &out);
+    let log = std::fs::read_to_string(&out).unwrap();
+    let lines: Vec<&str> = log
+        .lines()
+        .skip(1)
+        .filter(|l| !l.starts_with('#'))
+        .collect();
+    assert_eq!(lines.len(), rows.len());
+    let horizontal = |r: &[f64; 6]| r[NORTH].abs().max(r[EAST].abs());
+    let time = |l: &str| l.split(',').next().unwrap().parse::<f64>().unwrap();
+    let beyond: Vec<f64> = lines
+        .iter()
+        .zip(&rows)
+        .filter(|(_, r)| horizontal(r) > 4.0)
+        .map(|(l, _)| time(l))
+        .collect();
+    let first = *beyond.first().expect("the heading error never showed");
+    for (l, r) in lines.iter().zip(&rows) {
+        let t = time(l);
+        assert!(
+            t <= first + 4.5 || horizontal(r) <= 4.0,
+            "{:.1} sigma at {t} s: {l}",
+            horizontal(r)
+        );
+    }
+    // DEGRADED after 5 s of refusals (the count of 100 would take 100 s at 1 Hz).
+    let soon = lines.iter().find(|l| time(l) >= first + 8.0).unwrap();
+    assert!(soon.ends_with("DEGRADED"), "{soon}");
+    let last = rows.last().unwrap();
+    assert!(lines.last().unwrap().ends_with("NAV"), "{log}");
+    assert!(horizontal(last) < 3.0, "{last:?}");
+}
+
 fn family_case(scenario: &str, grade: Grade, rate: f64, vel: Option<[f64; 3]>) -> Case {
     Case {
         scenario: scenario.into(),

@@ -117,6 +117,9 @@ pub struct ErrorFilter<T: Scalar> {
     refused_unconfirmed: Option<RefusedCluster<T>>,
     /// Propagated time since the last position fix [s].
     since_fix_s: T,
+    /// Propagated time from the first to the last of the position fixes refused in a row
+    /// [s] (zero with fewer than two).
+    refused_for_s: T,
     /// The correction of the last position fix when it was a re-acquisition (taken alone
     /// against a much wider prediction; [`integrity`] module docs), until the next fix.
     reacquired: Option<Reacquisition<T>>,
@@ -180,6 +183,7 @@ impl<T: Scalar> ErrorFilter<T> {
             cluster: None,
             refused_unconfirmed: None,
             since_fix_s: T::zero(),
+            refused_for_s: T::zero(),
             reacquired: None,
             restart: None,
             pull: Pull::none(),
@@ -306,7 +310,8 @@ impl<T: Scalar> ErrorFilter<T> {
 
     /// The health: a latched covariance fault, a lost IMU gap, the vicinity of a pole
     /// ([`Self::near_pole`]), [`FilterConfig::rejections_to_degrade`] position fixes refused
-    /// in a row, or a horizontal 1-sigma beyond [`FilterConfig::max_horizontal_sigma_m`].
+    /// in a row or refusals in a row over [`FilterConfig::refused_time_to_degrade_s`], or a
+    /// horizontal 1-sigma beyond [`FilterConfig::max_horizontal_sigma_m`].
     pub fn status(&self) -> FilterStatus {
         if self.fault_latched {
             FilterStatus::CovarianceFault
@@ -314,7 +319,9 @@ impl<T: Scalar> ErrorFilter<T> {
             FilterStatus::ImuLost
         } else if self.near_pole {
             FilterStatus::NearPole
-        } else if self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade {
+        } else if self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade
+            || self.refused_for_s >= self.config.refused_time_to_degrade_s
+        {
             FilterStatus::AidingRejected
         } else if self.position_covariance().fixed_view::<2, 2>(0, 0).trace()
             > self.config.max_horizontal_sigma_m * self.config.max_horizontal_sigma_m
@@ -341,11 +348,9 @@ impl<T: Scalar> ErrorFilter<T> {
     pub fn diverged(&self) -> bool {
         let max = self.config.max_horizontal_sigma_m;
         let p_pos = Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)]);
-        let gross_drift = self.config.gate_nis * T::c(integrity::GROSS_NIS_FACTOR);
         self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade
             && self.cluster.as_ref().is_some_and(|c| {
-                c.members as usize >= integrity::WINDOW
-                    && (!c.gross || c.moved(&p_pos) > gross_drift)
+                c.members as usize >= integrity::WINDOW && (!c.gross || c.ran_away)
             })
             && p_pos.x + p_pos.y > max * max
     }
@@ -768,11 +773,18 @@ impl<T: Scalar> ErrorFilter<T> {
         fix: &GnssPosition<T>,
         lag_s: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
+        let since_last_s = self.since_fix_s;
         let out = match self.position_measurement(snap, fix, lag_s) {
             Some(m) => self.screened_position_update(&m, snap.earth.g),
             None => (AidResult::Invalid, None),
         };
-        Self::counted(&mut self.counters.position, out)
+        let out = Self::counted(&mut self.counters.position, out);
+        self.refused_for_s = match (&out.0, self.counters.position.consecutive_rejected) {
+            (AidResult::Rejected { .. }, 1) | (AidResult::Accepted { .. }, _) => T::zero(),
+            (AidResult::Rejected { .. }, _) => self.refused_for_s + since_last_s,
+            (AidResult::Invalid, _) => self.refused_for_s,
+        };
+        out
     }
 
     /// The position update with the integrity tests of [`super::integrity`]; `g` [m/s^2] the
@@ -871,10 +883,11 @@ impl<T: Scalar> ErrorFilter<T> {
                 )
                 .replacing(previous.as_ref()),
             };
+            let p_pos = Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)]);
+            let cluster = cluster.judged(&p_pos, gate);
             self.cluster = Some(cluster);
             // DEGRADED, and the refused fixes moved away from the filter faster than its own
             // covariance allows: the filter is the one drifting ([`integrity`] module docs).
-            let p_pos = Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)]);
             let p_vel = self.p.fixed_view::<3, 3>(VEL, VEL).into_owned();
             recovered = self.counters.position.consecutive_rejected
                 >= self.config.rejections_to_degrade
@@ -901,7 +914,8 @@ impl<T: Scalar> ErrorFilter<T> {
             && (c.gross || !correlated)
             && c.claims(&m.z, &m.r, &drift, nis, &s, gate)
         {
-            self.cluster = Some(c.followed_by(m.z, m.r, dt));
+            let p_pos = Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)]);
+            self.cluster = Some(c.followed_by(m.z, m.r, dt).judged(&p_pos, gate));
             let n = &mut self.counters.position.cluster_rejected;
             *n = n.saturating_add(1);
             return (AidResult::Rejected { nis }, None);

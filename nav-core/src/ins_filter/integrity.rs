@@ -167,7 +167,12 @@
 //! 2 sigma of the solution, which does not claim to exclude what it cannot tell from its own
 //! error. Only the reported covariance carries it (the gate, the cluster rules and the
 //! updates use the filter's own, so what the filter refuses is unchanged); a gross cluster
-//! adds none (the filter knew its position when the jump came). A cluster that starts while
+//! adds none (the filter knew its position when the jump came) until it has run away
+//! ([`RefusedCluster::ran_away`]: its offset moved since the jump by more than
+//! [`GROSS_NIS_FACTOR`] times the gate of the filter's own position variance, latched): then
+//! the filter, not the fixes, is moving, and it cannot claim to exclude them (a given start's
+//! heading 90 deg off under a declared 0.1 deg: the fixes ran away at the car's 15 m/s, and
+//! the rows were hundreds of metres off with a 3 m sigma). A cluster that starts while
 //! another is refused carries the other's doubt ([`RefusedCluster::replacing`]): a held offset
 //! that begins while the filter refuses the true fixes it may have drifted from (after a ramp
 //! it followed) leaves that doubt standing.
@@ -517,6 +522,10 @@ pub struct RefusedCluster<T: Scalar> {
     /// docs: a held offset that starts while the true fixes are refused does not clear the
     /// filter's doubt about them).
     pub carried_doubt: Matrix3<T>,
+    /// A gross cluster whose offset moved away from the jump beyond what the filter's own
+    /// position variance allows, as last [`Self::judged`] (latched): the filter, not the
+    /// fixes, ran away (module docs).
+    pub ran_away: bool,
 }
 
 impl<T: Scalar> RefusedCluster<T> {
@@ -535,6 +544,7 @@ impl<T: Scalar> RefusedCluster<T> {
             age_s: T::zero(),
             members: 1,
             carried_doubt: Matrix3::zeros(),
+            ran_away: false,
         }
     }
 
@@ -718,11 +728,25 @@ impl<T: Scalar> RefusedCluster<T> {
         q <= gate_3dof && q < nis && !self.is_typical(s)
     }
 
+    /// The cluster judged against the filter's own position variances `p_pos_m2` [m^2] with
+    /// the gate `gate_3dof`: it has run away ([`Self::ran_away`], latched) once it is gross
+    /// and its offset has moved since the jump by more than [`GROSS_NIS_FACTOR`] times the
+    /// gate ([`Self::moved`]).
+    pub fn judged(self, p_pos_m2: &Vector3<T>, gate_3dof: T) -> Self {
+        Self {
+            ran_away: self.ran_away
+                || (self.gross && self.moved(p_pos_m2) > gate_3dof * T::c(GROSS_NIS_FACTOR)),
+            ..self
+        }
+    }
+
     /// The doubt on the solution's position while this cluster is refused (module docs):
-    /// `z z^T / 4` of the last member's innovation `z` [m^2], none for a gross cluster, plus
-    /// the doubt it carries from a cluster it replaced; `None` when both are none.
+    /// `z z^T / 4` of the last member's innovation `z` [m^2], none for a gross cluster that
+    /// has not run away ([`Self::ran_away`]), plus the doubt it carries from a cluster it
+    /// replaced; `None` when both are none.
     pub fn doubt(&self) -> Option<Matrix3<T>> {
-        let own = (!self.gross).then(|| self.z_ned_m * self.z_ned_m.transpose() * T::c(0.25));
+        let own = (!self.gross || self.ran_away)
+            .then(|| self.z_ned_m * self.z_ned_m.transpose() * T::c(0.25));
         let carried = (self.carried_doubt != Matrix3::zeros()).then_some(self.carried_doubt);
         match (own, carried) {
             (Some(a), Some(b)) => Some(a + b),
@@ -1078,6 +1102,44 @@ mod tests {
         assert!(!small.explains(&Vector3::new(6.0, 0.0, 0.0), &s, gate));
         let later = pull.carried(600.0);
         assert!(later.position_ned_m.norm() < 0.1 * pull.position_ned_m.norm());
+    }
+
+    /// A gross cluster whose offset runs away from the jump faster than the filter's own
+    /// position variance could (a given start's heading 90 deg off under a declared
+    /// 0.1 deg: the refused fixes 15 m further off each second) reports it as doubt; a held
+    /// jump does not.
+    #[test]
+    fn a_gross_cluster_that_runs_away_reports_its_offset_as_doubt() {
+        let (gate, r) = (
+            crate::ins_filter::CHI2_3DOF_999,
+            Vector3::new(0.25, 0.25, 1.0),
+        );
+        let p_pos = Vector3::repeat(0.12_f64 * 0.12);
+        let jump = Vector3::new(-11.4, 12.2, 0.0);
+        let start = RefusedCluster::start(jump, r, 2000.0, gate, true).judged(&p_pos, gate);
+        assert!(start.gross && !start.ran_away);
+        let held = start
+            .followed_by(jump + Vector3::new(0.2, -0.1, 0.3), r, 1.0)
+            .judged(&p_pos, gate);
+        assert!(!held.ran_away && held.doubt().is_none());
+        let z = Vector3::new(-20.7, 20.6, -0.5);
+        // Against a filter whose own variance covers the move, it has not run away.
+        assert!(
+            !start
+                .followed_by(z, r, 1.0)
+                .judged(&Vector3::repeat(100.0), gate)
+                .ran_away
+        );
+        let away = start.followed_by(z, r, 1.0).judged(&p_pos, gate);
+        assert!(away.ran_away);
+        let d = away.doubt().expect("the doubt of a filter that ran away");
+        assert!((d[(0, 0)].sqrt() * 2.0 - 20.7).abs() < 1e-9, "{d}");
+        // Latched: the filter's own variance growing later (free inertial, or set aside for
+        // a re-alignment) does not make the run-away offset its own error.
+        let later = away
+            .followed_by(z * 10.0, r, 10.0)
+            .judged(&Vector3::repeat(1e4), gate);
+        assert!(later.ran_away && later.doubt().is_some());
     }
 
     /// A gross cluster that starts while a cluster of 3 m was refused keeps its doubt; one

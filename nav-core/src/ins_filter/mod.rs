@@ -101,8 +101,14 @@ pub struct FilterConfig<T: Scalar> {
     pub gnss_correlated_error: Option<GnssCorrelatedError<T>>,
     /// Chi-square gate of a 3-component measurement [-] (default [`CHI2_3DOF_999`]).
     pub gate_nis: T,
-    /// Consecutive position rejections after which the filter reports itself degraded.
+    /// Consecutive position rejections after which the filter reports itself degraded (and
+    /// after which the recovery rules of [`integrity`] apply).
     pub rejections_to_degrade: u32,
+    /// Time from the first to the last of the position fixes refused in a row after which
+    /// the filter reports itself degraded, however few they are [s]: at 1 Hz the count
+    /// alone left it NAV for 100 s of refusals (a given start's heading 90 deg off under a
+    /// declared 0.1 deg: 1.3 km off, NAV).
+    pub refused_time_to_degrade_s: T,
     /// Horizontal position 1-sigma above which the filter reports itself degraded [m].
     pub max_horizontal_sigma_m: T,
     /// Zero-velocity and zero-rate updates (`None`: off).
@@ -115,7 +121,8 @@ pub struct FilterConfig<T: Scalar> {
 
 impl<T: Scalar> FilterConfig<T> {
     /// Defaults around `noise`: scale factors on, propagation at 10 Hz, no lever arm, the
-    /// 99.9 % gate, degraded after 100 rejections or beyond 50 m, ZUPT/ZARU on.
+    /// 99.9 % gate, degraded after 100 rejections in a row, after refusals in a row over 5 s
+    /// or beyond 50 m, ZUPT/ZARU on.
     pub fn new(noise: FilterNoise<T>) -> Self {
         Self {
             noise,
@@ -125,6 +132,7 @@ impl<T: Scalar> FilterConfig<T> {
             gnss_correlated_error: None,
             gate_nis: T::c(CHI2_3DOF_999),
             rejections_to_degrade: 100,
+            refused_time_to_degrade_s: T::c(5.0),
             max_horizontal_sigma_m: T::c(50.0),
             zero_motion: Some(ZeroMotionConfig::default()),
             mechanization: MechanizationConfig::default(),
@@ -248,7 +256,8 @@ impl<T: Scalar> SensorErrors<T> {
 pub enum FilterStatus {
     /// Aided (or free inertial within its limits).
     Nominal,
-    /// [`FilterConfig::rejections_to_degrade`] position fixes in a row refused by the gate.
+    /// [`FilterConfig::rejections_to_degrade`] position fixes in a row refused, or refused in
+    /// a row over [`FilterConfig::refused_time_to_degrade_s`].
     AidingRejected,
     /// Horizontal position 1-sigma above [`FilterConfig::max_horizontal_sigma_m`].
     SigmaAboveLimit,

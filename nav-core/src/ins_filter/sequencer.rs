@@ -788,11 +788,48 @@ pub(crate) mod tests {
             assert!(e < 3.0 * sigma, "{e} m against {sigma} m");
         }
 
+        /// Fixes 50 m north of the car for 15 s: refused from the first, the filter says
+        /// DEGRADED once the refusals in a row span 5 s (6 fixes at 1 Hz, not the 100 of the
+        /// count), and NAV again from the first true fix after them.
+        #[test]
+        fn refusals_over_5_s_degrade_the_status_before_their_count_does() {
+            let mut seq = sequencer();
+            drive(&mut seq, 0.0, 60.0, |_| true);
+            let status = |seq: &Sequencer<f64>| seq.filter().unwrap().status();
+            assert_eq!(status(&seq), FilterStatus::Nominal);
+            for k in 6_001..=7_500u64 {
+                let t_us = k * DT_US;
+                if t_us.is_multiple_of(1_000_000) {
+                    let mut f = fix(t_us / 1_000_000);
+                    f.position.lat_rad += 50.0 / 6.37e6;
+                    seq.push_fix(f);
+                }
+                seq.on_sample(t_us, &increment()).unwrap();
+                let c = seq.filter().unwrap().counters().position;
+                let t_s = t_us as f64 * 1e-6;
+                if t_s > 61.0 {
+                    assert!(c.consecutive_rejected >= 1, "{c}");
+                }
+                // The 6th refusal, at 66 s, ends 5 s of propagated time (summed intervals):
+                // either way.
+                let expected = match t_s {
+                    t if t >= 67.0 => FilterStatus::AidingRejected,
+                    t if t < 66.0 => FilterStatus::Nominal,
+                    _ => status(&seq),
+                };
+                assert_eq!(status(&seq), expected, "at {t_s} s: {c}");
+            }
+            drive(&mut seq, 75.0, 77.0, |_| true);
+            assert_eq!(status(&seq), FilterStatus::Nominal);
+            assert_eq!(seq.filter().unwrap().counters().position.rejected, 15);
+        }
+
         /// A gyro bias of 0.06 deg/s for the first 60 s, a hundred times the 1-sigma the filter
         /// was given (a transient its model does not allow), and position fixes alone: the
         /// filter drifts away from its fixes, which it refuses from 48 s on as a jump (a
         /// gross cluster), and its error grows far faster than its own 1-sigma (kilometres
-        /// against tens of metres). Once DEGRADED by refusals with its horizontal 1-sigma
+        /// against tens of metres; the reported 1-sigma carries the refused fixes' offset,
+        /// which ran away from the jump, as doubt). Once DEGRADED by refusals with its horizontal 1-sigma
         /// beyond the limit, it is set aside (its rows go on, DEGRADED) and the start in
         /// motion re-aligns on the fixes: the filter navigates again (NAV) from the start's
         /// sensor knowledge, its counters going on, within 3 sigma to the end. Was: every fix
@@ -822,7 +859,12 @@ pub(crate) mod tests {
                         let p = position(t_us as f64 * 1e-6).ned_to(&lost.state().position);
                         ((p[0] * p[0] + p[1] * p[1]).sqrt(), ())
                     };
-                    assert!(e > 20.0 * lost.sigma(POS).x, "{e} m");
+                    // Far beyond its own 1-sigma; the reported one carries the refused
+                    // fixes' offset as doubt (they ran away from the jump), and covers it.
+                    let own = lost.covariance()[(POS, POS)].sqrt();
+                    assert!(e > 20.0 * own, "{e} m against {own} m");
+                    let reported = lost.sigma(POS).xy().norm();
+                    assert!(e < 3.0 * reported, "{e} m against {reported} m");
                     set_aside = Some((t_us, lost.counters().position));
                 }
                 if seq.realignments().completed > 0 && t_us.is_multiple_of(1_000_000) {
