@@ -87,6 +87,71 @@ impl AtomicFile {
     }
 }
 
+/// A set of outputs written into one directory whole or not at all (`nav sim`'s recording,
+/// truth, description and fixes): every destination is checked before anything is written
+/// ([`Self::new`]), the files are written into a hidden staging directory beside them, and
+/// only once all are written are they renamed into place ([`Self::commit`]). A set dropped
+/// without it removes the staging directory and leaves the destinations as they were (a
+/// directory in the place of `truth.csv` left a new recording beside an earlier run's truth).
+#[derive(Debug)]
+pub struct FileSet {
+    dir: PathBuf,
+    names: Vec<String>,
+    staging: tempfile::TempDir,
+}
+
+impl FileSet {
+    /// Starts the set of `names` in `dir` (which must exist); refuses a destination that
+    /// holds something other than a regular file, as [`AtomicFile::create`] does.
+    pub fn new(dir: &Path, names: &[&str]) -> io::Result<Self> {
+        for name in names {
+            destination(&dir.join(name))?;
+        }
+        let staging = tempfile::Builder::new()
+            .prefix(".staging.")
+            .tempdir_in(dir)?;
+        Ok(Self {
+            dir: dir.to_owned(),
+            names: names.iter().map(|n| (*n).to_owned()).collect(),
+            staging,
+        })
+    }
+
+    /// Where to write the file `name` of the set (in the staging directory); `None` for a
+    /// name the set was not started with.
+    pub fn staged(&self, name: &str) -> Option<PathBuf> {
+        self.names
+            .iter()
+            .any(|n| n == name)
+            .then(|| self.staging.path().join(name))
+    }
+
+    /// Renames every file of the set into place (over a symbolic link's target, keeping a
+    /// replaced file's permission bits, as [`AtomicFile::commit`] does); fails, leaving
+    /// every destination as it was, when one of them was not written.
+    pub fn commit(self) -> io::Result<()> {
+        let mut moves = Vec::with_capacity(self.names.len());
+        for name in &self.names {
+            let staged = self.staging.path().join(name);
+            if !staged.is_file() {
+                return Err(io::Error::other(format!(
+                    "{} of the set was not written",
+                    self.dir.join(name).display()
+                )));
+            }
+            let (target, keep) = destination(&self.dir.join(name))?;
+            if let Some(keep) = keep {
+                std::fs::set_permissions(&staged, keep)?;
+            }
+            moves.push((staged, target));
+        }
+        for (staged, target) in moves {
+            std::fs::rename(&staged, &target)?;
+        }
+        Ok(())
+    }
+}
+
 /// The file an output at `path` replaces and the permissions to keep (`None`: a new file);
 /// refuses what is not a regular file (module docs).
 fn destination(path: &Path) -> io::Result<(PathBuf, Option<Permissions>)> {
@@ -186,6 +251,49 @@ mod tests {
         write(&path, |w| w.write_all(b"new\n")).unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "new\n");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_file_set_is_put_in_place_whole_or_not_at_all() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::write(d.join("a.csv"), "old a\n").unwrap();
+        // One of the set not written: nothing moves, nothing is left behind.
+        let set = FileSet::new(d, &["a.csv", "b.csv"]).unwrap();
+        write(&set.staged("a.csv").unwrap(), |w| w.write_all(b"new a\n")).unwrap();
+        assert!(set.staged("c.csv").is_none());
+        let e = set.commit().unwrap_err();
+        assert!(
+            e.to_string().contains("b.csv of the set was not written"),
+            "{e}"
+        );
+        assert_eq!(std::fs::read_to_string(d.join("a.csv")).unwrap(), "old a\n");
+        assert_eq!(std::fs::read_dir(d).unwrap().count(), 1);
+        // A destination that is a directory is refused before anything is written.
+        std::fs::create_dir(d.join("b.csv")).unwrap();
+        let e = FileSet::new(d, &["a.csv", "b.csv"]).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("is not a regular file (a directory)"),
+            "{e}"
+        );
+        std::fs::remove_dir(d.join("b.csv")).unwrap();
+        // Dropped unfinished: nothing moves.
+        let set = FileSet::new(d, &["a.csv"]).unwrap();
+        write(&set.staged("a.csv").unwrap(), |w| w.write_all(b"new a\n")).unwrap();
+        drop(set);
+        assert_eq!(std::fs::read_to_string(d.join("a.csv")).unwrap(), "old a\n");
+        assert_eq!(std::fs::read_dir(d).unwrap().count(), 1);
+        // Whole: both in place, the staging directory gone.
+        let set = FileSet::new(d, &["a.csv", "b.csv"]).unwrap();
+        for name in ["a.csv", "b.csv"] {
+            write(&set.staged(name).unwrap(), |w| w.write_all(b"new\n")).unwrap();
+        }
+        set.commit().unwrap();
+        for name in ["a.csv", "b.csv"] {
+            assert_eq!(std::fs::read_to_string(d.join(name)).unwrap(), "new\n");
+        }
+        assert_eq!(std::fs::read_dir(d).unwrap().count(), 2);
     }
 
     #[test]

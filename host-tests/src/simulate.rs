@@ -249,14 +249,26 @@ pub fn write(dir: &Path, opts: &SimOptions, sim: &Simulated) -> Result<SimFiles>
     write_with_receiver(dir, opts, sim, None)
 }
 
-/// [`write`], with the simulated receiver's settings (`receiver`: the text to add, and the
-/// `nav replay` options that read its fixes) at the end of `scenario.txt`, and its replay line
-/// taking the fixes.
+/// The simulated receiver's part of a `nav sim` output: its settings (the text to add to
+/// `scenario.txt`, and the `nav replay` options that read its fixes) and its fixes (written
+/// as `gnss.csv` and `gnss.bin`).
+#[derive(Clone, Copy, Debug)]
+pub struct ReceiverOutput<'a> {
+    /// The settings' text.
+    pub text: &'a str,
+    /// The `nav replay` options that read the fixes.
+    pub replay_options: &'a str,
+    /// The fixes.
+    pub fixes: &'a [crate::gnss::GnssFix],
+}
+
+/// [`write`], with the simulated receiver's settings at the end of `scenario.txt`, its replay
+/// line taking the fixes, and the fixes, all in the one set written whole or not at all.
 pub fn write_with_receiver(
     dir: &Path,
     opts: &SimOptions,
     sim: &Simulated,
-    receiver: Option<(&str, &str)>,
+    receiver: Option<ReceiverOutput<'_>>,
 ) -> Result<SimFiles> {
     let replay_file = if opts.formats != Formats::Csv {
         dir.join("imu.bin")
@@ -278,7 +290,12 @@ pub fn write_with_receiver(
             })
             .collect();
     }
-    if let Some((text, replay_options)) = receiver {
+    if let Some(ReceiverOutput {
+        text,
+        replay_options,
+        ..
+    }) = receiver
+    {
         const END: &str = " --out solution.csv";
         description = description
             .lines()
@@ -291,16 +308,24 @@ pub fn write_with_receiver(
             .collect();
         description.push_str(text);
     }
-    write_files(dir, opts.formats, sim, &description)
+    write_files(
+        dir,
+        opts.formats,
+        sim,
+        &description,
+        receiver.map(|r| r.fixes),
+    )
 }
 
-/// Writes the recording(s) of `sim` as `formats` asks, `truth.csv` and `scenario.txt` (the
-/// text `description`) into `dir` (created if missing).
+/// Writes the recording(s) of `sim` as `formats` asks, `truth.csv`, `scenario.txt` (the
+/// text `description`) and the receiver's `fixes` (`gnss.csv`, `gnss.bin`) into `dir`
+/// (created if missing), as one set written whole or not at all ([`crate::atomic::FileSet`]).
 pub(crate) fn write_files(
     dir: &Path,
     formats: Formats,
     sim: &Simulated,
     description: &str,
+    fixes: Option<&[crate::gnss::GnssFix]>,
 ) -> Result<SimFiles> {
     let binary = dir.join("imu.bin");
     let csv = dir.join("imu.csv");
@@ -309,17 +334,34 @@ pub(crate) fn write_files(
     let r = &sim.recording;
     let csv_rows = if want_csv { Some(r.to_csv()?) } else { None };
     fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut names = vec!["truth.csv", "scenario.txt"];
+    names.extend(want_bin.then_some("imu.bin"));
+    names.extend(want_csv.then_some("imu.csv"));
+    if fixes.is_some() {
+        names.extend(["gnss.csv", "gnss.bin"]);
+    }
+    let set = crate::atomic::FileSet::new(dir, &names)
+        .with_context(|| format!("writing into {}", dir.display()))?;
+    // Every name was given to the set above.
+    let staged = |name: &str| set.staged(name).unwrap_or_else(|| dir.join(name));
     if want_bin {
-        recording_io::write_binary(&binary, r.kind, r.rate_hz, r.t0_ns, &r.records)?;
+        recording_io::write_binary(&staged("imu.bin"), r.kind, r.rate_hz, r.t0_ns, &r.records)?;
     }
     if let Some(rows) = &csv_rows {
-        imu_csv::write(&csv, rows)?;
+        imu_csv::write(&staged("imu.csv"), rows)?;
     }
-    let truth = dir.join("truth.csv");
-    truth_csv::write(&truth, &sim.truth)?;
-    let description_path = dir.join("scenario.txt");
+    truth_csv::write(&staged("truth.csv"), &sim.truth)?;
+    let description_path = staged("scenario.txt");
     crate::atomic::write(&description_path, |w| w.write_all(description.as_bytes()))
         .with_context(|| format!("writing {}", description_path.display()))?;
+    if let Some(fixes) = fixes {
+        crate::gnss::write_gnss_csv(&staged("gnss.csv"), fixes)?;
+        crate::gnss_file::write_record_file(&staged("gnss.bin"), fixes)?;
+    }
+    set.commit()
+        .with_context(|| format!("writing into {}", dir.display()))?;
+    let truth = dir.join("truth.csv");
+    let description_path = dir.join("scenario.txt");
     Ok(SimFiles {
         binary: want_bin.then_some(binary),
         csv: want_csv.then_some(csv),

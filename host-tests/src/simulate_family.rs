@@ -93,7 +93,7 @@ pub fn write_member(
         dir.join("imu.csv")
     };
     let description = describe_member(member, opts, sim, &replay_file)?;
-    crate::simulate::write_files(dir, opts.formats, sim, &description)
+    crate::simulate::write_files(dir, opts.formats, sim, &description, None)
 }
 
 /// The `scenario.txt` text of `member`.

@@ -175,6 +175,68 @@ fn sim_removes_an_earlier_runs_files_it_does_not_write() {
     assert_eq!(names(&out), before);
 }
 
+/// A run whose set cannot be written whole writes none of it: with a directory in the place
+/// of `truth.csv`, `nav sim` wrote the new recording and fixes beside the earlier run's
+/// description before it failed (found by a probe), a mixed set. Now every destination is
+/// checked first and the set is renamed into place only once all of it is written: the
+/// earlier run's files are as they were, and no staging directory is left.
+#[test]
+fn sim_writes_its_set_whole_or_not_at_all() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let run = |seed: &str| {
+        nav(&[
+            "sim",
+            "land-vehicle",
+            "--grade",
+            "fog",
+            "--seconds",
+            "10",
+            "--seed",
+            seed,
+            "--gnss-rate",
+            "1",
+            "--out",
+            s(&out),
+        ])
+    };
+    let o = run("1");
+    assert!(o.status.success(), "{}", text(&o));
+    std::fs::remove_file(out.join("truth.csv")).unwrap();
+    std::fs::create_dir(out.join("truth.csv")).unwrap();
+    let before: Vec<(String, Vec<u8>)> = names(&out)
+        .into_iter()
+        .filter(|n| n != "truth.csv")
+        .map(|n| (n.clone(), std::fs::read(out.join(&n)).unwrap()))
+        .collect();
+    assert_eq!(before.len(), 5, "{before:?}");
+    let o = run("2");
+    assert_refused(&o, "truth.csv is not a regular file (a directory)");
+    let after: Vec<(String, Vec<u8>)> = names(&out)
+        .into_iter()
+        .filter(|n| n != "truth.csv")
+        .map(|n| (n.clone(), std::fs::read(out.join(&n)).unwrap()))
+        .collect();
+    assert!(after == before, "{:?}", names(&out));
+    // Once the path is free the run writes its whole set.
+    std::fs::remove_dir(out.join("truth.csv")).unwrap();
+    let o = run("2");
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(
+        names(&out),
+        [
+            "gnss.bin",
+            "gnss.csv",
+            "imu.bin",
+            "imu.csv",
+            "scenario.txt",
+            "truth.csv"
+        ]
+    );
+    let scenario = std::fs::read_to_string(out.join("scenario.txt")).unwrap();
+    assert!(scenario.contains("seed = 2"), "{scenario}");
+}
+
 /// A still truth of 600 s at 1 Hz, from `nav sim static`.
 fn still_truth(dir: &Path) -> PathBuf {
     let sim = dir.join("still");

@@ -1635,7 +1635,7 @@ fn print_removed(
 }
 
 fn sim(a: SimArgs) -> Result<()> {
-    use host_tests::simulate::{SimOptions, simulate, write_with_receiver};
+    use host_tests::simulate::{ReceiverOutput, SimOptions, simulate, write_with_receiver};
     use host_tests::simulate_family::{SCENARIO_NAME, sim_scenario_names};
     use host_tests::trajectory::scenarios::Scenario;
     if a.scenario == SCENARIO_NAME {
@@ -1766,15 +1766,17 @@ fn sim(a: SimArgs) -> Result<()> {
         &sim,
         receiver_text
             .as_ref()
-            .map(|(t, o)| (t.as_str(), o.as_str())),
+            .zip(receiver.as_ref())
+            .map(|((text, replay_options), (_, r))| ReceiverOutput {
+                text,
+                replay_options,
+                fixes: &r.fixes,
+            }),
     )?;
     let (gnss_csv, gnss_bin) = (out.join("gnss.csv"), out.join("gnss.bin"));
     let gnss_files = [gnss_csv.as_path(), gnss_bin.as_path()];
     if let Some((g, receiver)) = receiver {
-        let path = out.join("gnss.csv");
-        host_tests::gnss::write_gnss_csv(&path, &receiver.fixes)?;
-        let bin = out.join("gnss.bin");
-        host_tests::gnss_file::write_record_file(&bin, &receiver.fixes)?;
+        let (path, bin) = (&gnss_csv, &gnss_bin);
         println!(
             "  GNSS       {} and {} ({} fixes)",
             path.display(),
