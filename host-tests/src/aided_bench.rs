@@ -131,7 +131,8 @@ pub struct CaseResult {
 }
 
 /// The filter's reported covariance of position, velocity and attitude, in [`state_error`]'s
-/// order: its own, with the reported position block (a refused cluster's doubt included).
+/// order: its own, with the reported position block and the velocity doubt (a refused
+/// cluster's doubt included).
 pub fn navigation_covariance(ins: &AidedIns<f64>) -> SMatrix<f64, 9, 9> {
     let p = ins.covariance();
     let blocks = [POS, VEL, ATT];
@@ -144,6 +145,8 @@ pub fn navigation_covariance(ins: &AidedIns<f64>) -> SMatrix<f64, 9, 9> {
     }
     p9.fixed_view_mut::<3, 3>(0, 0)
         .copy_from(&ins.position_covariance());
+    let mut vel = p9.fixed_view_mut::<3, 3>(3, 3);
+    vel += ins.filter().velocity_doubt();
     p9
 }
 

@@ -218,6 +218,32 @@ fn a_wrong_given_start_is_reacquired_once_degraded() {
     assert!(last[0].abs() < 3.0, "{last:?}");
 }
 
+/// A given start 111 m off under a declared 1 m, replayed with the board's MEMS noise model
+/// (an ideal car, 1 Hz fixes): no fix ever confirmed the filter's position. It re-acquired
+/// once, drifted away from the fixes (11 m/s relative to it, each refused alone, so never a
+/// cluster), and before, never re-aligned: 2.2 km off at the end. Now the refusals in a row
+/// with its own 1-sigma beyond the limit are a divergence even without a cluster: it
+/// re-aligns in motion and ends NAV, within 3 sigma.
+#[test]
+fn an_unconfirmed_filter_that_drifts_away_realigns() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    sim_into(d, &["land-vehicle", "--seconds", "300", "--gnss-rate", "1"]);
+    let mut start = GIVEN;
+    start[1] = "45.001,7.5,250";
+    let (text, out) = replay_in(d, &[&start[..], &["--init-std", "1,0.1,1"]].concat());
+    assert!(
+        text.contains("re-aligned in motion 1 time(s) after the filter diverged"),
+        "{text}"
+    );
+    let rows = errors_over_sigma(d, &out);
+    let log = std::fs::read_to_string(&out).unwrap();
+    let last = log.lines().filter(|l| !l.starts_with('#')).last().unwrap();
+    assert!(last.ends_with("NAV"), "{last}");
+    let e = rows.last().unwrap();
+    assert!(e[NORTH].abs().max(e[EAST].abs()) < 3.0, "{e:?}");
+}
+
 /// A given start whose heading is 90 deg off under a declared 0.1 deg (a FOG land vehicle,
 /// still for its first 20 s): once the car drives, every fix is refused as the filter runs
 /// away from them at its speed. Before, its rows said NAV with a 3 m 1-sigma while they were
@@ -227,7 +253,8 @@ fn a_wrong_given_start_is_reacquired_once_degraded() {
 /// after its error first passed 4 sigma (at 21.9 s, between the last fix taken and the first
 /// refused one; the third refused fix starts a gross cluster, the fourth shows it running away),
 /// and NAV,
-/// within 3 sigma, at the end (after the re-alignment that the divergence starts).
+/// within 3 sigma, at the end (after the re-alignment that the divergence starts). The
+/// velocity's 1-sigma carries the rate at which the fixes run away.
 #[test]
 fn a_wrong_given_heading_is_not_reported_as_nav() {
     let dir = tempfile::tempdir().unwrap();
@@ -269,6 +296,27 @@ fn a_wrong_given_heading_is_not_reported_as_nav() {
             horizontal(r)
         );
     }
+    // The velocity's 1-sigma carries the rate at which the refused fixes run away: while
+    // DEGRADED by the refusals (up to the re-alignment), its horizontal error stays within
+    // 5 sigma on all but 1 % of the rows (was 15 m/s off under 1 cm/s).
+    let truth = host_tests::truth_csv::read(&d.join("truth.csv")).unwrap();
+    let refusing: Vec<f64> = lines
+        .iter()
+        .filter(|l| time(l) > first + 4.5 && l.ends_with("DEGRADED"))
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').filter_map(|v| v.parse().ok()).collect();
+            let tr = host_tests::report::interpolate(&truth, v[0]).unwrap();
+            ((v[4] - tr.v_eb_ned.x) / v[13])
+                .abs()
+                .max(((v[5] - tr.v_eb_ned.y) / v[14]).abs())
+        })
+        .collect();
+    let beyond = refusing.iter().filter(|k| **k > 5.0).count();
+    assert!(
+        refusing.len() > 100 && beyond * 100 <= refusing.len(),
+        "{beyond} of {} DEGRADED rows' velocity beyond 5 sigma",
+        refusing.len()
+    );
     // DEGRADED after 5 s of refusals (the count of 100 would take 100 s at 1 Hz).
     let soon = lines.iter().find(|l| time(l) >= first + 8.0).unwrap();
     assert!(soon.ends_with("DEGRADED"), "{soon}");

@@ -222,12 +222,13 @@ impl<T: Scalar> ErrorFilter<T> {
     }
 
     /// 1-sigma of the state's block at `at` (one of the offsets), per axis; the position's
-    /// is that of [`Self::position_covariance`].
+    /// is that of [`Self::position_covariance`], the velocity's carries
+    /// [`Self::velocity_doubt`].
     pub fn sigma(&self, at: usize) -> Vector3<T> {
-        let doubt = if at == POS {
-            self.position_doubt().diagonal()
-        } else {
-            Vector3::zeros()
+        let doubt = match at {
+            POS => self.position_doubt().diagonal(),
+            VEL => self.velocity_doubt().diagonal(),
+            _ => Vector3::zeros(),
         };
         Vector3::from_fn(|k, _| self.p[(at + k, at + k)] + doubt[k])
             .map(|v| v.max(T::zero()).sqrt())
@@ -280,6 +281,17 @@ impl<T: Scalar> ErrorFilter<T> {
         cluster.unwrap_or_else(Matrix3::zeros)
             + reacquired.unwrap_or_else(Matrix3::zeros)
             + restarted.unwrap_or_else(Matrix3::zeros)
+    }
+
+    /// The doubt on the velocity, NED [m^2/s^2]: the rate of a refused cluster's offset whose
+    /// offset is a doubt on the position ([`RefusedCluster::velocity_doubt`]); zero
+    /// otherwise (reported, not gated, as the position's).
+    pub fn velocity_doubt(&self) -> Matrix3<T> {
+        self.cluster
+            .as_ref()
+            .or(self.refused_unconfirmed.as_ref())
+            .and_then(RefusedCluster::velocity_doubt)
+            .unwrap_or_else(Matrix3::zeros)
     }
 
     /// The reported position covariance, NED [m^2]: the filter's own ([`Self::covariance`],
@@ -344,14 +356,22 @@ impl<T: Scalar> ErrorFilter<T> {
     /// fast as its 1-sigma grows: the fixes' normalised squares stay just above the gate
     /// (17-30) while the 1-sigma grows to kilometres, so neither the typical release nor the
     /// drifted cluster re-acquires, and every fix of the run was refused. By then its sensor
-    /// estimates are as doubtful as its solution [Groves, ch. 17, re-initialisation].
+    /// estimates are as doubtful as its solution [Groves, ch. 17, re-initialisation]. A
+    /// filter that no full window of fixes has confirmed yet has no clusters: there, the
+    /// refusals in a row with its own 1-sigma beyond the limit are enough (a given start
+    /// 111 m off under a declared 1 m, on a MEMS model: it re-acquired once, then drifted
+    /// away from fixes moving 11 m/s relative to it, each refused alone, and was 2.2 km off
+    /// at the end of the run, never re-aligned).
     pub fn diverged(&self) -> bool {
         let max = self.config.max_horizontal_sigma_m;
         let p_pos = Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)]);
+        let clustered = self
+            .cluster
+            .as_ref()
+            .is_some_and(|c| c.members as usize >= integrity::WINDOW && (!c.gross || c.ran_away));
+        let unconfirmed = !self.confirmed && self.refused_unconfirmed.is_some();
         self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade
-            && self.cluster.as_ref().is_some_and(|c| {
-                c.members as usize >= integrity::WINDOW && (!c.gross || c.ran_away)
-            })
+            && (clustered || unconfirmed)
             && p_pos.x + p_pos.y > max * max
     }
 

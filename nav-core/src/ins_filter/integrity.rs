@@ -172,7 +172,10 @@
 //! [`GROSS_NIS_FACTOR`] times the gate of the filter's own position variance, latched): then
 //! the filter, not the fixes, is moving, and it cannot claim to exclude them (a given start's
 //! heading 90 deg off under a declared 0.1 deg: the fixes ran away at the car's 15 m/s, and
-//! the rows were hundreds of metres off with a 3 m sigma). A cluster that starts while
+//! the rows were hundreds of metres off with a 3 m sigma). Where the offset is a doubt, the
+//! rate at which it moves is one on the velocity ([`RefusedCluster::velocity_doubt`]): the
+//! filter's velocity error is what moves a true offset (those rows were 15 m/s off under a
+//! velocity 1-sigma of 1 cm/s). A cluster that starts while
 //! another is refused carries the other's doubt ([`RefusedCluster::replacing`]): a held offset
 //! that begins while the filter refuses the true fixes it may have drifted from (after a ramp
 //! it followed) leaves that doubt standing.
@@ -754,6 +757,29 @@ impl<T: Scalar> RefusedCluster<T> {
         }
     }
 
+    /// The doubt on the solution's velocity while this cluster is refused [m^2/s^2], where
+    /// its offset is a doubt on the position ([`Self::doubt`]: not a gross jump that stayed
+    /// put); `None` with one member. The filter's velocity error is what moves a true
+    /// offset (a given start's heading 90 deg off: the rows' velocity 15 m/s off under a
+    /// 1-sigma of 1 cm/s): the rate `v` at which the offset moved since the first member
+    /// ([`Self::drift_rate`]) as `v v^T / 4`, and for a cluster that ran away, whose error
+    /// turns with the vehicle, also the rate `u` since the member before (the fixes' noise
+    /// is small beside it) as `u u^T / 4`.
+    pub fn velocity_doubt(&self) -> Option<Matrix3<T>> {
+        if !(!self.gross || self.ran_away) || self.age_s <= T::zero() {
+            return None;
+        }
+        let v = self.drift_rate();
+        let mut d = v * v.transpose();
+        if let Some((z, _, dt)) = self.previous.filter(|_| self.ran_away)
+            && dt > T::zero()
+        {
+            let u = (self.z_ned_m - z) / dt;
+            d += u * u.transpose();
+        }
+        Some(d * T::c(0.25))
+    }
+
     /// True when this cluster's offset is a typical error of the filter: its normalised
     /// square against the innovation covariance `s` [m^2] within the median of `chi^2(3)`.
     pub fn is_typical(&self, s: &Matrix3<T>) -> bool {
@@ -1134,6 +1160,14 @@ mod tests {
         assert!(away.ran_away);
         let d = away.doubt().expect("the doubt of a filter that ran away");
         assert!((d[(0, 0)].sqrt() * 2.0 - 20.7).abs() < 1e-9, "{d}");
+        // Its velocity is doubtful by the rate of the run away (9.3 m/s north since the
+        // first member, which was also the one before); a held jump's is not.
+        let dv = away.velocity_doubt().expect("the velocity doubt");
+        assert!(
+            (dv[(0, 0)].sqrt() * 2.0 - 9.3 * 2f64.sqrt()).abs() < 1e-9,
+            "{dv}"
+        );
+        assert!(held.velocity_doubt().is_none() && start.velocity_doubt().is_none());
         // Latched: the filter's own variance growing later (free inertial, or set aside for
         // a re-alignment) does not make the run-away offset its own error.
         let later = away
