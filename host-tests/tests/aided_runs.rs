@@ -238,7 +238,7 @@ fn an_unconfirmed_filter_that_drifts_away_realigns() {
     );
     let rows = errors_over_sigma(d, &out);
     let log = std::fs::read_to_string(&out).unwrap();
-    let last = log.lines().filter(|l| !l.starts_with('#')).last().unwrap();
+    let last = log.lines().rfind(|l| !l.starts_with('#')).unwrap();
     assert!(last.ends_with("NAV"), "{last}");
     let e = rows.last().unwrap();
     assert!(e[NORTH].abs().max(e[EAST].abs()) < 3.0, "{e:?}");

@@ -766,7 +766,7 @@ impl<T: Scalar> RefusedCluster<T> {
     /// turns with the vehicle, also the rate `u` since the member before (the fixes' noise
     /// is small beside it) as `u u^T / 4`.
     pub fn velocity_doubt(&self) -> Option<Matrix3<T>> {
-        if !(!self.gross || self.ran_away) || self.age_s <= T::zero() {
+        if (self.gross && !self.ran_away) || self.age_s <= T::zero() {
             return None;
         }
         let v = self.drift_rate();
