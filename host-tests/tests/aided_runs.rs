@@ -218,6 +218,67 @@ fn a_wrong_given_start_is_reacquired_once_degraded() {
     assert!(last[0].abs() < 3.0, "{last:?}");
 }
 
+/// An RLG flight at 10 Hz started in motion, a 1/1/2 m correlated GNSS error simulated and
+/// declared, a 15 m multipath ramp over 30 s from 179 s: the filter follows the ramp through
+/// its velocity, then refuses the true fixes after it as a jump. Before, that jump was held
+/// against them to the end: DEGRADED, 950 m off under a 94 m 1-sigma at 870 s (its own
+/// covariance grew as fast as the fixes moved away; found by a probe, run 56). Now, DEGRADED
+/// by refusals, the jump's fixes moving away beyond the filter's own variance make it the
+/// one that ran away: its sigma carries their offset, and once its own 1-sigma is beyond
+/// the limit it re-aligns. Every row from 30 s after the ramp within 4 sigma, NAV at the end.
+#[test]
+fn a_jump_that_a_ramp_left_behind_is_let_go_once_the_filter_runs_away() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (text, out) = sim_and_replay(
+        d,
+        &[
+            "flight",
+            "--grade",
+            "rlg",
+            "--seed",
+            "56",
+            "--seconds",
+            "650",
+            "--gnss-rate",
+            "10",
+            "--gnss-ramp",
+            "179,30,15,0,0",
+            "--gnss-correlated",
+            "1,1,2",
+        ],
+        &[
+            "--imu-noise",
+            "rlg",
+            "--gnss-correlated",
+            "1,1,2",
+            "--start-in-motion",
+        ],
+    );
+    assert!(
+        text.contains("re-aligned in motion 1 time(s) after the filter diverged"),
+        "{text}"
+    );
+    let rows = errors_over_sigma(d, &out);
+    let log = std::fs::read_to_string(&out).unwrap();
+    let lines: Vec<&str> = log
+        .lines()
+        .skip(1)
+        .filter(|l| !l.starts_with('#'))
+        .collect();
+    let mut after = 0;
+    for (l, r) in lines.iter().zip(&rows) {
+        let t: f64 = l.split(',').next().unwrap().parse().unwrap();
+        if t >= 239.0 {
+            after += 1;
+            let k = r[NORTH].abs().max(r[EAST].abs());
+            assert!(k < 4.0, "{k:.1} sigma at {t} s: {l}");
+        }
+    }
+    assert!(after > 3000, "{after} rows after the ramp");
+    assert!(lines.last().unwrap().ends_with("NAV"), "{log}");
+}
+
 /// A given start 111 m off under a declared 1 m, replayed with the board's MEMS noise model
 /// (an ideal car, 1 Hz fixes): no fix ever confirmed the filter's position. It re-acquired
 /// once, drifted away from the fixes (11 m/s relative to it, each refused alone, so never a

@@ -904,7 +904,9 @@ impl<T: Scalar> ErrorFilter<T> {
                 .replacing(previous.as_ref()),
             };
             let p_pos = Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)]);
-            let cluster = cluster.judged(&p_pos, gate);
+            let degraded =
+                self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade;
+            let cluster = cluster.judged(&p_pos, gate, degraded);
             self.cluster = Some(cluster);
             // DEGRADED, and the refused fixes moved away from the filter faster than its own
             // covariance allows: the filter is the one drifting ([`integrity`] module docs).
@@ -935,7 +937,9 @@ impl<T: Scalar> ErrorFilter<T> {
             && c.claims(&m.z, &m.r, &drift, nis, &s, gate)
         {
             let p_pos = Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)]);
-            self.cluster = Some(c.followed_by(m.z, m.r, dt).judged(&p_pos, gate));
+            let degraded =
+                self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade;
+            self.cluster = Some(c.followed_by(m.z, m.r, dt).judged(&p_pos, gate, degraded));
             let n = &mut self.counters.position.cluster_rejected;
             *n = n.saturating_add(1);
             return (AidResult::Rejected { nis }, None);

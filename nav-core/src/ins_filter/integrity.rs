@@ -139,9 +139,12 @@
 //! applies. The price: a filter that an unseen fault pulled off by such a gross amount stays
 //! DEGRADED (refusing) until the fixes leave the line or its drift blurs the jump, unless
 //! its offset has moved since the jump by more than [`GROSS_NIS_FACTOR`] times the gate of its
-//! own position variance ([`RefusedCluster::moved`]) while its 1-sigma is beyond the limit:
-//! then the filter, not the fixes, ran away, and the sequencer re-aligns it
-//! ([`super::ErrorFilter::diverged`]).
+//! own position variance ([`RefusedCluster::moved`]), or by more than the gate once the
+//! filter is DEGRADED by refusals ([`RefusedCluster::judged`]; an RLG flight that had
+//! followed a ramp through its velocity drifted away from the true fixes after it with its
+//! own covariance growing as fast: 950 m off under 94 m): then the filter, not the fixes,
+//! ran away, its reported sigma carries their offset (below), and once its own 1-sigma is
+//! beyond the limit the sequencer re-aligns it ([`super::ErrorFilter::diverged`]).
 //!
 //! **A re-acquisition is checked by the next fix** [Groves, ch. 17, adaptation]. After a gap
 //! (an outage, a wide start) the prediction is far wider than a fix, so the gate cannot see a
@@ -734,11 +737,20 @@ impl<T: Scalar> RefusedCluster<T> {
     /// The cluster judged against the filter's own position variances `p_pos_m2` [m^2] with
     /// the gate `gate_3dof`: it has run away ([`Self::ran_away`], latched) once it is gross
     /// and its offset has moved since the jump by more than [`GROSS_NIS_FACTOR`] times the
-    /// gate ([`Self::moved`]).
-    pub fn judged(self, p_pos_m2: &Vector3<T>, gate_3dof: T) -> Self {
+    /// gate ([`Self::moved`]), or by more than the gate once the filter is `degraded` by
+    /// refusals ([`super::FilterConfig::rejections_to_degrade`] in a row): after that many,
+    /// a jump is no longer held against fixes that move away from the filter beyond its own
+    /// variance (an RLG flight that had followed a multipath ramp through its velocity
+    /// refused the true fixes after it as a jump, and drifted to 950 m off under a 94 m
+    /// 1-sigma, its own covariance growing as fast as the fixes moved away).
+    pub fn judged(self, p_pos_m2: &Vector3<T>, gate_3dof: T, degraded: bool) -> Self {
+        let factor = if degraded {
+            T::one()
+        } else {
+            T::c(GROSS_NIS_FACTOR)
+        };
         Self {
-            ran_away: self.ran_away
-                || (self.gross && self.moved(p_pos_m2) > gate_3dof * T::c(GROSS_NIS_FACTOR)),
+            ran_away: self.ran_away || (self.gross && self.moved(p_pos_m2) > gate_3dof * factor),
             ..self
         }
     }
@@ -1142,21 +1154,21 @@ mod tests {
         );
         let p_pos = Vector3::repeat(0.12_f64 * 0.12);
         let jump = Vector3::new(-11.4, 12.2, 0.0);
-        let start = RefusedCluster::start(jump, r, 2000.0, gate, true).judged(&p_pos, gate);
+        let start = RefusedCluster::start(jump, r, 2000.0, gate, true).judged(&p_pos, gate, false);
         assert!(start.gross && !start.ran_away);
         let held = start
             .followed_by(jump + Vector3::new(0.2, -0.1, 0.3), r, 1.0)
-            .judged(&p_pos, gate);
+            .judged(&p_pos, gate, true);
         assert!(!held.ran_away && held.doubt().is_none());
         let z = Vector3::new(-20.7, 20.6, -0.5);
         // Against a filter whose own variance covers the move, it has not run away.
         assert!(
             !start
                 .followed_by(z, r, 1.0)
-                .judged(&Vector3::repeat(100.0), gate)
+                .judged(&Vector3::repeat(100.0), gate, false)
                 .ran_away
         );
-        let away = start.followed_by(z, r, 1.0).judged(&p_pos, gate);
+        let away = start.followed_by(z, r, 1.0).judged(&p_pos, gate, false);
         assert!(away.ran_away);
         let d = away.doubt().expect("the doubt of a filter that ran away");
         assert!((d[(0, 0)].sqrt() * 2.0 - 20.7).abs() < 1e-9, "{d}");
@@ -1172,8 +1184,14 @@ mod tests {
         // a re-alignment) does not make the run-away offset its own error.
         let later = away
             .followed_by(z * 10.0, r, 10.0)
-            .judged(&Vector3::repeat(1e4), gate);
+            .judged(&Vector3::repeat(1e4), gate, false);
         assert!(later.ran_away && later.doubt().is_some());
+        // Once DEGRADED by refusals, a move beyond the gate of the filter's own variance is
+        // enough: 4 m against a 0.5 m 1-sigma (the held jump above moved 0.4 m).
+        let slow = start.followed_by(jump + Vector3::new(4.0, 0.0, 0.0), r, 10.0);
+        assert!(!slow.judged(&Vector3::repeat(0.25), gate, false).ran_away);
+        assert!(slow.judged(&Vector3::repeat(0.25), gate, true).ran_away);
+        assert!(!held.ran_away);
     }
 
     /// A gross cluster that starts while a cluster of 3 m was refused keeps its doubt; one
