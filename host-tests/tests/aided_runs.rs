@@ -222,7 +222,7 @@ fn a_wrong_given_start_is_reacquired_once_degraded() {
 /// declared, a 15 m multipath ramp over 30 s from 179 s: the filter follows the ramp through
 /// its velocity, then refuses the true fixes after it as a jump. Before, that jump was held
 /// against them to the end: DEGRADED, 950 m off under a 94 m 1-sigma at 870 s (its own
-/// covariance grew as fast as the fixes moved away; found by a probe, run 56). Now, DEGRADED
+/// covariance grew as fast as the fixes moved away; found by a probe). Now, DEGRADED
 /// by refusals, the jump's fixes moving away beyond the filter's own variance make it the
 /// one that ran away: its sigma carries their offset, and once its own 1-sigma is beyond
 /// the limit it re-aligns. Every row from 30 s after the ramp within 4 sigma, NAV at the end.

@@ -1776,11 +1776,10 @@ fn sim(a: SimArgs) -> Result<()> {
     let (gnss_csv, gnss_bin) = (out.join("gnss.csv"), out.join("gnss.bin"));
     let gnss_files = [gnss_csv.as_path(), gnss_bin.as_path()];
     if let Some((g, receiver)) = receiver {
-        let (path, bin) = (&gnss_csv, &gnss_bin);
         println!(
             "  GNSS       {} and {} ({} fixes)",
-            path.display(),
-            bin.display(),
+            gnss_csv.display(),
+            gnss_bin.display(),
             receiver.fixes.len()
         );
         for line in receiver.describe(&g).lines() {

@@ -331,7 +331,7 @@ impl<T: Scalar> ErrorFilter<T> {
             FilterStatus::ImuLost
         } else if self.near_pole {
             FilterStatus::NearPole
-        } else if self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade
+        } else if self.degraded_by_refusals()
             || self.refused_for_s >= self.config.refused_time_to_degrade_s
         {
             FilterStatus::AidingRejected
@@ -342,6 +342,24 @@ impl<T: Scalar> ErrorFilter<T> {
         } else {
             FilterStatus::Nominal
         }
+    }
+
+    /// [`FilterConfig::rejections_to_degrade`] position fixes refused in a row: the
+    /// recovery rules of [`integrity`] apply.
+    fn degraded_by_refusals(&self) -> bool {
+        self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade
+    }
+
+    /// The filter's own position variances, NED [m^2] (its covariance, without the doubt).
+    fn own_position_variances(&self) -> Vector3<T> {
+        Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)])
+    }
+
+    /// `cluster` judged against the filter's own position variances and the gate, as
+    /// DEGRADED by refusals or not ([`RefusedCluster::judged`]).
+    fn judged(&self, cluster: RefusedCluster<T>) -> RefusedCluster<T> {
+        let p_pos = self.own_position_variances();
+        cluster.judged(&p_pos, self.config.gate_nis, self.degraded_by_refusals())
     }
 
     /// True when the filter has diverged beyond what its fixes can bring back (the sequencer
@@ -364,15 +382,13 @@ impl<T: Scalar> ErrorFilter<T> {
     /// at the end of the run, never re-aligned).
     pub fn diverged(&self) -> bool {
         let max = self.config.max_horizontal_sigma_m;
-        let p_pos = Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)]);
+        let p_pos = self.own_position_variances();
         let clustered = self
             .cluster
             .as_ref()
             .is_some_and(|c| c.members as usize >= integrity::WINDOW && (!c.gross || c.ran_away));
         let unconfirmed = !self.confirmed && self.refused_unconfirmed.is_some();
-        self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade
-            && (clustered || unconfirmed)
-            && p_pos.x + p_pos.y > max * max
+        self.degraded_by_refusals() && (clustered || unconfirmed) && p_pos.x + p_pos.y > max * max
     }
 
     /// Takes the counters of `diverged`, a filter of the same settings this one restarts
@@ -840,10 +856,7 @@ impl<T: Scalar> ErrorFilter<T> {
         // DEGRADED by refusals, and this one refused but where the solution would be had the
         // fixes of the last minutes not pulled it: a fault it followed has ended, and the
         // pull is doubtful ([`integrity`] module docs, [Groves, ch. 17]).
-        if nis > gate
-            && self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade
-            && self.pull.explains(&m.z, &s, gate)
-        {
+        if nis > gate && self.degraded_by_refusals() && self.pull.explains(&m.z, &s, gate) {
             let d = self.pull.position_ned_m;
             let mut pos = self.p.fixed_view_mut::<3, 3>(POS, POS);
             pos += d * d.transpose();
@@ -872,9 +885,7 @@ impl<T: Scalar> ErrorFilter<T> {
                 }
                 _ => RefusedCluster::start(m.z, m.r, nis, gate, false),
             };
-            if self.counters.position.consecutive_rejected < self.config.rejections_to_degrade
-                || tracked.previous.is_none()
-            {
+            if !self.degraded_by_refusals() || tracked.previous.is_none() {
                 self.refused_unconfirmed = Some(tracked);
                 return (AidResult::Rejected { nis }, None);
             }
@@ -903,16 +914,13 @@ impl<T: Scalar> ErrorFilter<T> {
                 )
                 .replacing(previous.as_ref()),
             };
-            let p_pos = Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)]);
-            let degraded =
-                self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade;
-            let cluster = cluster.judged(&p_pos, gate, degraded);
+            let cluster = self.judged(cluster);
             self.cluster = Some(cluster);
             // DEGRADED, and the refused fixes moved away from the filter faster than its own
             // covariance allows: the filter is the one drifting ([`integrity`] module docs).
+            let p_pos = self.own_position_variances();
             let p_vel = self.p.fixed_view::<3, 3>(VEL, VEL).into_owned();
-            recovered = self.counters.position.consecutive_rejected
-                >= self.config.rejections_to_degrade
+            recovered = self.degraded_by_refusals()
                 && cluster.drifted(&p_pos, gate)
                 && cluster.drift_is_plausible(&p_vel, gate);
             if !recovered {
@@ -936,10 +944,7 @@ impl<T: Scalar> ErrorFilter<T> {
             && (c.gross || !correlated)
             && c.claims(&m.z, &m.r, &drift, nis, &s, gate)
         {
-            let p_pos = Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)]);
-            let degraded =
-                self.counters.position.consecutive_rejected >= self.config.rejections_to_degrade;
-            self.cluster = Some(c.followed_by(m.z, m.r, dt).judged(&p_pos, gate, degraded));
+            self.cluster = Some(self.judged(c.followed_by(m.z, m.r, dt)));
             let n = &mut self.counters.position.cluster_rejected;
             *n = n.saturating_add(1);
             return (AidResult::Rejected { nis }, None);
