@@ -378,6 +378,18 @@ fn a_wrong_given_heading_is_not_reported_as_nav() {
         "{beyond} of {} DEGRADED rows' velocity beyond 5 sigma",
         refusing.len()
     );
+    // The heading's 1-sigma carries the angle between the solution's track and the refused
+    // fixes' (was 0.1 deg for the 90 deg error): every DEGRADED row within 3 sigma.
+    for l in lines.iter().filter(|l| l.ends_with("DEGRADED")) {
+        let v: Vec<f64> = l.split(',').filter_map(|v| v.parse().ok()).collect();
+        let tr = host_tests::report::interpolate(&truth, v[0]).unwrap();
+        let yaw_deg = tr.q_b_ned.euler_angles().2.to_degrees();
+        let error_deg = (v[9] - yaw_deg + 540.0).rem_euclid(360.0) - 180.0;
+        assert!(
+            error_deg.abs() <= 3.0 * v[18],
+            "yaw {error_deg} deg off under {l}"
+        );
+    }
     // DEGRADED after 5 s of refusals (the count of 100 would take 100 s at 1 Hz).
     let soon = lines.iter().find(|l| time(l) >= first + 8.0).unwrap();
     assert!(soon.ends_with("DEGRADED"), "{soon}");

@@ -120,6 +120,9 @@ pub struct ErrorFilter<T: Scalar> {
     /// Propagated time from the first to the last of the position fixes refused in a row
     /// [s] (zero with fewer than two).
     refused_for_s: T,
+    /// The doubt a refused cluster leaves on the heading at the last position fix [rad^2]
+    /// ([`RefusedCluster::heading_doubt`]).
+    heading_doubt_rad2: T,
     /// The correction of the last position fix when it was a re-acquisition (taken alone
     /// against a much wider prediction; [`integrity`] module docs), until the next fix.
     reacquired: Option<Reacquisition<T>>,
@@ -184,6 +187,7 @@ impl<T: Scalar> ErrorFilter<T> {
             refused_unconfirmed: None,
             since_fix_s: T::zero(),
             refused_for_s: T::zero(),
+            heading_doubt_rad2: T::zero(),
             reacquired: None,
             restart: None,
             pull: Pull::none(),
@@ -301,7 +305,9 @@ impl<T: Scalar> ErrorFilter<T> {
     }
 
     /// 1-sigma of roll, pitch, yaw [rad] at heading `yaw` [rad]: the NED tilt variances turned
-    /// into the body's forward and right axes, and the heading's.
+    /// into the body's forward and right axes, and the heading's with the doubt a refused
+    /// cluster leaves on it ([`RefusedCluster::heading_doubt`], as at the last position fix;
+    /// reported, not gated, as the position's).
     pub fn attitude_sigma_rad(&self, yaw: T) -> Vector3<T> {
         let (s, c) = (yaw.psin(), yaw.pcos());
         let (pnn, pee, pne) = (
@@ -311,7 +317,8 @@ impl<T: Scalar> ErrorFilter<T> {
         );
         let roll2 = c * c * pnn + s * s * pee + T::c(2.0) * c * s * pne;
         let pitch2 = s * s * pnn + c * c * pee - T::c(2.0) * c * s * pne;
-        Vector3::new(roll2, pitch2, self.p[(ATT + 2, ATT + 2)]).map(|v| v.max(T::zero()).sqrt())
+        let yaw2 = self.p[(ATT + 2, ATT + 2)] + self.heading_doubt_rad2;
+        Vector3::new(roll2, pitch2, yaw2).map(|v| v.max(T::zero()).sqrt())
     }
 
     /// True once the solution came so near a pole that the NED error model does not hold
@@ -820,6 +827,12 @@ impl<T: Scalar> ErrorFilter<T> {
             (AidResult::Rejected { .. }, _) => self.refused_for_s + since_last_s,
             (AidResult::Invalid, _) => self.refused_for_s,
         };
+        let held = self.heading_doubt_rad2;
+        self.heading_doubt_rad2 = self
+            .cluster
+            .as_ref()
+            .or(self.refused_unconfirmed.as_ref())
+            .map_or_else(T::zero, |c| c.heading_doubt(&snap.state.v_eb_n, held));
         out
     }
 

@@ -178,7 +178,9 @@
 //! the rows were hundreds of metres off with a 3 m sigma). Where the offset is a doubt, the
 //! rate at which it moves is one on the velocity ([`RefusedCluster::velocity_doubt`]): the
 //! filter's velocity error is what moves a true offset (those rows were 15 m/s off under a
-//! velocity 1-sigma of 1 cm/s). A cluster that starts while
+//! velocity 1-sigma of 1 cm/s), and the angle between the solution's track and the refused
+//! fixes' is one on the heading ([`RefusedCluster::heading_doubt`]: the heading 1-sigma of
+//! those rows was 0.1 deg). A cluster that starts while
 //! another is refused carries the other's doubt ([`RefusedCluster::replacing`]): a held offset
 //! that begins while the filter refuses the true fixes it may have drifted from (after a ramp
 //! it followed) leaves that doubt standing.
@@ -200,6 +202,10 @@ pub const CHI2_30DOF_999: f64 = 59.703;
 /// 99.9 % point of chi-square with `3 * (WINDOW - 1)` = 27 degrees of freedom: the global
 /// test about the window's mean, under a declared correlated GNSS error.
 pub const CHI2_27DOF_999: f64 = 55.476;
+
+/// The horizontal speed below which a track has no direction to compare
+/// ([`RefusedCluster::heading_doubt`]) [m/s].
+pub const HEADING_DOUBT_MIN_SPEED_M_S: f64 = 2.0;
 
 /// A cluster whose first fix's normalised innovation squared exceeds the gate by this factor
 /// [-] is gross (module docs): beyond what a filter whose 1-sigma were up to 4 times
@@ -778,18 +784,56 @@ impl<T: Scalar> RefusedCluster<T> {
     /// turns with the vehicle, also the rate `u` since the member before (the fixes' noise
     /// is small beside it) as `u u^T / 4`.
     pub fn velocity_doubt(&self) -> Option<Matrix3<T>> {
+        let (v, u) = self.doubted_rates()?;
+        let u = u.map_or_else(Matrix3::zeros, |u| u * u.transpose());
+        Some((v * v.transpose() + u) * T::c(0.25))
+    }
+
+    /// The rates of [`Self::velocity_doubt`] [m/s]: since the first member, and for a cluster
+    /// that ran away since the member before; `None` where the offset is no doubt.
+    fn doubted_rates(&self) -> Option<(Vector3<T>, Option<Vector3<T>>)> {
         if (self.gross && !self.ran_away) || self.age_s <= T::zero() {
             return None;
         }
-        let v = self.drift_rate();
-        let mut d = v * v.transpose();
-        if let Some((z, _, dt)) = self.previous.filter(|_| self.ran_away)
-            && dt > T::zero()
-        {
-            let u = (self.z_ned_m - z) / dt;
-            d += u * u.transpose();
+        let u = self
+            .previous
+            .filter(|&(_, _, dt)| self.ran_away && dt > T::zero())
+            .map(|(z, _, dt)| (self.z_ned_m - z) / dt);
+        Some((self.drift_rate(), u))
+    }
+
+    /// The doubt on the solution's heading while this cluster is refused [rad^2], at the
+    /// solution's velocity `v_eb_n` [m/s], where its offset's rate is a doubt on the velocity
+    /// ([`Self::velocity_doubt`]): the refused fixes move over the ground at `v_eb_n - rate`
+    /// (the offset is the solution's position minus the fix's), and a heading error turns
+    /// the solution's track from theirs by itself (a given start's heading 90 deg off under
+    /// a declared 0.1 deg: the fixes' track 90 deg from the solution's). The larger angle `a`
+    /// between the two horizontal tracks of the two rates, as `a^2 / 4`. Where either track
+    /// is slower than [`HEADING_DOUBT_MIN_SPEED_M_S`] (no direction to compare: a stop) the
+    /// doubt `held` from the fix before stands; without a doubt on the velocity, the doubt
+    /// this cluster carries from one it replaced ([`Self::replacing`]) keeps `held` as well,
+    /// and otherwise there is none.
+    pub fn heading_doubt(&self, v_eb_n: &Vector3<T>, held: T) -> T {
+        let Some((v, u)) = self.doubted_rates() else {
+            let carried = self.carried_doubt != Matrix3::zeros();
+            return if carried { held } else { T::zero() };
+        };
+        let min2 = T::c(HEADING_DOUBT_MIN_SPEED_M_S * HEADING_DOUBT_MIN_SPEED_M_S);
+        let angle2 = |rate: Vector3<T>| {
+            let fixes = v_eb_n - rate;
+            let (a, b) = ((v_eb_n.x, v_eb_n.y), (fixes.x, fixes.y));
+            let slow = |(n, e): (T, T)| n * n + e * e < min2;
+            if slow(a) || slow(b) {
+                return None;
+            }
+            let angle = (a.0 * b.1 - a.1 * b.0).patan2(a.0 * b.0 + a.1 * b.1);
+            Some(angle * angle)
+        };
+        match (angle2(v), u.and_then(angle2)) {
+            (Some(a), Some(b)) => a.max(b) * T::c(0.25),
+            (Some(a), None) | (None, Some(a)) => a * T::c(0.25),
+            (None, None) => held,
         }
-        Some(d * T::c(0.25))
     }
 
     /// True when this cluster's offset is a typical error of the filter: its normalised
@@ -1192,6 +1236,45 @@ mod tests {
         assert!(!slow.judged(&Vector3::repeat(0.25), gate, false).ran_away);
         assert!(slow.judged(&Vector3::repeat(0.25), gate, true).ran_away);
         assert!(!held.ran_away);
+    }
+
+    /// A cluster that ran away because the solution's heading is 90 deg off: the fixes move
+    /// east at 15 m/s while the solution moves north, and the heading's doubt is that angle
+    /// as 2 sigma; held through a stop, none for a held jump.
+    #[test]
+    fn a_cluster_that_runs_away_across_the_track_doubts_the_heading() {
+        let (gate, r) = (
+            crate::ins_filter::CHI2_3DOF_999,
+            Vector3::new(0.25, 0.25, 1.0),
+        );
+        let p_pos = Vector3::repeat(0.12_f64 * 0.12);
+        let v_eb_n = Vector3::new(15.0, 0.0, 0.0);
+        // Offset = solution minus fix: north at 15 m/s, less east at 15 m/s each second.
+        let rate = Vector3::new(15.0, -15.0, 0.0);
+        let jump = Vector3::new(30.0, -30.0, 0.0);
+        let start = RefusedCluster::start(jump, r, 2000.0, gate, true).judged(&p_pos, gate, false);
+        assert_eq!(start.heading_doubt(&v_eb_n, 0.7), 0.0);
+        let away = start
+            .followed_by(jump + rate, r, 1.0)
+            .judged(&p_pos, gate, false);
+        assert!(away.ran_away);
+        let sigma = away.heading_doubt(&v_eb_n, 0.0).sqrt();
+        assert!(
+            (sigma * 2.0 - core::f64::consts::FRAC_PI_2).abs() < 1e-9,
+            "{sigma}"
+        );
+        // At a stop the tracks have no direction: the doubt from the fix before stands.
+        let stopped = away.followed_by(jump + rate, r, 1.0);
+        assert_eq!(stopped.heading_doubt(&Vector3::zeros(), 0.6), 0.6);
+        // Fixes that move with the solution leave no heading doubt, whatever the offset.
+        let along = RefusedCluster::start(Vector3::new(5.0, 0.0, 0.0), r, 30.0, gate, true)
+            .followed_by(Vector3::new(5.1, 0.0, 0.0), r, 1.0);
+        assert!(!along.gross && along.heading_doubt(&v_eb_n, 0.6) < 1e-4);
+        // A held gross jump is no doubt on anything.
+        let held = start
+            .followed_by(jump + Vector3::new(0.2, -0.1, 0.3), r, 1.0)
+            .judged(&p_pos, gate, true);
+        assert_eq!(held.heading_doubt(&v_eb_n, 0.6), 0.0);
     }
 
     /// A gross cluster that starts while a cluster of 3 m was refused keeps its doubt; one
