@@ -271,8 +271,9 @@ impl<T: Scalar> ErrorFilter<T> {
     /// The doubt on the position, NED [m^2]: of a refused cluster that is not gross
     /// ([`RefusedCluster::doubt`]; the fixes refused before the filter was confirmed are
     /// one), of a re-acquisition not yet confirmed by the next fix
-    /// ([`Reacquisition::doubt`]) and of a window restart not yet confirmed
-    /// ([`Restart::doubt`]); zero otherwise.
+    /// ([`Reacquisition::doubt`]), of a window restart not yet confirmed
+    /// ([`Restart::doubt`]) and of a pull that is a fault ([`Pull::is_fault`]); zero
+    /// otherwise.
     pub fn position_doubt(&self) -> Matrix3<T> {
         let cluster = self
             .cluster
@@ -285,17 +286,29 @@ impl<T: Scalar> ErrorFilter<T> {
         cluster.unwrap_or_else(Matrix3::zeros)
             + reacquired.unwrap_or_else(Matrix3::zeros)
             + restarted.unwrap_or_else(Matrix3::zeros)
+            + self.pull_doubt().map_or_else(Matrix3::zeros, |[p, _, _]| p)
+    }
+
+    /// The doubt on the position, velocity and attitude of a [`Pull`] that is a fault
+    /// ([`Pull::is_fault`], [`Pull::doubt`]), but not under a declared correlated GNSS error
+    /// (its fixes' corrections are not independent).
+    fn pull_doubt(&self) -> Option<[Matrix3<T>; 3]> {
+        let pull = self.pull.carried(self.since_fix_s);
+        let gate = self.config.gate_nis;
+        (!self.consider.has_gnss_error() && pull.is_fault(gate)).then(|| pull.doubt())
     }
 
     /// The doubt on the velocity, NED [m^2/s^2]: the rate of a refused cluster's offset whose
-    /// offset is a doubt on the position ([`RefusedCluster::velocity_doubt`]); zero
-    /// otherwise (reported, not gated, as the position's).
+    /// offset is a doubt on the position ([`RefusedCluster::velocity_doubt`]) and a pull that
+    /// is a fault ([`Pull::is_fault`]); zero otherwise (reported, not gated, as the
+    /// position's).
     pub fn velocity_doubt(&self) -> Matrix3<T> {
         self.cluster
             .as_ref()
             .or(self.refused_unconfirmed.as_ref())
             .and_then(RefusedCluster::velocity_doubt)
             .unwrap_or_else(Matrix3::zeros)
+            + self.pull_doubt().map_or_else(Matrix3::zeros, |[_, v, _]| v)
     }
 
     /// The reported position covariance, NED [m^2]: the filter's own ([`Self::covariance`],
@@ -305,19 +318,18 @@ impl<T: Scalar> ErrorFilter<T> {
     }
 
     /// 1-sigma of roll, pitch, yaw [rad] at heading `yaw` [rad]: the NED tilt variances turned
-    /// into the body's forward and right axes, and the heading's with the doubt a refused
-    /// cluster leaves on it ([`RefusedCluster::heading_doubt`], as at the last position fix;
-    /// reported, not gated, as the position's).
+    /// into the body's forward and right axes, and the heading's, with the doubt of a pull
+    /// that is a fault ([`Pull::is_fault`]) and the doubt a refused cluster leaves on the
+    /// heading ([`RefusedCluster::heading_doubt`], as at the last position fix; reported, not
+    /// gated, as the position's).
     pub fn attitude_sigma_rad(&self, yaw: T) -> Vector3<T> {
         let (s, c) = (yaw.psin(), yaw.pcos());
-        let (pnn, pee, pne) = (
-            self.p[(ATT, ATT)],
-            self.p[(ATT + 1, ATT + 1)],
-            self.p[(ATT, ATT + 1)],
-        );
+        let att = self.p.fixed_view::<3, 3>(ATT, ATT)
+            + self.pull_doubt().map_or_else(Matrix3::zeros, |[_, _, a]| a);
+        let (pnn, pee, pne) = (att[(0, 0)], att[(1, 1)], att[(0, 1)]);
         let roll2 = c * c * pnn + s * s * pee + T::c(2.0) * c * s * pne;
         let pitch2 = s * s * pnn + c * c * pee - T::c(2.0) * c * s * pne;
-        let yaw2 = self.p[(ATT + 2, ATT + 2)] + self.heading_doubt_rad2;
+        let yaw2 = att[(2, 2)] + self.heading_doubt_rad2;
         Vector3::new(roll2, pitch2, yaw2).map(|v| v.max(T::zero()).sqrt())
     }
 
@@ -870,9 +882,10 @@ impl<T: Scalar> ErrorFilter<T> {
         // fixes of the last minutes not pulled it: a fault it followed has ended, and the
         // pull is doubtful ([`integrity`] module docs, [Groves, ch. 17]).
         if nis > gate && self.degraded_by_refusals() && self.pull.explains(&m.z, &s, gate) {
-            let d = self.pull.position_ned_m;
-            let mut pos = self.p.fixed_view_mut::<3, 3>(POS, POS);
-            pos += d * d.transpose();
+            for (at, d) in [POS, VEL, ATT].into_iter().zip(self.pull.doubt()) {
+                let mut block = self.p.fixed_view_mut::<3, 3>(at, at);
+                block += d;
+            }
             self.check_covariance();
             self.pull = Pull::none();
             let Some(again) = self.innovation(m) else {
@@ -1003,11 +1016,15 @@ impl<T: Scalar> ErrorFilter<T> {
             (s, nis) = again;
         }
         let p_pos_before = self.p.fixed_view::<3, 3>(POS, POS).into_owned();
+        let p_vel_before = self.p.fixed_view::<3, 3>(VEL, VEL).into_owned();
         let basis = self.shrink_basis(m, &s);
         let out = self.apply(m, &basis, nis);
         if let Some(c) = &out.1 {
-            self.pull = self.pull.taken(&c.x);
-            self.window.set_last_correction(&c.x);
+            let pos_shrink = p_pos_before - self.p.fixed_view::<3, 3>(POS, POS);
+            let vel_shrink0 = p_vel_before - self.p.fixed_view::<3, 3>(VEL, VEL);
+            self.pull = self.pull.taken(&c.x, &pos_shrink, &vel_shrink0);
+            let vel_shrink = p_vel_before - self.p.fixed_view::<3, 3>(VEL, VEL);
+            self.window.set_last_correction(&c.x, &vel_shrink);
             self.restart = self
                 .restart
                 .map(|r| r.taken(&c.x))

@@ -115,7 +115,24 @@
 //! agrees with the solution as it was before that pull, the pull itself beyond the fixes'
 //! noise ([`Pull::explains`]), re-acquires: the pull `d` joins the position's covariance as
 //! `d d^T` (what those fixes moved it by is doubtful), and the fix is judged again. A held
-//! offset seen while nothing pulled the filter is not explained, and stays refused.
+//! offset seen while nothing pulled the filter is not explained, and stays refused. The
+//! pull's velocity and attitude join their covariances with it: those fixes moved them as
+//! well.
+//!
+//! **A pull that is a fault** [Groves, ch. 17; Teunissen, 1990, the test of a sum of
+//! corrections]. A fix's correction `K z` is, under no fault, a zero-mean vector of
+//! covariance `K S K^T = P^- - P^+`, what the update took away, and the corrections of
+//! successive fixes are independent (their innovations are white). So the pull's position
+//! sum, and its velocity sum, whitened with the sum of what the fixes took away (the same
+//! weights, squared), is `chi^2(3)`; beyond the gate ([`Pull::is_fault`]) the fixes moved the
+//! solution more, and further one way, than its own noise does: a fault the windowed test
+//! cannot see because the filter follows it (a FOG car at 10 Hz followed a 5 m multipath
+//! ramp through its velocity, 80 sigma north with a 0.06 m sigma; its window of 10 fixes
+//! spans 1 s). The pull's sums then join the reported covariances as `d d^T` (position,
+//! velocity, attitude; [`Pull::doubt`]), the doubt of what those fixes moved it by. Reported,
+//! not gated, and not under a declared correlated GNSS error, whose fixes' corrections are
+//! not independent. The test needs its evidence: the first 15 s of that ramp stay beyond
+//! 4 sigma, and a ramp as slow as a tactical MEMS filter's own drift is not seen at all.
 //!
 //! **A gross cluster** is not released that way. Its first fix was beyond
 //! [`GROSS_NIS_FACTOR`] times the gate, a jump no plausible optimism of the filter's own
@@ -185,7 +202,7 @@
 //! that begins while the filter refuses the true fixes it may have drifted from (after a ramp
 //! it followed) leaves that doubt standing.
 
-use super::states::{Covariance, POS, StateVector, VEL};
+use super::states::{ATT, Covariance, POS, StateVector, VEL};
 use crate::Scalar;
 use nalgebra::{Matrix3, Vector3};
 
@@ -321,14 +338,24 @@ impl<T: Scalar> Restart<T> {
 /// falls to about a half after it: a minute-long fault followed is still there when it ends).
 pub const PULL_MEMORY_S: f64 = 120.0;
 
-/// What the accepted position fixes of the last minutes moved the solution's position by
-/// (module docs): their position corrections, with a memory of [`PULL_MEMORY_S`] (the
-/// velocity corrections are left out: carried on over minutes, the small corrections of a
-/// consistent filter's velocity added up to metres, and a held offset passed for them).
+/// What the accepted position fixes of the last minutes moved the solution by (module
+/// docs): their position, velocity and attitude corrections, each summed as it was applied
+/// (the velocity corrections are not carried into the position: carried on over minutes,
+/// the small corrections of a consistent filter's velocity added up to metres, and a held
+/// offset passed for them), and the position and velocity covariance the fixes took away,
+/// all with a memory of [`PULL_MEMORY_S`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pull<T: Scalar> {
     /// The position corrections (error state: the solution moved by minus this), NED [m].
     pub position_ned_m: Vector3<T>,
+    /// The velocity corrections, NED [m/s].
+    pub velocity_ned_m_s: Vector3<T>,
+    /// The attitude corrections, NED [rad].
+    pub attitude_rad: Vector3<T>,
+    /// The position covariance the fixes took away, with the squared weights [m^2].
+    pub position_shrink_m2: Matrix3<T>,
+    /// The velocity covariance the fixes took away, with the squared weights [m^2/s^2].
+    pub velocity_shrink: Matrix3<T>,
 }
 
 impl<T: Scalar> Pull<T> {
@@ -336,6 +363,10 @@ impl<T: Scalar> Pull<T> {
     pub fn none() -> Self {
         Self {
             position_ned_m: Vector3::zeros(),
+            velocity_ned_m_s: Vector3::zeros(),
+            attitude_rad: Vector3::zeros(),
+            position_shrink_m2: Matrix3::zeros(),
+            velocity_shrink: Matrix3::zeros(),
         }
     }
 
@@ -346,14 +377,50 @@ impl<T: Scalar> Pull<T> {
         let k = T::one() / (T::one() + x + x * x * T::c(0.5));
         Self {
             position_ned_m: self.position_ned_m * k,
+            velocity_ned_m_s: self.velocity_ned_m_s * k,
+            attitude_rad: self.attitude_rad * k,
+            position_shrink_m2: self.position_shrink_m2 * (k * k),
+            velocity_shrink: self.velocity_shrink * (k * k),
         }
     }
 
-    /// With the correction `x` of a fix taken.
-    pub fn taken(&self, x: &StateVector<T>) -> Self {
+    /// With the correction `x` of a fix taken, and the position and velocity covariance it
+    /// took away.
+    pub fn taken(
+        &self,
+        x: &StateVector<T>,
+        shrink_pos: &Matrix3<T>,
+        shrink_vel: &Matrix3<T>,
+    ) -> Self {
         Self {
             position_ned_m: self.position_ned_m + x.fixed_rows::<3>(POS),
+            velocity_ned_m_s: self.velocity_ned_m_s + x.fixed_rows::<3>(VEL),
+            attitude_rad: self.attitude_rad + x.fixed_rows::<3>(ATT),
+            position_shrink_m2: self.position_shrink_m2 + shrink_pos,
+            velocity_shrink: self.velocity_shrink + shrink_vel,
         }
+    }
+
+    /// True when the pull is more than the fixes' own corrections explain: the position's or
+    /// the velocity's, whitened with the covariance the fixes took away, beyond `gate_3dof`
+    /// (module docs).
+    pub fn is_fault(&self, gate_3dof: T) -> bool {
+        let beyond = |d: &Vector3<T>, c: &Matrix3<T>| {
+            whiten(c, d).is_some_and(|w| w.norm_squared() > gate_3dof)
+        };
+        beyond(&self.position_ned_m, &self.position_shrink_m2)
+            || beyond(&self.velocity_ned_m_s, &self.velocity_shrink)
+    }
+
+    /// The doubt on the position [m^2], velocity [m^2/s^2] and attitude [rad^2] of what the
+    /// fixes pulled the solution by: `d d^T` of each.
+    pub fn doubt(&self) -> [Matrix3<T>; 3] {
+        [
+            self.position_ned_m,
+            self.velocity_ned_m_s,
+            self.attitude_rad,
+        ]
+        .map(|d| d * d.transpose())
     }
 
     /// True when a fix of innovation `z` (predicted minus measured) [m] and innovation
@@ -385,6 +452,7 @@ pub enum WindowVerdict {
 pub struct InnovationWindow<T: Scalar> {
     w: [Vector3<T>; WINDOW],
     corrections: [StateVector<T>; WINDOW],
+    velocity_shrinks: [Matrix3<T>; WINDOW],
     len: usize,
     next: usize,
 }
@@ -394,6 +462,7 @@ impl<T: Scalar> Default for InnovationWindow<T> {
         Self {
             w: [Vector3::zeros(); WINDOW],
             corrections: [StateVector::zeros(); WINDOW],
+            velocity_shrinks: [Matrix3::zeros(); WINDOW],
             len: 0,
             next: 0,
         }
@@ -405,15 +474,32 @@ impl<T: Scalar> InnovationWindow<T> {
     pub fn push(&mut self, w: Vector3<T>) {
         self.w[self.next] = w;
         self.corrections[self.next] = StateVector::zeros();
+        self.velocity_shrinks[self.next] = Matrix3::zeros();
         self.next = (self.next + 1) % WINDOW;
         self.len = (self.len + 1).min(WINDOW);
     }
 
     /// Records the correction `x` the last pushed fix applied to the error state.
-    pub fn set_last_correction(&mut self, x: &StateVector<T>) {
+    pub fn set_last_correction(&mut self, x: &StateVector<T>, velocity_shrink: &Matrix3<T>) {
         if self.len > 0 {
-            self.corrections[(self.next + WINDOW - 1) % WINDOW] = *x;
+            let last = (self.next + WINDOW - 1) % WINDOW;
+            self.corrections[last] = *x;
+            self.velocity_shrinks[last] = *velocity_shrink;
         }
+    }
+
+    /// The pull statistic `d_v^T C^-1 d_v` [-]: `d_v` the sum of the velocity corrections the
+    /// window's fixes applied, `C` the sum of the velocity covariance each took away.
+    pub fn pull_statistic(&self) -> T {
+        let d = self
+            .corrections
+            .iter()
+            .fold(Vector3::zeros(), |a, c| a + c.fixed_rows::<3>(VEL));
+        let c = self
+            .velocity_shrinks
+            .iter()
+            .fold(Matrix3::zeros(), |a, m| a + m);
+        whiten(&c, &d).map_or(T::zero(), |w| w.norm_squared())
     }
 
     /// The sum of the corrections the window's fixes applied, forgotten once taken (module
@@ -424,6 +510,7 @@ impl<T: Scalar> InnovationWindow<T> {
             sum += *c;
             *c = StateVector::zeros();
         }
+        self.velocity_shrinks = [Matrix3::zeros(); WINDOW];
         sum
     }
 
@@ -961,9 +1048,9 @@ mod tests {
         // The corrections are summed once.
         let mut x = StateVector::<f64>::zeros();
         x[0] = 0.5;
-        wide.set_last_correction(&x);
+        wide.set_last_correction(&x, &Matrix3::identity());
         wide.push(Vector3::zeros());
-        wide.set_last_correction(&x);
+        wide.set_last_correction(&x, &Matrix3::identity());
         assert_eq!(wide.take_corrections()[0], 1.0);
         assert_eq!(wide.take_corrections()[0], 0.0);
         wide.clear();
@@ -1173,17 +1260,59 @@ mod tests {
         let s = Matrix3::from_diagonal_element(1.2 * 1.2);
         let mut x = StateVector::<f64>::zeros();
         x[POS] = -0.1;
-        let pull = (0..120).fold(Pull::none(), |p, _| p.carried(0.2).taken(&x));
+        let none = Matrix3::zeros();
+        let pull = (0..120).fold(Pull::none(), |p, _| p.carried(0.2).taken(&x, &none, &none));
         assert!(pull.position_ned_m.x < -10.5, "{:?}", pull.position_ned_m);
         // Predicted minus measured: the true fix south of the pulled solution, +12 m.
         assert!(pull.explains(&Vector3::new(11.5, 0.0, 0.0), &s, gate));
         assert!(!pull.explains(&Vector3::new(-6.0, 0.0, 0.0), &s, gate));
         let small = Pull {
             position_ned_m: Vector3::new(-2.0, 0.0, 0.0),
+            ..Pull::none()
         };
         assert!(!small.explains(&Vector3::new(6.0, 0.0, 0.0), &s, gate));
         let later = pull.carried(600.0);
         assert!(later.position_ned_m.norm() < 0.1 * pull.position_ned_m.norm());
+    }
+
+    /// Corrections whose sum the covariance they took away explains are no fault; the same
+    /// corrections all one way (a ramp the filter follows: 0.02 m north per fix against a
+    /// shrink of (0.02 m)^2 per fix) are, and their sums are the doubt.
+    #[test]
+    fn a_pull_beyond_what_its_fixes_took_away_is_a_fault() {
+        let gate = 16.27;
+        let shrink_pos = Matrix3::from_diagonal_element(0.02 * 0.02);
+        let shrink_vel = Matrix3::from_diagonal_element(0.001 * 0.001);
+        let mut x = StateVector::<f64>::zeros();
+        let mut random = Pull::none();
+        for k in 0..100 {
+            // Alternating signs: the sum stays within one correction.
+            let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+            x[POS] = 0.02 * sign;
+            x[VEL] = 0.001 * sign;
+            random = random.carried(0.1).taken(&x, &shrink_pos, &shrink_vel);
+        }
+        assert!(!random.is_fault(gate), "{random:?}");
+        x[VEL] = 0.0;
+        x[ATT + 1] = 1e-5;
+        let mut ramp = Pull::none();
+        for _ in 0..100 {
+            x[POS] = -0.02;
+            ramp = ramp.carried(0.1).taken(&x, &shrink_pos, &shrink_vel);
+        }
+        assert!(ramp.is_fault(gate), "{ramp:?}");
+        let [p, v, a] = ramp.doubt();
+        assert!((p[(0, 0)].sqrt() - ramp.position_ned_m.x.abs()).abs() < 1e-12);
+        assert!(p[(0, 0)].sqrt() > 1.9, "{p}");
+        assert_eq!(v, Matrix3::zeros());
+        assert!((a[(1, 1)].sqrt() - 1e-3).abs() < 1e-4, "{a}");
+        // The velocity alone: 0.005 m/s a fix against a shrink of (0.001 m/s)^2.
+        x[POS] = 0.0;
+        x[VEL + 2] = 0.005;
+        let vel = (0..20).fold(Pull::none(), |p, _| {
+            p.carried(0.1).taken(&x, &shrink_pos, &shrink_vel)
+        });
+        assert!(vel.is_fault(gate), "{vel:?}");
     }
 
     /// A gross cluster whose offset runs away from the jump faster than the filter's own
