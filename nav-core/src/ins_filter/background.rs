@@ -1021,10 +1021,9 @@ impl<T: Scalar> ErrorFilter<T> {
         let out = self.apply(m, &basis, nis);
         if let Some(c) = &out.1 {
             let pos_shrink = p_pos_before - self.p.fixed_view::<3, 3>(POS, POS);
-            let vel_shrink0 = p_vel_before - self.p.fixed_view::<3, 3>(VEL, VEL);
-            self.pull = self.pull.taken(&c.x, &pos_shrink, &vel_shrink0);
             let vel_shrink = p_vel_before - self.p.fixed_view::<3, 3>(VEL, VEL);
-            self.window.set_last_correction(&c.x, &vel_shrink);
+            self.pull = self.pull.taken(&c.x, &pos_shrink, &vel_shrink);
+            self.window.set_last_correction(&c.x);
             self.restart = self
                 .restart
                 .map(|r| r.taken(&c.x))
