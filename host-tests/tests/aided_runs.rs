@@ -261,14 +261,10 @@ fn a_jump_that_a_ramp_left_behind_is_let_go_once_the_filter_runs_away() {
     );
     let rows = errors_over_sigma(d, &out);
     let log = std::fs::read_to_string(&out).unwrap();
-    let lines: Vec<&str> = log
-        .lines()
-        .skip(1)
-        .filter(|l| !l.starts_with('#'))
-        .collect();
+    let lines = solution_lines(&log);
     let mut after = 0;
     for (l, r) in lines.iter().zip(&rows) {
-        let t: f64 = l.split(',').next().unwrap().parse().unwrap();
+        let t = row_time(l);
         if t >= 239.0 {
             after += 1;
             let k = r[NORTH].abs().max(r[EAST].abs());
@@ -334,23 +330,18 @@ fn a_wrong_given_heading_is_not_reported_as_nav() {
     assert!(text.contains("re-aligned in motion"), "{text}");
     let rows = errors_over_sigma(d, &out);
     let log = std::fs::read_to_string(&out).unwrap();
-    let lines: Vec<&str> = log
-        .lines()
-        .skip(1)
-        .filter(|l| !l.starts_with('#'))
-        .collect();
+    let lines = solution_lines(&log);
     assert_eq!(lines.len(), rows.len());
     let horizontal = |r: &[f64; 6]| r[NORTH].abs().max(r[EAST].abs());
-    let time = |l: &str| l.split(',').next().unwrap().parse::<f64>().unwrap();
     let beyond: Vec<f64> = lines
         .iter()
         .zip(&rows)
         .filter(|(_, r)| horizontal(r) > 4.0)
-        .map(|(l, _)| time(l))
+        .map(|(l, _)| row_time(l))
         .collect();
     let first = *beyond.first().expect("the heading error never showed");
     for (l, r) in lines.iter().zip(&rows) {
-        let t = time(l);
+        let t = row_time(l);
         assert!(
             t <= first + 4.5 || horizontal(r) <= 4.0,
             "{:.1} sigma at {t} s: {l}",
@@ -363,7 +354,7 @@ fn a_wrong_given_heading_is_not_reported_as_nav() {
     let truth = host_tests::truth_csv::read(&d.join("truth.csv")).unwrap();
     let refusing: Vec<f64> = lines
         .iter()
-        .filter(|l| time(l) > first + 4.5 && l.ends_with("DEGRADED"))
+        .filter(|l| row_time(l) > first + 4.5 && l.ends_with("DEGRADED"))
         .map(|l| {
             let v: Vec<f64> = l.split(',').filter_map(|v| v.parse().ok()).collect();
             let tr = host_tests::report::interpolate(&truth, v[0]).unwrap();
@@ -391,7 +382,7 @@ fn a_wrong_given_heading_is_not_reported_as_nav() {
         );
     }
     // DEGRADED after 5 s of refusals (the count of 100 would take 100 s at 1 Hz).
-    let soon = lines.iter().find(|l| time(l) >= first + 8.0).unwrap();
+    let soon = lines.iter().find(|l| row_time(l) >= first + 8.0).unwrap();
     assert!(soon.ends_with("DEGRADED"), "{soon}");
     let last = rows.last().unwrap();
     assert!(lines.last().unwrap().ends_with("NAV"), "{log}");
@@ -444,15 +435,10 @@ fn a_ramp_the_filter_follows_is_reported_in_its_sigma() {
     );
     let rows = errors_over_sigma(d, &out);
     let log = std::fs::read_to_string(&out).unwrap();
-    let lines: Vec<&str> = log
-        .lines()
-        .skip(1)
-        .filter(|l| !l.starts_with('#'))
-        .collect();
-    let time = |l: &str| l.split(',').next().unwrap().parse::<f64>().unwrap();
+    let lines = solution_lines(&log);
     let mut checked = 0;
     for (l, r) in lines.iter().zip(&rows) {
-        let t = time(l);
+        let t = row_time(l);
         if (362.0..=400.0).contains(&t) && l.ends_with("NAV") {
             assert!(r[NORTH].abs() <= 4.0, "{:.1} sigma north: {l}", r[NORTH]);
             checked += 1;
@@ -695,16 +681,10 @@ fn a_ramp_followed_under_a_declared_correlated_error_is_let_go_after_it() {
     );
     let rows = errors_over_sigma(d, &out);
     let log = std::fs::read_to_string(&out).unwrap();
-    let times: Vec<f64> = log
-        .lines()
-        .skip(1)
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| l.split(',').next().unwrap().parse().unwrap())
-        .collect();
-    let statuses: Vec<&str> = log
-        .lines()
-        .skip(1)
-        .filter(|l| !l.starts_with('#'))
+    let lines = solution_lines(&log);
+    let times: Vec<f64> = lines.iter().map(|l| row_time(l)).collect();
+    let statuses: Vec<&str> = lines
+        .iter()
         .map(|l| l.rsplit(',').next().unwrap())
         .collect();
     let mut after = 0;
@@ -1828,6 +1808,19 @@ const EAST: usize = 1;
 const ROLL: usize = 3;
 const PITCH: usize = 4;
 const YAW: usize = 5;
+
+/// The data rows of a solution log: its lines after the header, without the `#` notes.
+fn solution_lines(log: &str) -> Vec<&str> {
+    log.lines()
+        .skip(1)
+        .filter(|l| !l.starts_with('#'))
+        .collect()
+}
+
+/// The time [s] of a solution log's data row (its first column).
+fn row_time(l: &str) -> f64 {
+    l.split(',').next().unwrap().parse().unwrap()
+}
 
 /// Each row of the solution log `out` against the truth in `d`: the errors of [`CHANNELS`]
 /// over their 1-sigma.

@@ -1029,9 +1029,9 @@ impl<T: Scalar> ErrorFilter<T> {
                 .map(|r| r.taken(&c.x))
                 .filter(|r| !r.is_confirmed());
             let limited = (0..3).any(|i| effective_noise(basis[i], m.r[i]) > m.r[i]);
-            self.reacquired = limited.then(|| Reacquisition {
+            self.reacquired = limited.then_some(Reacquisition {
                 correction: c.x,
-                position_shrink: p_pos_before - self.p.fixed_view::<3, 3>(POS, POS),
+                position_shrink: pos_shrink,
             });
         }
         out
