@@ -447,6 +447,44 @@ fn a_ramp_the_filter_follows_is_reported_in_its_sigma() {
     assert!(checked > 200, "{checked} NAV rows in the ramp");
 }
 
+/// An RLG car with 5 Hz fixes declared white follows a 5 m east ramp over 30 s through its
+/// velocity: without the coasting test (the solution against where it would be had it
+/// coasted on its sensors since an anchor) the NAV rows were up to 44 sigma east from 15 s
+/// into the ramp. Now from 15 s into it to 50 s, every NAV row's east error is within 4
+/// sigma.
+#[test]
+fn a_ramp_the_coasting_can_tell_is_reported_in_its_sigma() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    sim_into(
+        d,
+        &[
+            "land-vehicle",
+            "--grade",
+            "rlg",
+            "--seed",
+            "1",
+            "--seconds",
+            "360",
+            "--gnss-rate",
+            "5",
+            "--gnss-ramp",
+            "300,30,0,5,0",
+        ],
+    );
+    let (_, out) = replay_in(d, &[&GIVEN[..], &["--imu-noise", "rlg"]].concat());
+    let rows = errors_over_sigma(d, &out);
+    let log = std::fs::read_to_string(&out).unwrap();
+    let mut checked = 0;
+    for (l, r) in solution_lines(&log).iter().zip(&rows) {
+        if (315.0..=350.0).contains(&row_time(l)) && l.ends_with("NAV") {
+            assert!(r[EAST].abs() <= 4.0, "{:.1} sigma east: {l}", r[EAST]);
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "{checked} NAV rows in the ramp");
+}
+
 fn family_case(scenario: &str, grade: Grade, rate: f64, vel: Option<[f64; 3]>) -> Case {
     Case {
         scenario: scenario.into(),

@@ -5,6 +5,7 @@
 //! slow faults, the refusal of a consistent cluster refused before).
 
 use super::aiding::{AidCounters, AidResult, FilterCounters, GnssPosition, GnssVelocity};
+use super::coast::{Coast, Motion};
 use super::consider::{self, ConsiderModel, CrossCovariance};
 use super::covariance::{self, Transition};
 use super::foreground::{LostGap, Propagation};
@@ -139,10 +140,11 @@ pub struct ErrorFilter<T: Scalar> {
     /// The consider states' model and cross-covariance `P_ac` ([`consider`]).
     consider: ConsiderModel<T>,
     p_ac: CrossCovariance<T>,
-    /// The last propagation's attitude `C_b_n` and specific force `f_ib_n` [m/s^2] (the stop
-    /// detector's allowance, [`Self::uncertainty`]).
-    c_b_n: Matrix3<T>,
-    f_ib_n: Vector3<T>,
+    /// The last propagation's attitude, specific force and rate (the stop detector's
+    /// allowance, [`Self::uncertainty`]; the coasting test's error equations).
+    motion: Motion<T>,
+    /// The coasting test ([`coast`] module docs).
+    coast: Coast<T>,
 }
 
 impl<T: Scalar> ErrorFilter<T> {
@@ -194,8 +196,12 @@ impl<T: Scalar> ErrorFilter<T> {
             confirmed: false,
             consider,
             p_ac,
-            c_b_n: *nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), yaw).matrix(),
-            f_ib_n: Vector3::new(T::zero(), T::zero(), -T::c(crate::earth::GAMMA_EQUATOR)),
+            motion: Motion {
+                c_b_n: *nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), yaw).matrix(),
+                f_ib_b: Vector3::new(T::zero(), T::zero(), -T::c(crate::earth::GAMMA_EQUATOR)),
+                omega_ib_b: Vector3::zeros(),
+            },
+            coast: Coast::none(),
         })
     }
 
@@ -244,11 +250,11 @@ impl<T: Scalar> ErrorFilter<T> {
     /// last propagation, with the tilt and bias correlations the stops have built.
     pub fn uncertainty(&self) -> Uncertainty<T> {
         let mut h = SMatrix::<T, 2, 6>::zeros();
-        let skew_f = model::skew(&self.f_ib_n);
+        let skew_f = model::skew(&(self.motion.c_b_n * self.motion.f_ib_b));
         h.fixed_view_mut::<2, 3>(0, 0)
             .copy_from(&skew_f.fixed_rows::<2>(0));
         h.fixed_view_mut::<2, 3>(0, 3)
-            .copy_from(&self.c_b_n.fixed_rows::<2>(0));
+            .copy_from(&self.motion.c_b_n.fixed_rows::<2>(0));
         let mut p = SMatrix::<T, 6, 6>::zeros();
         for (i, a) in [ATT, ATT + 1, ATT + 2, BA, BA + 1, BA + 2]
             .into_iter()
@@ -272,8 +278,8 @@ impl<T: Scalar> ErrorFilter<T> {
     /// ([`RefusedCluster::doubt`]; the fixes refused before the filter was confirmed are
     /// one), of a re-acquisition not yet confirmed by the next fix
     /// ([`Reacquisition::doubt`]), of a window restart not yet confirmed
-    /// ([`Restart::doubt`]) and of a pull that is a fault ([`Pull::is_fault`]); zero
-    /// otherwise.
+    /// ([`Restart::doubt`]) and of a pull that is a fault ([`Pull::is_fault`]) or that the
+    /// coasting test refuses ([`Coast::doubt`]); zero otherwise.
     pub fn position_doubt(&self) -> Matrix3<T> {
         let cluster = self
             .cluster
@@ -290,12 +296,20 @@ impl<T: Scalar> ErrorFilter<T> {
     }
 
     /// The doubt on the position, velocity and attitude of a [`Pull`] that is a fault
-    /// ([`Pull::is_fault`], [`Pull::doubt`]), but not under a declared correlated GNSS error
-    /// (its fixes' corrections are not independent).
+    /// ([`Pull::is_fault`], [`Pull::doubt`]) and of the coasting test ([`Coast::doubt`]), but
+    /// not under a declared correlated GNSS error (its fixes' corrections are not independent,
+    /// and the solution follows the error it declares).
     fn pull_doubt(&self) -> Option<[Matrix3<T>; 3]> {
+        if self.consider.has_gnss_error() {
+            return None;
+        }
         let pull = self.pull.carried(self.since_fix_s);
         let gate = self.config.gate_nis;
-        (!self.consider.has_gnss_error() && pull.is_fault(gate)).then(|| pull.doubt())
+        let pulled = pull.is_fault(gate).then(|| pull.doubt());
+        match (pulled, self.coast.doubt()) {
+            (Some(p), Some(c)) => Some(core::array::from_fn(|i| p[i] + c[i])),
+            (p, c) => p.or(c),
+        }
     }
 
     /// The doubt on the velocity, NED [m^2/s^2]: the rate of a refused cluster's offset whose
@@ -499,7 +513,8 @@ impl<T: Scalar> ErrorFilter<T> {
         self.p.fixed_view_mut::<2, 2>(ATT, ATT).copy_from(&tilt);
         let with_consider = j * self.p_ac.fixed_rows::<3>(BA);
         self.p_ac.fixed_rows_mut::<2>(ATT).copy_from(&with_consider);
-        self.c_b_n = *c_b_n;
+        self.motion.c_b_n = *c_b_n;
+        self.coast.clear();
         self.check_covariance();
     }
 
@@ -513,8 +528,11 @@ impl<T: Scalar> ErrorFilter<T> {
         self.near_pole |= model::near_pole(&prop.lin.earth, &prop.lin.v_eb_n);
         let f = model::system_matrix(&prop.lin, &self.config.noise, self.config.scale_factors);
         let phi = Transition::new(&f, prop.dt);
-        self.c_b_n = prop.lin.c_b_n;
-        self.f_ib_n = prop.lin.c_b_n * prop.lin.f_ib_b;
+        self.motion = Motion {
+            c_b_n: prop.lin.c_b_n,
+            f_ib_b: prop.lin.f_ib_b,
+            omega_ib_b: prop.lin.omega_ib_b,
+        };
         let mut q = model::noise_density(&self.config.noise, self.config.scale_factors);
         // A bridged gap's unknown motion, spread as driving noise over the interval
         // ([`crate::gap::GapDynamics`]).
@@ -549,6 +567,13 @@ impl<T: Scalar> ErrorFilter<T> {
         self.counters.propagations = self.counters.propagations.wrapping_add(1);
         self.since_fix_s += prop.dt;
         self.check_covariance();
+        // A gap's unknown motion is not in the coasting test's error model.
+        if b.lost.is_some() || b.attitude_var_rad2 > T::zero() || b.velocity_var_m2_s2 > T::zero() {
+            self.coast.clear();
+        }
+        let sf = self.config.scale_factors;
+        self.coast
+            .carried(prop.dt, &self.motion, &self.p, &self.config.noise, sf);
     }
 
     /// The covariance across a gap too long to bridge ([`LostGap`]): the position carried at
@@ -774,6 +799,7 @@ impl<T: Scalar> ErrorFilter<T> {
         for c in [&mut self.cluster, &mut self.refused_unconfirmed] {
             *c = c.map(|c| c.corrected(&dr));
         }
+        self.coast.taken(&self.x);
         self.reset_attitude(&self.x.fixed_rows::<3>(ATT).into_owned());
         self.x = StateVector::zeros();
         self.check_covariance();
@@ -839,6 +865,8 @@ impl<T: Scalar> ErrorFilter<T> {
             (AidResult::Rejected { .. }, _) => self.refused_for_s + since_last_s,
             (AidResult::Invalid, _) => self.refused_for_s,
         };
+        let coast_gate = T::c(super::coast::GATE_3DOF);
+        self.coast.judged(&self.p, &self.config.noise, coast_gate);
         let held = self.heading_doubt_rad2;
         self.heading_doubt_rad2 = self
             .cluster

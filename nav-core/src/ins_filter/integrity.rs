@@ -134,7 +134,8 @@
 //! not independent. The test needs its evidence: the first 15 s of that ramp stay beyond
 //! 4 sigma, a ramp as slow as a tactical MEMS filter's own drift is not seen at all, and
 //! where the covariance added for a refused fix or a window detection is taken away again
-//! by the next fixes, that shrink hides the pull (most 5 and 10 Hz ramps, README).
+//! by the next fixes, that shrink hides the pull (most 5 and 10 Hz ramps, README). The
+//! coasting test of [`super::coast`] does not depend on that shrink.
 //!
 //! **A gross cluster** is not released that way. Its first fix was beyond
 //! [`GROSS_NIS_FACTOR`] times the gate, a jump no plausible optimism of the filter's own

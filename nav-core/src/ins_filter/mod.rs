@@ -9,6 +9,8 @@
 //! - [`aiding`]: the measurements, their outcomes and counters;
 //! - [`integrity`]: the windowed innovation test and the refusal of a consistent cluster of
 //!   wrong position fixes;
+//! - [`coast`]: the solution against where it would be had it coasted on its sensors since an
+//!   anchor (a slow fault the fixes pulled it along);
 //! - [`limits`]: the range of the noise figures and initial 1-sigmas any IMU can have;
 //! - [`stationarity`]: the IMU-only stop detector;
 //! - [`motion`]: the start in motion from GNSS (level from the accelerometers, heading from the
@@ -31,6 +33,7 @@
 
 pub mod aiding;
 pub mod background;
+pub mod coast;
 pub mod consider;
 pub mod covariance;
 pub mod foreground;

@@ -355,7 +355,7 @@ pub(crate) mod tests {
         }
     }
 
-    fn lin(lat: f64, v: Vector3<f64>) -> Linearisation<f64> {
+    pub(crate) fn lin(lat: f64, v: Vector3<f64>) -> Linearisation<f64> {
         Linearisation {
             earth: LocalEarth::new(lat, 100.0),
             v_eb_n: v,
