@@ -433,17 +433,7 @@ fn a_ramp_the_filter_follows_is_reported_in_its_sigma() {
         ]
         .concat(),
     );
-    let rows = errors_over_sigma(d, &out);
-    let log = std::fs::read_to_string(&out).unwrap();
-    let lines = solution_lines(&log);
-    let mut checked = 0;
-    for (l, r) in lines.iter().zip(&rows) {
-        let t = row_time(l);
-        if (362.0..=400.0).contains(&t) && l.ends_with("NAV") {
-            assert!(r[NORTH].abs() <= 4.0, "{:.1} sigma north: {l}", r[NORTH]);
-            checked += 1;
-        }
-    }
+    let checked = assert_nav_rows_within(d, &out, 362.0..=400.0, NORTH, 4.0);
     assert!(checked > 200, "{checked} NAV rows in the ramp");
 }
 
@@ -473,16 +463,34 @@ fn a_ramp_the_coasting_can_tell_is_reported_in_its_sigma() {
         ],
     );
     let (_, out) = replay_in(d, &[&GIVEN[..], &["--imu-noise", "rlg"]].concat());
-    let rows = errors_over_sigma(d, &out);
-    let log = std::fs::read_to_string(&out).unwrap();
+    let checked = assert_nav_rows_within(d, &out, 315.0..=350.0, EAST, 4.0);
+    assert!(checked > 100, "{checked} NAV rows in the ramp");
+}
+
+/// Asserts that every NAV row of the solution log `out` (simulated in `d`) in the time span
+/// `span` [s] has its error on `axis` within `bound` of its 1-sigma; returns how many it
+/// checked.
+fn assert_nav_rows_within(
+    d: &Path,
+    out: &Path,
+    span: std::ops::RangeInclusive<f64>,
+    axis: usize,
+    bound: f64,
+) -> usize {
+    let rows = errors_over_sigma(d, out);
+    let log = std::fs::read_to_string(out).unwrap();
     let mut checked = 0;
     for (l, r) in solution_lines(&log).iter().zip(&rows) {
-        if (315.0..=350.0).contains(&row_time(l)) && l.ends_with("NAV") {
-            assert!(r[EAST].abs() <= 4.0, "{:.1} sigma east: {l}", r[EAST]);
+        if span.contains(&row_time(l)) && l.ends_with("NAV") {
+            assert!(
+                r[axis].abs() <= bound,
+                "{:.1} sigma on axis {axis}: {l}",
+                r[axis]
+            );
             checked += 1;
         }
     }
-    assert!(checked > 100, "{checked} NAV rows in the ramp");
+    checked
 }
 
 fn family_case(scenario: &str, grade: Grade, rate: f64, vel: Option<[f64; 3]>) -> Case {

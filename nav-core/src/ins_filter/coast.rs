@@ -46,9 +46,9 @@ pub const ANCHOR_SPACING_S: f64 = 10.0;
 pub const ANCHOR_KEPT_S: f64 = 120.0;
 
 /// The test's gate: the chi-square(3) 99 % point. Each axis is judged against the sum of the
-/// coasting's and the filter's own 1-sigma, a bound whatever their correlation, so a true
-/// difference passes it more often than 99 % of the time; the family of the consistency bench
-/// never failed it.
+/// coasting's and the filter's own 1-sigma, a bound whatever their correlation, so without a
+/// fault the difference passes it more often than 99 % of the time (over the consistency
+/// bench's 360 runs it moved one cell's mean NEES by 0.01).
 pub const GATE_3DOF: f64 = 11.345;
 
 /// The errors carried from an anchor: position, velocity, acceleration, jerk.
@@ -213,7 +213,7 @@ impl<T: Scalar> Anchor<T> {
         self.f_max = self.f_max.max(f_n.norm());
         self.turned_rad += motion.omega_ib_b.norm() * dt;
         self.df_integral_m_s += df * dt;
-        let turn = (T::c(3.0) - (motion.c_b_n * self.c0_b_n.transpose()).trace())
+        let turn = (T::c(3.0) - motion.c_b_n.component_mul(&self.c0_b_n).sum())
             .max(T::zero())
             .sqrt();
         let [sigma_bg, sigma_ba, sigma_sa] = self.sensor_sigmas;
