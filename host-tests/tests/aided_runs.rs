@@ -395,7 +395,8 @@ fn a_wrong_given_heading_is_not_reported_as_nav() {
 /// 80 sigma. What its fixes moved the solution by is now tested against the covariance
 /// they took away, and once beyond the gate it is reported as doubt: from 15 s into the
 /// ramp until the fixes are accepted again after it, every NAV row's north error within
-/// 4 sigma.
+/// 4 sigma; and from then on to 420 s the pitch, which was 12 s beyond 4 sigma after the
+/// filter re-acquired.
 #[test]
 fn a_ramp_the_filter_follows_is_reported_in_its_sigma() {
     let dir = tempfile::tempdir().unwrap();
@@ -435,6 +436,10 @@ fn a_ramp_the_filter_follows_is_reported_in_its_sigma() {
     );
     let checked = assert_nav_rows_within(d, &out, 362.0..=400.0, NORTH, 4.0);
     assert!(checked > 200, "{checked} NAV rows in the ramp");
+    // Re-acquired after it, the velocity, attitude and biases the ramp's fixes moved are
+    // doubtful as well: the pitch was 12 s beyond 4 sigma (up to 6.6).
+    let checked = assert_nav_rows_within(d, &out, 362.0..=420.0, PITCH, 4.0);
+    assert!(checked > 300, "{checked} NAV rows in and after the ramp");
 }
 
 /// An RLG car with 5 Hz fixes declared white follows a 5 m east ramp over 30 s through its

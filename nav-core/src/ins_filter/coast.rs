@@ -546,4 +546,74 @@ mod tests {
         assert!(run(2e-5, 0.0).is_none());
         assert!(run(1e-3, 5.0 / 300.0).is_none());
     }
+
+    /// Anchors are replaced once [`ANCHORS`] times [`ANCHOR_SPACING_S`] old while they pass;
+    /// one that fails is kept until [`ANCHOR_KEPT_S`], so the doubt of a fault the solution
+    /// followed lasts beyond the minute; a gap ends every anchor and the doubt.
+    #[test]
+    fn a_failing_anchor_is_kept_and_a_gap_ends_all() {
+        let motion = Motion {
+            c_b_n: Matrix3::identity(),
+            f_ib_b: Vector3::new(0.0, 0.0, -9.8),
+            omega_ib_b: Vector3::zeros(),
+        };
+        let n = FilterNoise {
+            arw_rad_per_sqrt_s: 1e-6,
+            vrw_mps_per_sqrt_s: 1e-4,
+            ..noise()
+        };
+        let p = settled(2e-5);
+        let oldest = |c: &Coast<f64>| {
+            c.anchors
+                .iter()
+                .flatten()
+                .map(|a| a.age_s)
+                .fold(0.0, f64::max)
+        };
+        let mut c = Coast::none();
+        let second = |c: &mut Coast<f64>, step_m: f64| {
+            let mut x = StateVector::zeros();
+            x[POS + 1] = -step_m;
+            for _ in 0..10 {
+                for _ in 0..10 {
+                    c.carried(0.01, &motion, &p, &n, true);
+                }
+                c.taken(&x);
+                c.judged(&p, &n, GATE_3DOF);
+            }
+        };
+        for _ in 0..200 {
+            second(&mut c, 0.0);
+        }
+        assert!(c.doubt().is_none());
+        assert!(
+            oldest(&c) <= ANCHORS as f64 * ANCHOR_SPACING_S + 1e-6,
+            "{}",
+            oldest(&c)
+        );
+        // A 5 m ramp over 30 s, then nothing: the anchor from before it is kept.
+        for _ in 0..30 {
+            second(&mut c, 5.0 / 300.0);
+        }
+        for _ in 0..60 {
+            second(&mut c, 0.0);
+        }
+        let east = c.doubt().expect("kept")[0][(1, 1)].sqrt();
+        assert!(east > 4.5, "{east} m");
+        assert!(
+            oldest(&c) > ANCHORS as f64 * ANCHOR_SPACING_S + 20.0,
+            "{}",
+            oldest(&c)
+        );
+        for _ in 0..60 {
+            second(&mut c, 0.0);
+        }
+        assert!(
+            oldest(&c) <= ANCHOR_KEPT_S + ANCHOR_SPACING_S,
+            "{}",
+            oldest(&c)
+        );
+        c.clear();
+        assert!(c.doubt().is_none() && c.anchors.iter().all(Option::is_none));
+    }
 }

@@ -205,7 +205,7 @@
 //! that begins while the filter refuses the true fixes it may have drifted from (after a ramp
 //! it followed) leaves that doubt standing.
 
-use super::states::{ATT, Covariance, POS, StateVector, VEL};
+use super::states::{ATT, BA, BG, Covariance, POS, StateVector, VEL};
 use crate::Scalar;
 use nalgebra::{Matrix3, Vector3};
 
@@ -359,6 +359,10 @@ pub struct Pull<T: Scalar> {
     pub position_shrink_m2: Matrix3<T>,
     /// The velocity covariance the fixes took away, with the squared weights [m^2/s^2].
     pub velocity_shrink: Matrix3<T>,
+    /// The gyro bias corrections, body frame [rad/s].
+    pub gyro_bias_rad_s: Vector3<T>,
+    /// The accelerometer bias corrections, body frame [m/s^2].
+    pub accel_bias_mps2: Vector3<T>,
 }
 
 impl<T: Scalar> Pull<T> {
@@ -370,6 +374,8 @@ impl<T: Scalar> Pull<T> {
             attitude_rad: Vector3::zeros(),
             position_shrink_m2: Matrix3::zeros(),
             velocity_shrink: Matrix3::zeros(),
+            gyro_bias_rad_s: Vector3::zeros(),
+            accel_bias_mps2: Vector3::zeros(),
         }
     }
 
@@ -384,6 +390,8 @@ impl<T: Scalar> Pull<T> {
             attitude_rad: self.attitude_rad * k,
             position_shrink_m2: self.position_shrink_m2 * (k * k),
             velocity_shrink: self.velocity_shrink * (k * k),
+            gyro_bias_rad_s: self.gyro_bias_rad_s * k,
+            accel_bias_mps2: self.accel_bias_mps2 * k,
         }
     }
 
@@ -401,6 +409,8 @@ impl<T: Scalar> Pull<T> {
             attitude_rad: self.attitude_rad + x.fixed_rows::<3>(ATT),
             position_shrink_m2: self.position_shrink_m2 + shrink_pos,
             velocity_shrink: self.velocity_shrink + shrink_vel,
+            gyro_bias_rad_s: self.gyro_bias_rad_s + x.fixed_rows::<3>(BG),
+            accel_bias_mps2: self.accel_bias_mps2 + x.fixed_rows::<3>(BA),
         }
     }
 
@@ -424,6 +434,12 @@ impl<T: Scalar> Pull<T> {
             self.attitude_rad,
         ]
         .map(|d| d * d.transpose())
+    }
+
+    /// The doubt on the gyro biases [rad^2/s^2] and the accelerometer biases [m^2/s^4] of
+    /// what the fixes moved them by: `d d^T` of each (taken at a recovery, not reported).
+    pub fn sensor_doubt(&self) -> [Matrix3<T>; 2] {
+        [self.gyro_bias_rad_s, self.accel_bias_mps2].map(|d| d * d.transpose())
     }
 
     /// True when a fix of innovation `z` (predicted minus measured) [m] and innovation
