@@ -1049,7 +1049,7 @@ impl<T: Scalar> ErrorFilter<T> {
             (s, nis) = again;
         }
         if recovered || self.degraded_by_refusals() {
-            self.recover_from_coasting();
+            self.reacquire_from_degraded();
             let Some(again) = self.innovation(m) else {
                 return (AidResult::Invalid, None);
             };
@@ -1083,9 +1083,9 @@ impl<T: Scalar> ErrorFilter<T> {
     /// accelerated the solution by ([`Pull::doubt`]; nothing once a recovery by the pull took
     /// it), and what the anchor that failed found the corrections had, join the velocity's
     /// and attitude's covariance (`d d^T`, the fault recovery by covariance increase of
-    /// [Groves, ch. 17]): a FOG car that had followed a ramp turned 0.06 deg of heading with
-    /// it and held it 30 s beyond 4 sigma after re-acquiring.
-    fn recover_from_coasting(&mut self) {
+    /// [Groves, ch. 17]): a FOG car that had followed a ramp held its pitch 12 s beyond 4
+    /// sigma after re-acquiring (up to 6.6).
+    fn reacquire_from_degraded(&mut self) {
         if !self.consider.has_gnss_error() {
             let [_, pv, pa] = self.pull.doubt();
             let [pg, pb] = self.pull.sensor_doubt();

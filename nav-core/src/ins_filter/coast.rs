@@ -510,34 +510,47 @@ mod tests {
         p
     }
 
+    /// Level and still: the error equations at rest.
+    fn at_rest() -> Motion<f64> {
+        Motion {
+            c_b_n: Matrix3::identity(),
+            f_ib_b: Vector3::new(0.0, 0.0, -9.8),
+            omega_ib_b: Vector3::zeros(),
+        }
+    }
+
+    /// A navigation-grade part's noise.
+    fn fine_noise() -> FilterNoise<f64> {
+        FilterNoise {
+            arw_rad_per_sqrt_s: 1e-6,
+            vrw_mps_per_sqrt_s: 1e-4,
+            ..noise()
+        }
+    }
+
+    /// `seconds` of 10 fixes a second, each moving the solution `step_m` [m] east, with the
+    /// filter's covariance `p` throughout.
+    fn fed(c: &mut Coast<f64>, p: &Covariance<f64>, step_m: f64, seconds: usize) {
+        let mut x = StateVector::zeros();
+        x[POS + 1] = -step_m;
+        for _ in 0..seconds * 10 {
+            for _ in 0..10 {
+                c.carried(0.01, &at_rest(), p, &fine_noise(), true);
+            }
+            c.taken(&x);
+            c.judged(p, &fine_noise(), GATE_3DOF);
+        }
+    }
+
     /// Fed back as a ramp the fixes pull the solution along (5 m east over 30 s in steps
     /// of 0.1 s), the corrections fail the test of a navigation-grade anchor and are reported
     /// as doubt; no correction never fails; an anchor whose tilt is 50 times as uncertain
     /// (a MEMS part) cannot tell the same ramp from its own drift.
     #[test]
     fn a_ramp_the_solution_followed_fails_against_a_coasting_that_can_tell() {
-        let motion = Motion {
-            c_b_n: Matrix3::identity(),
-            f_ib_b: Vector3::new(0.0, 0.0, -9.8),
-            omega_ib_b: Vector3::zeros(),
-        };
-        let n = FilterNoise {
-            arw_rad_per_sqrt_s: 1e-6,
-            vrw_mps_per_sqrt_s: 1e-4,
-            ..noise()
-        };
         let run = |tilt_rad: f64, step_m: f64| {
-            let p = settled(tilt_rad);
             let mut c = Coast::none();
-            let mut x = StateVector::zeros();
-            x[POS + 1] = -step_m;
-            for _ in 0..300 {
-                for _ in 0..10 {
-                    c.carried(0.01, &motion, &p, &n, true);
-                }
-                c.taken(&x);
-                c.judged(&p, &n, 16.27);
-            }
+            fed(&mut c, &settled(tilt_rad), step_m, 30);
             c.doubt()
         };
         let doubt = run(2e-5, 5.0 / 300.0).expect("the ramp fails");
@@ -552,16 +565,6 @@ mod tests {
     /// followed lasts beyond the minute; a gap ends every anchor and the doubt.
     #[test]
     fn a_failing_anchor_is_kept_and_a_gap_ends_all() {
-        let motion = Motion {
-            c_b_n: Matrix3::identity(),
-            f_ib_b: Vector3::new(0.0, 0.0, -9.8),
-            omega_ib_b: Vector3::zeros(),
-        };
-        let n = FilterNoise {
-            arw_rad_per_sqrt_s: 1e-6,
-            vrw_mps_per_sqrt_s: 1e-4,
-            ..noise()
-        };
         let p = settled(2e-5);
         let oldest = |c: &Coast<f64>| {
             c.anchors
@@ -571,20 +574,7 @@ mod tests {
                 .fold(0.0, f64::max)
         };
         let mut c = Coast::none();
-        let second = |c: &mut Coast<f64>, step_m: f64| {
-            let mut x = StateVector::zeros();
-            x[POS + 1] = -step_m;
-            for _ in 0..10 {
-                for _ in 0..10 {
-                    c.carried(0.01, &motion, &p, &n, true);
-                }
-                c.taken(&x);
-                c.judged(&p, &n, GATE_3DOF);
-            }
-        };
-        for _ in 0..200 {
-            second(&mut c, 0.0);
-        }
+        fed(&mut c, &p, 0.0, 200);
         assert!(c.doubt().is_none());
         assert!(
             oldest(&c) <= ANCHORS as f64 * ANCHOR_SPACING_S + 1e-6,
@@ -592,12 +582,8 @@ mod tests {
             oldest(&c)
         );
         // A 5 m ramp over 30 s, then nothing: the anchor from before it is kept.
-        for _ in 0..30 {
-            second(&mut c, 5.0 / 300.0);
-        }
-        for _ in 0..60 {
-            second(&mut c, 0.0);
-        }
+        fed(&mut c, &p, 5.0 / 300.0, 30);
+        fed(&mut c, &p, 0.0, 60);
         let east = c.doubt().expect("kept")[0][(1, 1)].sqrt();
         assert!(east > 4.5, "{east} m");
         assert!(
@@ -605,9 +591,7 @@ mod tests {
             "{}",
             oldest(&c)
         );
-        for _ in 0..60 {
-            second(&mut c, 0.0);
-        }
+        fed(&mut c, &p, 0.0, 60);
         assert!(
             oldest(&c) <= ANCHOR_KEPT_S + ANCHOR_SPACING_S,
             "{}",
