@@ -292,14 +292,16 @@ impl<T: Scalar> ErrorFilter<T> {
         cluster.unwrap_or_else(Matrix3::zeros)
             + reacquired.unwrap_or_else(Matrix3::zeros)
             + restarted.unwrap_or_else(Matrix3::zeros)
-            + self.pull_doubt().map_or_else(Matrix3::zeros, |[p, _, _]| p)
+            + self
+                .fault_doubt()
+                .map_or_else(Matrix3::zeros, |[p, _, _]| p)
     }
 
     /// The doubt on the position, velocity and attitude of a [`Pull`] that is a fault
     /// ([`Pull::is_fault`], [`Pull::doubt`]) and of the coasting test ([`Coast::doubt`]), but
     /// not under a declared correlated GNSS error (its fixes' corrections are not independent,
     /// and the solution follows the error it declares).
-    fn pull_doubt(&self) -> Option<[Matrix3<T>; 3]> {
+    fn fault_doubt(&self) -> Option<[Matrix3<T>; 3]> {
         if self.consider.has_gnss_error() {
             return None;
         }
@@ -322,7 +324,9 @@ impl<T: Scalar> ErrorFilter<T> {
             .or(self.refused_unconfirmed.as_ref())
             .and_then(RefusedCluster::velocity_doubt)
             .unwrap_or_else(Matrix3::zeros)
-            + self.pull_doubt().map_or_else(Matrix3::zeros, |[_, v, _]| v)
+            + self
+                .fault_doubt()
+                .map_or_else(Matrix3::zeros, |[_, v, _]| v)
     }
 
     /// The reported position covariance, NED [m^2]: the filter's own ([`Self::covariance`],
@@ -339,7 +343,9 @@ impl<T: Scalar> ErrorFilter<T> {
     pub fn attitude_sigma_rad(&self, yaw: T) -> Vector3<T> {
         let (s, c) = (yaw.psin(), yaw.pcos());
         let att = self.p.fixed_view::<3, 3>(ATT, ATT)
-            + self.pull_doubt().map_or_else(Matrix3::zeros, |[_, _, a]| a);
+            + self
+                .fault_doubt()
+                .map_or_else(Matrix3::zeros, |[_, _, a]| a);
         let (pnn, pee, pne) = (att[(0, 0)], att[(1, 1)], att[(0, 1)]);
         let roll2 = c * c * pnn + s * s * pee + T::c(2.0) * c * s * pne;
         let pitch2 = s * s * pnn + c * c * pee - T::c(2.0) * c * s * pne;
@@ -865,8 +871,7 @@ impl<T: Scalar> ErrorFilter<T> {
             (AidResult::Rejected { .. }, _) => self.refused_for_s + since_last_s,
             (AidResult::Invalid, _) => self.refused_for_s,
         };
-        let coast_gate = T::c(super::coast::GATE_3DOF);
-        self.coast.judged(&self.p, &self.config.noise, coast_gate);
+        self.coast.judged(&self.p, &self.config.noise);
         let held = self.heading_doubt_rad2;
         self.heading_doubt_rad2 = self
             .cluster

@@ -94,14 +94,14 @@ impl<T: Scalar> Motion<T> {
     /// The rates of a deviation of the solution: its acceleration [m/s^2] and its attitude
     /// rate [rad/s] from the attitude deviation `dphi` [rad] and the sensor deviations
     /// `[b_g, b_a, s_g, s_a]` (body frame), by the same error equations
-    /// ([`Motion::rows`]) at this motion.
+    /// ([`Motion::rows`]) at this motion, whose specific force in NED is `f_n` [m/s^2].
     fn deviation_rates(
         &self,
+        f_n: &Vector3<T>,
         dphi: &Vector3<T>,
         sensors: &[Vector3<T>; 4],
     ) -> (Vector3<T>, Vector3<T>) {
         let [bg, ba, sg, sa] = sensors;
-        let f_n = self.c_b_n * self.f_ib_b;
         let acc = f_n.cross(dphi) + self.c_b_n * (ba + self.f_ib_b.component_mul(sa));
         let rate = -(self.c_b_n * (bg + self.omega_ib_b.component_mul(sg)));
         (acc, rate)
@@ -193,9 +193,10 @@ impl<T: Scalar> Anchor<T> {
         }
     }
 
-    fn carried(&mut self, dt: T, motion: &Motion<T>, noise: &FilterNoise<T>) {
+    /// Carried over `dt` [s] at `motion`, whose specific force in NED is `f_n` [m/s^2].
+    fn carried(&mut self, dt: T, motion: &Motion<T>, f_n: &Vector3<T>, noise: &FilterNoise<T>) {
         let half = T::c(0.5);
-        let (acc, rate) = motion.deviation_rates(&self.dphi, &self.sensors);
+        let (acc, rate) = motion.deviation_rates(f_n, &self.dphi, &self.sensors);
         self.dr += self.dv * dt + acc * (dt * dt * half);
         self.dv += acc * dt;
         self.dphi += rate * dt;
@@ -208,7 +209,6 @@ impl<T: Scalar> Anchor<T> {
         // and their bias and scale factor turned away from the anchor's attitude (by `2
         // sin(theta / 2) = sqrt(3 - tr(C C0^T))` at most). The last three act through the
         // largest specific force as well.
-        let f_n = motion.c_b_n * motion.f_ib_b;
         let df = (f_n - self.f0_n).norm();
         self.f_max = self.f_max.max(f_n.norm());
         self.turned_rad += motion.omega_ib_b.norm() * dt;
@@ -322,8 +322,9 @@ impl<T: Scalar> Coast<T> {
         noise: &FilterNoise<T>,
         scale_factors: bool,
     ) {
+        let f_n = motion.c_b_n * motion.f_ib_b;
         for a in self.anchors.iter_mut().flatten() {
-            a.carried(dt, motion, noise);
+            a.carried(dt, motion, &f_n, noise);
         }
         self.since_anchor_s += dt;
         if self.since_anchor_s < T::c(ANCHOR_SPACING_S) {
@@ -358,14 +359,15 @@ impl<T: Scalar> Coast<T> {
         }
     }
 
-    /// Judges every anchor against the gate `gate_3dof` with the filter's covariance `p` now
+    /// Judges every anchor against [`GATE_3DOF`] with the filter's covariance `p` now
     /// and keeps the doubt of the failing one with the largest position difference.
-    pub fn judged(&mut self, p: &Covariance<T>, noise: &FilterNoise<T>, gate_3dof: T) {
+    pub fn judged(&mut self, p: &Covariance<T>, noise: &FilterNoise<T>) {
+        let gate = T::c(GATE_3DOF);
         let own = [POS, VEL].map(|at| Vector3::from_fn(|i, _| p[(at + i, at + i)]));
         let mut worst: Option<&Anchor<T>> = None;
         for a in self.anchors.iter_mut().flatten() {
             let [pos, vel] = a.statistics(noise, &own);
-            a.failing = pos > gate_3dof || vel > gate_3dof;
+            a.failing = pos > gate || vel > gate;
             if a.failing && worst.is_none_or(|w| a.dr.norm_squared() > w.dr.norm_squared()) {
                 worst = Some(a);
             }
@@ -447,7 +449,8 @@ mod tests {
             let f = model::system_matrix(&l, &quiet, true);
             // Second order per step: F changes slowly against the step.
             moved += (f * moved + f * (f * moved) * (dt / 2.0)) * dt;
-            a.carried(dt, &motion_of(&l), &quiet);
+            let m = motion_of(&l);
+            a.carried(dt, &m, &(m.c_b_n * m.f_ib_b), &quiet);
         }
         for (got, at, what) in [
             (a.dr, POS, "position"),
@@ -482,7 +485,7 @@ mod tests {
         let mut age = 0.0;
         for tau in [10.0, 30.0, 60.0] {
             while age < tau - 1e-9 {
-                a.carried(0.01, &motion, &quiet);
+                a.carried(0.01, &motion, &(l.c_b_n * l.f_ib_b), &quiet);
                 age += 0.01;
             }
             let phi = transition(&f, tau);
@@ -538,7 +541,7 @@ mod tests {
                 c.carried(0.01, &at_rest(), p, &fine_noise(), true);
             }
             c.taken(&x);
-            c.judged(p, &fine_noise(), GATE_3DOF);
+            c.judged(p, &fine_noise());
         }
     }
 

@@ -342,7 +342,8 @@ impl<T: Scalar> Restart<T> {
 pub const PULL_MEMORY_S: f64 = 120.0;
 
 /// What the accepted position fixes of the last minutes moved the solution by (module
-/// docs): their position, velocity and attitude corrections, each summed as it was applied
+/// docs): their position, velocity, attitude and sensor-bias corrections, each summed as it
+/// was applied
 /// (the velocity corrections are not carried into the position: carried on over minutes,
 /// the small corrections of a consistent filter's velocity added up to metres, and a held
 /// offset passed for them), and the position and velocity covariance the fixes took away,
