@@ -6,13 +6,17 @@
 //! count equals the rows decoded: a stream cut short, or one that lost solution frames, gives
 //! a log without it (incomplete, as the project's logs say). A stream without a solution row
 //! to write is refused, with its counts. The CSV is written atomically ([`crate::atomic`]):
-//! nothing is left at the output path when the decoding fails. What the decoder skipped and refused, and the frames by type, are
-//! reported ([`DecodeSummary`]'s `Display`).
+//! nothing is left at the output path when the decoding fails. What the decoder skipped and
+//! refused, and the frames by type, are reported ([`DecodeSummary`]'s `Display`); frames of
+//! another protocol version are counted by version and named. A stream with no valid frame is
+//! refused with what it was, when that can be told: frames of another protocol version, or an
+//! IMU recording (`docs/recording-format.md`'s magic).
 
 use crate::atomic::AtomicFile;
 use anyhow::{Context, Result, bail};
 use hal_adapters::protocol::messages::EndOfRun;
-use hal_adapters::protocol::{DecodeStats, Decoder, Message, MessageId, Refusal};
+use hal_adapters::protocol::{DecodeStats, Decoder, Message, MessageId, Refusal, VERSION};
+use hal_adapters::recording::MAGIC;
 use nav_core::number::Number;
 use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, EndRecord, Row};
 use std::fmt;
@@ -56,6 +60,9 @@ pub struct DecodeSummary {
     /// configuration (`DEFAULT_CONFIG`), or one that lost its IMU data (`IMU_LOST`), looked like
     /// any other.
     pub flags: Vec<(&'static str, u32)>,
+    /// Frames refused for their protocol version (version, count; in the order first seen):
+    /// a capture of a board running another version, refused whole, never misread.
+    pub other_versions: Vec<(u8, u32)>,
 }
 
 /// Why a solution row that passed its frame's checks is not a navigator's: time not after the
@@ -146,6 +153,13 @@ impl fmt::Display for DecodeSummary {
         for (offset, r) in &self.refusals {
             writeln!(f, "refused frame ending at byte {offset}: {r}")?;
         }
+        if !self.other_versions.is_empty() {
+            writeln!(
+                f,
+                "{}; this decoder reads version {VERSION}",
+                versions_text(&self.other_versions)
+            )?;
+        }
         if self.implausible > 0 {
             writeln!(
                 f,
@@ -220,6 +234,21 @@ impl fmt::Display for DecodeSummary {
     }
 }
 
+/// "N frames of protocol version V" for each version of `versions` (version, count).
+fn versions_text(versions: &[(u8, u32)]) -> String {
+    let parts: Vec<String> = versions
+        .iter()
+        .map(|(v, n)| format!("{n} frames of protocol version {v}"))
+        .collect();
+    parts.join(", ")
+}
+
+/// Leading bytes of a stream kept to tell what a stream without a valid frame is.
+const HEAD_LEN: usize = 8;
+
+/// The magic's letters, without its line end (which a text-mode copy may have changed).
+const RECORDING_MAGIC: &[u8] = MAGIC.split_at(6).0;
+
 /// Decodes the stream file `stream` into the solution CSV `out` (module docs).
 pub fn decode_file(stream: &Path, out: &Path) -> Result<DecodeSummary> {
     crate::atomic::refuse_same_file(&[stream], out)
@@ -245,6 +274,7 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
     let mut buf = vec![0u8; 1 << 16];
     let mut failure: Option<anyhow::Error> = None;
     let mut last_t_us: Option<u64> = None;
+    let mut head: Vec<u8> = Vec::with_capacity(HEAD_LEN);
     loop {
         let n = match input.read(&mut buf) {
             Ok(0) => break,
@@ -252,6 +282,8 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
             Err(e) => return Err(e).context("read error"),
         };
+        let keep = n.min(HEAD_LEN - head.len());
+        head.extend_from_slice(&buf[..keep]);
         for &b in &buf[..n] {
             let Some(result) = decoder.feed(b) else {
                 continue;
@@ -259,6 +291,12 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
             let received = match result {
                 Ok(r) => r,
                 Err(e) => {
+                    if let Refusal::Version(v) = e {
+                        match summary.other_versions.iter_mut().find(|(w, _)| *w == v) {
+                            Some((_, count)) => *count += 1,
+                            None => summary.other_versions.push((v, 1)),
+                        }
+                    }
                     if summary.refusals.len() < MAX_LISTED {
                         summary.refusals.push((decoder.stats().bytes, e));
                     }
@@ -326,6 +364,24 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
     summary.cut_off_bytes = decoder.finish();
     summary.stats = *decoder.stats();
     if summary.stats.frames_total() == 0 {
+        if summary.stats.bytes == 0 {
+            bail!("the stream is empty (0 bytes)");
+        }
+        if head.starts_with(RECORDING_MAGIC) {
+            bail!(
+                "an IMU recording (it starts with the NAVIMU magic of docs/recording-format.md), \
+                 not the board's output stream: `nav replay --imu` reads recordings"
+            );
+        }
+        if !summary.other_versions.is_empty() {
+            bail!(
+                "no frame of protocol version {VERSION} in {} bytes: {}; this decoder reads \
+                 version {VERSION} (a frame of another version is refused whole, never read \
+                 with this version's layout)",
+                summary.stats.bytes,
+                versions_text(&summary.other_versions)
+            );
+        }
         bail!(
             "no valid frame in {} bytes ({} CRC failures): not a protocol stream?",
             summary.stats.bytes,

@@ -132,6 +132,24 @@ fn stream_of(log: &str, garbage: bool) -> (Vec<u8>, usize) {
     (out, added)
 }
 
+/// The `k`-th free-inertial solution frame of a still run at 400 Hz from 1 s.
+fn free_row(k: u64) -> Message {
+    Message::NavSolution(NavSolution {
+        row: Row::Free(Solution {
+            t_us: 1_000_000 + k * 2500,
+            lat_ndeg: 45_000_000_000,
+            lon_ndeg: 7_500_000_000,
+            h_m: 150.0,
+            v_eb_n: [0.0; 3],
+            roll_deg: 0.0,
+            pitch_deg: 0.0,
+            yaw_deg: 30.0,
+        }),
+        status: NavStatus::Nav,
+        flags: StatusFlags::empty(),
+    })
+}
+
 fn run_ok(args: &[&str]) -> String {
     let o = nav(args);
     let text = output_text(&o);
@@ -313,22 +331,6 @@ fn early_end_of_run_and_repeated_frames_are_named() {
     let d = dir.path();
     let out = d.join("out.csv");
     let out_s = out.to_str().unwrap();
-    let solution = |k: u64| {
-        Message::NavSolution(NavSolution {
-            row: Row::Free(Solution {
-                t_us: 1_000_000 + k * 2500,
-                lat_ndeg: 45_000_000_000,
-                lon_ndeg: 7_500_000_000,
-                h_m: 150.0,
-                v_eb_n: [0.0; 3],
-                roll_deg: 0.0,
-                pitch_deg: 0.0,
-                yaw_deg: 30.0,
-            }),
-            status: NavStatus::Nav,
-            flags: StatusFlags::empty(),
-        })
-    };
     let end = Message::EndOfRun(EndOfRun { rows: 2 });
     let encode = |messages: &[&Message]| -> Vec<Vec<u8>> {
         let mut enc = Encoder::new();
@@ -344,7 +346,7 @@ fn early_end_of_run_and_repeated_frames_are_named() {
 
     // The end of run first, then the solutions.
     let early = d.join("early.bin");
-    std::fs::write(&early, encode(&[&end, &solution(0), &solution(1)]).concat()).unwrap();
+    std::fs::write(&early, encode(&[&end, &free_row(0), &free_row(1)]).concat()).unwrap();
     let report = run_ok(&["decode", early.to_str().unwrap(), "--out", out_s]);
     assert!(
         report.contains("end-of-run frame (saying 2 rows) came before the end of the stream")
@@ -357,7 +359,7 @@ fn early_end_of_run_and_repeated_frames_are_named() {
 
     // The end-of-run frame sent twice (the same sequence number): one frame out of order,
     // none lost, the log complete.
-    let frames = encode(&[&solution(0), &solution(1), &end]);
+    let frames = encode(&[&free_row(0), &free_row(1), &end]);
     let repeated = d.join("repeated.bin");
     std::fs::write(&repeated, [frames.concat(), frames[2].clone()].concat()).unwrap();
     let report = run_ok(&["decode", repeated.to_str().unwrap(), "--out", out_s]);
@@ -370,7 +372,7 @@ fn early_end_of_run_and_repeated_frames_are_named() {
     // Two runs' streams one after the other (a capture across a restart): the second run's
     // rows go back in time and are refused; they still follow the first run's end, and the
     // summary says so (it said "2 rows, but the end-of-run frame says 2: incomplete").
-    let run = encode(&[&solution(0), &solution(1), &end]).concat();
+    let run = encode(&[&free_row(0), &free_row(1), &end]).concat();
     let two = d.join("two-runs.bin");
     std::fs::write(&two, [run.clone(), run].concat()).unwrap();
     let report = run_ok(&["decode", two.to_str().unwrap(), "--out", out_s]);
@@ -382,6 +384,118 @@ fn early_end_of_run_and_repeated_frames_are_named() {
     let log = std::fs::read_to_string(&out).unwrap();
     assert_eq!(log.lines().count(), 3, "{log}");
     assert!(!log.contains("# end"), "{log}");
+}
+
+/// COBS decoding of one frame (its delimiter left off).
+fn unstuffed(bytes: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        let code = usize::from(bytes[i]);
+        out.extend_from_slice(&bytes[i + 1..i + code]);
+        i += code;
+        if code < 0xff && i < bytes.len() {
+            out.push(0);
+        }
+    }
+    out
+}
+
+/// COBS encoding of the raw frame `raw`, with the zero delimiter.
+fn stuffed(raw: &[u8]) -> Vec<u8> {
+    let mut out = vec![0];
+    let mut code_at = 0;
+    for &b in raw {
+        if b != 0 {
+            out.push(b);
+        }
+        if b == 0 || out.len() - code_at == 0xff {
+            out[code_at] = (out.len() - code_at) as u8;
+            code_at = out.len();
+            out.push(0);
+        }
+    }
+    out[code_at] = (out.len() - code_at) as u8;
+    out.push(0);
+    out
+}
+
+/// The frame of `message` as a board of protocol version `version` sends it: the version
+/// byte changed, the CRC recomputed over it.
+fn frame_of_version(message: &Message, seq: u16, version: u8) -> Vec<u8> {
+    let mut enc = Encoder::new();
+    let mut frame = Vec::new();
+    for _ in 0..=seq {
+        frame.clear();
+        enc.append(message, &mut frame).unwrap();
+    }
+    let mut raw = unstuffed(&frame[..frame.len() - 1]);
+    raw[0] = version;
+    let end = raw.len() - 4;
+    let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC).checksum(&raw[..end]);
+    raw[end..].copy_from_slice(&crc.to_le_bytes());
+    let out = stuffed(&raw);
+    if version == hal_adapters::protocol::VERSION {
+        assert_eq!(out, frame, "the test's COBS and CRC are not the encoder's");
+    }
+    out
+}
+
+/// A stream of valid frames of protocol version 4 was refused as "no valid frame in 39732
+/// bytes (0 CRC failures): not a protocol stream?", and an IMU recording as CRC failures: the
+/// other version's frames are counted and named (refused, never misread), among this
+/// version's frames too, and a recording is named as one.
+#[test]
+fn frames_of_another_version_and_recordings_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("out.csv");
+    let out_s = out.to_str().unwrap();
+    let end = Message::EndOfRun(EndOfRun { rows: 3 });
+    let run = |version: u8| -> Vec<u8> {
+        let messages = [free_row(0), free_row(1), free_row(2), end];
+        let frames = messages.iter().enumerate();
+        frames
+            .flat_map(|(k, m)| frame_of_version(m, k as u16, version))
+            .collect()
+    };
+
+    // Version 4 only: refused, the frames counted by version.
+    let v4 = d.join("v4.bin");
+    std::fs::write(&v4, run(4)).unwrap();
+    let e = run_err(&["decode", v4.to_str().unwrap(), "--out", out_s]);
+    assert!(
+        e.contains("no frame of protocol version 5 in")
+            && e.contains(": 4 frames of protocol version 4; this decoder reads version 5"),
+        "{e}"
+    );
+    assert!(!out.exists());
+
+    // A capture across a firmware update: this version's run decoded, the others named.
+    let mixed = d.join("mixed.bin");
+    std::fs::write(&mixed, [run(3), run(5), run(4)].concat()).unwrap();
+    let report = run_ok(&["decode", mixed.to_str().unwrap(), "--out", out_s]);
+    assert!(
+        report.contains(
+            "4 frames of protocol version 3, 4 frames of protocol version 4; this decoder reads \
+             version 5"
+        ),
+        "{report}"
+    );
+    assert_eq!(std::fs::read_to_string(&out).unwrap().lines().count(), 5);
+
+    // An IMU recording.
+    let recording = d.join("still.bin");
+    common::generated_recording(&recording, "1");
+    let e = run_err(&["decode", recording.to_str().unwrap(), "--out", out_s]);
+    assert!(
+        e.contains("an IMU recording (it starts with the NAVIMU magic"),
+        "{e}"
+    );
+    let empty = d.join("empty.bin");
+    std::fs::write(&empty, []).unwrap();
+    let e = run_err(&["decode", empty.to_str().unwrap(), "--out", out_s]);
+    assert!(e.contains("the stream is empty"), "{e}");
 }
 
 #[test]
@@ -440,65 +554,94 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
         (Some([2.0, 2.0, 4.0]), 90.0)
     );
 
+    // The site, after the lines a case is about (their line numbers unchanged).
+    let site = |text: &str| format!("{text}lat-deg = 45\nlon-deg = 7\nh-m = 150\n");
     for (name, text, want) in [
         (
             "syntax",
-            "lat-deg = 45\nlon-deg = east\n",
-            "bad-syntax.txt:2: lon-deg takes a finite number",
+            "lat-deg = 45\nlon-deg = east\n".to_string(),
+            "bad-syntax.txt:2: lon-deg: takes a finite number, got east",
         ),
         (
             "key",
-            "lat-deg = 45\n\ncolour = red\n",
+            "lat-deg = 45\n\ncolour = red\n".to_string(),
             "bad-key.txt:3: unknown key 'colour'",
         ),
         (
             "lat",
-            "lat-deg = 95\nlon-deg = 7\n",
+            "lat-deg = 95\nlon-deg = 7\nh-m = 0\n".to_string(),
             "bad-lat.txt:1: refused (reason code 1): latitude 95",
         ),
         (
             "mount",
-            "mounting = 1,0,0,0,1,0,0,0,-1\n",
+            site("mounting = 1,0,0,0,1,0,0,0,-1\n"),
             "bad-mount.txt:1: refused (reason code 10)",
         ),
         (
             "align",
-            "align-method = fine\nimu-model = bmi088\n",
+            site("align-method = fine\nimu-model = bmi088\n"),
             "refused (reason code 8)",
         ),
         (
             "health",
-            "# quiet\nhealth-every = 0\n",
+            site("# quiet\nhealth-every = 0\n"),
             "bad-health.txt:2: refused (reason code 11)",
         ),
         // A refusal about several keys names each one's line.
         (
             "window",
-            "align-seconds = 5\n# c\n\nlat-deg = 45\nlon-deg = 7\n",
+            "align-seconds = 5\n# c\n\nlat-deg = 45\nlon-deg = 7\nh-m = 0\n".to_string(),
             "(keys align-seconds (line 1), lat-deg (line 4))",
         ),
         (
             "window2",
-            "align-seconds = 5\n# c\n\nlat-deg = 45\nlon-deg = 7\n",
+            "align-seconds = 5\n# c\n\nlat-deg = 45\nlon-deg = 7\nh-m = 0\n".to_string(),
             "bad-window2.txt:1,4: refused (reason code 8): alignment window 5 s",
         ),
         // No key at all (an empty or truncated file, comments only): the frame would carry the
         // compiled-in configuration as the host's, without the DEFAULT_CONFIG flag.
-        ("empty", "", "bad-empty.txt: no 'key = value' line"),
+        (
+            "empty",
+            String::new(),
+            "bad-empty.txt: no 'key = value' line",
+        ),
         (
             "comments",
-            "# the roof antenna board\n\n   \n# lat-deg = 45\n",
+            "# the roof antenna board\n\n   \n# lat-deg = 45\n".to_string(),
             "bad-comments.txt: no 'key = value' line",
+        ),
+        // The same for the site: keys, but not the site's (the compiled-in one, 0, 0, 0).
+        (
+            "site",
+            "log-every = 40\n".to_string(),
+            "bad-site.txt: the site is not given (lat-deg, lon-deg, h-m missing)",
+        ),
+        (
+            "height",
+            "lat-deg = 45\nlon-deg = 7\n".to_string(),
+            "bad-height.txt: the site is not given (h-m missing)",
+        ),
+        // Keys `nav replay` refuses together, named with both lines.
+        (
+            "levers",
+            site("lever-arm = 1,0,0\nlever-arm-sigma = 2\n"),
+            "bad-levers.txt:2: lever-arm-sigma: cannot be used with lever-arm (line 1)",
+        ),
+        // Named by the file's key, not by `nav replay`'s option or nav-core's field.
+        (
+            "log-every",
+            site("log-every = -1\n"),
+            "bad-log-every.txt:1: log-every: takes a whole number within 1 to 4294967295, got -1",
         ),
         // A comment after a value; a rate no IMU has.
         (
             "inline",
-            "lat-deg = 95 # the site\n",
+            "lat-deg = 95 # the site\nlon-deg = 7\nh-m = 0\n".to_string(),
             "bad-inline.txt:1: refused (reason code 1): latitude 95",
         ),
         (
             "rate",
-            "imu-rate-hz = 1e12\n",
+            site("imu-rate-hz = 1e12\n"),
             "bad-rate.txt:1: refused (reason code 8): sampling rate 9.99999995904e11 Hz is not \
              within [10, 40000] Hz",
         ),
@@ -506,29 +649,36 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
         // none of them.
         (
             "slow",
-            "imu-rate-hz = 5\n",
+            site("imu-rate-hz = 5\n"),
             "bad-slow.txt:1: refused (reason code 8): sampling rate 5 Hz is not within [10, 40000] Hz",
         ),
         // Noise densities of zero (an overconfident filter) or beyond any IMU's.
         (
             "arw0",
-            "lat-deg = 45\ngyro-arw-rad-per-sqrt-s = 0\n",
+            site("log-every = 4\ngyro-arw-rad-per-sqrt-s = 0\n"),
             "bad-arw0.txt:2: refused (reason code 8): gyro-arw-rad-per-sqrt-s must be above 0",
         ),
         (
             "vrw",
-            "accel-vrw-mps-per-sqrt-s = 1e9\n",
+            site("accel-vrw-mps-per-sqrt-s = 1e9\n"),
             "bad-vrw.txt:1: refused (reason code 8): accel-vrw-mps-per-sqrt-s must be above 0",
         ),
         (
             "bias",
-            "gyro-bias-rad-s = 1e9\n",
+            site("gyro-bias-rad-s = 1e9\n"),
             "bad-bias.txt:1: refused (reason code 8): gyro-bias-rad-s must be 0 or more",
+        ),
+        // A scale factor's 1-sigma of 0 (encoded as valid with aiding off before).
+        (
+            "scale0",
+            site("gyro-scale-sigma = 0\n"),
+            "bad-scale0.txt:1: refused (reason code 9): GNSS aiding: a scale-factor 1-sigma \
+             (gyro-scale-sigma, accel-scale-sigma) must be above 0",
         ),
         // The GNSS correlated error beyond the filter's range, named by its line.
         (
             "correlated",
-            "aiding = on\ngnss-correlated = 1, 1, 500\n",
+            site("aiding = on\ngnss-correlated = 1, 1, 500\n"),
             "bad-correlated.txt:1,2: refused (reason code 9): GNSS aiding: the GNSS correlated-error 1-sigma must be 0 to 100 m per axis",
         ),
     ] {

@@ -290,7 +290,8 @@ impl BoardIdentity {
 
 // The ranges are nav-core's, the filter's own (one place for the rule).
 pub use nav_core::ins_filter::limits::{
-    MAX_ACCEL_BIAS_MPS2, MAX_ARW_RAD_PER_SQRT_S, MAX_GYRO_BIAS_RAD_S, MAX_VRW_MPS_PER_SQRT_S,
+    MAX_ACCEL_BIAS_MPS2, MAX_ARW_RAD_PER_SQRT_S, MAX_GYRO_BIAS_RAD_S, MAX_SCALE,
+    MAX_VRW_MPS_PER_SQRT_S,
 };
 
 /// The refusal of a gyro ARW out of range ([`SettingsError::OutOfRange`], reason
@@ -309,6 +310,26 @@ pub const GYRO_BIAS_OUT_OF_RANGE: &str =
 /// The refusal of an accelerometer bias 1-sigma out of range.
 pub const ACCEL_BIAS_OUT_OF_RANGE: &str =
     "accel-bias-mps2 must be 0 or more and at most 10 m/s^2 (more than any IMU's)";
+
+/// The refusal of a scale-factor 1-sigma not above 0 or beyond [`MAX_SCALE`] (reason
+/// [`ReasonCode::Aiding`], with or without aiding: a frame carries it).
+pub const SCALE_OUT_OF_RANGE: &str = "a scale-factor 1-sigma (gyro-scale-sigma, \
+     accel-scale-sigma) must be above 0 and at most 0.1 (100,000 ppm): at 0 the aided filter's \
+     scale-factor states would have a zero variance (a part without scale-factor errors: 1e-6)";
+
+/// `Err` when a scale-factor 1-sigma of `figures` is not above 0 or beyond [`MAX_SCALE`].
+/// nav-core refuses 0 only with aiding on (its check of the other figures, 0 allowed for
+/// none, applies to both); a scale factor's 1-sigma is never "none" (it is the aided filter's
+/// state's initial and driving 1-sigma), so a frame is refused for it whatever its aiding.
+fn check_scale_factors(figures: &SensorFigures) -> Result<(), ConfigRefusal> {
+    // NaN fails the comparison.
+    let ok = |v: f32| f64::from(v) > 0.0 && f64::from(v) <= MAX_SCALE;
+    if ok(figures.gyro_scale) && ok(figures.accel_scale) {
+        Ok(())
+    } else {
+        Err(ConfigRefusal::Run(ConfigError::Aiding(SCALE_OUT_OF_RANGE)))
+    }
+}
 
 /// `Err` when the noise figures of `noise` are out of an IMU's range: the white noise
 /// densities not above zero (a zero density makes the filters overconfident) or beyond
@@ -349,12 +370,14 @@ const AIDING_BITS: u8 = AIDING_ON | SCALE_FACTORS | ZERO_MOTION | GNSS_CORRELATE
 
 impl DeviceConfig {
     /// Checks the configuration: the white noise densities (above zero, within an IMU's
-    /// range), nav-core's checks of the run at the IMU's rate ([`Setup::new`], the same as
-    /// every run's), then the mounting and the output rates.
+    /// range), the scale-factor 1-sigmas (above zero, [`SCALE_OUT_OF_RANGE`]), nav-core's
+    /// checks of the run at the IMU's rate ([`Setup::new`], the same as every run's), then the
+    /// mounting and the output rates.
     /// The run is checked in `f32`, the precision the board navigates in: the check its run's
     /// start makes (and no `f64` copy of the setup's code in the board's flash).
     pub fn validate(&self) -> Result<(), ConfigRefusal> {
         check_noise_densities(&self.run.noise)?;
+        check_scale_factors(&self.run.figures)?;
         Setup::<f32>::new(&self.run, f64::from(self.imu_rate_hz)).map_err(ConfigRefusal::Run)?;
         if !self.mounting.is_rotation(MOUNTING_TOL) {
             return Err(ConfigRefusal::Mounting);

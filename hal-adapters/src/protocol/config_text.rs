@@ -11,11 +11,16 @@
 //! | `imu-rate-hz` | IMU output rate [Hz] |
 //! | `imu-noise` | a grade's figures instead: `fog`, `rlg`, `mems-tactical`, `mems-consumer` |
 //! | `gyro-arw-rad-per-sqrt-s`, `accel-vrw-mps-per-sqrt-s`, `gyro-bias-rad-s`, `accel-bias-mps2` | one noise figure |
+//! | `gyro-scale-sigma`, `accel-scale-sigma` [-] (above 0), `gyro-cross-coupling-rad`, `accel-cross-coupling-rad` [rad], `gyro-g-sensitivity` [rad/s per m/s^2] (0: none) | one of the aided filter's other figures |
 //! | `mounting` | sensor-to-body rotation `c_s_b`, 9 numbers row by row, comma-separated |
 //! | `align-seconds` | alignment window [s] |
 //! | `raw-every`, `health-every`, `align-progress-every` | output rates [IMU samples between frames], 0: off |
 //! | `aiding` | `on` or `off` (GNSS-aided phase) |
-//! | `align-method`, `bias-prior`, `lever-arm` (X,Y,Z [m]), `lever-arm-sigma` [m], `base-translation` [m], `log-every` (solution rate, [navigation steps]), `frame`, `attitude`, `vertical`, `gnss-lever-arm` (X,Y,Z [m]), `propagation-rate` [Hz], `gnss-correlated` (N,E,D 1-sigma [m]), `gnss-correlated-time` [s] | as `nav replay`'s options |
+//! | `align-method`, `bias-prior`, `lever-arm` (X,Y,Z [m]), `lever-arm-sigma` [m], `base-translation` [m], `log-every` (solution rate, [navigation steps], at least 1), `frame`, `attitude`, `vertical`, `gnss-lever-arm` (X,Y,Z [m]), `propagation-rate` [Hz], `gnss-correlated` (N,E,D 1-sigma [m]), `gnss-correlated-time` [s] | as `nav replay`'s options |
+//!
+//! What a whole file must hold, and which keys exclude or replace others, is checked by its
+//! reader (`nav config`) from the tables here: [`SITE_KEYS`], [`EXCLUSIVE_KEYS`],
+//! [`AIDING_KEYS`], [`REPLACING_KEYS`].
 
 use super::config::{DeviceConfig, ImuModel, sensor_noise};
 use crate::drivers::Mounting;
@@ -24,22 +29,22 @@ use core::fmt;
 use nav_core::navigator::OptionError;
 use nav_core::navigator::config::AidingConfig;
 
-/// Why a line was refused.
+/// Why a line was refused. Its `Display` names the file's key, never a command-line option.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LineError<'a> {
     /// No `=` on the line.
     NoEquals,
     /// A key no configuration has (the key).
     UnknownKey(&'a str),
-    /// The value does not parse (the key, what it takes).
+    /// The value does not parse, or is out of the key's range (the key, what it takes).
     Invalid {
         /// The key.
         key: &'a str,
         /// What it takes.
         expected: &'static str,
+        /// The value given (trimmed).
+        value: &'a str,
     },
-    /// nav-core's option parser refused it.
-    Option(OptionError),
 }
 
 impl fmt::Display for LineError<'_> {
@@ -47,40 +52,83 @@ impl fmt::Display for LineError<'_> {
         match self {
             Self::NoEquals => f.write_str("expected 'key = value'"),
             Self::UnknownKey(k) => write!(f, "unknown key '{k}'"),
-            Self::Invalid { key, expected } => write!(f, "{key} takes {expected}"),
-            Self::Option(e) => write!(f, "{e}"),
+            Self::Invalid {
+                key,
+                expected,
+                value: "",
+            } => write!(f, "{key}: takes {expected}, got nothing"),
+            Self::Invalid {
+                key,
+                expected,
+                value,
+            } => write!(f, "{key}: takes {expected}, got {value}"),
         }
     }
 }
 
-/// The `key` of a line (trimmed), `None` for a blank or comment line.
-pub fn key_of(line: &str) -> Option<&str> {
-    let line = line.trim();
-    if line.is_empty() || line.starts_with('#') {
-        return None;
+/// The keys of the site: a file must give each (the compiled-in site, latitude 0, longitude
+/// 0, height 0, is no board's).
+pub const SITE_KEYS: [&str; 3] = ["lat-deg", "lon-deg", "h-m"];
+
+/// Keys that cannot be given together (as `nav replay`'s options of the same names), and why.
+pub const EXCLUSIVE_KEYS: [(&str, &str, &str); 1] = [(
+    "lever-arm",
+    "lever-arm-sigma",
+    "the lever arm is known (its offset) or unknown (its 1-sigma), not both",
+)];
+
+/// The keys that switch the GNSS-aided phase on: not with `aiding = off`.
+pub const AIDING_KEYS: [&str; 4] = [
+    "gnss-lever-arm",
+    "propagation-rate",
+    "gnss-correlated",
+    "gnss-correlated-time",
+];
+
+/// Keys that replace the values of other keys, which must therefore come after them (a figure
+/// given before `imu-model` or `imu-noise` would be lost): the key, the keys it replaces.
+pub const REPLACING_KEYS: [(&str, &[&str]); 2] =
+    [("imu-model", MODEL_REPLACES), ("imu-noise", FIGURE_KEYS)];
+
+/// The keys of one of the IMU's figures ([`NOISE_KEYS`] after the model and the grade).
+const FIGURE_KEYS: &[&str] = NOISE_KEYS.split_at(2).1;
+
+/// What `imu-model` replaces: a grade's figures and every single figure ([`NOISE_KEYS`]
+/// after the model).
+const MODEL_REPLACES: &[&str] = NOISE_KEYS.split_at(1).1;
+
+/// The `key` and `value` of a line (trimmed, a `#` comment removed), `Ok(None)` for a blank
+/// or comment line.
+pub fn key_value(line: &str) -> Result<Option<(&str, &str)>, LineError<'_>> {
+    // A `#` starts a comment, on its own line or after a value.
+    let line = line
+        .split_once('#')
+        .map_or(line, |(before, _)| before)
+        .trim();
+    if line.is_empty() {
+        return Ok(None);
     }
-    Some(line.split_once('=').map_or(line, |(k, _)| k).trim())
+    let (key, value) = line.split_once('=').ok_or(LineError::NoEquals)?;
+    Ok(Some((key.trim(), value.trim())))
 }
 
 impl DeviceConfig {
     /// Applies one line of the text form (module docs); blank and comment lines do nothing.
     /// Values are checked for syntax here and by [`Self::validate`] for sense.
     pub fn apply_line<'a>(&mut self, line: &'a str) -> Result<(), LineError<'a>> {
-        // A `#` starts a comment, on its own line or after a value.
-        let line = line
-            .split_once('#')
-            .map_or(line, |(before, _)| before)
-            .trim();
-        if line.is_empty() {
-            return Ok(());
+        match key_value(line)? {
+            Some((key, value)) => self.set(key, value),
+            None => Ok(()),
         }
-        let (key, value) = line.split_once('=').ok_or(LineError::NoEquals)?;
-        self.set(key.trim(), value.trim())
     }
 
     /// Sets `key` to `value` (module docs).
     pub fn set<'a>(&mut self, key: &'a str, value: &'a str) -> Result<(), LineError<'a>> {
-        let bad = |expected| LineError::Invalid { key, expected };
+        let bad = |expected| LineError::Invalid {
+            key,
+            expected,
+            value,
+        };
         let number = || {
             value
                 .parse::<f64>()
@@ -135,10 +183,19 @@ impl DeviceConfig {
                 "off" => run.aiding = None,
                 _ => return Err(bad("on or off")),
             },
+            // Refused where it is written (nav-core refuses 0 as the run's check, reason code 5).
+            "log-every" => {
+                run.log_every = value
+                    .parse::<u32>()
+                    .ok()
+                    .filter(|n| *n >= 1)
+                    .ok_or(bad("a whole number within 1 to 4294967295"))?;
+            }
+            // nav-core's option parser; its refusal named with the key, not as an option.
             _ => match run.set(key, value) {
                 Ok(()) => {}
                 Err(OptionError::Unknown) => return Err(LineError::UnknownKey(key)),
-                Err(e) => return Err(LineError::Option(e)),
+                Err(OptionError::Invalid { expected, .. }) => return Err(bad(expected)),
             },
         }
         Ok(())
@@ -166,7 +223,8 @@ pub fn keys_of(
 ) -> impl Iterator<Item = &'static str> + use<> {
     use super::config::ConfigRefusal as R;
     use super::config::{
-        ACCEL_BIAS_OUT_OF_RANGE, ARW_OUT_OF_RANGE, GYRO_BIAS_OUT_OF_RANGE, VRW_OUT_OF_RANGE,
+        ACCEL_BIAS_OUT_OF_RANGE, ARW_OUT_OF_RANGE, GYRO_BIAS_OUT_OF_RANGE, SCALE_OUT_OF_RANGE,
+        VRW_OUT_OF_RANGE,
     };
     use nav_core::alignment::machine::SettingsError;
     use nav_core::navigator::ConfigError as E;
@@ -190,6 +248,17 @@ pub fn keys_of(
             },
             false,
         ),
+        R::Run(E::Alignment(SettingsError::BadRate(_))) => (&["imu-rate-hz"], false),
+        R::Run(E::Alignment(SettingsError::WindowTooLong { .. })) => (&["align-seconds"], false),
+        R::Run(E::Alignment(SettingsError::NearPole)) => (&["lat-deg"], false),
+        R::Run(E::Alignment(SettingsError::LeverArmTooLong { .. })) => (&["lever-arm"], false),
+        R::Run(E::Alignment(SettingsError::LeverArmSigmaTooLarge { .. })) => {
+            (&["lever-arm-sigma"], false)
+        }
+        // The lever arm is not given (an unknown one's 1-sigma may be).
+        R::Run(E::Alignment(SettingsError::SwayNeedsLeverArm)) => {
+            (&["align-method", "lever-arm-sigma"], false)
+        }
         R::Run(E::Alignment(_)) => (
             &[
                 "align-method",
@@ -202,6 +271,15 @@ pub fn keys_of(
                 "bias-prior",
             ],
             true,
+        ),
+        R::Run(E::Aiding(why)) if *why == SCALE_OUT_OF_RANGE => (
+            &[
+                "gyro-scale-sigma",
+                "accel-scale-sigma",
+                "imu-model",
+                "imu-noise",
+            ],
+            false,
         ),
         R::Run(E::Aiding(_)) => (
             &[
@@ -220,4 +298,25 @@ pub fn keys_of(
     };
     let noise: &'static [&'static str] = if noise { &NOISE_KEYS } else { &[] };
     own.iter().chain(noise).copied()
+}
+
+/// A refusal in the text form's words: the refusal's own text, but a file's key where
+/// nav-core's names a command-line option (`--lever-arm`) or a field (`log_every`).
+#[derive(Clone, Copy, Debug)]
+pub struct InText<'a>(pub &'a super::config::ConfigRefusal);
+
+impl fmt::Display for InText<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use super::config::ConfigRefusal as R;
+        use nav_core::alignment::machine::SettingsError;
+        use nav_core::navigator::ConfigError as E;
+        match self.0 {
+            R::Run(E::Alignment(SettingsError::SwayNeedsLeverArm)) => f.write_str(
+                "the sway method needs the lever arm (lever-arm = X,Y,Z; 0,0,0 at the centre of \
+                 rotation): with an unknown one its 1-sigma is not true; use fine",
+            ),
+            R::Run(E::LogEvery) => f.write_str("log-every must be at least 1"),
+            r => write!(f, "{r}"),
+        }
+    }
 }

@@ -164,7 +164,7 @@ pub fn every_message() -> [Message; 10] {
 pub type Mutation = fn(&mut DeviceConfig);
 
 /// Changes of the default configuration and the reason each must be refused with.
-pub fn refusal_cases() -> [(Mutation, ReasonCode); 12] {
+pub fn refusal_cases() -> [(Mutation, ReasonCode); 13] {
     [
         (|c| c.run.lat_deg = 91.0, ReasonCode::Latitude),
         (|c| c.run.lon_deg = 400.0, ReasonCode::Longitude),
@@ -187,6 +187,8 @@ pub fn refusal_cases() -> [(Mutation, ReasonCode); 12] {
             },
             ReasonCode::Aiding,
         ),
+        // Without aiding too: a frame carries it (a zero variance once aiding is on).
+        (|c| c.run.figures.gyro_scale = 0.0, ReasonCode::Aiding),
         (|c| c.mounting.c_s_b[0][0] = 1.01, ReasonCode::Mounting),
         (|c| c.rates.health_every = 0, ReasonCode::OutputRate),
     ]

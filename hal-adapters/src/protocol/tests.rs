@@ -4,7 +4,7 @@
 extern crate std;
 
 use super::config::{ConfigRefusal, DeviceConfig, ReasonCode};
-use super::config_text::{LineError, keys_of};
+use super::config_text::{InText, LineError, keys_of};
 use super::decoder::{Decoder, Received, Refusal};
 use super::frame::{CRC, Encoder, MAX_FRAME, VERSION};
 use super::messages::*;
@@ -460,8 +460,138 @@ fn text_lines_set_values_and_refuse_bad_ones() {
     ));
     assert!(matches!(
         c.apply_line("align-method = magic"),
-        Err(LineError::Option(_))
+        Err(LineError::Invalid {
+            key: "align-method",
+            ..
+        })
     ));
+}
+
+/// A line's refusal names the file's key and the value given; it named nav-core's
+/// command-line option ("--log-every takes a whole number"), and a `log-every` of 0 passed the
+/// line to be refused by the run's check as "log_every must be at least 1".
+#[test]
+fn line_errors_name_the_key_and_the_value_not_an_option() {
+    for (line, want) in [
+        (
+            "log-every = -1",
+            "log-every: takes a whole number within 1 to 4294967295, got -1",
+        ),
+        (
+            "log-every = 0",
+            "log-every: takes a whole number within 1 to 4294967295, got 0",
+        ),
+        (
+            "align-method = foo",
+            "align-method: takes static, inertial, fine or sway, got foo",
+        ),
+        (
+            "propagation-rate = 0",
+            "propagation-rate: takes a rate within 1 to 1000 Hz, got 0",
+        ),
+        (
+            "lever-arm = 1,2 # short",
+            "lever-arm: takes X,Y,Z (three numbers), got 1,2",
+        ),
+        ("lat-deg =", "lat-deg: takes a finite number, got nothing"),
+    ] {
+        let mut c = DeviceConfig::default();
+        let e = c.apply_line(line).unwrap_err();
+        assert_eq!(std::format!("{e}"), want, "{line}");
+        assert_eq!(c, DeviceConfig::default(), "{line}: applied");
+    }
+    let mut c = DeviceConfig::default();
+    c.apply_line("log-every = 1").unwrap();
+    assert_eq!(c.run.log_every, 1);
+}
+
+/// A scale-factor 1-sigma of 0 was carried as valid with aiding off (nav-core's check of the
+/// other figures allows 0, "none"), while the text form's documentation says above 0 and the
+/// aided filter refuses it (a zero variance): refused now with or without aiding, naming the
+/// key and not the aiding line; the other figures' 0 ("none", a FOG's) and a zero bias
+/// 1-sigma without aiding (biases compensated) still pass.
+#[test]
+fn a_zero_scale_factor_sigma_is_refused_with_or_without_aiding() {
+    for aiding in ["off", "on"] {
+        for line in [
+            "gyro-scale-sigma = 0",
+            "accel-scale-sigma = 0",
+            "gyro-scale-sigma = -1e-3",
+            "accel-scale-sigma = 0.2",
+        ] {
+            let mut c = DeviceConfig::default();
+            c.apply_line(&std::format!("aiding = {aiding}")).unwrap();
+            c.apply_line(line).unwrap();
+            let r = c.validate().unwrap_err();
+            assert_eq!(r.code(), ReasonCode::Aiding, "{line}: {r}");
+            assert!(
+                std::format!("{r}").contains("must be above 0 and at most 0.1"),
+                "{line}: {r}"
+            );
+            let key = line.split(' ').next().unwrap();
+            let keys: Vec<&str> = keys_of(&r).collect();
+            assert!(keys.contains(&key), "{line}: {keys:?}");
+            assert!(!keys.contains(&"aiding"), "{line}: {keys:?}");
+        }
+    }
+    for line in [
+        "gyro-scale-sigma = 1e-6",
+        "accel-scale-sigma = 0.05",
+        "gyro-cross-coupling-rad = 0",
+        "accel-cross-coupling-rad = 0",
+        "gyro-g-sensitivity = 0",
+        "gyro-bias-rad-s = 0",
+    ] {
+        let mut c = DeviceConfig::default();
+        c.apply_line(line).unwrap();
+        assert_eq!(c.validate(), Ok(()), "{line}");
+    }
+}
+
+/// An alignment refusal about one value names that value's key alone (a file's site lines
+/// were listed with an IMU rate's or a window's refusal).
+#[test]
+fn alignment_refusals_about_one_value_name_its_key_alone() {
+    for (line, key) in [
+        ("imu-rate-hz = 5", "imu-rate-hz"),
+        ("align-seconds = 1e9", "align-seconds"),
+        ("lat-deg = 90", "lat-deg"),
+        ("lever-arm = 1e3, 0, 0", "lever-arm"),
+        ("lever-arm-sigma = 1e3", "lever-arm-sigma"),
+    ] {
+        let mut c = DeviceConfig::default();
+        c.apply_line(line).unwrap();
+        let r = c.validate().unwrap_err();
+        assert_eq!(r.code(), ReasonCode::Alignment, "{line}: {r}");
+        assert_eq!(keys_of(&r).collect::<Vec<_>>(), [key], "{line}: {r}");
+    }
+}
+
+/// A refusal in the text's words names the file's key where nav-core's text names the
+/// command-line option (`--lever-arm`) or the field (`log_every`).
+#[test]
+fn refusals_in_the_texts_words_name_its_keys() {
+    let mut c = DeviceConfig::default();
+    c.run.lat_deg = 45.0;
+    c.apply_line("align-method = sway").unwrap();
+    let r = c.validate().unwrap_err();
+    let text = std::format!("{}", InText(&r));
+    assert!(
+        text.contains("lever-arm = X,Y,Z") && !text.contains("--"),
+        "{text}"
+    );
+    assert_eq!(
+        keys_of(&r).collect::<Vec<_>>(),
+        ["align-method", "lever-arm-sigma"]
+    );
+    let r = ConfigRefusal::Run(ConfigError::LogEvery);
+    assert_eq!(
+        std::format!("{}", InText(&r)),
+        "log-every must be at least 1"
+    );
+    // Others as they are.
+    let r = ConfigRefusal::Run(ConfigError::Latitude(91.0));
+    assert_eq!(std::format!("{}", InText(&r)), std::format!("{r}"));
 }
 
 #[test]
@@ -578,7 +708,10 @@ fn the_gnss_correlated_error_round_trips_and_its_keys_are_named() {
     assert!(keys_of(&r).any(|k| k == "gnss-correlated"));
     assert!(matches!(
         c.apply_line("gnss-correlated = 1, 2"),
-        Err(LineError::Option(_))
+        Err(LineError::Invalid {
+            key: "gnss-correlated",
+            ..
+        })
     ));
     // The aiding bits' byte (after the solution rate): bit 4 is no flag.
     let m = Message::Config(c);
