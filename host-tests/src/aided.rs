@@ -138,6 +138,9 @@ pub struct LostImuTime {
     /// Intervals of the samples the navigation skipped as out of time order since the last
     /// navigated one [s] ([`Self::out_of_order`]).
     skipped_s: f64,
+    /// The data's end not navigated ([`Self::finish`]): its length [s] and the last navigated
+    /// sample's time [s] (nothing follows it to bridge to: not in [`Self::gaps`]).
+    pub tail: Option<(f64, f64)>,
 }
 
 /// A lost span shorter than this is not reported [s] (rounding of the time tags).
@@ -188,16 +191,23 @@ impl LostImuTime {
         }
     }
 
-    /// Ends the data: the samples after the last navigated one, if any, were lost.
+    /// Ends the data: the samples after the last navigated one, if any, were not navigated;
+    /// before navigation started, a gap the alignment took, after it, the solution's end
+    /// ([`Self::tail`]).
     pub fn finish(&mut self) {
         let (Some(first), Some(latest)) = (self.first_us, self.latest_us) else {
             return;
         };
-        let from = self.navigated_us.take().unwrap_or(first);
+        let navigated = self.navigated_us.take();
+        let from = navigated.unwrap_or(first);
         let skipped_s = std::mem::take(&mut self.skipped_s);
         let lost_s = (latest.saturating_sub(from) as f64 * 1e-6).max(skipped_s);
-        if lost_s > LOST_TOLERANCE_S {
-            self.add(lost_s, latest);
+        if lost_s <= LOST_TOLERANCE_S {
+            return;
+        }
+        match navigated {
+            Some(from_us) if !self.aligning => self.tail = Some((lost_s, from_us as f64 * 1e-6)),
+            _ => self.add(lost_s, latest),
         }
     }
 
@@ -210,11 +220,18 @@ impl LostImuTime {
                 self.alignment_s, self.alignment_gaps
             )
         });
-        let navigating = self.navigation_warning();
-        match (aligning, navigating) {
-            (Some(a), Some(n)) => Some(format!("{a}\n{n}")),
-            (a, n) => a.or(n),
-        }
+        let tail = self.tail.map(|(lost_s, from_s)| {
+            format!(
+                "WARNING: the last {lost_s:.3} s of IMU data were not navigated (samples \
+                 unusable, refused by the input limits or out of time order): the solution \
+                 ends at t = {from_s:.3} s"
+            )
+        });
+        let lines: Vec<String> = [aligning, self.navigation_warning(), tail]
+            .into_iter()
+            .flatten()
+            .collect();
+        (!lines.is_empty()).then(|| lines.join("\n"))
     }
 
     /// The warning for time lost while navigating.
@@ -611,8 +628,17 @@ mod tests {
             l.out_of_order(P_S);
         }
         l.finish();
-        assert_eq!(l.gaps, 1, "{l:?}");
-        assert!((l.total_s - 400.0 * P_S).abs() < 1e-9, "{l:?}");
+        assert_eq!(l.gaps, 0, "{l:?}");
+        let (tail_s, from_s) = l.tail.unwrap();
+        assert!((tail_s - 400.0 * P_S).abs() < 1e-9, "{l:?}");
+        assert_eq!(from_s, t as f64 * 1e-6);
+        let w = l.warning().unwrap();
+        assert!(
+            w.contains("the last 1.000 s of IMU data were not navigated"),
+            "{w}"
+        );
+        assert!(w.contains("the solution ends at t = 100.000 s"), "{w}");
+        assert!(!w.contains("bridged"), "{w}");
     }
 
     /// A second of records missing, the first after it unusable; unusable samples at the start
@@ -635,8 +661,9 @@ mod tests {
             (3 * P_US, true),
             (4 * P_US, false),
         ]);
-        assert_eq!(l.gaps, 2, "{l:?}");
-        assert!((l.total_s - 2.0 * P_S).abs() < 1e-9, "{l:?}");
+        assert_eq!(l.gaps, 1, "{l:?}");
+        assert!((l.total_s - P_S).abs() < 1e-9, "{l:?}");
+        assert_eq!(l.tail, Some((P_S, 3.0 * P_S)), "{l:?}");
         // Every sample on time: nothing.
         let l = lost(&[(0, true), (P_US, true), (2 * P_US, true)]);
         assert_eq!(l.gaps, 0, "{l:?}");

@@ -50,8 +50,10 @@ impl Default for Stationary {
     }
 }
 
-/// Highest sampling rate accepted [Hz] (as `nav sim`'s): timestamps are whole nanoseconds.
-pub const MAX_RATE_HZ: f64 = 100_000.0;
+/// Highest sampling rate accepted [Hz] (as `nav sim`'s): the navigator's
+/// ([`nav_core::alignment::machine::MAX_RATE_HZ`]). Was 100 kHz: a 50 kHz recording was
+/// written that every replay refused.
+pub const MAX_RATE_HZ: f64 = nav_core::alignment::machine::MAX_RATE_HZ;
 
 /// Why a recording's sampling rate `rate_hz` [Hz] is not one to write (`nav generate`, `nav
 /// sim`): not finite, above [`MAX_RATE_HZ`], or so low that every increment is longer than
@@ -62,8 +64,9 @@ pub fn check_rate(rate_hz: f64) -> Result<()> {
     let min_hz = 1.0 / max_dt_s;
     ensure!(
         rate_hz.is_finite() && rate_hz >= min_hz && rate_hz <= MAX_RATE_HZ,
-        "the rate must be within [{min_hz}, {MAX_RATE_HZ}] Hz, not {} (below {min_hz} Hz every \
-         increment is longer than the {max_dt_s} s the navigator accepts)",
+        "the rate must be within [{min_hz}, {MAX_RATE_HZ}] Hz, the rates a replay navigates, \
+         not {} (below {min_hz} Hz every increment is longer than the {max_dt_s} s the \
+         navigator accepts)",
         Number(rate_hz)
     );
     Ok(())

@@ -285,14 +285,17 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
             navigator.push_fix(crate::gnss_file::narrow::<T>(f));
         }
         let out_of_order = navigator.counters().flagged_by.out_of_order;
+        let rejected = navigator.counters().rejected;
         let logged = navigator
             .push_inline(&mut background, &s.nav_input())
             .map_err(PipelineError::Navigation)?;
-        // The navigator's word on the sample's time (nav_core::gap).
+        // The navigator's word on the sample's time (nav_core::gap) and on its increment (a
+        // refused one is lost time as an unusable one is).
         if navigator.counters().flagged_by.out_of_order > out_of_order {
             lost.out_of_order(f64::from(s.dt_s));
         } else {
-            lost.note(s.t_us, usable.then_some(f64::from(s.dt_s)));
+            let navigated = usable && navigator.counters().rejected == rejected;
+            lost.note(s.t_us, navigated.then_some(f64::from(s.dt_s)));
         }
         if let Some(r) = logged {
             row(&mut out, &r)?;

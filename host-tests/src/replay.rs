@@ -41,7 +41,7 @@ pub enum ImuDevice {
     /// The recording's samples as they are.
     #[default]
     Recording,
-    /// The board's ADIS16505 ([`Model::BOARD`]), 32-bit delta bursts.
+    /// The board's ADIS16505 (ADIS16505-2), 32-bit delta bursts.
     Adis16505,
     /// A TDK ICM-42688-P, 2 kHz FIFO integrated to 400 Hz.
     Icm42688,

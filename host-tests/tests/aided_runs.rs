@@ -1560,6 +1560,9 @@ fn replay_refuses_an_impossible_start() {
         ["--align-method", "sway"],
         ["--lat", "10"],
         ["--lever-arm", "1,1,1"],
+        // Was ignored: the recording replayed as it is, a 100 Hz file taken as if through
+        // the 400 Hz device.
+        ["--device", "adis16505"],
     ] {
         let msg = replay_given(&[&GIVEN[..], &extra[..]].concat());
         assert!(
@@ -2587,6 +2590,69 @@ fn lost_imu_time_is_reported() {
         &GIVEN,
     ));
     assert!(!text.contains("missing in"), "{text}");
+}
+
+/// Seven seconds of samples refused by the input limits (a gyro of 1000 rad per increment)
+/// lose the solution as seven seconds of non-finite samples do, and are reported alike:
+/// free-inertial and aided. Was: the refused ones passed for navigated time, the run said
+/// nothing of a solution 109 m off. A clock that steps back for good near the end: the
+/// samples behind it are the data's end, not a bridged gap (was: "bridged with the rates
+/// either side", nothing following to bridge to).
+#[test]
+fn refused_samples_and_a_lost_end_are_reported_as_lost_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    lv_fog(d);
+    let out = d.join("sol.csv");
+    for bad in [1e3_f32, f32::NAN] {
+        let mut rec = host_tests::recording_io::read(&d.join("imu.bin")).unwrap();
+        for r in &mut rec.records[12_000..14_800] {
+            r.gyro[0] = bad;
+        }
+        let imu = d.join("bad.bin");
+        std::fs::write(&imu, rec.to_bytes().unwrap()).unwrap();
+        let mut free = nav();
+        free.arg("replay")
+            .arg("--imu")
+            .arg(&imu)
+            .args(ALIGNED)
+            .arg("--out")
+            .arg(&out);
+        let gnss = d.join("gnss.csv");
+        for cmd in [
+            &mut free,
+            &mut replay_gnss(&imu, &gnss, &out, &ALIGNED),
+            &mut replay_gnss(&imu, &gnss, &out, &GIVEN),
+        ] {
+            let text = run_ok(cmd);
+            assert!(
+                text.contains("7.000 s of IMU data missing in 1 gap(s)"),
+                "{bad}: {text}"
+            );
+            assert!(text.contains("is not bridged"), "{bad}: {text}");
+        }
+    }
+    let mut rec = host_tests::recording_io::read(&d.join("imu.bin")).unwrap();
+    for r in &mut rec.records[20_000..] {
+        r.t_ns -= 10_000_000_000;
+    }
+    let imu = d.join("stepped.bin");
+    std::fs::write(&imu, rec.to_bytes().unwrap()).unwrap();
+    let text = run_ok(
+        nav()
+            .arg("replay")
+            .arg("--imu")
+            .arg(&imu)
+            .args(ALIGNED)
+            .arg("--out")
+            .arg(&out),
+    );
+    assert!(
+        text.contains("the last 9.997 s of IMU data were not navigated"),
+        "{text}"
+    );
+    assert!(text.contains("the solution ends at t = 50.000 s"), "{text}");
+    assert!(!text.contains("bridged"), "{text}");
 }
 
 /// 6 s of IMU records lost inside the static alignment's window (its averages take them), or

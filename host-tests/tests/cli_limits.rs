@@ -100,7 +100,12 @@ fn recording_lengths_beyond_memory_are_refused() {
     assert!(!dir.path().join("g.bin").exists());
     refused(
         &["sim", "static", "--out", out, "--rate", "1e300"],
-        &["the rate must be within [10, 100000] Hz, not 1e300"],
+        &["the rate must be within [10, 40000] Hz, the rates a replay navigates, not 1e300"],
+    );
+    // Written before at up to 100 kHz, then refused by every replay.
+    refused(
+        &["sim", "static", "--out", out, "--rate", "50000"],
+        &["within [10, 40000] Hz", "not 50000"],
     );
     refused(
         &[
@@ -253,7 +258,11 @@ fn replay_alignment_options_beyond_range_are_refused_in_both_precisions() {
 fn config_text_base_translation_beyond_range_names_its_key() {
     let dir = tempfile::tempdir().unwrap();
     let text = dir.path().join("run.txt");
-    std::fs::write(&text, "base-translation = 1e300\n").unwrap();
+    std::fs::write(
+        &text,
+        "base-translation = 1e300\nlat-deg = 45\nlon-deg = 7\nh-m = 150\n",
+    )
+    .unwrap();
     let out = dir.path().join("run.bin");
     let msg = refused(
         &[

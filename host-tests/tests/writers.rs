@@ -372,18 +372,18 @@ fn generate_refuses_what_the_replay_would_refuse_and_writes_nothing() {
         (
             "--rate",
             "0",
-            "the rate must be within [10, 100000] Hz, not 0",
+            "the rate must be within [10, 40000] Hz, the rates a replay navigates, not 0",
         ),
         (
             "--rate",
             "1e12",
-            "the rate must be within [10, 100000] Hz, not 1e12",
+            "the rate must be within [10, 40000] Hz, the rates a replay navigates, not 1e12",
         ),
         // Every 2 s increment would be refused by the replay (0.1 s at most).
         (
             "--rate",
             "0.5",
-            "the rate must be within [10, 100000] Hz, not 0.5",
+            "the rate must be within [10, 40000] Hz, the rates a replay navigates, not 0.5",
         ),
         (
             "--lon",

@@ -179,13 +179,14 @@ enum Command {
     },
     /// Benchmarks, printed: the mechanization alone (the default: steps per second on one
     /// thread, f32 and f64, over 10 min of exact 400 Hz increments of a 900 km/h flight), `nav
-    /// kf-gins` speed and accuracy, the aided filter's NEES/NIS consistency, GNSS outages and
-    /// GNSS outliers.
+    /// kf-gins` speed and accuracy, the aided filter's NEES/NIS consistency, GNSS outages,
+    /// GNSS outliers and gaps in the IMU data.
     Bench {
         /// What to measure: mechanization (steps/s, no I/O), filter (`nav kf-gins` speed and
         /// accuracy on a generated 1-hour KF-GINS data set), consistency (NEES/NIS Monte Carlo
         /// of the GNSS-aided filter), outages (drift in GNSS outages of `--outage-seconds`
-        /// every 180 s) or outliers (jumps, spikes, multipath, NaN fixes).
+        /// every 180 s), outliers (jumps, spikes, multipath, NaN fixes) or gaps (IMU records
+        /// removed: the error against the widened 1-sigma after each gap).
         #[arg(default_value = "mechanization")]
         what: BenchKind,
         /// Passes over the 240,000 increments (mechanization; at least 1).
@@ -506,8 +507,9 @@ struct ReplayArgs {
     #[arg(long, value_name = "FILE", conflicts_with_all = ["init_pos", "start_in_motion"])]
     calibration: Option<PathBuf>,
     /// The sample path: the recording as it is, or a simulated IMU on an SPI bus read by its
-    /// real driver (the firmware's path on the `qemu` board is `adis16505`).
-    #[arg(long, value_enum, default_value_t = ImuDevice::Recording)]
+    /// real driver (the firmware's path on the `qemu` board is `adis16505`); from the
+    /// alignment only (a given start or a start in motion replays the recording as it is).
+    #[arg(long, value_enum, default_value_t = ImuDevice::Recording, conflicts_with_all = ["init_pos", "start_in_motion"])]
     device: ImuDevice,
     /// Navigation frame of the mechanization, wander or ned (outputs are NED either way).
     #[arg(long, default_value = "wander", value_parser = named(&config::FRAMES), conflicts_with_all = ["init_pos", "start_in_motion"])]

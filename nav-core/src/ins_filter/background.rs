@@ -1086,7 +1086,7 @@ impl<T: Scalar> ErrorFilter<T> {
     /// coasting test across that jump says nothing more of its error and its anchors end
     /// ([`coast`] module docs). What the accepted fixes of the last minutes turned and
     /// accelerated the solution by ([`Pull::doubt`]; nothing once a recovery by the pull took
-    /// it), and what the anchor that failed found the corrections had, join the velocity's
+    /// it; taken once, [`Pull::position_only`]), and what the anchor that failed found the corrections had, join the velocity's
     /// and attitude's covariance (`d d^T`, the fault recovery by covariance increase of
     /// [Groves, ch. 17]): a FOG car that had followed a ramp held its pitch 12 s beyond 4
     /// sigma after re-acquiring (up to 6.6).
@@ -1100,6 +1100,7 @@ impl<T: Scalar> ErrorFilter<T> {
                 block += d;
             }
             self.check_covariance();
+            self.pull = self.pull.position_only();
         }
         self.coast.clear();
     }

@@ -22,9 +22,10 @@
 //! difference between the two solutions is the coasting error minus the filter's own; its
 //! 1-sigma per axis is bounded by the sum of theirs (whatever their correlation). Over the
 //! three axes the position difference, and the velocity difference, are tested against the
-//! chi-square gate. Beyond it, the differences are reported as a doubt on the position,
-//! velocity and attitude (`d d^T`, as the pull of [`super::integrity`]), not given to the
-//! filter: its own covariance would let the next fixes follow the fault further.
+//! chi-square gate. Beyond it, the part of the differences beyond the gate's ellipsoid
+//! (`beyond_gate`) is reported as a doubt on the position, velocity and attitude (`d d^T`,
+//! as the pull of [`super::integrity`]), not given to the filter: its own covariance would
+//! let the next fixes follow the fault further.
 //!
 //! The carried terms drop the Schuler, Coriolis and gravity-gradient couplings, which over the
 //! [`ANCHOR_KEPT_S`] an anchor lives change them by below 3 %. An anchor is kept while it
@@ -149,6 +150,10 @@ struct Anchor<T: Scalar> {
     turned_bias_rad: T,
     /// Failed the test at the last judgement.
     failing: bool,
+    /// The largest part of the position and of the velocity difference that lay beyond the
+    /// gate at a judgement ([`beyond_gate`]): the evidence of a fault, kept while the
+    /// anchor's coasting, growing less sure with its age, tells less.
+    claimed: [T; 2],
 }
 
 impl<T: Scalar> Anchor<T> {
@@ -190,6 +195,7 @@ impl<T: Scalar> Anchor<T> {
             }),
             turned_bias_rad: T::zero(),
             failing: false,
+            claimed: [T::zero(); 2],
         }
     }
 
@@ -291,6 +297,19 @@ impl<T: Scalar> Anchor<T> {
     }
 }
 
+/// The part of a difference whose statistic is `stat` that lies beyond the gate's ellipsoid,
+/// as a fraction of it: `1 - sqrt(gate / stat)`, zero within the gate. The fault a failing
+/// anchor can claim is at least that part: the rest is what the coasting's own drift
+/// explains. A difference just beyond the gate claims next to nothing; one ten times its
+/// 1-sigma nearly all of it.
+fn beyond_gate<T: Scalar>(stat: T, gate: T) -> T {
+    if stat > gate {
+        T::one() - (gate / stat).sqrt()
+    } else {
+        T::zero()
+    }
+}
+
 /// The anchors and the doubt of the last judgement (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Coast<T: Scalar> {
@@ -303,11 +322,13 @@ pub struct Coast<T: Scalar> {
 }
 
 impl<T: Scalar> Coast<T> {
-    /// No anchor.
+    /// No anchor; the first is set [`ANCHOR_SPACING_S`] on, once fixes have told the filter
+    /// something (one set on a start's covariance holds its sensor priors, and a bias the
+    /// first fixes found at 2.4 sigma failed it while the solution was 0.2 m off).
     pub fn none() -> Self {
         Self {
             anchors: [None; ANCHORS],
-            since_anchor_s: T::c(ANCHOR_SPACING_S),
+            since_anchor_s: T::zero(),
             doubt: None,
         }
     }
@@ -360,19 +381,32 @@ impl<T: Scalar> Coast<T> {
     }
 
     /// Judges every anchor against [`GATE_3DOF`] with the filter's covariance `p` now
-    /// and keeps the doubt of the failing one with the largest position difference.
+    /// and keeps the doubt of the failing one with the largest position difference. A
+    /// failing anchor claims the part of its differences beyond the gate (`beyond_gate`):
+    /// one just beyond it, a sensor bias the corrections found drawn at 2.4 sigma, claims
+    /// next to nothing (taken whole, it reported 40 m and 5.5 m/s of doubt and a DEGRADED
+    /// status for 25 s on a solution 0.2 m off); it keeps the largest part it claimed while
+    /// it fails.
     pub fn judged(&mut self, p: &Covariance<T>, noise: &FilterNoise<T>) {
         let gate = T::c(GATE_3DOF);
         let own = [POS, VEL].map(|at| Vector3::from_fn(|i, _| p[(at + i, at + i)]));
-        let mut worst: Option<&Anchor<T>> = None;
+        let mut worst: Option<[Vector3<T>; 3]> = None;
         for a in self.anchors.iter_mut().flatten() {
             let [pos, vel] = a.statistics(noise, &own);
             a.failing = pos > gate || vel > gate;
-            if a.failing && worst.is_none_or(|w| a.dr.norm_squared() > w.dr.norm_squared()) {
-                worst = Some(a);
+            if !a.failing {
+                continue;
+            }
+            for (k, stat) in a.claimed.iter_mut().zip([pos, vel]) {
+                *k = k.max(beyond_gate(stat, gate));
+            }
+            let [k_pos, k_vel] = a.claimed;
+            let d = [a.dr * k_pos, a.dv * k_vel, a.dphi * k_pos.max(k_vel)];
+            if worst.is_none_or(|w| d[0].norm_squared() > w[0].norm_squared()) {
+                worst = Some(d);
             }
         }
-        self.doubt = worst.map(|a| [a.dr, a.dv, a.dphi].map(|d| d * d.transpose()));
+        self.doubt = worst.map(|w| w.map(|d| d * d.transpose()));
     }
 
     /// The doubt of the last judgement (module docs), if an anchor failed.
@@ -546,21 +580,54 @@ mod tests {
     }
 
     /// Fed back as a ramp the fixes pull the solution along (5 m east over 30 s in steps
-    /// of 0.1 s), the corrections fail the test of a navigation-grade anchor and are reported
-    /// as doubt; no correction never fails; an anchor whose tilt is 50 times as uncertain
-    /// (a MEMS part) cannot tell the same ramp from its own drift.
+    /// of 0.1 s) from an anchor set before it, the corrections fail the test of a
+    /// navigation-grade anchor and are reported as doubt; no correction never fails; an
+    /// anchor whose tilt is 50 times as uncertain (a MEMS part) cannot tell the same ramp
+    /// from its own drift.
     #[test]
     fn a_ramp_the_solution_followed_fails_against_a_coasting_that_can_tell() {
         let run = |tilt_rad: f64, step_m: f64| {
             let mut c = Coast::none();
+            fed(&mut c, &settled(tilt_rad), 0.0, ANCHOR_SPACING_S as usize);
             fed(&mut c, &settled(tilt_rad), step_m, 30);
             c.doubt()
         };
+        // The part beyond the gate of the anchor that saw the whole ramp (78 %).
         let doubt = run(2e-5, 5.0 / 300.0).expect("the ramp fails");
         let east = doubt[0][(1, 1)].sqrt();
-        assert!((4.5..=5.01).contains(&east), "{east} m east");
+        assert!((3.5..=5.01).contains(&east), "{east} m east");
         assert!(run(2e-5, 0.0).is_none());
         assert!(run(1e-3, 5.0 / 300.0).is_none());
+    }
+
+    /// A position difference whose statistic is `k` times the gate claims the part of itself
+    /// beyond the gate's ellipsoid, `1 - sqrt(1 / k)`: next to nothing just beyond it (a
+    /// sensor bias the fixes found, drawn at 2.4 sigma against an anchor set at the start,
+    /// was reported whole, 40 m of doubt on a solution 0.2 m off), nearly all far beyond it,
+    /// and nothing within it.
+    #[test]
+    fn the_doubt_is_the_part_beyond_the_gate() {
+        let p = settled(2e-5);
+        let own = [POS, VEL].map(|at| Vector3::from_fn(|i, _| p[(at + i, at + i)]));
+        let claimed = |k: f64| {
+            let mut c = Coast::none();
+            fed(&mut c, &p, 0.0, ANCHOR_SPACING_S as usize + 5);
+            let mut one = StateVector::zeros();
+            one[POS + 1] = -1.0;
+            let mut probe = c.anchors[0].unwrap();
+            probe.taken(&one);
+            let per_m2 = probe.statistics(&fine_noise(), &own)[0];
+            let east_m = (k * GATE_3DOF / per_m2).sqrt();
+            c.taken(&(one * east_m));
+            c.judged(&p, &fine_noise());
+            c.doubt().map(|d| d[0][(1, 1)].sqrt() / east_m)
+        };
+        assert_eq!(claimed(0.9), None);
+        for k in [1.2, 4.0, 100.0] {
+            let part = claimed(k).expect("beyond the gate");
+            let want = 1.0 - (1.0 / k).sqrt();
+            assert!((part - want).abs() < 1e-9, "{k}: {part} against {want}");
+        }
     }
 
     /// Anchors are replaced once [`ANCHORS`] times [`ANCHOR_SPACING_S`] old while they pass;
@@ -584,11 +651,16 @@ mod tests {
             "{}",
             oldest(&c)
         );
-        // A 5 m ramp over 30 s, then nothing: the anchor from before it is kept.
+        // A 5 m ramp over 30 s, then nothing: the anchor from before it is kept, and the
+        // part of the ramp it claimed with it, though its coasting now tells less.
         fed(&mut c, &p, 5.0 / 300.0, 30);
+        let claimed = c.doubt().expect("the ramp fails")[0][(1, 1)].sqrt();
         fed(&mut c, &p, 0.0, 60);
         let east = c.doubt().expect("kept")[0][(1, 1)].sqrt();
-        assert!(east > 4.5, "{east} m");
+        assert!(
+            east > 3.5 && east >= claimed - 1e-9,
+            "{east} m, {claimed} m claimed"
+        );
         assert!(
             oldest(&c) > ANCHORS as f64 * ANCHOR_SPACING_S + 20.0,
             "{}",

@@ -415,6 +415,19 @@ impl<T: Scalar> Pull<T> {
         }
     }
 
+    /// What is left once the velocity, attitude and sensor-bias sums have joined the
+    /// filter's covariance (a re-acquisition): the position's, still what a later fault test
+    /// and the pull's recovery compare fixes with. Kept, the sums joined the covariance again
+    /// when the filter was DEGRADED a second time within [`PULL_MEMORY_S`], and the reported
+    /// doubt counted them beside the covariance that held them.
+    pub fn position_only(&self) -> Self {
+        Self {
+            position_ned_m: self.position_ned_m,
+            position_shrink_m2: self.position_shrink_m2,
+            ..Self::none()
+        }
+    }
+
     /// True when the pull is more than the fixes' own corrections explain: the position's or
     /// the velocity's, whitened with the covariance the fixes took away, beyond `gate_3dof`
     /// (module docs).
@@ -1313,6 +1326,18 @@ mod tests {
             p.carried(0.1).taken(&x, &shrink_pos, &shrink_vel)
         });
         assert!(vel.is_fault(gate), "{vel:?}");
+        // Taken into the covariance at a re-acquisition, the velocity, attitude and bias sums
+        // leave the pull; the position's stays, still a fault.
+        x[BG] = 1e-6;
+        x[BA + 1] = 1e-4;
+        let all = ramp.taken(&x, &shrink_pos, &shrink_vel);
+        let kept = all.position_only();
+        assert_eq!(kept.position_ned_m, all.position_ned_m);
+        assert!(kept.is_fault(gate), "{kept:?}");
+        let [_, v, a] = kept.doubt();
+        assert_eq!((v, a), (Matrix3::zeros(), Matrix3::zeros()));
+        assert_eq!(kept.sensor_doubt(), [Matrix3::zeros(); 2]);
+        assert_ne!(all.sensor_doubt(), [Matrix3::zeros(); 2]);
     }
 
     /// A gross cluster whose offset runs away from the jump faster than the filter's own
