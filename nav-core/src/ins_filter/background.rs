@@ -1086,10 +1086,10 @@ impl<T: Scalar> ErrorFilter<T> {
     /// coasting test across that jump says nothing more of its error and its anchors end
     /// ([`coast`] module docs). What the accepted fixes of the last minutes turned and
     /// accelerated the solution by ([`Pull::doubt`]; nothing once a recovery by the pull took
-    /// it; taken once, [`Pull::position_only`]), and what the anchor that failed found the corrections had, join the velocity's
-    /// and attitude's covariance (`d d^T`, the fault recovery by covariance increase of
-    /// [Groves, ch. 17]): a FOG car that had followed a ramp held its pitch 12 s beyond 4
-    /// sigma after re-acquiring (up to 6.6).
+    /// it; taken once, [`Pull::position_only`]), and what the anchor that failed found the
+    /// corrections had, join the velocity's and attitude's covariance (`d d^T`, the fault
+    /// recovery by covariance increase of [Groves, ch. 17]): a FOG car that had followed a
+    /// ramp held its pitch 12 s beyond 4 sigma after re-acquiring (up to 6.6).
     fn reacquire_from_degraded(&mut self) {
         if !self.consider.has_gnss_error() {
             let [_, pv, pa] = self.pull.doubt();
