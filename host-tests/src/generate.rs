@@ -50,16 +50,14 @@ impl Default for Stationary {
     }
 }
 
-/// Highest sampling rate accepted [Hz] (as `nav sim`'s): the navigator's
-/// ([`nav_core::alignment::machine::MAX_RATE_HZ`]). Was 100 kHz: a 50 kHz recording was
-/// written that every replay refused.
-pub const MAX_RATE_HZ: f64 = nav_core::alignment::machine::MAX_RATE_HZ;
-
 /// Why a recording's sampling rate `rate_hz` [Hz] is not one to write (`nav generate`, `nav
-/// sim`): not finite, above [`MAX_RATE_HZ`], or so low that every increment is longer than
-/// the navigator accepts (`nav_core::InputLimits::max_dt`, 0.1 s: 10 Hz), a recording whose
-/// every sample a replay would refuse.
+/// sim`): not finite, above the navigator's highest
+/// ([`nav_core::alignment::machine::MAX_RATE_HZ`]; a 50 kHz recording was written that every
+/// replay refused), or so low that every increment is longer than the navigator accepts
+/// (`nav_core::InputLimits::max_dt`, 0.1 s: 10 Hz), a recording whose every sample a replay
+/// would refuse.
 pub fn check_rate(rate_hz: f64) -> Result<()> {
+    use nav_core::alignment::machine::MAX_RATE_HZ;
     let max_dt_s = nav_core::InputLimits::<f64>::default().max_dt;
     let min_hz = 1.0 / max_dt_s;
     ensure!(

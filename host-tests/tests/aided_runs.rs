@@ -401,12 +401,10 @@ fn a_wrong_given_heading_is_not_reported_as_nav() {
 fn a_ramp_the_filter_follows_is_reported_in_its_sigma() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    sim_into(
+    let out = ramp_run(
         d,
+        "fog",
         &[
-            "land-vehicle",
-            "--grade",
-            "fog",
             "--seed",
             "216",
             "--seconds",
@@ -418,21 +416,7 @@ fn a_ramp_the_filter_follows_is_reported_in_its_sigma() {
             "--gnss-ramp",
             "347,30,5,0,0",
         ],
-    );
-    let (_, out) = replay_in(
-        d,
-        &[
-            &GIVEN[..],
-            &[
-                "--imu-noise",
-                "fog",
-                "--gnss-lever-arm",
-                "-0.49,0.15,-1.06",
-                "--precision",
-                "f32",
-            ],
-        ]
-        .concat(),
+        &["--gnss-lever-arm", "-0.49,0.15,-1.06", "--precision", "f32"],
     );
     let checked = assert_nav_rows_within(d, &out, 362.0..=400.0, NORTH, 4.0);
     assert!(checked > 200, "{checked} NAV rows in the ramp");
@@ -451,12 +435,10 @@ fn a_ramp_the_filter_follows_is_reported_in_its_sigma() {
 fn a_ramp_the_coasting_can_tell_is_reported_in_its_sigma() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    sim_into(
+    let out = ramp_run(
         d,
+        "rlg",
         &[
-            "land-vehicle",
-            "--grade",
-            "rlg",
             "--seed",
             "1",
             "--seconds",
@@ -466,10 +448,19 @@ fn a_ramp_the_coasting_can_tell_is_reported_in_its_sigma() {
             "--gnss-ramp",
             "300,30,0,5,0",
         ],
+        &[],
     );
-    let (_, out) = replay_in(d, &[&GIVEN[..], &["--imu-noise", "rlg"]].concat());
     let checked = assert_nav_rows_within(d, &out, 315.0..=350.0, EAST, 4.0);
     assert!(checked > 100, "{checked} NAV rows in the ramp");
+}
+
+/// A land vehicle of `grade` simulated into `d` with the `sim` options (its GNSS ramp among
+/// them), replayed from the given start with the grade's noise and the `replay` options; the
+/// solution log's path.
+fn ramp_run(d: &Path, grade: &str, sim: &[&str], replay: &[&str]) -> PathBuf {
+    sim_into(d, &[&["land-vehicle", "--grade", grade][..], sim].concat());
+    let noise = ["--imu-noise", grade];
+    replay_in(d, &[&GIVEN[..], &noise[..], replay].concat()).1
 }
 
 /// Asserts that every NAV row of the solution log `out` (simulated in `d`) in the time span
@@ -2466,6 +2457,18 @@ fn lv_fog(d: &Path) {
     );
 }
 
+/// `nav replay` of `imu` free-inertial after the static alignment of [`ALIGNED`].
+fn free_replay(imu: &Path, out: &Path) -> Command {
+    let mut cmd = nav();
+    cmd.arg("replay")
+        .arg("--imu")
+        .arg(imu)
+        .args(ALIGNED)
+        .arg("--out")
+        .arg(out);
+    cmd
+}
+
 fn replay_gnss(imu: &Path, gnss: &Path, out: &Path, args: &[&str]) -> Command {
     let mut cmd = nav();
     cmd.arg("replay")
@@ -2611,16 +2614,9 @@ fn refused_samples_and_a_lost_end_are_reported_as_lost_time() {
         }
         let imu = d.join("bad.bin");
         std::fs::write(&imu, rec.to_bytes().unwrap()).unwrap();
-        let mut free = nav();
-        free.arg("replay")
-            .arg("--imu")
-            .arg(&imu)
-            .args(ALIGNED)
-            .arg("--out")
-            .arg(&out);
         let gnss = d.join("gnss.csv");
         for cmd in [
-            &mut free,
+            &mut free_replay(&imu, &out),
             &mut replay_gnss(&imu, &gnss, &out, &ALIGNED),
             &mut replay_gnss(&imu, &gnss, &out, &GIVEN),
         ] {
@@ -2638,15 +2634,7 @@ fn refused_samples_and_a_lost_end_are_reported_as_lost_time() {
     }
     let imu = d.join("stepped.bin");
     std::fs::write(&imu, rec.to_bytes().unwrap()).unwrap();
-    let text = run_ok(
-        nav()
-            .arg("replay")
-            .arg("--imu")
-            .arg(&imu)
-            .args(ALIGNED)
-            .arg("--out")
-            .arg(&out),
-    );
+    let text = run_ok(&mut free_replay(&imu, &out));
     assert!(
         text.contains("the last 9.997 s of IMU data were not navigated"),
         "{text}"
