@@ -2792,9 +2792,12 @@ fn a_replay_whose_clock_steps_back_skips_the_samples_behind_it() {
 /// Gaps in the IMU data over a family (grades, seeds, gap times drawn from the seed): a gap
 /// within the bridge leaves an error its widened covariance covers (the NEES of position,
 /// velocity and attitude at the first sample after it within the 99.9 % point of chi^2(9),
-/// the horizontal error within 3.5 sigma for 30 s), and the filter takes the fixes after it.
-/// Without the bridge a 1 s gap left 20-100 m and 80 sigma, and most later fixes refused; a
-/// gap beyond the bridge ends the run DEGRADED.
+/// the horizontal error within 3.5 sigma for 30 s), and the filter takes the fixes after it
+/// (at most 2 of the 30 refused: a filter near the edge of its sigma after the gap may
+/// refuse one at the gate, and a lone refusal no longer widens the covariance by the next
+/// fix's whole offset, which had let that one through at once). Without the bridge a 1 s
+/// gap left 20-100 m and 80 sigma, and most later fixes refused; a gap beyond the bridge
+/// ends the run DEGRADED.
 #[test]
 fn gaps_in_the_imu_data_are_bridged_within_their_sigma() {
     use host_tests::gap_bench::{gap_case, gap_run, gap_start_s};
@@ -2808,7 +2811,7 @@ fn gaps_in_the_imu_data_are_bridged_within_their_sigma() {
                 let what = format!("{grade} seed {seed}, {lost_s} s: {o:?}");
                 assert!(o.nees_after < NEES9_999, "{what}");
                 assert!(o.max_error_per_sigma < 3.5, "{what}");
-                assert!(o.refused <= 1, "{what}");
+                assert!(o.refused <= 2, "{what}");
                 assert_eq!(o.status, FilterStatus::Nominal, "{what}");
             }
         }

@@ -1043,11 +1043,13 @@ impl<T: Scalar> ErrorFilter<T> {
                 self.p.fixed_view::<3, 3>(POS, POS).into_owned(),
             ));
         }
-        if self.cluster.take().is_some() {
+        if let Some(c) = self.cluster.take() {
             // The first fix after a refused cluster: its offset joins the position's
-            // covariance ([`integrity`] module docs, [Groves, ch. 17]).
+            // covariance, in the part the cluster held ([`RefusedCluster::weight`]:
+            // [`integrity`] module docs, [Groves, ch. 17]).
+            let z = m.z * c.weight();
             let mut pos = self.p.fixed_view_mut::<3, 3>(POS, POS);
-            pos += m.z * m.z.transpose();
+            pos += z * z.transpose();
             let Some(again) = self.innovation(m) else {
                 return (AidResult::Invalid, None);
             };

@@ -33,6 +33,7 @@
 //! [`ANCHOR_KEPT_S`]; a gap in the IMU data, bridged or lost, or a re-start of the solution
 //! ends all anchors.
 
+use super::integrity::beyond_gate;
 use super::model::{FilterNoise, skew};
 use super::states::{ATT, BA, BG, Covariance, N, POS, SA, SG, StateVector, VEL};
 use crate::Scalar;
@@ -294,19 +295,6 @@ impl<T: Scalar> Anchor<T> {
             stat(&self.dr, &coasting[0], &own[0]),
             stat(&self.dv, &coasting[1], &own[1]),
         ]
-    }
-}
-
-/// The part of a difference whose statistic is `stat` that lies beyond the gate's ellipsoid,
-/// as a fraction of it: `1 - sqrt(gate / stat)`, zero within the gate. The fault a failing
-/// anchor can claim is at least that part: the rest is what the coasting's own drift
-/// explains. A difference just beyond the gate claims next to nothing; one ten times its
-/// 1-sigma nearly all of it.
-fn beyond_gate<T: Scalar>(stat: T, gate: T) -> T {
-    if stat > gate {
-        T::one() - (gate / stat).sqrt()
-    } else {
-        T::zero()
     }
 }
 

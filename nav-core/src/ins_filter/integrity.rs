@@ -85,7 +85,11 @@
 //! that agree with it again, so its position is doubtful by that offset, a step it followed
 //! rather than a drift of its velocity, and the fix moves the position, not the velocity (a
 //! MEMS filter that followed a ramp otherwise turned the step back into a velocity error and
-//! lost the fixes again).
+//! lost the fixes again). A cluster of one refused fix holds, there and in its reported
+//! doubt, only the part of its offset beyond the gate ([`RefusedCluster::weight`]): the gate
+//! refuses one fault-free fix in a thousand, and such a false alarm (4.3 sigma, 2 m fixes
+//! at 10 Hz) had widened the covariance by the next fix's whole offset, which then moved the
+//! solution by 8 m.
 //!
 //! **A DEGRADED filter that drifted recovers** [Groves, ch. 17, fault recovery by covariance
 //! increase]. A filter that followed part of a fault (a FOG filter pulled by a ramp the window
@@ -240,6 +244,19 @@ pub const CHAIN_GATE_FACTOR: f64 = 4.0;
 /// Median of chi-square with 3 degrees of freedom: a refused cluster whose offset is this
 /// typical of the filter's own error is released (module docs).
 pub const CHI2_3DOF_MEDIAN: f64 = 2.366;
+
+/// The part of a difference whose statistic is `stat` that lies beyond the gate's ellipsoid,
+/// as a fraction of it: `1 - sqrt(gate / stat)`, zero within the gate. The fault a test that
+/// fails can claim is at least that part: the rest is what the noise it is judged against
+/// explains. A difference just beyond the gate claims next to nothing; one ten times its
+/// 1-sigma nearly all of it.
+pub(crate) fn beyond_gate<T: Scalar>(stat: T, gate: T) -> T {
+    if stat > gate {
+        T::one() - (gate / stat).sqrt()
+    } else {
+        T::zero()
+    }
+}
 
 /// `L^-1 z` for `S = L L^T` (the whitened innovation); `None` when `S` is not positive
 /// definite.
@@ -630,6 +647,9 @@ pub struct RefusedCluster<T: Scalar> {
     pub age_s: T,
     /// Members so far [-].
     pub members: u32,
+    /// The part of the first member's innovation beyond the gate, `1 - sqrt(gate / NIS)` of
+    /// its normalised square `NIS` [-]: all a lone refused fix claims ([`Self::weight`]).
+    pub beyond: T,
     /// The doubt of a cluster this one replaced while it was still refused [m^2] (module
     /// docs: a held offset that starts while the true fixes are refused does not clear the
     /// filter's doubt about them).
@@ -655,6 +675,7 @@ impl<T: Scalar> RefusedCluster<T> {
             first: (z, r),
             age_s: T::zero(),
             members: 1,
+            beyond: beyond_gate(nis, gate_3dof),
             carried_doubt: Matrix3::zeros(),
             ran_away: false,
         }
@@ -862,16 +883,37 @@ impl<T: Scalar> RefusedCluster<T> {
     }
 
     /// The doubt on the solution's position while this cluster is refused (module docs):
-    /// `z z^T / 4` of the last member's innovation `z` [m^2], none for a gross cluster that
-    /// has not run away ([`Self::ran_away`]), plus the doubt it carries from a cluster it
-    /// replaced; `None` when both are none.
+    /// `z z^T / 4` of the last member's innovation `z` [m^2] times [`Self::weight`] squared,
+    /// none for a gross cluster that has not run away ([`Self::ran_away`]), plus the doubt
+    /// it carries from a cluster it replaced; `None` when both are none.
     pub fn doubt(&self) -> Option<Matrix3<T>> {
+        let w = self.weight();
         let own = (!self.gross || self.ran_away)
-            .then(|| self.z_ned_m * self.z_ned_m.transpose() * T::c(0.25));
+            .then(|| self.z_ned_m * self.z_ned_m.transpose() * (T::c(0.25) * w * w));
         let carried = (self.carried_doubt != Matrix3::zeros()).then_some(self.carried_doubt);
         match (own, carried) {
             (Some(a), Some(b)) => Some(a + b),
             (a, b) => a.or(b),
+        }
+    }
+
+    /// True while the cluster is one refused fix.
+    pub fn is_lone(&self) -> bool {
+        self.members < 2
+    }
+
+    /// The part of the offset the cluster holds against the filter [-]: all of it once a
+    /// second refused fix agrees with the first; for a lone refused fix only its part beyond
+    /// the gate ([`Self::beyond`]). The gate refuses fault-free fixes at its false-alarm rate
+    /// (one in a thousand): a 4.3-sigma fix of 2 m at 10 Hz was taken whole as the
+    /// solution's doubt, and the next ordinary fix moved the solution by 8 m; a fix far
+    /// beyond the gate (the true fixes after a fault the filter followed) still claims nearly
+    /// all of its offset.
+    pub fn weight(&self) -> T {
+        if self.is_lone() {
+            self.beyond
+        } else {
+            T::one()
         }
     }
 
@@ -1163,8 +1205,13 @@ mod tests {
             &Matrix3::from_diagonal_element(5.8e-4),
             gate
         ));
-        // Refusing 30 m it cannot tell from its own error, the solution reports a doubt
-        // that puts the fixes at 2 sigma.
+        // One refused fix, at twice the gate, holds the part of its offset beyond the gate
+        // (the rest may be the gate's false alarm); refusing a second 30 m off it cannot
+        // tell from its own error, the solution reports a doubt that puts the fixes at 2
+        // sigma.
+        let lone = c.doubt().unwrap()[(1, 1)].sqrt() * 2.0;
+        assert!(c.is_lone() && (lone - 30.0 * (1.0 - 0.5_f64.sqrt())).abs() < 1e-9);
+        let c = c.followed_by(Vector3::new(0.0, 30.0, 0.0), r, 1.0);
         let d = c.doubt().unwrap();
         assert!((d[(1, 1)].sqrt() * 2.0 - 30.0).abs() < 1e-9);
         assert_eq!(d[(0, 1)], 0.0);
@@ -1436,7 +1483,8 @@ mod tests {
     #[test]
     fn a_cluster_started_while_another_was_refused_carries_its_doubt() {
         let (gate, r) = (16.27_f64, Vector3::repeat(0.25));
-        let before = RefusedCluster::start(Vector3::new(0.0, 3.0, 0.0), r, 40.0, gate, false);
+        let before = RefusedCluster::start(Vector3::new(0.0, 3.0, 0.0), r, 40.0, gate, false)
+            .followed_by(Vector3::new(0.0, 3.0, 0.0), r, 1.0);
         let jump = Vector3::new(0.0, -30.0, 0.0);
         let fresh = RefusedCluster::start(jump, r, 3600.0, gate, true);
         assert!(fresh.gross && fresh.doubt().is_none());
