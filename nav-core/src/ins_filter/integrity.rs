@@ -209,6 +209,7 @@
 //! that begins while the filter refuses the true fixes it may have drifted from (after a ramp
 //! it followed) leaves that doubt standing.
 
+use super::motion::MIN_DIFFERENCE_INTERVAL_S;
 use super::states::{ATT, BA, BG, Covariance, POS, StateVector, VEL};
 use crate::Scalar;
 use nalgebra::{Matrix3, Vector3};
@@ -919,7 +920,9 @@ impl<T: Scalar> RefusedCluster<T> {
 
     /// The doubt on the solution's velocity while this cluster is refused [m^2/s^2], where
     /// its offset is a doubt on the position ([`Self::doubt`]: not a gross jump that stayed
-    /// put); `None` with one member. The filter's velocity error is what moves a true
+    /// put); `None` with one member, and while the members of a cluster that has not run
+    /// away span less than [`MIN_DIFFERENCE_INTERVAL_S`] (the fixes' noise over a tenth of a
+    /// second is tens of metres per second). The filter's velocity error is what moves a true
     /// offset (a given start's heading 90 deg off: the rows' velocity 15 m/s off under a
     /// 1-sigma of 1 cm/s): the rate `v` at which the offset moved since the first member
     /// ([`Self::drift_rate`]) as `v v^T / 4`, and for a cluster that ran away, whose error
@@ -932,9 +935,16 @@ impl<T: Scalar> RefusedCluster<T> {
     }
 
     /// The rates of [`Self::velocity_doubt`] [m/s]: since the first member, and for a cluster
-    /// that ran away since the member before; `None` where the offset is no doubt.
+    /// that ran away since the member before; `None` where the offset is no doubt, and
+    /// before the members span [`MIN_DIFFERENCE_INTERVAL_S`] unless the cluster ran away
+    /// (its offsets dwarf the fixes' noise): two fixes of 2 m a tenth of a second apart
+    /// differ at 28 m/s of noise, and a chance pair of refusals at 10 Hz reported 36 m/s of
+    /// velocity doubt and 60 deg of heading doubt on a solution 1 cm/s off.
     fn doubted_rates(&self) -> Option<(Vector3<T>, Option<Vector3<T>>)> {
         if (self.gross && !self.ran_away) || self.age_s <= T::zero() {
+            return None;
+        }
+        if !self.ran_away && self.age_s < T::c(MIN_DIFFERENCE_INTERVAL_S) {
             return None;
         }
         let u = self
@@ -1476,6 +1486,24 @@ mod tests {
             .followed_by(jump + Vector3::new(0.2, -0.1, 0.3), r, 1.0)
             .judged(&p_pos, gate, true);
         assert_eq!(held.heading_doubt(&v_eb_n, 0.6), 0.0);
+    }
+
+    /// Two refused fixes of 2 m a tenth of a second apart, 3.6 m from each other (their
+    /// noise): no rate of the offset is doubted until the members span a second (was 36 m/s
+    /// of velocity doubt and tens of degrees of heading doubt on a solution 1 cm/s off);
+    /// over a second the same difference is a rate of 3.6 m/s.
+    #[test]
+    fn a_rate_is_doubted_only_over_a_second_of_members() {
+        let (gate, r) = (16.27_f64, Vector3::new(4.0, 4.0, 16.0));
+        let first = RefusedCluster::start(Vector3::new(4.6, 7.1, -1.0), r, 18.0, gate, true);
+        let v_eb_n = Vector3::new(10.0, 0.0, 0.0);
+        let pair = first.followed_by(Vector3::new(4.6, 3.5, -1.0), r, 0.1);
+        assert!(!pair.gross && pair.velocity_doubt().is_none());
+        assert_eq!(pair.heading_doubt(&v_eb_n, 0.0), 0.0);
+        let slow = first.followed_by(Vector3::new(4.6, 3.5, -1.0), r, 1.0);
+        let d = slow.velocity_doubt().expect("a rate over a second");
+        assert!((d[(1, 1)].sqrt() * 2.0 - 3.6).abs() < 1e-9, "{d}");
+        assert!(slow.heading_doubt(&v_eb_n, 0.0) > 0.0);
     }
 
     /// A gross cluster that starts while a cluster of 3 m was refused keeps its doubt; one
