@@ -85,11 +85,12 @@
 //! that agree with it again, so its position is doubtful by that offset, a step it followed
 //! rather than a drift of its velocity, and the fix moves the position, not the velocity (a
 //! MEMS filter that followed a ramp otherwise turned the step back into a velocity error and
-//! lost the fixes again). A cluster of one refused fix holds, there and in its reported
-//! doubt, only the part of its offset beyond the gate ([`RefusedCluster::weight`]): the gate
-//! refuses one fault-free fix in a thousand, and such a false alarm (4.3 sigma, 2 m fixes
-//! at 10 Hz) had widened the covariance by the next fix's whole offset, which then moved the
-//! solution by 8 m.
+//! lost the fixes again). A cluster that is not gross holds, there and in its reported
+//! doubt, only the part of its offset beyond the gate of the evidence its members give
+//! ([`RefusedCluster::weight`]: a lone fix's own, or their common offset's), which grows
+//! with the members: the gate refuses one fault-free fix in a thousand, the next fix joins
+//! such a false alarm often enough, and one (4.3 sigma, 2 m fixes at 10 Hz) had widened
+//! the covariance by the next fix's whole offset, which then moved the solution by 8 m.
 //!
 //! **A DEGRADED filter that drifted recovers** [Groves, ch. 17, fault recovery by covariance
 //! increase]. A filter that followed part of a fault (a FOG filter pulled by a ramp the window
@@ -651,6 +652,13 @@ pub struct RefusedCluster<T: Scalar> {
     /// The part of the first member's innovation beyond the gate, `1 - sqrt(gate / NIS)` of
     /// its normalised square `NIS` [-]: all a lone refused fix claims ([`Self::weight`]).
     pub beyond: T,
+    /// The sum of the members' innovations, NED [m], corrected as the last one's is
+    /// ([`Self::corrected`]): the evidence of their common offset ([`Self::weight`]).
+    pub sum_z_ned_m: Vector3<T>,
+    /// The sum of their noise variances, NED [m^2].
+    pub sum_r_ned_m2: Vector3<T>,
+    /// The gate the cluster was started against [-].
+    pub gate_3dof: T,
     /// The doubt of a cluster this one replaced while it was still refused [m^2] (module
     /// docs: a held offset that starts while the true fixes are refused does not clear the
     /// filter's doubt about them).
@@ -677,6 +685,9 @@ impl<T: Scalar> RefusedCluster<T> {
             age_s: T::zero(),
             members: 1,
             beyond: beyond_gate(nis, gate_3dof),
+            sum_z_ned_m: z,
+            sum_r_ned_m2: r,
+            gate_3dof,
             carried_doubt: Matrix3::zeros(),
             ran_away: false,
         }
@@ -701,6 +712,8 @@ impl<T: Scalar> RefusedCluster<T> {
             previous: Some((self.z_ned_m, self.r_ned_m2, dt_s)),
             age_s: self.age_s + dt_s,
             members: self.members.saturating_add(1),
+            sum_z_ned_m: self.sum_z_ned_m + z,
+            sum_r_ned_m2: self.sum_r_ned_m2 + r,
             ..*self
         }
     }
@@ -715,6 +728,7 @@ impl<T: Scalar> RefusedCluster<T> {
             z_ned_m: self.z_ned_m - dr_ned_m,
             previous: self.previous.map(|(z, r, dt)| (z - dr_ned_m, r, dt)),
             first: (self.first.0 - dr_ned_m, self.first.1),
+            sum_z_ned_m: self.sum_z_ned_m - dr_ned_m * T::c(f64::from(self.members)),
             ..*self
         }
     }
@@ -903,18 +917,26 @@ impl<T: Scalar> RefusedCluster<T> {
         self.members < 2
     }
 
-    /// The part of the offset the cluster holds against the filter [-]: all of it once a
-    /// second refused fix agrees with the first; for a lone refused fix only its part beyond
-    /// the gate ([`Self::beyond`]). The gate refuses fault-free fixes at its false-alarm rate
-    /// (one in a thousand): a 4.3-sigma fix of 2 m at 10 Hz was taken whole as the
-    /// solution's doubt, and the next ordinary fix moved the solution by 8 m; a fix far
-    /// beyond the gate (the true fixes after a fault the filter followed) still claims nearly
-    /// all of its offset.
+    /// The part of the offset the cluster holds against the filter [-]: the part of the
+    /// evidence beyond the gate. For a lone refused fix, its own ([`Self::beyond`]); for more
+    /// members, that of their common offset, the sum of their innovations against the sum of
+    /// their noise variances (the members' noise is independent; the filter's own error, which
+    /// they share, is what the cluster stands for), so that the evidence and the part grow
+    /// with the members; all of it for a gross cluster, which only holds a doubt once it ran
+    /// away. The gate refuses fault-free fixes at its false-alarm rate (one in a thousand),
+    /// and the next ordinary fix lies closer to such an outlier than to the prediction often
+    /// enough to join it: a 4.3-sigma fix of 2 m at 10 Hz, taken whole as the solution's
+    /// doubt, had the next ordinary fix move the solution by 8 m, and a chance pair by 3 m. A
+    /// fix far beyond the gate (the true fixes after a fault the filter followed) still
+    /// claims nearly all of its offset.
     pub fn weight(&self) -> T {
-        if self.is_lone() {
+        if self.gross {
+            T::one()
+        } else if self.is_lone() {
             self.beyond
         } else {
-            T::one()
+            let evidence = normalised_square(&self.sum_z_ned_m, &self.sum_r_ned_m2);
+            beyond_gate(evidence, self.gate_3dof)
         }
     }
 
@@ -1221,9 +1243,11 @@ mod tests {
         // sigma.
         let lone = c.doubt().unwrap()[(1, 1)].sqrt() * 2.0;
         assert!(c.is_lone() && (lone - 30.0 * (1.0 - 0.5_f64.sqrt())).abs() < 1e-9);
+        // Two members: their common offset, 60 m against 0.5 m^2, nearly all of it.
         let c = c.followed_by(Vector3::new(0.0, 30.0, 0.0), r, 1.0);
         let d = c.doubt().unwrap();
-        assert!((d[(1, 1)].sqrt() * 2.0 - 30.0).abs() < 1e-9);
+        let part = 1.0 - (gate / (3600.0 / 0.5)).sqrt();
+        assert!((d[(1, 1)].sqrt() * 2.0 - 30.0 * part).abs() < 1e-9);
         assert_eq!(d[(0, 1)], 0.0);
         // 30 m is not typical of a 5 m 1-sigma, it is of a 30 m one.
         assert!(!c.is_typical(&Matrix3::from_diagonal_element(25.0)));
@@ -1518,7 +1542,9 @@ mod tests {
         assert!(fresh.gross && fresh.doubt().is_none());
         let held = fresh.replacing(Some(&before));
         let d = held.doubt().expect("the carried doubt");
-        assert!((d[(1, 1)] - 2.25).abs() < 1e-12, "{d}");
+        // Its part of 3 m: two members' common offset, 6 m against 0.5 m^2.
+        let part = 1.0 - (gate / 72.0).sqrt();
+        assert!((d[(1, 1)] - 2.25 * part * part).abs() < 1e-12, "{d}");
         // Carried through its members.
         let next = held.followed_by(jump, r, 1.0);
         assert_eq!(next.doubt(), Some(d));
