@@ -13,8 +13,8 @@ use hal_adapters::drivers::Health;
 use hal_adapters::protocol::config::{ConfigRefusal, MOUNTING_TOL};
 use nav_core::alignment::fine::FineRefusal;
 use nav_core::alignment::machine::{
-    AlignFailure, AlignMethod, MAX_LEVER_ARM_M, MAX_RATE_HZ, MAX_WINDOW_S, MIN_RATE_HZ,
-    SettingsError,
+    AlignFailure, AlignMethod, LEVER_ARM_SIGMA_ZERO, MAX_LEVER_ARM_M, MAX_RATE_HZ, MAX_WINDOW_S,
+    MIN_RATE_HZ, SettingsError, bad_rate_reason, longer_window_s,
 };
 use nav_core::alignment::sway::MAX_YAW_SWAY_RAD;
 use nav_core::alignment::{AlignError, GravityMismatch, InertialAlignError};
@@ -165,8 +165,12 @@ impl Format for Failure<'_> {
             ),
             AlignFailure::WindowTooShort { seconds, min_s } => write!(
                 f,
-                "the data cover {=f64} s, less than the method's minimum of {=f64} s",
-                seconds, min_s
+                "the data cover {=f64} s, less than the method's minimum of {=f64} s (the \
+                 samples' own intervals, shortened by timestamp jitter or gaps): ask for a \
+                 window of {=f64} s or more",
+                seconds,
+                min_s,
+                longer_window_s(*seconds, *min_s)
             ),
             AlignFailure::NotCompiledIn(method) => write!(f, "{}", NotCompiledIn(*method)),
         }
@@ -357,9 +361,11 @@ impl Format for Settings<'_> {
             ),
             SettingsError::BadRate(r) => write!(
                 f,
-                "sampling rate {=f64} Hz is not within [{=f64}, {=f64}] Hz (below {=f64} Hz every \
-                 increment is longer than the 0.1 s the navigator accepts)",
-                r, MIN_RATE_HZ, MAX_RATE_HZ, MIN_RATE_HZ
+                "sampling rate {=f64} Hz is not within [{=f64}, {=f64}] Hz ({=str})",
+                r,
+                MIN_RATE_HZ,
+                MAX_RATE_HZ,
+                bad_rate_reason(*r)
             ),
             SettingsError::WindowTooLong { seconds } => write!(
                 f,
@@ -384,6 +390,7 @@ impl Format for Settings<'_> {
                 "lever arm 1-sigma {=f64} m is beyond {=f64} m {=str}",
                 sigma_m, MAX_LEVER_ARM_M, HULL
             ),
+            SettingsError::LeverArmSigmaZero => write!(f, "{=str}", LEVER_ARM_SIGMA_ZERO),
             SettingsError::SwayNeedsLeverArm => write!(
                 f,
                 "the sway method needs the lever arm (--lever-arm X,Y,Z; 0,0,0 at the centre of rotation): with an unknown one its 1-sigma is not true; use fine"
@@ -413,7 +420,7 @@ impl Format for Calibration<'_> {
                 "calibration line {=usize}: expected `key = values`",
                 line
             ),
-            CalibrationError::UnknownKey { line } => {
+            CalibrationError::UnknownKey { line, .. } => {
                 write!(f, "calibration line {=usize}: unknown key", line)
             }
             CalibrationError::BadValues { line } => write!(

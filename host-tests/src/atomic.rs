@@ -8,10 +8,72 @@
 //! output and a file elsewhere is not left stale behind it; a link to nothing is refused. A
 //! directory, FIFO, socket or device is refused: renaming a new file over it would replace it
 //! (`--out /dev/full` made a regular file of the device).
+//!
+//! **Interrupted.** The temporary files and staging directories being written are kept in a
+//! registry; [`remove_partial_outputs_on_interrupt`] makes SIGINT and SIGTERM remove them
+//! before the process exits (a Ctrl-C left a hidden `.NAME.XXXX.part` beside `--out` at every
+//! interrupt). SIGKILL cannot be caught: a file it leaves behind stays.
 
 use std::fs::{File, Metadata, Permissions};
 use std::io::{self, BufWriter};
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard, PoisonError};
+
+/// The temporary files and staging directories not yet renamed into place or removed.
+static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn live() -> MutexGuard<'static, Vec<PathBuf>> {
+    LIVE.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// On SIGINT or SIGTERM: removes every partial output (the registry of the module docs) and
+/// exits with the status a shell gives a process killed by that signal (130, 143). Call once,
+/// at the start of `main`.
+pub fn remove_partial_outputs_on_interrupt() -> io::Result<()> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])?;
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            // Held until the exit: a commit waiting for it never renames a file half-removed.
+            let live = live();
+            for path in live.iter() {
+                let _ = if path.is_dir() {
+                    std::fs::remove_dir_all(path)
+                } else {
+                    std::fs::remove_file(path)
+                };
+            }
+            std::process::exit(128 + signal);
+        }
+    });
+    Ok(())
+}
+
+/// A partial output's entry in the registry (module docs), removed when dropped.
+#[derive(Debug)]
+struct Registered(PathBuf);
+
+impl Registered {
+    fn new(path: &Path) -> Self {
+        live().push(path.to_owned());
+        Self(path.to_owned())
+    }
+
+    /// Runs `settle` (which renames or removes the partial output) with the registry held, so
+    /// that an interrupt handler does not remove the output half-way; then leaves it.
+    fn settle<T>(&self, settle: impl FnOnce() -> T) -> T {
+        let mut live = live();
+        let value = settle();
+        live.retain(|p| p != &self.0);
+        value
+    }
+}
+
+impl Drop for Registered {
+    fn drop(&mut self) {
+        live().retain(|p| p != &self.0);
+    }
+}
 
 /// Writes `path` through `body`: a temporary `.NAME.*.part` beside it, flushed, synced and
 /// renamed over `path` only when `body` succeeded. On any error the temporary file is removed
@@ -35,6 +97,8 @@ pub struct AtomicFile {
     out: BufWriter<File>,
     tmp: tempfile::TempPath,
     path: PathBuf,
+    // Dropped last: the temporary file is removed before it leaves the registry.
+    live: Registered,
 }
 
 impl AtomicFile {
@@ -57,6 +121,7 @@ impl AtomicFile {
         #[cfg(unix)]
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
         let (file, tmp) = builder.tempfile_in(dir)?.into_parts();
+        let live = Registered::new(&tmp);
         // The replaced file's bits exactly (fchmod, no umask).
         #[cfg(unix)]
         if let Some(keep) = keep {
@@ -68,6 +133,7 @@ impl AtomicFile {
             out: BufWriter::new(file),
             tmp,
             path: path.to_owned(),
+            live,
         })
     }
 
@@ -78,11 +144,16 @@ impl AtomicFile {
 
     /// Flushes, syncs and renames the temporary file over the output path.
     pub fn commit(self) -> io::Result<()> {
-        let Self { out, tmp, path } = self;
+        let Self {
+            out,
+            tmp,
+            path,
+            live,
+        } = self;
         let file = out.into_inner().map_err(|e| e.into_error())?;
         file.sync_all()?;
         drop(file);
-        tmp.persist(&path).map_err(|e| e.error)?;
+        live.settle(|| tmp.persist(&path).map_err(|e| e.error))?;
         Ok(())
     }
 }
@@ -98,6 +169,8 @@ pub struct FileSet {
     dir: PathBuf,
     names: Vec<String>,
     staging: tempfile::TempDir,
+    // Dropped last: the staging directory is removed before it leaves the registry.
+    live: Registered,
 }
 
 impl FileSet {
@@ -110,10 +183,12 @@ impl FileSet {
         let staging = tempfile::Builder::new()
             .prefix(".staging.")
             .tempdir_in(dir)?;
+        let live = Registered::new(staging.path());
         Ok(Self {
             dir: dir.to_owned(),
             names: names.iter().map(|n| (*n).to_owned()).collect(),
             staging,
+            live,
         })
     }
 
@@ -145,10 +220,12 @@ impl FileSet {
             }
             moves.push((staged, target));
         }
-        for (staged, target) in moves {
-            std::fs::rename(&staged, &target)?;
-        }
-        Ok(())
+        self.live.settle(|| {
+            for (staged, target) in moves {
+                std::fs::rename(&staged, &target)?;
+            }
+            Ok(())
+        })
     }
 }
 

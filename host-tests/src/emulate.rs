@@ -218,6 +218,16 @@ impl EmulatorErrors {
     /// e.g. a preset with one quantity changed. On an error `self` is unchanged.
     /// A byte-order mark before the first line (an editor's on Windows) is not part of its key.
     pub fn apply_text(&mut self, text: &str) -> Result<(), ParseError> {
+        self.apply_text_noting(text, |_| {})
+    }
+
+    /// [`Self::apply_text`], telling `noted` each quantity set, the line and the key as
+    /// written (for messages in the file's words).
+    fn apply_text_noting(
+        &mut self,
+        text: &str,
+        mut noted: impl FnMut(Given),
+    ) -> Result<(), ParseError> {
         let mut next = *self;
         let mut seen = [false; Quantity::COUNT];
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
@@ -232,7 +242,7 @@ impl EmulatorErrors {
                 .split_once('=')
                 .ok_or_else(|| err(ParseErrorKind::Syntax))?;
             let key = key.trim();
-            let &(_, quantity, unit) = KEYS
+            let &(name, quantity, unit) = KEYS
                 .iter()
                 .find(|(k, _, _)| *k == key)
                 .ok_or_else(|| err(ParseErrorKind::UnknownKey(key.to_string())))?;
@@ -243,6 +253,13 @@ impl EmulatorErrors {
                 .ok_or_else(|| err(ParseErrorKind::BadValues(key.to_string())))?
                 * unit;
             *next.field_mut(quantity) = v;
+            noted(Given {
+                quantity,
+                place: String::new(),
+                line,
+                key: name,
+                unit,
+            });
         }
         *self = next;
         Ok(())
@@ -285,6 +302,17 @@ enum Quantity {
 
 impl Quantity {
     const COUNT: usize = 7;
+}
+
+/// Where a quantity of the errors was given last: the place (the error file and line, a
+/// `--set`), the line in the text, the key as written and the key's factor to SI.
+#[derive(Clone, Debug)]
+struct Given {
+    quantity: Quantity,
+    place: String,
+    line: usize,
+    key: &'static str,
+    unit: f64,
 }
 
 /// Keys of the error file: name, quantity, factor to SI.
@@ -450,7 +478,7 @@ pub enum EmulateError {
     BeyondLinearRange {
         /// The quantity's SI key in the error file.
         key: &'static str,
-        /// Its size: the largest component or the norm [the key's unit].
+        /// Its size: the largest component (with its sign) or the norm [the key's unit].
         value: f64,
         /// The largest accepted [the key's unit].
         limit: f64,
@@ -475,6 +503,15 @@ pub enum EmulateError {
     /// A displayed row its readers would refuse (a latitude beyond a pole, a non-finite
     /// value).
     Row(RowError),
+}
+
+/// "KEY VALUE is beyond +-LIMIT: REASON" ([`EmulateError::BeyondLinearRange`]).
+fn beyond_linear_range(key: &str, value: f64, limit: f64, reason: &str) -> String {
+    format!(
+        "{key} {} is beyond +-{}: {reason}",
+        Rounded(value),
+        Rounded(limit)
+    )
 }
 
 impl fmt::Display for EmulateError {
@@ -506,12 +543,7 @@ impl fmt::Display for EmulateError {
                 value,
                 limit,
                 reason,
-            } => write!(
-                f,
-                "{key} {} is beyond {}: {reason}",
-                Rounded(*value),
-                Rounded(*limit)
-            ),
+            } => f.write_str(&beyond_linear_range(key, *value, *limit, reason)),
             Self::LeftLinearRange {
                 row,
                 t_s,
@@ -744,7 +776,8 @@ fn check_linear_range(truth: &[Truth], errors: &EmulatorErrors) -> Result<(), Em
         .map(|w| w[0].q_b_ned.angle_to(&w[1].q_b_ned))
         .sum::<f64>()
         + OMEGA_IE * duration_s;
-    let largest = |v: &Vector3<f64>| v.amax();
+    // Signed: the message keeps the sign of the value given.
+    let largest = |v: &Vector3<f64>| v[v.iamax()];
     // The norm without overflow: 1e300 deg/h squared is beyond f64.
     let norm = |v: &Vector3<f64>| {
         let m = v.amax();
@@ -800,7 +833,7 @@ fn check_linear_range(truth: &[Truth], errors: &EmulatorErrors) -> Result<(), Em
     ];
     for (key, value, limit, reason) in checks {
         // Finite values only reach here (validated above): `>` refuses what is beyond.
-        if value > limit {
+        if value.abs() > limit {
             return Err(EmulateError::BeyondLinearRange {
                 key,
                 value,
@@ -1002,18 +1035,67 @@ impl EmulateJob<'_> {
     /// The errors: the preset, then the file, then each `set` line, each overriding the
     /// quantities it names.
     pub fn errors(&self) -> anyhow::Result<EmulatorErrors> {
+        Ok(self.errors_given()?.0)
+    }
+
+    /// [`Self::errors`], and where each quantity was given last (`None`: the preset's).
+    fn errors_given(&self) -> anyhow::Result<(EmulatorErrors, [Option<Given>; Quantity::COUNT])> {
         let mut e = self.preset.errors();
+        let mut given: [Option<Given>; Quantity::COUNT] = Default::default();
         if let Some(path) = self.errors_file {
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("reading {}", path.display()))?;
-            e.apply_text(&text)
-                .with_context(|| format!("error file {}", path.display()))?;
+            let place = format!("error file {}", path.display());
+            e.apply_text_noting(&text, |g| {
+                given[g.quantity as usize] = Some(Given {
+                    place: format!("{place} line {}", g.line),
+                    ..g
+                });
+            })
+            .context(place.clone())?;
         }
         for (i, line) in self.set.iter().enumerate() {
-            e.apply_text(line)
-                .with_context(|| format!("--set #{} `{line}`", i + 1))?;
+            let place = format!("--set #{} `{line}`", i + 1);
+            // An empty `--set ''` was accepted without a word.
+            anyhow::ensure!(
+                !line.trim().is_empty(),
+                "{place}: empty; give `key = v1 v2 v3`"
+            );
+            e.apply_text_noting(line, |g| {
+                given[g.quantity as usize] = Some(Given {
+                    place: place.clone(),
+                    ..g
+                });
+            })
+            .context(place.clone())?;
         }
-        Ok(e)
+        Ok((e, given))
+    }
+
+    /// A refusal of a quantity beyond the linear model's range in the words it was given in
+    /// (the file and line, the key, the value in the key's unit); others as they are.
+    fn in_given_words(error: EmulateError, given: &[Option<Given>]) -> anyhow::Error {
+        let EmulateError::BeyondLinearRange {
+            key,
+            value,
+            limit,
+            reason,
+        } = error
+        else {
+            return error.into();
+        };
+        let given = SI_KEYS
+            .iter()
+            .find(|(_, k)| *k == key)
+            .and_then(|(q, _)| given[*q as usize].as_ref());
+        match given {
+            Some(g) => anyhow::anyhow!(
+                "{}: {}",
+                g.place,
+                beyond_linear_range(g.key, value / g.unit, limit / g.unit, reason)
+            ),
+            None => anyhow::anyhow!("the preset's {}", error),
+        }
     }
 
     /// Reads the truth, emulates, writes the outputs; returns a summary for the terminal.
@@ -1036,16 +1118,18 @@ impl EmulateJob<'_> {
                 path.display()
             );
         }
-        let errors = self.errors()?;
+        let (errors, given) = self.errors_given()?;
         let truth = crate::truth_csv::read(self.truth)?;
         let out = emulate(&truth, &errors, &self.options)
+            .map_err(|e| Self::in_given_words(e, &given))
             .with_context(|| format!("emulating along {}", self.truth.display()))?;
         crate::atomic::write(self.out, |w| -> anyhow::Result<()> {
             let mut rows = crate::truth_csv::TruthWriter::new(w)?;
             for row in &out.displayed {
                 rows.write(row)?;
             }
-            rows.finish()?;
+            // A complete solution, as replay's (`nav report` said "cut short" without it).
+            rows.finish_solution()?;
             if let Some(path) = self.errors_out {
                 write_errors_csv(path, &out.errors)?;
             }

@@ -50,22 +50,20 @@ impl Default for Stationary {
     }
 }
 
-/// Why a recording's sampling rate `rate_hz` [Hz] is not one to write (`nav generate`, `nav
-/// sim`): not finite, above the navigator's highest
+/// Why a recording's sampling rate `rate_hz` [Hz] is not one to write or convert (`nav
+/// generate`, `nav sim`, `nav convert`; nav-core's rule, `machine::check_rate`): not finite, above the navigator's highest
 /// ([`nav_core::alignment::machine::MAX_RATE_HZ`]; a 50 kHz recording was written that every
 /// replay refused), or so low that every increment is longer than the navigator accepts
 /// (`nav_core::InputLimits::max_dt`, 0.1 s: 10 Hz), a recording whose every sample a replay
 /// would refuse.
 pub fn check_rate(rate_hz: f64) -> Result<()> {
-    use nav_core::alignment::machine::MAX_RATE_HZ;
-    let max_dt_s = nav_core::InputLimits::<f64>::default().max_dt;
-    let min_hz = 1.0 / max_dt_s;
+    use nav_core::alignment::machine::{MAX_RATE_HZ, MIN_RATE_HZ, bad_rate_reason};
     ensure!(
-        rate_hz.is_finite() && rate_hz >= min_hz && rate_hz <= MAX_RATE_HZ,
-        "the rate must be within [{min_hz}, {MAX_RATE_HZ}] Hz, the rates a replay navigates, \
-         not {} (below {min_hz} Hz every increment is longer than the {max_dt_s} s the \
-         navigator accepts)",
-        Number(rate_hz)
+        nav_core::alignment::machine::check_rate(rate_hz).is_ok(),
+        "the rate must be within [{MIN_RATE_HZ}, {MAX_RATE_HZ}] Hz, the rates a replay navigates, \
+         not {} ({})",
+        Number(rate_hz),
+        bad_rate_reason(rate_hz)
     );
     Ok(())
 }

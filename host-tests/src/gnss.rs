@@ -246,6 +246,15 @@ fn read_text_gnss(path: &Path) -> anyhow::Result<Vec<GnssFix>> {
             path.display()
         );
     }
+    // An IMU recording read as text failed with "line 1: expected 7 numbers ..., found 1".
+    if head >= 6 && magic.starts_with(&hal_adapters::recording::MAGIC[..6]) {
+        anyhow::bail!(
+            "{}: an IMU recording (it starts with the NAVIMU magic of \
+             docs/recording-format.md), not GNSS fixes: give the receiver's fixes (the \
+             project's CSV or KF-GINS's text)",
+            path.display()
+        );
+    }
     let format = detect(path)?;
     let file = File::open(path).map_err(|e| TextError::io(path, e))?;
     let reader = BufReader::new(file);
@@ -531,6 +540,15 @@ mod tests {
         std::fs::write(&bin, bytes).unwrap();
         let e = read_gnss(&bin).unwrap_err().to_string();
         assert!(e.contains("binary fix file the firmware reads"), "{e}");
+        // An IMU recording: named, not read as text ("line 1: expected 7 numbers").
+        let mut bytes = hal_adapters::recording::MAGIC.to_vec();
+        bytes.extend_from_slice(&[0u8; 40]);
+        std::fs::write(&bin, bytes).unwrap();
+        let e = read_gnss(&bin).unwrap_err().to_string();
+        assert!(
+            e.contains("an IMU recording (it starts with the NAVIMU magic"),
+            "{e}"
+        );
     }
 
     fn csv(text: &str) -> Result<Vec<GnssFix>, TextError> {

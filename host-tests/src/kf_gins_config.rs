@@ -298,8 +298,8 @@ pub fn parse(text: &str, path: &Path, dir: &Path) -> Result<(KfGinsConfig, Vec<S
     let deg = |v: [f64; 3]| v.map(f64::to_radians);
     let scaled = |v: [f64; 3], k: f64| v.map(|x| x * k);
     let config = KfGinsConfig {
-        imu_path: c.path("imupath", raw.imupath, dir)?,
-        gnss_path: c.path("gnsspath", raw.gnsspath, dir)?,
+        imu_path: c.file_path("imupath", raw.imupath, dir)?,
+        gnss_path: c.file_path("gnsspath", raw.gnsspath, dir)?,
         output_dir: c.path("outputpath", raw.outputpath, dir)?,
         imu_columns,
         imu_rate_hz,
@@ -458,11 +458,22 @@ impl Check<'_> {
             bail!(self.key(key, "the path is empty"));
         }
         let p = PathBuf::from(text);
-        if p.is_absolute() || p.exists() {
-            return Ok(p);
-        }
         let beside = dir.join(&p);
-        Ok(if beside.exists() { beside } else { p })
+        Ok(if p.is_absolute() || p.exists() || !beside.exists() {
+            p
+        } else {
+            beside
+        })
+    }
+
+    /// [`Self::path`] of a file to read: a folder is refused naming the key (it was read as
+    /// a text file: ".: line 1: Is a directory (os error 21)").
+    fn file_path(&self, key: &str, value: Option<String>, dir: &Path) -> Result<PathBuf> {
+        let p = self.path(key, value, dir)?;
+        if p.is_dir() {
+            bail!(self.key(key, format_args!("{} is a folder, not a file", p.display())));
+        }
+        Ok(p)
     }
 }
 
@@ -665,6 +676,12 @@ odolever: [ 1, 2, 3 ]
                 "imupath: \"./dataset/Leador-A15.txt\"",
                 "imupath: \"\"",
                 "key 'imupath': the path is empty",
+            ),
+            // A folder read as a text file: ".: line 1: Is a directory (os error 21)".
+            (
+                "imupath: \"./dataset/Leador-A15.txt\"",
+                "imupath: \".\"",
+                "key 'imupath': . is a folder, not a file",
             ),
         ];
         for (from, to, expected) in cases {

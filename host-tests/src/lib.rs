@@ -73,3 +73,7 @@ pub mod text_stream;
 pub mod trajectory;
 pub mod truth;
 pub mod truth_csv;
+
+/// Most threads a Monte Carlo bench runs (`--threads` of `nav bench` and `nav align-bench`: one
+/// range for both, which took 1-256 and 1-64).
+pub const MAX_THREADS: usize = 256;

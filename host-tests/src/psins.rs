@@ -255,14 +255,10 @@ impl fmt::Display for PsinsError {
     }
 }
 
-impl std::error::Error for PsinsError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match &self.kind {
-            PsinsErrorKind::Io(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+/// No source: the text carries the I/O error's (as [`crate::text_error::TextError`]'s does);
+/// a chain of causes printed it twice ("reading X: X: No such file or directory (os error 2):
+/// No such file or directory (os error 2)").
+impl std::error::Error for PsinsError {}
 
 /// Reads a PSINS recording from `path` into memory (a replay streams it instead:
 /// [`PsinsReader`]).

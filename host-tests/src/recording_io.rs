@@ -28,7 +28,8 @@ use hal_adapters::recording::{
     ReplayStats,
 };
 use hal_adapters::{Imu, ImuSample};
-use nav_core::increment::InputLimits;
+use nav_core::gap::GapDetector;
+use nav_core::increment::{ImuIncrement, InputLimits};
 use std::fs::File;
 use std::io::{BufReader, Read, Write};
 use std::path::Path;
@@ -402,7 +403,8 @@ pub struct Converted {
     /// The header of the recording written (the count, rate, `t0` and kind).
     pub header: Header,
     /// Records carried over as they are although a replay flags them: time not after the
-    /// previous record's.
+    /// last record a replay navigates (nav-core's rule, `nav_core::gap::GapDetector`: after a
+    /// clock's step back every record until it passes the last time again).
     pub time_not_increasing: u64,
     /// ... and a gyro or accelerometer value that is not finite.
     pub not_finite: u64,
@@ -417,7 +419,7 @@ impl Converted {
         (self.time_not_increasing + self.not_finite + self.out_of_range > 0).then(|| {
             let limits = InputLimits::<f64>::default();
             format!(
-                "WARNING: {} records with a time not after the previous one's, {} with a \
+                "WARNING: {} records with a time not after the last navigable record's, {} with a \
                  value that is not finite and {} with a rate beyond {:.0} deg/s or a specific \
                  force beyond {:.0} m/s^2 (beyond any IMU's full scale) were converted as they \
                  are; a replay flags or refuses them and does not navigate them",
@@ -430,16 +432,24 @@ impl Converted {
         })
     }
 
-    /// Counts `r` into the warnings; `previous_t_ns` is the previous record's time (`None` for
-    /// the first record, whose interval starts at the header's `t0_ns`).
-    fn check(&mut self, r: &Record, previous_t_ns: Option<u64>) {
-        if previous_t_ns.is_some_and(|p| r.t_ns <= p) {
+    /// Counts `r` into the warnings, each record once, as a replay flags it; `previous_t_ns`
+    /// is the previous record's time (`None` for the first record, whose interval starts at
+    /// the header's `t0_ns`), `order` the navigator's time-order rule over the records so far.
+    fn check(&mut self, r: &Record, previous_t_ns: Option<u64>, order: &mut GapDetector<f64>) {
+        // The replay's sample time (hal-adapters' `Replay`: whole microseconds).
+        let t_us = r.t_ns / 1000;
+        if order.out_of_order(t_us, 0.0) {
             self.time_not_increasing += 1;
-        }
-        if !r.gyro.iter().chain(&r.accel).all(|x| x.is_finite()) {
+        } else if !r.gyro.iter().chain(&r.accel).all(|x| x.is_finite()) {
             self.not_finite += 1;
         } else if self.beyond_limits(r, previous_t_ns) {
             self.out_of_range += 1;
+        } else {
+            let wide = |v: &[f32; 3]| v.map(f64::from);
+            order.note(
+                t_us,
+                &ImuIncrement::new(wide(&r.gyro), wide(&r.accel), 1.0 / self.header.rate_hz),
+            );
         }
     }
 
@@ -489,6 +499,12 @@ pub fn convert(input: &Path, out: &Path) -> Result<Converted> {
     crate::atomic::refuse_same_file(&[input], out)?;
     let scanned = scan(input, format)?;
     let header = scanned.header;
+    // The reader checks a replay applies (a recording it refuses was converted without a word).
+    crate::generate::check_rate(header.rate_hz)
+        .with_context(|| format!("recording {}", input.display()))?;
+    if format == Format::Binary {
+        check_header_rate(input, &header)?;
+    }
     let writing = || format!("writing {}", out.display());
     let to_csv = is_csv(out);
     if to_csv {
@@ -509,10 +525,11 @@ pub fn convert(input: &Path, out: &Path) -> Result<Converted> {
         let mut records = RecordStream::open(input, format)?;
         let mut written = 0_u64;
         let mut previous_t_ns = None;
+        let mut order = GapDetector::<f64>::new();
         let mut next = |records: &mut RecordStream| -> Result<Option<Record>> {
             let r = records.next_record()?;
             if let Some(r) = &r {
-                converted.check(r, previous_t_ns);
+                converted.check(r, previous_t_ns, &mut order);
                 previous_t_ns = Some(r.t_ns);
             }
             Ok(r)
@@ -689,7 +706,7 @@ pub enum ReplaySource {
 /// Most records read to check the header's rate against the timestamps.
 const RATE_CHECK_RECORDS: usize = 201;
 
-/// Intervals per span of the rate check ([`check_rate`]).
+/// Intervals per span of the rate check ([`check_header_rate`]).
 const RATE_SPAN: usize = 50;
 
 /// Largest relative difference between the header's rate and the timestamps' median rate.
@@ -701,7 +718,7 @@ pub const RATE_TOLERANCE: f64 = 0.01;
 /// span's mean averages the time tags' jitter away (a single interval's median moved by 1.4 %
 /// with ±20 % jitter, and refused good files), and the median over spans ignores a gap.
 /// Records that do not decode are left to the replay's own errors.
-fn check_rate(path: &Path, header: &Header) -> Result<()> {
+fn check_header_rate(path: &Path, header: &Header) -> Result<()> {
     let mut file = BufReader::new(File::open(path)?);
     let mut skip = [0u8; HEADER_LEN];
     file.read_exact(&mut skip)?;
@@ -766,7 +783,7 @@ impl ReplaySource {
                         "trailing bytes after the last record"
                     }
                 );
-                check_rate(path, replay.header())?;
+                check_header_rate(path, replay.header())?;
                 Self::File(replay)
             }
             Format::Csv | Format::Psins | Format::KfGins => {

@@ -206,10 +206,29 @@ pub fn replay_file_with_fixes<T: Scalar, W: Write>(
 /// Farthest a PSINS header's site may be from the run's `--lat/--lon` [m].
 pub const PSINS_SITE_TOLERANCE_M: f64 = 1000.0;
 
+/// Largest difference between a PSINS header's height and the run's `--h` [m]: beyond the
+/// geoid's separation from the ellipsoid anywhere (about -106 to +85 m), so a header in
+/// either kind of height passes and a typing error (1380 m for 380 m, accepted before with
+/// the heading's 1-sigma grown from 0.08 to 11 deg) does not.
+pub const PSINS_HEIGHT_TOLERANCE_M: f64 = 200.0;
+
 /// Refuses a PSINS recording whose header site (latitude, longitude) is more than
-/// [`PSINS_SITE_TOLERANCE_M`] from the run's: one of the two is wrong, and the alignment would
-/// use the run's without a word.
+/// [`PSINS_SITE_TOLERANCE_M`] from the run's, or whose height is more than
+/// [`PSINS_HEIGHT_TOLERANCE_M`] from it: one of the two is wrong, and the alignment would use
+/// the run's without a word.
 fn check_psins_site(path: &Path, h: &PsinsHeader, run: &RunConfig) -> Result<()> {
+    let dh_m = (h.h_m - run.h_m).abs();
+    if dh_m > PSINS_HEIGHT_TOLERANCE_M {
+        return Err(anyhow!(
+            "recording {}: the PSINS header's height {} m is {:.0} m from --h {} (more than \
+             {PSINS_HEIGHT_TOLERANCE_M} m, beyond the geoid's separation from the ellipsoid): \
+             pass the header's height or correct the header",
+            path.display(),
+            h.h_m,
+            dh_m,
+            run.h_m
+        ));
+    }
     let distance_m = horizontal_distance_m(
         (h.lat_deg.to_radians(), h.lon_deg.to_radians()),
         (run.lat_deg.to_radians(), run.lon_deg.to_radians()),

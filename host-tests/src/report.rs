@@ -22,7 +22,9 @@
 //! A solution log ends with its end record (`# end: N rows, ok`, [`EndRecord`]), which only a
 //! run that finished writes. A CSV solution without it is still compared (the rows it has are
 //! valid), with a warning on stderr that the run was cut short; the exit status stays 0. An end
-//! record whose count differs from the rows read, or anything after it, is an error.
+//! record whose count differs from the rows read, or anything after it, is an error. The rows
+//! at and after a free-inertial log's lost record ([`LostRecord`]: an IMU gap beyond the
+//! bridge lost the solution there) are not compared, and the report says how many.
 
 use crate::sigma_log::{self, Sigma};
 use crate::truth::Truth;
@@ -32,7 +34,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use nav_core::attitude::euler;
 use nav_core::earth::radii;
 use nav_core::number::Number;
-use nav_core::output::EndRecord;
+use nav_core::output::{EndRecord, LostRecord};
 use plotters::prelude::*;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -457,6 +459,9 @@ pub struct Trajectory {
     pub kf_gins: bool,
     /// The solution log's end record, if the file has one (its count matches `rows`).
     pub end: Option<EndRecord>,
+    /// The first record of a solution lost by an IMU gap, if the log has one: the rows at
+    /// or after its time are no solution.
+    pub lost: Option<LostRecord>,
 }
 
 /// Reads a trajectory: a CSV with the solution log's header (truth files, `nav replay` logs), a
@@ -480,6 +485,7 @@ pub fn read_trajectory_file(path: &Path, progress: bool) -> Result<Trajectory> {
             rows: crate::gnss_ins_sim::read_truth(path)?,
             kf_gins: false,
             end: None,
+            lost: None,
         });
     }
     let file = File::open(path).with_context(|| format!("{}", path.display()))?;
@@ -523,6 +529,7 @@ pub fn read_trajectory_file(path: &Path, progress: bool) -> Result<Trajectory> {
         rows,
         kf_gins: is_kf_gins,
         end: lines.end,
+        lost: lines.lost,
     })
 }
 
@@ -536,6 +543,8 @@ struct EndRecordFilter<R> {
     buf: Vec<u8>,
     at: usize,
     end: Option<EndRecord>,
+    /// The first lost record seen (passed on too: a comment).
+    lost: Option<LostRecord>,
 }
 
 impl<R: BufRead> EndRecordFilter<R> {
@@ -546,6 +555,7 @@ impl<R: BufRead> EndRecordFilter<R> {
             buf: Vec::new(),
             at: 0,
             end: None,
+            lost: None,
         }
     }
 
@@ -569,6 +579,9 @@ impl<R: BufRead> EndRecordFilter<R> {
                     "line {}: text after the end record '{end}'",
                     self.line
                 )));
+            }
+            if self.lost.is_none() {
+                self.lost = LostRecord::parse(&text);
             }
             match EndRecord::parse(&text) {
                 None => return Ok(true),
@@ -709,9 +722,10 @@ pub fn report_files(
         bail!("--at {t}: expected finite times in seconds");
     }
     let Trajectory {
-        rows: sol,
+        rows: mut sol,
         kf_gins,
         end,
+        lost,
     } = read_trajectory_file(solution, true)?;
     let complete = if end.is_some() || kf_gins {
         ""
@@ -726,11 +740,27 @@ pub fn report_files(
         );
         ", no end record: cut short"
     };
-    let sigma = if kf_gins {
+    let mut sigma = if kf_gins {
         None
     } else {
         sigma_log::read(solution)?
     };
+    let file_rows = sol.len();
+    // The rows after an IMU gap that lost the solution (the log's lost record) look valid.
+    let lost_rows = lost.map(|l| {
+        let t_s = l.t_us as f64 * 1e-6;
+        let keep = sol.iter().position(|r| r.t_s >= t_s).unwrap_or(sol.len());
+        let n = sol.len() - keep;
+        sol.truncate(keep);
+        if let Some(sigma) = &mut sigma {
+            sigma.truncate(keep);
+        }
+        format!(
+            "not compared: the {n} rows from t = {} s on, after an IMU gap that lost the \
+             solution (the log's lost record)\n",
+            Number(t_s)
+        )
+    });
     let tru = read_trajectory(truth, true)?;
     let series = compare_with_sigma(&sol, sigma.as_deref(), &tru).with_context(|| {
         format!(
@@ -745,7 +775,7 @@ pub fn report_files(
          compared {} rows, skipped {} before and {} after the truth's span; t0 = {} s (the \
          truth's first row)\n",
         solution.display(),
-        sol.len(),
+        file_rows,
         truth.display(),
         tru.len(),
         series.samples.len(),
@@ -763,6 +793,7 @@ pub fn report_files(
             TRUTH_GAP_FACTOR
         );
     }
+    out.extend(lost_rows);
     out.push_str(&format_table(&series, at_s));
     if let Some(dir) = plots {
         for path in write_plots(&series, dir, &[solution, truth])? {

@@ -3,10 +3,11 @@
 //!
 //! A log without those columns (a free-inertial or alignment run, a truth file) has none: the
 //! reader answers `None`. A log with only some of them, or with a value that is not a finite
-//! number >= 0, is refused with its line.
+//! number >= 0, is refused with its line; so is a status word none of the logs write.
 
 use crate::aided::SIGMA_COLUMNS;
 use anyhow::{Context, Result, bail};
+use hal_adapters::protocol::status::NavStatus;
 use std::fs::File;
 use std::io::BufReader;
 use std::path::Path;
@@ -40,6 +41,7 @@ pub fn read(path: &Path) -> Result<Option<Vec<Sigma>>> {
         .map(|name| header.iter().position(|h| h == *name))
         .collect();
     if index.iter().all(Option::is_none) {
+        check_status_words(path, &header, reader.records())?;
         return Ok(None);
     }
     if let Some(k) = index.iter().position(Option::is_none) {
@@ -50,10 +52,12 @@ pub fn read(path: &Path) -> Result<Option<Vec<Sigma>>> {
         );
     }
     let index: Vec<usize> = index.into_iter().flatten().collect();
+    let status = header.iter().position(|h| h == STATUS);
     let mut rows = Vec::new();
     for record in reader.records() {
         let record = record.with_context(|| format!("{}", path.display()))?;
         let line = record.position().map_or(0, |p| p.line());
+        check_status_word(path, line, status.and_then(|i| record.get(i)))?;
         let mut sigma = [0.0; 9];
         for (s, (&i, name)) in sigma.iter_mut().zip(index.iter().zip(names)) {
             let text = record.get(i).unwrap_or("");
@@ -68,6 +72,43 @@ pub fn read(path: &Path) -> Result<Option<Vec<Sigma>>> {
         rows.push(sigma);
     }
     Ok(Some(rows))
+}
+
+/// The status column's name.
+const STATUS: &str = "status";
+
+/// Refuses a row whose status (`word`, when the log has the column) is none of the words the
+/// logs write ([`NavStatus`]'s names): "FOO" was read and compared as a solution.
+fn check_status_word(path: &Path, line: u64, word: Option<&str>) -> Result<()> {
+    let Some(word) = word else { return Ok(()) };
+    if NavStatus::ALL.iter().any(|s| s.name() == word) {
+        return Ok(());
+    }
+    let known: Vec<&str> = NavStatus::ALL.iter().map(|s| s.name()).collect();
+    bail!(
+        "{}: line {line}: column {STATUS}: unknown status word {word:?} (the solution logs \
+         write {})",
+        path.display(),
+        known.join(", ")
+    )
+}
+
+/// [`check_status_word`] for every row of a log without 1-sigma columns that has a status
+/// column.
+fn check_status_words<R: std::io::Read>(
+    path: &Path,
+    header: &csv::StringRecord,
+    records: csv::StringRecordsIter<'_, R>,
+) -> Result<()> {
+    let Some(status) = header.iter().position(|h| h == STATUS) else {
+        return Ok(());
+    };
+    for record in records {
+        let record = record.with_context(|| format!("{}", path.display()))?;
+        let line = record.position().map_or(0, |p| p.line());
+        check_status_word(path, line, record.get(status))?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -116,6 +157,28 @@ sigma_pitch_deg,sigma_yaw_deg,status";
             ));
             let e = format!("{:#}", read(f.path()).unwrap_err());
             assert!(e.contains("line 2: sigma_n_m"), "{bad}: {e}");
+        }
+    }
+
+    /// A status "FOO" was read and compared as a solution.
+    #[test]
+    fn refuses_an_unknown_status_word() {
+        for header in [HEADER, "t_s,lat_deg,status"] {
+            let row = match header {
+                HEADER => "1,45,7,100,0,0,0,0,0,0,1,2,3,0.1,0.2,0.3,0.01,0.02,0.5",
+                _ => "1,45",
+            };
+            let f = file(&format!("{header}\n{row},NAV\n{row},DEGRADED\n"));
+            assert!(read(f.path()).is_ok(), "{header}");
+            let f = file(&format!("{header}\n{row},NAV\n{row},FOO\n"));
+            let e = format!("{:#}", read(f.path()).unwrap_err());
+            assert!(
+                e.contains(
+                    "line 3: column status: unknown status word \"FOO\" (the solution \
+                            logs write ALIGN_COARSE, ALIGN_FINE, NAV, DEGRADED, FAULT, STANDBY)"
+                ),
+                "{e}"
+            );
         }
     }
 }

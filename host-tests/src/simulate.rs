@@ -317,6 +317,20 @@ pub fn write_with_receiver(
     )
 }
 
+/// Refuses an output folder `dir` that is something other than a folder (an existing file
+/// gave "creating FILE: File exists (os error 17)"): `nav sim` writes a set of files.
+pub fn check_out_dir(dir: &Path) -> Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        bail!(
+            "--out {} is a file: nav sim writes a folder of files (imu.bin or imu.csv, \
+             truth.csv, scenario.txt, and gnss.csv and gnss.bin with --gnss-rate); give a \
+             folder's path (created if missing)",
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
 /// Writes the recording(s) of `sim` as `formats` asks, `truth.csv`, `scenario.txt` (the
 /// text `description`) and the receiver's `fixes` (`gnss.csv`, `gnss.bin`) into `dir`
 /// (created if missing), as one set written whole or not at all ([`crate::atomic::FileSet`]).
@@ -333,6 +347,7 @@ pub(crate) fn write_files(
     let want_csv = formats != Formats::Binary;
     let r = &sim.recording;
     let csv_rows = if want_csv { Some(r.to_csv()?) } else { None };
+    check_out_dir(dir)?;
     fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut names = vec!["truth.csv", "scenario.txt"];
     names.extend(want_bin.then_some("imu.bin"));

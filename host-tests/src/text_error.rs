@@ -11,6 +11,8 @@ use std::fmt;
 use std::io;
 use std::path::{Path, PathBuf};
 
+use crate::truth_csv::MAX_YAW_DEG;
+
 /// The largest time the recording clock holds [s]: `u64::MAX` nanoseconds (about 584 years).
 /// The binary format's `t_ns` and the samples' `t_us` derive from it.
 pub const MAX_TIME_S: f64 = 18_446_744_073.709_553;
@@ -223,6 +225,13 @@ pub enum TextErrorKind {
         /// The latitude found [deg].
         lat_deg: f64,
     },
+    /// A trajectory's yaw is outside [-[`MAX_YAW_DEG`], [`MAX_YAW_DEG`]] deg.
+    BadYaw {
+        /// Column name.
+        column: &'static str,
+        /// The yaw found [deg].
+        yaw_deg: f64,
+    },
     /// The longitude is outside [-180, 180] deg (refused, not wrapped, as a site's).
     BadLongitude {
         /// Column name; the message names the longitude unless the column is called
@@ -419,6 +428,11 @@ impl fmt::Display for TextErrorKind {
                     "column {column}: {what}{lat_deg} deg is outside [-90, 90]"
                 )
             }
+            Self::BadYaw { column, yaw_deg } => write!(
+                f,
+                "column {column}: yaw {yaw_deg} deg is outside [-{MAX_YAW_DEG}, {MAX_YAW_DEG}] \
+                 (a heading: the solution logs write it in (-180, 180], KF-GINS in [0, 360))"
+            ),
             Self::BadLongitude { column, lon_deg } => {
                 let what = if *column == "longitude" {
                     ""

@@ -10,8 +10,8 @@
 //! of `q_b_ned` (FRD body axes to NED; roll, pitch, yaw) [deg]. Columns are found by name, so
 //! columns appended later (or in another order) are ignored.
 //!
-//! Every value must be a finite number, the latitude within [-90, 90] deg, and time must not go
-//! backwards (equal times are allowed). Rows are read one at a time ([`TruthReader`]); a last
+//! Every value must be a finite number, the latitude within [-90, 90] deg, the yaw within
+//! [-360, 360] deg ([`MAX_YAW_DEG`]), and time must not go backwards (equal times are allowed). Rows are read one at a time ([`TruthReader`]); a last
 //! line that no newline ends is checked for a cut inside a field ([`crate::text_stream`]).
 //!
 //! The writer prints floats in their shortest round-trip form, so degrees keep the full f64
@@ -43,6 +43,11 @@ pub const COLUMNS: [&str; 10] = [
     "yaw_deg",
 ];
 
+/// Largest yaw magnitude a trajectory row may have [deg]: either convention of a heading, the
+/// solution logs' (-180, 180] (nav-core's [`nav_core::output::Solution`]) and KF-GINS's
+/// [0, 360); a yaw beyond is no heading (490 deg was compared as 130).
+pub const MAX_YAW_DEG: f64 = 360.0;
+
 /// Column positions in [`COLUMNS`].
 const T: usize = 0;
 const LAT: usize = 1;
@@ -61,13 +66,14 @@ pub type TruthCsvErrorKind = TextErrorKind;
 #[derive(Debug)]
 pub struct TruthWriter<W: Write> {
     out: W,
+    rows: u32,
 }
 
 impl<W: Write> TruthWriter<W> {
     /// Writes the header row to `out`. Wrap files in a `BufWriter`: rows are written line by line.
     pub fn new(mut out: W) -> io::Result<Self> {
         writeln!(out, "{CSV_HEADER}")?;
-        Ok(Self { out })
+        Ok(Self { out, rows: 0 })
     }
 
     /// Writes one row: `truth` in the file's units (degrees for angles).
@@ -87,13 +93,24 @@ impl<W: Write> TruthWriter<W> {
             roll.to_degrees(),
             pitch.to_degrees(),
             yaw.to_degrees()
-        )
+        )?;
+        self.rows = self.rows.saturating_add(1);
+        Ok(())
     }
 
     /// Flushes and returns the writer.
     pub fn finish(mut self) -> io::Result<W> {
         self.out.flush()?;
         Ok(self.out)
+    }
+
+    /// Writes the solution log's end record ([`nav_core::output::EndRecord`], the rows
+    /// written), flushes and returns the writer: for a trajectory that is a run's solution
+    /// (`nav emulate`'s), which `nav report` would otherwise call cut short.
+    pub fn finish_solution(mut self) -> io::Result<W> {
+        let end = nav_core::output::EndRecord { rows: self.rows };
+        writeln!(self.out, "{end}")?;
+        self.finish()
     }
 }
 
@@ -228,6 +245,12 @@ impl<R: Read> TruthReader<R> {
             return Some(Err(at(TruthCsvErrorKind::BadLatitude {
                 column: COLUMNS[LAT],
                 lat_deg: values[LAT],
+            })));
+        }
+        if values[ATT + 2].abs() > MAX_YAW_DEG {
+            return Some(Err(at(TruthCsvErrorKind::BadYaw {
+                column: COLUMNS[ATT + 2],
+                yaw_deg: values[ATT + 2],
             })));
         }
         if let Some(previous) = self.previous_t_s
@@ -404,6 +427,18 @@ mod tests {
         assert_eq!(
             msg(&format!("{CSV_HEADER}\n1,95,7.5,150,0,0,0,0,0,0\n")),
             "mem.csv: line 2: column lat_deg: latitude 95 deg is outside [-90, 90]"
+        );
+        // A yaw of 490 deg was read (and compared as 130 deg); +-360 is either convention's.
+        assert!(
+            msg(&format!("{CSV_HEADER}\n{ok}\n2,45,7.5,150,0,0,0,0,0,490\n")).starts_with(
+                "mem.csv: line 3: column yaw_deg: yaw 490 deg is outside [-360, 360] (a heading"
+            )
+        );
+        assert!(
+            parse(&format!(
+                "{CSV_HEADER}\n1,45,7.5,150,0,0,0,0,0,-360\n2,45,7.5,150,0,0,0,0,0,359.9\n"
+            ))
+            .is_ok()
         );
         let m = msg("t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,pitch_deg\n");
         assert!(

@@ -427,7 +427,11 @@ fn lasergyro_repeatability() {
         );
         return;
     }
-    println!("{}", lasergyro::run(&path).unwrap());
+    let table = lasergyro::run(&path).unwrap();
+    println!("{table}");
+    // The raw estimators' rows said nothing of the checks they bypass.
+    assert!(table.contains(lasergyro::CHECKS_NOTE), "{table}");
+    assert!(table.contains("WITHOUT the refusal checks nav replay applies"));
     let (incs, site, rec) = lasergyro::load(&path).unwrap();
     let rows = lasergyro::evaluate(&incs, &site, rec.header.rate_hz());
     for &w in &lasergyro::WINDOWS_S {

@@ -501,11 +501,16 @@ fn align_bench_options_of_another_table_are_refused() {
         ),
         (
             &["family", "--threads", "0"],
-            "--threads must be from 1 to 64, not 0",
+            "--threads must be from 1 to 256, not 0",
         ),
         (
             &["seed003", "--threads", "1000"],
-            "--threads must be from 1 to 64, not 1000",
+            "--threads must be from 1 to 256, not 1000",
+        ),
+        // The range of `nav bench --threads` (it was 1 to 64 here, 1 to 256 there).
+        (
+            &["seed003", "--threads", "257"],
+            "--threads must be from 1 to 256, not 257",
         ),
     ] {
         let mut argv = vec!["align-bench"];
@@ -774,4 +779,84 @@ fn start_speed_out_of_range_is_refused() {
         &["--start-speed is the heading threshold of a --start-in-motion"],
     );
     assert!(!out.exists());
+}
+
+/// Refusals that named neither the option, the key nor the cause (the messages of before in
+/// the comments); each names them now.
+#[test]
+fn refusals_name_the_option_the_key_and_the_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let imu = path("imu.bin");
+    generated_recording(std::path::Path::new(&imu), "12");
+    let out = path("out.csv");
+    // "calibration line 1: unknown key".
+    let cal = path("units.cal");
+    std::fs::write(&cal, "gyro_bias_deg_h = 1 0 0\n").unwrap();
+    refused(
+        &replay_args(&imu, &out, &["--calibration", &cal]),
+        &[
+            "--calibration",
+            "units.cal: calibration line 1: unknown key `gyro_bias_deg_h` (known: \
+             gyro_bias_rad_s, gyro_scale,",
+        ],
+    );
+    // "the lever arm must be finite and not negative", "the base motion must be ...".
+    refused(
+        &replay_args(&imu, &out, &["--lever-arm-sigma", "-1"]),
+        &["--lever-arm-sigma -1: the lever arm's 1-sigma must be finite and not negative"],
+    );
+    refused(
+        &replay_args(&imu, &out, &["--base-translation", "NaN"]),
+        &["--base-translation NaN: the base motion's 1-sigma must be finite and not negative"],
+    );
+    // Accepted: an unknown lever arm of 1-sigma 0 is a known one of 0 m.
+    refused(
+        &replay_args(&imu, &out, &["--lever-arm-sigma", "0"]),
+        &[
+            "--lever-arm-sigma 0: an unknown lever arm's 1-sigma of 0 m",
+            "--lever-arm 0,0,0",
+        ],
+    );
+    // "creating FILE: File exists (os error 17)".
+    refused(
+        &["sim", "static", "--seconds", "1", "--out", &imu],
+        &[
+            "--out",
+            "imu.bin is a file: nav sim writes a folder of files",
+        ],
+    );
+    // "reading X: X: No such file or directory (os error 2): No such file or directory ...".
+    let text = refused(
+        &["align-bench", "lasergyro", "--data", "/nonexistent"],
+        &["/nonexistent: No such file or directory"],
+    );
+    assert_eq!(text.matches("No such file").count(), 1, "{text}");
+    // "line 1: expected 7 numbers ..., found 1": an IMU recording given as GNSS fixes.
+    refused(
+        &["convert", "--gnss", "--in", &imu, "--out", &path("g.bin")],
+        &["imu.bin: an IMU recording (it starts with the NAVIMU magic"],
+    );
+    // `nav emulate`: "gyro_scale 2.000 is beyond 0.1219" named the SI key, dropped the sign
+    // and gave no file or line.
+    let sim = path("sim");
+    let o = common::nav(&["sim", "static", "--seconds", "2", "--out", &sim]);
+    assert!(o.status.success(), "{}", output_text(&o));
+    let truth = format!("{sim}/truth.csv");
+    let errors = path("errors.txt");
+    std::fs::write(&errors, "# scale\ngyro_scale_ppm = -1e10 0 0\n").unwrap();
+    let emulated = path("emulated.csv");
+    refused(
+        &[
+            "emulate", "--truth", &truth, "--out", &emulated, "--errors", &errors,
+        ],
+        &["errors.txt line 2: gyro_scale_ppm -1", "is beyond +-"],
+    );
+    // An empty `--set ''` was accepted.
+    refused(
+        &[
+            "emulate", "--truth", &truth, "--out", &emulated, "--set", "",
+        ],
+        &["--set #1 ``: empty; give `key = v1 v2 v3`"],
+    );
 }

@@ -279,3 +279,78 @@ fn convert_warns_about_increments_beyond_full_scale() {
     assert!(w.contains("2 with a rate beyond 2000 deg/s"), "{w}");
     assert!(w.contains("490 m/s^2"), "{w}");
 }
+
+/// A clock that steps back 1 s and stays behind: a replay skips every record until the time
+/// passes the last navigated one again (400 here); `nav convert` counted only the first ("1
+/// records with a time not after the previous one's"). Both count by nav-core's rule now.
+#[test]
+fn convert_counts_the_records_a_replay_skips_after_a_step_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = Stationary {
+        seconds: 15.0,
+        ..Stationary::default()
+    };
+    let mut stepped = s.recording().unwrap();
+    let at = (12.0 * s.rate_hz) as usize;
+    for r in &mut stepped.records[at..] {
+        r.t_ns -= 1_000_000_000;
+    }
+    let input = dir.path().join("stepped.bin");
+    recording_io::write(&input, &stepped).unwrap();
+    let c = recording_io::convert(&input, &dir.path().join("stepped.csv")).unwrap();
+    let (replayed, _) = replay::<f32>(&input, &options(&s));
+    // The first after the step has a negative interval (flagged so), the others are out of
+    // time order: both skipped.
+    let flagged = replayed.report.flagged_by;
+    let skipped = flagged.out_of_order + flagged.bad_interval;
+    assert_eq!(skipped, 400);
+    assert_eq!(c.time_not_increasing, u64::from(skipped));
+    assert!(c.warning().unwrap().contains("WARNING: 400 records"));
+}
+
+/// Recordings a replay refuses were converted into valid-looking files without a word: a
+/// header rate the timestamps contradict (200 Hz on 100 Hz samples) and a CSV whose time
+/// column is in milliseconds (0.1 Hz). Refused now by the replay's own checks.
+#[test]
+fn convert_refuses_what_a_replay_refuses() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = Stationary {
+        seconds: 3.0,
+        rate_hz: 100.0,
+        ..Stationary::default()
+    };
+    let r = s.recording().unwrap();
+    let wrong = dir.path().join("rate_wrong.bin");
+    recording_io::write_binary(&wrong, r.kind, 200.0, r.t0_ns, &r.records).unwrap();
+    let e = format!(
+        "{:#}",
+        recording_io::convert(&wrong, &dir.path().join("a.bin")).unwrap_err()
+    );
+    assert!(
+        e.contains("the header's rate 200 Hz contradicts the timestamps"),
+        "{e}"
+    );
+    let csv = dir.path().join("time_ms.csv");
+    recording_io::write(&csv, &r).unwrap();
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut ms = String::new();
+    for (i, line) in text.lines().enumerate() {
+        match line.split_once(',') {
+            Some((t, rest)) if i > 0 => {
+                let t: f64 = t.parse().unwrap();
+                ms += &format!("{},{rest}\n", t * 1000.0);
+            }
+            _ => ms += &format!("{line}\n"),
+        }
+    }
+    std::fs::write(&csv, ms).unwrap();
+    let e = format!(
+        "{:#}",
+        recording_io::convert(&csv, &dir.path().join("b.bin")).unwrap_err()
+    );
+    assert!(
+        e.contains("time_ms.csv: the rate must be within [10, 40000] Hz"),
+        "{e}"
+    );
+    assert!(!dir.path().join("a.bin").exists() && !dir.path().join("b.bin").exists());
+}

@@ -735,6 +735,19 @@ fn nav_emulate_command_line() {
         assert!((g.v_eb_ned - e.v_eb_ned).norm() < 1e-12);
         assert!(g.q_b_ned.angle_to(&e.q_b_ned) < 1e-12);
     }
+    // The end record of a complete solution: `nav report` called the output "cut short".
+    let displayed = std::fs::read_to_string(&out_path).unwrap();
+    assert_eq!(displayed.lines().last(), Some("# end: 601 rows, ok"));
+    let report = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+        .args(["report", "--solution"])
+        .arg(&out_path)
+        .arg("--truth")
+        .arg(&truth_path)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&report.stderr);
+    assert!(report.status.success(), "{text}");
+    assert!(!text.contains("cut short"), "{text}");
     let series = std::fs::read_to_string(&err_path).unwrap();
     assert_eq!(series.lines().count(), rows.len() + 1);
     assert!(series.starts_with("t_s,phi_n_rad,"));

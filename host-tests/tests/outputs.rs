@@ -158,3 +158,48 @@ fn a_plot_over_an_input_is_refused_and_the_input_kept() {
         );
     }
 }
+
+/// Ctrl-C (SIGINT) or SIGTERM during a replay left its hidden `.log.csv.XXXX.part` beside
+/// `--out` (piling up at every interrupt); now the run removes it and exits with the status a
+/// shell gives the signal (130, 143), nothing at `--out`.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_run_leaves_no_partial_output() {
+    let dir = tempfile::tempdir().unwrap();
+    // Long enough that the run is still writing when the signal comes (about 2 s of replay).
+    let imu = recording(dir.path(), 3600.0);
+    for (signal, status) in [("INT", 130), ("TERM", 143)] {
+        let out = dir.path().join("log.csv");
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+            .args(replay_args(
+                &imu,
+                out.to_str().unwrap(),
+                &["--log-every", "1"],
+            ))
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let part = || {
+            std::fs::read_dir(dir.path())
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .any(|n| n.ends_with(".part"))
+        };
+        let start = std::time::Instant::now();
+        while !part() {
+            assert!(start.elapsed().as_secs() < 30, "no partial output appeared");
+            assert!(child.try_wait().unwrap().is_none(), "the run ended first");
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        let sent = std::process::Command::new("kill")
+            .args([&format!("-{signal}"), &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(sent.success());
+        let exit = child.wait().unwrap();
+        assert_eq!(exit.code(), Some(status), "SIG{signal}: {exit:?}");
+        assert!(!part(), "SIG{signal}: a partial output is left");
+        assert!(!out.exists(), "SIG{signal}: an output at --out");
+    }
+}

@@ -675,6 +675,19 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
             "bad-scale0.txt:1: refused (reason code 9): GNSS aiding: a scale-factor 1-sigma \
              (gyro-scale-sigma, accel-scale-sigma) must be above 0",
         ),
+        // An unknown lever arm of 1-sigma 0 (accepted before): a known zero lever arm.
+        (
+            "lever-sigma0",
+            site("lever-arm-sigma = 0\n"),
+            "bad-lever-sigma0.txt:1: refused (reason code 8): an unknown lever arm's 1-sigma of 0 m \
+             is a known lever arm of 0 m by another name: give it as known (lever-arm = 0,0,0)",
+        ),
+        // Too high a rate: the high limit's reason (it gave the low limit's).
+        (
+            "fast",
+            site("imu-rate-hz = 1e9\n"),
+            "Hz (no IMU samples faster than 40 kHz",
+        ),
         // The GNSS correlated error beyond the filter's range, named by its line.
         (
             "correlated",

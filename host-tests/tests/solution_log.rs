@@ -19,25 +19,20 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// `seconds` of the `static` scenario (45 deg N, 7.5 deg E, 150 m) into `d/sim`, with its
+/// truth (`sim/imu.bin`, `sim/truth.csv`).
+fn simulate_static(d: &Path, seconds: &str) {
+    let args = ["sim", "static", "--out", "sim", "--seconds", seconds];
+    let o = nav(d, &[&args[..], &["--format", "bin"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
 #[test]
 fn the_end_record_marks_a_complete_log_and_report_warns_without_it() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     // 20 s of the `static` scenario (45 deg N, 7.5 deg E, 150 m) with its truth.
-    let o = nav(
-        d,
-        &[
-            "sim",
-            "static",
-            "--out",
-            "sim",
-            "--seconds",
-            "20",
-            "--format",
-            "bin",
-        ],
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
+    simulate_static(d, "20");
     let o = nav(d, &common::replay_args("sim/imu.bin", "log.csv", &[]));
     assert!(o.status.success(), "{}", stderr(&o));
     let log = std::fs::read_to_string(d.join("log.csv")).unwrap();
@@ -89,5 +84,54 @@ fn the_end_record_marks_a_complete_log_and_report_warns_without_it() {
         stderr(&o).contains("short.csv: line 52: the end record says 101 rows, the file has 50"),
         "{}",
         stderr(&o)
+    );
+}
+
+/// A free-inertial log after an IMU gap beyond the bridge (6 s here): its rows carried on from
+/// the state before the gap and looked valid, with nothing in the file to say otherwise. The
+/// log marks the gap with its lost record now, and `nav report` does not compare the rows
+/// after it, saying how many.
+#[test]
+fn rows_after_a_lost_imu_gap_are_marked_and_not_compared() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    simulate_static(d, "30");
+    let mut r = host_tests::recording_io::read(&d.join("sim/imu.bin")).unwrap();
+    // 6 s of records lost from t = 15 s.
+    r.records
+        .retain(|x| !(15_000_000_000..21_000_000_000).contains(&(x.t_ns - r.t0_ns)));
+    host_tests::recording_io::write(&d.join("gap.bin"), &r).unwrap();
+    let o = nav(d, &common::replay_args("gap.bin", "log.csv", &[]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let log = std::fs::read_to_string(d.join("log.csv")).unwrap();
+    let lost: Vec<&str> = log.lines().filter(|l| l.starts_with("# lost:")).collect();
+    assert_eq!(lost.len(), 1, "{log}");
+    assert!(
+        lost[0].starts_with("# lost: t = 21.00") && lost[0].contains("after an IMU gap of "),
+        "{}",
+        lost[0]
+    );
+    let after = log
+        .lines()
+        .skip_while(|l| !l.starts_with("# lost:"))
+        .filter(|l| !l.starts_with('#'))
+        .count();
+    assert!(after > 0);
+    let o = nav(
+        d,
+        &[
+            "report",
+            "--solution",
+            "log.csv",
+            "--truth",
+            "sim/truth.csv",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains(&format!("not compared: the {after} rows from t = 21.00"))
+            && stdout.contains("after an IMU gap that lost the solution"),
+        "{stdout}"
     );
 }

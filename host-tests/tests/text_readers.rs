@@ -752,6 +752,19 @@ fn a_psins_site_far_from_the_run_is_refused() {
             && msg.contains("m from --lat 45 --lon 7.5 (more than 1000 m)"),
         "{msg}"
     );
+    // The height 1000 m off --h (accepted before, the heading's 1-sigma grown from 0.08 to
+    // 11 deg on the laser-gyro data): refused too.
+    std::fs::write(&path, scenario_psins(s.lat_deg, s.lon_deg)).unwrap();
+    let mut far = options();
+    far.run.h_m += 1000.0;
+    let msg = replay_error(&path, &far);
+    assert!(
+        msg.contains(&format!(
+            "site.imu: the PSINS header's height {} m is 1000 m from --h {} (more than 200 m",
+            s.h_m, far.run.h_m
+        )),
+        "{msg}"
+    );
     // 0.005 deg (556 m) is within the bound: the replay runs.
     std::fs::write(&path, scenario_psins(s.lat_deg + 0.005, s.lon_deg)).unwrap();
     let (fr, _) = replay::<f64>(&path, &options());

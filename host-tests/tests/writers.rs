@@ -272,6 +272,7 @@ fn emulate(truth: &Path, out: &Path, errors_out: &Path, set: &str) -> Output {
     ])
 }
 
+/// In the words the errors were given in (the `--set` or file line, the key, its unit).
 #[test]
 fn emulate_refuses_errors_beyond_the_linear_model_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
@@ -282,23 +283,24 @@ fn emulate_refuses_errors_beyond_the_linear_model_and_writes_nothing() {
     for (set, msg) in [
         (
             "gyro_drift_deg_h = 1e300 0 0",
-            "gyro_drift_rad_s 4.848e294 is beyond 3.333e-4: over the truth's length",
+            "--set #1 `gyro_drift_deg_h = 1e300 0 0`: gyro_drift_deg_h 1.000e300 is beyond +-68.75: \
+             over the truth's length",
         ),
         (
             "accel_bias_g = 1e6 0 0",
-            "accel_bias_m_s2 9.807e6 is beyond 1.961: the tilt bias/g",
+            "accel_bias_g 1.000e6 is beyond +-0.2000: the tilt bias/g",
         ),
         (
             "position_error_m = 1e12 0 0",
-            "position_error_m 1.000e12 is beyond 100000",
+            "position_error_m 1.000e12 is beyond +-100000",
         ),
         (
             "attitude_error_deg = 20 0 0",
-            "attitude_error_rad 0.3491 is beyond 0.2000",
+            "attitude_error_deg 20.00 is beyond +-11.46",
         ),
         (
             "velocity_error_m_s = 1e3 0 0",
-            "velocity_error_m_s 1000 is beyond 100.0",
+            "velocity_error_m_s 1000 is beyond +-100.0",
         ),
     ] {
         let o = emulate(&truth, &out, &errors_out, set);
@@ -440,7 +442,7 @@ fn a_lever_arm_beyond_a_hull_is_refused_as_a_bad_argument() {
     );
     assert_refused(
         &o,
-        "invalid configuration: lever arm 1.000e30 m is beyond 100 m",
+        "--lever-arm 1e30,0,0: lever arm 1.000e30 m is beyond 100 m",
     );
     assert!(!text(&o).contains("gravity"), "{}", text(&o));
     assert!(!out.exists());
@@ -449,7 +451,10 @@ fn a_lever_arm_beyond_a_hull_is_refused_as_a_bad_argument() {
         &out,
         &[&inertial[..], &["--lever-arm-sigma", "1e30"]].concat(),
     );
-    assert_refused(&o, "lever arm 1-sigma 1.000e30 m is beyond 100 m");
+    assert_refused(
+        &o,
+        "--lever-arm-sigma 1e30: lever arm 1-sigma 1.000e30 m is beyond 100 m",
+    );
     assert!(!out.exists());
     // A ship's deck lever arm is accepted (a FOG's noise: the ADIS16505 default cannot
     // resolve the Earth rate in 20 s).

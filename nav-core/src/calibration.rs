@@ -75,10 +75,13 @@ pub enum CalibrationError {
         /// 1-based line number.
         line: usize,
     },
-    /// The key is not one of the documented keys.
+    /// The key is not one of the documented keys ([`KEYS`]).
     UnknownKey {
         /// 1-based line number.
         line: usize,
+        /// Where the key is in the parsed text: its first byte's offset and its length in
+        /// bytes ([`Self::in_text`] names it).
+        key_at: (usize, usize),
     },
     /// A value is not a finite number, or there are too few or too many values.
     BadValues {
@@ -116,7 +119,7 @@ impl fmt::Display for CalibrationError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Syntax { line } => write!(f, "calibration line {line}: expected `key = values`"),
-            Self::UnknownKey { line } => write!(f, "calibration line {line}: unknown key"),
+            Self::UnknownKey { line, .. } => unknown_key(f, *line, None),
             Self::BadValues { line } => {
                 write!(
                     f,
@@ -137,7 +140,50 @@ impl fmt::Display for CalibrationError {
 
 impl core::error::Error for CalibrationError {}
 
-const KEYS: [&str; 6] = [
+impl CalibrationError {
+    /// The error with the key it names read from `text`, the text given to
+    /// [`ImuCalibration::parse`] ("unknown key `gyro_bias_deg_h`" rather than "unknown key").
+    pub fn in_text<'a>(&'a self, text: &'a str) -> impl fmt::Display + 'a {
+        InText { error: self, text }
+    }
+}
+
+/// [`CalibrationError::in_text`].
+struct InText<'a> {
+    error: &'a CalibrationError,
+    text: &'a str,
+}
+
+impl fmt::Display for InText<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self.error {
+            CalibrationError::UnknownKey {
+                line,
+                key_at: (at, len),
+            } => unknown_key(f, line, self.text.get(at..at + len)),
+            ref e => e.fmt(f),
+        }
+    }
+}
+
+/// "calibration line N: unknown key `KEY` (known: ...)".
+fn unknown_key(f: &mut fmt::Formatter<'_>, line: usize, key: Option<&str>) -> fmt::Result {
+    write!(f, "calibration line {line}: unknown key")?;
+    if let Some(key) = key {
+        write!(f, " `{key}`")?;
+    }
+    f.write_str(" (known: ")?;
+    for (i, k) in KEYS.iter().enumerate() {
+        if i > 0 {
+            f.write_str(", ")?;
+        }
+        f.write_str(k)?;
+    }
+    f.write_str("; SI units)")
+}
+
+/// The keys of the text form (module docs).
+pub const KEYS: [&str; 6] = [
     "gyro_bias_rad_s",
     "gyro_scale",
     "gyro_misalignment",
@@ -152,6 +198,7 @@ impl ImuCalibration {
     pub fn parse(text: &str) -> Result<Self, CalibrationError> {
         let mut cal = Self::default();
         let mut seen = [false; KEYS.len()];
+        let whole = text;
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
@@ -162,10 +209,15 @@ impl ImuCalibration {
             let (key, values) = content
                 .split_once('=')
                 .ok_or(CalibrationError::Syntax { line })?;
-            let k = KEYS
-                .iter()
-                .position(|&k| k == key.trim())
-                .ok_or(CalibrationError::UnknownKey { line })?;
+            let key = key.trim();
+            let k = KEYS.iter().position(|&k| k == key).ok_or_else(|| {
+                // Both slices of `whole`: the key's offset in it.
+                let at = key.as_ptr() as usize - whole.as_ptr() as usize;
+                CalibrationError::UnknownKey {
+                    line,
+                    key_at: (at, key.len()),
+                }
+            })?;
             if core::mem::replace(&mut seen[k], true) {
                 return Err(CalibrationError::Duplicate { line });
             }
@@ -349,7 +401,28 @@ mod tests {
         // Only at the start: elsewhere it is a character of a key.
         assert_eq!(
             ImuCalibration::parse("gyro_scale = 0 0 0\n\u{feff}accel_scale = 0 0 0"),
-            Err(CalibrationError::UnknownKey { line: 2 })
+            Err(CalibrationError::UnknownKey {
+                line: 2,
+                key_at: (19, 14)
+            })
+        );
+    }
+
+    /// "calibration line 1: unknown key" named neither the key nor the known ones.
+    #[test]
+    fn an_unknown_key_is_named_with_the_known_ones() {
+        use std::string::ToString;
+        let text = "\u{feff}# units\n  gyro_bias_deg_h = 1 0 0\n";
+        let e = ImuCalibration::parse(text).unwrap_err();
+        let known = "(known: gyro_bias_rad_s, gyro_scale, gyro_misalignment, accel_bias_m_s2, \
+                     accel_scale, accel_misalignment; SI units)";
+        assert_eq!(
+            e.in_text(text).to_string(),
+            std::format!("calibration line 2: unknown key `gyro_bias_deg_h` {known}")
+        );
+        assert_eq!(
+            e.to_string(),
+            std::format!("calibration line 2: unknown key {known}")
         );
     }
 
@@ -368,7 +441,13 @@ mod tests {
         use CalibrationError::*;
         let cases = [
             ("gyro_bias_rad_s 1 2 3", Syntax { line: 1 }),
-            ("\nmag_bias = 1 2 3", UnknownKey { line: 2 }),
+            (
+                "\nmag_bias = 1 2 3",
+                UnknownKey {
+                    line: 2,
+                    key_at: (1, 8),
+                },
+            ),
             ("gyro_scale = 1 2", BadValues { line: 1 }),
             ("gyro_scale = 0 0 0 0", BadValues { line: 1 }),
             ("gyro_scale = 0 nan 0", BadValues { line: 1 }),

@@ -8,7 +8,9 @@
 //! A log is [`CSV_HEADER`], one [`Solution`] row per line, and, as its last line, the
 //! [`EndRecord`] (`# end: 102 rows, ok`). Only a run that ended normally writes the end record,
 //! after its last row: a log without it was cut short (the run failed, crashed or was stopped),
-//! whatever rows it has. CSV readers that skip `#` comment lines read the rows unchanged.
+//! whatever rows it has. CSV readers that skip `#` comment lines read the rows unchanged. A
+//! free-inertial log marks an IMU gap that lost its solution with a [`LostRecord`] before the
+//! rows after it.
 
 use crate::{NavState, Scalar};
 use core::fmt;
@@ -63,6 +65,64 @@ impl fmt::Display for EndRecord {
     /// `# end: N rows, ok` (no line terminator).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{} {} rows, ok", Self::PREFIX, self.rows)
+    }
+}
+
+/// The comment record a free-inertial log writes where an IMU gap beyond the bridge
+/// ([`crate::gap::MAX_BRIDGED_S`]) lost the solution, before the rows after it: `# lost: t =
+/// 3615.002500 s after an IMU gap of 3600.000000 s (...): the rows from here on are no
+/// solution`. The rows after it carry on from the state before the gap and look valid; a
+/// reader takes the ones at or after `t_us` as lost.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LostRecord {
+    /// Time of the first sample after the gap [us].
+    pub t_us: u64,
+    /// The gap's length [us].
+    pub gap_us: u64,
+}
+
+impl LostRecord {
+    /// What every lost record starts with (a CSV comment).
+    pub const PREFIX: &'static str = "# lost: t = ";
+
+    /// The lost record of `line` (surrounding blanks allowed): `None` unless it starts with
+    /// [`Self::PREFIX`] followed by a time in seconds (`3615.002500 s`); only the time is read.
+    pub fn parse(line: &str) -> Option<Self> {
+        let rest = line.trim().strip_prefix(Self::PREFIX)?;
+        let (t, _) = rest.split_once(" s")?;
+        let (whole, fraction) = t.split_once('.').unwrap_or((t, ""));
+        let digits = |s: &str| s.bytes().all(|b| b.is_ascii_digit());
+        if whole.is_empty() || !digits(whole) || !digits(fraction) || fraction.len() > 6 {
+            return None;
+        }
+        let scale = 10_u64.pow(6 - fraction.len() as u32);
+        let micros = if fraction.is_empty() {
+            0
+        } else {
+            fraction.parse::<u64>().ok()? * scale
+        };
+        let t_us = whole
+            .parse::<u64>()
+            .ok()?
+            .checked_mul(1_000_000)?
+            .checked_add(micros)?;
+        Some(Self { t_us, gap_us: 0 })
+    }
+}
+
+impl fmt::Display for LostRecord {
+    /// The record (no line terminator).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(Self::PREFIX)?;
+        write_unsigned_decimal(f, self.t_us, 6)?;
+        f.write_str(" s after an IMU gap of ")?;
+        write_unsigned_decimal(f, self.gap_us, 6)?;
+        write!(
+            f,
+            " s (beyond the {} s bridged): the solution is lost, the rows from here on are no \
+             solution",
+            crate::gap::MAX_BRIDGED_S
+        )
     }
 }
 
@@ -300,6 +360,42 @@ mod tests {
             core::str::from_utf8(&b.0[..b.1]).unwrap(),
             "1.000000,45.000000000,7.500000000,250,0,0,0,0,0,90"
         );
+    }
+
+    #[test]
+    fn lost_record_round_trip() {
+        extern crate std;
+        let r = LostRecord {
+            t_us: 3_615_002_500,
+            gap_us: 3_600_000_000,
+        };
+        let text = std::format!("{r}");
+        assert!(
+            text.starts_with("# lost: t = 3615.002500 s after an IMU gap of 3600.000000 s"),
+            "{text}"
+        );
+        assert_eq!(
+            LostRecord::parse(&text),
+            Some(LostRecord {
+                t_us: 3_615_002_500,
+                gap_us: 0
+            })
+        );
+        assert_eq!(
+            LostRecord::parse("# lost: t = 12 s"),
+            Some(LostRecord {
+                t_us: 12_000_000,
+                gap_us: 0
+            })
+        );
+        for bad in [
+            "# lost: t = x s",
+            "# lost: t = 1.2345678 s",
+            "# end: 1 rows, ok",
+            "1,2",
+        ] {
+            assert_eq!(LostRecord::parse(bad), None, "{bad}");
+        }
     }
 
     #[test]

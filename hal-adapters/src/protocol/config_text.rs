@@ -252,9 +252,9 @@ pub fn keys_of(
         R::Run(E::Alignment(SettingsError::WindowTooLong { .. })) => (&["align-seconds"], false),
         R::Run(E::Alignment(SettingsError::NearPole)) => (&["lat-deg"], false),
         R::Run(E::Alignment(SettingsError::LeverArmTooLong { .. })) => (&["lever-arm"], false),
-        R::Run(E::Alignment(SettingsError::LeverArmSigmaTooLarge { .. })) => {
-            (&["lever-arm-sigma"], false)
-        }
+        R::Run(E::Alignment(
+            SettingsError::LeverArmSigmaTooLarge { .. } | SettingsError::LeverArmSigmaZero,
+        )) => (&["lever-arm-sigma"], false),
         // The lever arm is not given (an unknown one's 1-sigma may be).
         R::Run(E::Alignment(SettingsError::SwayNeedsLeverArm)) => {
             (&["align-method", "lever-arm-sigma"], false)
@@ -314,6 +314,10 @@ impl fmt::Display for InText<'_> {
             R::Run(E::Alignment(SettingsError::SwayNeedsLeverArm)) => f.write_str(
                 "the sway method needs the lever arm (lever-arm = X,Y,Z; 0,0,0 at the centre of \
                  rotation): with an unknown one its 1-sigma is not true; use fine",
+            ),
+            R::Run(E::Alignment(SettingsError::LeverArmSigmaZero)) => f.write_str(
+                "an unknown lever arm's 1-sigma of 0 m is a known lever arm of 0 m by another \
+                 name: give it as known (lever-arm = 0,0,0), or a 1-sigma above 0",
             ),
             R::Run(E::LogEvery) => f.write_str("log-every must be at least 1"),
             r => write!(f, "{r}"),

@@ -513,7 +513,7 @@ fn monte_carlo<F>(runs: usize, threads: usize, f: F) -> Result<Vec<Vec<Checkpoin
 where
     F: Fn(usize) -> Result<Vec<Checkpoint>> + Sync,
 {
-    let threads = threads.clamp(1, 64);
+    let threads = threads.clamp(1, crate::MAX_THREADS);
     let results: Vec<Result<Vec<Numbered>>> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
             .map(|th| {

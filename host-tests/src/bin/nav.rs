@@ -99,7 +99,7 @@ enum Command {
         /// Sensor grade of the `seed002` runs.
         #[arg(long, default_value = "fog")]
         grade: host_tests::sensor_model::Grade,
-        /// Threads (seed003, family).
+        /// Threads (seed003, family; 1 to 256, as `nav bench`).
         #[arg(long, default_value_t = 2)]
         threads: usize,
         /// The laser-gyro recording (lasergyro).
@@ -198,7 +198,7 @@ enum Command {
         /// outages, 1 for outliers (above 1: each outlier's figures over the seeds), 10 for gaps]
         #[arg(long)]
         runs: Option<usize>,
-        /// Threads (consistency, outages).
+        /// Threads (consistency, outages; 1 to 256, as `nav align-bench`).
         #[arg(long, default_value_t = 2)]
         threads: usize,
         /// Length of each simulated run [s] (consistency; filter and outages use 1 h).
@@ -558,7 +558,9 @@ impl ReplayArgs {
                 host_tests::atomic::refuse_same_file(&[path], &self.out)?;
                 let text = std::fs::read_to_string(path)
                     .with_context(|| format!("reading {}", path.display()))?;
-                ImuCalibration::parse(&text).with_context(|| format!("in {}", path.display()))?
+                ImuCalibration::parse(&text).map_err(|e| {
+                    anyhow::anyhow!("--calibration {}: {}", path.display(), e.in_text(&text))
+                })?
             }
         };
         let noise = self
@@ -593,25 +595,49 @@ impl ReplayArgs {
                 sensor_noise(&noise),
             )
         };
+        self.check_geometry(&run)?;
         Ok(ReplayOptions {
             run,
             device: self.device,
         })
     }
+
+    /// nav-core's check of the lever arm and the base's motion, its refusal named by the
+    /// option that gave the value ("the base motion must be finite ..." named neither).
+    fn check_geometry(&self, run: &RunConfig) -> Result<()> {
+        use nav_core::alignment::machine::check_geometry;
+        use nav_core::number::Number;
+        let lever = match self.lever_arm {
+            Some(r) => format!(
+                "--lever-arm {},{},{}",
+                Number(r[0]),
+                Number(r[1]),
+                Number(r[2])
+            ),
+            None => format!("--lever-arm-sigma {}", Number(self.lever_arm_sigma)),
+        };
+        check_geometry(&run.lever_arm, &BaseMotion::default()).context(lever)?;
+        check_geometry(&LeverArm::default(), &run.base)
+            .with_context(|| format!("--base-translation {}", Number(self.base_translation)))?;
+        Ok(())
+    }
 }
 
 /// Most runs of a Monte Carlo bench.
 const MAX_RUNS: usize = 100_000;
-/// Most threads of a Monte Carlo bench.
-const MAX_THREADS: usize = 256;
-
 /// Refuses a bench's `--runs` outside `min_runs..=MAX_RUNS` and `--threads` outside
-/// `1..=MAX_THREADS`.
+/// [`check_threads`]'s range.
 fn check_monte_carlo(runs: usize, min_runs: usize, threads: usize) -> Result<()> {
     anyhow::ensure!(
         (min_runs..=MAX_RUNS).contains(&runs),
         "--runs must be from {min_runs} to {MAX_RUNS}, not {runs}"
     );
+    check_threads(threads)
+}
+
+/// Refuses a bench's `--threads` outside `1..=MAX_THREADS` (every bench's range).
+fn check_threads(threads: usize) -> Result<()> {
+    use host_tests::MAX_THREADS;
     anyhow::ensure!(
         (1..=MAX_THREADS).contains(&threads),
         "--threads must be from 1 to {MAX_THREADS}, not {threads}"
@@ -1640,6 +1666,9 @@ fn sim(a: SimArgs) -> Result<()> {
     use host_tests::simulate::{ReceiverOutput, SimOptions, simulate, write_with_receiver};
     use host_tests::simulate_family::{SCENARIO_NAME, sim_scenario_names};
     use host_tests::trajectory::scenarios::Scenario;
+    if let Some(out) = &a.out {
+        host_tests::simulate::check_out_dir(out)?;
+    }
     if a.scenario == SCENARIO_NAME {
         return sim_family(a);
     }
@@ -1877,6 +1906,11 @@ fn write_readouts(
 fn main() -> ExitCode {
     // Output piped into `head` ends the process as it ends `cat`'s, without a panic message.
     sigpipe::reset();
+    // Ctrl-C or SIGTERM: no hidden partial output left beside `--out`.
+    if let Err(e) = host_tests::atomic::remove_partial_outputs_on_interrupt() {
+        eprintln!("error: cannot install the interrupt handler: {e}");
+        return ExitCode::FAILURE;
+    }
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -1889,7 +1923,7 @@ fn main() -> ExitCode {
 /// Refuses an option of `nav align-bench` given with other than its default to a benchmark
 /// that does not use it (it was ignored: `nav align-bench seed003 --seconds 5` ran the
 /// default benchmark without a word), and a `--threads` the benchmarks do not run (0, or more
-/// than 64: they took 1 and 64).
+/// than [`host_tests::MAX_THREADS`]: they took 1 and 64).
 fn refuse_unused_align_bench_options(command: &Command) -> Result<()> {
     let Command::AlignBench {
         which,
@@ -1948,11 +1982,7 @@ fn refuse_unused_align_bench_options(command: &Command) -> Result<()> {
             );
         }
     }
-    anyhow::ensure!(
-        (1..=64).contains(threads),
-        "--threads must be from 1 to 64, not {threads}"
-    );
-    Ok(())
+    check_threads(*threads)
 }
 
 /// Refuses an option of `nav bench` given with other than its default to a measurement that

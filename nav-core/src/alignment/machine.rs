@@ -180,7 +180,11 @@ impl core::fmt::Display for AlignFailure {
             ),
             Self::WindowTooShort { seconds, min_s } => write!(
                 f,
-                "the data cover {seconds:.3} s, less than the method's minimum of {min_s} s"
+                "the data cover {seconds:.3} s, less than the method's minimum of {min_s} s \
+                 (the samples' own intervals, shortened by timestamp jitter or gaps): ask for a \
+                 window {:.3} s longer or more, e.g. {} s",
+                min_s - seconds,
+                longer_window_s(*seconds, *min_s)
             ),
             Self::NotCompiledIn(method) => not_compiled_in(f, *method),
         }
@@ -188,6 +192,13 @@ impl core::fmt::Display for AlignFailure {
 }
 
 impl core::error::Error for AlignFailure {}
+
+/// The window to ask for when one of `min_s` [s] covered only `seconds` [s] of the samples'
+/// intervals ([`AlignFailure::WindowTooShort`]: timestamp jitter or gaps): the minimum plus the
+/// shortfall, rounded up to 0.1 s (9.990 s of a 10 s window: 10.1 s).
+pub fn longer_window_s(seconds: f64, min_s: f64) -> f64 {
+    libm::ceil((2.0 * min_s - seconds) * 10.0 - 1e-9) / 10.0
+}
 
 impl AlignFailure {
     /// A short, fixed name of the reason (for counting refusals by kind; the `Display` text
@@ -351,6 +362,34 @@ pub const MIN_RATE_HZ: f64 = 10.0;
 /// beyond it is a unit or typing error). A day's window at this rate still fits the sample
 /// counter.
 pub const MAX_RATE_HZ: f64 = 40_000.0;
+
+/// Refuses a sampling rate `rate_hz` [Hz] that is not finite or not within [`MIN_RATE_HZ`] to
+/// [`MAX_RATE_HZ`] ([`SettingsError::BadRate`]): the rates an alignment, and so a replay,
+/// takes (the host's writers and converters check their rates with it).
+pub fn check_rate(rate_hz: f64) -> Result<(), SettingsError> {
+    if rate_hz.is_finite() && (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz) {
+        Ok(())
+    } else {
+        Err(SettingsError::BadRate(rate_hz))
+    }
+}
+
+/// Why the sampling rate `rate_hz` [Hz] is refused ([`SettingsError::BadRate`]): the reason of
+/// the limit it crosses ("too high" explained the low limit's reason).
+pub fn bad_rate_reason(rate_hz: f64) -> &'static str {
+    if rate_hz > MAX_RATE_HZ {
+        "no IMU samples faster than 40 kHz: a rate above it is a unit or typing error, such as \
+         a time column in milliseconds read as seconds"
+    } else if rate_hz.is_nan() {
+        "not a number"
+    } else {
+        "below 10 Hz every increment is longer than the 0.1 s the navigator accepts"
+    }
+}
+
+/// The reason an unknown lever arm of 1-sigma 0 is refused ([`SettingsError::LeverArmSigmaZero`]).
+pub const LEVER_ARM_SIGMA_ZERO: &str = "an unknown lever arm's 1-sigma of 0 m is a known lever arm \
+     of 0 m by another name: give it as known (--lever-arm 0,0,0), or a 1-sigma above 0";
 /// Longest alignment window [s] (a day: longer is a unit or typing error, and its sample
 /// count would not fit the counters).
 pub const MAX_WINDOW_S: f64 = 86_400.0;
@@ -399,6 +438,9 @@ pub enum SettingsError {
     /// heading 1-sigma is not true then (an unknown lever arm's estimate and the sway model
     /// share the roll and pitch signal), so it is not offered.
     SwayNeedsLeverArm,
+    /// An unknown lever arm whose 1-sigma is 0: a known lever arm of zero by another name,
+    /// which the methods take as known ([`LEVER_ARM_SIGMA_ZERO`]).
+    LeverArmSigmaZero,
     /// [`AlignMethod::Fine`] or [`AlignMethod::Sway`] with gyros whose bias 1-sigma alone puts
     /// the heading beyond the filter's limit: on a still base the east bias and the Earth
     /// rate's east tilt drift are the same signal, so the heading's 1-sigma is at least
@@ -427,10 +469,9 @@ impl core::fmt::Display for SettingsError {
             ),
             Self::BadRate(r) => write!(
                 f,
-                "sampling rate {} Hz is not within [{MIN_RATE_HZ}, {MAX_RATE_HZ}] Hz (below \
-                 {MIN_RATE_HZ} Hz every increment is longer than the 0.1 s the navigator \
-                 accepts)",
-                Number(*r)
+                "sampling rate {} Hz is not within [{MIN_RATE_HZ}, {MAX_RATE_HZ}] Hz ({})",
+                Number(*r),
+                bad_rate_reason(*r)
             ),
             Self::WindowTooLong { seconds } => write!(
                 f,
@@ -454,6 +495,7 @@ impl core::fmt::Display for SettingsError {
             Self::SwayNeedsLeverArm => f.write_str(
                 "the sway method needs the lever arm (--lever-arm X,Y,Z; 0,0,0 at the centre of rotation): with an unknown one its 1-sigma is not true; use fine",
             ),
+            Self::LeverArmSigmaZero => f.write_str(LEVER_ARM_SIGMA_ZERO),
             Self::GyrosTooCoarse {
                 bias_rad_s,
                 earth_rad_s,
@@ -483,6 +525,7 @@ impl SettingsError {
             Self::BadValue(_) => "bad value",
             Self::OutOfRange(_) => "value out of range",
             Self::SwayNeedsLeverArm => "sway needs the lever arm",
+            Self::LeverArmSigmaZero => "unknown lever arm of 1-sigma 0",
             Self::GyrosTooCoarse { .. } => "gyros too coarse to find north",
             Self::LeverArmTooLong { .. } | Self::LeverArmSigmaTooLarge { .. } => {
                 "lever arm beyond a hull"
@@ -537,9 +580,7 @@ impl<T: Scalar> AlignSettings<T> {
         rate_hz: f64,
         noise: SensorNoise<T>,
     ) -> Result<Self, SettingsError> {
-        if !(rate_hz.is_finite() && (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz)) {
-            return Err(SettingsError::BadRate(rate_hz));
-        }
+        check_rate(rate_hz)?;
         if seconds > MAX_WINDOW_S {
             return Err(SettingsError::WindowTooLong { seconds });
         }
@@ -683,7 +724,10 @@ pub fn check_geometry(
         }
         LeverArm::Unknown { sigma_m } => {
             if !ok(sigma_m) {
-                return Err(SettingsError::BadValue("the lever arm"));
+                return Err(SettingsError::BadValue("the lever arm's 1-sigma"));
+            }
+            if sigma_m == 0.0 {
+                return Err(SettingsError::LeverArmSigmaZero);
             }
             if !(sigma_m <= MAX_LEVER_ARM_M) {
                 return Err(SettingsError::LeverArmSigmaTooLarge { sigma_m });
@@ -691,7 +735,7 @@ pub fn check_geometry(
         }
     }
     if !(ok(base.position_sigma_m) && ok(base.translation_sigma_m)) {
-        return Err(SettingsError::BadValue("the base motion"));
+        return Err(SettingsError::BadValue("the base motion's 1-sigma"));
     }
     if !(base.translation_sigma_m <= MAX_LEVER_ARM_M) {
         return Err(SettingsError::OutOfRange(BASE_TRANSLATION_OUT_OF_RANGE));
@@ -1450,6 +1494,23 @@ mod tests {
             "sampling rate 5 Hz is not within [10, 40000] Hz (below 10 Hz every increment is \
              longer than the 0.1 s the navigator accepts)"
         );
+        // A window at the minimum that timestamp jitter shortened: how much longer to ask.
+        let e = std::format!(
+            "{}",
+            AlignFailure::WindowTooShort {
+                seconds: 9.990,
+                min_s: 10.0
+            }
+        );
+        assert!(
+            e.ends_with("ask for a window 0.010 s longer or more, e.g. 10.1 s"),
+            "{e}"
+        );
+        assert_eq!(longer_window_s(9.621, 10.0), 10.4);
+        assert_eq!(longer_window_s(29.9, 30.0), 30.1);
+        // Too high: the high limit's reason (it gave the low limit's).
+        let e = std::format!("{}", SettingsError::BadRate(5e4));
+        assert!(e.contains("(no IMU samples faster than 40 kHz"), "{e}");
         assert!(AlignSettings::new(AlignMethod::Static, site, 20.0, MIN_RATE_HZ, noise).is_ok());
         // A window shorter than the method's minimum: refused by the settings, and by the
         // machine from the increments' own intervals when the settings were built by hand.
@@ -1551,6 +1612,13 @@ mod tests {
             std::format!("{e}").starts_with("lever arm 1-sigma 1000 m is beyond 100 m"),
             "{e}"
         );
+        // A 1-sigma of 0 was accepted: a known zero lever arm by another name.
+        let e = s
+            .with_lever_arm(LeverArm::Unknown { sigma_m: 0.0 })
+            .validate()
+            .unwrap_err();
+        assert_eq!(e, SettingsError::LeverArmSigmaZero);
+        assert!(std::format!("{e}").contains("--lever-arm 0,0,0"), "{e}");
         let mut s32 = AlignSettings::<f32>::new(
             AlignMethod::Inertial,
             Position::from_degrees(45.0, 7.5, 100.0),

@@ -383,7 +383,7 @@ impl FamilyOptions {
 /// member not yet taken); in member order, whatever the threads.
 pub fn run_family(opts: &FamilyOptions) -> Result<Vec<MemberRun>> {
     let windows = checked_windows(&opts.windows_s)?;
-    let threads = opts.threads.clamp(1, 64);
+    let threads = opts.threads.clamp(1, crate::MAX_THREADS);
     let all: Vec<u64> = opts.members.clone().collect();
     let next = AtomicUsize::new(0);
     let results: Vec<Result<Vec<MemberRun>>> = std::thread::scope(|s| {
