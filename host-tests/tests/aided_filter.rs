@@ -66,8 +66,8 @@ fn z_scores(ins: &AidedIns<f64>, truth: &NavState<f64>) -> [f64; 9] {
     ]
 }
 
-#[test]
-fn a_still_base_with_position_fixes_converges_within_its_sigma() {
+/// A base standing still, levelled and headed a little off the axes, and its state.
+fn still_base() -> (Stationary, NavState<f64>) {
     let body = Stationary {
         lat: 0.8,
         lon: 0.2,
@@ -75,6 +75,12 @@ fn a_still_base_with_position_fixes_converges_within_its_sigma() {
         q_b_ned: from_euler(0.02, -0.01, 1.2),
     };
     let truth = NavState::at_rest(Position::from_radians(0.8, 0.2, 300.0), body.q_b_ned);
+    (body, truth)
+}
+
+#[test]
+fn a_still_base_with_position_fixes_converges_within_its_sigma() {
+    let (body, truth) = still_base();
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     for run in 0..6 {
         let s0 = sigma0();
@@ -136,13 +142,7 @@ impl StillBase {
     /// Converged on fixes each axis within 2 sigma (none beyond the gate; the windowed test
     /// may refuse one by chance, which starts no cluster), with no refused cluster.
     fn converged() -> Self {
-        let body = Stationary {
-            lat: 0.8,
-            lon: 0.2,
-            h: 300.0,
-            q_b_ned: from_euler(0.02, -0.01, 1.2),
-        };
-        let truth = NavState::at_rest(Position::from_radians(0.8, 0.2, 300.0), body.q_b_ned);
+        let (body, truth) = still_base();
         let mut config = FilterConfig::new(noise());
         config.zero_motion = None;
         let ins = AidedIns::new(truth, SensorErrors::default(), &sigma0(), config).unwrap();
