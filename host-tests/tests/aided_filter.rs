@@ -214,6 +214,20 @@ fn a_lone_false_alarm_of_the_gate_moves_nothing() {
     base.an_ordinary_fix_moves_nothing();
 }
 
+/// A fix refused far beyond the gate (6 sigma east) holds a third of its offset as the
+/// reported doubt; the next fix (2.6 sigma west, 1.8 sigma up) agrees with the filter, not
+/// with it, and is taken as any fix. Before, the covariance was widened by the next fix's
+/// offset in the refused fix's part, and the solution followed that fix by 2 m.
+#[test]
+fn a_fix_that_disagrees_with_the_refused_one_is_taken_as_any() {
+    let mut base = StillBase::converged();
+    let r = base.fix([0.0, 6.0 * GATE_SIGMA_M, 0.0]);
+    assert!(matches!(r, AidResult::Rejected { .. }), "{r:?}");
+    let doubt = base.sigma_m();
+    assert!(doubt.y > 1.5 && doubt.y < 2.5, "{doubt}");
+    base.an_ordinary_fix_moves_nothing();
+}
+
 /// The same false alarm, and the next fault-free fix (2.2 sigma east) closer to it than to
 /// the prediction: refused as its cluster's second member. Their common offset is evidence
 /// only a little beyond the gate, and the cluster holds that part: the reported sigma stays

@@ -1046,8 +1046,15 @@ impl<T: Scalar> ErrorFilter<T> {
         if let Some(c) = self.cluster.take() {
             // The first fix after a refused cluster: its offset joins the position's
             // covariance, in the part the cluster held ([`RefusedCluster::weight`]:
-            // [`integrity`] module docs, [Groves, ch. 17]).
-            let z = m.z * c.weight();
+            // [`integrity`] module docs, [Groves, ch. 17]); after a lone refused fix, only
+            // where it agrees with that fix rather than with the filter (one that agrees with
+            // the filter says the refused one was the outlier).
+            let agrees = recovered || !c.is_lone() || c.distance(&m.z, &m.r, &drift) < nis;
+            let z = if agrees {
+                m.z * c.weight()
+            } else {
+                Vector3::zeros()
+            };
             let mut pos = self.p.fixed_view_mut::<3, 3>(POS, POS);
             pos += z * z.transpose();
             let Some(again) = self.innovation(m) else {

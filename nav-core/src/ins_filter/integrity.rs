@@ -85,12 +85,14 @@
 //! that agree with it again, so its position is doubtful by that offset, a step it followed
 //! rather than a drift of its velocity, and the fix moves the position, not the velocity (a
 //! MEMS filter that followed a ramp otherwise turned the step back into a velocity error and
-//! lost the fixes again). A cluster that is not gross holds, there and in its reported
-//! doubt, only the part of its offset beyond the gate of the evidence its members give
-//! ([`RefusedCluster::weight`]: a lone fix's own, or their common offset's), which grows
-//! with the members: the gate refuses one fault-free fix in a thousand, the next fix joins
-//! such a false alarm often enough, and one (4.3 sigma, 2 m fixes at 10 Hz) had widened
-//! the covariance by the next fix's whole offset, which then moved the solution by 8 m.
+//! lost the fixes again); after a lone refused fix, a fix that agrees with the filter rather
+//! than with it (the refused one was the gate's false alarm) adds nothing. A cluster that
+//! is not gross holds, there and in its reported doubt, only the part of its offset beyond the
+//! gate of the evidence its members give ([`RefusedCluster::weight`]: a lone fix's own, or
+//! their common offset's), which grows with the members: the gate refuses one fault-free fix in
+//! a thousand, the next fix joins such a false alarm often enough, and one (4.3 sigma, 2 m
+//! fixes at 10 Hz) had widened the covariance by the next fix's whole offset, which then moved
+//! the solution by 8 m.
 //!
 //! **A DEGRADED filter that drifted recovers** [Groves, ch. 17, fault recovery by covariance
 //! increase]. A filter that followed part of a fault (a FOG filter pulled by a ramp the window
