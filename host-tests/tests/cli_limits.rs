@@ -549,6 +549,26 @@ imunoise:
 antlever: [0.0, 0.0, 0.0]
 ";
 
+/// A KF-GINS configuration's refusal names its file once, with the key (it was
+/// `KF-GINS configuration k.yaml: k.yaml: key ...`); one that comes from elsewhere in the
+/// run is still told as the configuration's.
+#[test]
+fn a_kf_gins_refusal_names_its_configuration_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("k.yaml");
+    let config = config.to_str().unwrap();
+    std::fs::write(
+        config,
+        KF_GINS_CONFIG.replace("corrtime: 1.0", "corrtime: 0"),
+    )
+    .unwrap();
+    let text = refused(&["kf-gins", config], &["imunoise.corrtime"]);
+    assert_eq!(text.matches("k.yaml").count(), 1, "{text}");
+    std::fs::write(config, KF_GINS_CONFIG).unwrap();
+    let text = refused(&["kf-gins", config], &["KF-GINS configuration", "gnsspath"]);
+    assert_eq!(text.matches("k.yaml").count(), 1, "{text}");
+}
+
 /// Inputs given as the output were overwritten: `kf-gins ok.yaml --out ok.yaml` the
 /// configuration, `emulate --errors E --out E` (or `--errors-out E`) the error file,
 /// `replay --calibration C --out C` the calibration. Refused now, the file untouched.
