@@ -11,6 +11,7 @@
 use crate::aided::fix_input;
 use crate::atomic;
 use crate::gnss::{self, GnssFix};
+use crate::text_error::told_as;
 use anyhow::{Context, Result, anyhow, bail};
 use hal_adapters::gnss_record::{self, GnssReader, GnssRecord};
 use nav_core::Scalar;
@@ -68,7 +69,8 @@ pub fn is_record_file(path: &Path) -> Result<bool> {
 pub fn read_fixes(path: &Path, assumed: Option<&gnss::AssumedSigma>) -> Result<GnssFixes> {
     let in_file = || format!("GNSS file {}", path.display());
     if path.is_dir() || !is_record_file(path)? {
-        let text = gnss::read_gnss_assuming(path, assumed).with_context(in_file)?;
+        let text =
+            gnss::read_gnss_assuming(path, assumed).map_err(|e| told_as(e, path, in_file()))?;
         let mut out = GnssFixes::default();
         for f in &text {
             match fix_input::<f64>(f) {
@@ -104,7 +106,7 @@ pub fn read_as_text_fixes(
 ) -> Result<Vec<GnssFix>> {
     if path.is_dir() || !is_record_file(path)? {
         return gnss::read_gnss_assuming(path, assumed)
-            .with_context(|| format!("GNSS file {}", path.display()));
+            .map_err(|e| told_as(e, path, format!("GNSS file {}", path.display())));
     }
     Ok(read_fixes(path, assumed)?
         .fixes
@@ -219,7 +221,7 @@ pub fn convert(input: &Path, output: &Path, assumed: Option<&gnss::AssumedSigma>
     }
     atomic::refuse_same_file(&[input], output)?;
     let fixes = gnss::read_gnss_assuming(input, assumed)
-        .with_context(|| format!("GNSS file {}", input.display()))?;
+        .map_err(|e| told_as(e, input, format!("GNSS file {}", input.display())))?;
     write_record_file(output, &fixes)?;
     Ok(fixes.len())
 }

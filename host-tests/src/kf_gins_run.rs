@@ -317,8 +317,10 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
     refuse_shared_outputs(&named)?;
     crate::gnss_file::refuse_the_imu_recording(&c.gnss_path, &c.imu_path)
         .context("gnsspath and imupath")?;
-    let fixes: Vec<GnssFix> = gnss::read_gnss(&c.gnss_path)
-        .with_context(|| format!("GNSS file {} (gnsspath)", c.gnss_path.display()))?;
+    let fixes: Vec<GnssFix> = gnss::read_gnss(&c.gnss_path).map_err(|e| {
+        let label = format!("GNSS file {} (gnsspath)", c.gnss_path.display());
+        crate::text_error::told_as(e, &c.gnss_path, label)
+    })?;
     let mut config = filter_config(&c);
     if !stops {
         config.zero_motion = None;

@@ -26,6 +26,18 @@ pub fn seconds_to_ns(t_s: f64) -> Option<u64> {
     (t_s.is_finite() && t_s >= 0.0 && ns < TWO_POW_64).then_some(ns as u64)
 }
 
+/// `e` told as `label` (what the file is, and its path): the readers' errors start with the
+/// file's path already, which then follows the label rather than repeating it (`GNSS file
+/// g.txt: line 1: ...`, not `GNSS file g.txt: g.txt: line 1: ...`); an error that does not
+/// start with it gets the label in front.
+pub fn told_as(e: anyhow::Error, path: &Path, label: String) -> anyhow::Error {
+    let message = format!("{e:#}");
+    match message.strip_prefix(&format!("{}: ", path.display())) {
+        Some(rest) => anyhow::anyhow!("{label}: {rest}"),
+        None => e.context(label),
+    }
+}
+
 /// `x` as a message shows it: `{}`, but in exponent form when very large or very small (`1e300`,
 /// not 301 digits).
 pub fn number_text(x: f64) -> String {

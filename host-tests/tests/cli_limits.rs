@@ -551,7 +551,8 @@ antlever: [0.0, 0.0, 0.0]
 
 /// A KF-GINS configuration's refusal names its file once, with the key (it was
 /// `KF-GINS configuration k.yaml: k.yaml: key ...`); one that comes from elsewhere in the
-/// run is still told as the configuration's.
+/// run is still told as the configuration's, its own file named once as well (it was
+/// `GNSS file gnss.txt (gnsspath): gnss.txt: No such file ...`).
 #[test]
 fn a_kf_gins_refusal_names_its_configuration_once() {
     let dir = tempfile::tempdir().unwrap();
@@ -562,11 +563,16 @@ fn a_kf_gins_refusal_names_its_configuration_once() {
         KF_GINS_CONFIG.replace("corrtime: 1.0", "corrtime: 0"),
     )
     .unwrap();
-    let text = refused(&["kf-gins", config], &["imunoise.corrtime"]);
+    let text = refused(
+        &["kf-gins", config],
+        &["KF-GINS configuration", "k.yaml: key 'imunoise.corrtime'"],
+    );
     assert_eq!(text.matches("k.yaml").count(), 1, "{text}");
     std::fs::write(config, KF_GINS_CONFIG).unwrap();
     let text = refused(&["kf-gins", config], &["KF-GINS configuration", "gnsspath"]);
     assert_eq!(text.matches("k.yaml").count(), 1, "{text}");
+    // And the GNSS file, which names itself, once.
+    assert_eq!(text.matches("gnss.txt").count(), 1, "{text}");
 }
 
 /// Inputs given as the output were overwritten: `kf-gins ok.yaml --out ok.yaml` the

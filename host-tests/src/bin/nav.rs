@@ -2361,15 +2361,10 @@ fn run(cli: Cli) -> Result<()> {
                 imu_err,
                 std,
             };
-            // Named once: the configuration's own errors already start with its path.
-            let named = config.display().to_string();
             let run =
                 host_tests::kf_gins_run::run_with(&config, &outputs, !no_stops).map_err(|e| {
-                    if e.to_string().starts_with(&named) {
-                        e
-                    } else {
-                        e.context(format!("KF-GINS configuration {named}"))
-                    }
+                    let label = format!("KF-GINS configuration {}", config.display());
+                    host_tests::text_error::told_as(e, &config, label)
                 })?;
             let seconds = started.elapsed().as_secs_f64();
             for w in &run.warnings {
