@@ -73,13 +73,21 @@ pub fn quat_to_f64<T: Scalar>(q: &UnitQuaternion<T>) -> UnitQuaternion<f64> {
 }
 
 /// Roll, pitch and yaw [rad] of `q_b_n` (yaw in (-pi, pi]); Titterton & Weston eq. 3.66 in
-/// quaternion form.
+/// quaternion form. Within the working precision of pitch +-90 deg, where roll and yaw are
+/// not separately defined (their `atan2` arguments, `cos(pitch)` times the rest, are
+/// rounding errors there: in `f32` an attitude 67.6 deg wrong came out), roll is 0 and yaw
+/// carries the rotation about the vertical, `yaw -+ roll`, from `C_01` and `C_11`.
 #[inline]
 pub fn euler<T: Scalar>(q_b_n: &UnitQuaternion<T>) -> (T, T, T) {
     let (w, x, y, z) = (q_b_n.w, q_b_n.i, q_b_n.j, q_b_n.k);
     let (one, two) = (T::one(), T::c(2.0));
-    let roll = (two * (w * x + y * z)).patan2(one - two * (x * x + y * y));
+    let (c21, c22) = (two * (w * x + y * z), one - two * (x * x + y * y));
     let sin_pitch = (two * (w * y - z * x)).max(-one).min(one);
+    if c21 * c21 + c22 * c22 < T::default_epsilon() {
+        let yaw = (two * (w * z - x * y)).patan2(one - two * (x * x + z * z));
+        return (T::zero(), sin_pitch.pasin(), yaw);
+    }
+    let roll = c21.patan2(c22);
     let yaw = (two * (w * z + x * y)).patan2(one - two * (y * y + z * z));
     (roll, sin_pitch.pasin(), yaw)
 }
@@ -127,6 +135,29 @@ pub fn about_y<T: Scalar>(angle: T) -> UnitQuaternion<T> {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// At pitch +-90 deg in `f32` (and next to it) the angles describe the attitude they came
+    /// from: roll and yaw are not defined separately there, their combination is (was: an
+    /// attitude 67.6 deg off, roll and yaw from rounding errors).
+    #[test]
+    fn the_angles_at_vertical_describe_the_attitude() {
+        for pitch_deg in [90.0f32, -90.0, 89.99, -89.995] {
+            for (roll_deg, yaw_deg) in [(-7.6f32, 22.4), (40.0, -130.0), (0.0, 179.0)] {
+                let [r, p, y] = [roll_deg, pitch_deg, yaw_deg].map(f32::to_radians);
+                let q = from_euler(r, p, y);
+                let (r2, p2, y2) = euler(&q);
+                let back = from_euler(r2, p2, y2);
+                let off_deg = back.angle_to(&q).to_degrees();
+                assert!(
+                    off_deg < 0.05,
+                    "({roll_deg}, {pitch_deg}, {yaw_deg}) deg: {off_deg} deg off"
+                );
+            }
+        }
+        // Away from vertical the angles are the ones given.
+        let (r, p, y) = euler(&from_euler(0.3f32, 1.2, -2.0));
+        assert!((r - 0.3).abs() < 1e-5 && (p - 1.2).abs() < 1e-5 && (y + 2.0).abs() < 1e-5);
+    }
 
     #[test]
     fn constant_rate_is_exact_in_many_steps() {

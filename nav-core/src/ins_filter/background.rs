@@ -19,10 +19,11 @@ use super::{
     ATT, BA, BG, Covariance, FilterConfig, FilterError, FilterStatus, InitialSigma, N, POS, SG,
     StateVector, VEL,
 };
+use crate::alignment::fine::euler_sigma;
 use crate::alignment::fine::kalman::{ConsiderError, ScalarUpdate, update_scalar_correlated};
 use crate::earth::LocalEarth;
 use crate::{NavState, Position, Scalar};
-use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVector, UnitQuaternion, Vector3};
 
 /// Largest reduction of a measured quantity's variance by one update [-] (see
 /// `ErrorFilter::update`): a fix shrinks a 100 m prediction to 25 m, not to its own 0.5 m; the
@@ -335,22 +336,20 @@ impl<T: Scalar> ErrorFilter<T> {
         self.p.fixed_view::<3, 3>(POS, POS) + self.position_doubt()
     }
 
-    /// 1-sigma of roll, pitch, yaw [rad] at heading `yaw` [rad]: the NED tilt variances turned
-    /// into the body's forward and right axes, and the heading's, with the doubt of a pull
-    /// that is a fault ([`Pull::is_fault`]) and the doubt a refused cluster leaves on the
-    /// heading ([`RefusedCluster::heading_doubt`], as at the last position fix; reported, not
-    /// gated, as the position's).
-    pub fn attitude_sigma_rad(&self, yaw: T) -> Vector3<T> {
-        let (s, c) = (yaw.psin(), yaw.pcos());
-        let att = self.p.fixed_view::<3, 3>(ATT, ATT)
+    /// 1-sigma of roll, pitch, yaw [rad] of the attitude `q_b_n`: the NED attitude error's
+    /// covariance, with the doubt of a pull that is a fault ([`Pull::is_fault`]) and the doubt
+    /// a refused cluster leaves on the heading ([`RefusedCluster::heading_doubt`], as at the
+    /// last position fix; reported, not gated, as the position's), mapped to the Euler angles
+    /// ([`euler_sigma`]): roll and yaw grow as `1 / cos(pitch)` towards pitch +-90 deg, where
+    /// they are not defined (at 75-89 deg of pitch the NED tilt's 1-sigma reported as roll's
+    /// and yaw's was 5-46 times below their errors), and stop at 180 deg.
+    pub fn attitude_sigma_rad(&self, q_b_n: &UnitQuaternion<T>) -> Vector3<T> {
+        let mut att = self.p.fixed_view::<3, 3>(ATT, ATT)
             + self
                 .fault_doubt()
                 .map_or_else(Matrix3::zeros, |[_, _, a]| a);
-        let (pnn, pee, pne) = (att[(0, 0)], att[(1, 1)], att[(0, 1)]);
-        let roll2 = c * c * pnn + s * s * pee + T::c(2.0) * c * s * pne;
-        let pitch2 = s * s * pnn + c * c * pee - T::c(2.0) * c * s * pne;
-        let yaw2 = att[(2, 2)] + self.heading_doubt_rad2;
-        Vector3::new(roll2, pitch2, yaw2).map(|v| v.max(T::zero()).sqrt())
+        att[(2, 2)] += self.heading_doubt_rad2;
+        euler_sigma(q_b_n, &att).map(|s| s.min(T::c(core::f64::consts::PI)))
     }
 
     /// True once the solution came so near a pole that the NED error model does not hold

@@ -397,7 +397,7 @@ impl<T: Scalar> AidedIns<T> {
 
     /// 1-sigma of roll, pitch, yaw [rad] ([`ErrorFilter::attitude_sigma_rad`]).
     pub fn attitude_sigma_rad(&self) -> Vector3<T> {
-        self.filter.attitude_sigma_rad(self.state().euler().2)
+        self.filter.attitude_sigma_rad(&self.state().q_b_n)
     }
 
     /// The health.

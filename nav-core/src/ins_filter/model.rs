@@ -338,6 +338,56 @@ pub(crate) mod tests {
     use crate::ins_filter::states::N;
 
     /// A tactical-grade noise figure set for the filter's unit tests.
+    /// The Euler angles' 1-sigma of a body pitched up by 80 deg at heading 0: the NED tilt
+    /// about north is roll's times `cos(pitch)`, and leaks into yaw by `tan(pitch)` (was: the
+    /// NED tilt's 1-sigma reported as roll's and yaw's, 5-46 times below their errors in
+    /// loops). At vertical the two are not defined: at most 180 deg.
+    #[test]
+    fn euler_sigma_grows_towards_vertical() {
+        use crate::ins_filter::{AidedIns, FilterConfig, InitialSigma};
+        use crate::{NavState, Position, attitude};
+        let sigma_at = |pitch: f64| {
+            let state = NavState {
+                q_b_n: attitude::from_euler(0.0, pitch, 0.0),
+                v_eb_n: Vector3::new(100.0, 0.0, -50.0),
+                position: Position::from_radians(0.8, 0.3, 1000.0),
+            };
+            let n = noise();
+            let sigma = InitialSigma {
+                position_ned_m: Vector3::repeat(0.1),
+                velocity_ned_m_s: Vector3::repeat(0.01),
+                attitude_rad: Vector3::new(1e-3, 2e-3, 3e-3),
+                gyro_bias_rad_s: Vector3::repeat(n.gyro_bias_rad_s),
+                accel_bias_mps2: Vector3::repeat(n.accel_bias_mps2),
+                gyro_scale: Vector3::repeat(n.gyro_scale),
+                accel_scale: Vector3::repeat(n.accel_scale),
+            };
+            AidedIns::new(state, Default::default(), &sigma, FilterConfig::new(n))
+                .unwrap()
+                .attitude_sigma_rad()
+        };
+        let pitch = 80f64.to_radians();
+        let s = sigma_at(pitch);
+        let expected = Vector3::new(
+            1e-3 / pitch.cos(),
+            2e-3,
+            (9e-6 + (pitch.tan() * 1e-3).powi(2)).sqrt(),
+        );
+        assert!((s - expected).norm() < 1e-9, "{s} against {expected}");
+        let level = sigma_at(0.0);
+        assert!(
+            (level - Vector3::new(1e-3, 2e-3, 3e-3)).norm() < 1e-12,
+            "{level}"
+        );
+        let vertical = sigma_at(core::f64::consts::FRAC_PI_2);
+        assert!(
+            vertical
+                .iter()
+                .all(|v| v.is_finite() && *v <= core::f64::consts::PI)
+        );
+        assert!(vertical.x > 1.0 && vertical.z > 1.0, "{vertical}");
+    }
+
     pub(crate) fn noise() -> FilterNoise<f64> {
         FilterNoise {
             arw_rad_per_sqrt_s: 1e-4,

@@ -15,7 +15,7 @@ use crate::ins_filter::{
     Correction, ErrorFilter, FilterConfig, FilterCounters, FilterError, FilterStatus, GnssPosition,
     GnssVelocity, InitialSigma, POS, Propagation, Snapshot, VEL,
 };
-use nalgebra::Vector3;
+use nalgebra::{UnitQuaternion, Vector3};
 
 /// What the foreground hands to the background.
 ///
@@ -67,10 +67,10 @@ pub enum ToBackground<T: Scalar> {
         /// Gravity at its position [m/s^2].
         gravity_mps2: T,
     },
-    /// The filter's 1-sigmas and status for a row, the attitude's at heading `yaw_rad` [rad].
+    /// The filter's 1-sigmas and status for a row, the Euler angles' at the attitude `q_b_n`.
     Report {
-        /// The solution's yaw [rad].
-        yaw_rad: T,
+        /// The solution's attitude.
+        q_b_n: UnitQuaternion<T>,
     },
 }
 
@@ -100,12 +100,12 @@ pub struct FilterReport<T: Scalar> {
 }
 
 impl<T: Scalar> FilterReport<T> {
-    /// The report of a filter, the attitude's 1-sigma at heading `yaw_rad` [rad].
-    pub fn of(filter: &ErrorFilter<T>, yaw_rad: T) -> Self {
+    /// The report of a filter, the Euler angles' 1-sigma at the attitude `q_b_n`.
+    pub fn of(filter: &ErrorFilter<T>, q_b_n: &UnitQuaternion<T>) -> Self {
         Self {
             sigma_ned_m: filter.sigma(POS),
             sigma_v_ned_m_s: filter.sigma(VEL),
-            sigma_att_rad: filter.attitude_sigma_rad(yaw_rad),
+            sigma_att_rad: filter.attitude_sigma_rad(q_b_n),
             status: filter.status(),
             counters: *filter.counters(),
             covariance_faults: filter.covariance_faults(),
@@ -283,8 +283,8 @@ impl<T: Scalar> Background<T> {
                     f.uncertainty()
                 })
             }))),
-            ToBackground::Report { yaw_rad } => match filter {
-                Some(f) => Some(FromBackground::Report(FilterReport::of(f, yaw_rad))),
+            ToBackground::Report { q_b_n } => match filter {
+                Some(f) => Some(FromBackground::Report(FilterReport::of(f, &q_b_n))),
                 // Not reached: the foreground asks only once the filter runs.
                 None => Some(FromBackground::FilterFailed(FilterError::BadState)),
             },

@@ -920,7 +920,7 @@ impl<T: Scalar> Navigator<T> {
             w.row = RowStage::Requested(t_us);
             self.awaiting = Some(Awaiting::Report);
             return Some(ToBackground::Report {
-                yaw_rad: mech.state().euler().2,
+                q_b_n: mech.state().q_b_n,
             });
         }
         None
