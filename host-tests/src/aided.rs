@@ -9,7 +9,9 @@
 use crate::gnss::GnssFix;
 use anyhow::{Result, anyhow};
 use hal_adapters::{Imu, ImuSample, SampleFlags};
-use nav_core::ins_filter::sequencer::{FixCounters, GnssFixInput, Phase, Realignments, Sequencer};
+use nav_core::ins_filter::sequencer::{
+    FixCounters, GnssFixInput, Phase, Realignments, Sequencer, Start,
+};
 use nav_core::ins_filter::{
     AidResult, AidedIns, FilterCounters, GnssPosition, GnssVelocity, POS, VEL,
 };
@@ -314,6 +316,54 @@ pub struct AidedReport {
     /// model does not hold (`nav_core::ins_filter::model::near_pole`): its time [s] and
     /// latitude [deg]; DEGRADED from there on.
     pub near_pole: Option<(f64, f64)>,
+    /// The attitude a start in motion took (`None` for a given start).
+    pub motion_start: Option<MotionStartAttitude>,
+}
+
+/// The attitude the filter started with in motion, as its user is told it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MotionStartAttitude {
+    /// Roll, pitch, yaw [deg].
+    pub euler_deg: [f64; 3],
+    /// Their 1-sigma [deg].
+    pub sigma_deg: [f64; 3],
+    /// The heading against the track of the start's velocity (a vehicle moving backwards).
+    pub backwards: bool,
+}
+
+impl MotionStartAttitude {
+    /// The start of `ins`.
+    fn of<T: Scalar>(ins: &AidedIns<T>) -> Self {
+        let (r, p, y) = ins.state().euler();
+        let v = ins.state().v_eb_n.map(T::to_f64);
+        let track = v.y.atan2(v.x);
+        let off = (y.to_f64() - track).sin_cos();
+        Self {
+            euler_deg: [r, p, y].map(|a| a.to_f64().to_degrees()),
+            sigma_deg: ins
+                .attitude_sigma_rad()
+                .map(T::to_f64)
+                .map(f64::to_degrees)
+                .into(),
+            backwards: off.1 < 0.0,
+        }
+    }
+
+    /// The line of the run's summary: where the heading came from, and the level.
+    pub fn line(&self, t_s: f64) -> String {
+        let [r, p, y] = self.euler_deg;
+        let [sr, sp, sy] = self.sigma_deg;
+        let along = if self.backwards {
+            "against the GNSS track (moving backwards: the accelerometers felt it)"
+        } else {
+            "along the GNSS track"
+        };
+        format!(
+            "filter started at t = {t_s:.3} s, in motion: heading {y:.1} deg (1-sigma {sy:.1}) \
+             {along}, roll {r:.1} deg (1-sigma {sr:.1}), pitch {p:.1} deg (1-sigma {sp:.1}) \
+             from the accelerometers"
+        )
+    }
 }
 
 fn wide(r: &AidResult<impl Scalar>) -> AidResult<f64> {
@@ -548,6 +598,9 @@ pub fn run<T: Scalar, E: fmt::Display>(
         let Some(ins) = seq.filter() else { continue };
         if report.start_s.is_none() {
             report.start_s = Some(s.t_us as f64 * 1e-6);
+            if matches!(seq.start(), Start::Motion(_)) {
+                report.motion_start = Some(MotionStartAttitude::of(ins));
+            }
         }
         if report.near_pole.is_none() && ins.filter().near_pole() {
             let lat = ins.state().position.lat_f64().to_degrees();

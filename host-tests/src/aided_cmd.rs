@@ -10,7 +10,7 @@ use anyhow::{Result, anyhow, bail};
 use hal_adapters::drivers::NoiseSpec;
 use nav_core::ins_filter::limits::MIN_BIAS_INSTABILITY_TIME_S;
 use nav_core::ins_filter::model::FilterNoise;
-use nav_core::ins_filter::motion::{MAX_FIX_INTERVAL_S, MotionAlignConfig};
+use nav_core::ins_filter::motion::{MAX_FIX_INTERVAL_S, MIN_SPEED_SIGMAS, MotionAlignConfig};
 use nav_core::ins_filter::sequencer::{RealignCause, Realignments, Sequencer, Start};
 use nav_core::ins_filter::{FilterConfig, InitialSigma, SensorErrors};
 use nav_core::navigator::config::{MAX_HEIGHT_M, MIN_HEIGHT_M};
@@ -458,8 +458,9 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
                 match a.start {
                     AidedStart::Motion { min_speed_m_s, .. } => sparse_fixes(&fixes).unwrap_or_else(|| {
                         format!(
-                            "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold ({} m/s, --start-speed)",
-                            nav_core::number::Number(min_speed_m_s)
+                            "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold ({} m/s, --start-speed) and {} times the noise of its velocity (2 m positions without a velocity, differenced over a second: 11 m/s)",
+                            nav_core::number::Number(min_speed_m_s),
+                            nav_core::number::Number(MIN_SPEED_SIGMAS)
                         )
                     }),
                     AidedStart::Given(_) => aided::no_usable_sample(&report),
@@ -522,9 +523,10 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
             rows,
             out.display()
         ),
-        match r.start_s {
-            Some(t) => format!("filter started at t = {t:.3} s"),
-            None => "filter never started".into(),
+        match (r.start_s, &r.motion_start) {
+            (Some(t), Some(m)) => m.line(t),
+            (Some(t), None) => format!("filter started at t = {t:.3} s"),
+            (None, _) => "filter never started".into(),
         },
         line("GNSS position", &c.position),
         line("GNSS velocity", &c.velocity),

@@ -1749,6 +1749,12 @@ fn sim_and_start_in_motion(d: &Path, sim: &[&str], replay: &[&str]) -> PathBuf {
     ];
     let (text, out) = sim_and_replay(d, sim, &replay.concat());
     assert!(text.contains("filter started at t = "), "{sim:?}: {text}");
+    // The summary says where the start's heading came from (the simulated vehicles drive
+    // forwards).
+    assert!(
+        text.contains(", in motion: heading ") && text.contains("along the GNSS track"),
+        "{sim:?}: {text}"
+    );
     out
 }
 

@@ -469,6 +469,8 @@ struct ReplayArgs {
     start_in_motion: bool,
     /// With --start-in-motion: the horizontal speed above which the heading is taken from the
     /// track [m/s], 0.5 to 100 (default 5): lower it for a slow vehicle (a robot, a boat). The
+    /// speed must also be 4 times the noise of the velocity (with the receiver's velocity, a
+    /// few decimetres per second; 0.5 m positions differenced over a second, 3 m/s). The
     /// heading's 1-sigma is the velocity's over the speed with the sideslip's, so a slow start
     /// is a start with a wide heading 1-sigma.
     #[arg(long, value_name = "M/S")]

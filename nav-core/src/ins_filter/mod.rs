@@ -43,6 +43,7 @@ pub mod model;
 pub mod motion;
 pub mod restart;
 pub mod sequencer;
+pub mod span_fit;
 pub mod states;
 pub mod stationarity;
 

@@ -7,13 +7,19 @@
 //!   force (Groves eq. 5.101); their 1-sigma is the acceleration bound and the accelerometer
 //!   bias over `g`, in quadrature (the mean specific force is the mean acceleration less
 //!   gravity: a mean horizontal acceleration `a` tilts the level by `a / g`; the bound, not the
-//!   RMS, also covers the body's pitching within the span). The bias's share is the bias
-//!   error's own: the filter starts with the tilt correlated with it
-//!   ([`super::AidedIns::level_on_accelerometers`]). The span grows fix by fix until its mean
-//!   acceleration is known well enough: one interval with the receiver's velocity (0.05 m/s),
-//!   a few seconds with velocities differenced from 0.5 m positions (0.7 m/s each: over one
-//!   second their difference is 1 m/s^2 of noise, and a single interval never showed a
-//!   vehicle standing still as quasi-static). A span that turns, accelerates beyond doubt
+//!   RMS, also covers the body's pitching within the span), and the RMS angle of the specific
+//!   force's direction over [`LEVEL_BLOCK_S`] blocks about its mean: the level holds at the
+//!   span's last fix, where a rolling boat's body may be tilted from its mean by the roll's
+//!   amplitude (a boat rolling 5 deg was levelled 8.5 deg off with a 1.8 deg 1-sigma). The
+//!   bias's share is the bias error's own: the filter starts with the tilt correlated with it
+//!   ([`super::AidedIns::level_on_accelerometers`]). From its fix on, the gyros carry the
+//!   level to the fix the filter starts at (the mean rate at rest taken out when known), its
+//!   1-sigma growing by the bias left and the angle random walk. The span grows fix by fix
+//!   until its mean acceleration is known well enough: one interval with the receiver's
+//!   velocity (0.05 m/s); without it, from the least-squares fit of all the span's positions
+//!   ([`SpanFit`]: a few seconds with 0.5 m positions, about 8 s with 2 m ones at 10 Hz, where
+//!   the difference of two velocities differenced a second apart is 4 m/s^2 of noise and
+//!   needed half a minute still). A span that turns, accelerates beyond doubt
 //!   (three sigma), or passes [`MAX_SPAN_S`] starts again at its last fix.
 //! - Gyro bias: while the level spans find the vehicle standing still (the antenna moved by
 //!   no more than three times the fixes' noise and [`REST_DISPLACEMENT_M`]), their rotation
@@ -24,9 +30,15 @@
 //!   unknown at the start, turned the heading by tens of degrees before the fixes found it,
 //!   and the filter linearised about that took false information on the roll. A body that
 //!   turns in place while its antenna stands still (a turntable) is outside this model.
-//! - Heading: once the horizontal speed exceeds [`MotionAlignConfig::min_speed_m_s`], the
-//!   ground track `atan2(v_E, v_N)` (a land vehicle moves along its forward axis); 1-sigma from
-//!   the velocity's 1-sigma over the speed and the sideslip allowance.
+//! - Heading: once the horizontal speed exceeds [`MotionAlignConfig::min_speed_m_s`] and
+//!   [`MIN_SPEED_SIGMAS`] times its noise, the ground track `atan2(v_E, v_N)` (a land vehicle
+//!   moves along its forward axis); 1-sigma from the velocity's 1-sigma over the speed and the
+//!   sideslip allowance. The forward axis is taken against the track when the body moves
+//!   backwards: since the level was found, the fixes' speed grew beyond three sigma while the
+//!   accelerometers (levelled) felt the forward velocity fall beyond three sigma of the level's
+//!   and the bias's error (a car that reversed out of a parking space was started 179 deg off
+//!   with a 3 deg 1-sigma). A body that reached its speed before the level was found is taken
+//!   to move forwards.
 //! - Velocity: the GNSS velocity, or the difference of two positions at least
 //!   [`MIN_DIFFERENCE_INTERVAL_S`] apart (a 10 Hz receiver's consecutive positions, 0.5 m
 //!   each, differ by 7 m/s of noise: no span of 30 s was quasi-static beyond that doubt, and
@@ -50,10 +62,11 @@
 
 use super::aiding::{GnssPosition, GnssVelocity};
 use super::model::FilterNoise;
+use super::span_fit::SpanFit;
 use super::states::InitialSigma;
 use crate::earth::LocalEarth;
 use crate::{ImuIncrement, NavState, Position, Scalar, attitude};
-use nalgebra::Vector3;
+use nalgebra::{UnitQuaternion, Vector3};
 
 /// Longest interval between two fixes the start takes as consecutive [s]: a 0.5 Hz receiver's
 /// (a position-differenced velocity over a 57 s outage, at a turn, once started the filter 54
@@ -76,6 +89,17 @@ pub const MAX_SPAN_S: f64 = 30.0;
 /// centripetal acceleration (10 deg of roll at 5 m/s on a 15 m radius). A turn slower than
 /// that changes the GNSS velocity over the span beyond the acceleration bound.
 pub const MAX_SPAN_RATE_RAD_S: f64 = 0.087;
+
+/// Length of the blocks whose mean specific force's direction measures the body's tilt
+/// about its mean over a level span [s] (module docs).
+pub const LEVEL_BLOCK_S: f64 = 0.1;
+
+/// Fewest 1-sigma of the horizontal velocity (per axis) the speed must reach for the track to
+/// give the heading. A vehicle standing still with 2 m fixes differenced over a second shows
+/// 2.8 m/s of noise per axis, and crossed a 5 m/s threshold within seconds: its heading was
+/// the noise's, 150 deg off with a 30 deg 1-sigma. The speed of a still vehicle is Rayleigh
+/// distributed: beyond 4 sigma with a chance of `exp(-8)` (3e-4) per fix.
+pub const MIN_SPEED_SIGMAS: f64 = 4.0;
 
 /// Shortest time at rest the gyro bias is taken over [s].
 pub const MIN_REST_S: f64 = 10.0;
@@ -184,6 +208,12 @@ struct Span<T: Scalar> {
     sum_dt: T,
     /// Sum of the rotation increments since [rad].
     turn_rad: Vector3<T>,
+    /// Its positions, fitted (receivers without velocity).
+    fit: SpanFit,
+    /// Sum of the directions of the specific force over blocks of [`LEVEL_BLOCK_S`], and
+    /// their number.
+    sum_dir: Vector3<T>,
+    blocks: u32,
 }
 
 impl<T: Scalar> Span<T> {
@@ -195,6 +225,9 @@ impl<T: Scalar> Span<T> {
             sum_dv: Vector3::zeros(),
             sum_dt: T::zero(),
             turn_rad: Vector3::zeros(),
+            fit: SpanFit::new(t0_s, &p0),
+            sum_dir: Vector3::zeros(),
+            blocks: 0,
         }
     }
 }
@@ -221,6 +254,37 @@ pub struct MotionAlign<T: Scalar> {
     /// The rotation increments [rad] and their intervals [s] summed over the consecutive
     /// level spans the vehicle stood still in (module docs).
     rest: Option<(Vector3<T>, T)>,
+    /// The velocity increments [m/s] and their intervals [s] summed into the block of
+    /// [`LEVEL_BLOCK_S`] being filled.
+    block: (Vector3<T>, T),
+    /// What the IMU and the fixes saw since the level was last found (the direction of
+    /// travel, module docs).
+    since_level: Option<SinceLevel<T>>,
+    /// The level carried by the gyros from the fix it was found at (module docs).
+    level_track: Option<LevelTrack<T>>,
+}
+
+/// The level found at a fix, carried to the later fixes by the gyros.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct LevelTrack<T: Scalar> {
+    /// The body's attitude from a level frame whose heading is its own at the fix.
+    q_b_l: UnitQuaternion<T>,
+    /// Time carried [s].
+    dt: T,
+    /// The gyro bias taken out [rad/s], and the 1-sigma of what is left of it [rad/s].
+    bias_rad_s: Vector3<T>,
+    bias_sigma_rad_s: T,
+}
+
+/// The body's travel since the level was found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SinceLevel<T: Scalar> {
+    /// Horizontal speed at the level's fix [m/s] and its 1-sigma [m/s].
+    speed_m_s: T,
+    speed_sigma_m_s: T,
+    /// Sum of the velocity increments since [m/s], body axes, and of their intervals [s].
+    sum_dv_b: Vector3<T>,
+    sum_dt: T,
 }
 
 impl<T: Scalar> MotionAlign<T> {
@@ -238,6 +302,9 @@ impl<T: Scalar> MotionAlign<T> {
             dt_since_fix_s: T::zero(),
             dv_since_fix_b: Vector3::zeros(),
             rest: None,
+            block: (Vector3::zeros(), T::zero()),
+            since_level: None,
+            level_track: None,
         }
     }
 
@@ -255,10 +322,30 @@ impl<T: Scalar> MotionAlign<T> {
         self.turn_since_fix_rad += inc.delta_theta_ib_b;
         self.dt_since_fix_s += inc.dt;
         self.dv_since_fix_b += inc.delta_v_ib_b;
+        if let Some(l) = &mut self.level_track {
+            let turn = inc.delta_theta_ib_b - l.bias_rad_s * inc.dt;
+            l.q_b_l *= attitude::rotation_vector_quat(&turn);
+            l.dt += inc.dt;
+        }
+        if let Some(s) = &mut self.since_level {
+            s.sum_dv_b += inc.delta_v_ib_b;
+            s.sum_dt += inc.dt;
+        }
+        self.block.0 += inc.delta_v_ib_b;
+        self.block.1 += inc.dt;
+        let block_dir = (self.block.1 >= T::c(LEVEL_BLOCK_S)).then(|| {
+            let dir = self.block.0 / self.block.0.norm();
+            self.block = (Vector3::zeros(), T::zero());
+            dir
+        });
         if let Some(span) = &mut self.span {
             span.sum_dv += inc.delta_v_ib_b;
             span.sum_dt += inc.dt;
             span.turn_rad += inc.delta_theta_ib_b;
+            if let Some(dir) = block_dir.filter(|d| d.iter().all(|x| x.finite())) {
+                span.sum_dir += dir;
+                span.blocks += 1;
+            }
         }
     }
 
@@ -307,8 +394,15 @@ impl<T: Scalar> MotionAlign<T> {
             self.span = None;
             self.level = None;
             self.rest = None;
+            self.since_level = None;
+            self.level_track = None;
             self.restart_base(fix);
             return None;
+        }
+        if vel.is_none()
+            && let Some(span) = &mut self.span
+        {
+            span.fit.add(t_s, pos);
         }
         let prev = match (vel, self.base) {
             (Some(_), _) => prev,
@@ -340,8 +434,14 @@ impl<T: Scalar> MotionAlign<T> {
             }
         };
         // The span's test takes one 1-sigma, the RMS over the axes.
-        self.level_over_span(t_s, pos, v, sv_ned.norm() / T::c(1.732_050_807_568_877_2));
-        let (roll, pitch, tilt_sigma) = self.level?;
+        self.level_over_span(
+            t_s,
+            pos,
+            v,
+            sv_ned.norm() / T::c(1.732_050_807_568_877_2),
+            vel.is_none(),
+        );
+        let (roll, pitch, tilt_sigma) = self.carried_level()?;
         // A difference is the mean velocity over its interval, half an interval behind the fix:
         // carried to the fix by the IMU's mean acceleration `C_b_n f + g` times `dt / 2`
         // (attitude from the level and the track), whose error, the tilt's and the heading's
@@ -377,14 +477,20 @@ impl<T: Scalar> MotionAlign<T> {
         // The antenna's lever-arm velocity in body axes; taken out in NED with the attitude
         // found from the track, twice: the track of the IMU's velocity, not the antenna's.
         let lever_v_b = rate_ib_b.cross(&self.lever_arm_b_m);
-        let mut q_b_n = attitude::from_euler(roll, pitch, v.y.patan2(v.x));
+        // The body's forward axis along the track, or against it when reversing.
+        let backwards = if self.reversing(roll, pitch, tilt_sigma, &v, sv) {
+            T::c(core::f64::consts::PI)
+        } else {
+            T::zero()
+        };
+        let mut q_b_n = attitude::from_euler(roll, pitch, v.y.patan2(v.x) + backwards);
         for _ in 0..2 {
             let v_imu = v - q_b_n * lever_v_b;
-            q_b_n = attitude::from_euler(roll, pitch, v_imu.y.patan2(v_imu.x));
+            q_b_n = attitude::from_euler(roll, pitch, v_imu.y.patan2(v_imu.x) + backwards);
         }
         let v = v - q_b_n * lever_v_b;
         let speed = (v.x * v.x + v.y * v.y).sqrt();
-        if !(speed >= self.config.min_speed_m_s) {
+        if !(speed >= self.config.min_speed_m_s && speed >= T::c(MIN_SPEED_SIGMAS) * sv) {
             return None;
         }
         let yaw_sigma = ((sv / speed) * (sv / speed)
@@ -451,6 +557,42 @@ impl<T: Scalar> MotionAlign<T> {
         Some((bias, Vector3::repeat(sigma)))
     }
 
+    /// Roll, pitch [rad] and their 1-sigma [rad] now: the level found at a fix, carried on by
+    /// the gyros (a rolling boat's level found 3 s before the fix that started it was 7.8 deg
+    /// off at the start, 4 sigma), its 1-sigma grown by the gyro bias left and the angle
+    /// random walk over the time carried.
+    fn carried_level(&self) -> Option<(T, T, T)> {
+        let (_, _, sigma) = self.level?;
+        let l = self.level_track?;
+        let (roll, pitch, _) = attitude::euler(&l.q_b_l);
+        let arw = self.config.arw_rad_per_sqrt_s;
+        let drift = l.bias_sigma_rad_s * l.dt;
+        Some((
+            roll,
+            pitch,
+            (sigma * sigma + drift * drift + arw * arw * l.dt).sqrt(),
+        ))
+    }
+
+    /// True when the body moves backwards along its track (module docs): since the level, the
+    /// fixes' speed `v` [m/s] (1-sigma `sv` [m/s] per axis) grew beyond doubt while the
+    /// accelerometers, levelled by `roll`, `pitch` [rad] (1-sigma `tilt_sigma` [rad]), felt the
+    /// body's forward velocity fall beyond doubt.
+    fn reversing(&self, roll: T, pitch: T, tilt_sigma: T, v: &Vector3<T>, sv: T) -> bool {
+        let Some(s) = &self.since_level else {
+            return false;
+        };
+        let gain = (v.x * v.x + v.y * v.y).sqrt() - s.speed_m_s;
+        let gain_sigma = (sv * sv + s.speed_sigma_m_s * s.speed_sigma_m_s).sqrt();
+        let forward = (attitude::from_euler(roll, pitch, T::zero()) * s.sum_dv_b).x;
+        let g = T::c(crate::earth::GAMMA_EQUATOR);
+        let forward_sigma = ((g * tilt_sigma).powi(2)
+            + self.config.accel_bias_mps2 * self.config.accel_bias_mps2)
+            .sqrt()
+            * s.sum_dt;
+        gain > T::c(3.0) * gain_sigma && forward < T::c(-3.0) * forward_sigma
+    }
+
     /// `fix` the start of the next position difference.
     fn restart_base(&mut self, fix: Fix<T>) {
         self.base = Some(fix);
@@ -461,8 +603,17 @@ impl<T: Scalar> MotionAlign<T> {
 
     /// The span's test at a fix of velocity `v` [m/s] (1-sigma `sv` [m/s]) at `t_s` [s]
     /// (module docs): the level when the span was quasi-static; a new span from this fix when
-    /// it turned, accelerated beyond doubt or grew too long.
-    fn level_over_span(&mut self, t_s: f64, pos: &GnssPosition<T>, v: Vector3<T>, sv: T) {
+    /// it turned, accelerated beyond doubt or grew too long. `positions_only`: the velocity was
+    /// differenced from positions, and the span's mean acceleration is taken from the fit of
+    /// all its positions once it has enough ([`SpanFit`]).
+    fn level_over_span(
+        &mut self,
+        t_s: f64,
+        pos: &GnssPosition<T>,
+        v: Vector3<T>,
+        sv: T,
+        positions_only: bool,
+    ) {
         let here = Span::at(t_s, *pos, (v, sv));
         let Some(span) = self.span.replace(here) else {
             return;
@@ -488,11 +639,26 @@ impl<T: Scalar> MotionAlign<T> {
         );
         let v_mid = (v + v0) * T::c(0.5);
         let turning = (earth.omega_ie_n() * T::c(2.0) + earth.omega_en_n(&v_mid)).cross(&v_mid);
-        let accel = ((v - v0) / t + turning).norm();
+        let fitted = span.fit.acceleration(t_s).filter(|_| positions_only);
+        let (accel, accel_sigma) = match fitted {
+            // The fit's horizontal acceleration and its Coriolis term, and the RMS of their
+            // two axes' 1-sigma.
+            Some(a) => {
+                let [n, e] = [0, 1].map(|k| a.accel_m_s2[k] + a.coriolis_m_s2[k]);
+                let [sn, se] = a.sigma_m_s2;
+                (
+                    T::c(libm::sqrt(n * n + e * e)),
+                    T::c(libm::sqrt(0.5 * (sn * sn + se * se))),
+                )
+            }
+            None => (
+                ((v - v0) / t + turning).norm(),
+                (sv * sv + sv0 * sv0).sqrt() / t,
+            ),
+        };
         if !accel.finite() {
             return;
         }
-        let accel_sigma = (sv * sv + sv0 * sv0).sqrt() / t;
         // The span's mean acceleration, as the GNSS knows it: its RMS with the noise.
         let accel_rms = (accel * accel + accel_sigma * accel_sigma).sqrt();
         if accel_rms <= c.max_accel_mps2 {
@@ -500,11 +666,26 @@ impl<T: Scalar> MotionAlign<T> {
             let g = f.norm();
             let roll = (-f.y).patan2(-f.z);
             let pitch = f.x.patan2((f.y * f.y + f.z * f.z).sqrt());
-            let sigma = (c.max_accel_mps2 * c.max_accel_mps2
+            // The body's tilt about its mean over the span: 1 - |mean direction|^2 is the
+            // mean square angle of the directions from their mean (small angles).
+            let scatter2 = if span.blocks >= 2 {
+                let mean = span.sum_dir / T::c(f64::from(span.blocks));
+                (T::one() - mean.norm_squared()).max(T::zero())
+            } else {
+                T::zero()
+            };
+            let sigma = ((c.max_accel_mps2 * c.max_accel_mps2
                 + c.accel_bias_mps2 * c.accel_bias_mps2)
-                .sqrt()
-                / g;
+                / (g * g)
+                + scatter2)
+                .sqrt();
             self.level = Some((roll, pitch, sigma));
+            self.since_level = Some(SinceLevel {
+                speed_m_s: (v.x * v.x + v.y * v.y).sqrt(),
+                speed_sigma_m_s: sv,
+                sum_dv_b: Vector3::zeros(),
+                sum_dt: T::zero(),
+            });
             // Still, or moving without a turn the GNSS can bound: only the first sums the gyro
             // bias (module docs).
             self.rest = if stood_still(&span.p0, pos) {
@@ -513,6 +694,23 @@ impl<T: Scalar> MotionAlign<T> {
             } else {
                 None
             };
+            // The gyros carry the level on from here: with the mean rate at rest taken out
+            // when known (Earth rate in, as the level turns with the Earth), else the
+            // configured bias's 1-sigma left in.
+            let (bias_rad_s, bias_sigma_rad_s) = match self.rest {
+                Some((turn, dt)) if dt >= T::c(MIN_REST_S) => {
+                    let arw = c.arw_rad_per_sqrt_s;
+                    let rock = T::c(REST_ROCKING_RAD) / dt;
+                    (turn / dt, (arw * arw / dt + rock * rock).sqrt())
+                }
+                _ => (Vector3::zeros(), c.gyro_bias_rad_s),
+            };
+            self.level_track = Some(LevelTrack {
+                q_b_l: attitude::from_euler(roll, pitch, T::zero()),
+                dt: T::zero(),
+                bias_rad_s,
+                bias_sigma_rad_s,
+            });
             return;
         }
         // Undecided: the span goes on (it is not quasi-static beyond doubt, nor too long).
@@ -599,6 +797,159 @@ mod tests {
         assert!(roll.abs() < 1e-9 && (pitch.to_degrees() - 2.0).abs() < 1e-9);
         assert!(s.sigma.velocity_ned_m_s.x < 1.0, "{:?}", s.sigma);
         assert!((s.state.v_eb_n.y - 10.0).abs() < 3.0 * s.sigma.velocity_ned_m_s.y);
+    }
+
+    /// Noise of about unit 1-sigma per fix and axis (three of [`noise`]'s draws summed).
+    fn gauss(k: u64, axis: u64) -> f64 {
+        noise(k, axis) + noise(k + 7_919, axis + 3) + noise(k + 104_729, axis + 6)
+    }
+
+    /// A car level at rest for `still_s` seconds, then driving east at `speed` [m/s], with
+    /// 10 Hz fixes of positions alone, 2 m of noise (a code receiver without velocity, as
+    /// KF-GINS's files hold); `None` when it never started within 60 s of driving.
+    fn start_on_code_fixes(still_s: u32, speed: f64) -> Option<(f64, MotionStart<f64>)> {
+        let mut m = MotionAlign::new(MotionAlignConfig::default(), Vector3::zeros());
+        let dt = 0.1;
+        for k in 0..u64::from((still_s + 60) * 10) {
+            let t = k as f64 * dt;
+            let moving_s = (t - f64::from(still_s)).max(0.0);
+            m.add_imu(&ImuIncrement::new([0.0; 3], [0.0, 0.0, -9.8 * dt], dt));
+            let mut at = fix(2.0 * gauss(k, 0), speed * moving_s + 2.0 * gauss(k, 1));
+            at.sigma_ned_m = Vector3::new(2.0, 2.0, 4.0);
+            if let Some(s) = m.add_fix(t, &at, None) {
+                return Some((t, s));
+            }
+        }
+        None
+    }
+
+    /// 2 m fixes at 10 Hz: the span's mean acceleration from the fit of all its positions
+    /// (0.05 m/s^2 over 10 s) finds a car standing 12 s level; two fixes a second apart
+    /// differ by 2.8 m/s of noise, and the span needed about 30 s still (none came).
+    #[test]
+    fn a_car_is_level_on_code_fixes_after_seconds() {
+        let (t, s) = start_on_code_fixes(12, 20.0).expect("level at rest, then a start");
+        assert!(t > 12.0, "started at {t} s, before the car moved");
+        let (roll, pitch, yaw) = s.state.euler();
+        assert!(roll.abs() < 1e-9 && pitch.abs() < 1e-9);
+        let yaw_err = yaw - core::f64::consts::FRAC_PI_2;
+        assert!(
+            yaw_err.abs() < 3.0 * s.sigma.attitude_rad.z,
+            "yaw {} deg off, 1-sigma {} deg",
+            yaw_err.to_degrees(),
+            s.sigma.attitude_rad.z.to_degrees()
+        );
+    }
+
+    /// A car standing still for a minute with 2 m fixes at 10 Hz is level, but never moving:
+    /// positions a second apart differ by 2.8 m/s of noise per axis, which crossed the 5 m/s
+    /// threshold within seconds (a start 150 deg off in heading, 1-sigma 30 deg).
+    #[test]
+    fn noise_is_not_a_track() {
+        assert_eq!(start_on_code_fixes(120, 0.0), None);
+    }
+
+    /// Level at rest with the receiver's velocity (0.05 m/s at 1 Hz), body forward north,
+    /// then accelerating at 2 m/s^2 along the body's `sign` x axis until the speed passes
+    /// the threshold; the start's heading error [rad] and 1-sigma [rad].
+    fn start_accelerating(sign: f64) -> (f64, f64) {
+        let mut m = levelled_at_rest(Vector3::zeros());
+        let (a, dt) = (2.0 * sign, 0.01);
+        let mut v = 0.0;
+        for k in 3..10 {
+            for _ in 0..100 {
+                m.add_imu(&ImuIncrement::new([0.0; 3], [a * dt, 0.0, -9.8 * dt], dt));
+                v += a * dt;
+            }
+            let vel = GnssVelocity {
+                v_ned_m_s: Vector3::new(v, 0.0, 0.0),
+                sigma_ned_m_s: Vector3::repeat(0.05),
+            };
+            if let Some(s) = m.add_fix(f64::from(k), &fix(0.0, 0.0), Some(&vel)) {
+                let (_, _, yaw) = s.state.euler();
+                return (yaw, s.sigma.attitude_rad.z);
+            }
+        }
+        panic!("no start");
+    }
+
+    /// A car reversing out of a parking space: its track points backwards, and the
+    /// accelerometers say so (was: started 180 deg off in heading with a 3 deg 1-sigma).
+    #[test]
+    fn a_reversing_start_faces_against_its_track() {
+        for sign in [1.0, -1.0] {
+            let (yaw_err, sigma) = start_accelerating(sign);
+            assert!(
+                yaw_err.abs() < 3.0 * sigma,
+                "driving {sign}: heading {} deg off, 1-sigma {} deg",
+                yaw_err.to_degrees(),
+                sigma.to_degrees()
+            );
+        }
+    }
+
+    /// Level at rest, then the body rolls by 8.6 deg (a boat in a wave) before the fix that
+    /// starts it: the level found before is carried on by the gyros (was: the level of its
+    /// fix, 8.6 deg off against a 1.8 deg 1-sigma).
+    #[test]
+    fn the_level_is_carried_to_the_start() {
+        let mut m = levelled_at_rest(Vector3::zeros());
+        let (rate, dt) = (0.1, 0.01);
+        let mut roll: f64 = 0.0;
+        for _ in 0..150 {
+            let f_b = [0.0, -9.8 * roll.sin() * dt, -9.8 * roll.cos() * dt];
+            m.add_imu(&ImuIncrement::new([rate * dt, 0.0, 0.0], f_b, dt));
+            roll += rate * dt;
+        }
+        let vel = GnssVelocity {
+            v_ned_m_s: Vector3::new(10.0, 0.0, 0.0),
+            sigma_ned_m_s: Vector3::repeat(0.05),
+        };
+        let s = m
+            .add_fix(3.5, &fix(10.0, 0.0), Some(&vel))
+            .expect("level and moving: a start");
+        let (r, _, _) = s.state.euler();
+        assert!(
+            (r - roll).abs() < 3.0 * s.sigma.attitude_rad.x,
+            "roll {} deg against {} deg, 1-sigma {} deg",
+            r.to_degrees(),
+            roll.to_degrees(),
+            s.sigma.attitude_rad.x.to_degrees()
+        );
+    }
+
+    /// A body standing still but rolling +-5 deg with an 8 s period, 0.5 m fixes at 1 Hz: each
+    /// span's level is its mean roll, and the level's 1-sigma holds the body's roll about it
+    /// at the span's last fix (was: the acceleration bound's 1.8 deg against errors of 5 deg).
+    #[test]
+    fn a_rolling_body_is_levelled_with_its_roll() {
+        let mut m = MotionAlign::new(MotionAlignConfig::default(), Vector3::zeros());
+        let (amplitude, period, dt) = (5f64.to_radians(), 8.0, 0.01);
+        let roll_at = |t: f64| amplitude * (2.0 * core::f64::consts::PI * t / period).sin();
+        let mut checked = 0;
+        for k in 0..6_000u64 {
+            let t = k as f64 * dt;
+            let roll = roll_at(t + 0.5 * dt);
+            let rate = (roll_at(t + dt) - roll_at(t)) / dt;
+            let f_b = [0.0, -9.8 * roll.sin() * dt, -9.8 * roll.cos() * dt];
+            m.add_imu(&ImuIncrement::new([rate * dt, 0.0, 0.0], f_b, dt));
+            if (k + 1) % 100 == 0 {
+                let at = fix(0.5 * noise(k, 0), 0.5 * noise(k, 1));
+                assert_eq!(m.add_fix(t + dt, &at, None), None);
+                if let Some((r, _, sigma)) = m.carried_level() {
+                    let err = r - roll_at(t + dt);
+                    assert!(
+                        err.abs() < 3.0 * sigma,
+                        "t {} s: roll {} deg off, 1-sigma {} deg",
+                        t + dt,
+                        err.to_degrees(),
+                        sigma.to_degrees()
+                    );
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 10, "levelled at {checked} fixes");
     }
 
     /// A car accelerating at 0.6 m/s^2 (its specific force tilted by 3.5 deg against gravity)
