@@ -157,6 +157,7 @@ pub fn read_gnss_assuming(
     } else {
         path
     };
+    crate::text_error::refuse_a_stream(path)?;
     let mut first = String::new();
     File::open(path)
         .map(BufReader::new)

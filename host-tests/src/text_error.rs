@@ -38,6 +38,25 @@ pub fn told_as(e: anyhow::Error, path: &Path, label: String) -> anyhow::Error {
     }
 }
 
+/// Refuses `path` when it is neither a regular file nor a folder (a pipe, a FIFO, a device):
+/// the readers open an input more than once (its format is told from its first bytes, then it
+/// is read from the start; `nav convert` reads it twice), and a stream read a second time
+/// starts where the first read stopped, so valid data were refused as damaged. A path that
+/// cannot be looked at is left to the open, which says why.
+pub fn refuse_a_stream(path: &Path) -> io::Result<()> {
+    match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() && !m.is_dir() => Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "{}: not a regular file (a pipe, FIFO or device): pipes are not supported, as \
+                 the file is read more than once; give a file (save the stream to one first)",
+                path.display()
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// `x` as a message shows it: `{}`, but in exponent form when very large or very small (`1e300`,
 /// not 301 digits).
 pub fn number_text(x: f64) -> String {

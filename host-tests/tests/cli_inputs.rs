@@ -32,3 +32,61 @@ fn the_ship_bench_with_ideal_sensors_prints_numbers() {
         assert!(worst < 1e-3, "{row}");
     }
 }
+
+/// `nav args` with `input` written to its standard input through a pipe.
+fn nav_with_stdin(args: &[&str], input: Vec<u8>) -> std::process::Output {
+    use std::io::Write as _;
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+        .args(args)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run nav");
+    let mut stdin = child.stdin.take().unwrap();
+    // A refusal closes the pipe before all is written: not this test's failure.
+    let writer = std::thread::spawn(move || {
+        let _ = stdin.write_all(&input);
+    });
+    let o = child.wait_with_output().expect("nav's output");
+    writer.join().unwrap();
+    o
+}
+
+/// A pipe as the IMU recording or the GNSS file: the format detection read its start, the
+/// reader then found the rest and blamed valid data ("expected the header row", "not a NAVIMU
+/// recording", "no data"). Refused now as what it is, nothing written.
+#[test]
+fn a_pipe_as_an_input_is_refused_as_a_pipe() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (bin, csv, out) = (path("imu.bin"), path("imu.csv"), path("out.bin"));
+    common::generated_recording(std::path::Path::new(&bin), "1");
+    ok(&["convert", "--in", &bin, "--out", &csv]);
+    for input in [&bin, &csv] {
+        let o = nav_with_stdin(
+            &["convert", "--in", "/dev/stdin", "--out", &out],
+            std::fs::read(input).unwrap(),
+        );
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(1), "{text}");
+        assert!(
+            text.contains("/dev/stdin: not a regular file")
+                && text.contains("pipes are not supported"),
+            "{text}"
+        );
+        assert!(!std::path::Path::new(&out).exists());
+    }
+    let gnss = "t_s,lat_deg,lon_deg,h_m,sigma_n_m,sigma_e_m,sigma_d_m\n0.5,45,7.5,150,1,1,2\n";
+    let o = nav_with_stdin(
+        &["convert", "--gnss", "--in", "/dev/stdin", "--out", &out],
+        gnss.as_bytes().to_vec(),
+    );
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("GNSS file /dev/stdin: not a regular file"),
+        "{text}"
+    );
+    assert!(!std::path::Path::new(&out).exists());
+}
