@@ -297,10 +297,26 @@ pub fn parse(text: &str, path: &Path, dir: &Path) -> Result<(KfGinsConfig, Vec<S
     }
     let deg = |v: [f64; 3]| v.map(f64::to_radians);
     let scaled = |v: [f64; 3], k: f64| v.map(|x| x * k);
+    let imu_path = c.file_path("imupath", raw.imupath, dir, &mut warnings)?;
+    let gnss_path = c.file_path("gnsspath", raw.gnsspath, dir, &mut warnings)?;
+    // One input from the current directory, the other beside the configuration: two data sets
+    // mixed (an unrelated imu.txt where the run started), each file valid on its own.
+    let here = |f: &Found| matches!(f, Found::Here | Found::HereAndBeside(_));
+    if here(&imu_path.1) && gnss_path.1 == Found::Beside
+        || imu_path.1 == Found::Beside && here(&gnss_path.1)
+    {
+        warnings.push(format!(
+            "{}: imupath {} and gnsspath {} were found in different folders (the current one, \
+             then the configuration's): check that they are one data set",
+            path.display(),
+            imu_path.0.display(),
+            gnss_path.0.display()
+        ));
+    }
     let config = KfGinsConfig {
-        imu_path: c.file_path("imupath", raw.imupath, dir)?,
-        gnss_path: c.file_path("gnsspath", raw.gnsspath, dir)?,
-        output_dir: c.path("outputpath", raw.outputpath, dir)?,
+        imu_path: imu_path.0,
+        gnss_path: gnss_path.0,
+        output_dir: c.path("outputpath", raw.outputpath, dir)?.0,
         imu_columns,
         imu_rate_hz,
         start_time_s,
@@ -451,29 +467,76 @@ impl Check<'_> {
         Ok(v)
     }
 
-    /// A path, resolved as KF-GINS would find it, else beside the configuration file.
-    fn path(&self, key: &str, value: Option<String>, dir: &Path) -> Result<PathBuf> {
+    /// A path, resolved as KF-GINS would find it, else beside the configuration file, and
+    /// where it was found.
+    fn path(&self, key: &str, value: Option<String>, dir: &Path) -> Result<(PathBuf, Found)> {
         let text = self.required(key, value, "a path")?;
         if text.is_empty() {
             bail!(self.key(key, "the path is empty"));
         }
         let p = PathBuf::from(text);
+        if p.is_absolute() {
+            return Ok((p, Found::Absolute));
+        }
         let beside = dir.join(&p);
-        Ok(if p.is_absolute() || p.exists() || !beside.exists() {
-            p
-        } else {
-            beside
+        Ok(match (p.exists(), beside.exists()) {
+            (true, true) if !same_file(&p, &beside) => (p, Found::HereAndBeside(beside)),
+            (true, _) => (p, Found::Here),
+            (false, true) => (beside, Found::Beside),
+            (false, false) => (p, Found::Nowhere),
         })
     }
 
     /// [`Self::path`] of a file to read: a folder is refused naming the key (it was read as
-    /// a text file: ".: line 1: Is a directory (os error 21)").
-    fn file_path(&self, key: &str, value: Option<String>, dir: &Path) -> Result<PathBuf> {
-        let p = self.path(key, value, dir)?;
+    /// a text file: ".: line 1: Is a directory (os error 21)"); a relative path found both
+    /// here and, another file, beside the configuration is warned about in `warnings`.
+    fn file_path(
+        &self,
+        key: &str,
+        value: Option<String>,
+        dir: &Path,
+        warnings: &mut Vec<String>,
+    ) -> Result<(PathBuf, Found)> {
+        let (p, found) = self.path(key, value, dir)?;
         if p.is_dir() {
             bail!(self.key(key, format_args!("{} is a folder, not a file", p.display())));
         }
-        Ok(p)
+        if let Found::HereAndBeside(other) = &found {
+            warnings.push(self.key(
+                key,
+                format_args!(
+                    "{} is read from the current folder, as KF-GINS reads it; the \
+                     configuration's folder has another ({})",
+                    p.display(),
+                    other.display()
+                ),
+            ));
+        }
+        Ok((p, found))
+    }
+}
+
+/// Where a relative path of the configuration was found (module docs).
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum Found {
+    /// Absolute: no folder to choose.
+    Absolute,
+    /// Relative to the current folder.
+    Here,
+    /// Relative to the current folder, and another file of that name is beside the
+    /// configuration (its path).
+    HereAndBeside(PathBuf),
+    /// Relative to the configuration file's folder.
+    Beside,
+    /// In neither (left relative to the current folder; opening it names it).
+    Nowhere,
+}
+
+/// True when `a` and `b` name one file (both canonical paths equal).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
     }
 }
 

@@ -291,6 +291,14 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
         .nav
         .clone()
         .unwrap_or_else(|| c.output_dir.join(KF_GINS_NAV_NAME));
+    // The relative paths are looked for in two folders (kf_gins_config's module docs): the
+    // files the run reads, as found.
+    eprintln!(
+        "KF-GINS files: imupath {}, gnsspath {}, trajectory {}",
+        c.imu_path.display(),
+        c.gnss_path.display(),
+        out.display()
+    );
     let named = [
         Some(("the trajectory (--out)", out.as_path())),
         outputs.imu_err.as_deref().map(|p| ("--imu-err", p)),

@@ -90,3 +90,80 @@ fn a_pipe_as_an_input_is_refused_as_a_pipe() {
     );
     assert!(!std::path::Path::new(&out).exists());
 }
+
+/// `nav kf-gins` run from a folder that has a file of `imupath`'s relative name read that one
+/// and `gnsspath` from the configuration's folder, silently: two data sets mixed. The files
+/// read are named now, and the mixing warned about.
+#[test]
+fn kf_gins_names_its_files_and_warns_of_two_folders() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = host_tests::filter_bench::generate(
+        &dir.path().join("set"),
+        &host_tests::filter_bench::FilterBenchOptions {
+            seconds: 20.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let yaml = std::fs::read_to_string(&data.config).unwrap();
+    // Relative names, as a user writes them.
+    let name_of = |key: &str| {
+        let line = yaml.lines().find(|l| l.starts_with(key)).unwrap();
+        let path = line.split('"').nth(1).unwrap();
+        let name = std::path::Path::new(path).file_name().unwrap();
+        (line.to_owned(), name.to_str().unwrap().to_owned())
+    };
+    let (imu_line, imu_name) = name_of("imupath:");
+    let (gnss_line, gnss_name) = name_of("gnsspath:");
+    let relative = yaml
+        .replace(&imu_line, &format!("imupath: \"{imu_name}\""))
+        .replace(&gnss_line, &format!("gnsspath: \"{gnss_name}\""));
+    std::fs::write(&data.config, relative).unwrap();
+    // Another folder with the first half of the IMU file under its name.
+    let here = dir.path().join("here");
+    std::fs::create_dir(&here).unwrap();
+    let imu_text = std::fs::read_to_string(data.config.with_file_name(&imu_name)).unwrap();
+    let lines: Vec<&str> = imu_text.lines().collect();
+    std::fs::write(
+        here.join(&imu_name),
+        lines[..lines.len() / 2].join("\n") + "\n",
+    )
+    .unwrap();
+    let run = |cwd: &std::path::Path| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+            .current_dir(cwd)
+            .arg("kf-gins")
+            .arg(&data.config)
+            .arg("--out")
+            .arg(&data.out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", output_text(&o));
+        (
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+            output_text(&o),
+        )
+    };
+    let (stderr, text) = run(&here);
+    let beside = data.config.with_file_name(&gnss_name);
+    assert!(
+        stderr.contains(&format!(
+            "KF-GINS files: imupath {imu_name}, gnsspath {}",
+            beside.display()
+        )),
+        "{stderr}"
+    );
+    assert!(
+        text.contains("were found in different folders") && text.contains("has another"),
+        "{text}"
+    );
+    // From the configuration's folder: one folder, no warning.
+    let (stderr, text) = run(data.config.parent().unwrap());
+    assert!(
+        stderr.contains(&format!(
+            "KF-GINS files: imupath {imu_name}, gnsspath {gnss_name}"
+        )),
+        "{stderr}"
+    );
+    assert!(!text.contains("warning"), "{text}");
+}
