@@ -179,8 +179,12 @@ pub struct SourceCounters {
     pub missed: u32,
     /// Samples flagged NaN or infinite.
     pub non_finite: u32,
-    /// Samples flagged for a zero, negative or implausible interval.
+    /// Samples flagged for an implausible interval (a short increment after a gap, a jump).
     pub bad_interval: u32,
+    /// Samples flagged because their time is not after the previous record's (a repeated
+    /// time tag, a swapped pair, a clock that stepped back): out of time order, as the
+    /// navigator calls a time not after the last navigated sample's.
+    pub out_of_order: u32,
 }
 
 /// What a run did.

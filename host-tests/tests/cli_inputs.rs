@@ -167,3 +167,45 @@ fn kf_gins_names_its_files_and_warns_of_two_folders() {
     );
     assert!(!text.contains("warning"), "{text}");
 }
+
+/// A repeated time tag and the second of a swapped pair were counted as "bad interval", the
+/// README's "time out of order" staying 0 (the rest of a step back was counted there).
+#[test]
+fn repeated_and_swapped_time_tags_are_counted_out_of_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (bin, csv) = (path("imu.bin"), path("imu.csv"));
+    common::generated_recording(std::path::Path::new(&bin), "12");
+    ok(&["convert", "--in", &bin, "--out", &csv]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let write = |name: &str, lines: &[&str]| {
+        std::fs::write(path(name), lines.join("\n") + "\n").unwrap();
+        path(name)
+    };
+    let mut repeated = lines.clone();
+    repeated.insert(4501, lines[4500]);
+    let mut swapped = lines.clone();
+    swapped.swap(4500, 4501);
+    let out = path("out.csv");
+    let summary = |imu: &str| {
+        let text = ok(&common::replay_args(imu, &out, &[]));
+        text.lines()
+            .find(|l| l.starts_with("samples "))
+            .unwrap()
+            .to_owned()
+    };
+    let line = summary(&write("repeated.csv", &repeated));
+    assert!(
+        line.contains("flagged 1 (non-finite 0, bad interval 0, time out of order 1)"),
+        "{line}"
+    );
+    // The first of the pair comes 2 periods after its predecessor with one period's increment
+    // and the one after the pair too (bad intervals, docs/recording-format.md); the second is
+    // behind the first.
+    let line = summary(&write("swapped.csv", &swapped));
+    assert!(
+        line.contains("flagged 3 (non-finite 0, bad interval 2, time out of order 1)"),
+        "{line}"
+    );
+}
