@@ -75,6 +75,27 @@ impl Drop for Registered {
     }
 }
 
+/// The longest file name the usual file systems take (`NAME_MAX`) [bytes].
+const NAME_MAX_BYTES: usize = 255;
+/// Random characters of a temporary name.
+const TEMP_RAND_CHARS: usize = 6;
+/// The end of a temporary name.
+const TEMP_SUFFIX: &str = ".part";
+
+/// The start of the temporary name of an output named `name`: `.NAME.`, `NAME` cut (at a
+/// character's end) so the whole temporary name fits [`NAME_MAX_BYTES`] when the output's
+/// name does (an output name of 243 to 255 bytes was refused: "File name too long" at the
+/// temporary file's path).
+fn temp_prefix(name: &str) -> String {
+    let mut end = name
+        .len()
+        .min(NAME_MAX_BYTES - 2 - TEMP_RAND_CHARS - TEMP_SUFFIX.len());
+    while !name.is_char_boundary(end) {
+        end -= 1;
+    }
+    format!(".{}.", &name[..end])
+}
+
 /// Writes `path` through `body`: a temporary `.NAME.*.part` beside it, flushed, synced and
 /// renamed over `path` only when `body` succeeded. On any error the temporary file is removed
 /// and `path` is as it was.
@@ -114,9 +135,12 @@ impl AtomicFile {
         let name = path
             .file_name()
             .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-        let prefix = format!(".{name}.");
+        let prefix = temp_prefix(&name);
         let mut builder = tempfile::Builder::new();
-        builder.prefix(&prefix).suffix(".part");
+        builder
+            .prefix(&prefix)
+            .rand_bytes(TEMP_RAND_CHARS)
+            .suffix(TEMP_SUFFIX);
         // open(2) applies the umask; tempfile's own default is 0600.
         #[cfg(unix)]
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
@@ -312,6 +336,27 @@ pub fn refuse_same_file(inputs: &[&Path], output: &Path) -> io::Result<()> {
 mod tests {
     use super::*;
     use std::io::Write;
+
+    /// An output name the file system takes is written whatever its length, its temporary
+    /// name cut to fit (one of 246 to 255 characters was refused for its `.part` name).
+    #[test]
+    fn an_output_name_up_to_the_longest_is_written() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in [
+            "a".repeat(250) + ".csv",
+            "a".to_owned() + &"é".repeat(125) + ".csv",
+        ] {
+            assert!(
+                name.len() >= 254 && name.len() <= NAME_MAX_BYTES,
+                "{}",
+                name.len()
+            );
+            let path = dir.path().join(&name);
+            write(&path, |w| w.write_all(b"row\n")).unwrap();
+            assert_eq!(std::fs::read_to_string(&path).unwrap(), "row\n");
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
 
     #[test]
     fn a_failed_write_leaves_the_old_file_and_no_temporary() {
