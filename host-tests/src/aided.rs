@@ -416,10 +416,11 @@ impl<T: Scalar, F: FnMut(&AidedRow) -> Result<()>> AidedSink<T> for CsvRows<F> {
 }
 
 /// Refuses a run in which not one GNSS fix lies within the IMU data's time span
-/// `imu_span_us` (first and last sample end [us]; `None`: no sample): the two files' time tags
-/// are on different clocks (GNSS seconds of week against a recording that starts at 0, or
-/// milliseconds for seconds), and the run would be free-inertial while looking aided. A file
-/// without fixes, or with some in the span, passes.
+/// `imu_span_us` ([`nav_core::gap::data_span_us`]; `None`: no sample): the run would be
+/// free-inertial while looking aided. Far from the data, the two files' time tags are on
+/// different clocks ([`nav_core::gap::on_another_clock`]: GNSS seconds of week against a
+/// recording that starts at 0, or milliseconds for seconds), and the message says so; near
+/// it, it names the nearest fix. A file without fixes, or with some in the span, passes.
 pub fn check_fixes_in_span(
     fix_times_s: impl IntoIterator<Item = f64>,
     imu_span_us: Option<(u64, u64)>,
@@ -435,16 +436,32 @@ pub fn check_fixes_in_span(
     if times.iter().any(|t| (a_s..=b_s).contains(t)) {
         return Ok(());
     }
-    Err(anyhow!(
-        "no GNSS fix within the IMU data's time span: the {} fixes are at {} .. {} s, the IMU \
-         samples at {} .. {} s: the GNSS time tags are on another clock than the recording's \
-         (e.g. GNSS seconds of week against a recording that starts at 0); give the fixes the \
-         recording's time",
+    use nav_core::number::Number;
+    let spans = format!(
+        "the {} fixes are at {} .. {} s, the IMU data cover {} .. {} s",
         times.len(),
-        nav_core::number::Number(*first),
-        nav_core::number::Number(*last),
-        nav_core::number::Number(a_s),
-        nav_core::number::Number(b_s)
+        Number(*first),
+        Number(*last),
+        Number(a_s),
+        Number(b_s)
+    );
+    let to_us = |t: f64| crate::text_error::seconds_to_ns(t).map_or(u64::MAX, |ns| ns / 1000);
+    if nav_core::gap::on_another_clock((to_us(*first), to_us(*last)), (a_us, b_us)) {
+        return Err(anyhow!(
+            "no GNSS fix within the IMU data's time span: {spans}: the GNSS time tags are on \
+             another clock than the recording's (e.g. GNSS seconds of week against a recording \
+             that starts at 0); give the fixes the recording's time"
+        ));
+    }
+    let (nearest, how) = if *last < a_s {
+        (*last, format!("{} s before", Number(a_s - last)))
+    } else {
+        (*first, format!("{} s after", Number(first - b_s)))
+    };
+    Err(anyhow!(
+        "no GNSS fix within the IMU data's time span: {spans}; the nearest fix, at {} s, is {how} \
+         it: the run would be free-inertial",
+        Number(nearest)
     ))
 }
 
@@ -482,7 +499,8 @@ pub fn run<T: Scalar, E: fmt::Display>(
     let mut span_us: Option<(u64, u64)> = None;
     while let Some(s) = samples().map_err(|e| anyhow!("{e}"))? {
         report.samples += 1;
-        span_us = Some((span_us.map_or(s.t_us, |(a, _)| a), s.t_us));
+        let first_us = || nav_core::gap::data_span_us(s.t_us, s.increment.dt.to_f64(), 0).0;
+        span_us = Some((span_us.map_or_else(first_us, |(a, _)| a), s.t_us));
         // Fixes due at or before this sample go in first (held by the sequencer until it).
         while let Some(input) = inputs.get(next_fix) {
             let Some(input) = *input else {

@@ -209,3 +209,72 @@ fn repeated_and_swapped_time_tags_are_counted_out_of_order() {
         "{line}"
     );
 }
+
+/// A fix at the recording's first tick (2.5 ms before the first sample's end) was "on another
+/// clock"; it lies in the data's time now. Fixes near the data but outside it are named by
+/// the nearest; only fixes far from it are said to be on another clock.
+#[test]
+fn fixes_just_outside_the_data_are_not_on_another_clock() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let sim = path("sim");
+    ok(&[
+        "sim",
+        "land-vehicle",
+        "--out",
+        &sim,
+        "--seconds",
+        "20",
+        "--gnss-rate",
+        "1",
+        "--grade",
+        "fog",
+    ]);
+    let gnss = std::fs::read_to_string(format!("{sim}/gnss.csv")).unwrap();
+    let mut lines = gnss.lines();
+    let header = lines.next().unwrap();
+    let first = lines.next().unwrap();
+    assert!(first.starts_with("0,"), "{first}");
+    let (imu, out) = (format!("{sim}/imu.bin"), path("out.csv"));
+    let replay = |t_s: &str| {
+        let fix = path(&format!("fix_{t_s}.csv"));
+        let row = first.replacen('0', t_s, 1);
+        std::fs::write(&fix, format!("{header}\n{row}\n")).unwrap();
+        nav(&[
+            "replay",
+            "--imu",
+            &imu,
+            "--gnss",
+            &fix,
+            "--imu-noise",
+            "fog",
+            "--init-pos",
+            "45,7.5,250",
+            "--init-vel",
+            "0,0,0",
+            "--init-att",
+            "0,0,0",
+            "--out",
+            &out,
+        ])
+    };
+    let o = replay("0");
+    let text = output_text(&o);
+    assert!(o.status.success(), "{text}");
+    assert!(
+        text.contains("WARNING: no GNSS position fix was used") && !text.contains("another clock"),
+        "{text}"
+    );
+    let o = replay("21");
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("the nearest fix, at 21 s, is 1 s after it")
+            && !text.contains("another clock"),
+        "{text}"
+    );
+    let o = replay("345600");
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(text.contains("on another clock"), "{text}");
+}
