@@ -933,7 +933,7 @@ fn kf_gins_runs_a_configuration_as_it_is() {
     );
     assert!(
         text.contains("warning: imudatarate 170 Hz, but the epochs of ")
-            && text.contains(" come at 200.0 Hz on average"),
+            && text.contains(" come every 0.005 s (200 Hz, the median interval"),
         "{text}"
     );
     let r = host_tests::filter_bench::run(&data).unwrap();

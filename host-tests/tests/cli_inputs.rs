@@ -278,3 +278,55 @@ fn fixes_just_outside_the_data_are_not_on_another_clock() {
     assert_eq!(o.status.code(), Some(1), "{text}");
     assert!(text.contains("on another clock"), "{text}");
 }
+
+/// `nav kf-gins` compared `imudatarate` with the average rate of the epochs, a gap's time
+/// included: a 7 s hole in 400 Hz data read as 353 Hz and blamed `imudatarate`. The median
+/// interval is the file's rate; a declared rate off it by more than 0.1 % is said (a 401 Hz
+/// `imudatarate` for a 400 Hz file ran silently).
+#[test]
+fn kf_gins_judges_imudatarate_by_the_median_interval() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = host_tests::filter_bench::generate(
+        dir.path(),
+        &host_tests::filter_bench::FilterBenchOptions {
+            seconds: 20.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let yaml = std::fs::read_to_string(&data.config).unwrap();
+    let imu_line = yaml.lines().find(|l| l.starts_with("imupath:")).unwrap();
+    let imu = imu_line.split('"').nth(1).unwrap();
+    let text = std::fs::read_to_string(imu).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    // 7 s of the 200 Hz epochs dropped.
+    let holed = [&lines[..1000], &lines[2400..]].concat().join("\n") + "\n";
+    let holed_path = dir.path().join("holed.txt");
+    std::fs::write(&holed_path, holed).unwrap();
+    let run = |name: &str, yaml: String| {
+        let config = dir.path().join(name);
+        std::fs::write(&config, yaml).unwrap();
+        let out = dir.path().join("out.nav");
+        ok(&[
+            "kf-gins",
+            config.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let with_hole = yaml.replace(imu_line, &format!("imupath: \"{}\"", holed_path.display()));
+    let text = run("holed.yaml", with_hole);
+    assert!(
+        text.contains("WARNING: 7.") && !text.contains("imudatarate"),
+        "{text}"
+    );
+    let text = run(
+        "off.yaml",
+        yaml.replace("imudatarate: 200\n", "imudatarate: 200.3\n"),
+    );
+    assert!(
+        text.contains("warning: imudatarate 200.3 Hz, but the epochs of ")
+            && text.contains("come every 0.005 s (200 Hz"),
+        "{text}"
+    );
+}
