@@ -909,6 +909,14 @@ fn bench_filter(dir: Option<PathBuf>) -> Result<()> {
     use host_tests::filter_bench::{FilterBenchOptions, generate, run};
     let temp = tempfile::tempdir()?;
     let dir = dir.unwrap_or_else(|| temp.path().to_path_buf());
+    // A file gave "creating FILE: File exists (os error 17)".
+    if dir.exists() && !dir.is_dir() {
+        anyhow::bail!(
+            "--dir {} is a file: nav bench filter writes a folder (the KF-GINS data set: IMU and \
+             GNSS text, configuration, truth, result); give a folder's path (created if missing)",
+            dir.display()
+        );
+    }
     let o = FilterBenchOptions::default();
     println!(
         "generating {} s of {} at {} Hz with 1 Hz RTK fixes ({:?} m) in {} ...",
@@ -985,6 +993,19 @@ fn bench_consistency(
         .find(|c| !(1..=CONSISTENCY_CELLS).contains(*c))
     {
         anyhow::bail!("--cells {cell}: the table has cells 1 to {CONSISTENCY_CELLS}");
+    }
+    // The seeds wrapped silently past u64::MAX (a table of seeds 18446744073709551615–0).
+    let seeds = (runs as u64).checked_mul(choice.families as u64);
+    if seeds
+        .and_then(|n| choice.first_seed.checked_add(n.saturating_sub(1)))
+        .is_none()
+    {
+        anyhow::bail!(
+            "--first-seed {} + --runs {runs} x --families {} overflows the seeds (at most {})",
+            choice.first_seed,
+            choice.families,
+            u64::MAX
+        );
     }
     let (lo9, hi9) = average_chi2_bounds(9.0, runs);
     let (lo3, hi3) = average_chi2_bounds(3.0, runs);
@@ -1086,10 +1107,9 @@ fn bench_consistency(
         };
         let mut inside = Vec::new();
         for family in 0..choice.families as u64 {
-            let first = choice
-                .first_seed
-                .wrapping_add(family.wrapping_mul(runs as u64));
-            let seeds = format!("{first}–{}", first.wrapping_add(runs as u64 - 1));
+            // Checked above: no overflow.
+            let first = choice.first_seed + family * runs as u64;
+            let seeds = format!("{first}–{}", first + (runs as u64 - 1));
             let r = consistency_cell(
                 &Case {
                     seed: first,
@@ -1553,8 +1573,11 @@ fn gnss_options(
 }
 
 /// The `--set KEY=VALUE` pairs of `nav sim`.
+/// The `--set KEY=VALUE` pairs; a key given twice is refused, as `nav config` refuses one
+/// (the last one won silently).
 fn key_values(set: &[String]) -> Result<Vec<(&str, f64)>> {
-    set.iter()
+    let pairs = set
+        .iter()
         .map(|kv| {
             let (k, v) = kv
                 .split_once('=')
@@ -1565,7 +1588,13 @@ fn key_values(set: &[String]) -> Result<Vec<(&str, f64)>> {
                 .with_context(|| format!("--set {kv:?}: the value is not a number"))?;
             Ok((k.trim(), v))
         })
-        .collect()
+        .collect::<Result<Vec<_>>>()?;
+    for (i, (k, v)) in pairs.iter().enumerate() {
+        if let Some((_, first)) = pairs[..i].iter().find(|(key, _)| key == k) {
+            anyhow::bail!("--set {k} is given twice ({first} and {v}): give each parameter once");
+        }
+    }
+    Ok(pairs)
 }
 
 fn sim_formats(f: SimFormat) -> host_tests::simulate::Formats {
