@@ -12,6 +12,7 @@ use std::io;
 use std::path::{Path, PathBuf};
 
 use crate::truth_csv::MAX_YAW_DEG;
+use nav_core::number::Shown;
 
 /// The largest time the recording clock holds [s]: `u64::MAX` nanoseconds (about 584 years).
 /// The binary format's `t_ns` and the samples' `t_us` derive from it.
@@ -381,7 +382,7 @@ impl fmt::Display for TextErrorKind {
                 if let Some(column) = optional {
                     write!(f, " (optionally followed by ',{column}')")?;
                 }
-                write!(f, ", found '{found}'")
+                write!(f, ", found '{}'", Shown(found))
             }
             Self::HeaderMissingColumn {
                 column,
@@ -389,7 +390,8 @@ impl fmt::Display for TextErrorKind {
                 found,
             } => write!(
                 f,
-                "the header has no column {column}: expected the columns '{expected}', found '{found}'"
+                "the header has no column {column}: expected the columns '{expected}', found '{}'",
+                Shown(found)
             ),
             Self::NoData { columns } => write!(
                 f,
@@ -417,15 +419,21 @@ impl fmt::Display for TextErrorKind {
                 "expected {expected} columns as in the header, found {found}"
             ),
             Self::NotANumber { column, found } => {
-                write!(f, "column {column}: expected a number, found '{found}'")
+                write!(
+                    f,
+                    "column {column}: expected a number, found '{}'",
+                    Shown(found)
+                )
             }
             Self::NotFinite { column, found } => write!(
                 f,
-                "column {column}: expected a finite number, found '{found}'"
+                "column {column}: expected a finite number, found '{}'",
+                Shown(found)
             ),
             Self::Infinite { column, found } => write!(
                 f,
-                "column {column}: expected a finite displacement or NaN, found '{found}'"
+                "column {column}: expected a finite displacement or NaN, found '{}'",
+                Shown(found)
             ),
             Self::PartlyMissing { column } => write!(
                 f,
@@ -433,7 +441,8 @@ impl fmt::Display for TextErrorKind {
             ),
             Self::BadTime { found } => write!(
                 f,
-                "column t_s: expected a finite, non-negative time in seconds, found '{found}'"
+                "column t_s: expected a finite, non-negative time in seconds, found '{}'",
+                Shown(found)
             ),
             Self::NegativeTime { t_s } => write!(
                 f,

@@ -330,3 +330,34 @@ fn kf_gins_judges_imudatarate_by_the_median_interval() {
         "{text}"
     );
 }
+
+/// A NUL byte inside a value was printed raw: invisible, the message "got 45.5" refused what
+/// looked valid. Control characters are shown escaped.
+#[test]
+fn a_nul_byte_in_a_value_is_shown() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let config = path("nul.txt");
+    std::fs::write(&config, "lat-deg = 45.5\0\n").unwrap();
+    let o = nav(&["config", &config, "--out", &path("c.bin")]);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("lat-deg: takes a finite number, got 45.5\\u{0}"),
+        "{text}"
+    );
+    let (bin, csv) = (path("imu.bin"), path("imu.csv"));
+    common::generated_recording(std::path::Path::new(&bin), "1");
+    ok(&["convert", "--in", &bin, "--out", &csv]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+    lines[5] = lines[5].replacen(',', ",\0", 2).replacen(",\0", ",", 1);
+    std::fs::write(&csv, lines.join("\n") + "\n").unwrap();
+    let o = nav(&common::replay_args(&csv, &path("out.csv"), &[]));
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("line 6: column") && text.contains("found '\\u{0}"),
+        "{text}"
+    );
+}
