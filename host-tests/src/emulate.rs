@@ -1075,8 +1075,7 @@ impl EmulateJob<'_> {
         let mut e = self.preset.errors();
         let mut given: [Option<Given>; Quantity::COUNT] = Default::default();
         if let Some(path) = self.errors_file {
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("reading {}", path.display()))?;
+            let text = crate::text_error::read_text(path)?;
             let place = format!("error file {}", path.display());
             e.apply_text_noting(&text, |g| {
                 given[g.quantity as usize] = Some(Given {

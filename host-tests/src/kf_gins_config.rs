@@ -40,7 +40,7 @@
 //! negative value), an empty path. YAML syntax and type errors carry the parser's line and
 //! column. Keys KF-GINS does not read are ignored and listed in the returned warnings.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use nav_core::number::Number;
 use serde::Deserialize;
 use serde::de::IgnoredAny;
@@ -181,7 +181,7 @@ const PER_SQRT_H: f64 = 1.0 / 60.0;
 /// Reads and checks KF-GINS's configuration file `path`: the configuration in SI units and one
 /// warning per key that KF-GINS does not read.
 pub fn load(path: &Path) -> Result<(KfGinsConfig, Vec<String>)> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+    let text = crate::text_error::read_text(path)?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -192,8 +192,22 @@ pub fn load(path: &Path) -> Result<(KfGinsConfig, Vec<String>)> {
 /// Parses configuration `text`; `path` names it in messages, relative paths are resolved
 /// against the current directory or `dir` (module docs).
 pub fn parse(text: &str, path: &Path, dir: &Path) -> Result<(KfGinsConfig, Vec<String>)> {
-    let raw: RawConfig = serde_saphyr::from_str(text)
-        .map_err(|e| anyhow::anyhow!("{}: not a KF-GINS configuration: {e}", path.display()))?;
+    let raw: RawConfig = serde_saphyr::from_str(text).map_err(|e| {
+        let inner = match &e {
+            serde_saphyr::Error::WithSnippet { error, .. } => error.as_ref(),
+            e => e,
+        };
+        match inner {
+            // The parser's own words name its API ("use from_str_multiple ...").
+            serde_saphyr::Error::MultipleDocuments { location, .. } => anyhow::anyhow!(
+                "{}: line {}: a second YAML document (after '---'): a KF-GINS configuration \
+                 is one document",
+                path.display(),
+                location.line()
+            ),
+            _ => anyhow::anyhow!("{}: not a KF-GINS configuration: {e}", path.display()),
+        }
+    })?;
     let c = Check { path };
     let mut warnings: Vec<String> = raw
         .unknown
@@ -756,6 +770,33 @@ odolever: [ 1, 2, 3 ]
         let m = msg("imudatarate: 200", "imudatarate: fast");
         assert!(m.starts_with("kf.yaml: not a KF-GINS configuration"), "{m}");
         assert!(m.contains("line 13"), "{m}");
+    }
+
+    /// A second YAML document was refused in the parser's words ("use from_str_multiple or
+    /// from_str_multiple_with_options"); a file not in UTF-8 with "stream did not contain
+    /// valid UTF-8", no line. Both in a user's terms now, with the line.
+    #[test]
+    fn a_second_document_and_a_file_not_in_utf8_are_told_plainly() {
+        let m = format!(
+            "{:#}",
+            parse_text(&format!("{EXAMPLE}---\nimudatarate: 200\n")).unwrap_err()
+        );
+        assert!(m.contains("a second YAML document (after '---')"), "{m}");
+        assert!(!m.contains("from_str"), "{m}");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("kf.yaml");
+        let mut bytes = EXAMPLE.as_bytes().to_vec();
+        let at = EXAMPLE.find("imudatalen").unwrap();
+        bytes.insert(at, 0xe9);
+        std::fs::write(&path, bytes).unwrap();
+        let line = 1 + EXAMPLE[..at].matches('\n').count();
+        let m = format!("{:#}", load(&path).unwrap_err());
+        assert!(
+            m.contains(&format!(
+                "kf.yaml: line {line}: not UTF-8 text (byte {at}, 0xe9)"
+            )),
+            "{m}"
+        );
     }
 
     #[test]

@@ -39,6 +39,23 @@ pub fn told_as(e: anyhow::Error, path: &Path, label: String) -> anyhow::Error {
     }
 }
 
+/// The text of the whole file `path`; not UTF-8, refused with the line and byte where it stops
+/// being (`std`'s "stream did not contain valid UTF-8" named neither). Errors start with the
+/// path.
+pub fn read_text(path: &Path) -> anyhow::Result<String> {
+    let bytes = std::fs::read(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let line = 1 + bytes[..at].iter().filter(|&&b| b == b'\n').count();
+        anyhow::anyhow!(
+            "{}: line {line}: not UTF-8 text (byte {at}, 0x{:02x}): save the file as UTF-8",
+            path.display(),
+            bytes[at]
+        )
+    })
+}
+
 /// Refuses `path` when it is neither a regular file nor a folder (a pipe, a FIFO, a device):
 /// the readers open an input more than once (its format is told from its first bytes, then it
 /// is read from the start; `nav convert` reads it twice), and a stream read a second time

@@ -556,8 +556,7 @@ impl ReplayArgs {
             None => ImuCalibration::default(),
             Some(path) => {
                 host_tests::atomic::refuse_same_file(&[path], &self.out)?;
-                let text = std::fs::read_to_string(path)
-                    .with_context(|| format!("reading {}", path.display()))?;
+                let text = host_tests::text_error::read_text(path)?;
                 ImuCalibration::parse(&text).map_err(|e| {
                     anyhow::anyhow!("--calibration {}: {}", path.display(), e.in_text(&text))
                 })?
