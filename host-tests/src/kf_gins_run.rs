@@ -342,7 +342,23 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
         config.zero_motion = None;
     }
     let seq = sequencer::<f64>(&config, &AidedStart::Given(Box::new(start(&c))))?;
-    let file = File::open(&c.imu_path)
+    crate::text_error::refuse_a_stream(&c.imu_path)
+        .map_err(|e| anyhow::anyhow!("IMU file (imupath) {e}"))?;
+    let mut file = File::open(&c.imu_path)
+        .with_context(|| format!("IMU file {} (imupath)", c.imu_path.display()))?;
+    // A binary recording read as text failed with "line 1: expected 7 numbers ..., found 1".
+    let mut magic = [0_u8; 6];
+    if std::io::Read::read_exact(&mut file, &mut magic).is_ok()
+        && magic == hal_adapters::recording::MAGIC[..6]
+    {
+        bail!(
+            "IMU file {} (imupath): a binary IMU recording (it starts with the NAVIMU magic of \
+             docs/recording-format.md), not KF-GINS's IMU text: give the text file (7 or 8 \
+             numbers a line), or replay the recording with nav replay",
+            c.imu_path.display()
+        );
+    }
+    std::io::Seek::rewind(&mut file)
         .with_context(|| format!("IMU file {} (imupath)", c.imu_path.display()))?;
     let mut rows = ImuReader::new(BufReader::with_capacity(1 << 20, file), &c.imu_path)
         .with_columns(c.imu_columns);

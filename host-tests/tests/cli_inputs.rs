@@ -361,3 +361,35 @@ fn a_nul_byte_in_a_value_is_shown() {
         "{text}"
     );
 }
+
+/// A binary recording as `imupath` was read as text: "line 1: expected 7 numbers ..., found
+/// 1". Named as what it is.
+#[test]
+fn a_binary_recording_as_imupath_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = host_tests::filter_bench::generate(
+        &dir.path().join("set"),
+        &host_tests::filter_bench::FilterBenchOptions {
+            seconds: 5.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let bin = dir.path().join("imu.bin");
+    common::generated_recording(&bin, "1");
+    let yaml = std::fs::read_to_string(&data.config).unwrap();
+    let imu_line = yaml.lines().find(|l| l.starts_with("imupath:")).unwrap();
+    let config = dir.path().join("bin.yaml");
+    std::fs::write(
+        &config,
+        yaml.replace(imu_line, &format!("imupath: \"{}\"", bin.display())),
+    )
+    .unwrap();
+    let o = nav(&["kf-gins", config.to_str().unwrap()]);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("(imupath): a binary IMU recording (it starts with the NAVIMU magic"),
+        "{text}"
+    );
+}
