@@ -332,6 +332,40 @@ pub fn refuse_same_file(inputs: &[&Path], output: &Path) -> io::Result<()> {
     Ok(())
 }
 
+/// Refuses two outputs that name one file (the later would replace the earlier), under any
+/// name: a symbolic link is written through to its target (`crate::atomic`).
+pub fn refuse_shared_outputs(outputs: &[(&str, &Path)]) -> io::Result<()> {
+    // An existing file (or link) resolved; else the folder canonicalised and the name as
+    // given (a folder that does not exist: the path as given).
+    let key = |p: &Path| {
+        if let Ok(file) = p.canonicalize() {
+            return (
+                file.parent().map(ToOwned::to_owned),
+                file.file_name().map(ToOwned::to_owned),
+            );
+        }
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
+        match dir.map_or_else(|| Path::new(".").canonicalize(), Path::canonicalize) {
+            Ok(dir) => (Some(dir), p.file_name().map(ToOwned::to_owned)),
+            Err(_) => (Some(p.to_owned()), None),
+        }
+    };
+    for (i, (a_name, a)) in outputs.iter().enumerate() {
+        for (b_name, b) in &outputs[i + 1..] {
+            if key(a) == key(b) {
+                return Err(io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    format!(
+                        "{a_name} and {b_name} name the same file {}: each output needs its own",
+                        b.display()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -356,6 +390,25 @@ mod tests {
             assert_eq!(std::fs::read_to_string(&path).unwrap(), "row\n");
         }
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    /// An output that is a link to another output is that file: refused, not written twice
+    /// (the 1-sigma rows replaced the trajectory, reported as written).
+    #[test]
+    fn an_output_linked_to_another_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let nav = dir.path().join("a.nav");
+        let link = dir.path().join("link.txt");
+        std::fs::write(&nav, "old\n").unwrap();
+        std::os::unix::fs::symlink("a.nav", &link).unwrap();
+        let e = refuse_shared_outputs(&[("the trajectory (--out)", &nav), ("--std", &link)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("name the same file"), "{e}");
+        // Two files, one not there yet: not the same.
+        let other = dir.path().join("std.txt");
+        refuse_shared_outputs(&[("the trajectory (--out)", &nav), ("--std", &other)]).unwrap();
+        refuse_shared_outputs(&[("--std", &other), ("the trajectory (--out)", &nav)]).unwrap();
     }
 
     #[test]

@@ -1142,12 +1142,8 @@ impl EmulateJob<'_> {
         crate::atomic::refuse_same_file(&inputs, self.out)?;
         if let Some(path) = self.errors_out {
             crate::atomic::refuse_same_file(&inputs, path)?;
-            crate::atomic::refuse_same_file(&[self.out], path)?;
-            anyhow::ensure!(
-                !same_path(path, self.out),
-                "--errors-out {} is --out: refusing to write both into one file",
-                path.display()
-            );
+            // Was "output E is the input E" when --out existed.
+            crate::atomic::refuse_shared_outputs(&[("--out", self.out), ("--errors-out", path)])?;
         }
         let (errors, given) = self.errors_given()?;
         let truth = crate::truth_csv::read(self.truth)?;
@@ -1199,13 +1195,6 @@ impl EmulateJob<'_> {
 }
 
 /// Whether `a` and `b` name the same path (not yet existing files compared as written).
-fn same_path(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => a == b,
-    }
-}
-
 /// Writes the error series as CSV: `t_s`, `phi_{n,e,d}_rad`, `dv_{n,e,d}_mps`,
 /// `dr_{n,e,d}_m`.
 pub fn write_errors_csv(path: &Path, errors: &[ErrorSample]) -> anyhow::Result<()> {

@@ -254,35 +254,6 @@ impl AidedSink<f64> for NavRows {
     }
 }
 
-/// Refuses two outputs that name one file (the later would replace the earlier), under any
-/// name: a symbolic link is written through to its target (`crate::atomic`).
-fn refuse_shared_outputs(outputs: &[(&str, &Path)]) -> Result<()> {
-    // An existing file (or link) resolved; else the folder canonicalised (it exists: checked
-    // before) and the name as given.
-    let key = |p: &Path| {
-        if let Ok(file) = p.canonicalize() {
-            return (
-                file.parent().map(ToOwned::to_owned),
-                file.file_name().map(ToOwned::to_owned),
-            );
-        }
-        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
-        let dir = dir.map_or_else(|| Path::new(".").canonicalize(), Path::canonicalize);
-        (dir.ok(), p.file_name().map(ToOwned::to_owned))
-    };
-    for (i, (a_name, a)) in outputs.iter().enumerate() {
-        for (b_name, b) in &outputs[i + 1..] {
-            if key(a) == key(b) {
-                bail!(
-                    "{a_name} and {b_name} name the same file {}: each output needs its own",
-                    b.display()
-                );
-            }
-        }
-    }
-    Ok(())
-}
-
 /// Runs the configuration at `config_path`; the trajectory goes to `outputs.nav`, or to
 /// KF-GINS's `outputpath/KF_GINS_Navresult.nav`, and the IMU error and 1-sigma files where
 /// `outputs` asks.
@@ -330,7 +301,7 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
             );
         }
     }
-    refuse_shared_outputs(&named)?;
+    crate::atomic::refuse_shared_outputs(&named)?;
     crate::gnss_file::refuse_the_imu_recording(&c.gnss_path, &c.imu_path)
         .context("gnsspath and imupath")?;
     let fixes: Vec<GnssFix> = gnss::read_gnss(&c.gnss_path).map_err(|e| {
@@ -502,28 +473,4 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
         store_s,
         sigma_rms,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// An output that is a link to another output is that file: refused, not written twice
-    /// (the 1-sigma rows replaced the trajectory, reported as written).
-    #[test]
-    fn an_output_linked_to_another_is_refused() {
-        let dir = tempfile::tempdir().unwrap();
-        let nav = dir.path().join("a.nav");
-        let link = dir.path().join("link.txt");
-        std::fs::write(&nav, "old\n").unwrap();
-        std::os::unix::fs::symlink("a.nav", &link).unwrap();
-        let e = refuse_shared_outputs(&[("the trajectory (--out)", &nav), ("--std", &link)])
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("name the same file"), "{e}");
-        // Two files, one not there yet: not the same.
-        let other = dir.path().join("std.txt");
-        refuse_shared_outputs(&[("the trajectory (--out)", &nav), ("--std", &other)]).unwrap();
-        refuse_shared_outputs(&[("--std", &other), ("the trajectory (--out)", &nav)]).unwrap();
-    }
 }

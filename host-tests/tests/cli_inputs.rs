@@ -393,3 +393,31 @@ fn a_binary_recording_as_imupath_is_named() {
         "{text}"
     );
 }
+
+/// `emulate --out E --errors-out E` with E from an earlier run said "output E is the input E":
+/// it is the other output. Worded as kf-gins words it.
+#[test]
+fn two_emulator_outputs_in_one_file_are_named_as_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let sim = path("sim");
+    ok(&["sim", "static", "--seconds", "2", "--out", &sim]);
+    let (truth, out) = (format!("{sim}/truth.csv"), path("e.csv"));
+    std::fs::write(&out, "an earlier run\n").unwrap();
+    let o = nav(&[
+        "emulate",
+        "--truth",
+        &truth,
+        "--out",
+        &out,
+        "--errors-out",
+        &out,
+    ]);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("--out and --errors-out name the same file") && !text.contains("input"),
+        "{text}"
+    );
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "an earlier run\n");
+}
