@@ -30,7 +30,9 @@
 //! **Paths.** KF-GINS opens its paths as written, relative to the directory it runs in. A
 //! relative path is resolved the same way (against the current directory) when that file or
 //! folder exists, else against the configuration file's directory when it exists there, else
-//! left relative to the current directory (opening it then names it).
+//! left relative to the current directory (opening it then names it). `nav kf-gins` prints the
+//! paths it reads, and warns when `imupath` and `gnsspath` were found in different folders or
+//! an input is found in both (two different files).
 //!
 //! **Checks** (each message names the file and the key): a missing required key, an array that
 //! is not 3 numbers, a value that is not finite, a negative standard deviation or noise density,
