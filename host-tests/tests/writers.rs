@@ -360,7 +360,7 @@ fn emulate_refuses_an_output_that_is_its_truth() {
         "--errors-out",
         s(&out),
     ]);
-    assert_refused(&o, "is --out");
+    assert_refused(&o, "--out and --errors-out name the same file");
     assert!(!out.exists());
 }
 
