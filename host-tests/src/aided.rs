@@ -289,7 +289,8 @@ pub struct AidedReport {
     pub flagged: u64,
     /// Increments refused by nav-core's limits.
     pub rejected: u64,
-    /// Samples whose time is not after the last navigated one's (`nav_core::gap`), skipped.
+    /// Samples whose time is not after the last navigated one's (`nav_core::gap`) or the
+    /// previous one's ([`AidedSample::behind`]), skipped.
     pub out_of_order: u64,
     /// Fixes whose time tag is not on the IMU clock.
     pub bad_time_tags: u64,
@@ -334,6 +335,9 @@ pub struct AidedSample<T: Scalar> {
     pub increment: ImuIncrement<T>,
     /// Not usable (its source's flags).
     pub unusable: bool,
+    /// Of the unusable: its time is not after the previous sample's (the source's bad
+    /// interval of no length), counted out of time order.
+    pub behind: bool,
     /// A gap precedes it.
     pub gap: bool,
 }
@@ -349,6 +353,7 @@ pub fn sample_of<T: Scalar>(s: &ImuSample) -> AidedSample<T> {
             T::of_f32(s.dt_s),
         ),
         unusable: s.flags.unusable_cause().is_some(),
+        behind: s.flags.unusable_cause() == Some(SampleFlags::BAD_INTERVAL) && s.dt_s <= 0.0,
         gap: s.flags.contains(SampleFlags::GAP),
     }
 }
@@ -520,7 +525,13 @@ pub fn run<T: Scalar, E: fmt::Display>(
         }
         first = false;
         if s.unusable {
-            report.flagged += 1;
+            // A time not after the previous sample's is out of time order (the README's
+            // rule), as the navigation's own are below.
+            if s.behind {
+                report.out_of_order += 1;
+            } else {
+                report.flagged += 1;
+            }
             report.lost.note(s.t_us, None);
             seq.restart_increments();
             continue;

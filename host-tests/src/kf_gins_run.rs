@@ -400,6 +400,8 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
                 t_us: (row.t_s * 1e6).round() as u64,
                 increment: ImuIncrement::new(row.delta_theta_ib_b, row.delta_v_ib_b, dt),
                 unusable: short,
+                // The reader refuses a time that does not increase.
+                behind: false,
                 gap,
             }));
         }
