@@ -893,6 +893,7 @@ fn refusals_name_the_option_the_key_and_the_cause() {
 /// parameter `speed` the scenario does not have (the value was checked before the key); a
 /// `--set` key given twice kept the last (`nav config` refuses one); `bench filter --dir FILE`
 /// said "File exists"; `align-bench lasergyro --data DIR` said "line 1: Is a directory";
+/// `sim --gnss-nan 2 --gnss-nan 2` made one fix NaN, silently;
 /// `bench consistency --first-seed u64::MAX` wrapped its seeds to 0.
 #[test]
 fn options_are_refused_by_what_they_name() {
@@ -913,6 +914,23 @@ fn options_are_refused_by_what_they_name() {
     assert!(
         text.contains("--set seconds is given twice (5 and 6)"),
         "{text}"
+    );
+    refused(
+        &[
+            "sim",
+            "static",
+            "--seconds",
+            "5",
+            "--out",
+            &sim,
+            "--gnss-rate",
+            "1",
+            "--gnss-nan",
+            "2",
+            "--gnss-nan",
+            "2",
+        ],
+        &["--gnss-nan 2 is given twice"],
     );
     refused(
         &["bench", "filter", "--dir", &file],

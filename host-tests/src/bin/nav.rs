@@ -1550,7 +1550,11 @@ fn gnss_options(
             final_offset_ned_m: [r[2], r[3], r[4]],
         });
     }
-    for t in &a.gnss_nan {
+    for (i, t) in a.gnss_nan.iter().enumerate() {
+        // Listed twice, one fix made NaN once: not the receiver asked for.
+        if a.gnss_nan[..i].contains(t) {
+            anyhow::bail!("--gnss-nan {t} is given twice: give each fix's time once");
+        }
         outliers.push(Outlier::NaN { t_s: *t });
     }
     Ok(GnssSimOptions {
