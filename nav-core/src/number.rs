@@ -54,7 +54,7 @@ fn plain(x: f64) -> bool {
 
 /// A text from a file as a message shows it: control characters written as escapes (`\t`,
 /// `\u{0}`, `\u{1b}`), so that the message shows what the file holds (a NUL inside a number was
-/// printed raw, invisible: "found '1.2<NUL>45e-7'" read as a valid number).
+/// printed raw, invisible: `found '1.2<NUL>45e-7'` read as a valid number).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Shown<'a>(pub &'a str);
 
