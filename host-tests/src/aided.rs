@@ -145,10 +145,16 @@ pub struct LostImuTime {
     /// The data's end not navigated ([`Self::finish`]): its length [s] and the last navigated
     /// sample's time [s] (nothing follows it to bridge to: not in [`Self::gaps`]).
     pub tail: Option<(f64, f64)>,
+    /// The largest step back of the time tags (a sample's end before the last navigated
+    /// one's) [s], and the time it stepped back to [s].
+    pub step_back: Option<(f64, f64)>,
 }
 
 /// A lost span shorter than this is not reported [s] (rounding of the time tags).
 const LOST_TOLERANCE_S: f64 = 1e-4;
+
+/// A GPS week [s]: time tags in seconds of week step back by it at a rollover.
+const GPS_WEEK_S: f64 = 604_800.0;
 
 impl LostImuTime {
     /// One sample ending at `t_us` [us]: navigated over `navigated_dt_s` [s], or not (`None`).
@@ -156,6 +162,14 @@ impl LostImuTime {
         let first = *self.first_us.get_or_insert(t_us);
         let Some(dt_s) = navigated_dt_s else {
             self.latest_us = Some(self.latest_us.map_or(t_us, |l| l.max(t_us)));
+            if let Some(navigated_us) = self.navigated_us
+                && t_us < navigated_us
+            {
+                let back_s = (navigated_us - t_us) as f64 * 1e-6;
+                if self.step_back.is_none_or(|(b, _)| back_s > b) {
+                    self.step_back = Some((back_s, t_us as f64 * 1e-6));
+                }
+            }
             return;
         };
         self.latest_us = Some(t_us);
@@ -244,7 +258,20 @@ impl LostImuTime {
                  ends at t = {from_s:.3} s"
             )
         });
-        let lines: Vec<String> = [aligning, self.navigation_warning(), tail]
+        // Within a second of a week: seconds of week restarting at 0 (was only "the last
+        // 30 s were not navigated", no word of why).
+        let rollover = self
+            .step_back
+            .filter(|(back_s, _)| (back_s - GPS_WEEK_S).abs() < 1.0)
+            .map(|(back_s, to_s)| {
+                format!(
+                    "WARNING: the time tags stepped back by {back_s:.3} s (to t = {to_s:.3} s): \
+                     a GPS week rollover (seconds of week restarting at 0)? The samples after \
+                     it are out of time order; give the times on one clock (add {GPS_WEEK_S} \
+                     s after the rollover)"
+                )
+            });
+        let lines: Vec<String> = [aligning, self.navigation_warning(), tail, rollover]
             .into_iter()
             .flatten()
             .collect();
@@ -685,6 +712,32 @@ mod tests {
         );
         assert!(w.contains("the solution ends at t = 100.000 s"), "{w}");
         assert!(!w.contains("bridged"), "{w}");
+    }
+
+    /// Time tags in seconds of week restarting at 0 (a GPS week rollover): the tail was "not
+    /// navigated", no word of why; the step back is named as a rollover.
+    #[test]
+    fn a_step_back_of_a_week_is_named_a_rollover() {
+        let t = 604_799_997_500;
+        let mut l = LostImuTime::default();
+        l.note(t, Some(P_S));
+        l.note(0, None);
+        for _ in 0..399 {
+            l.out_of_order(P_S);
+        }
+        l.finish();
+        let w = l.warning().unwrap();
+        assert!(
+            w.contains("the time tags stepped back by 604799.99")
+                && w.contains("(to t = 0.000 s): a GPS week rollover"),
+            "{w}"
+        );
+        // A step back of a minute is not one.
+        let mut l = LostImuTime::default();
+        l.note(t, Some(P_S));
+        l.note(t - 60_000_000, None);
+        l.finish();
+        assert!(l.warning().is_none_or(|w| !w.contains("rollover")), "{l:?}");
     }
 
     /// A second of records missing, the first after it unusable; unusable samples at the start
