@@ -125,9 +125,16 @@ impl Fixes {
         Ok(())
     }
 
-    /// The next fix if it is due at a sample ending at `t_us` [us] (its time at or before it).
-    pub fn due(&mut self, t_us: u64) -> Result<Option<GnssFixInput<f32>>, GnssFileError> {
-        let start = *self.data_start_us.get_or_insert(t_us);
+    /// The next fix if it is due at a sample ending at `t_us` [us] over `dt_s` [s] (its time
+    /// at or before it).
+    pub fn due(
+        &mut self,
+        t_us: u64,
+        dt_s: f32,
+    ) -> Result<Option<GnssFixInput<f32>>, GnssFileError> {
+        let start = *self
+            .data_start_us
+            .get_or_insert_with(|| nav_core::gap::data_span_us(t_us, f64::from(dt_s), t_us).0);
         match self.next {
             Some(f) if f.t_us <= t_us => {
                 self.advance()?;
@@ -143,11 +150,10 @@ impl Fixes {
         total - self.read + u32::from(self.next.is_some())
     }
 
-    /// The fixes' span and the IMU data's (the first sample's time to `last_sample_us`) [us]
-    /// when the file has fixes and not one of them lies within the data's span: the two files'
-    /// time tags are on different clocks (GNSS seconds of week against a recording that starts
-    /// at 0), and the run was free-inertial while looking aided (the harness refuses the
-    /// same, `host_tests::aided::check_fixes_in_span`).
+    /// The fixes' span and the IMU data's (the start of the first sample's interval to
+    /// `last_sample_us`, [`nav_core::gap::data_span_us`]) [us] when the file has fixes and not
+    /// one of them lies within the data's span: the run was free-inertial while looking aided
+    /// (the harness refuses the same, `host_tests::aided::check_fixes_in_span`).
     pub fn none_in_span(&self, last_sample_us: u64) -> Option<[(u64, u64); 2]> {
         let start = self.data_start_us?;
         let file = self.file_span_us?;

@@ -476,6 +476,9 @@ pub struct ReplayStats {
     pub non_finite: u32,
     /// Samples flagged [`SampleFlags::BAD_INTERVAL`].
     pub bad_interval: u32,
+    /// Of [`Self::bad_interval`], the samples whose time is not after the previous record's
+    /// (a repeated time tag, a swapped pair, a clock that stepped back): out of time order.
+    pub not_after_previous: u32,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -595,6 +598,7 @@ impl<R: Read> Replay<R> {
             (delta_ns * 1e-9) as f32
         } else {
             flags |= SampleFlags::BAD_INTERVAL;
+            self.stats.not_after_previous = self.stats.not_after_previous.saturating_add(1);
             0.0
         };
         if !record

@@ -147,10 +147,16 @@ pub struct LostImuTime {
     /// The data's end not navigated ([`Self::finish`]): its length [s] and the last navigated
     /// sample's time [s] (nothing follows it to bridge to: not in [`Self::gaps`]).
     pub tail: Option<(f64, f64)>,
+    /// The largest step back of the time tags (a sample's end before the last navigated
+    /// one's) [s], and the time it stepped back to [s].
+    pub step_back: Option<(f64, f64)>,
 }
 
 /// A lost span shorter than this is not reported [s] (rounding of the time tags).
 const LOST_TOLERANCE_S: f64 = 1e-4;
+
+/// A GPS week [s]: time tags in seconds of week step back by it at a rollover.
+const GPS_WEEK_S: f64 = 604_800.0;
 
 impl LostImuTime {
     /// One sample ending at `t_us` [us]: navigated over `navigated_dt_s` [s], or not (`None`).
@@ -158,6 +164,14 @@ impl LostImuTime {
         let first = *self.first_us.get_or_insert(t_us);
         let Some(dt_s) = navigated_dt_s else {
             self.latest_us = Some(self.latest_us.map_or(t_us, |l| l.max(t_us)));
+            if let Some(navigated_us) = self.navigated_us
+                && t_us < navigated_us
+            {
+                let back_s = (navigated_us - t_us) as f64 * 1e-6;
+                if self.step_back.is_none_or(|(b, _)| back_s > b) {
+                    self.step_back = Some((back_s, t_us as f64 * 1e-6));
+                }
+            }
             return;
         };
         self.latest_us = Some(t_us);
@@ -246,7 +260,20 @@ impl LostImuTime {
                  ends at t = {from_s:.3} s"
             )
         });
-        let lines: Vec<String> = [aligning, self.navigation_warning(), tail]
+        // Within a second of a week: seconds of week restarting at 0 (was only "the last
+        // 30 s were not navigated", no word of why).
+        let rollover = self
+            .step_back
+            .filter(|(back_s, _)| (back_s - GPS_WEEK_S).abs() < 1.0)
+            .map(|(back_s, to_s)| {
+                format!(
+                    "WARNING: the time tags stepped back by {back_s:.3} s (to t = {to_s:.3} s): \
+                     a GPS week rollover (seconds of week restarting at 0)? The samples after \
+                     it are out of time order; give the times on one clock (add {GPS_WEEK_S} \
+                     s after the rollover)"
+                )
+            });
+        let lines: Vec<String> = [aligning, self.navigation_warning(), tail, rollover]
             .into_iter()
             .flatten()
             .collect();
@@ -291,7 +318,8 @@ pub struct AidedReport {
     pub flagged: u64,
     /// Increments refused by nav-core's limits.
     pub rejected: u64,
-    /// Samples whose time is not after the last navigated one's (`nav_core::gap`), skipped.
+    /// Samples whose time is not after the last navigated one's (`nav_core::gap`) or the
+    /// previous one's ([`AidedSample::behind`]), skipped.
     pub out_of_order: u64,
     /// Fixes whose time tag is not on the IMU clock.
     pub bad_time_tags: u64,
@@ -384,6 +412,9 @@ pub struct AidedSample<T: Scalar> {
     pub increment: ImuIncrement<T>,
     /// Not usable (its source's flags).
     pub unusable: bool,
+    /// Of the unusable: its time is not after the previous sample's (the source's bad
+    /// interval of no length), counted out of time order.
+    pub behind: bool,
     /// A gap precedes it.
     pub gap: bool,
 }
@@ -399,6 +430,7 @@ pub fn sample_of<T: Scalar>(s: &ImuSample) -> AidedSample<T> {
             T::of_f32(s.dt_s),
         ),
         unusable: s.flags.unusable_cause().is_some(),
+        behind: s.flags.unusable_cause() == Some(SampleFlags::BAD_INTERVAL) && s.dt_s <= 0.0,
         gap: s.flags.contains(SampleFlags::GAP),
     }
 }
@@ -466,10 +498,11 @@ impl<T: Scalar, F: FnMut(&AidedRow) -> Result<()>> AidedSink<T> for CsvRows<F> {
 }
 
 /// Refuses a run in which not one GNSS fix lies within the IMU data's time span
-/// `imu_span_us` (first and last sample end [us]; `None`: no sample): the two files' time tags
-/// are on different clocks (GNSS seconds of week against a recording that starts at 0, or
-/// milliseconds for seconds), and the run would be free-inertial while looking aided. A file
-/// without fixes, or with some in the span, passes.
+/// `imu_span_us` ([`nav_core::gap::data_span_us`]; `None`: no sample): the run would be
+/// free-inertial while looking aided. Far from the data, the two files' time tags are on
+/// different clocks ([`nav_core::gap::on_another_clock`]: GNSS seconds of week against a
+/// recording that starts at 0, or milliseconds for seconds), and the message says so; near
+/// it, it names the nearest fix. A file without fixes, or with some in the span, passes.
 pub fn check_fixes_in_span(
     fix_times_s: impl IntoIterator<Item = f64>,
     imu_span_us: Option<(u64, u64)>,
@@ -485,16 +518,32 @@ pub fn check_fixes_in_span(
     if times.iter().any(|t| (a_s..=b_s).contains(t)) {
         return Ok(());
     }
-    Err(anyhow!(
-        "no GNSS fix within the IMU data's time span: the {} fixes are at {} .. {} s, the IMU \
-         samples at {} .. {} s: the GNSS time tags are on another clock than the recording's \
-         (e.g. GNSS seconds of week against a recording that starts at 0); give the fixes the \
-         recording's time",
+    use nav_core::number::Number;
+    let spans = format!(
+        "the {} fixes are at {} .. {} s, the IMU data cover {} .. {} s",
         times.len(),
-        nav_core::number::Number(*first),
-        nav_core::number::Number(*last),
-        nav_core::number::Number(a_s),
-        nav_core::number::Number(b_s)
+        Number(*first),
+        Number(*last),
+        Number(a_s),
+        Number(b_s)
+    );
+    let to_us = |t: f64| crate::text_error::seconds_to_ns(t).map_or(u64::MAX, |ns| ns / 1000);
+    if nav_core::gap::on_another_clock((to_us(*first), to_us(*last)), (a_us, b_us)) {
+        return Err(anyhow!(
+            "no GNSS fix within the IMU data's time span: {spans}: the GNSS time tags are on \
+             another clock than the recording's (e.g. GNSS seconds of week against a recording \
+             that starts at 0); give the fixes the recording's time"
+        ));
+    }
+    let (nearest, how) = if *last < a_s {
+        (*last, format!("{} s before", Number(a_s - last)))
+    } else {
+        (*first, format!("{} s after", Number(first - b_s)))
+    };
+    Err(anyhow!(
+        "no GNSS fix within the IMU data's time span: {spans}; the nearest fix, at {} s, is {how} \
+         it: the run would be free-inertial",
+        Number(nearest)
     ))
 }
 
@@ -532,7 +581,8 @@ pub fn run<T: Scalar, E: fmt::Display>(
     let mut span_us: Option<(u64, u64)> = None;
     while let Some(s) = samples().map_err(|e| anyhow!("{e}"))? {
         report.samples += 1;
-        span_us = Some((span_us.map_or(s.t_us, |(a, _)| a), s.t_us));
+        let first_us = || nav_core::gap::data_span_us(s.t_us, s.increment.dt.to_f64(), 0).0;
+        span_us = Some((span_us.map_or_else(first_us, |(a, _)| a), s.t_us));
         // Fixes due at or before this sample go in first (held by the sequencer until it).
         while let Some(input) = inputs.get(next_fix) {
             let Some(input) = *input else {
@@ -552,7 +602,13 @@ pub fn run<T: Scalar, E: fmt::Display>(
         }
         first = false;
         if s.unusable {
-            report.flagged += 1;
+            // A time not after the previous sample's is out of time order (the README's
+            // rule), as the navigation's own are below.
+            if s.behind {
+                report.out_of_order += 1;
+            } else {
+                report.flagged += 1;
+            }
             report.lost.note(s.t_us, None);
             seq.restart_increments();
             continue;
@@ -709,6 +765,32 @@ mod tests {
         );
         assert!(w.contains("the solution ends at t = 100.000 s"), "{w}");
         assert!(!w.contains("bridged"), "{w}");
+    }
+
+    /// Time tags in seconds of week restarting at 0 (a GPS week rollover): the tail was "not
+    /// navigated", no word of why; the step back is named as a rollover.
+    #[test]
+    fn a_step_back_of_a_week_is_named_a_rollover() {
+        let t = 604_799_997_500;
+        let mut l = LostImuTime::default();
+        l.note(t, Some(P_S));
+        l.note(0, None);
+        for _ in 0..399 {
+            l.out_of_order(P_S);
+        }
+        l.finish();
+        let w = l.warning().unwrap();
+        assert!(
+            w.contains("the time tags stepped back by 604799.99")
+                && w.contains("(to t = 0.000 s): a GPS week rollover"),
+            "{w}"
+        );
+        // A step back of a minute is not one.
+        let mut l = LostImuTime::default();
+        l.note(t, Some(P_S));
+        l.note(t - 60_000_000, None);
+        l.finish();
+        assert!(l.warning().is_none_or(|w| !w.contains("rollover")), "{l:?}");
     }
 
     /// A second of records missing, the first after it unusable; unusable samples at the start

@@ -322,6 +322,7 @@ pub fn recording_samples<T: Scalar>(
                 T::c(dt_s),
             ),
             unusable: false,
+            behind: false,
             gap: false,
         }))
     }

@@ -75,6 +75,27 @@ impl Drop for Registered {
     }
 }
 
+/// The longest file name the usual file systems take (`NAME_MAX`) [bytes].
+const NAME_MAX_BYTES: usize = 255;
+/// Random characters of a temporary name.
+const TEMP_RAND_CHARS: usize = 6;
+/// The end of a temporary name.
+const TEMP_SUFFIX: &str = ".part";
+
+/// The start of the temporary name of an output named `name`: `.NAME.`, `NAME` cut (at a
+/// character's end) so the whole temporary name fits [`NAME_MAX_BYTES`] when the output's
+/// name does (an output name of 243 to 255 bytes was refused: "File name too long" at the
+/// temporary file's path).
+fn temp_prefix(name: &str) -> String {
+    let mut end = name
+        .len()
+        .min(NAME_MAX_BYTES - 2 - TEMP_RAND_CHARS - TEMP_SUFFIX.len());
+    while !name.is_char_boundary(end) {
+        end -= 1;
+    }
+    format!(".{}.", &name[..end])
+}
+
 /// Writes `path` through `body`: a temporary `.NAME.*.part` beside it, flushed, synced and
 /// renamed over `path` only when `body` succeeded. On any error the temporary file is removed
 /// and `path` is as it was.
@@ -114,9 +135,12 @@ impl AtomicFile {
         let name = path
             .file_name()
             .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-        let prefix = format!(".{name}.");
+        let prefix = temp_prefix(&name);
         let mut builder = tempfile::Builder::new();
-        builder.prefix(&prefix).suffix(".part");
+        builder
+            .prefix(&prefix)
+            .rand_bytes(TEMP_RAND_CHARS)
+            .suffix(TEMP_SUFFIX);
         // open(2) applies the umask; tempfile's own default is 0600.
         #[cfg(unix)]
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
@@ -308,10 +332,84 @@ pub fn refuse_same_file(inputs: &[&Path], output: &Path) -> io::Result<()> {
     Ok(())
 }
 
+/// Refuses two outputs that name one file (the later would replace the earlier), under any
+/// name: a symbolic link is written through to its target (`crate::atomic`).
+pub fn refuse_shared_outputs(outputs: &[(&str, &Path)]) -> io::Result<()> {
+    // An existing file (or link) resolved; else the folder canonicalised and the name as
+    // given (a folder that does not exist: the path as given).
+    let key = |p: &Path| {
+        if let Ok(file) = p.canonicalize() {
+            return (
+                file.parent().map(ToOwned::to_owned),
+                file.file_name().map(ToOwned::to_owned),
+            );
+        }
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
+        match dir.map_or_else(|| Path::new(".").canonicalize(), Path::canonicalize) {
+            Ok(dir) => (Some(dir), p.file_name().map(ToOwned::to_owned)),
+            Err(_) => (Some(p.to_owned()), None),
+        }
+    };
+    for (i, (a_name, a)) in outputs.iter().enumerate() {
+        for (b_name, b) in &outputs[i + 1..] {
+            if key(a) == key(b) {
+                return Err(io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    format!(
+                        "{a_name} and {b_name} name the same file {}: each output needs its own",
+                        b.display()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use std::io::Write;
+
+    /// An output name the file system takes is written whatever its length, its temporary
+    /// name cut to fit (one of 246 to 255 characters was refused for its `.part` name).
+    #[test]
+    fn an_output_name_up_to_the_longest_is_written() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in [
+            "a".repeat(250) + ".csv",
+            "a".to_owned() + &"é".repeat(125) + ".csv",
+        ] {
+            assert!(
+                name.len() >= 254 && name.len() <= NAME_MAX_BYTES,
+                "{}",
+                name.len()
+            );
+            let path = dir.path().join(&name);
+            write(&path, |w| w.write_all(b"row\n")).unwrap();
+            assert_eq!(std::fs::read_to_string(&path).unwrap(), "row\n");
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    /// An output that is a link to another output is that file: refused, not written twice
+    /// (the 1-sigma rows replaced the trajectory, reported as written).
+    #[test]
+    fn an_output_linked_to_another_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let nav = dir.path().join("a.nav");
+        let link = dir.path().join("link.txt");
+        std::fs::write(&nav, "old\n").unwrap();
+        std::os::unix::fs::symlink("a.nav", &link).unwrap();
+        let e = refuse_shared_outputs(&[("the trajectory (--out)", &nav), ("--std", &link)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("name the same file"), "{e}");
+        // Two files, one not there yet: not the same.
+        let other = dir.path().join("std.txt");
+        refuse_shared_outputs(&[("the trajectory (--out)", &nav), ("--std", &other)]).unwrap();
+        refuse_shared_outputs(&[("--std", &other), ("the trajectory (--out)", &nav)]).unwrap();
+    }
 
     #[test]
     fn a_failed_write_leaves_the_old_file_and_no_temporary() {

@@ -163,8 +163,7 @@ pub fn parse(name: &Path, text: &str) -> Result<DeviceConfig> {
 /// Encodes the configuration of the text file `file` as a frame into `out`.
 pub fn encode_file(file: &Path, out: &Path) -> Result<DeviceConfig> {
     atomic::refuse_same_file(&[file], out).with_context(|| format!("output {}", out.display()))?;
-    let text =
-        std::fs::read_to_string(file).with_context(|| format!("cannot read {}", file.display()))?;
+    let text = crate::text_error::read_text(file)?;
     let config = parse(file, &text)?;
     let mut frame = Vec::new();
     Encoder::new()

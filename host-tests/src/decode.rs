@@ -63,6 +63,26 @@ pub struct DecodeSummary {
     /// Frames refused for their protocol version (version, count; in the order first seen):
     /// a capture of a board running another version, refused whole, never misread.
     pub other_versions: Vec<(u8, u32)>,
+    /// Line feeds (0x0A) in the stream, and those right after a carriage return (0x0D): in
+    /// binary frames a line feed follows a carriage return by chance, 1 in 256; every one of
+    /// them after one is a text-mode transfer's rewriting (LF -> CR LF).
+    pub line_feeds: (u64, u64),
+}
+
+/// Line feeds from which a stream whose every line feed follows a carriage return is said to
+/// have passed a text-mode transfer (by chance: 256^-8).
+const CRLF_EVIDENCE: u64 = 8;
+
+impl DecodeSummary {
+    /// A hint when frames were refused and every line feed follows a carriage return.
+    fn text_mode_hint(&self) -> Option<&'static str> {
+        let (lf, crlf) = self.line_feeds;
+        let refused = self.stats.other_refusals + self.stats.crc_failures > 0;
+        (refused && lf >= CRLF_EVIDENCE && crlf == lf).then_some(
+            "every line feed of the stream follows a carriage return: a text-mode transfer \
+             (LF -> CR LF) rewrote it; copy the stream in binary mode",
+        )
+    }
 }
 
 /// Why a solution row that passed its frame's checks is not a navigator's: time not after the
@@ -152,6 +172,9 @@ impl fmt::Display for DecodeSummary {
         writeln!(f, "frames by type: {}", by_type.join(", "))?;
         for (offset, r) in &self.refusals {
             writeln!(f, "refused frame ending at byte {offset}: {r}")?;
+        }
+        if let Some(hint) = self.text_mode_hint() {
+            writeln!(f, "{hint}")?;
         }
         if !self.other_versions.is_empty() {
             writeln!(
@@ -275,6 +298,7 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
     let mut failure: Option<anyhow::Error> = None;
     let mut last_t_us: Option<u64> = None;
     let mut head: Vec<u8> = Vec::with_capacity(HEAD_LEN);
+    let mut previous = 0_u8;
     loop {
         let n = match input.read(&mut buf) {
             Ok(0) => break,
@@ -285,6 +309,11 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
         let keep = n.min(HEAD_LEN - head.len());
         head.extend_from_slice(&buf[..keep]);
         for &b in &buf[..n] {
+            if b == b'\n' {
+                summary.line_feeds.0 += 1;
+                summary.line_feeds.1 += u64::from(previous == b'\r');
+            }
+            previous = b;
             let Some(result) = decoder.feed(b) else {
                 continue;
             };
@@ -381,6 +410,9 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
                 summary.stats.bytes,
                 versions_text(&summary.other_versions)
             );
+        }
+        if let Some(hint) = summary.text_mode_hint() {
+            bail!("no valid frame in {} bytes: {hint}", summary.stats.bytes);
         }
         bail!(
             "no valid frame in {} bytes ({} CRC failures): not a protocol stream?",
@@ -636,6 +668,41 @@ mod tests {
     /// after the previous row and the log left incomplete, which the summary said as "451
     /// rows, but the end-of-run frame says 451", the counts it calls different equal. It names
     /// the refused frames now.
+    /// A stream through a text-mode transfer (LF -> CR LF) was "broken COBS stuffing" 300
+    /// times, no word of why; the decoder says what happened to it.
+    #[test]
+    fn a_stream_rewritten_by_a_text_mode_transfer_is_named_so() {
+        let messages: Vec<Message> = (0..200)
+            .map(|k| {
+                solution(Row::Free(Solution {
+                    t_us: S.t_us + k * 2500,
+                    h_m: 150.0 + k as f64 * 0.37,
+                    ..S
+                }))
+            })
+            .chain([Message::EndOfRun(EndOfRun { rows: 200 })])
+            .collect();
+        let good = frames(&messages);
+        let s = decode(&mut good.as_slice(), &mut Vec::new()).unwrap();
+        assert!(s.complete() && s.text_mode_hint().is_none());
+        let mut crlf = Vec::new();
+        for &b in &good {
+            if b == b'\n' {
+                crlf.push(b'\r');
+            }
+            crlf.push(b);
+        }
+        assert!(crlf.len() >= good.len() + CRLF_EVIDENCE as usize);
+        let e = format!(
+            "{:#}",
+            decode(&mut crlf.as_slice(), &mut Vec::new()).unwrap_err()
+        );
+        assert!(
+            e.contains("a text-mode transfer (LF -> CR LF) rewrote it"),
+            "{e}"
+        );
+    }
+
     #[test]
     fn a_repeated_solution_frame_is_named_as_the_reason_for_an_incomplete_log() {
         let row = solution(Row::Free(S));

@@ -40,7 +40,9 @@
 //! and the attitude by slerp inside the interval; the dynamics (Schuler 84 min, Earth rate) are
 //! slow, so this is accurate for truth at 400 Hz as well as at 0.1–10 Hz. Neglected: products
 //! of errors (linear model) and the change of the radii of curvature with latitude (relative
-//! `e^2 ~ 0.7 %` of the position-dependent terms).
+//! `e^2 ~ 0.7 %` of the position-dependent terms). A truth with a hole (an interval over
+//! [`crate::truth::TRUTH_GAP_FACTOR`] times its median, as `nav report` tells one) is refused:
+//! the mean over a hole is not the motion in it.
 //!
 //! The linear model holds for small errors only, so errors beyond its range are refused
 //! before anything is written, naming the key and the limit: an attitude error beyond
@@ -463,6 +465,17 @@ pub enum EmulateError {
         /// This row's time [s].
         t_s: f64,
     },
+    /// A hole in the truth ([`crate::truth::first_gap`]): the motion is recovered from the
+    /// truth per interval, which across a hole is not the trajectory (a 60 s hole was stepped
+    /// over in one go, silently).
+    TruthGap {
+        /// Index (0-based) of the row before the hole.
+        row: usize,
+        /// Its time and the next row's [s].
+        t_s: (f64, f64),
+        /// The truth's median interval [s].
+        median_s: f64,
+    },
     /// A truth row closer to a pole than [`MAX_ABS_LAT_RAD`].
     NearPole {
         /// Row index (0-based).
@@ -527,6 +540,18 @@ impl fmt::Display for EmulateError {
             Self::NonMonotonicTime { row, prev_t_s, t_s } => write!(
                 f,
                 "truth row {row}: time {t_s} s does not increase (previous {prev_t_s} s)"
+            ),
+            Self::TruthGap { row, t_s, median_s } => write!(
+                f,
+                "truth rows {row} and {} (t = {} s and {} s) are {} s apart, over {} times the \
+                 truth's median interval {} s: the emulator recovers the motion between rows, \
+                 and across a hole it is not the trajectory; give the truth without holes",
+                row + 1,
+                Rounded(t_s.0),
+                Rounded(t_s.1),
+                Rounded(t_s.1 - t_s.0),
+                crate::truth::TRUTH_GAP_FACTOR,
+                Rounded(*median_s)
             ),
             Self::NearPole { row } => write!(
                 f,
@@ -759,6 +784,13 @@ fn validate(
                 t_s: t.t_s,
             });
         }
+    }
+    if let Some(row) = crate::truth::first_gap(truth) {
+        return Err(EmulateError::TruthGap {
+            row,
+            t_s: (truth[row].t_s, truth[row + 1].t_s),
+            median_s: crate::truth::median_interval_s(truth),
+        });
     }
     check_linear_range(truth, errors)
 }
@@ -1043,8 +1075,7 @@ impl EmulateJob<'_> {
         let mut e = self.preset.errors();
         let mut given: [Option<Given>; Quantity::COUNT] = Default::default();
         if let Some(path) = self.errors_file {
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("reading {}", path.display()))?;
+            let text = crate::text_error::read_text(path)?;
             let place = format!("error file {}", path.display());
             e.apply_text_noting(&text, |g| {
                 given[g.quantity as usize] = Some(Given {
@@ -1111,12 +1142,8 @@ impl EmulateJob<'_> {
         crate::atomic::refuse_same_file(&inputs, self.out)?;
         if let Some(path) = self.errors_out {
             crate::atomic::refuse_same_file(&inputs, path)?;
-            crate::atomic::refuse_same_file(&[self.out], path)?;
-            anyhow::ensure!(
-                !same_path(path, self.out),
-                "--errors-out {} is --out: refusing to write both into one file",
-                path.display()
-            );
+            // Was "output E is the input E" when --out existed.
+            crate::atomic::refuse_shared_outputs(&[("--out", self.out), ("--errors-out", path)])?;
         }
         let (errors, given) = self.errors_given()?;
         let truth = crate::truth_csv::read(self.truth)?;
@@ -1168,13 +1195,6 @@ impl EmulateJob<'_> {
 }
 
 /// Whether `a` and `b` name the same path (not yet existing files compared as written).
-fn same_path(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => a == b,
-    }
-}
-
 /// Writes the error series as CSV: `t_s`, `phi_{n,e,d}_rad`, `dv_{n,e,d}_mps`,
 /// `dr_{n,e,d}_m`.
 pub fn write_errors_csv(path: &Path, errors: &[ErrorSample]) -> anyhow::Result<()> {

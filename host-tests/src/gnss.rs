@@ -118,7 +118,8 @@ fn csv_column(i: usize) -> &'static str {
 }
 
 /// The format of a GNSS file: the project's CSV when its first line that is not blank or a
-/// `#`/`%` comment starts with `t_s`, KF-GINS's text otherwise.
+/// `#`/`%` comment is a header (its first field not a number: `t_s`, or a header the CSV
+/// reader then refuses by name, such as `T_S`), KF-GINS's text otherwise.
 pub fn detect(path: &Path) -> Result<GnssFormat, TextError> {
     let file = File::open(path).map_err(|e| TextError::io(path, e))?;
     let mut lines = LineReader::new(BufReader::new(file));
@@ -128,10 +129,11 @@ pub fn detect(path: &Path) -> Result<GnssFormat, TextError> {
         if text.is_empty() || text.starts_with('#') || text.starts_with('%') {
             continue;
         }
-        return Ok(if text.starts_with("t_s") {
-            GnssFormat::Csv
-        } else {
+        let first_field = text.split([',', ' ', '\t']).next().unwrap_or("");
+        return Ok(if first_field.trim().parse::<f64>().is_ok() {
             GnssFormat::KfGins
+        } else {
+            GnssFormat::Csv
         });
     }
     Ok(GnssFormat::KfGins) // no data line: the text reader says so
@@ -157,6 +159,7 @@ pub fn read_gnss_assuming(
     } else {
         path
     };
+    crate::text_error::refuse_a_stream(path)?;
     let mut first = String::new();
     File::open(path)
         .map(BufReader::new)
@@ -677,6 +680,26 @@ mod tests {
             &format!("{header},{CSV_VELOCITY_TAIL}\n1,45,7,100,0,1,1,1,0,0,0.1,0.1,0.1\n"),
         );
         assert_eq!(read_gnss(&csv).unwrap().len(), 1);
+    }
+
+    /// A header in capitals was read as KF-GINS text: "column seconds of week: expected a
+    /// number, found 'T_S'", a column the file does not have. Told as the CSV header it is.
+    #[test]
+    fn a_header_in_capitals_is_refused_as_a_header() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("upper.csv");
+        let header = CSV_COLUMNS.join(",").to_uppercase();
+        std::fs::write(&path, format!("{header}\n1,45,7,100,1,1,1\n")).unwrap();
+        assert_eq!(detect(&path).unwrap(), GnssFormat::Csv);
+        let m = read_gnss(&path).unwrap_err().to_string();
+        assert!(
+            m.contains("line 1: expected the header row 't_s,lat_deg,")
+                && m.contains("found 'T_S,LAT_DEG,"),
+            "{m}"
+        );
+        // A KF-GINS line is still KF-GINS text.
+        std::fs::write(&path, "1 45 7 100 1 1 1\n").unwrap();
+        assert_eq!(detect(&path).unwrap(), GnssFormat::KfGins);
     }
 
     #[test]

@@ -50,6 +50,7 @@ pub fn refuse_the_imu_recording(gnss: &Path, imu: &Path) -> Result<()> {
 
 /// True when `path` starts like a binary fix file ([`gnss_record::MAGIC`]).
 pub fn is_record_file(path: &Path) -> Result<bool> {
+    crate::text_error::refuse_a_stream(path).map_err(|e| anyhow!("GNSS file {e}"))?;
     let mut head = [0_u8; 8];
     let mut file = std::fs::File::open(path)
         .with_context(|| format!("cannot open the GNSS file {}", path.display()))?;

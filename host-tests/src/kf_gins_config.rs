@@ -30,7 +30,9 @@
 //! **Paths.** KF-GINS opens its paths as written, relative to the directory it runs in. A
 //! relative path is resolved the same way (against the current directory) when that file or
 //! folder exists, else against the configuration file's directory when it exists there, else
-//! left relative to the current directory (opening it then names it).
+//! left relative to the current directory (opening it then names it). `nav kf-gins` prints the
+//! paths it reads, and warns when `imupath` and `gnsspath` were found in different folders or
+//! an input is found in both (two different files).
 //!
 //! **Checks** (each message names the file and the key): a missing required key, an array that
 //! is not 3 numbers, a value that is not finite, a negative standard deviation or noise density,
@@ -40,7 +42,7 @@
 //! negative value), an empty path. YAML syntax and type errors carry the parser's line and
 //! column. Keys KF-GINS does not read are ignored and listed in the returned warnings.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use nav_core::number::Number;
 use serde::Deserialize;
 use serde::de::IgnoredAny;
@@ -181,7 +183,7 @@ const PER_SQRT_H: f64 = 1.0 / 60.0;
 /// Reads and checks KF-GINS's configuration file `path`: the configuration in SI units and one
 /// warning per key that KF-GINS does not read.
 pub fn load(path: &Path) -> Result<(KfGinsConfig, Vec<String>)> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+    let text = crate::text_error::read_text(path)?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -192,8 +194,22 @@ pub fn load(path: &Path) -> Result<(KfGinsConfig, Vec<String>)> {
 /// Parses configuration `text`; `path` names it in messages, relative paths are resolved
 /// against the current directory or `dir` (module docs).
 pub fn parse(text: &str, path: &Path, dir: &Path) -> Result<(KfGinsConfig, Vec<String>)> {
-    let raw: RawConfig = serde_saphyr::from_str(text)
-        .map_err(|e| anyhow::anyhow!("{}: not a KF-GINS configuration: {e}", path.display()))?;
+    let raw: RawConfig = serde_saphyr::from_str(text).map_err(|e| {
+        let inner = match &e {
+            serde_saphyr::Error::WithSnippet { error, .. } => error.as_ref(),
+            e => e,
+        };
+        match inner {
+            // The parser's own words name its API ("use from_str_multiple ...").
+            serde_saphyr::Error::MultipleDocuments { location, .. } => anyhow::anyhow!(
+                "{}: line {}: a second YAML document (after '---'): a KF-GINS configuration \
+                 is one document",
+                path.display(),
+                location.line()
+            ),
+            _ => anyhow::anyhow!("{}: not a KF-GINS configuration: {e}", path.display()),
+        }
+    })?;
     let c = Check { path };
     let mut warnings: Vec<String> = raw
         .unknown
@@ -297,10 +313,26 @@ pub fn parse(text: &str, path: &Path, dir: &Path) -> Result<(KfGinsConfig, Vec<S
     }
     let deg = |v: [f64; 3]| v.map(f64::to_radians);
     let scaled = |v: [f64; 3], k: f64| v.map(|x| x * k);
+    let imu_path = c.file_path("imupath", raw.imupath, dir, &mut warnings)?;
+    let gnss_path = c.file_path("gnsspath", raw.gnsspath, dir, &mut warnings)?;
+    // One input from the current directory, the other beside the configuration: two data sets
+    // mixed (an unrelated imu.txt where the run started), each file valid on its own.
+    let here = |f: &Found| matches!(f, Found::Here | Found::HereAndBeside(_));
+    if here(&imu_path.1) && gnss_path.1 == Found::Beside
+        || imu_path.1 == Found::Beside && here(&gnss_path.1)
+    {
+        warnings.push(format!(
+            "{}: imupath {} and gnsspath {} were found in different folders (the current one, \
+             then the configuration's): check that they are one data set",
+            path.display(),
+            imu_path.0.display(),
+            gnss_path.0.display()
+        ));
+    }
     let config = KfGinsConfig {
-        imu_path: c.file_path("imupath", raw.imupath, dir)?,
-        gnss_path: c.file_path("gnsspath", raw.gnsspath, dir)?,
-        output_dir: c.path("outputpath", raw.outputpath, dir)?,
+        imu_path: imu_path.0,
+        gnss_path: gnss_path.0,
+        output_dir: c.path("outputpath", raw.outputpath, dir)?.0,
         imu_columns,
         imu_rate_hz,
         start_time_s,
@@ -451,29 +483,76 @@ impl Check<'_> {
         Ok(v)
     }
 
-    /// A path, resolved as KF-GINS would find it, else beside the configuration file.
-    fn path(&self, key: &str, value: Option<String>, dir: &Path) -> Result<PathBuf> {
+    /// A path, resolved as KF-GINS would find it, else beside the configuration file, and
+    /// where it was found.
+    fn path(&self, key: &str, value: Option<String>, dir: &Path) -> Result<(PathBuf, Found)> {
         let text = self.required(key, value, "a path")?;
         if text.is_empty() {
             bail!(self.key(key, "the path is empty"));
         }
         let p = PathBuf::from(text);
+        if p.is_absolute() {
+            return Ok((p, Found::Absolute));
+        }
         let beside = dir.join(&p);
-        Ok(if p.is_absolute() || p.exists() || !beside.exists() {
-            p
-        } else {
-            beside
+        Ok(match (p.exists(), beside.exists()) {
+            (true, true) if !same_file(&p, &beside) => (p, Found::HereAndBeside(beside)),
+            (true, _) => (p, Found::Here),
+            (false, true) => (beside, Found::Beside),
+            (false, false) => (p, Found::Nowhere),
         })
     }
 
     /// [`Self::path`] of a file to read: a folder is refused naming the key (it was read as
-    /// a text file: ".: line 1: Is a directory (os error 21)").
-    fn file_path(&self, key: &str, value: Option<String>, dir: &Path) -> Result<PathBuf> {
-        let p = self.path(key, value, dir)?;
+    /// a text file: ".: line 1: Is a directory (os error 21)"); a relative path found both
+    /// here and, another file, beside the configuration is warned about in `warnings`.
+    fn file_path(
+        &self,
+        key: &str,
+        value: Option<String>,
+        dir: &Path,
+        warnings: &mut Vec<String>,
+    ) -> Result<(PathBuf, Found)> {
+        let (p, found) = self.path(key, value, dir)?;
         if p.is_dir() {
             bail!(self.key(key, format_args!("{} is a folder, not a file", p.display())));
         }
-        Ok(p)
+        if let Found::HereAndBeside(other) = &found {
+            warnings.push(self.key(
+                key,
+                format_args!(
+                    "{} is read from the current folder, as KF-GINS reads it; the \
+                     configuration's folder has another ({})",
+                    p.display(),
+                    other.display()
+                ),
+            ));
+        }
+        Ok((p, found))
+    }
+}
+
+/// Where a relative path of the configuration was found (module docs).
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum Found {
+    /// Absolute: no folder to choose.
+    Absolute,
+    /// Relative to the current folder.
+    Here,
+    /// Relative to the current folder, and another file of that name is beside the
+    /// configuration (its path).
+    HereAndBeside(PathBuf),
+    /// Relative to the configuration file's folder.
+    Beside,
+    /// In neither (left relative to the current folder; opening it names it).
+    Nowhere,
+}
+
+/// True when `a` and `b` name one file (both canonical paths equal).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
     }
 }
 
@@ -693,6 +772,33 @@ odolever: [ 1, 2, 3 ]
         let m = msg("imudatarate: 200", "imudatarate: fast");
         assert!(m.starts_with("kf.yaml: not a KF-GINS configuration"), "{m}");
         assert!(m.contains("line 13"), "{m}");
+    }
+
+    /// A second YAML document was refused in the parser's words ("use from_str_multiple or
+    /// from_str_multiple_with_options"); a file not in UTF-8 with "stream did not contain
+    /// valid UTF-8", no line. Both in a user's terms now, with the line.
+    #[test]
+    fn a_second_document_and_a_file_not_in_utf8_are_told_plainly() {
+        let m = format!(
+            "{:#}",
+            parse_text(&format!("{EXAMPLE}---\nimudatarate: 200\n")).unwrap_err()
+        );
+        assert!(m.contains("a second YAML document (after '---')"), "{m}");
+        assert!(!m.contains("from_str"), "{m}");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("kf.yaml");
+        let mut bytes = EXAMPLE.as_bytes().to_vec();
+        let at = EXAMPLE.find("imudatalen").unwrap();
+        bytes.insert(at, 0xe9);
+        std::fs::write(&path, bytes).unwrap();
+        let line = 1 + EXAMPLE[..at].matches('\n').count();
+        let m = format!("{:#}", load(&path).unwrap_err());
+        assert!(
+            m.contains(&format!(
+                "kf.yaml: line {line}: not UTF-8 text (byte {at}, 0xe9)"
+            )),
+            "{m}"
+        );
     }
 
     #[test]

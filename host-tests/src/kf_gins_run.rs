@@ -25,6 +25,8 @@ use crate::gnss::{self, GnssFix};
 use crate::kf_gins::ImuReader;
 use crate::kf_gins_config::{self, KfGinsConfig};
 use crate::nav_writer::{NavRow, NavWriter};
+use crate::text_error::seconds_to_ns;
+use crate::text_recording::{RATE_PREFIX_RECORDS, rate_from_times};
 use anyhow::{Context, Result, bail};
 use nav_core::attitude::euler;
 use nav_core::ins_filter::model::FilterNoise;
@@ -43,6 +45,12 @@ pub const KF_GINS_IMU_ERR_NAME: &str = "KF_GINS_IMU_ERR.txt";
 
 /// The name KF-GINS gives its 1-sigma file in `outputpath`.
 pub const KF_GINS_STD_NAME: &str = "KF_GINS_STD.txt";
+
+/// Relative difference between `imudatarate` and the file's median epoch interval beyond which
+/// it is warned of: 0.1 %, ten times an IMU clock's crystal error (100 ppm), so that a rate the
+/// file does not have is said (`imudatarate: 401` for a 400 Hz file ran silently) and a clock's
+/// own error is not.
+pub const RATE_TOLERANCE: f64 = 1e-3;
 
 /// The files a run writes.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -246,35 +254,6 @@ impl AidedSink<f64> for NavRows {
     }
 }
 
-/// Refuses two outputs that name one file (the later would replace the earlier), under any
-/// name: a symbolic link is written through to its target (`crate::atomic`).
-fn refuse_shared_outputs(outputs: &[(&str, &Path)]) -> Result<()> {
-    // An existing file (or link) resolved; else the folder canonicalised (it exists: checked
-    // before) and the name as given.
-    let key = |p: &Path| {
-        if let Ok(file) = p.canonicalize() {
-            return (
-                file.parent().map(ToOwned::to_owned),
-                file.file_name().map(ToOwned::to_owned),
-            );
-        }
-        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
-        let dir = dir.map_or_else(|| Path::new(".").canonicalize(), Path::canonicalize);
-        (dir.ok(), p.file_name().map(ToOwned::to_owned))
-    };
-    for (i, (a_name, a)) in outputs.iter().enumerate() {
-        for (b_name, b) in &outputs[i + 1..] {
-            if key(a) == key(b) {
-                bail!(
-                    "{a_name} and {b_name} name the same file {}: each output needs its own",
-                    b.display()
-                );
-            }
-        }
-    }
-    Ok(())
-}
-
 /// Runs the configuration at `config_path`; the trajectory goes to `outputs.nav`, or to
 /// KF-GINS's `outputpath/KF_GINS_Navresult.nav`, and the IMU error and 1-sigma files where
 /// `outputs` asks.
@@ -291,6 +270,14 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
         .nav
         .clone()
         .unwrap_or_else(|| c.output_dir.join(KF_GINS_NAV_NAME));
+    // The relative paths are looked for in two folders (kf_gins_config's module docs): the
+    // files the run reads, as found.
+    eprintln!(
+        "KF-GINS files: imupath {}, gnsspath {}, trajectory {}",
+        c.imu_path.display(),
+        c.gnss_path.display(),
+        out.display()
+    );
     let named = [
         Some(("the trajectory (--out)", out.as_path())),
         outputs.imu_err.as_deref().map(|p| ("--imu-err", p)),
@@ -314,7 +301,7 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
             );
         }
     }
-    refuse_shared_outputs(&named)?;
+    crate::atomic::refuse_shared_outputs(&named)?;
     crate::gnss_file::refuse_the_imu_recording(&c.gnss_path, &c.imu_path)
         .context("gnsspath and imupath")?;
     let fixes: Vec<GnssFix> = gnss::read_gnss(&c.gnss_path).map_err(|e| {
@@ -326,7 +313,23 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
         config.zero_motion = None;
     }
     let seq = sequencer::<f64>(&config, &AidedStart::Given(Box::new(start(&c))))?;
-    let file = File::open(&c.imu_path)
+    crate::text_error::refuse_a_stream(&c.imu_path)
+        .map_err(|e| anyhow::anyhow!("IMU file (imupath) {e}"))?;
+    let mut file = File::open(&c.imu_path)
+        .with_context(|| format!("IMU file {} (imupath)", c.imu_path.display()))?;
+    // A binary recording read as text failed with "line 1: expected 7 numbers ..., found 1".
+    let mut magic = [0_u8; 6];
+    if std::io::Read::read_exact(&mut file, &mut magic).is_ok()
+        && magic == hal_adapters::recording::MAGIC[..6]
+    {
+        bail!(
+            "IMU file {} (imupath): a binary IMU recording (it starts with the NAVIMU magic of \
+             docs/recording-format.md), not KF-GINS's IMU text: give the text file (7 or 8 \
+             numbers a line), or replay the recording with nav replay",
+            c.imu_path.display()
+        );
+    }
+    std::io::Seek::rewind(&mut file)
         .with_context(|| format!("IMU file {} (imupath)", c.imu_path.display()))?;
     let mut rows = ImuReader::new(BufReader::with_capacity(1 << 20, file), &c.imu_path)
         .with_columns(c.imu_columns);
@@ -340,8 +343,9 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
     // Intervals off `imudatarate` by more than a quarter of its interval, of all intervals (a
     // rate off by a factor of 2 or 4/3 is caught; a receiver's jitter of a few percent is not).
     let (mut off_rate, mut intervals) = (0_u64, 0_u64);
-    // Their sum [s], for the rate the file has.
-    let mut sum_dt = 0.0_f64;
+    // The first epochs' times [ns], for the rate the file has (their median interval, as a
+    // replay's header takes it: a gap does not lower it).
+    let mut prefix_t_ns: Vec<u64> = Vec::with_capacity(RATE_PREFIX_RECORDS);
     let samples = || -> Result<Option<AidedSample<f64>>> {
         loop {
             let Some(row) = rows.next() else {
@@ -351,8 +355,12 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
             let dt = prev_t.map_or(nominal_dt, |p| row.t_s - p);
             if prev_t.is_some() {
                 intervals += 1;
-                sum_dt += dt;
                 off_rate += u64::from((dt - nominal_dt).abs() > 0.25 * nominal_dt);
+            }
+            if prefix_t_ns.len() < RATE_PREFIX_RECORDS
+                && let Some(t_ns) = seconds_to_ns(row.t_s)
+            {
+                prefix_t_ns.push(t_ns);
             }
             prev_t = Some(row.t_s);
             let gap = dt > 1.5 * nominal_dt;
@@ -392,6 +400,8 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
                 t_us: (row.t_s * 1e6).round() as u64,
                 increment: ImuIncrement::new(row.delta_theta_ib_b, row.delta_v_ib_b, dt),
                 unusable: short,
+                // The reader refuses a time that does not increase.
+                behind: false,
                 gap,
             }));
         }
@@ -432,15 +442,20 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
         );
     }
     // Within that, a rate the file does not have is said: the intervals are the time
-    // column's, `imudatarate` only judges them (and the first epoch's).
-    let file_hz = intervals as f64 / sum_dt;
-    if intervals > 0 && (file_hz - c.imu_rate_hz).abs() > 0.02 * c.imu_rate_hz {
+    // column's, `imudatarate` only judges them (and the first epoch's). Against the median
+    // interval (the average counted a gap's time: a 7 s hole in 400 Hz data read as 353 Hz,
+    // blaming imudatarate), within RATE_TOLERANCE.
+    if let Ok((file_hz, _)) = rate_from_times(&prefix_t_ns)
+        && (file_hz - c.imu_rate_hz).abs() > RATE_TOLERANCE * c.imu_rate_hz
+    {
         warnings.push(format!(
-            "imudatarate {} Hz, but the epochs of {} come at {:.1} Hz on average: the intervals \
-             are taken from its time column",
+            "imudatarate {} Hz, but the epochs of {} come every {} s ({} Hz, the median \
+             interval of the first {}): the intervals are taken from its time column",
             Number(c.imu_rate_hz),
             c.imu_path.display(),
-            file_hz
+            Number(1.0 / file_hz),
+            Number((file_hz * 1e3).round() / 1e3),
+            prefix_t_ns.len()
         ));
     }
     let sigma_rms = sink.sigma_rms();
@@ -460,28 +475,4 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
         store_s,
         sigma_rms,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// An output that is a link to another output is that file: refused, not written twice
-    /// (the 1-sigma rows replaced the trajectory, reported as written).
-    #[test]
-    fn an_output_linked_to_another_is_refused() {
-        let dir = tempfile::tempdir().unwrap();
-        let nav = dir.path().join("a.nav");
-        let link = dir.path().join("link.txt");
-        std::fs::write(&nav, "old\n").unwrap();
-        std::os::unix::fs::symlink("a.nav", &link).unwrap();
-        let e = refuse_shared_outputs(&[("the trajectory (--out)", &nav), ("--std", &link)])
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("name the same file"), "{e}");
-        // Two files, one not there yet: not the same.
-        let other = dir.path().join("std.txt");
-        refuse_shared_outputs(&[("the trajectory (--out)", &nav), ("--std", &other)]).unwrap();
-        refuse_shared_outputs(&[("--std", &other), ("the trajectory (--out)", &nav)]).unwrap();
-    }
 }

@@ -179,8 +179,12 @@ pub struct SourceCounters {
     pub missed: u32,
     /// Samples flagged NaN or infinite.
     pub non_finite: u32,
-    /// Samples flagged for a zero, negative or implausible interval.
+    /// Samples flagged for an implausible interval (a short increment after a gap, a jump).
     pub bad_interval: u32,
+    /// Samples flagged because their time is not after the previous record's (a repeated
+    /// time tag, a swapped pair, a clock that stepped back): out of time order, as the
+    /// navigator calls a time not after the last navigated sample's.
+    pub out_of_order: u32,
 }
 
 /// What a run did.
@@ -211,7 +215,8 @@ pub struct Report {
     pub final_solution: Solution,
     /// The aided phase's outcome, in an aided run.
     pub aided: Option<AidedOutcome>,
-    /// End times of the first and last samples [us] (`None`: no sample).
+    /// The time the samples cover [us], from the start of the first's interval to the end
+    /// of the last ([`nav_core::gap::data_span_us`]; `None`: no sample).
     pub span_us: Option<(u64, u64)>,
     /// IMU time not navigated (the spans of unusable samples).
     pub lost: crate::aided::LostImuTime,
@@ -279,7 +284,8 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
     let mut span_us: Option<(u64, u64)> = None;
     let mut lost = crate::aided::LostImuTime::default();
     while let Some(s) = source.read_sample().map_err(PipelineError::Source)? {
-        span_us = Some((span_us.map_or(s.t_us, |(a, _)| a), s.t_us));
+        let first_us = || nav_core::gap::data_span_us(s.t_us, f64::from(s.dt_s), 0).0;
+        span_us = Some((span_us.map_or_else(first_us, |(a, _)| a), s.t_us));
         let usable = s.flags.usable();
         lost.set_aligning(navigator.is_aligning());
         while let Some(f) = next_fix.next_if(|f| f.t_us <= s.t_us) {

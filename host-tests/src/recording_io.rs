@@ -67,6 +67,7 @@ impl core::fmt::Display for Format {
 /// format's own error message. A KF-GINS GNSS file given as a recording is refused by name. A
 /// folder is a gnss-ins-sim output folder or refused; so is a file with one of its headers.
 pub fn detect(path: &Path) -> Result<Format> {
+    crate::text_error::refuse_a_stream(path).map_err(|e| anyhow!("recording {e}"))?;
     if path.is_dir() {
         ensure!(
             gnss_ins_sim::locate(path).is_some(),

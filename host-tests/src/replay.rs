@@ -193,7 +193,8 @@ pub fn replay_file_with_fixes<T: Scalar, W: Write>(
     report.source = Some(SourceCounters {
         missed: stats.missed,
         non_finite: stats.non_finite,
-        bad_interval: stats.bad_interval,
+        bad_interval: stats.bad_interval - stats.not_after_previous,
+        out_of_order: stats.not_after_previous,
     });
     report.driver = driver;
     Ok(FileReport {
@@ -351,7 +352,7 @@ pub fn summary(imu: &Path, out: &Path, precision: &str, fr: &FileReport) -> Stri
         r.flagged,
         c.non_finite,
         c.bad_interval,
-        r.flagged_by.out_of_order,
+        r.flagged_by.out_of_order + c.out_of_order,
         r.rejected,
         c.missed,
         r.nav_steps

@@ -27,7 +27,7 @@
 //! bridge lost the solution there) are not compared, and the report says how many.
 
 use crate::sigma_log::{self, Sigma};
-use crate::truth::Truth;
+use crate::truth::{TRUTH_GAP_FACTOR, Truth, median_interval_s};
 use crate::{kf_gins, truth_csv};
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -99,11 +99,6 @@ pub struct ErrorSeries {
     /// The longest interval between truth rows the comparison interpolates across [s].
     pub max_truth_interval_s: f64,
 }
-
-/// A gap in the truth: an interval between its rows longer than this many times their median
-/// interval. A solution row inside one is not compared: a straight line across a truth hole of
-/// 200 s of a turning car was reported as a 1 km error of the solution.
-pub const TRUTH_GAP_FACTOR: f64 = 5.0;
 
 /// An error quantity of an [`ErrorSample`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -361,17 +356,6 @@ pub fn compare_with_sigma(
         );
     }
     Ok(series)
-}
-
-/// The median interval between consecutive rows of `truth` [s] (infinite for one row: no
-/// gap can be told).
-fn median_interval_s(truth: &[Truth]) -> f64 {
-    let mut d: Vec<f64> = truth.windows(2).map(|w| w[1].t_s - w[0].t_s).collect();
-    if d.is_empty() {
-        return f64::INFINITY;
-    }
-    d.sort_by(f64::total_cmp);
-    d[d.len() / 2]
 }
 
 /// Whether `t_s` lies strictly between two truth rows more than `max_interval_s` apart.

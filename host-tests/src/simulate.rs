@@ -195,15 +195,17 @@ pub(crate) fn sense(
 /// 34 h at 400 Hz), well within the binary format's `u32` count.
 pub const MAX_SAMPLES: f64 = 5e7;
 
-/// Refuses a length that gives no sample, or more than [`MAX_SAMPLES`].
+/// Refuses a length that gives fewer than 2 samples (a recording of one was written, and every
+/// reader refused it: its rate is told from its intervals), or more than [`MAX_SAMPLES`].
 pub(crate) fn check_sample_count(sampling: Sampling, seconds: f64) -> Result<()> {
     // From the product itself: `sampling.n` saturates at u64::MAX.
     let n = (seconds * sampling.rate_hz).round();
     ensure!(
-        n >= 1.0,
-        "{} s at {} Hz gives no sample",
+        n >= 2.0,
+        "{} s at {} Hz gives {}: a recording needs at least 2 samples",
         Number(seconds),
-        Number(sampling.rate_hz)
+        Number(sampling.rate_hz),
+        if n < 1.0 { "no sample" } else { "1 sample" }
     );
     ensure!(
         n <= MAX_SAMPLES,

@@ -12,6 +12,7 @@ use std::io;
 use std::path::{Path, PathBuf};
 
 use crate::truth_csv::MAX_YAW_DEG;
+use nav_core::number::Shown;
 
 /// The largest time the recording clock holds [s]: `u64::MAX` nanoseconds (about 584 years).
 /// The binary format's `t_ns` and the samples' `t_us` derive from it.
@@ -35,6 +36,42 @@ pub fn told_as(e: anyhow::Error, path: &Path, label: String) -> anyhow::Error {
     match message.strip_prefix(&format!("{}: ", path.display())) {
         Some(rest) => anyhow::anyhow!("{label}: {rest}"),
         None => e.context(label),
+    }
+}
+
+/// The text of the whole file `path`; not UTF-8, refused with the line and byte where it stops
+/// being (`std`'s "stream did not contain valid UTF-8" named neither). Errors start with the
+/// path.
+pub fn read_text(path: &Path) -> anyhow::Result<String> {
+    let bytes = std::fs::read(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let line = 1 + bytes[..at].iter().filter(|&&b| b == b'\n').count();
+        anyhow::anyhow!(
+            "{}: line {line}: not UTF-8 text (byte {at}, 0x{:02x}): save the file as UTF-8",
+            path.display(),
+            bytes[at]
+        )
+    })
+}
+
+/// Refuses `path` when it is neither a regular file nor a folder (a pipe, a FIFO, a device):
+/// the readers open an input more than once (its format is told from its first bytes, then it
+/// is read from the start; `nav convert` reads it twice), and a stream read a second time
+/// starts where the first read stopped, so valid data were refused as damaged. A path that
+/// cannot be looked at is left to the open, which says why.
+pub fn refuse_a_stream(path: &Path) -> io::Result<()> {
+    match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() && !m.is_dir() => Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "{}: not a regular file (a pipe, FIFO or device): pipes are not supported, as \
+                 the file is read more than once; give a file (save the stream to one first)",
+                path.display()
+            ),
+        )),
+        _ => Ok(()),
     }
 }
 
@@ -362,7 +399,7 @@ impl fmt::Display for TextErrorKind {
                 if let Some(column) = optional {
                     write!(f, " (optionally followed by ',{column}')")?;
                 }
-                write!(f, ", found '{found}'")
+                write!(f, ", found '{}'", Shown(found))
             }
             Self::HeaderMissingColumn {
                 column,
@@ -370,7 +407,8 @@ impl fmt::Display for TextErrorKind {
                 found,
             } => write!(
                 f,
-                "the header has no column {column}: expected the columns '{expected}', found '{found}'"
+                "the header has no column {column}: expected the columns '{expected}', found '{}'",
+                Shown(found)
             ),
             Self::NoData { columns } => write!(
                 f,
@@ -398,15 +436,21 @@ impl fmt::Display for TextErrorKind {
                 "expected {expected} columns as in the header, found {found}"
             ),
             Self::NotANumber { column, found } => {
-                write!(f, "column {column}: expected a number, found '{found}'")
+                write!(
+                    f,
+                    "column {column}: expected a number, found '{}'",
+                    Shown(found)
+                )
             }
             Self::NotFinite { column, found } => write!(
                 f,
-                "column {column}: expected a finite number, found '{found}'"
+                "column {column}: expected a finite number, found '{}'",
+                Shown(found)
             ),
             Self::Infinite { column, found } => write!(
                 f,
-                "column {column}: expected a finite displacement or NaN, found '{found}'"
+                "column {column}: expected a finite displacement or NaN, found '{}'",
+                Shown(found)
             ),
             Self::PartlyMissing { column } => write!(
                 f,
@@ -414,7 +458,8 @@ impl fmt::Display for TextErrorKind {
             ),
             Self::BadTime { found } => write!(
                 f,
-                "column t_s: expected a finite, non-negative time in seconds, found '{found}'"
+                "column t_s: expected a finite, non-negative time in seconds, found '{}'",
+                Shown(found)
             ),
             Self::NegativeTime { t_s } => write!(
                 f,

@@ -30,6 +30,31 @@ pub struct Truth {
     pub q_b_ned: UnitQuaternion<f64>,
 }
 
+/// A gap in a truth trajectory: an interval between its rows longer than this many times their
+/// median interval. Across one a straight line (the comparison's interpolation, the
+/// emulator's motion recovered per interval) is not the trajectory: a truth hole of 200 s of a
+/// turning car was reported as a 1 km error of the solution.
+pub const TRUTH_GAP_FACTOR: f64 = 5.0;
+
+/// The median interval between consecutive rows of `truth` [s] (infinite for one row: no
+/// gap can be told).
+pub fn median_interval_s(truth: &[Truth]) -> f64 {
+    let mut d: Vec<f64> = truth.windows(2).map(|w| w[1].t_s - w[0].t_s).collect();
+    if d.is_empty() {
+        return f64::INFINITY;
+    }
+    d.sort_by(f64::total_cmp);
+    d[d.len() / 2]
+}
+
+/// The first gap of `truth` ([`TRUTH_GAP_FACTOR`]): the index of the row before it.
+pub fn first_gap(truth: &[Truth]) -> Option<usize> {
+    let max_interval_s = TRUTH_GAP_FACTOR * median_interval_s(truth);
+    truth
+        .windows(2)
+        .position(|w| w[1].t_s - w[0].t_s > max_interval_s)
+}
+
 /// Distance [m] between two geodetic positions (through ECEF).
 pub fn distance_m(lat1: f64, lon1: f64, h1: f64, lat2: f64, lon2: f64, h2: f64) -> f64 {
     (earth::geodetic_to_ecef(lat1, lon1, h1) - earth::geodetic_to_ecef(lat2, lon2, h2)).norm()

@@ -276,7 +276,9 @@ fn zero_intervals_are_flagged_and_skipped() {
     let (d, dirty_log) = replay::<f32>(&dirty_path, &options());
     let (c, d) = (c.report, d.report);
     assert_eq!((d.samples, d.flagged, d.rejected), (c.samples + 2, 2, 0));
-    assert_eq!(d.source.unwrap().bad_interval, 2);
+    // A zero interval is a time not after the previous record's: out of time order.
+    let source = d.source.unwrap();
+    assert_eq!((source.bad_interval, source.out_of_order), (0, 2));
     assert_eq!(d.nav_steps, c.nav_steps);
     assert_eq!(dirty_log, clean_log);
 }
@@ -301,7 +303,10 @@ fn nan_and_backwards_time_are_flagged_and_skipped() {
     let r = fr.report;
     let stats = r.source.unwrap();
     assert_eq!((r.samples, r.flagged, r.rejected), (n + 1, 3, 0));
-    assert_eq!((stats.non_finite, stats.bad_interval), (2, 1));
+    assert_eq!(
+        (stats.non_finite, stats.bad_interval, stats.out_of_order),
+        (2, 0, 1)
+    );
     // 4000 samples aligned (the NaN one does not count), the rest navigated but for 3 skipped.
     assert_eq!(r.n_align, 4000);
     assert_eq!(r.nav_steps, n + 1 - 3 - 4000);

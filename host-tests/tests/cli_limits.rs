@@ -571,8 +571,10 @@ fn a_kf_gins_refusal_names_its_configuration_once() {
     std::fs::write(config, KF_GINS_CONFIG).unwrap();
     let text = refused(&["kf-gins", config], &["KF-GINS configuration", "gnsspath"]);
     assert_eq!(text.matches("k.yaml").count(), 1, "{text}");
-    // And the GNSS file, which names itself, once.
-    assert_eq!(text.matches("gnss.txt").count(), 1, "{text}");
+    // And the GNSS file, which names itself, once (in the refusal: the run's first line
+    // names the files it reads).
+    let refusal = text.lines().find(|l| l.starts_with("error:")).unwrap();
+    assert_eq!(refusal.matches("gnss.txt").count(), 1, "{text}");
 }
 
 /// Inputs given as the output were overwritten: `kf-gins ok.yaml --out ok.yaml` the
@@ -884,5 +886,78 @@ fn refusals_name_the_option_the_key_and_the_cause() {
             "emulate", "--truth", &truth, "--out", &emulated, "--set", "",
         ],
         &["--set #1 ``: empty; give `key = v1 v2 v3`"],
+    );
+}
+
+/// Options that named the wrong thing or were taken silently: `sim --set speed=NaN` named a
+/// parameter `speed` the scenario does not have (the value was checked before the key); a
+/// `--set` key given twice kept the last (`nav config` refuses one); `bench filter --dir FILE`
+/// said "File exists"; `align-bench lasergyro --data DIR` said "line 1: Is a directory";
+/// `sim --gnss-nan 2 --gnss-nan 2` made one fix NaN, silently;
+/// `bench consistency --first-seed u64::MAX` wrapped its seeds to 0.
+#[test]
+fn options_are_refused_by_what_they_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (sim, file) = (path("sim"), path("file"));
+    std::fs::write(&file, "").unwrap();
+    let sim_with = |set: &[&'static str]| {
+        let mut args = vec!["sim", "land-vehicle", "--out", &sim];
+        for s in set {
+            args.extend(["--set", s]);
+        }
+        refused(&args, &[])
+    };
+    let text = sim_with(&["speed=NaN"]);
+    assert!(text.contains("unknown parameter \"speed\""), "{text}");
+    let text = sim_with(&["seconds=5", "seconds=6"]);
+    assert!(
+        text.contains("--set seconds is given twice (5 and 6)"),
+        "{text}"
+    );
+    refused(
+        &[
+            "sim",
+            "static",
+            "--seconds",
+            "5",
+            "--out",
+            &sim,
+            "--gnss-rate",
+            "1",
+            "--gnss-nan",
+            "2",
+            "--gnss-nan",
+            "2",
+        ],
+        &["--gnss-nan 2 is given twice"],
+    );
+    refused(
+        &["bench", "filter", "--dir", &file],
+        &["--dir", "file is a file: nav bench filter writes a folder"],
+    );
+    refused(
+        &[
+            "align-bench",
+            "lasergyro",
+            "--data",
+            dir.path().to_str().unwrap(),
+        ],
+        &["is a folder: give the laser-gyro recording"],
+    );
+    refused(
+        &[
+            "bench",
+            "consistency",
+            "--first-seed",
+            "18446744073709551615",
+            "--runs",
+            "2",
+            "--seconds",
+            "1",
+            "--cells",
+            "1",
+        ],
+        &["--first-seed 18446744073709551615 + --runs 2 x --families 1 overflows the seeds"],
     );
 }

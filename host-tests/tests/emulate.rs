@@ -441,6 +441,33 @@ fn bad_truth_is_refused() {
     assert_eq!(out.displayed, good);
 }
 
+/// A truth with a 60 s hole (rows every 1 s around it) was stepped over in one go, silently;
+/// refused as `nav report` tells a hole ([`host_tests::truth::first_gap`]). Two missing rows
+/// are not a hole.
+#[test]
+fn a_truth_with_a_hole_is_refused() {
+    let opts = EmulatorOptions::default();
+    let errors = EmulatorErrors::seed004_rlg();
+    let rows = at_rest(0.5, 0.0, 1.0, 120.0);
+    let holed: Vec<Truth> = rows
+        .iter()
+        .filter(|r| !(30.5..90.0).contains(&r.t_s))
+        .copied()
+        .collect();
+    let e = emulate(&holed, &errors, &opts).unwrap_err();
+    assert!(
+        matches!(e, EmulateError::TruthGap { row: 30, t_s, .. } if t_s == (30.0, 90.0)),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("60.00 s apart"), "{e}");
+    let short: Vec<Truth> = rows
+        .iter()
+        .filter(|r| !(30.5..33.0).contains(&r.t_s))
+        .copied()
+        .collect();
+    assert!(emulate(&short, &errors, &opts).is_ok());
+}
+
 /// Errors of a mechanization run against the truth at one time: horizontal position [m] (N, E),
 /// velocity [m/s] (N, E).
 struct MechErrors {

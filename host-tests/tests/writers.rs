@@ -78,6 +78,13 @@ fn sim_refuses_a_length_with_no_sample() {
     let o = nav(&["sim", "static", "--seconds", "1e-9", "--out", s(&out)]);
     assert_refused(&o, "1e-9 s at 400 Hz gives no sample");
     assert!(!out.exists());
+    // One sample was written, a recording every reader refused.
+    let o = nav(&["sim", "static", "--seconds", "0.0025", "--out", s(&out)]);
+    assert_refused(
+        &o,
+        "0.0025 s at 400 Hz gives 1 sample: a recording needs at least 2 samples",
+    );
+    assert!(!out.exists());
     let o = nav(&["sim", "static", "--seconds", "0", "--out", s(&out)]);
     assert_refused(&o, "the length must be positive");
     assert!(!out.exists());
@@ -360,7 +367,7 @@ fn emulate_refuses_an_output_that_is_its_truth() {
         "--errors-out",
         s(&out),
     ]);
-    assert_refused(&o, "is --out");
+    assert_refused(&o, "--out and --errors-out name the same file");
     assert!(!out.exists());
 }
 

@@ -31,6 +31,10 @@
 //!
 //! The rule is the same in every run: [`GapDetector`] sees every navigated sample, in the
 //! firmware's navigator and in the harness's sequencer alike.
+//!
+//! **Fixes outside the data.** A GNSS file none of whose fixes lies in the time the IMU data
+//! cover ([`data_span_us`]) is refused by the firmware and the harness alike; it is on another
+//! clock ([`on_another_clock`]) only when its fixes are far from the data.
 
 use crate::{ImuIncrement, Scalar};
 use nalgebra::Vector3;
@@ -239,6 +243,42 @@ impl<T: Scalar> GapDetector<T> {
     }
 }
 
+/// The time the IMU data cover [us]: from the start of the first sample's interval (its end
+/// `first_end_us` [us] less its interval `first_dt_s` [s], at most [`InputLimits::max_dt`]'s
+/// default) to the end of the last, `last_end_us` [us]. A fix at the start of the first
+/// interval lies in the data (one at the recording's first tick, 2.5 ms before the first
+/// sample's end, was said to be on another clock).
+///
+/// [`InputLimits::max_dt`]: crate::increment::InputLimits::max_dt
+pub fn data_span_us(first_end_us: u64, first_dt_s: f64, last_end_us: u64) -> (u64, u64) {
+    let max_dt_s = crate::increment::InputLimits::<f64>::default().max_dt;
+    let dt_s = if first_dt_s.is_finite() {
+        first_dt_s.clamp(0.0, max_dt_s)
+    } else {
+        0.0
+    };
+    (
+        // Rounded (core has no f64::round): an f32 interval of 2.5 ms is 2499.99 us.
+        first_end_us.saturating_sub((dt_s * 1e6 + 0.5) as u64),
+        last_end_us,
+    )
+}
+
+/// Whether GNSS fixes spanning `fixes_us` (first and last [us]), none of them within the IMU
+/// data's span `data_us` ([`data_span_us`]), look like time tags on another clock (GNSS
+/// seconds of week against a recording that starts at 0, milliseconds for seconds) rather
+/// than a receiver that missed the data by little: the nearest fix is further from the data
+/// than the data's own length. Fixes on both sides of the data are on its clock.
+pub fn on_another_clock(fixes_us: (u64, u64), data_us: (u64, u64)) -> bool {
+    let (a, b) = data_us;
+    let distance_us = if fixes_us.1 < a {
+        a - fixes_us.1
+    } else {
+        fixes_us.0.saturating_sub(b)
+    };
+    distance_us > b.saturating_sub(a)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -298,6 +338,21 @@ mod tests {
         let g = d.note(5_010_000, &inc([0.0; 3], [0.0; 3], 0.01)).unwrap();
         assert!(g.bridged());
         assert_eq!(g.step().0, 250);
+    }
+
+    #[test]
+    fn fixes_far_from_the_data_are_on_another_clock() {
+        // 60 s of 400 Hz data from 0: a fix at 0 is in it; one 1 s before is near it.
+        let data = data_span_us(2500, f64::from(0.0025_f32), 60_000_000);
+        assert_eq!(data, (0, 60_000_000));
+        assert_eq!(data_span_us(2500, f64::NAN, 9).0, 2500);
+        assert_eq!(data_span_us(20_000_000, 1e9, 9).0, 19_900_000);
+        assert!(!on_another_clock((0, 0), (2500, 60_000_000)));
+        assert!(!on_another_clock((61_000_000, 70_000_000), data));
+        // GNSS seconds of week against a recording from 0; fixes on both sides of it.
+        assert!(on_another_clock((345_600_000_000, 345_660_000_000), data));
+        assert!(on_another_clock((0, 1_000), (5_000_000, 6_000_000)));
+        assert!(!on_another_clock((0, 10_000_000), (4_000_000, 4_500_000)));
     }
 
     #[test]

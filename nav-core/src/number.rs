@@ -1,5 +1,5 @@
 //! Numbers in messages, readable at any magnitude: a refused `1e30` prints as `1e30`, not as
-//! thirty-one digits.
+//! thirty-one digits; and texts from files as they are ([`Shown`]).
 
 use core::fmt;
 
@@ -52,6 +52,29 @@ fn plain(x: f64) -> bool {
     x == 0.0 || (1e-3..1e6).contains(&a)
 }
 
+/// A text from a file as a message shows it: control characters written as escapes (`\t`,
+/// `\u{0}`, `\u{1b}`), so that the message shows what the file holds (a NUL inside a number was
+/// printed raw, invisible: `found '1.2<NUL>45e-7'` read as a valid number).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shown<'a>(pub &'a str);
+
+impl fmt::Display for Shown<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use fmt::Write as _;
+        for c in self.0.chars() {
+            if matches!(c, '\t' | '\r' | '\n') {
+                write!(f, "{}", c.escape_debug())?;
+            } else if c.is_control() {
+                // `\u{0}`, not `\0`: "1.2\045" would read as an octal escape.
+                write!(f, "{}", c.escape_unicode())?;
+            } else {
+                f.write_char(c)?;
+            }
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     extern crate std;
@@ -74,5 +97,11 @@ mod tests {
         assert_eq!(format!("{}", Rounded(0.0)), "0");
         assert_eq!(format!("{}", Rounded(9.99999999)), "10.00");
         assert_eq!(format!("{}", Rounded(0.0999996)), "0.1000");
+    }
+
+    #[test]
+    fn control_characters_are_shown_escaped() {
+        assert_eq!(format!("{}", Shown("1.2\u{0}45")), "1.2\\u{0}45");
+        assert_eq!(format!("{}", Shown("a\tb é")), "a\\tb é");
     }
 }

@@ -416,10 +416,11 @@ impl Watchdog {
 pub enum Fixes {}
 
 impl Fixes {
-    /// The next fix due at `t_us` (never any).
+    /// The next fix due at a sample ending at `t_us` over `dt_s` (never any).
     pub fn due(
         &mut self,
         _t_us: u64,
+        _dt_s: f32,
     ) -> Result<Option<nav_core::ins_filter::sequencer::GnssFixInput<f32>>, core::convert::Infallible>
     {
         match *self {}

@@ -51,7 +51,7 @@ impl fmt::Display for LineError<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::NoEquals => f.write_str("expected 'key = value'"),
-            Self::UnknownKey(k) => write!(f, "unknown key '{k}'"),
+            Self::UnknownKey(k) => write!(f, "unknown key '{}'", nav_core::number::Shown(k)),
             Self::Invalid {
                 key,
                 expected,
@@ -61,7 +61,11 @@ impl fmt::Display for LineError<'_> {
                 key,
                 expected,
                 value,
-            } => write!(f, "{key}: takes {expected}, got {value}"),
+            } => write!(
+                f,
+                "{key}: takes {expected}, got {}",
+                nav_core::number::Shown(value)
+            ),
         }
     }
 }

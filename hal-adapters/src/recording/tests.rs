@@ -405,6 +405,7 @@ fn time_going_backwards_is_bad_interval() {
         Ok(ReplayStats {
             samples: 5,
             bad_interval: 2,
+            not_after_previous: 2,
             ..ReplayStats::default()
         })
     );

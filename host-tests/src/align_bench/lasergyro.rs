@@ -213,6 +213,12 @@ impl Row {
 
 /// The recording's increments (FRD, SI) and site.
 pub fn load(path: &Path) -> Result<(Vec<ImuIncrement<f64>>, Site, PsinsRecording)> {
+    // A folder was read as text: "line 1: Is a directory (os error 21)".
+    ensure!(
+        !path.is_dir(),
+        "--data {} is a folder: give the laser-gyro recording (a PSINS .imu file)",
+        path.display()
+    );
     // The error names the file and the cause.
     let rec = psins::read(path)?;
     let dt = rec.header.interval_s();

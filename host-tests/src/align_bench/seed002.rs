@@ -375,9 +375,18 @@ fn monte_carlo(rec: &Recorded, model: &ImuErrorModel, runs: usize) -> Result<Vec
             .map(|&t| bias_floor(rec, &bias, t, g))
             .collect();
         let init = InitialErrors::draw(seed);
-        for (i, (gains, _)) in FILTERS.iter().enumerate() {
+        for (i, (gains, name)) in FILTERS.iter().enumerate() {
             let cfg = config_for(rec, model, &init, *gains);
             let e = fly::<f64>(rec, &sensed, &cfg, &CHECKPOINTS_S)?;
+            // A table of NaN would read as a result.
+            ensure!(
+                e.roll_rad
+                    .iter()
+                    .chain(&e.pitch_rad)
+                    .chain(e.sigma_rad.iter().flat_map(|(r, p)| [r, p]))
+                    .all(|x| x.is_finite()),
+                "the {name} filter's attitude or sigma is not finite (run {seed}); no table"
+            );
             for (j, cell) in cells[i].iter_mut().enumerate() {
                 cell.add(&e, j, floors[j], sigma_floor);
             }

@@ -558,8 +558,7 @@ impl ReplayArgs {
             None => ImuCalibration::default(),
             Some(path) => {
                 host_tests::atomic::refuse_same_file(&[path], &self.out)?;
-                let text = std::fs::read_to_string(path)
-                    .with_context(|| format!("reading {}", path.display()))?;
+                let text = host_tests::text_error::read_text(path)?;
                 ImuCalibration::parse(&text).map_err(|e| {
                     anyhow::anyhow!("--calibration {}: {}", path.display(), e.in_text(&text))
                 })?
@@ -911,6 +910,14 @@ fn bench_filter(dir: Option<PathBuf>) -> Result<()> {
     use host_tests::filter_bench::{FilterBenchOptions, generate, run};
     let temp = tempfile::tempdir()?;
     let dir = dir.unwrap_or_else(|| temp.path().to_path_buf());
+    // A file gave "creating FILE: File exists (os error 17)".
+    if dir.exists() && !dir.is_dir() {
+        anyhow::bail!(
+            "--dir {} is a file: nav bench filter writes a folder (the KF-GINS data set: IMU and \
+             GNSS text, configuration, truth, result); give a folder's path (created if missing)",
+            dir.display()
+        );
+    }
     let o = FilterBenchOptions::default();
     println!(
         "generating {} s of {} at {} Hz with 1 Hz RTK fixes ({:?} m) in {} ...",
@@ -987,6 +994,19 @@ fn bench_consistency(
         .find(|c| !(1..=CONSISTENCY_CELLS).contains(*c))
     {
         anyhow::bail!("--cells {cell}: the table has cells 1 to {CONSISTENCY_CELLS}");
+    }
+    // The seeds wrapped silently past u64::MAX (a table of seeds 18446744073709551615–0).
+    let seeds = (runs as u64).checked_mul(choice.families as u64);
+    if seeds
+        .and_then(|n| choice.first_seed.checked_add(n.saturating_sub(1)))
+        .is_none()
+    {
+        anyhow::bail!(
+            "--first-seed {} + --runs {runs} x --families {} overflows the seeds (at most {})",
+            choice.first_seed,
+            choice.families,
+            u64::MAX
+        );
     }
     let (lo9, hi9) = average_chi2_bounds(9.0, runs);
     let (lo3, hi3) = average_chi2_bounds(3.0, runs);
@@ -1088,10 +1108,9 @@ fn bench_consistency(
         };
         let mut inside = Vec::new();
         for family in 0..choice.families as u64 {
-            let first = choice
-                .first_seed
-                .wrapping_add(family.wrapping_mul(runs as u64));
-            let seeds = format!("{first}–{}", first.wrapping_add(runs as u64 - 1));
+            // Checked above: no overflow.
+            let first = choice.first_seed + family * runs as u64;
+            let seeds = format!("{first}–{}", first + (runs as u64 - 1));
             let r = consistency_cell(
                 &Case {
                     seed: first,
@@ -1533,7 +1552,11 @@ fn gnss_options(
             final_offset_ned_m: [r[2], r[3], r[4]],
         });
     }
-    for t in &a.gnss_nan {
+    for (i, t) in a.gnss_nan.iter().enumerate() {
+        // Listed twice, one fix made NaN once: not the receiver asked for.
+        if a.gnss_nan[..i].contains(t) {
+            anyhow::bail!("--gnss-nan {t} is given twice: give each fix's time once");
+        }
         outliers.push(Outlier::NaN { t_s: *t });
     }
     Ok(GnssSimOptions {
@@ -1555,8 +1578,11 @@ fn gnss_options(
 }
 
 /// The `--set KEY=VALUE` pairs of `nav sim`.
+/// The `--set KEY=VALUE` pairs; a key given twice is refused, as `nav config` refuses one
+/// (the last one won silently).
 fn key_values(set: &[String]) -> Result<Vec<(&str, f64)>> {
-    set.iter()
+    let pairs = set
+        .iter()
         .map(|kv| {
             let (k, v) = kv
                 .split_once('=')
@@ -1567,7 +1593,13 @@ fn key_values(set: &[String]) -> Result<Vec<(&str, f64)>> {
                 .with_context(|| format!("--set {kv:?}: the value is not a number"))?;
             Ok((k.trim(), v))
         })
-        .collect()
+        .collect::<Result<Vec<_>>>()?;
+    for (i, (k, v)) in pairs.iter().enumerate() {
+        if let Some((_, first)) = pairs[..i].iter().find(|(key, _)| key == k) {
+            anyhow::bail!("--set {k} is given twice ({first} and {v}): give each parameter once");
+        }
+    }
+    Ok(pairs)
 }
 
 fn sim_formats(f: SimFormat) -> host_tests::simulate::Formats {

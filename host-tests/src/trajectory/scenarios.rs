@@ -48,12 +48,11 @@ pub trait Params {
 
 /// Sets `key` to `value` in `p` (unknown keys are an error listing the known ones).
 pub fn set_param(p: &mut dyn Params, key: &str, value: f64) -> Result<()> {
-    if !value.is_finite() {
-        bail!("{key} must be a finite number, not {value}");
-    }
     let mut list = p.params();
     let known: Vec<&str> = list.iter().map(|q| q.key).collect();
+    // The key first: `speed=NaN` was "speed must be a finite number", a parameter that is not.
     match list.iter_mut().find(|q| q.key == key) {
+        Some(_) if !value.is_finite() => bail!("{key} must be a finite number, not {value}"),
         Some(q) => {
             *q.value = value;
             Ok(())

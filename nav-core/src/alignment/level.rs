@@ -68,7 +68,8 @@
 //! # Constant-gain variant ([`GainMode::Scheduled`])
 //! After each update the velocity state is reset to zero (velocity gain 1) and the tilt is
 //! corrected by `delta psi_E = -z_N K(t)`, `delta psi_N = z_E K(t)` with
-//! `K(t) = coth(t / tau) / (g tau)`, `tau = sqrt(q_a / q_g) / g`. This is the Riccati solution of
+//! `K(t) = coth(t / tau) / (g tau)`, `tau = sqrt(q_a / q_g) / g` (at least the update period:
+//! [`LevelConfig::scheduled_time_constant_s`]). This is the Riccati solution of
 //! the problem in its simplest form (a slope `g psi` observed through a velocity random walk of
 //! density `q_a`, the slope itself a random walk of `q_c = g^2 q_g`; Gelb §4.5):
 //! `P(t) = sqrt(q_c q_a) coth(t / tau)`, so `K -> 1 / (g t)` (the running mean of the slope) while `t << tau` and
@@ -253,14 +254,17 @@ impl<T: Scalar> LevelConfig<T> {
 
     /// Time constant of the constant-gain filter `tau = sqrt(q_a / q_g) / g` [s]: where the
     /// running mean of the slope stops improving because the tilt itself wanders (infinite
-    /// without gyro noise).
+    /// without gyro noise), and at least [`Self::update_period_s`]: the gain `1 / (g tau)`
+    /// then stays at most the dead-beat gain of one update interval `t_u` (a slope `g psi` seen
+    /// over `t_u` corrected whole): a shorter `tau` overshoots, one below `t_u / 2` diverges, and
+    /// without accelerometer noise `tau` is 0 and the gain infinite.
     pub fn scheduled_time_constant_s(&self) -> T {
         let g = LocalEarth::new(self.lat_rad, self.h_m).g;
         let q_g = self.tilt_process_noise();
         if q_g <= T::zero() {
             return T::c(f64::INFINITY);
         }
-        (self.accel_vrw_mps_per_sqrt_s / q_g.sqrt()) / g
+        ((self.accel_vrw_mps_per_sqrt_s / q_g.sqrt()) / g).max(self.update_period_s)
     }
 }
 
@@ -864,6 +868,36 @@ mod tests {
             levels_at_rest::<f64>(gains);
             levels_at_rest::<f32>(gains);
         }
+    }
+
+    #[test]
+    fn constant_gains_level_without_accelerometer_noise() {
+        // Ideal sensors: tau = sqrt(q_a / q_g) / g is 0, the gain is the dead-beat one of an
+        // update interval and the estimate finite (an infinite gain gave NaN and 90 deg).
+        let (lat, roll, pitch, yaw) = (0.8, 0.02, -0.03, 2.0);
+        let q = attitude::from_euler(roll, pitch, yaw);
+        let inc = rest(lat, &q, 0.0025);
+        let one = 1f64.to_radians();
+        let mut c = config::<f64>(roll + one, pitch - one, yaw, lat, GainMode::Scheduled);
+        c.gyro_arw_rad_per_sqrt_s = 0.0;
+        c.gyro_bias_sigma_rad_s = 0.0;
+        c.accel_vrw_mps_per_sqrt_s = 0.0;
+        c.accel_bias_sigma_mps2 = 0.0;
+        assert_eq!(c.scheduled_time_constant_s(), c.update_period_s);
+        let mut f = LevelFilter::new(c).unwrap();
+        for _ in 0..8000 {
+            f.add(&inc).unwrap();
+        }
+        let e = f.estimate();
+        let (r, p, _) = attitude::euler(&e.q_b_n);
+        assert!(e.sigma_rad.iter().all(|s| s.is_finite()), "{}", e.sigma_rad);
+        let deg = |x: f64| x.to_degrees().abs();
+        assert!(
+            deg(r - roll) < 1e-4 && deg(p - pitch) < 1e-4,
+            "{} {}",
+            deg(r - roll),
+            deg(p - pitch)
+        );
     }
 
     #[test]

@@ -1,0 +1,423 @@
+//! Inputs of `nav` that were taken wrongly or silently: grades without noise, streams, data
+//! sets mixed from two folders, repeated time tags, headers in capitals, holes in a truth file,
+//! long output names, fixes just before the data. Each is refused with a message that names
+//! the file and what was expected, warned about, or counted where the README says.
+
+mod common;
+
+use common::{nav, output_text};
+
+/// `nav args`, which must succeed; its stdout and stderr.
+fn ok(args: &[&str]) -> String {
+    let o = nav(args);
+    let text = output_text(&o);
+    assert!(o.status.success(), "nav {args:?}: {text}");
+    assert!(!text.contains("panicked"), "nav {args:?}: {text}");
+    text
+}
+
+/// The constant-gain level filter with noise-free sensors: its time constant was 0, its gain
+/// infinite, and the table printed NaN and 90 deg errors with status 0.
+#[test]
+fn the_ship_bench_with_ideal_sensors_prints_numbers() {
+    let text = ok(&["align-bench", "seed002", "--grade", "ideal", "--runs", "1"]);
+    assert!(!text.contains("NaN"), "{text}");
+    // Every const row is within a millidegree (exact data).
+    for row in text.lines().filter(|l| l.contains(" const ")) {
+        let worst = row
+            .split(['|', ' '])
+            .filter_map(|f| f.parse::<f64>().ok())
+            .skip(2)
+            .fold(0.0_f64, |m, x| m.max(x.abs()));
+        assert!(worst < 1e-3, "{row}");
+    }
+}
+
+/// `nav args` with `input` written to its standard input through a pipe.
+fn nav_with_stdin(args: &[&str], input: Vec<u8>) -> std::process::Output {
+    use std::io::Write as _;
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+        .args(args)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run nav");
+    let mut stdin = child.stdin.take().unwrap();
+    // A refusal closes the pipe before all is written: not this test's failure.
+    let writer = std::thread::spawn(move || {
+        let _ = stdin.write_all(&input);
+    });
+    let o = child.wait_with_output().expect("nav's output");
+    writer.join().unwrap();
+    o
+}
+
+/// A pipe as the IMU recording or the GNSS file: the format detection read its start, the
+/// reader then found the rest and blamed valid data ("expected the header row", "not a NAVIMU
+/// recording", "no data"). Refused now as what it is, nothing written.
+#[test]
+fn a_pipe_as_an_input_is_refused_as_a_pipe() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (bin, csv, out) = (path("imu.bin"), path("imu.csv"), path("out.bin"));
+    common::generated_recording(std::path::Path::new(&bin), "1");
+    ok(&["convert", "--in", &bin, "--out", &csv]);
+    for input in [&bin, &csv] {
+        let o = nav_with_stdin(
+            &["convert", "--in", "/dev/stdin", "--out", &out],
+            std::fs::read(input).unwrap(),
+        );
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(1), "{text}");
+        assert!(
+            text.contains("/dev/stdin: not a regular file")
+                && text.contains("pipes are not supported"),
+            "{text}"
+        );
+        assert!(!std::path::Path::new(&out).exists());
+    }
+    let gnss = "t_s,lat_deg,lon_deg,h_m,sigma_n_m,sigma_e_m,sigma_d_m\n0.5,45,7.5,150,1,1,2\n";
+    let o = nav_with_stdin(
+        &["convert", "--gnss", "--in", "/dev/stdin", "--out", &out],
+        gnss.as_bytes().to_vec(),
+    );
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("GNSS file /dev/stdin: not a regular file"),
+        "{text}"
+    );
+    assert!(!std::path::Path::new(&out).exists());
+}
+
+/// `nav kf-gins` run from a folder that has a file of `imupath`'s relative name read that one
+/// and `gnsspath` from the configuration's folder, silently: two data sets mixed. The files
+/// read are named now, and the mixing warned about.
+#[test]
+fn kf_gins_names_its_files_and_warns_of_two_folders() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = host_tests::filter_bench::generate(
+        &dir.path().join("set"),
+        &host_tests::filter_bench::FilterBenchOptions {
+            seconds: 20.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let yaml = std::fs::read_to_string(&data.config).unwrap();
+    // Relative names, as a user writes them.
+    let name_of = |key: &str| {
+        let line = yaml.lines().find(|l| l.starts_with(key)).unwrap();
+        let path = line.split('"').nth(1).unwrap();
+        let name = std::path::Path::new(path).file_name().unwrap();
+        (line.to_owned(), name.to_str().unwrap().to_owned())
+    };
+    let (imu_line, imu_name) = name_of("imupath:");
+    let (gnss_line, gnss_name) = name_of("gnsspath:");
+    let relative = yaml
+        .replace(&imu_line, &format!("imupath: \"{imu_name}\""))
+        .replace(&gnss_line, &format!("gnsspath: \"{gnss_name}\""));
+    std::fs::write(&data.config, relative).unwrap();
+    // Another folder with the first half of the IMU file under its name.
+    let here = dir.path().join("here");
+    std::fs::create_dir(&here).unwrap();
+    let imu_text = std::fs::read_to_string(data.config.with_file_name(&imu_name)).unwrap();
+    let lines: Vec<&str> = imu_text.lines().collect();
+    std::fs::write(
+        here.join(&imu_name),
+        lines[..lines.len() / 2].join("\n") + "\n",
+    )
+    .unwrap();
+    let run = |cwd: &std::path::Path| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_nav"))
+            .current_dir(cwd)
+            .arg("kf-gins")
+            .arg(&data.config)
+            .arg("--out")
+            .arg(&data.out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", output_text(&o));
+        (
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+            output_text(&o),
+        )
+    };
+    let (stderr, text) = run(&here);
+    let beside = data.config.with_file_name(&gnss_name);
+    assert!(
+        stderr.contains(&format!(
+            "KF-GINS files: imupath {imu_name}, gnsspath {}",
+            beside.display()
+        )),
+        "{stderr}"
+    );
+    assert!(
+        text.contains("were found in different folders") && text.contains("has another"),
+        "{text}"
+    );
+    // From the configuration's folder: one folder, no warning.
+    let (stderr, text) = run(data.config.parent().unwrap());
+    assert!(
+        stderr.contains(&format!(
+            "KF-GINS files: imupath {imu_name}, gnsspath {gnss_name}"
+        )),
+        "{stderr}"
+    );
+    assert!(!text.contains("warning"), "{text}");
+}
+
+/// A repeated time tag and the second of a swapped pair were counted as "bad interval", the
+/// README's "time out of order" staying 0 (the rest of a step back was counted there).
+#[test]
+fn repeated_and_swapped_time_tags_are_counted_out_of_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (bin, csv) = (path("imu.bin"), path("imu.csv"));
+    common::generated_recording(std::path::Path::new(&bin), "12");
+    ok(&["convert", "--in", &bin, "--out", &csv]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let write = |name: &str, lines: &[&str]| {
+        std::fs::write(path(name), lines.join("\n") + "\n").unwrap();
+        path(name)
+    };
+    let mut repeated = lines.clone();
+    repeated.insert(4501, lines[4500]);
+    let mut swapped = lines.clone();
+    swapped.swap(4500, 4501);
+    let out = path("out.csv");
+    let summary = |imu: &str| {
+        let text = ok(&common::replay_args(imu, &out, &[]));
+        text.lines()
+            .find(|l| l.starts_with("samples "))
+            .unwrap()
+            .to_owned()
+    };
+    let line = summary(&write("repeated.csv", &repeated));
+    assert!(
+        line.contains("flagged 1 (non-finite 0, bad interval 0, time out of order 1)"),
+        "{line}"
+    );
+    // The first of the pair comes 2 periods after its predecessor with one period's increment
+    // and the one after the pair too (bad intervals, docs/recording-format.md); the second is
+    // behind the first.
+    let line = summary(&write("swapped.csv", &swapped));
+    assert!(
+        line.contains("flagged 3 (non-finite 0, bad interval 2, time out of order 1)"),
+        "{line}"
+    );
+}
+
+/// A fix at the recording's first tick (2.5 ms before the first sample's end) was "on another
+/// clock"; it lies in the data's time now. Fixes near the data but outside it are named by
+/// the nearest; only fixes far from it are said to be on another clock.
+#[test]
+fn fixes_just_outside_the_data_are_not_on_another_clock() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let sim = path("sim");
+    ok(&[
+        "sim",
+        "land-vehicle",
+        "--out",
+        &sim,
+        "--seconds",
+        "20",
+        "--gnss-rate",
+        "1",
+        "--grade",
+        "fog",
+    ]);
+    let gnss = std::fs::read_to_string(format!("{sim}/gnss.csv")).unwrap();
+    let mut lines = gnss.lines();
+    let header = lines.next().unwrap();
+    let first = lines.next().unwrap();
+    assert!(first.starts_with("0,"), "{first}");
+    let (imu, out) = (format!("{sim}/imu.bin"), path("out.csv"));
+    let replay = |t_s: &str| {
+        let fix = path(&format!("fix_{t_s}.csv"));
+        let row = first.replacen('0', t_s, 1);
+        std::fs::write(&fix, format!("{header}\n{row}\n")).unwrap();
+        nav(&[
+            "replay",
+            "--imu",
+            &imu,
+            "--gnss",
+            &fix,
+            "--imu-noise",
+            "fog",
+            "--init-pos",
+            "45,7.5,250",
+            "--init-vel",
+            "0,0,0",
+            "--init-att",
+            "0,0,0",
+            "--out",
+            &out,
+        ])
+    };
+    let o = replay("0");
+    let text = output_text(&o);
+    assert!(o.status.success(), "{text}");
+    assert!(
+        text.contains("WARNING: no GNSS position fix was used") && !text.contains("another clock"),
+        "{text}"
+    );
+    let o = replay("21");
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("the nearest fix, at 21 s, is 1 s after it")
+            && !text.contains("another clock"),
+        "{text}"
+    );
+    let o = replay("345600");
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(text.contains("on another clock"), "{text}");
+}
+
+/// `nav kf-gins` compared `imudatarate` with the average rate of the epochs, a gap's time
+/// included: a 7 s hole in 400 Hz data read as 353 Hz and blamed `imudatarate`. The median
+/// interval is the file's rate; a declared rate off it by more than 0.1 % is said (a 401 Hz
+/// `imudatarate` for a 400 Hz file ran silently).
+#[test]
+fn kf_gins_judges_imudatarate_by_the_median_interval() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = host_tests::filter_bench::generate(
+        dir.path(),
+        &host_tests::filter_bench::FilterBenchOptions {
+            seconds: 20.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let yaml = std::fs::read_to_string(&data.config).unwrap();
+    let imu_line = yaml.lines().find(|l| l.starts_with("imupath:")).unwrap();
+    let imu = imu_line.split('"').nth(1).unwrap();
+    let text = std::fs::read_to_string(imu).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    // 7 s of the 200 Hz epochs dropped.
+    let holed = [&lines[..1000], &lines[2400..]].concat().join("\n") + "\n";
+    let holed_path = dir.path().join("holed.txt");
+    std::fs::write(&holed_path, holed).unwrap();
+    let run = |name: &str, yaml: String| {
+        let config = dir.path().join(name);
+        std::fs::write(&config, yaml).unwrap();
+        let out = dir.path().join("out.nav");
+        ok(&[
+            "kf-gins",
+            config.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let with_hole = yaml.replace(imu_line, &format!("imupath: \"{}\"", holed_path.display()));
+    let text = run("holed.yaml", with_hole);
+    assert!(
+        text.contains("WARNING: 7.") && !text.contains("imudatarate"),
+        "{text}"
+    );
+    let text = run(
+        "off.yaml",
+        yaml.replace("imudatarate: 200\n", "imudatarate: 200.3\n"),
+    );
+    assert!(
+        text.contains("warning: imudatarate 200.3 Hz, but the epochs of ")
+            && text.contains("come every 0.005 s (200 Hz"),
+        "{text}"
+    );
+}
+
+/// A NUL byte inside a value was printed raw: invisible, the message "got 45.5" refused what
+/// looked valid. Control characters are shown escaped.
+#[test]
+fn a_nul_byte_in_a_value_is_shown() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let config = path("nul.txt");
+    std::fs::write(&config, "lat-deg = 45.5\0\n").unwrap();
+    let o = nav(&["config", &config, "--out", &path("c.bin")]);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("lat-deg: takes a finite number, got 45.5\\u{0}"),
+        "{text}"
+    );
+    let (bin, csv) = (path("imu.bin"), path("imu.csv"));
+    common::generated_recording(std::path::Path::new(&bin), "1");
+    ok(&["convert", "--in", &bin, "--out", &csv]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+    lines[5] = lines[5].replacen(',', ",\0", 2).replacen(",\0", ",", 1);
+    std::fs::write(&csv, lines.join("\n") + "\n").unwrap();
+    let o = nav(&common::replay_args(&csv, &path("out.csv"), &[]));
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("line 6: column") && text.contains("found '\\u{0}"),
+        "{text}"
+    );
+}
+
+/// A binary recording as `imupath` was read as text: "line 1: expected 7 numbers ..., found
+/// 1". Named as what it is.
+#[test]
+fn a_binary_recording_as_imupath_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = host_tests::filter_bench::generate(
+        &dir.path().join("set"),
+        &host_tests::filter_bench::FilterBenchOptions {
+            seconds: 5.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let bin = dir.path().join("imu.bin");
+    common::generated_recording(&bin, "1");
+    let yaml = std::fs::read_to_string(&data.config).unwrap();
+    let imu_line = yaml.lines().find(|l| l.starts_with("imupath:")).unwrap();
+    let config = dir.path().join("bin.yaml");
+    std::fs::write(
+        &config,
+        yaml.replace(imu_line, &format!("imupath: \"{}\"", bin.display())),
+    )
+    .unwrap();
+    let o = nav(&["kf-gins", config.to_str().unwrap()]);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("(imupath): a binary IMU recording (it starts with the NAVIMU magic"),
+        "{text}"
+    );
+}
+
+/// `emulate --out E --errors-out E` with E from an earlier run said "output E is the input E":
+/// it is the other output. Worded as kf-gins words it.
+#[test]
+fn two_emulator_outputs_in_one_file_are_named_as_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let sim = path("sim");
+    ok(&["sim", "static", "--seconds", "2", "--out", &sim]);
+    let (truth, out) = (format!("{sim}/truth.csv"), path("e.csv"));
+    std::fs::write(&out, "an earlier run\n").unwrap();
+    let o = nav(&[
+        "emulate",
+        "--truth",
+        &truth,
+        "--out",
+        &out,
+        "--errors-out",
+        &out,
+    ]);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("--out and --errors-out name the same file") && !text.contains("input"),
+        "{text}"
+    );
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "an earlier run\n");
+}
