@@ -240,7 +240,7 @@ fn fixes_just_outside_the_data_are_not_on_another_clock() {
         let fix = path(&format!("fix_{t_s}.csv"));
         let row = first.replacen('0', t_s, 1);
         std::fs::write(&fix, format!("{header}\n{row}\n")).unwrap();
-        nav(&[
+        let head = [
             "replay",
             "--imu",
             &imu,
@@ -248,15 +248,8 @@ fn fixes_just_outside_the_data_are_not_on_another_clock() {
             &fix,
             "--imu-noise",
             "fog",
-            "--init-pos",
-            "45,7.5,250",
-            "--init-vel",
-            "0,0,0",
-            "--init-att",
-            "0,0,0",
-            "--out",
-            &out,
-        ])
+        ];
+        nav(&[&head[..], &common::GIVEN, &["--out", &out]].concat())
     };
     let o = replay("0");
     let text = output_text(&o);

@@ -542,19 +542,29 @@ impl<T: Scalar> MotionAlign<T> {
         roll: T,
         pitch: T,
     ) -> Option<(Vector3<T>, Vector3<T>)> {
+        let (rate, sigma) = self.mean_rate_at_rest()?;
+        let w_ie_n = crate::earth::omega_ie_n(T::c(pos.lat_rad.to_f64()));
+        let down_rate_n = Vector3::new(T::zero(), T::zero(), w_ie_n.z);
+        let c_n_b = attitude::from_euler(roll, pitch, T::zero()).inverse();
+        let bias = rate - c_n_b * down_rate_n;
+        let earth = w_ie_n.x;
+        Some((
+            bias,
+            Vector3::repeat((sigma * sigma + earth * earth).sqrt()),
+        ))
+    }
+
+    /// The mean body rate over the rest spans [rad/s] (Earth rate in) and its 1-sigma per axis
+    /// [rad/s]: the angle random walk over the time summed and a rocking of
+    /// [`REST_ROCKING_RAD`] over it. `None` below [`MIN_REST_S`].
+    fn mean_rate_at_rest(&self) -> Option<(Vector3<T>, T)> {
         let (turn, dt) = self.rest?;
         if !(dt >= T::c(MIN_REST_S)) {
             return None;
         }
-        let w_ie_n = crate::earth::omega_ie_n(T::c(pos.lat_rad.to_f64()));
-        let down_rate_n = Vector3::new(T::zero(), T::zero(), w_ie_n.z);
-        let c_n_b = attitude::from_euler(roll, pitch, T::zero()).inverse();
-        let bias = turn / dt - c_n_b * down_rate_n;
         let arw = self.config.arw_rad_per_sqrt_s;
         let rock = T::c(REST_ROCKING_RAD) / dt;
-        let earth = w_ie_n.x;
-        let sigma = (arw * arw / dt + rock * rock + earth * earth).sqrt();
-        Some((bias, Vector3::repeat(sigma)))
+        Some((turn / dt, (arw * arw / dt + rock * rock).sqrt()))
     }
 
     /// Roll, pitch [rad] and their 1-sigma [rad] now: the level found at a fix, carried on by
@@ -697,14 +707,9 @@ impl<T: Scalar> MotionAlign<T> {
             // The gyros carry the level on from here: with the mean rate at rest taken out
             // when known (Earth rate in, as the level turns with the Earth), else the
             // configured bias's 1-sigma left in.
-            let (bias_rad_s, bias_sigma_rad_s) = match self.rest {
-                Some((turn, dt)) if dt >= T::c(MIN_REST_S) => {
-                    let arw = c.arw_rad_per_sqrt_s;
-                    let rock = T::c(REST_ROCKING_RAD) / dt;
-                    (turn / dt, (arw * arw / dt + rock * rock).sqrt())
-                }
-                _ => (Vector3::zeros(), c.gyro_bias_rad_s),
-            };
+            let (bias_rad_s, bias_sigma_rad_s) = self
+                .mean_rate_at_rest()
+                .unwrap_or((Vector3::zeros(), self.config.gyro_bias_rad_s));
             self.level_track = Some(LevelTrack {
                 q_b_l: attitude::from_euler(roll, pitch, T::zero()),
                 dt: T::zero(),

@@ -135,10 +135,9 @@ impl SpanFit {
             sigma[axis] = 2.0 * libm::sqrt(var * inv[(2, 2)].max(0.0));
             v_mid[axis] = beta.y + 2.0 * beta.z * t_mid;
         }
-        // The horizontal part of 2 omega_ie x v, omega_ie_n = (W cos(lat), 0, -W sin(lat)),
-        // v = (v_N, v_E, 0): (2 W sin(lat) v_E, -2 W sin(lat) v_N).
-        let w_sin = 2.0 * crate::earth::OMEGA_IE * libm::sin(self.lat0_rad);
-        let coriolis = [w_sin * v_mid[1], -w_sin * v_mid[0]];
+        let v = Vector3::new(v_mid[0], v_mid[1], 0.0);
+        let c = (crate::earth::omega_ie_n(self.lat0_rad) * 2.0).cross(&v);
+        let coriolis = [c.x, c.y];
         let ok = accel
             .iter()
             .chain(sigma.iter())
