@@ -10,9 +10,7 @@
 //! at a time ([`Case::without`]).
 
 use crate::aided::{self, AidedSample, AidedSink};
-use crate::aided_cmd::{
-    GradeFilterModel, bias_state_part, filter_model_of, grade_noise, off_diagonal_rms,
-};
+use crate::aided_cmd::{bias_state_part, filter_model_of, model_config, off_diagonal_rms};
 use crate::gnss_sim::{self, GnssSimOptions};
 use crate::recording_io::Recording;
 use crate::report::interpolate;
@@ -24,8 +22,8 @@ use anyhow::{Result, anyhow};
 use nav_core::attitude::rotation_vector_of;
 use nav_core::ins_filter::sequencer::{Realignments, Sequencer, Start};
 use nav_core::ins_filter::{
-    ATT, AidResult, AidedIns, BA, BG, FilterConfig, GnssCorrelatedError, InitialSigma, POS, SA, SG,
-    SensorErrors, VEL,
+    ATT, AidResult, AidedIns, BA, BG, GnssCorrelatedError, InitialSigma, POS, SA, SG, SensorErrors,
+    VEL,
 };
 use nav_core::nalgebra::{SMatrix, SVector};
 use nav_core::{NavState, Position, Scalar, Vector3};
@@ -52,14 +50,10 @@ pub struct Case {
     /// stands for a stopped vehicle's residual motion, which the simulated stops lack (they
     /// are exactly still): with them the filter is conservative at every stop by design.
     pub zero_motion: bool,
-    /// The filter's noise model: [`filter_model_of`] the simulated errors (true: the grade's
-    /// turn-on spread as the start's uncertainty, its in-run processes alone as process
-    /// noise) or [`grade_noise`] (false: one figure per sensor for both, as `nav replay
-    /// --imu-noise`).
-    pub in_run_noise: bool,
     /// Sensor errors the simulator leaves out (diagnostics; empty: the grade as it is); the
-    /// filter's model ([`Case::in_run_noise`]) leaves them out as well, so that a diagnosis
-    /// compares a filter with the sensor it models.
+    /// filter's model ([`filter_model_of`] the simulated errors: the grade's turn-on spread as
+    /// the start's sensor 1-sigma, its in-run processes alone as process noise) leaves them
+    /// out as well, so that a diagnosis compares a filter with the sensor it models.
     pub without: Vec<ErrorSource>,
 }
 
@@ -345,22 +339,8 @@ pub fn prepare(case: &Case) -> Result<Prepared> {
         .map_err(|e| anyhow!("grade {}: {e}", case.grade))?;
     let sim = sense(traj.as_ref(), sampling, every, injector, |_, _| {})?;
     let gnss = gnss_sim::simulate(&sim.truth, &case.gnss)?;
-    let model = if case.in_run_noise {
-        filter_model_of(&case.error_model())
-    } else {
-        let noise = grade_noise(case.grade);
-        GradeFilterModel {
-            noise,
-            initial: [
-                noise.gyro_bias_rad_s,
-                noise.accel_bias_mps2,
-                noise.gyro_scale,
-                noise.accel_scale,
-            ]
-            .map(Vector3::repeat),
-        }
-    };
-    let mut config = FilterConfig::new(model.noise);
+    let model = filter_model_of(&case.error_model());
+    let mut config = model_config(&model);
     if !case.zero_motion {
         config.zero_motion = None;
     }
@@ -372,15 +352,12 @@ pub fn prepare(case: &Case) -> Result<Prepared> {
     });
     // A start with errors drawn from its own 1-sigma.
     let t0 = sim.truth[0];
-    let sigma = InitialSigma {
-        position_ned_m: Vector3::repeat(2.0),
-        velocity_ned_m_s: Vector3::repeat(0.1),
-        attitude_rad: Vector3::new(0.05f64, 0.05, 0.5).map(f64::to_radians),
-        gyro_bias_rad_s: model.initial[0],
-        accel_bias_mps2: model.initial[1],
-        gyro_scale: model.initial[2],
-        accel_scale: model.initial[3],
-    };
+    let sigma = InitialSigma::new(
+        Vector3::repeat(2.0),
+        Vector3::repeat(0.1),
+        Vector3::new(0.05f64, 0.05, 0.5).map(f64::to_radians),
+        &model.start_sigma,
+    );
     let mut rng = ChaCha8Rng::seed_from_u64(case.seed ^ 0x005E_ED0F_57A7);
     let mut draw = |s: &Vector3<f64>| {
         s.map(|x| {

@@ -12,7 +12,7 @@ use nav_core::ins_filter::limits::MIN_BIAS_INSTABILITY_TIME_S;
 use nav_core::ins_filter::model::FilterNoise;
 use nav_core::ins_filter::motion::{MAX_FIX_INTERVAL_S, MIN_SPEED_SIGMAS, MotionAlignConfig};
 use nav_core::ins_filter::sequencer::{RealignCause, Realignments, Sequencer, Start};
-use nav_core::ins_filter::{FilterConfig, InitialSigma, SensorErrors};
+use nav_core::ins_filter::{FilterConfig, FilterModel, InitialSigma, SensorErrors};
 use nav_core::navigator::config::{MAX_HEIGHT_M, MIN_HEIGHT_M};
 use nav_core::number::{Number, Rounded};
 use nav_core::{NavState, Position, Scalar, Vector3, attitude};
@@ -32,9 +32,11 @@ pub fn noise_of_spec(n: &NoiseSpec) -> FilterNoise<f64> {
 /// [`FILTER_CORRELATION_TIME_S`]. The start's sensor 1-sigma is the same figure, the
 /// process's stationary one, so its covariance does not decay; conservative (the turn-on
 /// spread is let wander in-run as well, at `sigma sqrt(2 / tau)`: a consumer gyro's 0.5 deg/s
-/// wanders 255 deg/h per sqrt(h), against the grade's 10), used by `nav replay --imu-noise`,
-/// whose starts in motion and from the alignment take the sensor 1-sigma from the noise model
-/// alone. With 1 h it wandered 100 times faster (a consumer gyro's bias 0.14 deg/s in 150 s):
+/// wanders 255 deg/h per sqrt(h), against the grade's 10), used by `nav replay --imu-noise`
+/// and by the firmware's grades. Not [`grade_filter_model`]: its in-run processes are the
+/// simulator's, none for `fog` and `rlg` (constant biases), and a real part's bias instability
+/// would meet bias states without process noise; in 60 s outages the two give the same
+/// 1-sigma within 2 % (the misalignment consider states make most of it). With 1 h it wandered 100 times faster (a consumer gyro's bias 0.14 deg/s in 150 s):
 /// on a straight flight the filter's heading walked with its bias estimate, 25-50 deg off
 /// after 900 s against a 16 deg 1-sigma, from a perfect IMU.
 pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {
@@ -43,6 +45,14 @@ pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {
         gyro_bias_rad_s: spec.gyro_bias_rad_s.max(1e-9),
         accel_bias_mps2: spec.accel_bias_mps2.max(1e-7),
         ..noise_of_spec(&spec)
+    }
+}
+
+/// The filter's configuration of a model `m`, the rest the defaults.
+pub fn model_config(m: &FilterModel) -> FilterConfig<f64> {
+    FilterConfig {
+        sensor_sigma: Some(m.start_sigma),
+        ..FilterConfig::new(m.noise)
     }
 }
 
@@ -63,20 +73,9 @@ pub const FILTER_CORRELATION_TIME_S: f64 = nav_core::navigator::config::DEFAULT_
 /// state, an accelerometer's white noise; a longer one drives the bias state.
 pub const WHITE_GM_BELOW_S: f64 = 60.0;
 
-/// The filter's model of a grade with its two kinds of sensor error kept apart, as KF-GINS
-/// keeps `imunoise` (in-run) apart from `init*std` (the start's uncertainty).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GradeFilterModel {
-    /// The in-run processes ([`FilterNoise`]): white noise, and the biases' and scale factors'
-    /// Gauss–Markov processes of correlation time [`FILTER_CORRELATION_TIME_S`] whose driving
-    /// noise `2 sigma^2 / tau` equals the in-run drift the grade has.
-    pub noise: FilterNoise<f64>,
-    /// 1-sigma of the sensor errors at the start, per axis: gyro bias [rad/s], accelerometer
-    /// bias [m/s^2], gyro and accelerometer scale factors [-].
-    pub initial: [Vector3<f64>; 4],
-}
-
-/// [`GradeFilterModel`] of `grade`, from the same figures the simulator injects:
+/// The filter's model of a grade ([`FilterModel`]: its two kinds of sensor error kept
+/// apart, as KF-GINS keeps `imunoise` (in-run) apart from `init*std` (the start's
+/// uncertainty)), from the same figures the simulator injects:
 ///
 /// - the turn-on bias (a random constant per power-up), the fixed bias and the stationary
 ///   1-sigma of the Gauss–Markov bias (RSS) are the start's bias uncertainty, not an in-run
@@ -92,8 +91,10 @@ pub struct GradeFilterModel {
 /// - the scale factors are constants of the grade: the start's 1-sigma the largest of them
 ///   (at least 1 ppm), no in-run drift;
 /// - misalignment and g-sensitivity as in [`grade_noise`]: consider states of the filter
-///   ([`nav_core::ins_filter::consider`]).
-pub fn grade_filter_model(grade: Grade) -> GradeFilterModel {
+///   ([`nav_core::ins_filter::consider`]);
+/// - the Gauss–Markov states' correlation time [`FILTER_CORRELATION_TIME_S`], their drive
+///   `2 sigma^2 / tau` the grade's in-run drift.
+pub fn grade_filter_model(grade: Grade) -> FilterModel {
     filter_model_of(&grade.model())
 }
 
@@ -114,8 +115,8 @@ pub fn bias_state_part(
     }
 }
 
-/// [`GradeFilterModel`] of an error model `m` ([`grade_filter_model`]: the same rules).
-pub fn filter_model_of(m: &crate::sensor_model::ImuErrorModel) -> GradeFilterModel {
+/// [`FilterModel`] of an error model `m` ([`grade_filter_model`]: the same rules).
+pub fn filter_model_of(m: &crate::sensor_model::ImuErrorModel) -> FilterModel {
     let tau_f = FILTER_CORRELATION_TIME_S;
     // (white-noise density [U/sqrt(Hz)], in-run Gauss–Markov 1-sigma [U], start 1-sigma [U],
     // the short Gauss–Markov kept as such: 1-sigma [U], correlation time [s]).
@@ -143,7 +144,7 @@ pub fn filter_model_of(m: &crate::sensor_model::ImuErrorModel) -> GradeFilterMod
     };
     let (arw, gyro_in_run, gyro_start, gyro_short) = split(&m.gyro, true);
     let (vrw, accel_in_run, accel_start, _) = split(&m.accel, false);
-    GradeFilterModel {
+    FilterModel {
         noise: FilterNoise {
             arw_rad_per_sqrt_s: arw,
             vrw_mps_per_sqrt_s: vrw,
@@ -158,12 +159,12 @@ pub fn filter_model_of(m: &crate::sensor_model::ImuErrorModel) -> GradeFilterMod
             gyro_bias_instability_rad_s: gyro_short.0,
             gyro_bias_instability_time_s: gyro_short.1,
         },
-        initial: [
-            gyro_start,
-            accel_start,
-            Vector3::repeat(m.gyro.scale_sigma()),
-            Vector3::repeat(m.accel.scale_sigma()),
-        ],
+        start_sigma: SensorErrors {
+            gyro_bias_rad_s: gyro_start,
+            accel_bias_mps2: accel_start,
+            gyro_scale: Vector3::repeat(m.gyro.scale_sigma()),
+            accel_scale: Vector3::repeat(m.accel.scale_sigma()),
+        },
     }
 }
 
@@ -177,23 +178,10 @@ pub fn off_diagonal_rms(m: &nav_core::nalgebra::Matrix3<f64>) -> f64 {
 
 /// `f64` settings in the working scalar.
 pub fn config_in<T: Scalar>(c: &FilterConfig<f64>) -> FilterConfig<T> {
-    let n = &c.noise;
     let v = |v: &Vector3<f64>| v.map(T::c);
     FilterConfig {
-        noise: FilterNoise {
-            arw_rad_per_sqrt_s: T::c(n.arw_rad_per_sqrt_s),
-            vrw_mps_per_sqrt_s: T::c(n.vrw_mps_per_sqrt_s),
-            gyro_bias_rad_s: T::c(n.gyro_bias_rad_s),
-            accel_bias_mps2: T::c(n.accel_bias_mps2),
-            gyro_scale: T::c(n.gyro_scale),
-            accel_scale: T::c(n.accel_scale),
-            correlation_time_s: T::c(n.correlation_time_s),
-            gyro_cross_coupling_rad: T::c(n.gyro_cross_coupling_rad),
-            accel_cross_coupling_rad: T::c(n.accel_cross_coupling_rad),
-            gyro_g_sensitivity: T::c(n.gyro_g_sensitivity),
-            gyro_bias_instability_rad_s: T::c(n.gyro_bias_instability_rad_s),
-            gyro_bias_instability_time_s: T::c(n.gyro_bias_instability_time_s),
-        },
+        noise: c.noise.cast(),
+        sensor_sigma: c.sensor_sigma.map(|s| s.cast()),
         scale_factors: c.scale_factors,
         propagation_interval_s: T::c(c.propagation_interval_s),
         antenna_lever_arm_b_m: v(&c.antenna_lever_arm_b_m),
@@ -255,13 +243,13 @@ pub struct GivenStart {
     pub att_std_deg: [f64; 3],
     /// Sensor errors known at the start (compensated from the first sample).
     pub sensors: SensorErrors<f64>,
-    /// Their 1-sigma (`None`: the noise model's).
+    /// Their 1-sigma (`None`: the configuration's, [`FilterConfig::start_sensor_sigma`]).
     pub sensor_sigma: Option<[[f64; 3]; 4]>,
 }
 
 impl GivenStart {
     /// nav-core's start in precision `T`, or why the values are not a start.
-    pub fn start<T: Scalar>(&self, noise: &FilterNoise<f64>) -> Result<Start<T>> {
+    pub fn start<T: Scalar>(&self, config: &FilterConfig<f64>) -> Result<Start<T>> {
         let all = self
             .pos_deg_m
             .iter()
@@ -334,21 +322,21 @@ impl GivenStart {
                 self.pos_deg_m[2],
             ),
         };
-        let [sbg, sba, ssg, ssa] = self.sensor_sigma.unwrap_or([
-            [noise.gyro_bias_rad_s; 3],
-            [noise.accel_bias_mps2; 3],
-            [noise.gyro_scale; 3],
-            [noise.accel_scale; 3],
-        ]);
-        let sigma = InitialSigma {
-            position_ned_m: v3(self.pos_std_m),
-            velocity_ned_m_s: v3(self.vel_std_m_s),
-            attitude_rad: v3(self.att_std_deg.map(f64::to_radians)),
-            gyro_bias_rad_s: v3(sbg),
-            accel_bias_mps2: v3(sba),
-            gyro_scale: v3(ssg),
-            accel_scale: v3(ssa),
+        let sensors = match self.sensor_sigma {
+            Some([sbg, sba, ssg, ssa]) => SensorErrors {
+                gyro_bias_rad_s: v3(sbg),
+                accel_bias_mps2: v3(sba),
+                gyro_scale: v3(ssg),
+                accel_scale: v3(ssa),
+            },
+            None => config.start_sensor_sigma().cast(),
         };
+        let sigma = InitialSigma::new(
+            v3(self.pos_std_m),
+            v3(self.vel_std_m_s),
+            v3(self.att_std_deg.map(f64::to_radians)),
+            &sensors,
+        );
         if let Some(why) = nav_core::ins_filter::limits::initial_sigma_out_of_range(&sigma) {
             bail!("{why}");
         }
@@ -418,7 +406,7 @@ pub fn sequencer<T: Scalar>(
     start: &AidedStart,
 ) -> Result<Sequencer<T>> {
     let start = match start {
-        AidedStart::Given(g) => g.start::<T>(&config.noise)?,
+        AidedStart::Given(g) => g.start::<T>(config)?,
         AidedStart::Motion {
             min_speed_m_s,
             sideslip_rad,

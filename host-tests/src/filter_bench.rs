@@ -148,7 +148,13 @@ pub fn generate(dir: &Path, o: &FilterBenchOptions) -> Result<DataSet> {
     let (roll, pitch, yaw) = nav_core::attitude::euler(&s.q_b_ned);
     let model = grade_filter_model(o.grade);
     let n = &model.noise;
-    let [init_bg, init_ba, init_sg, init_sa] = model.initial;
+    let s0 = &model.start_sigma;
+    let (init_bg, init_ba, init_sg, init_sa) = (
+        s0.gyro_bias_rad_s,
+        s0.accel_bias_mps2,
+        s0.gyro_scale,
+        s0.accel_scale,
+    );
     let deg = f64::to_degrees;
     let three = |v: f64| format!("[{v:e}, {v:e}, {v:e}]");
     let each = |v: Vector3<f64>| format!("[{:e}, {:e}, {:e}]", v.x, v.y, v.z);

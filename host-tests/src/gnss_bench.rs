@@ -79,7 +79,6 @@ pub fn outage_case(grade: Grade, seconds: f64, outage_s: f64, seed: u64) -> Case
         seconds,
         imu_rate_hz: 200.0,
         zero_motion: true,
-        in_run_noise: true,
         without: Vec::new(),
         gnss: GnssSimOptions {
             rate_hz: 1.0,
@@ -187,7 +186,6 @@ pub fn outlier_case(grade: Grade, seed: u64) -> Case {
         seconds: 1000.0,
         imu_rate_hz: 200.0,
         zero_motion: true,
-        in_run_noise: true,
         without: Vec::new(),
         gnss: GnssSimOptions {
             rate_hz: 1.0,

@@ -504,7 +504,6 @@ fn family_case(scenario: &str, grade: Grade, rate: f64, vel: Option<[f64; 3]>) -
         },
         seed: 1,
         zero_motion: false,
-        in_run_noise: true,
         without: Vec::new(),
     }
 }

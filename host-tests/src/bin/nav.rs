@@ -1096,7 +1096,6 @@ fn bench_consistency(
             },
             seed: choice.first_seed,
             zero_motion,
-            in_run_noise: true,
             without: choice.without.clone(),
         };
         let gnss = match correlated {

@@ -94,6 +94,13 @@ impl<T: Scalar> Default for ZeroMotionConfig<T> {
 pub struct FilterConfig<T: Scalar> {
     /// The IMU's noise and sensor-error model.
     pub noise: FilterNoise<T>,
+    /// 1-sigma of the sensor errors at the start, per axis (gyro bias [rad/s], accelerometer
+    /// bias [m/s^2], scale factors [-]), when they are not [`Self::noise`]'s Gauss–Markov
+    /// 1-sigmas (`None`: they are). A grade's turn-on bias is a constant of the run: taken as
+    /// the process's stationary 1-sigma it also drives the bias between fixes as if it
+    /// re-drew itself every correlation time, and the 1-sigma at the end of an outage grows
+    /// several times beyond the drift (consumer MEMS: 158 m against 9 m after 60 s).
+    pub sensor_sigma: Option<SensorErrors<T>>,
     /// Model the scale factors (21 states) or not (15 states used, the rest held at zero).
     pub scale_factors: bool,
     /// Interval between covariance propagations [s] (the mechanization runs on every sample).
@@ -130,6 +137,7 @@ impl<T: Scalar> FilterConfig<T> {
     pub fn new(noise: FilterNoise<T>) -> Self {
         Self {
             noise,
+            sensor_sigma: None,
             scale_factors: true,
             propagation_interval_s: T::c(0.1),
             antenna_lever_arm_b_m: Vector3::zeros(),
@@ -143,6 +151,29 @@ impl<T: Scalar> FilterConfig<T> {
             gap_dynamics: GapDynamics::default(),
         }
     }
+
+    /// The sensor errors' 1-sigma at the start: [`Self::sensor_sigma`], or the noise model's
+    /// bias and scale-factor figures.
+    pub fn start_sensor_sigma(&self) -> SensorErrors<T> {
+        let n = &self.noise;
+        self.sensor_sigma.unwrap_or(SensorErrors {
+            gyro_bias_rad_s: Vector3::repeat(n.gyro_bias_rad_s),
+            accel_bias_mps2: Vector3::repeat(n.accel_bias_mps2),
+            gyro_scale: Vector3::repeat(n.gyro_scale),
+            accel_scale: Vector3::repeat(n.accel_scale),
+        })
+    }
+}
+
+/// A sensor model whole: the in-run processes apart from the sensor errors' spread at the
+/// start, as KF-GINS keeps `imunoise` apart from `init*std` (a data sheet's bias figure holds
+/// both: [`FilterConfig::sensor_sigma`] `None`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterModel {
+    /// The in-run processes ([`FilterConfig::noise`]).
+    pub noise: FilterNoise<f64>,
+    /// The sensor errors' 1-sigma at the start ([`FilterConfig::sensor_sigma`]).
+    pub start_sigma: SensorErrors<f64>,
 }
 
 /// Why a filter cannot start.
@@ -196,6 +227,19 @@ pub struct SensorErrors<T: Scalar> {
     pub gyro_scale: Vector3<T>,
     /// Accelerometer scale-factor error [-].
     pub accel_scale: Vector3<T>,
+}
+
+impl<T: Scalar> SensorErrors<T> {
+    /// These errors in precision `U`.
+    pub fn cast<U: Scalar>(&self) -> SensorErrors<U> {
+        let c = |v: &Vector3<T>| v.map(|x| U::c(x.to_f64()));
+        SensorErrors {
+            gyro_bias_rad_s: c(&self.gyro_bias_rad_s),
+            accel_bias_mps2: c(&self.accel_bias_mps2),
+            gyro_scale: c(&self.gyro_scale),
+            accel_scale: c(&self.accel_scale),
+        }
+    }
 }
 
 impl<T: Scalar> Default for SensorErrors<T> {

@@ -72,6 +72,27 @@ pub struct FilterNoise<T: Scalar> {
     pub gyro_bias_instability_time_s: T,
 }
 
+impl<T: Scalar> FilterNoise<T> {
+    /// This model in precision `U`.
+    pub fn cast<U: Scalar>(&self) -> FilterNoise<U> {
+        let c = |x: T| U::c(x.to_f64());
+        FilterNoise {
+            arw_rad_per_sqrt_s: c(self.arw_rad_per_sqrt_s),
+            vrw_mps_per_sqrt_s: c(self.vrw_mps_per_sqrt_s),
+            gyro_bias_rad_s: c(self.gyro_bias_rad_s),
+            accel_bias_mps2: c(self.accel_bias_mps2),
+            gyro_scale: c(self.gyro_scale),
+            accel_scale: c(self.accel_scale),
+            correlation_time_s: c(self.correlation_time_s),
+            gyro_cross_coupling_rad: c(self.gyro_cross_coupling_rad),
+            accel_cross_coupling_rad: c(self.accel_cross_coupling_rad),
+            gyro_g_sensitivity: c(self.gyro_g_sensitivity),
+            gyro_bias_instability_rad_s: c(self.gyro_bias_instability_rad_s),
+            gyro_bias_instability_time_s: c(self.gyro_bias_instability_time_s),
+        }
+    }
+}
+
 /// What the error model is linearised about: the navigation solution at the end of the
 /// propagation interval and the interval's mean sensor outputs.
 #[derive(Clone, Copy, Debug, PartialEq)]

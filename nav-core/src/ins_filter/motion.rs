@@ -60,8 +60,8 @@
 //! large heading 1-sigma; the filter's GNSS updates refine it as the vehicle accelerates and
 //! turns.
 
+use super::FilterConfig;
 use super::aiding::{GnssPosition, GnssVelocity};
-use super::model::FilterNoise;
 use super::span_fit::SpanFit;
 use super::states::InitialSigma;
 use crate::earth::LocalEarth;
@@ -160,13 +160,15 @@ impl<T: Scalar> Default for MotionAlignConfig<T> {
 
 impl<T: Scalar> MotionAlignConfig<T> {
     /// The settings of a re-alignment in motion of a run that did not start in motion (a
-    /// given start's, the navigator's alignment at rest): the defaults, with the noise
-    /// model's angle random walk and its accelerometer bias when larger.
-    pub fn for_realignment(noise: &FilterNoise<T>) -> Self {
+    /// given start's, the navigator's alignment at rest): the defaults, with `config`'s
+    /// angle random walk and its start accelerometer bias 1-sigma when larger.
+    pub fn for_realignment(config: &FilterConfig<T>) -> Self {
         let d = Self::default();
         Self {
-            accel_bias_mps2: d.accel_bias_mps2.max(noise.accel_bias_mps2),
-            arw_rad_per_sqrt_s: noise.arw_rad_per_sqrt_s,
+            accel_bias_mps2: d
+                .accel_bias_mps2
+                .max(config.start_sensor_sigma().accel_bias_mps2.max()),
+            arw_rad_per_sqrt_s: config.noise.arw_rad_per_sqrt_s,
             ..d
         }
     }
@@ -177,7 +179,8 @@ impl<T: Scalar> MotionAlignConfig<T> {
 pub struct MotionStart<T: Scalar> {
     /// The IMU's state at the fix (position from the antenna's less the lever arm).
     pub state: NavState<T>,
-    /// Its 1-sigma (biases and scale factors left at zero: the caller's noise model).
+    /// Its 1-sigma (biases and scale factors left at zero: the configuration's start ones,
+    /// [`FilterConfig::start_sensor_sigma`]).
     pub sigma: InitialSigma<T>,
     /// 1-sigma of the level span's mean acceleration per axis [m/s^2]: the level's error
     /// besides the accelerometer bias's ([`super::AidedIns::level_on_accelerometers`]).

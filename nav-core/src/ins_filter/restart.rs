@@ -13,13 +13,13 @@
 //!   ([`ErrorFilter::take_sensors_from`]).
 //! - At the run's start ([`Carried::Nothing`]) and after a divergence ([`Carried::Counters`]:
 //!   a filter that ran away took sensor errors that are wrong) the sensors are known as at the
-//!   run's start (a given start's 1-sigma, or the noise model's), combined with the gyro bias
+//!   run's start (a given start's 1-sigma, or the configuration's,
+//!   [`FilterConfig::start_sensor_sigma`]), combined with the gyro bias
 //!   found at rest when the start's level span was still.
 
 use super::motion::MotionStart;
 use super::{ErrorFilter, FilterConfig, FilterError, InitialSigma, SensorErrors};
 use crate::{NavState, Scalar};
-use nalgebra::Vector3;
 
 /// What a filter started in motion takes over from the filter it replaces (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -56,7 +56,7 @@ impl<T: Scalar> Restart<T> {
     /// The start `s` found at a fix `lag_s` [s] before the current sample, for a filter of
     /// `config`: `sensors` are the sensor errors the start's samples were compensated with
     /// (after a lost gap, the replaced filter's estimates); `start_sigma` the sensors' 1-sigma
-    /// at the run's start when it was given (`None`: the noise model's), used unless the
+    /// at the run's start when it was given (`None`: `config`'s), used unless the
     /// sensors are carried.
     pub fn plan(
         s: &MotionStart<T>,
@@ -66,18 +66,10 @@ impl<T: Scalar> Restart<T> {
         start_sigma: Option<&InitialSigma<T>>,
         carried: Carried<T>,
     ) -> Self {
-        let n = &config.noise;
-        let mut sigma = s.sigma;
-        sigma.gyro_bias_rad_s = Vector3::repeat(n.gyro_bias_rad_s);
-        sigma.accel_bias_mps2 = Vector3::repeat(n.accel_bias_mps2);
-        sigma.gyro_scale = Vector3::repeat(n.gyro_scale);
-        sigma.accel_scale = Vector3::repeat(n.accel_scale);
+        let mut sigma = s.sigma.with_sensors(&config.start_sensor_sigma());
         let fresh = !matches!(carried, Carried::Sensors { .. });
         if let Some(given) = start_sigma.filter(|_| fresh) {
-            sigma.gyro_bias_rad_s = given.gyro_bias_rad_s;
-            sigma.accel_bias_mps2 = given.accel_bias_mps2;
-            sigma.gyro_scale = given.gyro_scale;
-            sigma.accel_scale = given.accel_scale;
+            sigma = sigma.with_sensors(&given.sensors());
         }
         let mut state = s.state;
         // From the fix's time to the current sample's.
@@ -129,5 +121,100 @@ impl<T: Scalar> Restart<T> {
         let c_b_n = mech_state.q_b_n.to_rotation_matrix().into_inner();
         f.level_on_accelerometers(&c_b_n, g, self.level_acceleration_mps2);
         Ok(f)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ins_filter::model::tests::noise;
+    use crate::{NavState, Position};
+    use nalgebra::{UnitQuaternion, Vector3};
+
+    fn start() -> MotionStart<f64> {
+        MotionStart {
+            state: NavState {
+                q_b_n: UnitQuaternion::identity(),
+                v_eb_n: Vector3::new(10.0, 0.0, 0.0),
+                position: Position::from_radians(0.8, 0.2, 100.0),
+            },
+            sigma: InitialSigma::new(
+                Vector3::repeat(1.0),
+                Vector3::repeat(0.1),
+                Vector3::new(0.01, 0.01, 0.05),
+                &SensorErrors::default(),
+            ),
+            level_acceleration_mps2: 0.01,
+            gyro_bias_at_rest: None,
+        }
+    }
+
+    /// A start in motion knows the sensors as the configuration says at the start: its own
+    /// start 1-sigma when it has one (a grade's turn-on spread), not the in-run model's
+    /// stationary 1-sigma; a given start's wins; carried sensors keep the filter's.
+    #[test]
+    fn the_sensors_start_with_the_configured_sigma() {
+        let mut config = FilterConfig::new(noise());
+        let of_noise = Restart::plan(
+            &start(),
+            0.0,
+            &config,
+            SensorErrors::default(),
+            None,
+            Carried::Nothing,
+        );
+        assert_eq!(of_noise.sigma.sensors(), config.start_sensor_sigma());
+        assert_eq!(
+            of_noise.sigma.accel_bias_mps2,
+            Vector3::repeat(noise().accel_bias_mps2)
+        );
+        let turn_on = SensorErrors {
+            gyro_bias_rad_s: Vector3::new(1e-3, 2e-3, 3e-3),
+            accel_bias_mps2: Vector3::new(0.1, 0.2, 0.3),
+            gyro_scale: Vector3::repeat(5e-3),
+            accel_scale: Vector3::repeat(4e-3),
+        };
+        config.sensor_sigma = Some(turn_on);
+        let plan = Restart::plan(
+            &start(),
+            0.0,
+            &config,
+            SensorErrors::default(),
+            None,
+            Carried::Nothing,
+        );
+        assert_eq!(plan.sigma.sensors(), turn_on);
+        assert_eq!(plan.sigma.position_ned_m, start().sigma.position_ned_m);
+        // After a divergence the sensors are known as at the start, again.
+        let again = Restart::plan(
+            &start(),
+            0.0,
+            &config,
+            SensorErrors::default(),
+            None,
+            Carried::Counters,
+        );
+        assert_eq!(again.sigma.sensors(), turn_on);
+        let given = InitialSigma::new(
+            Vector3::repeat(1.0),
+            Vector3::repeat(1.0),
+            Vector3::repeat(1.0),
+            &SensorErrors {
+                accel_bias_mps2: Vector3::repeat(0.05),
+                ..turn_on
+            },
+        );
+        let plan = Restart::plan(
+            &start(),
+            0.0,
+            &config,
+            SensorErrors::default(),
+            Some(&given),
+            Carried::Nothing,
+        );
+        assert_eq!(plan.sigma.accel_bias_mps2, Vector3::repeat(0.05));
+        // The re-alignment's level allows for the start's accelerometer bias.
+        let realign = crate::ins_filter::motion::MotionAlignConfig::for_realignment(&config);
+        assert!(realign.accel_bias_mps2 >= 0.3, "{realign:?}");
     }
 }

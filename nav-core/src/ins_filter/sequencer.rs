@@ -289,8 +289,7 @@ pub struct Sequencer<T: Scalar> {
 impl<T: Scalar> Sequencer<T> {
     /// A run with `config` starting as `start` (a given start is checked at once). A
     /// re-alignment (module docs) takes the start in motion's settings, or for a given start
-    /// [`MotionAlignConfig::default`] with the accelerometer bias of the noise model when
-    /// larger.
+    /// [`MotionAlignConfig::for_realignment`].
     pub fn new(config: FilterConfig<T>, start: Start<T>) -> Result<Self, FilterError> {
         let (motion, ins) = match start {
             Start::Given {
@@ -300,15 +299,8 @@ impl<T: Scalar> Sequencer<T> {
             } => (None, Some(AidedIns::new(state, sensors, &sigma, config)?)),
             Start::Motion(m) => {
                 // Checked now, not at the start in motion.
-                let probe = InitialSigma {
-                    position_ned_m: Vector3::repeat(T::one()),
-                    velocity_ned_m_s: Vector3::repeat(T::one()),
-                    attitude_rad: Vector3::repeat(T::one()),
-                    gyro_bias_rad_s: Vector3::repeat(config.noise.gyro_bias_rad_s),
-                    accel_bias_mps2: Vector3::repeat(config.noise.accel_bias_mps2),
-                    gyro_scale: Vector3::repeat(config.noise.gyro_scale),
-                    accel_scale: Vector3::repeat(config.noise.accel_scale),
-                };
+                let one = Vector3::repeat(T::one());
+                let probe = InitialSigma::new(one, one, one, &config.start_sensor_sigma());
                 let state = NavState::at_rest(
                     crate::Position::from_radians(0.0, 0.0, 0.0),
                     nalgebra::UnitQuaternion::identity(),
@@ -322,7 +314,7 @@ impl<T: Scalar> Sequencer<T> {
         };
         let realign = match start {
             Start::Motion(m) => m,
-            Start::Given { .. } => MotionAlignConfig::for_realignment(&config.noise),
+            Start::Given { .. } => MotionAlignConfig::for_realignment(&config),
         };
         Ok(Self {
             config,

@@ -1,6 +1,7 @@
 //! The navigation filter's error state vector: named offsets, sizes and the initial
 //! uncertainty.
 
+use super::SensorErrors;
 use super::stationarity::Uncertainty;
 use crate::Scalar;
 use nalgebra::{SMatrix, SVector, Vector3};
@@ -47,6 +48,45 @@ pub struct InitialSigma<T: Scalar> {
 }
 
 impl<T: Scalar> InitialSigma<T> {
+    /// The 1-sigma of position [m], velocity [m/s] and attitude [rad] (as the fields) with
+    /// the sensor errors' `sensors`.
+    pub fn new(
+        position_ned_m: Vector3<T>,
+        velocity_ned_m_s: Vector3<T>,
+        attitude_rad: Vector3<T>,
+        sensors: &SensorErrors<T>,
+    ) -> Self {
+        Self {
+            position_ned_m,
+            velocity_ned_m_s,
+            attitude_rad,
+            gyro_bias_rad_s: sensors.gyro_bias_rad_s,
+            accel_bias_mps2: sensors.accel_bias_mps2,
+            gyro_scale: sensors.gyro_scale,
+            accel_scale: sensors.accel_scale,
+        }
+    }
+
+    /// This start with the sensor errors' 1-sigma `sensors`.
+    pub fn with_sensors(self, sensors: &SensorErrors<T>) -> Self {
+        Self::new(
+            self.position_ned_m,
+            self.velocity_ned_m_s,
+            self.attitude_rad,
+            sensors,
+        )
+    }
+
+    /// The sensor errors' 1-sigma.
+    pub fn sensors(&self) -> SensorErrors<T> {
+        SensorErrors {
+            gyro_bias_rad_s: self.gyro_bias_rad_s,
+            accel_bias_mps2: self.accel_bias_mps2,
+            gyro_scale: self.gyro_scale,
+            accel_scale: self.accel_scale,
+        }
+    }
+
     /// What the stop detector allows for at the start ([`Uncertainty`]): the largest gyro-bias
     /// 1-sigma; the largest tilt's at gravity `g` [m/s^2] with the largest accelerometer
     /// bias's (independent at the start).

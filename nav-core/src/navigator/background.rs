@@ -151,23 +151,19 @@ pub enum FromBackground<T: Scalar> {
 pub const SIGMA_FLOORS: [f64; 3] = [1e-3, 1e-3, 1e-6];
 
 /// The filter's start uncertainty from an alignment's outcome: its position, velocity and
-/// attitude 1-sigmas (floored at [`SIGMA_FLOORS`]), the sensor errors' from `config`'s noise
-/// model (biases and, when modelled, scale factors).
+/// attitude 1-sigmas (floored at [`SIGMA_FLOORS`]), the sensor errors' `config`'s start ones
+/// ([`FilterConfig::start_sensor_sigma`]).
 pub fn initial_sigma<T: Scalar>(
     outcome: &AlignOutcome<T>,
     config: &FilterConfig<T>,
 ) -> InitialSigma<T> {
     let floor = |v: &Vector3<T>, f: f64| v.map(|x| if x < T::c(f) { T::c(f) } else { x });
-    let n = &config.noise;
-    InitialSigma {
-        position_ned_m: floor(&outcome.position_sigma_m, SIGMA_FLOORS[0]),
-        velocity_ned_m_s: floor(&outcome.velocity_sigma_m_s, SIGMA_FLOORS[1]),
-        attitude_rad: floor(&outcome.estimate.sigma_rad, SIGMA_FLOORS[2]),
-        gyro_bias_rad_s: Vector3::repeat(n.gyro_bias_rad_s),
-        accel_bias_mps2: Vector3::repeat(n.accel_bias_mps2),
-        gyro_scale: Vector3::repeat(n.gyro_scale),
-        accel_scale: Vector3::repeat(n.accel_scale),
-    }
+    InitialSigma::new(
+        floor(&outcome.position_sigma_m, SIGMA_FLOORS[0]),
+        floor(&outcome.velocity_sigma_m_s, SIGMA_FLOORS[1]),
+        floor(&outcome.estimate.sigma_rad, SIGMA_FLOORS[2]),
+        &config.start_sensor_sigma(),
+    )
 }
 
 /// A GNSS update's answer: `update`'s correction, and whether the filter has diverged after it.

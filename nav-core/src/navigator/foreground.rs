@@ -1248,7 +1248,7 @@ impl<T: Scalar> Realign<T> {
 fn start_in_motion<T: Scalar>(config: Option<&FilterConfig<T>>) -> MotionAlign<T> {
     match config {
         Some(c) => MotionAlign::new(
-            MotionAlignConfig::for_realignment(&c.noise),
+            MotionAlignConfig::for_realignment(c),
             c.antenna_lever_arm_b_m,
         ),
         None => MotionAlign::new(MotionAlignConfig::default(), Vector3::zeros()),
