@@ -11,6 +11,7 @@ use std::fmt;
 use std::io;
 use std::path::{Path, PathBuf};
 
+use crate::imu_csv::TEMPERATURE_RANGE_C;
 use crate::truth_csv::MAX_YAW_DEG;
 use nav_core::number::Shown;
 
@@ -274,6 +275,13 @@ pub enum TextErrorKind {
         /// The latitude found [deg].
         lat_deg: f64,
     },
+    /// A sensor temperature is outside [`TEMPERATURE_RANGE_C`] (or infinite).
+    BadTemperature {
+        /// Column name.
+        column: &'static str,
+        /// The temperature found [deg C].
+        temp_c: f32,
+    },
     /// A trajectory's yaw is outside [-[`MAX_YAW_DEG`], [`MAX_YAW_DEG`]] deg.
     BadYaw {
         /// Column name.
@@ -483,6 +491,14 @@ impl fmt::Display for TextErrorKind {
                 write!(
                     f,
                     "column {column}: {what}{lat_deg} deg is outside [-90, 90]"
+                )
+            }
+            Self::BadTemperature { column, temp_c } => {
+                let (low, high) = TEMPERATURE_RANGE_C;
+                write!(
+                    f,
+                    "column {column}: {temp_c} deg C is outside [{low}, {high}], not a sensor's \
+                     temperature (leave the field empty or write NaN when it is unknown)"
                 )
             }
             Self::BadYaw { column, yaw_deg } => write!(

@@ -414,3 +414,46 @@ fn two_emulator_outputs_in_one_file_are_named_as_outputs() {
     );
     assert_eq!(std::fs::read_to_string(&out).unwrap(), "an earlier run\n");
 }
+
+/// `temp_c` was not range-checked: 1,000,000 deg C replayed silently and `nav convert` copied
+/// it. Refused with its line and column; an empty field and NaN are both "unknown".
+#[test]
+fn an_imu_csv_temperature_no_sensor_has_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (bin, csv) = (path("imu.bin"), path("imu.csv"));
+    common::generated_recording(std::path::Path::new(&bin), "1");
+    ok(&["convert", "--in", &bin, "--out", &csv]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.starts_with("t_s,") && text.lines().next().unwrap().ends_with(",temp_c"));
+    // Field 8 of data line `k` (line k + 2) set to `temp`.
+    let with = |k: usize, temp: &str| {
+        let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+        let mut fields: Vec<&str> = lines[k + 1].split(',').collect();
+        fields[7] = temp;
+        lines[k + 1] = fields.join(",");
+        lines.join("\n") + "\n"
+    };
+    let (odd, out) = (path("odd.csv"), path("out.bin"));
+    for temp in ["1e6", "inf", "-300"] {
+        std::fs::write(&odd, with(3, temp)).unwrap();
+        for args in [
+            vec!["convert", "--in", &odd, "--out", &out],
+            common::replay_args(&odd, &out, &[]),
+        ] {
+            let o = nav(&args);
+            let text = output_text(&o);
+            assert_eq!(o.status.code(), Some(1), "{text}");
+            assert!(
+                text.contains("line 5: column temp_c: ")
+                    && text.contains("deg C is outside [-100, 200]"),
+                "{temp}: {text}"
+            );
+            assert!(!std::path::Path::new(&out).exists());
+        }
+    }
+    for temp in ["", "NaN"] {
+        std::fs::write(&odd, with(3, temp)).unwrap();
+        ok(&["convert", "--in", &odd, "--out", &out]);
+    }
+}
