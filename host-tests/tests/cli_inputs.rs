@@ -457,3 +457,54 @@ fn an_imu_csv_temperature_no_sensor_has_is_refused() {
         ok(&["convert", "--in", &odd, "--out", &out]);
     }
 }
+
+/// `nav sim --gnss-jump 1,1e9,...` (a jump of 1e9 s in a 5 s run) and a jump given twice (its
+/// offset added twice) were simulated silently. Refused, nothing written.
+#[test]
+fn sim_refuses_outliers_past_the_run_or_given_twice() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let out = out.to_str().unwrap();
+    let sim = |extra: &[&str]| {
+        let mut args = vec![
+            "sim",
+            "static",
+            "--seconds",
+            "5",
+            "--out",
+            out,
+            "--gnss-rate",
+            "1",
+        ];
+        args.extend_from_slice(extra);
+        nav(&args)
+    };
+    for (extra, expected) in [
+        (
+            &["--gnss-jump", "1,1e9,1,1,1"][..],
+            "GNSS jump at 1 s for 1e9 s ends at 1.000000001e9 s, past the run's end at 5 s: \
+             give a length of at most 5 s",
+        ),
+        (
+            &["--gnss-ramp", "2,30,1,1,1"],
+            "GNSS ramp at 2 s for 30 s ends at 32 s, past the run's end at 5 s",
+        ),
+        (
+            &["--gnss-jump", "1,2,1,1,1", "--gnss-jump", "1,2,1,1,1"],
+            "GNSS jump at 1 s is given twice",
+        ),
+        (
+            &["--gnss-nan", "2", "--gnss-nan", "2"],
+            "--gnss-nan 2 is given twice",
+        ),
+    ] {
+        let o = sim(extra);
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(1), "{extra:?}: {text}");
+        assert!(text.contains(expected), "{extra:?}: {text}");
+        assert!(!std::path::Path::new(out).exists(), "{extra:?}");
+    }
+    // To the run's end: taken.
+    let o = sim(&["--gnss-jump", "1,5,1,1,1"]);
+    assert!(o.status.success(), "{}", output_text(&o));
+}

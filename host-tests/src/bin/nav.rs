@@ -1784,6 +1784,9 @@ fn sim(a: SimArgs) -> Result<()> {
                     nav_core::number::Number(run_s)
                 );
             }
+            if let Some(last) = sim.truth.last() {
+                g.check_within_run(last.t_s)?;
+            }
             if let Some([_, _, first]) = a.gnss_outages
                 && g.outages.iter().all(|o| o.start_s >= run_s)
             {
