@@ -340,7 +340,7 @@ pub enum TextErrorKind {
         /// Why it looks cut off.
         cut: Cut,
     },
-    /// Malformed CSV (quoting, invalid UTF-8).
+    /// Malformed CSV (quoting).
     Syntax(String),
     /// The file could not be opened, read or written.
     Io(io::Error),
@@ -367,8 +367,19 @@ impl TextError {
         let text = e.to_string();
         let kind = match e.into_kind() {
             csv::ErrorKind::Io(e) => TextErrorKind::Io(e),
-            csv::ErrorKind::Utf8 { err, .. } => {
-                TextErrorKind::Syntax(format!("invalid UTF-8: {err}"))
+            // Was "malformed CSV: invalid UTF-8: invalid utf-8: invalid UTF-8 in field 6 near
+            // byte index 1".
+            csv::ErrorKind::Utf8 { pos, err } => {
+                let row =
+                    pos.map_or_else(String::new, |p| format!(" of the row at byte {}", p.byte()));
+                TextErrorKind::Io(io::Error::new(
+                    io::ErrorKind::InvalidData,
+                    format!(
+                        "not UTF-8 text (field {}{row}, its byte {}): save the file as UTF-8",
+                        err.field() + 1,
+                        err.valid_up_to()
+                    ),
+                ))
             }
             csv::ErrorKind::UnequalLengths {
                 expected_len, len, ..

@@ -508,3 +508,55 @@ fn sim_refuses_outliers_past_the_run_or_given_twice() {
     let o = sim(&["--gnss-jump", "1,5,1,1,1"]);
     assert!(o.status.success(), "{}", output_text(&o));
 }
+
+/// A recording not in UTF-8 said "line 6: stream did not contain valid UTF-8" (KF-GINS text)
+/// or "malformed CSV: invalid UTF-8: invalid utf-8: invalid UTF-8 in field 8 near byte index
+/// 4" (CSV): the byte where the text stops being UTF-8 is named, in a user's words.
+#[test]
+fn a_recording_not_in_utf8_names_its_line_and_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let mut text: Vec<u8> = (1..=400)
+        .flat_map(|k| format!("{} 0 0 0 0 0 -0.0245\n", f64::from(k) * 0.0025).into_bytes())
+        .collect();
+    // Line 6, "0.015 0 0 0 0 0 -0.0245", with its last 5 as cp1252's e-acute.
+    let line6: usize = text
+        .split(|&b| b == b'\n')
+        .take(5)
+        .map(|l| l.len() + 1)
+        .sum();
+    let bad = line6 + text[line6..].iter().position(|&b| b == b'\n').unwrap() - 1;
+    text[bad] = 0xe9;
+    let kf = path("imu.txt");
+    std::fs::write(&kf, &text).unwrap();
+    let o = nav(&common::replay_args(&kf, &path("out.csv"), &[]));
+    let said = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains(&format!(
+            "imu.txt: line 6: not UTF-8 text (byte {bad}, 0xe9): save the file as UTF-8"
+        )),
+        "{said}"
+    );
+    let (bin, csv) = (path("imu.bin"), path("imu.csv"));
+    common::generated_recording(std::path::Path::new(&bin), "1");
+    ok(&["convert", "--in", &bin, "--out", &csv]);
+    let mut text = std::fs::read(&csv).unwrap();
+    let line3: usize = text
+        .split(|&b| b == b'\n')
+        .take(2)
+        .map(|l| l.len() + 1)
+        .sum();
+    text.insert(line3 + 1, 0xe9);
+    std::fs::write(&csv, &text).unwrap();
+    let o = nav(&["convert", "--in", &csv, "--out", &path("out.bin")]);
+    let said = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains(&format!(
+            "imu.csv: line 3: not UTF-8 text (field 1 of the row at byte {line3}, its byte 1): \
+             save the file as UTF-8"
+        )),
+        "{said}"
+    );
+}
