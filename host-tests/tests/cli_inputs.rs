@@ -560,3 +560,54 @@ fn a_recording_not_in_utf8_names_its_line_and_byte() {
         "{said}"
     );
 }
+
+/// IMU time tags in seconds of week that roll over to 0 made an aided run fail as "GNSS on
+/// another clock" with the IMU data covering "604780 .. 20 s", no word of the rollover; the
+/// step back of a week is named in the refusal.
+#[test]
+fn an_aided_run_refused_after_a_week_rollover_names_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = dir.path().join("sim");
+    let sim = sim.to_str().unwrap();
+    ok(&[
+        "sim",
+        "land-vehicle",
+        "--seconds",
+        "40",
+        "--gnss-rate",
+        "1",
+        "--format",
+        "csv",
+        "--out",
+        sim,
+    ]);
+    let text = std::fs::read_to_string(format!("{sim}/imu.csv")).unwrap();
+    // The first 20 s at the end of a GPS week, the rest from 0.
+    let mut lines = text.lines();
+    let mut wrapped = lines.next().unwrap().to_owned() + "\n";
+    for line in lines {
+        let (t, rest) = line.split_once(',').unwrap();
+        let t_s: f64 = t.parse().unwrap();
+        let t_s = if t_s <= 20.0 {
+            t_s + 604_780.0
+        } else {
+            t_s - 20.0
+        };
+        wrapped += &format!("{t_s},{rest}\n");
+    }
+    let imu = dir.path().join("wrapped.csv");
+    std::fs::write(&imu, wrapped).unwrap();
+    let (imu, out) = (imu.to_str().unwrap(), format!("{sim}/out.csv"));
+    let gnss = format!("{sim}/gnss.csv");
+    let mut args = vec!["replay", "--imu", imu, "--gnss", &gnss, "--out", &out];
+    args.extend(common::GIVEN);
+    let o = nav(&args);
+    let said = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains("another clock")
+            && said.contains("the time tags stepped back by 604799.99")
+            && said.contains("(to t = 0.003 s): a GPS week rollover"),
+        "{said}"
+    );
+}
