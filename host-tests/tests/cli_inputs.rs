@@ -611,3 +611,49 @@ fn an_aided_run_refused_after_a_week_rollover_names_it() {
         "{said}"
     );
 }
+
+/// `imudatarate: 401` for a 400 Hz file ran without a word on stderr (its warning was on
+/// stdout, among the results). A declared rate off the file's by more than 0.1 % is warned of
+/// on stderr; one within it is not.
+#[test]
+fn kf_gins_warns_of_an_imudatarate_off_the_file_on_stderr() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = host_tests::filter_bench::generate(
+        dir.path(),
+        &host_tests::filter_bench::FilterBenchOptions {
+            seconds: 5.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let yaml = std::fs::read_to_string(&data.config).unwrap();
+    assert!(yaml.contains("imudatarate: 200\n"), "{yaml}");
+    let out = dir.path().join("out.nav");
+    for (rate, warned) in [("201", true), ("200.1", false)] {
+        let config = dir.path().join("rate.yaml");
+        std::fs::write(
+            &config,
+            yaml.replace("imudatarate: 200\n", &format!("imudatarate: {rate}\n")),
+        )
+        .unwrap();
+        let o = nav(&[
+            "kf-gins",
+            config.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let (stdout, stderr) = (
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr),
+        );
+        assert!(o.status.success(), "{stdout}{stderr}");
+        assert!(!stdout.contains("imudatarate"), "{stdout}");
+        assert_eq!(
+            stderr.contains(&format!(
+                "warning: imudatarate {rate} Hz, but the epochs of "
+            )),
+            warned,
+            "{rate}: {stderr}"
+        );
+    }
+}

@@ -2404,8 +2404,9 @@ fn run(cli: Cli) -> Result<()> {
                     host_tests::text_error::told_as(e, &config, label)
                 })?;
             let seconds = started.elapsed().as_secs_f64();
+            // On stderr, as convert's: the summary on stdout is the result.
             for w in &run.warnings {
-                println!("warning: {w}");
+                eprintln!("warning: {w}");
             }
             println!(
                 "{}",
