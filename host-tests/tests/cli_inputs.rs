@@ -1,6 +1,7 @@
 //! Inputs of `nav` that were taken wrongly or silently: grades without noise, streams, data
 //! sets mixed from two folders, repeated time tags, headers in capitals, holes in a truth file,
-//! long output names, fixes just before the data. Each is refused with a message that names
+//! long output names, fixes just before the data, temperatures no sensor has, GNSS outliers
+//! past the run, text not in UTF-8, a GPS week rollover. Each is refused with a message that names
 //! the file and what was expected, warned about, or counted where the README says.
 
 mod common;
