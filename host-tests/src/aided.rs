@@ -260,24 +260,38 @@ impl LostImuTime {
                  ends at t = {from_s:.3} s"
             )
         });
-        // Within a second of a week: seconds of week restarting at 0 (was only "the last
-        // 30 s were not navigated", no word of why).
-        let rollover = self
-            .step_back
-            .filter(|(back_s, _)| (back_s - GPS_WEEK_S).abs() < 1.0)
-            .map(|(back_s, to_s)| {
-                format!(
-                    "WARNING: the time tags stepped back by {back_s:.3} s (to t = {to_s:.3} s): \
-                     a GPS week rollover (seconds of week restarting at 0)? The samples after \
-                     it are out of time order; give the times on one clock (add {GPS_WEEK_S} \
-                     s after the rollover)"
-                )
-            });
+        // Was only "the last 30 s were not navigated", no word of why.
+        let rollover = self.week_rollover().map(|r| format!("WARNING: {r}"));
         let lines: Vec<String> = [aligning, self.navigation_warning(), tail, rollover]
             .into_iter()
             .flatten()
             .collect();
         (!lines.is_empty()).then(|| lines.join("\n"))
+    }
+
+    /// The largest step back of the time tags told as a GPS week rollover, when it is within
+    /// a second of a week (seconds of week restarting at 0).
+    pub fn week_rollover(&self) -> Option<String> {
+        self.step_back
+            .filter(|(back_s, _)| (back_s - GPS_WEEK_S).abs() < 1.0)
+            .map(|(back_s, to_s)| {
+                format!(
+                    "the time tags stepped back by {back_s:.3} s (to t = {to_s:.3} s): a GPS \
+                     week rollover (seconds of week restarting at 0)? The samples after it are \
+                     out of time order; give the times on one clock (add {GPS_WEEK_S} s after \
+                     the rollover)"
+                )
+            })
+    }
+
+    /// `e` (a refusal of the run) followed by the GPS week rollover of the IMU time tags, when
+    /// they had one ([`Self::week_rollover`]): a run refused as "GNSS on another clock" with
+    /// the IMU data covering "604770 .. 30 s" said nothing of it.
+    pub fn explain(&self, e: anyhow::Error) -> anyhow::Error {
+        match self.week_rollover() {
+            Some(r) => anyhow!("{e:#}; in the IMU data, {r}"),
+            None => e,
+        }
     }
 
     /// The warning for time lost while navigating.
@@ -667,7 +681,8 @@ pub fn run<T: Scalar, E: fmt::Display>(
         }
         sink.sample(s.t_us, ins)?;
     }
-    check_fixes_in_span(fixes.iter().map(|f| f.t_s), span_us)?;
+    check_fixes_in_span(fixes.iter().map(|f| f.t_s), span_us)
+        .map_err(|e| report.lost.explain(e))?;
     report.lost.finish();
     sink.finish()?;
     report.outside_imu_data += (fixes.len() - next_fix) as u64;

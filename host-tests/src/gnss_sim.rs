@@ -623,6 +623,42 @@ impl GnssSimOptions {
     }
 }
 
+impl GnssSimOptions {
+    /// Checks the outliers against a run that ends at `end_s` [s]: a jump or ramp
+    /// that lasts past it by more than one fix interval (a jump of 1e9 s in a 5 s run; a ramp
+    /// that never reaches its offset) and an outlier listed twice (its offset added twice) are
+    /// not the receiver asked for. Before any fix is written (`nav sim`).
+    pub fn check_within_run(&self, end_s: f64) -> Result<()> {
+        let interval_s = 1.0 / self.rate_hz;
+        for (i, o) in self.outliers.iter().enumerate() {
+            if self.outliers[..i].contains(o) {
+                bail!(
+                    "GNSS {} at {} s is given twice (their offsets would add): give each once",
+                    o.name(),
+                    Number(o.start_s())
+                );
+            }
+            let length_s = match *o {
+                Outlier::Jump { length_s, .. } | Outlier::Ramp { length_s, .. } => length_s,
+                Outlier::Spike { .. } | Outlier::NaN { .. } => continue,
+            };
+            if o.start_s() + length_s > end_s + interval_s {
+                bail!(
+                    "GNSS {} at {} s for {} s ends at {} s, past the run's end at {} s: \
+                     give a length of at most {} s",
+                    o.name(),
+                    Number(o.start_s()),
+                    Number(length_s),
+                    Number(o.start_s() + length_s),
+                    Number(end_s),
+                    Number((end_s + interval_s - o.start_s()).max(0.0))
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
 /// The truth rows that are GNSS epochs (module docs), after checking the options.
 fn epochs(truth: &[Truth], options: &GnssSimOptions) -> Result<Vec<usize>> {
     let o = options;
@@ -680,6 +716,51 @@ mod tests {
                 }
             })
             .collect()
+    }
+
+    /// A jump of 1e9 s in a 5 s run, and an outlier listed twice, were simulated silently.
+    #[test]
+    fn outliers_past_the_run_or_listed_twice_are_refused() {
+        let jump = |t_s, length_s| Outlier::Jump {
+            t_s,
+            length_s,
+            offset_ned_m: [1.0; 3],
+        };
+        let with = |outliers: Vec<Outlier>| GnssSimOptions {
+            rate_hz: 1.0,
+            outliers,
+            ..GnssSimOptions::default()
+        };
+        // To the last fix at 5 s (and its interval): the run's.
+        with(vec![jump(1.0, 5.0), jump(0.0, 1.0)])
+            .check_within_run(5.0)
+            .unwrap();
+        let e = with(vec![jump(1.0, 1e9)])
+            .check_within_run(5.0)
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "GNSS jump at 1 s for 1e9 s ends at 1.000000001e9 s, past the run's end at 5 s: \
+             give a length of at most 5 s"
+        );
+        let ramp = Outlier::Ramp {
+            start_s: 2.0,
+            length_s: 10.0,
+            final_offset_ned_m: [3.0; 3],
+        };
+        let e = with(vec![ramp]).check_within_run(5.0).unwrap_err();
+        assert!(
+            e.to_string().starts_with("GNSS ramp at 2 s for 10 s"),
+            "{e}"
+        );
+        let spike = Outlier::Spike {
+            t_s: 2.0,
+            offset_ned_m: [3.0; 3],
+        };
+        let e = with(vec![spike, jump(1.0, 1.0), spike])
+            .check_within_run(5.0)
+            .unwrap_err();
+        assert!(e.to_string().contains("spike at 2 s is given twice"), "{e}");
     }
 
     #[test]

@@ -7,7 +7,8 @@
 //!
 //! Each row holds the angle increment `delta_theta_ib_b` [rad] and the velocity increment
 //! `delta_v_ib_b` [m/s] over the interval that ENDS at `t_s` [s], body axes forward-right-down.
-//! The optional `temp_c` column is the sensor temperature [deg C] (empty or `NaN`: unknown).
+//! The optional `temp_c` column is the sensor temperature [deg C] (empty or `NaN`: unknown);
+//! a value outside [`TEMPERATURE_RANGE_C`] (or infinite) is no sensor's and is an error.
 //! A line that starts with `#` is a comment, before the header or between rows.
 //!
 //! NaN and infinite increments are parsed, not refused (the replay flags them), and so is time
@@ -35,6 +36,11 @@ pub const COLUMNS: [&str; 7] = [
 ];
 /// Name of the optional eighth column.
 pub const TEMPERATURE_COLUMN: &str = "temp_c";
+
+/// The temperatures a `temp_c` field may hold [deg C]: wider than any IMU's storage range
+/// (-65 to +150 deg C for the usual ones), so that only a wrong column or unit (1e6, a time)
+/// is refused.
+pub const TEMPERATURE_RANGE_C: (f32, f32) = (-100.0, 200.0);
 
 /// One row: the increments over the interval ending at `t_s`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -236,6 +242,7 @@ fn parse_row(
     };
     let delta_theta_ib_b = [number(1)?, number(2)?, number(3)?];
     let delta_v_ib_b = [number(4)?, number(5)?, number(6)?];
+    // Empty and NaN both say "unknown" (the writer writes NaN for it).
     let temperature_c = match record.get(COLUMNS.len()) {
         None | Some("") => f32::NAN,
         Some(text) => text.parse().map_err(|_| {
@@ -245,6 +252,13 @@ fn parse_row(
             })
         })?,
     };
+    let (low, high) = TEMPERATURE_RANGE_C;
+    if !temperature_c.is_nan() && !(low..=high).contains(&temperature_c) {
+        return Err(at(CsvErrorKind::BadTemperature {
+            column: TEMPERATURE_COLUMN,
+            temp_c: temperature_c,
+        }));
+    }
     Ok(CsvRow {
         t_s,
         delta_theta_ib_b,
@@ -353,6 +367,31 @@ mod tests {
         assert!(csv.has_temperature);
         assert_eq!(csv.rows[0].temperature_c, 24.5);
         assert!(csv.rows[1].temperature_c.is_nan());
+    }
+
+    /// A temperature no sensor has (1e6 deg C, a wrong column or unit) was read and copied by
+    /// `nav convert`; it is refused with its line and column. Empty and NaN are "unknown".
+    #[test]
+    fn temperatures_outside_a_physical_range_are_refused() {
+        let csv = parse(&format!(
+            "{HEADER},temp_c\n1,0,0,0,0,0,0,NaN\n2,0,0,0,0,0,0,\n3,0,0,0,0,0,0,-100\n4,0,0,0,0,0,0,200\n"
+        ))
+        .unwrap();
+        let temps: Vec<f32> = csv.rows.iter().map(|r| r.temperature_c).collect();
+        assert!(temps[0].is_nan() && temps[1].is_nan(), "{temps:?}");
+        assert_eq!(temps[2..], [-100.0, 200.0]);
+        for bad in ["1e6", "200.1", "-273.15", "inf", "-inf"] {
+            let msg = parse(&format!(
+                "{HEADER},temp_c\n1,0,0,0,0,0,0,25\n2,0,0,0,0,0,0,{bad}\n"
+            ))
+            .unwrap_err()
+            .to_string();
+            assert!(
+                msg.starts_with("mem.csv: line 3: column temp_c: ")
+                    && msg.contains("deg C is outside [-100, 200]"),
+                "{bad}: {msg}"
+            );
+        }
     }
 
     #[test]

@@ -631,12 +631,12 @@ impl<R: BufRead> DataLines<R> {
                     return Some(data_row(file, &mut self.any, &fields, &at, row));
                 }
             }
-            let Ok(text) = std::str::from_utf8(line.bytes) else {
-                let e = std::io::Error::new(
-                    std::io::ErrorKind::InvalidData,
-                    "stream did not contain valid UTF-8",
-                );
-                return Some(Err(at(KfGinsErrorKind::Io(e))));
+            let text = match std::str::from_utf8(line.bytes) {
+                Ok(text) => text,
+                Err(e) => {
+                    let e = crate::text_stream::not_utf8(line.bytes, line.start, &e);
+                    return Some(Err(at(KfGinsErrorKind::Io(e))));
+                }
             };
             let text = text
                 .trim_end_matches(['\n', '\r'])

@@ -316,7 +316,8 @@ pub fn replay_aided<T: Scalar>(
         crate::aided::check_fixes_in_span(
             fixes.iter().map(|f| f.t_us as f64 * 1e-6),
             file.report.span_us,
-        )?;
+        )
+        .map_err(|e| file.report.lost.explain(e))?;
         Ok::<_, ReplayFailure>(file)
     })?;
     Ok(AidedFileReport {

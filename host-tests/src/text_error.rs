@@ -11,6 +11,7 @@ use std::fmt;
 use std::io;
 use std::path::{Path, PathBuf};
 
+use crate::imu_csv::TEMPERATURE_RANGE_C;
 use crate::truth_csv::MAX_YAW_DEG;
 use nav_core::number::Shown;
 
@@ -274,6 +275,13 @@ pub enum TextErrorKind {
         /// The latitude found [deg].
         lat_deg: f64,
     },
+    /// A sensor temperature is outside [`TEMPERATURE_RANGE_C`] (or infinite).
+    BadTemperature {
+        /// Column name.
+        column: &'static str,
+        /// The temperature found [deg C].
+        temp_c: f32,
+    },
     /// A trajectory's yaw is outside [-[`MAX_YAW_DEG`], [`MAX_YAW_DEG`]] deg.
     BadYaw {
         /// Column name.
@@ -332,7 +340,7 @@ pub enum TextErrorKind {
         /// Why it looks cut off.
         cut: Cut,
     },
-    /// Malformed CSV (quoting, invalid UTF-8).
+    /// Malformed CSV (quoting).
     Syntax(String),
     /// The file could not be opened, read or written.
     Io(io::Error),
@@ -359,8 +367,19 @@ impl TextError {
         let text = e.to_string();
         let kind = match e.into_kind() {
             csv::ErrorKind::Io(e) => TextErrorKind::Io(e),
-            csv::ErrorKind::Utf8 { err, .. } => {
-                TextErrorKind::Syntax(format!("invalid UTF-8: {err}"))
+            // Was "malformed CSV: invalid UTF-8: invalid utf-8: invalid UTF-8 in field 6 near
+            // byte index 1".
+            csv::ErrorKind::Utf8 { pos, err } => {
+                let row =
+                    pos.map_or_else(String::new, |p| format!(" of the row at byte {}", p.byte()));
+                TextErrorKind::Io(io::Error::new(
+                    io::ErrorKind::InvalidData,
+                    format!(
+                        "not UTF-8 text (field {}{row}, its byte {}): save the file as UTF-8",
+                        err.field() + 1,
+                        err.valid_up_to()
+                    ),
+                ))
             }
             csv::ErrorKind::UnequalLengths {
                 expected_len, len, ..
@@ -483,6 +502,14 @@ impl fmt::Display for TextErrorKind {
                 write!(
                     f,
                     "column {column}: {what}{lat_deg} deg is outside [-90, 90]"
+                )
+            }
+            Self::BadTemperature { column, temp_c } => {
+                let (low, high) = TEMPERATURE_RANGE_C;
+                write!(
+                    f,
+                    "column {column}: {temp_c} deg C is outside [{low}, {high}], not a sensor's \
+                     temperature (leave the field empty or write NaN when it is unknown)"
                 )
             }
             Self::BadYaw { column, yaw_deg } => write!(

@@ -169,6 +169,8 @@ pub struct LineReader<R> {
     /// Bytes of the reader's buffer handed out last time, consumed before the next line.
     pending: usize,
     number: u64,
+    /// Byte offset of the next line's start in the file.
+    offset: u64,
 }
 
 impl<R: BufRead> LineReader<R> {
@@ -179,25 +181,20 @@ impl<R: BufRead> LineReader<R> {
             buf: Vec::new(),
             pending: 0,
             number: 0,
+            offset: 0,
         }
     }
 
     /// The next line, `None` at the end of the file; an error carries the number of the line
     /// that could not be read (e.g. invalid UTF-8).
     pub fn next_line(&mut self) -> Option<Result<Line<'_>, (u64, io::Error)>> {
-        let (bytes, number, unterminated) = match self.next_bytes()? {
-            Ok(line) => (line.bytes, line.number, line.unterminated),
+        let (bytes, number, unterminated, start) = match self.next_bytes()? {
+            Ok(line) => (line.bytes, line.number, line.unterminated, line.start),
             Err(e) => return Some(Err(e)),
         };
         let text = match std::str::from_utf8(bytes) {
             Ok(text) => text.trim_end_matches(['\n', '\r']),
-            Err(_) => {
-                let e = io::Error::new(
-                    io::ErrorKind::InvalidData,
-                    "stream did not contain valid UTF-8",
-                );
-                return Some(Err((number, e)));
-            }
+            Err(e) => return Some(Err((number, not_utf8(bytes, start, &e)))),
         };
         Some(Ok(Line {
             text,
@@ -212,6 +209,7 @@ impl<R: BufRead> LineReader<R> {
         self.reader.consume(std::mem::take(&mut self.pending));
         self.number += 1;
         let number = self.number;
+        let start = self.offset;
         // Where the line ends in the reader's buffer, if it does.
         let end = match self.reader.fill_buf() {
             Ok([]) => return None,
@@ -222,6 +220,7 @@ impl<R: BufRead> LineReader<R> {
             Some(end) => match self.reader.fill_buf() {
                 Ok(available) => {
                     self.pending = end + 1;
+                    self.offset += self.pending as u64;
                     (&available[..end], false)
                 }
                 Err(e) => return Some(Err((number, e))),
@@ -231,6 +230,7 @@ impl<R: BufRead> LineReader<R> {
                 if let Err(e) = self.reader.read_until(b'\n', &mut self.buf) {
                     return Some(Err((number, e)));
                 }
+                self.offset += self.buf.len() as u64;
                 let unterminated = self.buf.last() != Some(&b'\n');
                 let text = if unterminated {
                     &self.buf[..]
@@ -244,6 +244,7 @@ impl<R: BufRead> LineReader<R> {
             bytes,
             number,
             unterminated,
+            start,
         }))
     }
 }
@@ -257,6 +258,23 @@ pub struct RawLine<'a> {
     pub number: u64,
     /// `true` for the file's last line when no newline ends it.
     pub unterminated: bool,
+    /// Byte offset of the line's start in the file.
+    pub start: u64,
+}
+
+/// The error of a line `bytes` starting at byte `start` of its file that is not UTF-8 (`e`):
+/// the byte where it stops being, as [`crate::text_error::read_text`] says it (`std`'s "stream
+/// did not contain valid UTF-8" named no byte).
+pub fn not_utf8(bytes: &[u8], start: u64, e: &std::str::Utf8Error) -> io::Error {
+    let at = e.valid_up_to();
+    io::Error::new(
+        io::ErrorKind::InvalidData,
+        format!(
+            "not UTF-8 text (byte {}, 0x{:02x}): save the file as UTF-8",
+            start + at as u64,
+            bytes.get(at).copied().unwrap_or(0)
+        ),
+    )
 }
 
 /// The lines seen so far, for the test of an unterminated last line (see the module docs): the
@@ -379,6 +397,27 @@ mod tests {
                 ("y z".to_owned(), 3, true)
             ]
         );
+    }
+
+    /// A line that is not UTF-8 was "stream did not contain valid UTF-8": its line and the
+    /// byte, counted from the file's start across lines and the reader's buffer, are named.
+    #[test]
+    fn a_line_not_utf8_names_its_byte() {
+        let text = b"ab\r\nc\n\nd\xe9f\n";
+        for capacity in [1, 3, 64] {
+            let mut r = LineReader::new(io::BufReader::with_capacity(capacity, &text[..]));
+            let starts: Vec<u64> = (0..3)
+                .map(|_| r.next_line().unwrap().unwrap().number)
+                .collect();
+            assert_eq!(starts, [1, 2, 3]);
+            let (line, e) = r.next_line().unwrap().unwrap_err();
+            assert_eq!(line, 4, "{capacity}");
+            assert_eq!(
+                e.to_string(),
+                "not UTF-8 text (byte 8, 0xe9): save the file as UTF-8",
+                "{capacity}"
+            );
+        }
     }
 
     #[test]

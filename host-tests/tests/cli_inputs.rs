@@ -1,6 +1,7 @@
 //! Inputs of `nav` that were taken wrongly or silently: grades without noise, streams, data
 //! sets mixed from two folders, repeated time tags, headers in capitals, holes in a truth file,
-//! long output names, fixes just before the data. Each is refused with a message that names
+//! long output names, fixes just before the data, temperatures no sensor has, GNSS outliers
+//! past the run, text not in UTF-8, a GPS week rollover. Each is refused with a message that names
 //! the file and what was expected, warned about, or counted where the README says.
 
 mod common;
@@ -413,4 +414,247 @@ fn two_emulator_outputs_in_one_file_are_named_as_outputs() {
         "{text}"
     );
     assert_eq!(std::fs::read_to_string(&out).unwrap(), "an earlier run\n");
+}
+
+/// `temp_c` was not range-checked: 1,000,000 deg C replayed silently and `nav convert` copied
+/// it. Refused with its line and column; an empty field and NaN are both "unknown".
+#[test]
+fn an_imu_csv_temperature_no_sensor_has_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (bin, csv) = (path("imu.bin"), path("imu.csv"));
+    common::generated_recording(std::path::Path::new(&bin), "1");
+    ok(&["convert", "--in", &bin, "--out", &csv]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.starts_with("t_s,") && text.lines().next().unwrap().ends_with(",temp_c"));
+    // Field 8 of data line `k` (line k + 2) set to `temp`.
+    let with = |k: usize, temp: &str| {
+        let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+        let mut fields: Vec<&str> = lines[k + 1].split(',').collect();
+        fields[7] = temp;
+        lines[k + 1] = fields.join(",");
+        lines.join("\n") + "\n"
+    };
+    let (odd, out) = (path("odd.csv"), path("out.bin"));
+    for temp in ["1e6", "inf", "-300"] {
+        std::fs::write(&odd, with(3, temp)).unwrap();
+        for args in [
+            vec!["convert", "--in", &odd, "--out", &out],
+            common::replay_args(&odd, &out, &[]),
+        ] {
+            let o = nav(&args);
+            let text = output_text(&o);
+            assert_eq!(o.status.code(), Some(1), "{text}");
+            assert!(
+                text.contains("line 5: column temp_c: ")
+                    && text.contains("deg C is outside [-100, 200]"),
+                "{temp}: {text}"
+            );
+            assert!(!std::path::Path::new(&out).exists());
+        }
+    }
+    for temp in ["", "NaN"] {
+        std::fs::write(&odd, with(3, temp)).unwrap();
+        ok(&["convert", "--in", &odd, "--out", &out]);
+    }
+}
+
+/// `nav sim --gnss-jump 1,1e9,...` (a jump of 1e9 s in a 5 s run) and a jump given twice (its
+/// offset added twice) were simulated silently. Refused, nothing written.
+#[test]
+fn sim_refuses_outliers_past_the_run_or_given_twice() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let out = out.to_str().unwrap();
+    let sim = |extra: &[&str]| {
+        let mut args = vec![
+            "sim",
+            "static",
+            "--seconds",
+            "5",
+            "--out",
+            out,
+            "--gnss-rate",
+            "1",
+        ];
+        args.extend_from_slice(extra);
+        nav(&args)
+    };
+    for (extra, expected) in [
+        (
+            &["--gnss-jump", "1,1e9,1,1,1"][..],
+            "GNSS jump at 1 s for 1e9 s ends at 1.000000001e9 s, past the run's end at 5 s: \
+             give a length of at most 5 s",
+        ),
+        (
+            &["--gnss-ramp", "2,30,1,1,1"],
+            "GNSS ramp at 2 s for 30 s ends at 32 s, past the run's end at 5 s",
+        ),
+        (
+            &["--gnss-jump", "1,2,1,1,1", "--gnss-jump", "1,2,1,1,1"],
+            "GNSS jump at 1 s is given twice",
+        ),
+        (
+            &["--gnss-nan", "2", "--gnss-nan", "2"],
+            "--gnss-nan 2 is given twice",
+        ),
+    ] {
+        let o = sim(extra);
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(1), "{extra:?}: {text}");
+        assert!(text.contains(expected), "{extra:?}: {text}");
+        assert!(!std::path::Path::new(out).exists(), "{extra:?}");
+    }
+    // To the run's end: taken.
+    let o = sim(&["--gnss-jump", "1,5,1,1,1"]);
+    assert!(o.status.success(), "{}", output_text(&o));
+}
+
+/// A recording not in UTF-8 said "line 6: stream did not contain valid UTF-8" (KF-GINS text)
+/// or "malformed CSV: invalid UTF-8: invalid utf-8: invalid UTF-8 in field 8 near byte index
+/// 4" (CSV): the byte where the text stops being UTF-8 is named, in a user's words.
+#[test]
+fn a_recording_not_in_utf8_names_its_line_and_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let mut text: Vec<u8> = (1..=400)
+        .flat_map(|k| format!("{} 0 0 0 0 0 -0.0245\n", f64::from(k) * 0.0025).into_bytes())
+        .collect();
+    // Line 6, "0.015 0 0 0 0 0 -0.0245", with its last 5 as cp1252's e-acute.
+    let line6: usize = text
+        .split(|&b| b == b'\n')
+        .take(5)
+        .map(|l| l.len() + 1)
+        .sum();
+    let bad = line6 + text[line6..].iter().position(|&b| b == b'\n').unwrap() - 1;
+    text[bad] = 0xe9;
+    let kf = path("imu.txt");
+    std::fs::write(&kf, &text).unwrap();
+    let o = nav(&common::replay_args(&kf, &path("out.csv"), &[]));
+    let said = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains(&format!(
+            "imu.txt: line 6: not UTF-8 text (byte {bad}, 0xe9): save the file as UTF-8"
+        )),
+        "{said}"
+    );
+    let (bin, csv) = (path("imu.bin"), path("imu.csv"));
+    common::generated_recording(std::path::Path::new(&bin), "1");
+    ok(&["convert", "--in", &bin, "--out", &csv]);
+    let mut text = std::fs::read(&csv).unwrap();
+    let line3: usize = text
+        .split(|&b| b == b'\n')
+        .take(2)
+        .map(|l| l.len() + 1)
+        .sum();
+    text.insert(line3 + 1, 0xe9);
+    std::fs::write(&csv, &text).unwrap();
+    let o = nav(&["convert", "--in", &csv, "--out", &path("out.bin")]);
+    let said = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains(&format!(
+            "imu.csv: line 3: not UTF-8 text (field 1 of the row at byte {line3}, its byte 1): \
+             save the file as UTF-8"
+        )),
+        "{said}"
+    );
+}
+
+/// IMU time tags in seconds of week that roll over to 0 made an aided run fail as "GNSS on
+/// another clock" with the IMU data covering "604780 .. 20 s", no word of the rollover; the
+/// step back of a week is named in the refusal.
+#[test]
+fn an_aided_run_refused_after_a_week_rollover_names_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = dir.path().join("sim");
+    let sim = sim.to_str().unwrap();
+    ok(&[
+        "sim",
+        "land-vehicle",
+        "--seconds",
+        "40",
+        "--gnss-rate",
+        "1",
+        "--format",
+        "csv",
+        "--out",
+        sim,
+    ]);
+    let text = std::fs::read_to_string(format!("{sim}/imu.csv")).unwrap();
+    // The first 20 s at the end of a GPS week, the rest from 0.
+    let mut lines = text.lines();
+    let mut wrapped = lines.next().unwrap().to_owned() + "\n";
+    for line in lines {
+        let (t, rest) = line.split_once(',').unwrap();
+        let t_s: f64 = t.parse().unwrap();
+        let t_s = if t_s <= 20.0 {
+            t_s + 604_780.0
+        } else {
+            t_s - 20.0
+        };
+        wrapped += &format!("{t_s},{rest}\n");
+    }
+    let imu = dir.path().join("wrapped.csv");
+    std::fs::write(&imu, wrapped).unwrap();
+    let (imu, out) = (imu.to_str().unwrap(), format!("{sim}/out.csv"));
+    let gnss = format!("{sim}/gnss.csv");
+    let mut args = vec!["replay", "--imu", imu, "--gnss", &gnss, "--out", &out];
+    args.extend(common::GIVEN);
+    let o = nav(&args);
+    let said = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains("another clock")
+            && said.contains("the time tags stepped back by 604799.99")
+            && said.contains("(to t = 0.003 s): a GPS week rollover"),
+        "{said}"
+    );
+}
+
+/// `imudatarate: 401` for a 400 Hz file ran without a word on stderr (its warning was on
+/// stdout, among the results). A declared rate off the file's by more than 0.1 % is warned of
+/// on stderr; one within it is not.
+#[test]
+fn kf_gins_warns_of_an_imudatarate_off_the_file_on_stderr() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = host_tests::filter_bench::generate(
+        dir.path(),
+        &host_tests::filter_bench::FilterBenchOptions {
+            seconds: 5.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let yaml = std::fs::read_to_string(&data.config).unwrap();
+    assert!(yaml.contains("imudatarate: 200\n"), "{yaml}");
+    let out = dir.path().join("out.nav");
+    for (rate, warned) in [("201", true), ("200.1", false)] {
+        let config = dir.path().join("rate.yaml");
+        std::fs::write(
+            &config,
+            yaml.replace("imudatarate: 200\n", &format!("imudatarate: {rate}\n")),
+        )
+        .unwrap();
+        let o = nav(&[
+            "kf-gins",
+            config.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let (stdout, stderr) = (
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr),
+        );
+        assert!(o.status.success(), "{stdout}{stderr}");
+        assert!(!stdout.contains("imudatarate"), "{stdout}");
+        assert_eq!(
+            stderr.contains(&format!(
+                "warning: imudatarate {rate} Hz, but the epochs of "
+            )),
+            warned,
+            "{rate}: {stderr}"
+        );
+    }
 }

@@ -1783,6 +1783,9 @@ fn sim(a: SimArgs) -> Result<()> {
                     nav_core::number::Number(run_s)
                 );
             }
+            if let Some(last) = sim.truth.last() {
+                g.check_within_run(last.t_s)?;
+            }
             if let Some([_, _, first]) = a.gnss_outages
                 && g.outages.iter().all(|o| o.start_s >= run_s)
             {
@@ -2400,8 +2403,9 @@ fn run(cli: Cli) -> Result<()> {
                     host_tests::text_error::told_as(e, &config, label)
                 })?;
             let seconds = started.elapsed().as_secs_f64();
+            // On stderr, as convert's: the summary on stdout is the result.
             for w in &run.warnings {
-                println!("warning: {w}");
+                eprintln!("warning: {w}");
             }
             println!(
                 "{}",
