@@ -314,8 +314,23 @@ impl<W: Write> CsvWriter<W> {
         Ok(Self { w, has_temperature })
     }
 
-    /// Writes `row` (its temperature only when the header has the column).
+    /// Writes `row` (its temperature only when the header has the column), or refuses a
+    /// temperature outside [`TEMPERATURE_RANGE_C`] (the reader's rule: a file it would refuse
+    /// is not written; NaN is an unknown temperature).
     pub fn write_row(&mut self, row: &CsvRow) -> io::Result<()> {
+        let (low, high) = TEMPERATURE_RANGE_C;
+        let t = row.temperature_c;
+        if self.has_temperature && !t.is_nan() && !(low..=high).contains(&t) {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!(
+                    "the sample at t = {} s has a temperature of {} deg C, outside [{low}, \
+                     {high}] deg C (no IMU's)",
+                    nav_core::number::Number(row.t_s),
+                    nav_core::number::Number(f64::from(t))
+                ),
+            ));
+        }
         let [dtheta_x_rad, dtheta_y_rad, dtheta_z_rad] = row.delta_theta_ib_b;
         let [dv_x_mps, dv_y_mps, dv_z_mps] = row.delta_v_ib_b;
         self.w.serialize(RowOut {
@@ -392,6 +407,34 @@ mod tests {
                 "{bad}: {msg}"
             );
         }
+    }
+
+    /// The writer refuses what the reader would (a binary recording's garbage temperature
+    /// converted to CSV), and writes an unknown one as NaN.
+    #[test]
+    fn the_writer_refuses_a_temperature_the_reader_would() {
+        let row = |temperature_c: f32| CsvRow {
+            t_s: 2.5,
+            delta_theta_ib_b: [0.0; 3],
+            delta_v_ib_b: [0.0; 3],
+            temperature_c,
+        };
+        let mut out = Vec::new();
+        let mut w = CsvWriter::new(&mut out, true).unwrap();
+        w.write_row(&row(f32::NAN)).unwrap();
+        w.write_row(&row(-40.0)).unwrap();
+        let e = w.write_row(&row(1e6)).unwrap_err().to_string();
+        assert!(
+            e.contains("t = 2.5 s has a temperature of 1e6 deg C, outside [-100, 200]"),
+            "{e}"
+        );
+        assert!(w.write_row(&row(f32::INFINITY)).is_err());
+        w.finish().unwrap();
+        let csv = read_from(out.as_slice(), Path::new("mem.csv")).unwrap();
+        assert_eq!(csv.rows.len(), 2);
+        // Without the column, the temperature is not written and not judged.
+        let mut w = CsvWriter::new(Vec::new(), false).unwrap();
+        w.write_row(&row(1e6)).unwrap();
     }
 
     #[test]
