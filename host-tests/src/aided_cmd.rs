@@ -35,8 +35,9 @@ pub fn noise_of_spec(n: &NoiseSpec) -> FilterNoise<f64> {
 /// wanders 255 deg/h per sqrt(h), against the grade's 10), used by `nav replay --imu-noise`
 /// and by the firmware's grades. Not [`grade_filter_model`]: its in-run processes are the
 /// simulator's, none for `fog` and `rlg` (constant biases), and a real part's bias instability
-/// would meet bias states without process noise; in 60 s outages the two give the same
-/// 1-sigma within 2 % (the misalignment consider states make most of it). With 1 h it wandered 100 times faster (a consumer gyro's bias 0.14 deg/s in 150 s):
+/// would meet bias states without process noise; at the ends of 60 s outages the two gave
+/// 1-sigmas within 15 % of each other (the misalignment consider states make most of it).
+/// With 1 h it wandered 100 times faster (a consumer gyro's bias 0.14 deg/s in 150 s):
 /// on a straight flight the filter's heading walked with its bias estimate, 25-50 deg off
 /// after 900 s against a 16 deg 1-sigma, from a perfect IMU.
 pub fn grade_noise(grade: Grade) -> FilterNoise<f64> {

@@ -96,10 +96,9 @@ pub struct FilterConfig<T: Scalar> {
     pub noise: FilterNoise<T>,
     /// 1-sigma of the sensor errors at the start, per axis (gyro bias [rad/s], accelerometer
     /// bias [m/s^2], scale factors [-]), when they are not [`Self::noise`]'s Gauss–Markov
-    /// 1-sigmas (`None`: they are). A grade's turn-on bias is a constant of the run: taken as
-    /// the process's stationary 1-sigma it also drives the bias between fixes as if it
-    /// re-drew itself every correlation time, and the 1-sigma at the end of an outage grows
-    /// several times beyond the drift (consumer MEMS: 158 m against 9 m after 60 s).
+    /// 1-sigmas (`None`: they are). A grade's turn-on bias is a constant of the run and its
+    /// in-run drift far smaller: one figure for both drives the bias between fixes as if the
+    /// turn-on spread re-drew itself every correlation time.
     pub sensor_sigma: Option<SensorErrors<T>>,
     /// Model the scale factors (21 states) or not (15 states used, the rest held at zero).
     pub scale_factors: bool,

@@ -151,18 +151,21 @@ mod tests {
 
     /// A start in motion knows the sensors as the configuration says at the start: its own
     /// start 1-sigma when it has one (a grade's turn-on spread), not the in-run model's
-    /// stationary 1-sigma; a given start's wins; carried sensors keep the filter's.
+    /// stationary 1-sigma, also after a divergence; a given start's wins.
     #[test]
     fn the_sensors_start_with_the_configured_sigma() {
+        let plan = |config: &FilterConfig<f64>, given: Option<&InitialSigma<f64>>, carried| {
+            Restart::plan(
+                &start(),
+                0.0,
+                config,
+                SensorErrors::default(),
+                given,
+                carried,
+            )
+        };
         let mut config = FilterConfig::new(noise());
-        let of_noise = Restart::plan(
-            &start(),
-            0.0,
-            &config,
-            SensorErrors::default(),
-            None,
-            Carried::Nothing,
-        );
+        let of_noise = plan(&config, None, Carried::Nothing);
         assert_eq!(of_noise.sigma.sensors(), config.start_sensor_sigma());
         assert_eq!(
             of_noise.sigma.accel_bias_mps2,
@@ -175,25 +178,10 @@ mod tests {
             accel_scale: Vector3::repeat(4e-3),
         };
         config.sensor_sigma = Some(turn_on);
-        let plan = Restart::plan(
-            &start(),
-            0.0,
-            &config,
-            SensorErrors::default(),
-            None,
-            Carried::Nothing,
-        );
-        assert_eq!(plan.sigma.sensors(), turn_on);
-        assert_eq!(plan.sigma.position_ned_m, start().sigma.position_ned_m);
-        // After a divergence the sensors are known as at the start, again.
-        let again = Restart::plan(
-            &start(),
-            0.0,
-            &config,
-            SensorErrors::default(),
-            None,
-            Carried::Counters,
-        );
+        let fresh = plan(&config, None, Carried::Nothing);
+        assert_eq!(fresh.sigma.sensors(), turn_on);
+        assert_eq!(fresh.sigma.position_ned_m, start().sigma.position_ned_m);
+        let again = plan(&config, None, Carried::Counters);
         assert_eq!(again.sigma.sensors(), turn_on);
         let given = InitialSigma::new(
             Vector3::repeat(1.0),
@@ -204,15 +192,8 @@ mod tests {
                 ..turn_on
             },
         );
-        let plan = Restart::plan(
-            &start(),
-            0.0,
-            &config,
-            SensorErrors::default(),
-            Some(&given),
-            Carried::Nothing,
-        );
-        assert_eq!(plan.sigma.accel_bias_mps2, Vector3::repeat(0.05));
+        let given_plan = plan(&config, Some(&given), Carried::Nothing);
+        assert_eq!(given_plan.sigma.accel_bias_mps2, Vector3::repeat(0.05));
         // The re-alignment's level allows for the start's accelerometer bias.
         let realign = crate::ins_filter::motion::MotionAlignConfig::for_realignment(&config);
         assert!(realign.accel_bias_mps2 >= 0.3, "{realign:?}");
