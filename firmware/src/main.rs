@@ -349,6 +349,13 @@ mod app {
             };
             let step = navigator.push(&sample.nav_input());
             let spent = instructions_since(start);
+            // A free-inertial solution lost in an IMU gap carries on and looks valid: the
+            // log says where, before the sample's row (as the harness's).
+            if board::CSV_LOG
+                && let Some(lost) = navigator.take_lost_record()
+            {
+                write_line(&mut out.out, lost);
+            }
             match step {
                 Step::Navigated(None) => cost.add(spent),
                 Step::Navigated(Some(row)) => {

@@ -119,10 +119,8 @@ pub struct LostImuTime {
     pub gaps: u32,
     /// Their sum [s].
     pub total_s: f64,
-    /// Those beyond [`nav_core::gap::MAX_BRIDGED_S`] (not bridged: the solution lost), and
-    /// the last one's length [s] ([`Self::lost_record`]).
+    /// Those beyond [`nav_core::gap::MAX_BRIDGED_S`] (not bridged: the solution lost).
     pub unbridged: u32,
-    last_unbridged_s: f64,
     /// The longest [s] and the time it ended [s].
     pub longest_s: f64,
     /// End of the longest [s].
@@ -207,7 +205,6 @@ impl LostImuTime {
         self.total_s += lost_s;
         if lost_s > nav_core::gap::MAX_BRIDGED_S {
             self.unbridged += 1;
-            self.last_unbridged_s = lost_s;
         }
         if lost_s > self.longest_s {
             self.longest_s = lost_s;
@@ -232,15 +229,6 @@ impl LostImuTime {
         match navigated {
             Some(from_us) if !self.aligning => self.tail = Some((lost_s, from_us as f64 * 1e-6)),
             _ => self.add(lost_s, latest),
-        }
-    }
-
-    /// The log's record of the last gap not bridged, ended by the sample at `t_us` [us]
-    /// ([`nav_core::output::LostRecord`]).
-    pub fn lost_record(&self, t_us: u64) -> nav_core::output::LostRecord {
-        nav_core::output::LostRecord {
-            t_us,
-            gap_us: (self.last_unbridged_s * 1e6).round() as u64,
         }
     }
 

@@ -8,7 +8,7 @@
 //! ([`hal_adapters::ImuSample::nav_input`]), hands each GNSS fix over before the first sample at or after its time (as
 //! the firmware does), writes [`CSV_HEADER`] (an aided run: [`AIDED_CSV_HEADER`]), one row
 //! (its `Display`) per line, a free-inertial run's [`nav_core::output::LostRecord`] where an
-//! IMU gap lost its solution, and the end record ([`nav_core::output::EndRecord`]), and
+//! IMU gap lost its solution (the navigator's, [`nav_core::navigator::Navigator::take_lost_record`]), and the end record ([`nav_core::output::EndRecord`]), and
 //! reports in output units.
 
 use hal_adapters::Imu;
@@ -302,13 +302,10 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
             lost.out_of_order(f64::from(s.dt_s));
         } else {
             let navigated = usable && navigator.counters().rejected == rejected;
-            let unbridged = lost.unbridged;
             lost.note(s.t_us, navigated.then_some(f64::from(s.dt_s)));
-            // A free-inertial solution carries on across the gap and looks valid: the log
-            // says where it was lost (an aided run's rows say DEGRADED and it re-aligns).
-            if lost.unbridged > unbridged && config.aiding.is_none() {
-                writeln!(out, "{}", lost.lost_record(s.t_us)).map_err(PipelineError::Output)?;
-            }
+        }
+        if let Some(r) = navigator.take_lost_record() {
+            writeln!(out, "{r}").map_err(PipelineError::Output)?;
         }
         if let Some(r) = logged {
             row(&mut out, &r)?;

@@ -1396,6 +1396,78 @@ fn assert_same_lines(fw: &str, host: &str) {
     );
 }
 
+/// A free-inertial run whose IMU data lose 6 s (beyond the 5 s bridge) after the alignment:
+/// the firmware's log marks the lost solution with the harness's lost record, before the
+/// first row after the gap, and its rows are the harness's line for line (the firmware wrote
+/// no record: its rows after the gap looked valid).
+#[test]
+fn firmware_marks_a_lost_free_inertial_solution_like_the_harness() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut rec = static_recording(25.0, Grade::Fog);
+    // 400 Hz: the records of 14 s to 20 s.
+    rec.records.drain(5_600..8_000);
+    std::fs::write(d.join("rec.bin"), rec.to_bytes().unwrap()).unwrap();
+    let s = Static::default();
+    let (lat, lon, h) = (
+        s.lat_deg.to_string(),
+        s.lon_deg.to_string(),
+        s.h_m.to_string(),
+    );
+    let (code, log) = run_firmware(
+        d,
+        &[
+            "--imu-noise",
+            "fog",
+            "rec.bin",
+            "fw.csv",
+            &lat,
+            &lon,
+            &h,
+            "10",
+            "40",
+        ],
+    );
+    assert_eq!(code, 0, "firmware exit code {code}; log:\n{log}");
+    let o = nav(
+        d,
+        &[
+            "replay",
+            "--imu",
+            "rec.bin",
+            "--align-seconds",
+            "10",
+            "--log-every",
+            "40",
+            "--device",
+            "adis16505",
+            "--imu-noise",
+            "fog",
+            "--lat",
+            &lat,
+            "--lon",
+            &lon,
+            "--h",
+            &h,
+            "--out",
+            "host.csv",
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
+    let host = std::fs::read_to_string(d.join("host.csv")).unwrap();
+    let lost: Vec<&str> = fw.lines().filter(|l| l.starts_with("# lost:")).collect();
+    assert_eq!(lost.len(), 1, "{fw}");
+    // The records resume at 20.0025 s; the ADIS16505 driver's first sample after the gap, on
+    // both sides, ends at 20.005 s: 6 s lost, and a period.
+    assert!(
+        lost[0].starts_with("# lost: t = 20.005000 s after an IMU gap of 6.002500 s"),
+        "{}",
+        lost[0]
+    );
+    assert_same_lines(&fw, &host);
+}
+
 /// Fixes on another clock than the recording's (none within the IMU data's time span) end
 /// the firmware's run with the recording's exit code (4), named as the harness names them and
 /// without the end record; before, the run exited 0 with a complete-looking free-inertial log

@@ -180,8 +180,9 @@ pub struct GapCounters {
 }
 
 impl GapCounters {
-    /// Counts `gap`.
-    pub fn add<T: Scalar>(&mut self, gap: &ImuGap<T>) {
+    /// Counts `gap`; returns its length [us] (in the run's precision: an hour's gap in f32 is
+    /// within a millisecond).
+    pub fn add<T: Scalar>(&mut self, gap: &ImuGap<T>) -> u64 {
         if gap.bridged() {
             self.bridged = self.bridged.saturating_add(1);
         } else {
@@ -190,6 +191,7 @@ impl GapCounters {
         let us = (gap.lost_s.to_f64() * 1e6) as u64;
         self.time_us = self.time_us.saturating_add(us);
         self.longest_us = self.longest_us.max(us);
+        us
     }
 }
 

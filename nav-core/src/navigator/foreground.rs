@@ -20,7 +20,7 @@ use crate::ins_filter::{
     AidedMechanization, FilterConfig, FilterError, FilterStatus, GnssVelocity, Propagation,
     SensorErrors,
 };
-use crate::output::{EndRecord, FilterColumns, Row, Solution};
+use crate::output::{EndRecord, FilterColumns, LostRecord, Row, Solution};
 use crate::strapdown::{MechanizationConfig, Strapdown};
 use core::fmt;
 use nalgebra::Vector3;
@@ -505,6 +505,9 @@ pub struct Navigator<T: Scalar> {
     report: Option<FilterReport<T>>,
     /// Re-alignments in motion.
     realign: Realign<T>,
+    /// The record of a gap that lost the free-inertial solution, for the log
+    /// ([`Self::take_lost_record`]).
+    lost_record: Option<LostRecord>,
 }
 
 impl<T: Scalar> Navigator<T> {
@@ -536,7 +539,16 @@ impl<T: Scalar> Navigator<T> {
                 under_way: None,
                 counters: Realignments::default(),
             },
+            lost_record: None,
         }
+    }
+
+    /// The log's record of the IMU gap beyond the bridge that lost the free-inertial
+    /// solution at the last sample, once ([`LostRecord`]: the rows after it carry on from the
+    /// state before the gap and look valid); an aided run's rows say DEGRADED instead and it
+    /// re-aligns. The caller writes it before that sample's row.
+    pub fn take_lost_record(&mut self) -> Option<LostRecord> {
+        self.lost_record.take()
     }
 
     /// Hands over a GNSS fix (time order; at most a few ahead of the samples: hand each over
@@ -1142,7 +1154,10 @@ impl<T: Scalar> Navigator<T> {
             }
             _ => return,
         }
-        self.counters.gaps.add(gap);
+        let gap_us = self.counters.gaps.add(gap);
+        if !gap.bridged() && matches!(self.phase, Phase::Navigating(_)) {
+            self.lost_record = Some(LostRecord { t_us, gap_us });
+        }
     }
 
     /// The filter restarted ([`FromBackground::Restarted`]): the new mechanization from the

@@ -910,6 +910,33 @@ fn the_gnss_correlated_error_reaches_the_filter() {
     );
 }
 
+/// A gap beyond the bridge while navigating free inertial leaves the log its lost record,
+/// once, at the first sample after it; a bridged gap none (f32, as the firmware).
+#[test]
+fn a_lost_free_inertial_gap_leaves_its_record_once() {
+    let setup = Setup::<f32>::new(&config(10.0, 40), RATE_HZ).unwrap();
+    let (mut nav, mut bg) = (Navigator::new(&setup), Background::new(&setup));
+    let mut records = Vec::new();
+    for mut i in still(3000) {
+        // 1 s lost after sample 1200 (bridged), 6 s more after sample 1500 (lost).
+        i.t_us += match i.t_us / 10_000 {
+            k if k > 1500 => 7_000_000,
+            k if k > 1200 => 1_000_000,
+            _ => 0,
+        };
+        nav.push_inline(&mut bg, &i).unwrap();
+        if let Some(r) = nav.take_lost_record() {
+            records.push((i.t_us, r));
+        }
+    }
+    assert_eq!(records.len(), 1, "{records:?}");
+    let (t_us, r) = records[0];
+    assert_eq!((t_us, r.t_us), (22_010_000, 22_010_000));
+    assert!(r.gap_us.abs_diff(6_000_000) <= 1, "{r:?}");
+    assert_eq!(nav.counters().gaps.bridged, 1);
+    assert_eq!(nav.counters().gaps.lost, 1);
+}
+
 /// A gap inside the window of an alignment that integrates the attitude ends the run with the
 /// gap named (was: skipped, a heading 136 deg off claiming a 3.3 deg 1-sigma); the static
 /// method's averages take it.
