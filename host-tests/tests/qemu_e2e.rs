@@ -194,6 +194,17 @@ fn static_sim(seconds: f64, grade: Grade) -> host_tests::simulate::Simulated {
     simulate(&opts, |_, _| {}).unwrap()
 }
 
+/// The `static` scenario's site as command-line arguments: latitude, longitude [deg], height
+/// [m].
+fn static_site() -> (String, String, String) {
+    let s = Static::default();
+    (
+        s.lat_deg.to_string(),
+        s.lon_deg.to_string(),
+        s.h_m.to_string(),
+    )
+}
+
 fn static_recording(seconds: f64, grade: Grade) -> Recording {
     static_sim(seconds, grade).recording
 }
@@ -256,12 +267,7 @@ fn firmware_in_qemu_matches_host_replay() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let truth = recording_with_bad_samples(&d.join("rec.bin"));
-    let s = Static::default();
-    let (lat, lon, h) = (
-        s.lat_deg.to_string(),
-        s.lon_deg.to_string(),
-        s.h_m.to_string(),
-    );
+    let (lat, lon, h) = static_site();
 
     // The recording's true calibration: both sides must load it and apply it identically,
     // to the alignment as to the navigation.
@@ -492,12 +498,7 @@ fn firmware_takes_its_run_configuration_from_the_host() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     recording_io::write(&d.join("rec.bin"), &static_recording(13.0, Grade::Fog)).unwrap();
-    let s = Static::default();
-    let (lat, lon, h) = (
-        s.lat_deg.to_string(),
-        s.lon_deg.to_string(),
-        s.h_m.to_string(),
-    );
+    let (lat, lon, h) = static_site();
     let text = format!(
         "lat-deg = {lat}\nlon-deg = {lon}\nh-m = {h}\nalign-seconds = 12\nlever-arm = 0.5, -0.2, 0.1\nlog-every = 20\nmounting = {TURNED}\n"
     );
@@ -526,6 +527,7 @@ fn firmware_takes_its_run_configuration_from_the_host() {
     }
     std::fs::write(d.join("frames.bin"), &frames).unwrap();
 
+    let s = Static::default();
     let (lat_off, lon_off) = ((s.lat_deg - 1.0).to_string(), (s.lon_deg + 1.0).to_string());
     let (code, log) = run_firmware(
         d,
@@ -678,12 +680,7 @@ fn firmware_and_host_fail_alike_when_nothing_is_navigated() {
             "samples 4400, checksum errors 0, stale 400, device missed 0, bus errors 0,",
         ),
     ];
-    let s = Static::default();
-    let (lat, lon, h) = (
-        s.lat_deg.to_string(),
-        s.lon_deg.to_string(),
-        s.h_m.to_string(),
-    );
+    let (lat, lon, h) = static_site();
     for (file, rec, fw_code, expect, driver_expect) in cases {
         recording_io::write(&d.join(file), &rec).unwrap();
         let (code, log) = run_firmware(d, &[file, "fw.csv", &lat, &lon, &h, "10"]);
@@ -1408,12 +1405,7 @@ fn firmware_marks_a_lost_free_inertial_solution_like_the_harness() {
     // 400 Hz: the records of 14 s to 20 s.
     rec.records.drain(5_600..8_000);
     std::fs::write(d.join("rec.bin"), rec.to_bytes().unwrap()).unwrap();
-    let s = Static::default();
-    let (lat, lon, h) = (
-        s.lat_deg.to_string(),
-        s.lon_deg.to_string(),
-        s.h_m.to_string(),
-    );
+    let (lat, lon, h) = static_site();
     let (code, log) = run_firmware(
         d,
         &[
