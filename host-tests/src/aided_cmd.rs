@@ -391,6 +391,9 @@ pub struct AidedReplay {
     pub gnss: PathBuf,
     /// The 1-sigma of a GNSS file without its own (gnss-ins-sim's GPS file).
     pub gnss_sigma: Option<gnss::AssumedSigma>,
+    /// The receiver's output latency [s]: its fixes are taken at their tags less it
+    /// ([`crate::gnss_file::at_measurement_epochs`]).
+    pub gnss_latency_s: f64,
     /// The solution log.
     pub out: PathBuf,
     /// The filter's settings.
@@ -430,7 +433,14 @@ pub fn sequencer<T: Scalar>(
 pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
     atomic::refuse_same_file(&[&a.imu, &a.gnss], &a.out)?;
     crate::gnss_file::refuse_the_imu_recording(&a.gnss, &a.imu)?;
-    let fixes: Vec<GnssFix> = crate::gnss_file::read_as_text_fixes(&a.gnss, a.gnss_sigma.as_ref())?;
+    crate::gnss_file::check_latency(a.gnss_latency_s)?;
+    let mut fixes: Vec<GnssFix> =
+        crate::gnss_file::read_as_text_fixes(&a.gnss, a.gnss_sigma.as_ref())?;
+    // At their measurement epochs (a tag before the latency is then not on the clock: a bad
+    // time tag, as in `gnss_file::at_measurement_epochs`).
+    for f in &mut fixes {
+        f.t_s -= a.gnss_latency_s;
+    }
     let seq = sequencer::<T>(&a.config, &a.start)?;
     let (mut source, _format) = ReplaySource::open(&a.imu)?;
     let report = atomic::write(&a.out, |w| -> Result<(AidedReport, u64)> {
@@ -689,7 +699,7 @@ fn many_refused(kind: &str, c: &nav_core::ins_filter::AidCounters) -> Option<Str
             "WARNING: {} of {all} GNSS {kind} fixes refused ({:.0} %), where fixes as good as \
              their declared 1-sigma are refused about 0.1 % of the time: the fixes' 1-sigma may \
              be too small, the filter's IMU noise too optimistic, the start, the lever arm or \
-             the fixes' time tags (a receiver's latency) wrong, or the fixes faulty (jumps, \
+             the fixes' time tags (a receiver's latency: --gnss-latency) wrong, or the fixes faulty (jumps, \
              multipath); the solution's 1-sigma may then be too small",
             c.rejected,
             100.0 * c.rejected as f64 / all as f64
@@ -714,8 +724,9 @@ pub fn position_warning(p: &nav_core::ins_filter::AidCounters, unused: &str) -> 
             "WARNING: more GNSS position fixes refused ({}) or invalid ({}) than used ({}): the \
              filter's IMU noise (--imu-noise, imunoise), the start and its 1-sigma (--init-*, \
              init*, or the alignment's), the antenna lever arm, the fixes' 1-sigma or their \
-             time tags (a receiver's output latency: fixes tagged 0.2 s late are 3 m behind a \
-             car at 15 m/s) do not match the data, and the solution may be far off",
+             time tags (a receiver's output latency, --gnss-latency: fixes tagged 0.2 s late \
+             are 3 m behind a car at 15 m/s) do not match the data, and the solution may be \
+             far off",
             p.rejected, p.invalid, p.accepted
         ))
     } else {

@@ -30,6 +30,45 @@ pub struct GnssFixes {
     pub bad_time_tags: u32,
 }
 
+/// The largest receiver output latency a run may declare [s] (`--gnss-latency`): receivers'
+/// are tens to hundreds of milliseconds; a second is a wrong unit or clock.
+pub const MAX_GNSS_LATENCY_S: f64 = 1.0;
+
+/// The fixes' time tags less a receiver's output latency `latency_s` [s] (its fixes tagged that
+/// long after the epoch they were measured at, as a logger that tags them on arrival does):
+/// each fix is taken at its measurement epoch. A fix tagged before the latency has no epoch
+/// on the clock: left out and counted as a bad time tag. Refuses a latency outside `[0,`
+/// [`MAX_GNSS_LATENCY_S`]`]` ([`check_latency`]).
+pub fn at_measurement_epochs(fixes: &mut GnssFixes, latency_s: f64) -> Result<()> {
+    check_latency(latency_s)?;
+    let latency_us = (latency_s * 1e6).round() as u64;
+    let before = fixes.fixes.len();
+    fixes
+        .fixes
+        .retain_mut(|f| match f.t_us.checked_sub(latency_us) {
+            Some(t_us) => {
+                f.t_us = t_us;
+                true
+            }
+            None => false,
+        });
+    let dropped = before - fixes.fixes.len();
+    fixes.bad_time_tags = fixes.bad_time_tags.saturating_add(dropped as u32);
+    Ok(())
+}
+
+/// Refuses a receiver latency `latency_s` [s] outside `[0,` [`MAX_GNSS_LATENCY_S`]`]`.
+pub fn check_latency(latency_s: f64) -> Result<()> {
+    if !(0.0..=MAX_GNSS_LATENCY_S).contains(&latency_s) {
+        bail!(
+            "--gnss-latency must be within 0 to {MAX_GNSS_LATENCY_S} s (the receiver's output \
+             latency), not {}",
+            nav_core::number::Number(latency_s)
+        );
+    }
+    Ok(())
+}
+
 /// Refuses a GNSS file that is the IMU recording itself (the same file under any name): a
 /// KF-GINS IMU file has the 7 columns of its GNSS file and read as fixes at latitude 0 with
 /// negative 1-sigmas, every one refused by the filter, a free-inertial run. A gnss-ins-sim

@@ -291,13 +291,15 @@ pub struct AidedFileReport {
 
 /// `nav replay --gnss GNSS` from the navigator's alignment: `imu` replayed in precision `T`
 /// with `options` (their [`RunConfig::aiding`] set), the fixes of `gnss` (any format,
-/// [`gnss_file::read_fixes`], `gnss_sigma` the 1-sigma of a gnss-ins-sim GPS file) handed
-/// over at their samples, the log written to `out` atomically (nothing is left there on
-/// failure).
+/// [`gnss_file::read_fixes`], `gnss_sigma` the 1-sigma of a gnss-ins-sim GPS file, taken at
+/// their tags less the receiver's latency `latency_s` [s],
+/// [`gnss_file::at_measurement_epochs`]) handed over at their samples, the log written to
+/// `out` atomically (nothing is left there on failure).
 pub fn replay_aided<T: Scalar>(
     imu: &Path,
     gnss: &Path,
     gnss_sigma: Option<&crate::gnss::AssumedSigma>,
+    latency_s: f64,
     out: &Path,
     options: &ReplayOptions,
 ) -> Result<AidedFileReport, ReplayFailure> {
@@ -306,10 +308,12 @@ pub fn replay_aided<T: Scalar>(
     }
     crate::atomic::refuse_same_file(&[imu, gnss], out)?;
     gnss_file::refuse_the_imu_recording(gnss, imu)?;
+    let mut read = gnss_file::read_fixes(gnss, gnss_sigma)?;
+    gnss_file::at_measurement_epochs(&mut read, latency_s)?;
     let GnssFixes {
         fixes,
         bad_time_tags,
-    } = gnss_file::read_fixes(gnss, gnss_sigma)?;
+    } = read;
     let file = crate::atomic::write(out, |w| {
         let file = replay_file_with_fixes::<T, _>(imu, options, &fixes, w)?;
         // Before the log is renamed into place.
@@ -412,15 +416,16 @@ pub fn replay_aided_cli(
     imu: &Path,
     gnss: &Path,
     gnss_sigma: Option<&crate::gnss::AssumedSigma>,
+    latency_s: f64,
     out: &Path,
     options: &ReplayOptions,
     f64_precision: bool,
 ) -> Result<()> {
     let started = std::time::Instant::now();
     let run = if f64_precision {
-        replay_aided::<f64>(imu, gnss, gnss_sigma, out, options)
+        replay_aided::<f64>(imu, gnss, gnss_sigma, latency_s, out, options)
     } else {
-        replay_aided::<f32>(imu, gnss, gnss_sigma, out, options)
+        replay_aided::<f32>(imu, gnss, gnss_sigma, latency_s, out, options)
     };
     let r = run
         .map_err(|failure| {

@@ -106,6 +106,7 @@ fn aided_log<T: Scalar>(dir: &Path, lever_arm_b_m: [f64; 3], name: &str) -> (Str
         &dir.join("imu.bin"),
         &dir.join("gnss.csv"),
         None,
+        0.0,
         &out,
         &options,
     )
@@ -417,8 +418,15 @@ fn a_declared_gnss_correlated_error_runs_after_the_alignment() {
     );
     let run = |options: &ReplayOptions, name: &str| {
         let out = d.join(name);
-        replay_aided::<f32>(&d.join("imu.bin"), &d.join("gnss.csv"), None, &out, options)
-            .unwrap_or_else(|e| panic!("{e:#}"));
+        replay_aided::<f32>(
+            &d.join("imu.bin"),
+            &d.join("gnss.csv"),
+            None,
+            0.0,
+            &out,
+            options,
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
         std::fs::read_to_string(out).unwrap()
     };
     let declared = run(&options, "declared.csv");

@@ -192,6 +192,63 @@ fn a_receiver_whose_correlated_error_dominates_is_judged_at_its_own_covariance()
     }
 }
 
+/// A receiver whose fixes are tagged 0.2 s after their epoch (a logger that tags them on
+/// arrival), declared with `--gnss-latency 0.2`: the run is the one of the correctly tagged
+/// fixes, row for row, from a given start and from the alignment; undeclared, it is not. A
+/// latency outside 0 to 1 s is refused.
+#[test]
+fn a_declared_receiver_latency_takes_late_fixes_at_their_epoch() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    sim_fog_car(d, "60");
+    let on_time = std::fs::read_to_string(d.join("gnss.csv")).unwrap();
+    let late: String = on_time
+        .lines()
+        .map(|l| match l.split_once(',') {
+            Some((t, rest)) if t.parse::<f64>().is_ok() => {
+                format!("{:.6},{rest}\n", t.parse::<f64>().unwrap() + 0.2)
+            }
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    assert_ne!(late, on_time);
+    let aligned = [
+        "--lat",
+        "45",
+        "--lon",
+        "7.5",
+        "--h",
+        "250",
+        "--align-seconds",
+        "15",
+    ];
+    let fog = ["--imu-noise", "fog"];
+    for start in [&GIVEN[..], &aligned[..]] {
+        let log = |latency: &[&str]| {
+            let (text, out) = replay_in(d, &[start, &fog[..], latency].concat());
+            let log = std::fs::read_to_string(out).unwrap();
+            (text, log)
+        };
+        std::fs::write(d.join("gnss.csv"), &on_time).unwrap();
+        let (_, reference) = log(&[]);
+        std::fs::write(d.join("gnss.csv"), &late).unwrap();
+        let (text, declared) = log(&["--gnss-latency", "0.2"]);
+        assert_eq!(declared, reference, "{start:?}: {text}");
+        let (_, undeclared) = log(&[]);
+        assert_ne!(undeclared, reference, "{start:?}");
+    }
+    for bad in ["2", "-0.1", "NaN"] {
+        let e = run_err(&mut replay_in_cmd(
+            d,
+            &[&GIVEN[..], &["--gnss-latency", bad]].concat(),
+        ));
+        assert!(
+            e.contains("--gnss-latency must be within 0 to 1 s"),
+            "{bad}: {e}"
+        );
+    }
+}
+
 /// A given start 100 m off with a declared 1 m 1-sigma (a FOG land vehicle): every fix is
 /// refused before any has confirmed the filter's position. Once DEGRADED, a refused fix that
 /// agrees with the refused one before it re-acquires (the filter never knew its position);
