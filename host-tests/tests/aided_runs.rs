@@ -201,45 +201,30 @@ fn a_declared_receiver_latency_takes_late_fixes_at_their_epoch() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     sim_fog_car(d, "60");
-    let on_time = std::fs::read_to_string(d.join("gnss.csv")).unwrap();
-    let late: String = on_time
-        .lines()
-        .map(|l| match l.split_once(',') {
-            Some((t, rest)) if t.parse::<f64>().is_ok() => {
-                format!("{:.6},{rest}\n", t.parse::<f64>().unwrap() + 0.2)
-            }
-            _ => format!("{l}\n"),
-        })
-        .collect();
-    assert_ne!(late, on_time);
-    let aligned = [
-        "--lat",
-        "45",
-        "--lon",
-        "7.5",
-        "--h",
-        "250",
-        "--align-seconds",
-        "15",
-    ];
-    let fog = ["--imu-noise", "fog"];
-    for start in [&GIVEN[..], &aligned[..]] {
-        let log = |latency: &[&str]| {
-            let (text, out) = replay_in(d, &[start, &fog[..], latency].concat());
-            let log = std::fs::read_to_string(out).unwrap();
-            (text, log)
+    // Both through the same writer: only the time tags differ.
+    let (on_time, late) = (shifted_gnss(d, 0.0), shifted_gnss(d, 0.2));
+    let (imu, out) = (d.join("imu.bin"), d.join("sol.csv"));
+    for start in [&GIVEN[..], &ALIGNED[..]] {
+        let log = |gnss: &Path, latency: &[&str]| {
+            let text = run_ok(&mut replay_gnss(
+                &imu,
+                gnss,
+                &out,
+                &[start, latency].concat(),
+            ));
+            (text, std::fs::read_to_string(&out).unwrap())
         };
-        std::fs::write(d.join("gnss.csv"), &on_time).unwrap();
-        let (_, reference) = log(&[]);
-        std::fs::write(d.join("gnss.csv"), &late).unwrap();
-        let (text, declared) = log(&["--gnss-latency", "0.2"]);
+        let (_, reference) = log(&on_time, &[]);
+        let (text, declared) = log(&late, &["--gnss-latency", "0.2"]);
         assert_eq!(declared, reference, "{start:?}: {text}");
-        let (_, undeclared) = log(&[]);
+        let (_, undeclared) = log(&late, &[]);
         assert_ne!(undeclared, reference, "{start:?}");
     }
     for bad in ["2", "-0.1", "NaN"] {
-        let e = run_err(&mut replay_in_cmd(
-            d,
+        let e = run_err(&mut replay_gnss(
+            &imu,
+            &late,
+            &out,
             &[&GIVEN[..], &["--gnss-latency", bad]].concat(),
         ));
         assert!(
