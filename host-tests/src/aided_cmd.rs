@@ -245,7 +245,7 @@ pub struct GivenStart {
     /// Sensor errors known at the start (compensated from the first sample).
     pub sensors: SensorErrors<f64>,
     /// Their 1-sigma (`None`: the configuration's, [`FilterConfig::start_sensor_sigma`]).
-    pub sensor_sigma: Option<[[f64; 3]; 4]>,
+    pub sensor_sigma: Option<SensorErrors<f64>>,
 }
 
 impl GivenStart {
@@ -323,15 +323,10 @@ impl GivenStart {
                 self.pos_deg_m[2],
             ),
         };
-        let sensors = match self.sensor_sigma {
-            Some([sbg, sba, ssg, ssa]) => SensorErrors {
-                gyro_bias_rad_s: v3(sbg),
-                accel_bias_mps2: v3(sba),
-                gyro_scale: v3(ssg),
-                accel_scale: v3(ssa),
-            },
-            None => config.start_sensor_sigma().cast(),
-        };
+        let sensors = self
+            .sensor_sigma
+            .unwrap_or_else(|| config.start_sensor_sigma())
+            .cast();
         let sigma = InitialSigma::new(
             v3(self.pos_std_m),
             v3(self.vel_std_m_s),

@@ -148,12 +148,12 @@ pub fn start(c: &KfGinsConfig) -> GivenStart {
             gyro_scale: v(c.init_gyro_scale),
             accel_scale: v(c.init_accel_scale),
         },
-        sensor_sigma: Some([
-            c.init_gyro_bias_std_rad_s,
-            c.init_accel_bias_std_m_s2,
-            c.init_gyro_scale_std,
-            c.init_accel_scale_std,
-        ]),
+        sensor_sigma: Some(SensorErrors {
+            gyro_bias_rad_s: v(c.init_gyro_bias_std_rad_s),
+            accel_bias_mps2: v(c.init_accel_bias_std_m_s2),
+            gyro_scale: v(c.init_gyro_scale_std),
+            accel_scale: v(c.init_accel_scale_std),
+        }),
     }
 }
 

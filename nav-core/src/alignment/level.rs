@@ -849,15 +849,14 @@ mod tests {
             f.add(&inc_t).unwrap();
         }
         let e = f.estimate();
-        let (r, p, y) = attitude::euler(&attitude::quat_to_f64(&e.q_b_n));
-        let deg = |x: f64| x.to_degrees().abs();
+        let q = attitude::quat_to_f64(&e.q_b_n);
+        assert_levelled(&q, roll, pitch);
+        let (_, _, y) = attitude::euler(&q);
         assert!(
-            deg(r - roll) < 1e-4 && deg(p - pitch) < 1e-4,
-            "{} {}",
-            deg(r - roll),
-            deg(p - pitch)
+            (y - yaw).to_degrees().abs() < 1e-4,
+            "{}",
+            (y - yaw).to_degrees()
         );
-        assert!(deg(y - yaw) < 1e-4, "{}", deg(y - yaw));
         assert_eq!(f.status().updates, 200);
         assert!((e.elapsed_s.to_f64() - 20.0).abs() < 1e-6);
     }
@@ -889,8 +888,13 @@ mod tests {
             f.add(&inc).unwrap();
         }
         let e = f.estimate();
-        let (r, p, _) = attitude::euler(&e.q_b_n);
         assert!(e.sigma_rad.iter().all(|s| s.is_finite()), "{}", e.sigma_rad);
+        assert_levelled(&e.q_b_n, roll, pitch);
+    }
+
+    /// Roll and pitch of `q_b_n` within 1e-4 deg of `roll`, `pitch` [rad].
+    fn assert_levelled(q_b_n: &nalgebra::UnitQuaternion<f64>, roll: f64, pitch: f64) {
+        let (r, p, _) = attitude::euler(q_b_n);
         let deg = |x: f64| x.to_degrees().abs();
         assert!(
             deg(r - roll) < 1e-4 && deg(p - pitch) < 1e-4,
