@@ -9,6 +9,7 @@
 use crate::gnss::GnssFix;
 use anyhow::{Result, anyhow};
 use hal_adapters::{Imu, ImuSample, SampleFlags};
+use nav_core::ins_filter::latency::LatencyEstimate;
 use nav_core::ins_filter::sequencer::{
     FixCounters, GnssFixInput, Phase, Realignments, Sequencer, Start,
 };
@@ -348,6 +349,11 @@ pub struct AidedReport {
     pub near_pole: Option<(f64, f64)>,
     /// The attitude a start in motion took (`None` for a given start).
     pub motion_start: Option<MotionStartAttitude>,
+    /// The test of the fixes' time tags at the end (`nav_core::ins_filter::latency`; `None`
+    /// when no filter ran).
+    pub gnss_latency: Option<LatencyEstimate<f64>>,
+    /// When the fixes were first found lagging their time tags [s] (status DEGRADED).
+    pub gnss_late_at_s: Option<f64>,
 }
 
 /// The attitude the filter started with in motion, as its user is told it.
@@ -664,6 +670,9 @@ pub fn run<T: Scalar, E: fmt::Display>(
             let lat = ins.state().position.lat_f64().to_degrees();
             report.near_pole = Some((s.t_us as f64 * 1e-6, lat));
         }
+        if updated && report.gnss_late_at_s.is_none() && ins.gnss_latency().detected {
+            report.gnss_late_at_s = Some(s.t_us as f64 * 1e-6);
+        }
         if updated {
             sink.updated(s.t_us, ins);
         }
@@ -678,6 +687,7 @@ pub fn run<T: Scalar, E: fmt::Display>(
     if let Some(ins) = seq.filter().or(seq.lost_filter()) {
         report.counters = *ins.counters();
         report.covariance_faults = ins.covariance_faults();
+        report.gnss_latency = Some(ins.gnss_latency().cast());
     }
     report.fixes = *seq.fix_counters();
     report.realignments = *seq.realignments();

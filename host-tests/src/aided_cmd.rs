@@ -8,6 +8,7 @@ use crate::recording_io::ReplaySource;
 use crate::sensor_model::Grade;
 use anyhow::{Result, anyhow, bail};
 use hal_adapters::drivers::NoiseSpec;
+use nav_core::ins_filter::latency::LatencyEstimate;
 use nav_core::ins_filter::limits::MIN_BIAS_INSTABILITY_TIME_S;
 use nav_core::ins_filter::model::FilterNoise;
 use nav_core::ins_filter::motion::{MAX_FIX_INTERVAL_S, MIN_SPEED_SIGMAS, MotionAlignConfig};
@@ -619,6 +620,10 @@ pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
         .start_s
         .and_then(|_| velocity_warning(&r.counters.velocity));
     let stops = r.start_s.and_then(|_| stop_warning(&r.counters));
+    let late = r
+        .gnss_latency
+        .as_ref()
+        .and_then(|e| latency_warning(e, r.gnss_late_at_s));
     r.lost
         .warning()
         .into_iter()
@@ -626,7 +631,40 @@ pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
         .chain(position)
         .chain(velocity)
         .chain(stops)
+        .chain(late)
         .collect()
+}
+
+/// The warning for fixes found lagging (or leading) their time tags
+/// (`nav_core::ins_filter::latency`): the latency beyond any declared, with its 1-sigma and
+/// what to do.
+pub fn latency_warning(e: &LatencyEstimate<f64>, found_at_s: Option<f64>) -> Option<String> {
+    e.detected.then(|| {
+        let what = if e.late_s > 0.0 {
+            format!(
+                "lag their time tags by {:.3} s (1-sigma {:.3} s) beyond any declared latency: \
+                 the receiver's output latency (a logger that tags fixes on arrival); declare \
+                 it (--gnss-latency, added to any declared)",
+                e.late_s, e.sigma_s
+            )
+        } else {
+            format!(
+                "lead their time tags by {:.3} s (1-sigma {:.3} s): a declared latency too large, \
+                 or the receiver's clock ahead of the IMU's",
+                -e.late_s, e.sigma_s
+            )
+        };
+        format!(
+            "WARNING: the GNSS position fixes {what}; the solution followed fixes that were not \
+             where their time tags said (status DEGRADED from {}, its 1-sigma widened by the \
+             latency times the speed; found over {} windows of fixes)",
+            found_at_s.map_or_else(
+                || "when it was found".to_string(),
+                |t| format!("t = {t:.3} s, when it was found")
+            ),
+            e.windows
+        )
+    })
 }
 
 /// The warning for a run whose filter came so near a pole (at `t_s` [s], latitude `lat_deg`

@@ -98,6 +98,8 @@ pub struct AidedOutcome {
     pub counters: FilterCounters,
     /// Times the covariance lost a positive variance.
     pub covariance_faults: u32,
+    /// The test of the fixes' time tags at the end (`nav_core::ins_filter::latency`).
+    pub gnss_latency: nav_core::ins_filter::latency::LatencyEstimate<f64>,
     /// The fix queue's counters (received in the aided phase, refused, late).
     pub fixes: FixCounters,
     /// Fixes handed over before the aided phase (during the alignment).
@@ -124,6 +126,7 @@ impl AidedOutcome {
             status: r.status,
             counters: r.counters,
             covariance_faults: r.covariance_faults,
+            gnss_latency: r.gnss_latency.cast(),
             fixes,
             fixes_unused: unused,
             fixes_after_data: after,

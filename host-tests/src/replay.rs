@@ -456,7 +456,13 @@ pub fn replay_aided_cli(
         let position = crate::aided_cmd::position_warning(&a.counters.position, &unused);
         let velocity = crate::aided_cmd::velocity_warning(&a.counters.velocity);
         let realigned = crate::aided_cmd::realignment_line(&a.realignments);
-        for w in realigned.into_iter().chain(position).chain(velocity) {
+        let late = crate::aided_cmd::latency_warning(&a.gnss_latency, None);
+        for w in realigned
+            .into_iter()
+            .chain(position)
+            .chain(velocity)
+            .chain(late)
+        {
             println!("{w}");
         }
     }

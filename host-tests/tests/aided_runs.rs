@@ -234,6 +234,64 @@ fn a_declared_receiver_latency_takes_late_fixes_at_their_epoch() {
     }
 }
 
+/// Fixes tagged 0.2 s late (a logger that tags them on arrival), not declared: a FOG car
+/// followed them 3 m behind itself with the 1-sigma of its 10 cm fixes, status NAV (z up to
+/// 90 in the audit's runs). Now the test of the fixes' time tags finds the latency from the
+/// fixes themselves, within its 1-sigma of the truth, and says so; the last rows are DEGRADED.
+/// The same fixes on time, or late with the latency declared, say nothing and end NAV.
+#[test]
+fn an_undeclared_receiver_latency_is_found_and_flagged() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    sim_into(
+        d,
+        &[
+            "land-vehicle",
+            "--grade",
+            "fog",
+            "--seconds",
+            "60",
+            "--gnss-rate",
+            "5",
+            "--gnss-sigma",
+            "0.1,0.1,0.2",
+        ],
+    );
+    let (on_time, late) = (shifted_gnss(d, 0.0), shifted_gnss(d, 0.2));
+    let (imu, out) = (d.join("imu.bin"), d.join("sol.csv"));
+    let last_status = || {
+        let log = std::fs::read_to_string(&out).unwrap();
+        let last = log.lines().rfind(|l| !l.starts_with('#')).unwrap();
+        last.rsplit(',').next().unwrap().to_string()
+    };
+    const FOUND: &str = "lag their time tags by ";
+    for start in [&GIVEN[..], &ALIGNED[..]] {
+        let text = run_ok(&mut replay_gnss(&imu, &late, &out, start));
+        let found = text
+            .split(FOUND)
+            .nth(1)
+            .unwrap_or_else(|| panic!("{start:?}: no latency found: {text}"));
+        let first_number = |s: &str| -> f64 { s.split(' ').next().unwrap().parse().unwrap() };
+        let late_s = first_number(found);
+        let sigma_s = first_number(found.split("(1-sigma ").nth(1).unwrap());
+        assert!(
+            (late_s - 0.2).abs() < 4.0 * sigma_s && sigma_s < 0.05,
+            "{start:?}: {late_s} s, 1-sigma {sigma_s} s"
+        );
+        assert_eq!(last_status(), "DEGRADED", "{start:?}");
+        for (gnss, latency) in [(&on_time, &[][..]), (&late, &["--gnss-latency", "0.2"][..])] {
+            let text = run_ok(&mut replay_gnss(
+                &imu,
+                gnss,
+                &out,
+                &[start, latency].concat(),
+            ));
+            assert!(!text.contains(FOUND), "{start:?} {latency:?}: {text}");
+            assert_eq!(last_status(), "NAV", "{start:?} {latency:?}");
+        }
+    }
+}
+
 /// A given start 100 m off with a declared 1 m 1-sigma (a FOG land vehicle): every fix is
 /// refused before any has confirmed the filter's position. Once DEGRADED, a refused fix that
 /// agrees with the refused one before it re-acquires (the filter never knew its position);

@@ -77,7 +77,8 @@ bitflags! {
     pub struct StatusFlags: u16 {
         /// No aiding: free inertial after the alignment.
         const FREE_INERTIAL = 1 << 0;
-        /// The filter refused position fixes in a row beyond its limit.
+        /// The filter refused position fixes in a row beyond its limit, or found them lagging
+        /// their time tags (nav-core's `ins_filter::latency`).
         const AIDING_REJECTED = 1 << 1;
         /// The filter's horizontal position 1-sigma is above its limit.
         const SIGMA_ABOVE_LIMIT = 1 << 2;
@@ -308,7 +309,11 @@ fn nav_flags(nav: NavigatorState) -> StatusFlags {
     match nav.filter {
         None => f.set(StatusFlags::FREE_INERTIAL, nav.stage == Stage::Aligned),
         Some(FilterStatus::Nominal) => {}
-        Some(FilterStatus::AidingRejected) => f |= StatusFlags::AIDING_REJECTED,
+        // The fixes are refused, or lag their time tags: either way the aiding is not taken
+        // as it comes (the health frame's flags have no spare bit).
+        Some(FilterStatus::AidingRejected | FilterStatus::GnssLate) => {
+            f |= StatusFlags::AIDING_REJECTED
+        }
         Some(FilterStatus::SigmaAboveLimit) => f |= StatusFlags::SIGMA_ABOVE_LIMIT,
         Some(FilterStatus::CovarianceFault) => f |= StatusFlags::COVARIANCE_FAULT,
         Some(FilterStatus::ImuLost) => f |= StatusFlags::IMU_LOST,

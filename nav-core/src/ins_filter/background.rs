@@ -12,11 +12,12 @@ use super::foreground::{LostGap, Propagation};
 use super::integrity::{
     self, InnovationWindow, Pull, Reacquisition, RefusedCluster, Restart, WindowVerdict, whiten,
 };
+use super::latency::{LatencyEstimate, LatencyFix, LatencyMonitor};
 use super::limits;
 use super::model;
 use super::stationarity::{StillWindow, Uncertainty};
 use super::{
-    ATT, BA, BG, Covariance, FilterConfig, FilterError, FilterStatus, InitialSigma, N, POS, SG,
+    ATT, BA, BG, Covariance, FilterConfig, FilterError, FilterStatus, InitialSigma, N, POS, SA, SG,
     StateVector, VEL,
 };
 use crate::alignment::fine::euler_sigma;
@@ -146,6 +147,8 @@ pub struct ErrorFilter<T: Scalar> {
     motion: Motion<T>,
     /// The coasting test ([`coast`] module docs).
     coast: Coast<T>,
+    /// The test of the fixes' time tags ([`super::latency`]).
+    latency: LatencyMonitor<T>,
 }
 
 impl<T: Scalar> ErrorFilter<T> {
@@ -203,6 +206,7 @@ impl<T: Scalar> ErrorFilter<T> {
                 omega_ib_b: Vector3::zeros(),
             },
             coast: Coast::none(),
+            latency: LatencyMonitor::default(),
         })
     }
 
@@ -296,6 +300,7 @@ impl<T: Scalar> ErrorFilter<T> {
             + self
                 .fault_doubt()
                 .map_or_else(Matrix3::zeros, |[p, _, _]| p)
+            + self.latency.doubt().map_or_else(Matrix3::zeros, |(p, _)| p)
     }
 
     /// The doubt on the position, velocity and attitude of a [`Pull`] that is a fault
@@ -328,6 +333,7 @@ impl<T: Scalar> ErrorFilter<T> {
             + self
                 .fault_doubt()
                 .map_or_else(Matrix3::zeros, |[_, v, _]| v)
+            + self.latency.doubt().map_or_else(Matrix3::zeros, |(_, v)| v)
     }
 
     /// The reported position covariance, NED [m^2]: the filter's own ([`Self::covariance`],
@@ -358,6 +364,12 @@ impl<T: Scalar> ErrorFilter<T> {
         self.near_pole
     }
 
+    /// The test of the fixes' time tags ([`super::latency`]): the fixes' lag behind their
+    /// tags, its 1-sigma, and whether it is detected (status [`FilterStatus::GnssLate`]).
+    pub fn gnss_latency(&self) -> LatencyEstimate<T> {
+        self.latency.estimate()
+    }
+
     /// The health: a latched covariance fault, a lost IMU gap, the vicinity of a pole
     /// ([`Self::near_pole`]), [`FilterConfig::rejections_to_degrade`] position fixes refused
     /// in a row or refusals in a row over [`FilterConfig::refused_time_to_degrade_s`], or a
@@ -373,6 +385,8 @@ impl<T: Scalar> ErrorFilter<T> {
             || self.refused_for_s >= self.config.refused_time_to_degrade_s
         {
             FilterStatus::AidingRejected
+        } else if self.latency.estimate().detected {
+            FilterStatus::GnssLate
         } else if self.position_covariance().fixed_view::<2, 2>(0, 0).trace()
             > self.config.max_horizontal_sigma_m * self.config.max_horizontal_sigma_m
         {
@@ -804,6 +818,14 @@ impl<T: Scalar> ErrorFilter<T> {
         for c in [&mut self.cluster, &mut self.refused_unconfirmed] {
             *c = c.map(|c| c.corrected(&dr));
         }
+        let l_n = self.motion.c_b_n * self.config.antenna_lever_arm_b_m;
+        let dphi = self.x.fixed_rows::<3>(ATT).into_owned();
+        let dv = self.x.fixed_rows::<3>(VEL).into_owned();
+        let (c_b_n, f_ib_b) = (&self.motion.c_b_n, &self.motion.f_ib_b);
+        let scaled = self.x.fixed_rows::<3>(SA).component_mul(f_ib_b);
+        let da = (c_b_n * f_ib_b).cross(&dphi) + c_b_n * (self.x.fixed_rows::<3>(BA) + scaled);
+        self.latency
+            .corrected(&(dr + model::skew(&l_n) * dphi), &dv, &da, self.since_fix_s);
         self.coast.taken(&self.x);
         self.reset_attitude(&self.x.fixed_rows::<3>(ATT).into_owned());
         self.x = StateVector::zeros();
@@ -860,10 +882,27 @@ impl<T: Scalar> ErrorFilter<T> {
         lag_s: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
         let since_last_s = self.since_fix_s;
-        let out = match self.position_measurement(snap, fix, lag_s) {
-            Some(m) => self.screened_position_update(&m, snap.earth.g),
+        let m = self.position_measurement(snap, fix, lag_s);
+        let corrections = self.latency.take_corrections();
+        let accel_var = self.accel_error_variance(snap.earth.g);
+        let out = match &m {
+            Some(m) => self.screened_position_update(m, snap.earth.g),
             None => (AidResult::Invalid, None),
         };
+        match (&m, &out.0) {
+            (Some(m), AidResult::Accepted { .. } | AidResult::Rejected { .. }) => {
+                let f = LatencyFix {
+                    z_m: m.z,
+                    r_m2: m.r,
+                    v_eb_n: snap.state.v_eb_n - snap.a_eb_n * lag_s,
+                    accel_var,
+                    dt_s: since_last_s,
+                    corrections,
+                };
+                self.latency.fix(&f, &snap.a_eb_n);
+            }
+            _ => self.latency.broken(),
+        }
         let out = Self::counted(&mut self.counters.position, out);
         self.refused_for_s = match (&out.0, self.counters.position.consecutive_rejected) {
             (AidResult::Rejected { .. }, 1) | (AidResult::Accepted { .. }, _) => T::zero(),
@@ -1120,8 +1159,7 @@ impl<T: Scalar> ErrorFilter<T> {
     /// attitude variances plus the accelerometer bias variances (isotropic: a tilt or a
     /// heading error times the specific force, a bias in any axis), times `dt^4`.
     fn fix_drift(&self, dt: T, g: T) -> integrity::FixDrift<T> {
-        let var = |at: usize| (0..3).fold(T::zero(), |a, k| a + self.p[(at + k, at + k)]);
-        let accel_var = g * g * var(ATT) + var(BA);
+        let accel_var = self.accel_error_variance(g);
         let dt2 = dt * dt;
         integrity::FixDrift {
             dt_s: dt,
@@ -1129,6 +1167,14 @@ impl<T: Scalar> ErrorFilter<T> {
                 + self.consider.gnss_error_change_variance(dt),
             curvature_var_m2: Vector3::repeat(accel_var * dt2 * dt2),
         }
+    }
+
+    /// A bound of the acceleration error's variance [m^2/s^4] at gravity `g` [m/s^2]: `g^2`
+    /// times the attitude variances plus the accelerometer bias variances (isotropic: a tilt
+    /// or a heading error times the specific force, a bias in any axis).
+    fn accel_error_variance(&self, g: T) -> T {
+        let var = |at: usize| (0..3).fold(T::zero(), |a, k| a + self.p[(at + k, at + k)]);
+        g * g * var(ATT) + var(BA)
     }
 
     /// The measurement of a position fix: predicted minus measured, the INS position's NED

@@ -9,6 +9,7 @@
 //! - [`aiding`]: the measurements, their outcomes and counters;
 //! - [`integrity`]: the windowed innovation test and the refusal of a consistent cluster of
 //!   wrong position fixes;
+//! - [`latency`]: a GNSS receiver's unstated output latency, found from windows of fixes;
 //! - [`coast`]: the solution against where it would be had it coasted on its sensors since an
 //!   anchor (a slow fault the fixes pulled it along);
 //! - [`limits`]: the range of the noise figures and initial 1-sigmas any IMU can have;
@@ -38,6 +39,7 @@ pub mod consider;
 pub mod covariance;
 pub mod foreground;
 pub mod integrity;
+pub mod latency;
 pub mod limits;
 pub mod model;
 pub mod motion;
@@ -320,6 +322,11 @@ pub enum FilterStatus {
     /// ([`model::near_pole`]): the filter's NED error model does not hold there, and its
     /// solution and 1-sigma are not trusted for the rest of this filter's run (latched).
     NearPole,
+    /// The position fixes lag their time tags (or lead them) beyond what the filter can take
+    /// as noise ([`latency`]: an undeclared receiver output latency): the solution follows
+    /// fixes that are behind the vehicle by its velocity times the latency, and its 1-sigma
+    /// holds that doubt.
+    GnssLate,
 }
 
 impl FilterStatus {
@@ -331,7 +338,8 @@ impl FilterStatus {
             | Self::SigmaAboveLimit
             | Self::CovarianceFault
             | Self::ImuLost
-            | Self::NearPole => "DEGRADED",
+            | Self::NearPole
+            | Self::GnssLate => "DEGRADED",
         }
     }
 }
@@ -447,6 +455,11 @@ impl<T: Scalar> AidedIns<T> {
     /// The health.
     pub fn status(&self) -> FilterStatus {
         self.filter.status()
+    }
+
+    /// The test of the fixes' time tags ([`ErrorFilter::gnss_latency`]).
+    pub fn gnss_latency(&self) -> latency::LatencyEstimate<T> {
+        self.filter.gnss_latency()
     }
 
     /// True when the covariance is positive definite ([`ErrorFilter::is_positive_definite`]).

@@ -8,6 +8,7 @@ use crate::NavState;
 use crate::Scalar;
 use crate::alignment::{AlignFailure, AlignOutcome, AlignSettings, Aligner, Progress, Stage};
 use crate::increment::ImuIncrement;
+use crate::ins_filter::latency::LatencyEstimate;
 use crate::ins_filter::restart::Restart;
 use crate::ins_filter::stationarity::StillWindow;
 use crate::ins_filter::stationarity::Uncertainty;
@@ -97,6 +98,8 @@ pub struct FilterReport<T: Scalar> {
     pub counters: FilterCounters,
     /// Times the covariance lost a positive variance and was reset to its diagonal.
     pub covariance_faults: u32,
+    /// The test of the fixes' time tags ([`crate::ins_filter::latency`]).
+    pub gnss_latency: LatencyEstimate<T>,
 }
 
 impl<T: Scalar> FilterReport<T> {
@@ -109,6 +112,7 @@ impl<T: Scalar> FilterReport<T> {
             status: filter.status(),
             counters: *filter.counters(),
             covariance_faults: filter.covariance_faults(),
+            gnss_latency: filter.gnss_latency(),
         }
     }
 }

@@ -1,0 +1,534 @@
+//! A GNSS receiver's unstated output latency, found from the fixes themselves.
+//!
+//! A receiver (or a logger that tags its fixes on arrival) whose fixes carry a time tag `tau`
+//! [s] after their epoch gives `p(t - tau) ~ p(t) - v tau`: each fix is behind the vehicle by
+//! its velocity times the latency. At a steady velocity no test can tell this from a position
+//! error, and the filter follows the fixes (3 m behind a car at 15 m/s for 0.2 s, with the
+//! 1-sigma of RTK fixes); it shows only where the velocity changes, and the filter's velocity
+//! and position, pulled by every fix, adapt to it as well.
+//!
+//! So the test does not go through the filter's estimate. Over a window of [`WINDOW_S`], it
+//! takes the solution as the IMU alone carried it from the window's first fix: each fix's
+//! measurement "predicted minus measured" before its update, `z_i`, plus what the corrections
+//! since the window began moved the predicted antenna position by (undone: the position's
+//! `x_pos + [l_n x] phi` at once, the velocity's `x_vel (t_i - t_l)` since its time `t_l`, and
+//! `c (t_i - t_l)^2 / 2` of the acceleration's, `c = [f_n x] phi + C_b_n (b_a + f_b s_a)` the
+//! attitude, accelerometer bias and scale-factor corrections through the velocity error's rate
+//! of [`super::model`]), `y_i`, is then
+//!
+//! ```text
+//! y_i = dp + dv t_i + tau u_i + e_i,    u_i = v_i - v_0 (the IMU's velocity change, its
+//!                                       corrections undone the same way)
+//! ```
+//!
+//! with `dp`, `dv` the solution's position and velocity errors at the window's start (whatever
+//! the filter had adapted them to: nuisance parameters, per axis) and `e_i` the fix's noise
+//! plus the drift of an acceleration error over `t_i` (`sigma_a^2 t_i^4 / 4`, the filter's
+//! tilt and accelerometer-bias variances). The weighted least squares of the shared `tau`
+//! with the nuisance projected out [Bar-Shalom et al., §3.4] sums, over the windows and axes,
+//! the information `I = u^T W u - u^T W X (X^T W X)^-1 X^T W u` (`X = [1, t]`) and `b` the same
+//! with `y` for the second `u`: `tau = b / I`, 1-sigma `1 / sqrt(I)`. What is left to see is
+//! the velocity change that is not linear in time over the window: turns and stops. A window
+//! spans [`WINDOW_S`] and [`WINDOW_FIXES`] fixes (at most [`MAX_WINDOW_S`]). Without the
+//! attitude's corrections undone, a still base's drift, corrected at every fix, correlated
+//! with its own velocity change: 190-500 s of apparent latency at 2-4 sigma.
+//!
+//! The sensors' scale-factor and cross-coupling errors `S` give an apparent latency of about
+//! `|S| T / 2` over a window `T` (their error `S u` integrated): 4 ms for a consumer part's
+//! scale factor (0.1 %) over 8 s; its cross-coupling (1 %) only in part, through windows whose
+//! drift variance (its tilt's) leaves them little weight. A latency is reported
+//! ([`LatencyEstimate::detected`]) beyond [`DETECTION_SIGMAS`] of its 1-sigma, beyond
+//! [`MIN_LATENCY_S`] and within [`MAX_LATENCY_S`].
+
+use crate::Scalar;
+use nalgebra::{Matrix3, Vector3};
+
+/// Sigmas beyond which an estimated latency is reported [-].
+pub const DETECTION_SIGMAS: f64 = 5.0;
+/// Smallest latency reported [s] (module docs: five times the apparent latency of a consumer
+/// part's scale-factor error over an 8 s window).
+pub const MIN_LATENCY_S: f64 = 0.02;
+/// Largest latency reported [s]: a receiver's output latency is below a second (the range
+/// `--gnss-latency` takes); an estimate beyond it is the solution's own drift correlating with
+/// its velocity change (a vehicle at rest: the velocity change is the drift), not a latency.
+pub const MAX_LATENCY_S: f64 = 1.0;
+/// Shortest window [s]: a car's turn changes the velocity non-linearly over seconds; the
+/// drift of an acceleration error grows as its fourth power.
+pub const WINDOW_S: f64 = 4.0;
+/// Fixes a window holds at least, unless it reaches [`MAX_WINDOW_S`] (1 Hz fixes: 8 s).
+pub const WINDOW_FIXES: u32 = 8;
+/// Longest window [s].
+pub const MAX_WINDOW_S: f64 = 10.0;
+/// Longest interval between two fixes of one window [s]: a longer gap ends the window.
+pub const MAX_FIX_INTERVAL_S: f64 = 2.5;
+/// A window whose fit (nuisance and its own latency) leaves a chi-square beyond this many
+/// times its degrees of freedom (plus [`MAX_WINDOW_CHI2_EXTRA`]) holds a gross fault (a jump,
+/// an outlier) and is left out [-].
+pub const MAX_WINDOW_CHI2_PER_DOF: f64 = 3.0;
+/// See [`MAX_WINDOW_CHI2_PER_DOF`] [-].
+pub const MAX_WINDOW_CHI2_EXTRA: f64 = 25.0;
+
+/// What the corrections since the previous position fix did (undone by the test, module
+/// docs); times from that fix.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Corrections<T: Scalar> {
+    /// Sum of the predicted antenna position's corrections `x_pos + [l_n x] phi` [m].
+    pub position_m: Vector3<T>,
+    /// Sum of the velocity corrections `x_vel` [m/s].
+    pub velocity_m_s: Vector3<T>,
+    /// Sum of `x_vel t_l`, `t_l` the correction's time after the previous fix [m].
+    pub velocity_time_m: Vector3<T>,
+    /// Sum of the acceleration corrections `c = [f_n x] phi + C_b_n (b_a + f_b s_a)` (the
+    /// attitude's, accelerometer bias's and scale factor's, through the velocity error's
+    /// rate; the specific force as at the correction) [m/s^2].
+    pub accel_mps2: Vector3<T>,
+    /// Sum of `c t_l` [m/s].
+    pub accel_time_m_s: Vector3<T>,
+    /// Sum of `c t_l^2` [m].
+    pub accel_time2_m: Vector3<T>,
+}
+
+impl<T: Scalar> Default for Corrections<T> {
+    fn default() -> Self {
+        Self {
+            position_m: Vector3::zeros(),
+            velocity_m_s: Vector3::zeros(),
+            velocity_time_m: Vector3::zeros(),
+            accel_mps2: Vector3::zeros(),
+            accel_time_m_s: Vector3::zeros(),
+            accel_time2_m: Vector3::zeros(),
+        }
+    }
+}
+
+impl<T: Scalar> Corrections<T> {
+    /// `other`, whose times start `dt_s` [s] after these, added to these.
+    fn add_later(&mut self, other: &Self, dt_s: T) {
+        self.position_m += other.position_m;
+        self.velocity_time_m += other.velocity_time_m + other.velocity_m_s * dt_s;
+        self.velocity_m_s += other.velocity_m_s;
+        self.accel_time2_m += other.accel_time2_m
+            + other.accel_time_m_s * (dt_s + dt_s)
+            + other.accel_mps2 * (dt_s * dt_s);
+        self.accel_time_m_s += other.accel_time_m_s + other.accel_mps2 * dt_s;
+        self.accel_mps2 += other.accel_mps2;
+    }
+
+    /// What they moved the predicted antenna position [m] and the velocity [m/s] at `t_s` [s]
+    /// by (subtracted): `x_pos + x_vel (t - t_l) + c (t - t_l)^2 / 2` summed, and `x_vel +
+    /// c (t - t_l)`.
+    fn at(&self, t_s: T) -> (Vector3<T>, Vector3<T>) {
+        let half = T::c(0.5);
+        let position = self.position_m + self.velocity_m_s * t_s - self.velocity_time_m
+            + (self.accel_mps2 * (t_s * t_s) - self.accel_time_m_s * (t_s + t_s)
+                + self.accel_time2_m)
+                * half;
+        let velocity = self.velocity_m_s + self.accel_mps2 * t_s - self.accel_time_m_s;
+        (position, velocity)
+    }
+}
+
+/// One valid position fix as the test needs it, whether the filter took it or not (the fixes
+/// a latency puts off their tags are refused at the turns that show it; a gross fault spoils
+/// its window's fit, and the window is left out: [`MAX_WINDOW_CHI2_PER_DOF`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LatencyFix<T: Scalar> {
+    /// The measurement "predicted minus measured" before the update, NED [m].
+    pub z_m: Vector3<T>,
+    /// The fix's noise variances, NED [m^2].
+    pub r_m2: Vector3<T>,
+    /// The solution's velocity at the fix's epoch, NED [m/s].
+    pub v_eb_n: Vector3<T>,
+    /// Variance of the solution's acceleration error [m^2/s^4] (tilt and accelerometer bias).
+    pub accel_var: T,
+    /// Time since the previous position fix [s].
+    pub dt_s: T,
+    /// The corrections since the previous position fix ([`LatencyMonitor::take_corrections`],
+    /// taken before this fix's update).
+    pub corrections: Corrections<T>,
+}
+
+/// The test's estimate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LatencyEstimate<T: Scalar> {
+    /// The fixes' lag behind their time tags [s] (negative: ahead of them).
+    pub late_s: T,
+    /// Its 1-sigma [s] (infinite before any velocity change was seen).
+    pub sigma_s: T,
+    /// Windows of fixes used.
+    pub windows: u32,
+    /// Windows left out for a gross fault ([`MAX_WINDOW_CHI2_PER_DOF`]).
+    pub gross_windows: u32,
+    /// Beyond [`DETECTION_SIGMAS`] of its 1-sigma and beyond [`MIN_LATENCY_S`], within
+    /// [`MAX_LATENCY_S`].
+    pub detected: bool,
+}
+
+impl<T: Scalar> LatencyEstimate<T> {
+    /// The estimate in another precision.
+    pub fn cast<U: Scalar>(&self) -> LatencyEstimate<U> {
+        LatencyEstimate {
+            late_s: U::c(self.late_s.to_f64()),
+            sigma_s: U::c(self.sigma_s.to_f64()),
+            windows: self.windows,
+            gross_windows: self.gross_windows,
+            detected: self.detected,
+        }
+    }
+}
+
+/// The weighted sums of one axis over a window: of `1, t, t^2`, `u, u t, u^2`, `y, y t, u y`
+/// and `y^2`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct AxisSums<T> {
+    s: [T; 3],
+    u: [T; 3],
+    y: [T; 3],
+    yy: T,
+}
+
+impl<T: Scalar> AxisSums<T> {
+    const ZERO: Self = Self {
+        s: [T::ZERO; 3],
+        u: [T::ZERO; 3],
+        y: [T::ZERO; 3],
+        yy: T::ZERO,
+    };
+}
+
+/// The window being filled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Window<T: Scalar> {
+    /// Time since its first fix [s].
+    age_s: T,
+    /// Its first fix's velocity [m/s].
+    v0: Vector3<T>,
+    /// Corrections since its first fix, times from it.
+    undone: Corrections<T>,
+    sums: [AxisSums<T>; 3],
+    fixes: u32,
+}
+
+/// The test (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LatencyMonitor<T: Scalar> {
+    window: Option<Window<T>>,
+    pending: Corrections<T>,
+    information: T,
+    b: T,
+    windows: u32,
+    /// Windows left out for a gross fault.
+    gross: u32,
+    /// The velocity at the last fix [m/s] and the acceleration [m/s^2] (the doubt).
+    last_v: Vector3<T>,
+    last_a: Vector3<T>,
+}
+
+impl<T: Scalar> Default for LatencyMonitor<T> {
+    fn default() -> Self {
+        Self {
+            window: None,
+            pending: Corrections::default(),
+            information: T::zero(),
+            b: T::zero(),
+            windows: 0,
+            gross: 0,
+            last_v: Vector3::zeros(),
+            last_a: Vector3::zeros(),
+        }
+    }
+}
+
+impl<T: Scalar> LatencyMonitor<T> {
+    /// A correction fed back `since_fix_s` [s] after the last position fix: the predicted
+    /// antenna position by `-dr_m` [m], the velocity by `-dv_m_s` [m/s], the acceleration by
+    /// `-da_mps2` [m/s^2] ([`Corrections::accel_mps2`]).
+    pub fn corrected(
+        &mut self,
+        dr_m: &Vector3<T>,
+        dv_m_s: &Vector3<T>,
+        da_mps2: &Vector3<T>,
+        since_fix_s: T,
+    ) {
+        let one = Corrections {
+            position_m: *dr_m,
+            velocity_m_s: *dv_m_s,
+            velocity_time_m: Vector3::zeros(),
+            accel_mps2: *da_mps2,
+            accel_time_m_s: Vector3::zeros(),
+            accel_time2_m: Vector3::zeros(),
+        };
+        self.pending.add_later(&one, since_fix_s);
+    }
+
+    /// The corrections since the last position fix, from zero again.
+    pub fn take_corrections(&mut self) -> Corrections<T> {
+        core::mem::take(&mut self.pending)
+    }
+
+    /// The window ends without being counted (the fixes' chain broke: an invalid fix).
+    pub fn broken(&mut self) {
+        self.window = None;
+    }
+
+    /// Takes position fix `f`, with the solution's acceleration `a_eb_n` [m/s^2] at it.
+    pub fn fix(&mut self, f: &LatencyFix<T>, a_eb_n: &Vector3<T>) {
+        self.last_v = f.v_eb_n;
+        self.last_a = *a_eb_n;
+        if let Some(w) = &mut self.window {
+            w.undone.add_later(&f.corrections, w.age_s);
+            w.age_s += f.dt_s;
+            if !(f.dt_s <= T::c(MAX_FIX_INTERVAL_S) && w.age_s.finite()) {
+                self.close();
+            } else {
+                let t = w.age_s;
+                let (dp, dv) = w.undone.at(t);
+                let u = f.v_eb_n + dv - w.v0;
+                let y = f.z_m + dp;
+                let t2 = t * t;
+                let drift = f.accel_var * t2 * t2 * T::c(0.25);
+                for (k, s) in w.sums.iter_mut().enumerate() {
+                    let var = f.r_m2[k] + drift;
+                    if !(var > T::zero() && var.finite() && y[k].finite() && u[k].finite()) {
+                        continue;
+                    }
+                    let wt = T::one() / var;
+                    add(&mut s.s, wt, T::one(), t, t2);
+                    add(&mut s.u, wt, u[k], t, u[k]);
+                    add(&mut s.y, wt, y[k], t, u[k]);
+                    s.yy += wt * y[k] * y[k];
+                }
+                w.fixes += 1;
+                if t >= T::c(MAX_WINDOW_S) || (t >= T::c(WINDOW_S) && w.fixes >= WINDOW_FIXES) {
+                    self.close();
+                }
+            }
+            return;
+        }
+        {
+            let mut sums = [AxisSums::ZERO; 3];
+            for (k, s) in sums.iter_mut().enumerate() {
+                let var = f.r_m2[k];
+                if var > T::zero() && var.finite() && f.z_m[k].finite() {
+                    let wt = T::one() / var;
+                    s.s[0] = wt;
+                    s.y[0] = wt * f.z_m[k];
+                    s.yy = wt * f.z_m[k] * f.z_m[k];
+                }
+            }
+            self.window = Some(Window {
+                age_s: T::zero(),
+                v0: f.v_eb_n,
+                undone: Corrections::default(),
+                sums,
+                fixes: 1,
+            });
+        }
+    }
+
+    /// Ends the window, adding its information (module docs) unless its own fit shows a
+    /// gross fault ([`MAX_WINDOW_CHI2_PER_DOF`]).
+    fn close(&mut self) {
+        let Some(w) = self.window.take() else {
+            return;
+        };
+        if w.fixes < 3 {
+            return;
+        }
+        let (mut info, mut b, mut chi2, mut dof) = (T::zero(), T::zero(), T::zero(), -1_i32);
+        for a in &w.sums {
+            let [s0, s1, s2] = a.s;
+            let det = s0 * s2 - s1 * s1;
+            // Fixes too close in time to tell a velocity from an offset.
+            if !(det > T::c(1e-9) * s0 * s2) {
+                continue;
+            }
+            // `p^T W X (X^T W X)^-1 X^T W q` of the sums `(p0, p1)`, `(q0, q1)` of `p`, `q`
+            // against `1, t`.
+            let proj = |p0: T, p1: T, q0: T, q1: T| {
+                (p0 * (s2 * q0 - s1 * q1) + p1 * (s0 * q1 - s1 * q0)) / det
+            };
+            let [u0, u1, uu] = a.u;
+            let [y0, y1, uy] = a.y;
+            info += uu - proj(u0, u1, u0, u1);
+            b += uy - proj(u0, u1, y0, y1);
+            chi2 += a.yy - proj(y0, y1, y0, y1);
+            dof += w.fixes as i32 - 2;
+        }
+        if !(info > T::zero() && info.finite() && b.finite() && dof > 0) {
+            return;
+        }
+        let chi2 = chi2 - b * b / info;
+        let limit = T::c(MAX_WINDOW_CHI2_PER_DOF * f64::from(dof) + MAX_WINDOW_CHI2_EXTRA);
+        if chi2 > limit || !chi2.finite() {
+            self.gross = self.gross.saturating_add(1);
+            return;
+        }
+        self.information += info;
+        self.b += b;
+        self.windows = self.windows.saturating_add(1);
+    }
+
+    /// The estimate so far (the windows closed).
+    pub fn estimate(&self) -> LatencyEstimate<T> {
+        if self.information <= T::zero() {
+            return LatencyEstimate {
+                late_s: T::zero(),
+                sigma_s: T::c(f64::INFINITY),
+                windows: self.windows,
+                gross_windows: self.gross,
+                detected: false,
+            };
+        }
+        let late_s = self.b / self.information;
+        let sigma_s = T::one() / self.information.sqrt();
+        LatencyEstimate {
+            late_s,
+            sigma_s,
+            windows: self.windows,
+            gross_windows: self.gross,
+            detected: late_s.abs() > T::c(DETECTION_SIGMAS) * sigma_s
+                && late_s.abs() > T::c(MIN_LATENCY_S)
+                && late_s.abs() <= T::c(MAX_LATENCY_S),
+        }
+    }
+
+    /// What a detected latency leaves doubtful, `(position [m^2], velocity [m^2/s^2])`: the
+    /// solution followed fixes `tau v` behind the vehicle and `tau a` slow, so `(tau^2 +
+    /// sigma^2) v v^T` and `(tau^2 + sigma^2) a a^T` at the last fix (reported, not gated);
+    /// `None` when none is detected.
+    pub fn doubt(&self) -> Option<(Matrix3<T>, Matrix3<T>)> {
+        let e = self.estimate();
+        e.detected.then(|| {
+            let k = e.late_s * e.late_s + e.sigma_s * e.sigma_s;
+            (
+                self.last_v * self.last_v.transpose() * k,
+                self.last_a * self.last_a.transpose() * k,
+            )
+        })
+    }
+}
+
+/// Adds `w a`, `w a t` and `w a c` to the sums `s`.
+fn add<T: Scalar>(s: &mut [T; 3], w: T, a: T, t: T, c: T) {
+    s[0] += w * a;
+    s[1] += w * a * t;
+    s[2] += w * a * c;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A car at 15 m/s turning at 0.2 rad/s for 10 s in every 30, fixes at `rate` [Hz] of
+    /// 1-sigma `sigma` tagged `tau` late; the solution moves exactly as the car between fixes
+    /// and each update takes half the innovation, in position and in velocity (the
+    /// velocity's correction taken from the innovation's change since the previous fix), the
+    /// fixes off by 50 m for 2 s from `jump_at` [s]: the test finds `tau` within its 1-sigma,
+    /// and nothing when the tags are right.
+    fn run(
+        tau: f64,
+        sigma: f64,
+        rate: f64,
+        seconds: f64,
+        jump_at: Option<f64>,
+    ) -> LatencyEstimate<f64> {
+        let mut m = LatencyMonitor::<f64>::default();
+        let speed = 15.0;
+        let omega = |t: f64| if t % 30.0 < 10.0 { 0.2 } else { 0.0 };
+        let step = 1e-3;
+        let mut noise = 0.37_f64;
+        let (mut heading, mut p) = (0.0_f64, Vector3::zeros());
+        // The car's positions of the last 0.512 s, one per step.
+        let mut history = [Vector3::<f64>::zeros(); 512];
+        let lag = (tau / step).round() as usize;
+        let mut n_step = 0_usize;
+        let (mut p_ins, mut v_err) = (Vector3::new(3.0, -2.0, 1.0), Vector3::new(0.1, 0.0, 0.0));
+        let mut prev_z: Option<Vector3<f64>> = None;
+        let (mut t, mut next_fix) = (0.0, 1.0);
+        while t < seconds {
+            let v = Vector3::new(heading.cos(), heading.sin(), 0.0) * speed;
+            p += v * step;
+            p_ins += (v + v_err) * step;
+            heading += omega(t) * step;
+            t += step;
+            n_step += 1;
+            history[n_step % 512] = p;
+            if t + 1e-9 >= next_fix {
+                next_fix += 1.0 / rate;
+                let n = Vector3::from_fn(|_, _| {
+                    noise = (noise * 9301.0 + 0.4927).fract();
+                    (2.0 * noise - 1.0) * sigma
+                });
+                let jump = match jump_at {
+                    Some(j) if (j..j + 2.0).contains(&t) => Vector3::new(30.0, 40.0, 0.0),
+                    _ => Vector3::zeros(),
+                };
+                let z = p_ins - (history[(n_step - lag) % 512] + n + jump);
+                let corrections = m.take_corrections();
+                m.fix(
+                    &LatencyFix {
+                        z_m: z,
+                        r_m2: Vector3::repeat(sigma * sigma / 3.0),
+                        v_eb_n: v + v_err,
+                        accel_var: 0.0,
+                        dt_s: 1.0 / rate,
+                        corrections,
+                    },
+                    &Vector3::zeros(),
+                );
+                let dv = prev_z.map_or(Vector3::zeros(), |p| (z - p) * rate * 0.3);
+                prev_z = Some(z * 0.5);
+                p_ins -= z * 0.5;
+                v_err -= dv;
+                m.corrected(&(z * 0.5), &dv, &Vector3::zeros(), 0.0);
+            }
+        }
+        m.estimate()
+    }
+
+    #[test]
+    fn a_late_receiver_is_found_and_a_punctual_one_is_not() {
+        let late = run(0.1, 0.1, 5.0, 300.0, None);
+        assert!(late.detected, "{late:?}");
+        assert!((late.late_s - 0.1).abs() < 4.0 * late.sigma_s, "{late:?}");
+        let on_time = run(0.0, 0.1, 5.0, 300.0, None);
+        assert!(!on_time.detected, "{on_time:?}");
+        assert!(on_time.late_s.abs() < 4.0 * on_time.sigma_s, "{on_time:?}");
+        // Code fixes of 3 m: 0.1 s is within their noise.
+        let coarse = run(0.1, 3.0, 1.0, 300.0, None);
+        assert!(!coarse.detected, "{coarse:?}");
+    }
+
+    #[test]
+    fn a_steady_velocity_says_nothing() {
+        let mut m = LatencyMonitor::<f64>::default();
+        let v = Vector3::new(15.0, 0.0, 0.0);
+        for _ in 0..20 {
+            m.fix(
+                &LatencyFix {
+                    z_m: v * 0.2,
+                    r_m2: Vector3::repeat(1e-4),
+                    v_eb_n: v,
+                    accel_var: 0.0,
+                    dt_s: 1.0,
+                    corrections: Corrections::default(),
+                },
+                &Vector3::zeros(),
+            );
+        }
+        let e = m.estimate();
+        assert_eq!(e.windows, 0);
+        assert!(!e.detected && e.sigma_s.is_infinite(), "{e:?}");
+        assert!(m.doubt().is_none());
+    }
+
+    /// A 50 m jump in the fixes for 2 s: its windows are left out, and the punctual fixes
+    /// stay punctual.
+    #[test]
+    fn a_jump_in_the_fixes_is_left_out() {
+        let e = run(0.0, 0.1, 5.0, 300.0, Some(101.0));
+        assert!(e.gross_windows >= 1, "{e:?}");
+        assert!(!e.detected && e.late_s.abs() < 4.0 * e.sigma_s, "{e:?}");
+    }
+}
