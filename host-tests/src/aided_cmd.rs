@@ -543,6 +543,7 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
         ),
     ]
     .into_iter()
+    .chain(r.gnss_latency.as_ref().map(latency_line))
     .chain(realignment_line(&r.realignments))
     .chain(aiding_warnings(r))
     .collect::<Vec<_>>()
@@ -633,6 +634,29 @@ pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
         .chain(stops)
         .chain(late)
         .collect()
+}
+
+/// The summary's line of the test of the fixes' time tags (`nav_core::ins_filter::latency`):
+/// the estimate and its 1-sigma, whatever it found.
+pub fn latency_line(e: &LatencyEstimate<f64>) -> String {
+    let verdict = if e.detected {
+        "FOUND (below)"
+    } else {
+        "within their noise, or too small to matter"
+    };
+    if e.sigma_s.is_finite() {
+        format!(
+            "GNSS time tags: the fixes late by {:.3} s (1-sigma {:.3} s) over {} windows of \
+             fixes ({} left out as gross faults): {verdict}",
+            e.late_s, e.sigma_s, e.windows, e.gross_windows
+        )
+    } else {
+        format!(
+            "GNSS time tags: not tested ({} windows of fixes, no change of velocity to show a \
+             latency)",
+            e.windows
+        )
+    }
 }
 
 /// The warning for fixes found lagging (or leading) their time tags
@@ -770,6 +794,52 @@ pub fn position_warning(p: &nav_core::ins_filter::AidCounters, unused: &str) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The latency warning names the lag or the lead with its 1-sigma, when it was found and
+    /// what to do; nothing when none was found.
+    #[test]
+    fn the_latency_warning_says_which_way_and_what_to_do() {
+        let late = LatencyEstimate {
+            late_s: 0.1942,
+            sigma_s: 0.0353,
+            windows: 13,
+            gross_windows: 0,
+            detected: true,
+        };
+        let w = latency_warning(&late, Some(57.2)).unwrap();
+        assert!(
+            w.contains("lag their time tags by 0.194 s (1-sigma 0.035 s)"),
+            "{w}"
+        );
+        assert!(
+            w.contains("--gnss-latency") && w.contains("from t = 57.200 s"),
+            "{w}"
+        );
+        let early = LatencyEstimate {
+            late_s: -0.1,
+            ..late
+        };
+        let w = latency_warning(&early, None).unwrap();
+        assert!(w.contains("lead their time tags by 0.100 s"), "{w}");
+        assert!(w.contains("a declared latency too large"), "{w}");
+        assert!(w.contains("DEGRADED from when it was found"), "{w}");
+        let none = LatencyEstimate {
+            detected: false,
+            ..late
+        };
+        assert_eq!(latency_warning(&none, None), None);
+        assert!(latency_line(&late).ends_with("FOUND (below)"));
+        let line = latency_line(&none);
+        assert!(
+            line.contains("late by 0.194 s (1-sigma 0.035 s) over 13 windows"),
+            "{line}"
+        );
+        let untested = LatencyEstimate {
+            sigma_s: f64::INFINITY,
+            ..none
+        };
+        assert!(latency_line(&untested).contains("not tested"));
+    }
 
     /// The summary's line names the cause of the last re-alignment and what the restarted
     /// filter kept: after a divergence, not the sensor errors it had estimated.

@@ -166,6 +166,11 @@ impl fmt::Display for AidedOutcome {
             self.fixes_unused,
             self.fixes_after_data
         )?;
+        writeln!(
+            f,
+            "  {}",
+            crate::aided_cmd::latency_line(&self.gnss_latency)
+        )?;
         let (p, v, a) = (self.sigma_ned_m, self.sigma_v_ned_m_s, self.sigma_att_deg);
         write!(
             f,

@@ -203,6 +203,9 @@ struct Window<T: Scalar> {
     age_s: T,
     /// Its first fix's velocity [m/s].
     v0: Vector3<T>,
+    /// Its first fix's measurement [m]: the others' are taken from it (the nuisance offset
+    /// absorbs it; the sums stay small in `f32` after a start metres off).
+    z0: Vector3<T>,
     /// Corrections since its first fix, times from it.
     undone: Corrections<T>,
     sums: [AxisSums<T>; 3],
@@ -284,7 +287,7 @@ impl<T: Scalar> LatencyMonitor<T> {
                 let t = w.age_s;
                 let (dp, dv) = w.undone.at(t);
                 let u = f.v_eb_n + dv - w.v0;
-                let y = f.z_m + dp;
+                let y = f.z_m - w.z0 + dp;
                 let t2 = t * t;
                 let drift = f.accel_var * t2 * t2 * T::c(0.25);
                 for (k, s) in w.sums.iter_mut().enumerate() {
@@ -305,25 +308,22 @@ impl<T: Scalar> LatencyMonitor<T> {
             }
             return;
         }
-        {
-            let mut sums = [AxisSums::ZERO; 3];
-            for (k, s) in sums.iter_mut().enumerate() {
-                let var = f.r_m2[k];
-                if var > T::zero() && var.finite() && f.z_m[k].finite() {
-                    let wt = T::one() / var;
-                    s.s[0] = wt;
-                    s.y[0] = wt * f.z_m[k];
-                    s.yy = wt * f.z_m[k] * f.z_m[k];
-                }
+        // The first fix: `t`, `u` and `y` are zero.
+        let mut sums = [AxisSums::ZERO; 3];
+        for (k, s) in sums.iter_mut().enumerate() {
+            let var = f.r_m2[k];
+            if var > T::zero() && var.finite() {
+                s.s[0] = T::one() / var;
             }
-            self.window = Some(Window {
-                age_s: T::zero(),
-                v0: f.v_eb_n,
-                undone: Corrections::default(),
-                sums,
-                fixes: 1,
-            });
         }
+        self.window = Some(Window {
+            age_s: T::zero(),
+            v0: f.v_eb_n,
+            z0: f.z_m,
+            undone: Corrections::default(),
+            sums,
+            fixes: 1,
+        });
     }
 
     /// Ends the window, adding its information (module docs) unless its own fit shows a
