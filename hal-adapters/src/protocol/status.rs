@@ -426,6 +426,11 @@ mod tests {
                 StatusFlags::NEAR_POLE,
             ),
             (
+                state(Stage::Aligned, Some(FilterStatus::GnssLate)),
+                NavStatus::Degraded,
+                StatusFlags::AIDING_REJECTED,
+            ),
+            (
                 state(Stage::Failed, None),
                 NavStatus::Fault,
                 StatusFlags::ALIGN_FAILED,
