@@ -216,6 +216,12 @@ fn record_of(f: &GnssFixInput<f64>) -> GnssRecord {
 /// Writes `fixes` as a binary fix file at `path`, atomically ([`atomic::write`]). Refused: a
 /// fix whose time tag is not on the IMU clock, times that do not increase.
 pub fn write_record_file(path: &Path, fixes: &[GnssFix]) -> Result<()> {
+    write_inputs(path, &record_inputs(fixes)?)
+}
+
+/// The fixes as the binary file stores them. Refused: a fix whose time tag is not on the IMU
+/// clock, times that do not increase.
+fn record_inputs(fixes: &[GnssFix]) -> Result<Vec<GnssFixInput<f64>>> {
     let mut inputs = Vec::with_capacity(fixes.len());
     for (i, f) in fixes.iter().enumerate() {
         let fix = fix_input::<f64>(f).ok_or_else(|| {
@@ -235,10 +241,15 @@ pub fn write_record_file(path: &Path, fixes: &[GnssFix]) -> Result<()> {
         }
         inputs.push(fix);
     }
+    Ok(inputs)
+}
+
+/// Writes `inputs` as a binary fix file at `path`, atomically ([`atomic::write`]).
+fn write_inputs(path: &Path, inputs: &[GnssFixInput<f64>]) -> Result<()> {
     let count = u32::try_from(inputs.len()).context("more than 2^32 fixes")?;
     atomic::write(path, |w| -> Result<()> {
         w.write_all(&gnss_record::encode_header(count))?;
-        for f in &inputs {
+        for f in inputs {
             w.write_all(&record_of(f).encode())?;
         }
         Ok(())
@@ -250,6 +261,19 @@ pub fn write_record_file(path: &Path, fixes: &[GnssFix]) -> Result<()> {
 /// with the 1-sigma `assumed`) into the binary fix file the firmware reads; returns the number
 /// of fixes.
 pub fn convert(input: &Path, output: &Path, assumed: Option<&gnss::AssumedSigma>) -> Result<usize> {
+    convert_at_epochs(input, output, assumed, 0.0).map(|(n, _)| n)
+}
+
+/// [`convert`], each fix taken at its measurement epoch, its tag less the receiver's output
+/// latency `latency_s` [s] ([`at_measurement_epochs`]: the firmware reads the file as it
+/// is); returns the number of fixes written and of fixes tagged before the latency (left out).
+pub fn convert_at_epochs(
+    input: &Path,
+    output: &Path,
+    assumed: Option<&gnss::AssumedSigma>,
+    latency_s: f64,
+) -> Result<(usize, u32)> {
+    check_latency(latency_s)?;
     // The output is binary: a text file's name would hide it.
     if let Some(ext) = output.extension().and_then(|e| e.to_str())
         && ["csv", "txt", "pos"].contains(&ext.to_ascii_lowercase().as_str())
@@ -262,8 +286,13 @@ pub fn convert(input: &Path, output: &Path, assumed: Option<&gnss::AssumedSigma>
     atomic::refuse_same_file(&[input], output)?;
     let fixes = gnss::read_gnss_assuming(input, assumed)
         .map_err(|e| told_as(e, input, format!("GNSS file {}", input.display())))?;
-    write_record_file(output, &fixes)?;
-    Ok(fixes.len())
+    let mut fixes = GnssFixes {
+        fixes: record_inputs(&fixes)?,
+        bad_time_tags: 0,
+    };
+    at_measurement_epochs(&mut fixes, latency_s)?;
+    write_inputs(output, &fixes.fixes)?;
+    Ok((fixes.fixes.len(), fixes.bad_time_tags))
 }
 
 #[cfg(test)]
@@ -324,6 +353,36 @@ mod tests {
         assert_eq!(
             format!("{:?}", Some(f32_fix)),
             format!("{:?}", fix_input::<f32>(&fixes()[1]))
+        );
+    }
+
+    /// A binary file written for a receiver's latency holds the fixes the replay takes from
+    /// the text with `--gnss-latency`, bit for bit: one rule ([`at_measurement_epochs`]) for
+    /// the firmware's file and the harness. A fix tagged before the latency is left out.
+    #[test]
+    fn a_file_written_at_the_measurement_epochs_holds_what_the_replay_takes() {
+        let dir = tempfile::tempdir().unwrap();
+        let csv = dir.path().join("gnss.csv");
+        let bin = dir.path().join("gnss.bin");
+        gnss::write_gnss_csv(&csv, &fixes()).unwrap();
+        assert_eq!(convert_at_epochs(&csv, &bin, None, 0.2).unwrap(), (5, 0));
+        let mut text = read_fixes(&csv, None).unwrap();
+        at_measurement_epochs(&mut text, 0.2).unwrap();
+        let binary = read_fixes(&bin, None).unwrap();
+        let enc = |f: &GnssFixes| -> Vec<[u8; 112]> {
+            f.fixes.iter().map(|f| record_of(f).encode()).collect()
+        };
+        assert_eq!(enc(&binary), enc(&text));
+        assert_eq!(binary.fixes[0].t_us, 1_050_000);
+        let mut early = fixes();
+        early[0].t_s = 0.1;
+        gnss::write_gnss_csv(&csv, &early).unwrap();
+        assert_eq!(convert_at_epochs(&csv, &bin, None, 0.2).unwrap(), (4, 1));
+        assert_eq!(read_fixes(&bin, None).unwrap().fixes[0].t_us, 2_300_000);
+        let e = convert_at_epochs(&csv, &bin, None, 1.5).unwrap_err();
+        assert!(
+            e.to_string().contains("--gnss-latency must be within"),
+            "{e}"
         );
     }
 

@@ -1631,6 +1631,54 @@ fn firmware_realigns_after_a_lost_gap_like_the_harness() {
     assert!(!last.flags.contains(StatusFlags::IMU_LOST), "{last:?}");
 }
 
+/// Fixes of 10 cm tagged 0.2 s late (a logger that tags them on arrival): the firmware finds
+/// the latency as the harness does (its rows the harness's line for line, DEGRADED at the end,
+/// its last health frame DEGRADED with AIDING_REJECTED). The fix file written at the
+/// measurement epochs (`nav convert --gnss-latency`, `gnss_file::convert_at_epochs`) navigates
+/// as the harness's `--gnss-latency` does: the same rows, NAV at the end.
+#[test]
+fn firmware_finds_a_late_receiver_and_takes_a_declared_one_like_the_harness() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let rtk = host_tests::gnss_sim::GnssSimOptions {
+        sigma_ned_m: [0.1, 0.1, 0.2],
+        ..aided_receiver()
+    };
+    aided_drive(d, 75.0, &rtk);
+    // The same fixes, tagged 0.2 s late: the harness's text and the firmware's two files.
+    let csv = d.join("gnss.csv");
+    let mut fixes = host_tests::gnss::read_gnss(&csv).unwrap();
+    for f in &mut fixes {
+        f.t_s += 0.2;
+    }
+    host_tests::gnss::write_gnss_csv(&csv, &fixes).unwrap();
+    host_tests::gnss_file::convert(&csv, &d.join("gnss.bin"), None).unwrap();
+    host_tests::gnss_file::convert_at_epochs(&csv, &d.join("epochs.bin"), None, 0.2).unwrap();
+    let options = ["--imu-noise", "fog", "--gnss-lever-arm", "0.8,-0.3,-1.1"];
+    for (file, declared, status) in [
+        ("gnss.bin", &[][..], "DEGRADED"),
+        ("epochs.bin", &["--gnss-latency", "0.2"][..], "NAV"),
+    ] {
+        let mut args = vec!["--gnss", file, "--stream", "fw.bin"];
+        args.extend_from_slice(&options);
+        args.extend_from_slice(&["rec.bin", "fw.csv", "45", "7.5", "250", "15"]);
+        let (code, log) = run_firmware_at(d, &args, 3);
+        assert_eq!(code, 0, "{file}: firmware exit code {code}; log:\n{log}");
+        let o = replay_like_the_firmware(d, &[&options[..], declared].concat());
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let fw = std::fs::read_to_string(d.join("fw.csv")).unwrap();
+        let host = std::fs::read_to_string(d.join("host.csv")).unwrap();
+        assert_same_lines(&fw, &host);
+        let last = host.lines().rfind(|l| !l.starts_with('#')).unwrap();
+        assert!(last.ends_with(status), "{file}: {last}");
+        let health = health_frames(&stream_messages(&d.join("fw.bin")));
+        let h = health.last().unwrap();
+        let late =
+            h.status == NavStatus::Degraded && h.flags.contains(StatusFlags::AIDING_REJECTED);
+        assert_eq!(late, status == "DEGRADED", "{file}: {h:?}");
+    }
+}
+
 /// The aided runs' receiver: 5 Hz fixes of 0.5/0.5/1 m, the antenna at 0.8, -0.3, -1.1 m.
 fn aided_receiver() -> host_tests::gnss_sim::GnssSimOptions {
     host_tests::gnss_sim::GnssSimOptions {

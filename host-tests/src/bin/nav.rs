@@ -287,6 +287,11 @@ enum Command {
         gnss: bool,
         #[command(flatten)]
         gnss_sigma: GnssSigmaArgs,
+        /// With --gnss: the receiver's output latency [s] (as `nav replay --gnss-latency`):
+        /// each fix is written at its tag less it, its measurement epoch, for the firmware's
+        /// --gnss. Within 0 to 1 s.
+        #[arg(long, value_name = "S", requires = "gnss", default_value_t = 0.0)]
+        gnss_latency: f64,
     },
     /// Run a KF-GINS configuration file as it is (its IMU and GNSS text files, start, noise and
     /// lever arm) through this project's GNSS-aided filter, writing KF-GINS's 11-column .nav
@@ -2345,10 +2350,24 @@ fn run(cli: Cli) -> Result<()> {
             out,
             gnss: true,
             gnss_sigma,
+            gnss_latency,
         } => {
-            let n = host_tests::gnss_file::convert(&input, &out, gnss_sigma.assumed().as_ref())?;
+            let (n, dropped) = host_tests::gnss_file::convert_at_epochs(
+                &input,
+                &out,
+                gnss_sigma.assumed().as_ref(),
+                gnss_latency,
+            )?;
+            let epochs = if gnss_latency > 0.0 {
+                format!(
+                    ", at their tags less a latency of {gnss_latency} s ({dropped} tagged before \
+                     it left out)"
+                )
+            } else {
+                String::new()
+            };
             println!(
-                "converted {} ({n} GNSS fixes) to the binary fix file {}",
+                "converted {} ({n} GNSS fixes{epochs}) to the binary fix file {}",
                 input.display(),
                 out.display()
             );
@@ -2359,6 +2378,7 @@ fn run(cli: Cli) -> Result<()> {
             out,
             gnss: false,
             gnss_sigma,
+            ..
         } => {
             anyhow::ensure!(
                 gnss_sigma.assumed().is_none(),
