@@ -326,6 +326,11 @@ mod tests {
             .collect()
     }
 
+    /// The fixes' binary records (bit for bit, a NaN sigma included).
+    fn encoded(f: &GnssFixes) -> Vec<[u8; 112]> {
+        f.fixes.iter().map(|f| record_of(f).encode()).collect()
+    }
+
     #[test]
     fn text_and_binary_files_give_the_same_fixes() {
         let dir = tempfile::tempdir().unwrap();
@@ -341,10 +346,7 @@ mod tests {
         assert_eq!(a.fixes.len(), 5);
         assert_eq!(a.bad_time_tags, 0);
         // Bit for bit (a NaN sigma included): compare the records.
-        let enc = |f: &GnssFixes| -> Vec<[u8; 112]> {
-            f.fixes.iter().map(|f| record_of(f).encode()).collect()
-        };
-        assert_eq!(enc(&a), enc(&b));
+        assert_eq!(encoded(&a), encoded(&b));
         assert_eq!(b.fixes[0].t_us, 1_250_000);
         assert!(b.fixes[1].velocity.is_some() && b.fixes[0].velocity.is_none());
         // In f32 as fix_input gives them (compared as text: the NaN sigma is not equal to
@@ -369,10 +371,7 @@ mod tests {
         let mut text = read_fixes(&csv, None).unwrap();
         at_measurement_epochs(&mut text, 0.2).unwrap();
         let binary = read_fixes(&bin, None).unwrap();
-        let enc = |f: &GnssFixes| -> Vec<[u8; 112]> {
-            f.fixes.iter().map(|f| record_of(f).encode()).collect()
-        };
-        assert_eq!(enc(&binary), enc(&text));
+        assert_eq!(encoded(&binary), encoded(&text));
         assert_eq!(binary.fixes[0].t_us, 1_050_000);
         let mut early = fixes();
         early[0].t_s = 0.1;
