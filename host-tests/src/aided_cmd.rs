@@ -646,7 +646,7 @@ pub fn latency_line(e: &LatencyEstimate<f64>) -> String {
     };
     if e.sigma_s.is_finite() {
         format!(
-            "GNSS time tags: the fixes late by {:.3} s (1-sigma {:.3} s) over {} windows of \
+            "GNSS time tags: the fixes late by {:.4} s (1-sigma {:.4} s) over {} windows of \
              fixes ({} left out as gross faults): {verdict}",
             e.late_s, e.sigma_s, e.windows, e.gross_windows
         )
@@ -831,7 +831,7 @@ mod tests {
         assert!(latency_line(&late).ends_with("FOUND (below)"));
         let line = latency_line(&none);
         assert!(
-            line.contains("late by 0.194 s (1-sigma 0.035 s) over 13 windows"),
+            line.contains("late by 0.1942 s (1-sigma 0.0353 s) over 13 windows"),
             "{line}"
         );
         let untested = LatencyEstimate {
