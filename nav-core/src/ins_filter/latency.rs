@@ -212,6 +212,25 @@ struct Window<T: Scalar> {
     fixes: u32,
 }
 
+impl<T: Scalar> Window<T> {
+    /// Adds a fix at `t` [s] with the velocity change `u` [m/s], the measurement `y` [m] and
+    /// the variances `var` [m^2] (an axis whose values are not finite is left out).
+    fn add(&mut self, t: T, u: &Vector3<T>, y: &Vector3<T>, var: &Vector3<T>) {
+        for (k, s) in self.sums.iter_mut().enumerate() {
+            let v = var[k];
+            if !(v > T::zero() && v.finite() && y[k].finite() && u[k].finite()) {
+                continue;
+            }
+            let wt = T::one() / v;
+            add(&mut s.s, wt, T::one(), t, t * t);
+            add(&mut s.u, wt, u[k], t, u[k]);
+            add(&mut s.y, wt, y[k], t, u[k]);
+            s.yy += wt * y[k] * y[k];
+        }
+        self.fixes += 1;
+    }
+}
+
 /// The test (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LatencyMonitor<T: Scalar> {
@@ -290,40 +309,24 @@ impl<T: Scalar> LatencyMonitor<T> {
                 let y = f.z_m - w.z0 + dp;
                 let t2 = t * t;
                 let drift = f.accel_var * t2 * t2 * T::c(0.25);
-                for (k, s) in w.sums.iter_mut().enumerate() {
-                    let var = f.r_m2[k] + drift;
-                    if !(var > T::zero() && var.finite() && y[k].finite() && u[k].finite()) {
-                        continue;
-                    }
-                    let wt = T::one() / var;
-                    add(&mut s.s, wt, T::one(), t, t2);
-                    add(&mut s.u, wt, u[k], t, u[k]);
-                    add(&mut s.y, wt, y[k], t, u[k]);
-                    s.yy += wt * y[k] * y[k];
-                }
-                w.fixes += 1;
+                w.add(t, &u, &y, &(f.r_m2.add_scalar(drift)));
                 if t >= T::c(MAX_WINDOW_S) || (t >= T::c(WINDOW_S) && w.fixes >= WINDOW_FIXES) {
                     self.close();
                 }
             }
             return;
         }
-        // The first fix: `t`, `u` and `y` are zero.
-        let mut sums = [AxisSums::ZERO; 3];
-        for (k, s) in sums.iter_mut().enumerate() {
-            let var = f.r_m2[k];
-            if var > T::zero() && var.finite() {
-                s.s[0] = T::one() / var;
-            }
-        }
-        self.window = Some(Window {
+        let mut w = Window {
             age_s: T::zero(),
             v0: f.v_eb_n,
             z0: f.z_m,
             undone: Corrections::default(),
-            sums,
-            fixes: 1,
-        });
+            sums: [AxisSums::ZERO; 3],
+            fixes: 0,
+        };
+        // The first fix: `t`, `u` and `y` are zero.
+        w.add(T::zero(), &Vector3::zeros(), &Vector3::zeros(), &f.r_m2);
+        self.window = Some(w);
     }
 
     /// Ends the window, adding its information (module docs) unless its own fit shows a
