@@ -680,11 +680,12 @@ pub fn latency_warning(e: &LatencyEstimate<f64>, found_at_s: Option<f64>) -> Opt
         };
         format!(
             "WARNING: the GNSS position fixes {what}; the solution followed fixes that were not \
-             where their time tags said (status DEGRADED from {}, its 1-sigma widened by the \
-             latency times the speed; found over {} windows of fixes)",
+             where their time tags said until {}, then took each fix at its tag less the \
+             estimate (status DEGRADED from then on, its 1-sigma widened by the estimate's \
+             1-sigma times the speed; found over {} windows of fixes)",
             found_at_s.map_or_else(
-                || "when it was found".to_string(),
-                |t| format!("t = {t:.3} s, when it was found")
+                || "it was found".to_string(),
+                |t| format!("it was found at t = {t:.3} s")
             ),
             e.windows
         )
@@ -812,7 +813,7 @@ mod tests {
             "{w}"
         );
         assert!(
-            w.contains("--gnss-latency") && w.contains("from t = 57.200 s"),
+            w.contains("--gnss-latency") && w.contains("until it was found at t = 57.200 s"),
             "{w}"
         );
         let early = LatencyEstimate {
@@ -822,7 +823,7 @@ mod tests {
         let w = latency_warning(&early, None).unwrap();
         assert!(w.contains("lead their time tags by 0.100 s"), "{w}");
         assert!(w.contains("a declared latency too large"), "{w}");
-        assert!(w.contains("DEGRADED from when it was found"), "{w}");
+        assert!(w.contains("until it was found, then took each fix"), "{w}");
         let none = LatencyEstimate {
             detected: false,
             ..late

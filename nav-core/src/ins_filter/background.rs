@@ -37,6 +37,15 @@ pub const MAX_SHRINK: f64 = 16.0;
 /// survive (rounding, at every fix, left it not positive definite).
 pub const RESET_MIN_RAD: f64 = 1e-4;
 
+/// What retiming a fix by `late_s` [s] ([`LatencyMonitor::applied`]) moves its predicted
+/// antenna position by (subtracted), the fix taken `lag_s` [s] before the snapshot's sample:
+/// the solution carried back to `lag_s + late_s` rather than `lag_s`, to second order, `v
+/// late_s - a ((lag_s + late_s)^2 - lag_s^2) / 2` [m].
+fn retiming<T: Scalar>(snap: &Snapshot<T>, lag_s: T, late_s: T) -> Vector3<T> {
+    let to = lag_s + late_s;
+    snap.state.v_eb_n * late_s - snap.a_eb_n * ((to * to - lag_s * lag_s) * T::c(0.5))
+}
+
 /// The noise variance an update uses for a row of innovation variance `s` and noise variance
 /// `r` [same unit^2]: `r`, raised so the predicted variance `s - r` shrinks at most
 /// [`MAX_SHRINK`] times (a re-acquisition, [`integrity`] module docs, when raised).
@@ -864,6 +873,13 @@ impl<T: Scalar> ErrorFilter<T> {
         self.p_ac.fixed_rows_mut::<3>(ATT).copy_from(&consider);
     }
 
+    /// Adds the covariance `q` to the 3 x 3 block of the states from `at` (`P` stays
+    /// symmetric: `q` is).
+    fn add_doubt(&mut self, at: usize, q: &Matrix3<T>) {
+        let mut block = self.p.fixed_view_mut::<3, 3>(at, at);
+        block += q;
+    }
+
     fn counted(
         counters: &mut AidCounters,
         out: (AidResult<T>, Option<Correction<T>>),
@@ -882,7 +898,35 @@ impl<T: Scalar> ErrorFilter<T> {
         lag_s: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
         let since_last_s = self.since_fix_s;
-        let m = self.position_measurement(snap, fix, lag_s);
+        if let Some((p, v, a)) = self.latency.retime() {
+            self.add_doubt(POS, &p);
+            self.add_doubt(VEL, &v);
+            self.add_doubt(ATT, &a);
+            // The innovations so far were of fixes taken at other epochs: a cluster of them
+            // refused, or the window's test of them, says nothing of the retimed ones (a FOG
+            // car's fixes, refused as a cluster before the latency was found, stayed refused
+            // within 2 of their gate after it, the solution free-inertial). What the cluster
+            // left doubtful (reported, not gated) joins the covariance the gate uses.
+            if let Some(c) = self.cluster.take().or(self.refused_unconfirmed.take()) {
+                let zero = Matrix3::zeros;
+                self.add_doubt(POS, &c.doubt().unwrap_or_else(zero));
+                self.add_doubt(VEL, &c.velocity_doubt().unwrap_or_else(zero));
+            }
+            self.refused_unconfirmed = None;
+            self.window.clear();
+            // The retimed fixes' first pull, and the corrections the anchors of the coasting
+            // test set before see, are the latency's doubt, taken above: no fault.
+            self.pull = Pull::none();
+            self.coast = Coast::none();
+        }
+        let (late_s, late_sigma_s) = self.latency.applied();
+        let retimed = retiming(snap, lag_s, late_s);
+        let m = self.position_measurement(snap, fix, lag_s).map(|mut m| {
+            let v = &snap.state.v_eb_n;
+            m.z -= retimed;
+            m.r += v.component_mul(v) * (late_sigma_s * late_sigma_s);
+            m
+        });
         let corrections = self.latency.take_corrections();
         let accel_var = self.accel_error_variance(snap.earth.g);
         let out = match &m {
@@ -892,14 +936,16 @@ impl<T: Scalar> ErrorFilter<T> {
         match (&m, &out.0) {
             (Some(m), AidResult::Accepted { .. } | AidResult::Rejected { .. }) => {
                 let f = LatencyFix {
-                    z_m: m.z,
-                    r_m2: m.r,
+                    // As the fix's tag gives it, whatever the retiming.
+                    z_m: m.z + retimed,
+                    r_m2: fix.sigma_ned_m.component_mul(&fix.sigma_ned_m),
                     v_eb_n: snap.state.v_eb_n - snap.a_eb_n * lag_s,
                     accel_var,
                     dt_s: since_last_s,
                     corrections,
                 };
-                self.latency.fix(&f, &snap.a_eb_n);
+                let omega_n = snap.state.q_b_n * snap.omega_ib_b;
+                self.latency.fix(&f, &snap.a_eb_n, &omega_n);
             }
             _ => self.latency.broken(),
         }
@@ -1217,7 +1263,15 @@ impl<T: Scalar> ErrorFilter<T> {
         fix: &GnssVelocity<T>,
         lag_s: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
-        let out = match self.velocity_measurement(snap, fix, lag_s) {
+        let (late_s, late_sigma_s) = self.latency.applied();
+        let m = self
+            .velocity_measurement(snap, fix, lag_s + late_s)
+            .map(|mut m| {
+                let a = &snap.a_eb_n;
+                m.r += a.component_mul(a) * (late_sigma_s * late_sigma_s);
+                m
+            });
+        let out = match m {
             Some(m) => self.update(&m),
             None => (AidResult::Invalid, None),
         };

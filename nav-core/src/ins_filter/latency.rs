@@ -39,6 +39,14 @@
 //! drift variance (its tilt's) leaves them little weight. A latency is reported
 //! ([`LatencyEstimate::detected`]) beyond [`DETECTION_SIGMAS`] of its 1-sigma, beyond
 //! [`MIN_LATENCY_S`] and within [`MAX_LATENCY_S`].
+//!
+//! Once one is detected the filter retimes the fixes ([`LatencyMonitor::retime`],
+//! [`LatencyMonitor::applied`]): each is taken at its tag less the estimate, as a declared
+//! latency is, and follows the estimate as more windows refine it (the test itself always
+//! sees the fixes as their tags give them). What the solution took from the fixes before
+//! (the change of latency times the velocity, the acceleration and the rotation rate) joins
+//! the filter's covariance at each change; the estimate's own 1-sigma, common to every fix,
+//! widens the reported 1-sigma ([`LatencyMonitor::doubt`]).
 
 use crate::Scalar;
 use nalgebra::{Matrix3, Vector3};
@@ -67,6 +75,10 @@ pub const MAX_FIX_INTERVAL_S: f64 = 2.5;
 pub const MAX_WINDOW_CHI2_PER_DOF: f64 = 3.0;
 /// See [`MAX_WINDOW_CHI2_PER_DOF`] [-].
 pub const MAX_WINDOW_CHI2_EXTRA: f64 = 25.0;
+/// Time over which the largest acceleration and rotation rate are kept for the retiming's
+/// doubt [s] (they fade as `exp(-t / PEAK_MEMORY_S)`): about the time a filter's velocity and
+/// tilt take to follow the fixes.
+pub const PEAK_MEMORY_S: f64 = 30.0;
 
 /// What the corrections since the previous position fix did (undone by the test, module
 /// docs); times from that fix.
@@ -241,9 +253,16 @@ pub struct LatencyMonitor<T: Scalar> {
     windows: u32,
     /// Windows left out for a gross fault.
     gross: u32,
-    /// The velocity at the last fix [m/s] and the acceleration [m/s^2] (the doubt).
+    /// The velocity [m/s] and acceleration [m/s^2] at the last fix (the retiming's doubt).
     last_v: Vector3<T>,
     last_a: Vector3<T>,
+    /// Per axis, the largest acceleration [m/s^2] and rotation rate [rad/s] of the vehicle
+    /// over about [`PEAK_MEMORY_S`] (the retiming's doubt).
+    peak_a: Vector3<T>,
+    peak_w: Vector3<T>,
+    /// The latency the fixes are retimed by [s] ([`LatencyMonitor::retime`]); zero until one
+    /// is detected.
+    applied_s: T,
 }
 
 impl<T: Scalar> Default for LatencyMonitor<T> {
@@ -257,6 +276,9 @@ impl<T: Scalar> Default for LatencyMonitor<T> {
             gross: 0,
             last_v: Vector3::zeros(),
             last_a: Vector3::zeros(),
+            peak_a: Vector3::zeros(),
+            peak_w: Vector3::zeros(),
+            applied_s: T::zero(),
         }
     }
 }
@@ -293,10 +315,19 @@ impl<T: Scalar> LatencyMonitor<T> {
         self.window = None;
     }
 
-    /// Takes position fix `f`, with the solution's acceleration `a_eb_n` [m/s^2] at it.
-    pub fn fix(&mut self, f: &LatencyFix<T>, a_eb_n: &Vector3<T>) {
+    /// Takes position fix `f` (its measurement as its time tag gives it, not retimed), with
+    /// the solution's acceleration `a_eb_n` [m/s^2] and rotation rate `omega_n` [rad/s] at
+    /// it.
+    pub fn fix(&mut self, f: &LatencyFix<T>, a_eb_n: &Vector3<T>, omega_n: &Vector3<T>) {
         self.last_v = f.v_eb_n;
         self.last_a = *a_eb_n;
+        let keep = if f.dt_s.finite() && f.dt_s >= T::zero() {
+            (-f.dt_s / T::c(PEAK_MEMORY_S)).exp()
+        } else {
+            T::zero()
+        };
+        self.peak_a = (self.peak_a * keep).zip_map(a_eb_n, |p, a| p.max(a.abs()));
+        self.peak_w = (self.peak_w * keep).zip_map(omega_n, |p, w| p.max(w.abs()));
         if let Some(w) = &mut self.window {
             w.undone.add_later(&f.corrections, w.age_s);
             w.age_s += f.dt_s;
@@ -396,19 +427,54 @@ impl<T: Scalar> LatencyMonitor<T> {
         }
     }
 
-    /// What a detected latency leaves doubtful, `(position [m^2], velocity [m^2/s^2])`: the
-    /// solution followed fixes `tau v` behind the vehicle and `tau a` slow, so `(tau^2 +
-    /// sigma^2) v v^T` and `(tau^2 + sigma^2) a a^T` at the last fix (reported, not gated);
-    /// `None` when none is detected.
+    /// The latency the fixes are taken at and its 1-sigma [s]: once one is detected, the
+    /// estimate (each fix's epoch is its tag minus it); `(0, 0)` before.
+    pub fn applied(&self) -> (T, T) {
+        if self.applied_s == T::zero() {
+            return (T::zero(), T::zero());
+        }
+        (self.applied_s, self.estimate().sigma_s)
+    }
+
+    /// What the retiming's own error leaves doubtful, `(position [m^2], velocity
+    /// [m^2/s^2])`: the fixes are taken `sigma` [s] off their epochs, the same for all of
+    /// them, which no number of fixes averages out, so `sigma^2 v v^T` and `sigma^2 a a^T` at
+    /// the last fix (reported, not gated: a consider parameter's); `None` before a latency
+    /// is detected.
     pub fn doubt(&self) -> Option<(Matrix3<T>, Matrix3<T>)> {
-        let e = self.estimate();
-        e.detected.then(|| {
-            let k = e.late_s * e.late_s + e.sigma_s * e.sigma_s;
+        let (late_s, sigma_s) = self.applied();
+        (late_s != T::zero()).then(|| {
+            let k = sigma_s * sigma_s;
             (
                 self.last_v * self.last_v.transpose() * k,
                 self.last_a * self.last_a.transpose() * k,
             )
         })
+    }
+
+    /// Moves the retiming ([`Self::applied`]) to the estimate, once one was detected, and
+    /// returns what the change `d` [s] leaves doubtful in the filter's state, `(position
+    /// [m^2], velocity [m^2/s^2], attitude [rad^2])`: the solution followed fixes `d v`
+    /// behind the vehicle and `d a` slow, its attitude up to `d omega` behind, so `(d^2 +
+    /// sigma^2)` times `v v^T`, and the diagonal of the largest accelerations and rotation
+    /// rates of the last [`PEAK_MEMORY_S`] (the filter's memory of the fixes: the velocity
+    /// and attitude it took from them); `None` when nothing moves.
+    pub fn retime(&mut self) -> Option<(Matrix3<T>, Matrix3<T>, Matrix3<T>)> {
+        let e = self.estimate();
+        let engaged = e.detected || self.applied_s != T::zero();
+        let to = e.late_s.max(-T::c(MAX_LATENCY_S)).min(T::c(MAX_LATENCY_S));
+        if !(engaged && to.finite() && to != self.applied_s) {
+            return None;
+        }
+        let d = to - self.applied_s;
+        self.applied_s = to;
+        let k = d * d + e.sigma_s * e.sigma_s;
+        let diag = |p: &Vector3<T>| Matrix3::from_diagonal(&p.component_mul(p)) * k;
+        Some((
+            self.last_v * self.last_v.transpose() * k,
+            diag(&self.peak_a),
+            diag(&self.peak_w),
+        ))
     }
 }
 
@@ -479,6 +545,7 @@ mod tests {
                         corrections,
                     },
                     &Vector3::zeros(),
+                    &Vector3::zeros(),
                 );
                 let dv = prev_z.map_or(Vector3::zeros(), |p| (z - p) * rate * 0.3);
                 prev_z = Some(z * 0.5);
@@ -518,12 +585,41 @@ mod tests {
                     corrections: Corrections::default(),
                 },
                 &Vector3::zeros(),
+                &Vector3::zeros(),
             );
         }
         let e = m.estimate();
         assert_eq!(e.windows, 0);
         assert!(!e.detected && e.sigma_s.is_infinite(), "{e:?}");
-        assert!(m.doubt().is_none());
+        assert!(m.retime().is_none());
+        assert_eq!(m.applied(), (0.0, 0.0));
+    }
+
+    /// Once found, the fixes are retimed by the estimate, and the change's doubt is that of
+    /// fixes `d` behind: `(d^2 + sigma^2) v v^T`; nothing moves again until the estimate
+    /// does, and the reported doubt is the estimate's 1-sigma times the velocity.
+    #[test]
+    fn a_found_latency_retimes_the_fixes_once() {
+        let mut m = LatencyMonitor::<f64>::default();
+        m.information = 1e4;
+        m.b = 0.2 * 1e4;
+        m.last_v = Vector3::new(15.0, 0.0, 0.0);
+        m.peak_a = Vector3::new(0.0, 2.0, 0.0);
+        m.peak_w = Vector3::new(0.0, 0.0, 0.3);
+        assert_eq!(m.applied(), (0.0, 0.0));
+        let (p, v, a) = m.retime().expect("detected: 0.2 s, 1-sigma 0.01 s");
+        let k = 0.2 * 0.2 + 0.01 * 0.01;
+        assert!((p[(0, 0)] - k * 225.0).abs() < 1e-9 && p[(1, 1)] == 0.0, "{p}");
+        assert!((v[(1, 1)] - k * 4.0).abs() < 1e-9 && (a[(2, 2)] - k * 0.09).abs() < 1e-9);
+        let (late, sigma) = m.applied();
+        assert!((late - 0.2).abs() < 1e-12 && (sigma - 0.01).abs() < 1e-12);
+        assert!(m.retime().is_none());
+        let (dp, _) = m.doubt().unwrap();
+        assert!((dp[(0, 0)] - 0.01 * 0.01 * 225.0).abs() < 1e-9, "{dp}");
+        // A later window moves the estimate to 0.25 s: a change of 0.05 s.
+        m.b = 0.25 * 1e4;
+        let (p, _, _) = m.retime().unwrap();
+        assert!((p[(0, 0)] - (0.05 * 0.05 + 1e-4) * 225.0).abs() < 1e-9, "{p}");
     }
 
     /// A 50 m jump in the fixes for 2 s: its windows are left out, and the punctual fixes

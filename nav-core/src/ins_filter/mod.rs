@@ -323,9 +323,10 @@ pub enum FilterStatus {
     /// solution and 1-sigma are not trusted for the rest of this filter's run (latched).
     NearPole,
     /// The position fixes lag their time tags (or lead them) beyond what the filter can take
-    /// as noise ([`latency`]: an undeclared receiver output latency): the solution follows
-    /// fixes that are behind the vehicle by its velocity times the latency, and its 1-sigma
-    /// holds that doubt.
+    /// as noise ([`latency`]: an undeclared receiver output latency): from then on each fix
+    /// is taken at its tag less the estimate, the covariance widened by what the solution
+    /// took from the fixes before, and the reported 1-sigma by the estimate's own 1-sigma
+    /// times the velocity and acceleration (it rests on an estimate: not NAV).
     GnssLate,
 }
 
