@@ -119,6 +119,7 @@ pub fn simulate(opts: &SimOptions, progress: impl FnMut(u64, u64)) -> Result<Sim
     let traj = opts.scenario.build()?;
     let seconds = opts.seconds.unwrap_or(traj.duration_s());
     let (sampling, every) = plan(opts.rate_hz, opts.truth_rate_hz, seconds)?;
+    opts.scenario.check_periods(opts.rate_hz)?;
     let injector = ErrorInjector::new(opts.grade.model(), opts.seed)
         .map_err(|e| anyhow::anyhow!("grade {}: {e}", opts.grade))?;
     sense(traj.as_ref(), sampling, every, injector, progress)

@@ -90,6 +90,53 @@ fn sim_refuses_a_length_with_no_sample() {
     assert!(!out.exists());
 }
 
+/// A motion period shorter than 10 samples is refused with its name and range: a roll period
+/// of 1 ns wrote 1.4e6 rad in one 2.5 ms increment, one of 1 ms a ship at rest moving at
+/// 2.8 km/s, each with exit 0 and "saturated 0".
+#[test]
+fn sim_refuses_a_motion_period_shorter_than_ten_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    for (scenario, set, rate, msg) in [
+        (
+            "auv-bench",
+            "roll_period_s=1e-9",
+            "400",
+            "roll_period_s 1e-9 is not within [0.025, ",
+        ),
+        (
+            "ship-rocking",
+            "roll_period_s=0.001",
+            "400",
+            "roll_period_s 0.001 is not within [0.025, ",
+        ),
+        (
+            "ship-rocking",
+            "pitch_period_s=0.05",
+            "100",
+            "pitch_period_s 0.05 is not within [0.1, ",
+        ),
+    ] {
+        let o = nav(&[
+            "sim",
+            scenario,
+            "--seconds",
+            "2",
+            "--rate",
+            rate,
+            "--truth-rate",
+            "10",
+            "--set",
+            set,
+            "--out",
+            s(&out),
+        ]);
+        assert_refused(&o, msg);
+        assert_refused(&o, "at least 10 samples");
+        assert!(!out.exists(), "{set}");
+    }
+}
+
 /// Independently of the parameter checks: 1000 m/s is accepted, but north for 6000 s it
 /// crosses the pole, and the first truth row beyond it refuses the run; the old files in the
 /// directory stay as they were.
