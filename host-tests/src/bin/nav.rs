@@ -340,7 +340,7 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         truth: PathBuf,
         /// Times [s] after the start of the truth (its first row) at which to print the errors (nearest row),
-        /// comma-separated.
+        /// comma-separated; a time outside the compared rows' span is refused.
         #[arg(
             long,
             value_name = "S,...",
