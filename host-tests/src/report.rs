@@ -693,6 +693,41 @@ pub fn format_table(series: &ErrorSeries, at_s: &[f64]) -> String {
     out
 }
 
+/// Refuses a time of `at_s` [s since [`ErrorSeries::t_start_s`]] farther outside the
+/// compared rows' span than their median interval: its nearest row's error was printed under
+/// its label (`--at 1e9` gave the last row's, `--at -5` the first's).
+pub fn check_at_times(series: &ErrorSeries, at_s: &[f64]) -> Result<()> {
+    let (Some(first), Some(last)) = (series.samples.first(), series.samples.last()) else {
+        return Ok(());
+    };
+    let mut intervals_s: Vec<f64> = series
+        .samples
+        .windows(2)
+        .map(|w| w[1].t_s - w[0].t_s)
+        .collect();
+    intervals_s.sort_by(f64::total_cmp);
+    let slack_s = intervals_s
+        .get(intervals_s.len() / 2)
+        .copied()
+        .unwrap_or(0.0)
+        + SPAN_SLACK_S;
+    let t0 = series.t_start_s;
+    for &t in at_s {
+        let t_s = t0 + t;
+        if t_s < first.t_s - slack_s || t_s > last.t_s + slack_s {
+            bail!(
+                "--at {} s is outside the compared rows' span, t0 + {:.6} .. {:.6} s (t0 = {} \
+                 s, the truth's first row): give times within it",
+                Number(t),
+                first.t_s - t0,
+                last.t_s - t0,
+                Number(t0)
+            );
+        }
+    }
+    Ok(())
+}
+
 /// Compares the trajectory files `solution` and `truth` (see [`read_trajectory`]) and returns
 /// the report: what was compared, the table of [`format_table`] and, with `plots`, the SVG files
 /// written there (see [`write_plots`]).
@@ -753,6 +788,7 @@ pub fn report_files(
             truth.display()
         )
     })?;
+    check_at_times(&series, at_s)?;
     let (t_a, t_b) = series.truth_span_s;
     let mut out = format!(
         "solution {} ({} rows{complete}) against truth {} ({} rows, t = {t_a} .. {t_b} s)\n\
@@ -1173,6 +1209,29 @@ mod tests {
             err.contains("no solution row within the truth's time span"),
             "{err}"
         );
+    }
+
+    /// `--at` beyond the compared rows by more than their interval is refused, naming the
+    /// span; within one interval of either end it is the end row (a 10 Hz log ending at
+    /// 59.9 s is read at 60 s).
+    #[test]
+    fn at_times_outside_the_compared_span_are_refused() {
+        let t = truth();
+        // Solution rows from 2 to 8 s, every second; the truth from 0 to 10 s.
+        let series = compare(&t[2..=8], &t).unwrap();
+        for ok in [1.0, 2.0, 5.5, 8.0, 9.0] {
+            check_at_times(&series, &[ok]).unwrap();
+        }
+        for bad in [-5.0, 0.5, 9.5, 1e9] {
+            let e = check_at_times(&series, &[3.0, bad])
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("is outside the compared rows' span, t0 + 2.000000 .. 8.000000 s"),
+                "{bad}: {e}"
+            );
+            assert!(e.starts_with(&format!("--at {} s", Number(bad))), "{e}");
+        }
     }
 
     #[test]

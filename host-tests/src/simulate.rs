@@ -119,6 +119,7 @@ pub fn simulate(opts: &SimOptions, progress: impl FnMut(u64, u64)) -> Result<Sim
     let traj = opts.scenario.build()?;
     let seconds = opts.seconds.unwrap_or(traj.duration_s());
     let (sampling, every) = plan(opts.rate_hz, opts.truth_rate_hz, seconds)?;
+    opts.scenario.check_periods(opts.rate_hz)?;
     let injector = ErrorInjector::new(opts.grade.model(), opts.seed)
         .map_err(|e| anyhow::anyhow!("grade {}: {e}", opts.grade))?;
     sense(traj.as_ref(), sampling, every, injector, progress)
@@ -243,6 +244,8 @@ pub struct SimFiles {
     pub truth: PathBuf,
     /// `scenario.txt`.
     pub description: PathBuf,
+    /// An earlier run's files that this run did not write, removed ([`earlier_run_files`]).
+    pub removed: Vec<PathBuf>,
 }
 
 /// Writes `sim` of `opts` into `dir` (created if missing). Every file's content is made
@@ -320,8 +323,17 @@ pub fn write_with_receiver(
 }
 
 /// Refuses an output folder `dir` that is something other than a folder (an existing file
-/// gave "creating FILE: File exists (os error 17)"): `nav sim` writes a set of files.
+/// gave "creating FILE: File exists (os error 17)"): `nav sim` writes a set of files. Refuses
+/// as well a folder holding a file of [`SIM_FILE_NAMES`] that an earlier `nav sim` did not
+/// write ([`earlier_run_files`]): the run would replace or remove it.
 pub fn check_out_dir(dir: &Path) -> Result<()> {
+    check_is_folder(dir)?;
+    earlier_run_files(dir)?;
+    Ok(())
+}
+
+/// The first half of [`check_out_dir`]: `dir` is a folder or is missing.
+fn check_is_folder(dir: &Path) -> Result<()> {
     if dir.exists() && !dir.is_dir() {
         bail!(
             "--out {} is a file: nav sim writes a folder of files (imu.bin or imu.csv, \
@@ -349,7 +361,9 @@ pub(crate) fn write_files(
     let want_csv = formats != Formats::Binary;
     let r = &sim.recording;
     let csv_rows = if want_csv { Some(r.to_csv()?) } else { None };
-    check_out_dir(dir)?;
+    check_is_folder(dir)?;
+    // Before this run's scenario.txt replaces the one that shows whose they are.
+    let earlier = earlier_run_files(dir)?;
     fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut names = vec!["truth.csv", "scenario.txt"];
     names.extend(want_bin.then_some("imu.bin"));
@@ -377,6 +391,11 @@ pub(crate) fn write_files(
     }
     set.commit()
         .with_context(|| format!("writing into {}", dir.display()))?;
+    let stale: Vec<PathBuf> = earlier
+        .into_iter()
+        .filter(|p| !names.iter().any(|n| dir.join(n) == *p))
+        .collect();
+    let removed = remove_stale(&stale)?;
     let truth = dir.join("truth.csv");
     let description_path = dir.join("scenario.txt");
     Ok(SimFiles {
@@ -384,6 +403,7 @@ pub(crate) fn write_files(
         csv: want_csv.then_some(csv),
         truth,
         description: description_path,
+        removed,
     })
 }
 
@@ -398,20 +418,78 @@ pub const SIM_FILE_NAMES: [&str; 6] = [
     "gnss.bin",
 ];
 
-/// Removes the files of [`SIM_FILE_NAMES`] in `dir` that this run did not write (`written`)
-/// and returns them: an earlier run's `imu.csv` or `gnss.csv` left beside this run's truth
-/// made a set that looked whole (`nav sim static --format bin` into the directory of a
-/// `land-vehicle --gnss-rate 1` run kept the car's CSV recording and fixes). Called after
-/// this run's files are written, so a failed run leaves the earlier set as it was.
-pub fn remove_stale(dir: &Path, written: &[&Path]) -> Result<Vec<PathBuf>> {
-    let mut removed = Vec::new();
+/// The first line of every `scenario.txt` that `nav sim` writes (a family member's goes on
+/// `" family: ..."`).
+pub const SCENARIO_MARK: &str = "# nav sim";
+
+/// The files of [`SIM_FILE_NAMES`] in `dir`, each one an earlier `nav sim` run's, or an error
+/// naming the first that is not provably one: `dir` must hold a `scenario.txt` whose first
+/// line is [`SCENARIO_MARK`], and each other file must begin as `nav sim` writes it (the
+/// binary formats' magic, the CSV files' header). A user's own `gnss.csv` or `imu.csv` in the
+/// folder was removed as "an earlier run's". What is not a regular file is not listed (never
+/// removed; [`crate::atomic::FileSet`] refuses to write over it).
+pub fn earlier_run_files(dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut found = Vec::new();
     for name in SIM_FILE_NAMES {
         let path = dir.join(name);
-        if written.iter().any(|w| *w == path) {
-            continue;
+        // Through a symbolic link, as the set's writer goes; a FIFO is never opened.
+        if fs::metadata(&path).is_ok_and(|m| m.is_file()) {
+            found.push((name, path));
         }
-        match fs::remove_file(&path) {
-            Ok(()) => removed.push(path),
+    }
+    if found.is_empty() {
+        return Ok(Vec::new());
+    }
+    let refuse = |path: &Path, why: &str| {
+        anyhow::anyhow!(
+            "--out {}: {} was not written by nav sim ({why}), and this run would replace or \
+             remove it; choose an empty folder, or move the file away",
+            dir.display(),
+            path.display()
+        )
+    };
+    let scenario = dir.join("scenario.txt");
+    if !found.iter().any(|(name, _)| *name == "scenario.txt") {
+        let (_, path) = &found[0];
+        return Err(refuse(
+            path,
+            "no scenario.txt of an earlier nav sim run beside it",
+        ));
+    }
+    for (name, path) in &found {
+        let mark = match *name {
+            "scenario.txt" => SCENARIO_MARK.to_owned(),
+            "imu.bin" => String::from_utf8_lossy(&hal_adapters::recording::MAGIC).into_owned(),
+            "gnss.bin" => String::from_utf8_lossy(&hal_adapters::gnss_record::MAGIC).into_owned(),
+            "imu.csv" => imu_csv::COLUMNS.join(","),
+            "gnss.csv" => crate::gnss::CSV_COLUMNS.join(","),
+            _ => nav_core::output::CSV_HEADER.to_owned(),
+        };
+        let mut head = vec![0_u8; mark.len()];
+        let read =
+            fs::File::open(path).and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head));
+        if read.is_err() || head != mark.as_bytes() {
+            let why = if path == &scenario {
+                format!("its first line is not \"{SCENARIO_MARK} ...\"")
+            } else {
+                format!("it does not begin as nav sim's {name} does")
+            };
+            return Err(refuse(path, &why));
+        }
+    }
+    Ok(found.into_iter().map(|(_, path)| path).collect())
+}
+
+/// Removes the earlier run's files `stale` ([`earlier_run_files`]) that this run did not
+/// write, and returns them: an earlier run's `imu.csv` or `gnss.csv` left beside this run's
+/// truth made a set that looked whole (`nav sim static --format bin` into the directory of a
+/// `land-vehicle --gnss-rate 1` run kept the car's CSV recording and fixes). Called after
+/// this run's files are written, so a failed run leaves the earlier set as it was.
+fn remove_stale(stale: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let mut removed = Vec::new();
+    for path in stale {
+        match fs::remove_file(path) {
+            Ok(()) => removed.push(path.clone()),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
             Err(e) => {
                 return Err(e)

@@ -74,6 +74,10 @@ pub fn simulate_member(
 ) -> Result<Simulated> {
     let (sampling, every) = crate::simulate::plan(opts.rate_hz, opts.truth_rate_hz, opts.seconds)?;
     member.rocking.check().context("the member's trajectory")?;
+    member
+        .rocking
+        .check_periods(opts.rate_hz)
+        .context("the member's trajectory")?;
     let injector = ErrorInjector::new(member.error_model(), member.injector_seed)
         .map_err(|e| anyhow!("grade {}: {e}", member.grade))?;
     crate::simulate::sense(&member.rocking, sampling, every, injector, progress)

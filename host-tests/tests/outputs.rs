@@ -203,3 +203,40 @@ fn an_interrupted_run_leaves_no_partial_output() {
         assert!(!out.exists(), "SIG{signal}: an output at --out");
     }
 }
+
+/// `nav report --at` outside the compared rows' span is refused, naming the span: `--at
+/// 1e9` printed the last row's error under "at t0 + 1e9 s", `--at -5` the first's.
+#[test]
+fn report_at_a_time_outside_the_solution_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let header = "t_s,lat_deg,lon_deg,h_m,v_n_mps,v_e_mps,v_d_mps,roll_deg,pitch_deg,yaw_deg";
+    let row = |k: u32| format!("{k},45,7.5,150,0,0,0,1,2,30\n");
+    // The truth from 0 to 20 s, the solution from 5 to 15 s.
+    let truth: String = (0..=20).map(row).collect();
+    let rows: String = (5..=15).map(row).collect();
+    let (solution, truth_path) = (dir.path().join("sol.csv"), dir.path().join("truth.csv"));
+    std::fs::write(&solution, format!("{header}\n{rows}# end: 11 rows, ok\n")).unwrap();
+    std::fs::write(&truth_path, format!("{header}\n{truth}")).unwrap();
+    let report = |at: &str| {
+        nav(&[
+            "report",
+            "--solution",
+            solution.to_str().unwrap(),
+            "--truth",
+            truth_path.to_str().unwrap(),
+            "--at",
+            at,
+        ])
+    };
+    let o = report("5,10,15");
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    for at in ["1e9", "-5", "10,2"] {
+        let o = report(at);
+        assert_eq!(o.status.code(), Some(1), "{at}: {}", text(&o));
+        assert!(
+            text(&o).contains("is outside the compared rows' span, t0 + 5.000000 .. 15.000000 s"),
+            "{at}: {}",
+            text(&o)
+        );
+    }
+}

@@ -465,3 +465,31 @@ fn output_into_a_closed_pipe_is_not_a_panic() {
     assert!(!err.contains("panicked"), "{err}");
     assert_ne!(out.status.code(), Some(101), "{err}");
 }
+
+/// A period of the rocking or of the centre's translation is refused by its name when it spans
+/// fewer than 10 samples at the rate (it aliases, or is faster than an IMU senses), or is not
+/// finite; 10 samples exactly pass.
+#[test]
+fn a_motion_period_shorter_than_ten_samples_is_refused() {
+    use host_tests::trajectory::scenarios::Rocking;
+    let mut r = Rocking::ship(6);
+    r.check_periods(400.0).unwrap();
+    // 8 samples at 400 Hz.
+    r.translation.heave.period_s = 0.02;
+    let msg = r.check_periods(400.0).unwrap_err().to_string();
+    assert!(
+        msg.starts_with("heave_period_s 0.02 is not within [0.025, "),
+        "{msg}"
+    );
+    r.translation.heave.period_s = 0.025;
+    r.check_periods(400.0).unwrap();
+    // The same period at 100 Hz: 2.5 samples.
+    let msg = r.check_periods(100.0).unwrap_err().to_string();
+    assert!(
+        msg.starts_with("heave_period_s 0.025 is not within [0.1, "),
+        "{msg}"
+    );
+    r.roll.period_s = f64::INFINITY;
+    let msg = r.check_periods(400.0).unwrap_err().to_string();
+    assert!(msg.starts_with("roll_period_s inf"), "{msg}");
+}

@@ -90,15 +90,72 @@ fn sim_refuses_a_length_with_no_sample() {
     assert!(!out.exists());
 }
 
+/// A motion period shorter than 10 samples is refused with its name and range: a roll period
+/// of 1 ns wrote 1.4e6 rad in one 2.5 ms increment, one of 1 ms a ship at rest moving at
+/// 2.8 km/s, each with exit 0 and "saturated 0".
+#[test]
+fn sim_refuses_a_motion_period_shorter_than_ten_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    for (scenario, set, rate, msg) in [
+        (
+            "auv-bench",
+            "roll_period_s=1e-9",
+            "400",
+            "roll_period_s 1e-9 is not within [0.025, ",
+        ),
+        (
+            "ship-rocking",
+            "roll_period_s=0.001",
+            "400",
+            "roll_period_s 0.001 is not within [0.025, ",
+        ),
+        (
+            "ship-rocking",
+            "pitch_period_s=0.05",
+            "100",
+            "pitch_period_s 0.05 is not within [0.1, ",
+        ),
+    ] {
+        let o = nav(&[
+            "sim",
+            scenario,
+            "--seconds",
+            "2",
+            "--rate",
+            rate,
+            "--truth-rate",
+            "10",
+            "--set",
+            set,
+            "--out",
+            s(&out),
+        ]);
+        assert_refused(&o, msg);
+        assert_refused(&o, "at least 10 samples");
+        assert!(!out.exists(), "{set}");
+    }
+}
+
 /// Independently of the parameter checks: 1000 m/s is accepted, but north for 6000 s it
-/// crosses the pole, and the first truth row beyond it refuses the run; the old files in the
-/// directory stay as they were.
+/// crosses the pole, and the first truth row beyond it refuses the run; the earlier run's
+/// files in the directory stay as they were.
 #[test]
 fn sim_refuses_the_first_row_past_the_pole_and_keeps_the_old_files() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sim");
-    std::fs::create_dir(&out).unwrap();
-    std::fs::write(out.join("truth.csv"), "old\n").unwrap();
+    let o = nav(&[
+        "sim",
+        "static",
+        "--seconds",
+        "1",
+        "--format",
+        "bin",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let old = contents(&out);
     let o = nav(&[
         "sim",
         "ship-rocking",
@@ -121,11 +178,82 @@ fn sim_refuses_the_first_row_past_the_pole_and_keeps_the_old_files() {
         "{}",
         text(&o)
     );
-    assert_eq!(names(&out), ["truth.csv"]);
-    assert_eq!(
-        std::fs::read_to_string(out.join("truth.csv")).unwrap(),
-        "old\n"
+    assert!(contents(&out) == old, "{:?}", names(&out));
+}
+
+/// The names and bytes of the files in `dir`.
+fn contents(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    names(dir)
+        .into_iter()
+        .map(|n| (n.clone(), std::fs::read(dir.join(&n)).unwrap()))
+        .collect()
+}
+
+/// A file of a name `nav sim` writes that an earlier `nav sim` did not write is the user's:
+/// the run is refused, naming it, and nothing in the folder changes. A user's `gnss.csv` and
+/// `imu.csv` were removed "(an earlier run's, not this one's)" by `--format bin`.
+#[test]
+fn sim_refuses_a_folder_holding_files_it_did_not_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("mine");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("gnss.csv"), "my own GNSS log\n").unwrap();
+    std::fs::write(out.join("imu.csv"), "my own IMU log\n").unwrap();
+    let sim = |out: &Path| {
+        nav(&[
+            "sim",
+            "static",
+            "--seconds",
+            "2",
+            "--format",
+            "bin",
+            "--out",
+            s(out),
+        ])
+    };
+    let before = contents(&out);
+    let o = sim(&out);
+    assert_refused(
+        &o,
+        "was not written by nav sim (no scenario.txt of an earlier",
     );
+    assert_refused(&o, "choose an empty folder, or move the file away");
+    assert!(text(&o).contains(&format!("{}/", s(&out))), "{}", text(&o));
+    assert!(contents(&out) == before, "{:?}", names(&out));
+
+    // Beside an earlier run's scenario.txt, a file it did not write (its header not nav
+    // sim's) is still the user's.
+    let run = dir.path().join("run");
+    let o = nav(&[
+        "sim",
+        "static",
+        "--seconds",
+        "2",
+        "--gnss-rate",
+        "1",
+        "--out",
+        s(&run),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    std::fs::write(run.join("gnss.csv"), "my own GNSS log\n").unwrap();
+    let before = contents(&run);
+    let o = sim(&run);
+    assert_refused(
+        &o,
+        &format!(
+            "{} was not written by nav sim (it does not begin as nav sim's gnss.csv does)",
+            s(&run.join("gnss.csv"))
+        ),
+    );
+    assert!(contents(&run) == before, "{:?}", names(&run));
+
+    // A scenario.txt of the user's own proves nothing.
+    let notes = dir.path().join("notes");
+    std::fs::create_dir(&notes).unwrap();
+    std::fs::write(notes.join("scenario.txt"), "my scenario\n").unwrap();
+    let o = sim(&notes);
+    assert_refused(&o, "(its first line is not \"# nav sim ...\")");
+    assert_eq!(names(&notes), ["scenario.txt"]);
 }
 
 /// A run into the directory of an earlier one leaves no file of the earlier run: `nav sim

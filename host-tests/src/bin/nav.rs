@@ -340,7 +340,7 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         truth: PathBuf,
         /// Times [s] after the start of the truth (its first row) at which to print the errors (nearest row),
-        /// comma-separated.
+        /// comma-separated; a time outside the compared rows' span is refused.
         #[arg(
             long,
             value_name = "S,...",
@@ -1682,30 +1682,19 @@ fn sim_family(a: SimArgs) -> Result<()> {
     }
     println!("  truth      {}", files.truth.display());
     println!("  scenario   {}", files.description.display());
-    print_removed(&out, &files, &[])
+    print_removed(&files);
+    Ok(())
 }
 
-/// Removes the files an earlier `nav sim` left in `out` that this run (`files`, `more`) did
-/// not write ([`host_tests::simulate::remove_stale`]), and says so.
-fn print_removed(
-    out: &std::path::Path,
-    files: &host_tests::simulate::SimFiles,
-    more: &[&std::path::Path],
-) -> Result<()> {
-    let mut written: Vec<&std::path::Path> = [&files.binary, &files.csv]
-        .into_iter()
-        .flatten()
-        .map(PathBuf::as_path)
-        .collect();
-    written.extend([files.truth.as_path(), files.description.as_path()]);
-    written.extend_from_slice(more);
-    for p in host_tests::simulate::remove_stale(out, &written)? {
+/// Lists the files of an earlier `nav sim` run that this run removed (it did not write them;
+/// [`host_tests::simulate::earlier_run_files`]).
+fn print_removed(files: &host_tests::simulate::SimFiles) {
+    for p in &files.removed {
         println!(
-            "  removed    {} (an earlier run's, not this one's)",
+            "  removed    {} (an earlier nav sim run's, not this one's)",
             p.display()
         );
     }
-    Ok(())
 }
 
 fn sim(a: SimArgs) -> Result<()> {
@@ -1854,7 +1843,6 @@ fn sim(a: SimArgs) -> Result<()> {
             }),
     )?;
     let (gnss_csv, gnss_bin) = (out.join("gnss.csv"), out.join("gnss.bin"));
-    let gnss_files = [gnss_csv.as_path(), gnss_bin.as_path()];
     if let Some((g, receiver)) = receiver {
         println!(
             "  GNSS       {} and {} ({} fixes)",
@@ -1879,15 +1867,7 @@ fn sim(a: SimArgs) -> Result<()> {
     }
     println!("  truth      {}", files.truth.display());
     println!("  scenario   {}", files.description.display());
-    print_removed(
-        &out,
-        &files,
-        if a.gnss_rate.is_some() {
-            &gnss_files
-        } else {
-            &[]
-        },
-    )?;
+    print_removed(&files);
     let c = sim.counters;
     if c.gyro_saturated + c.accel_saturated > 0 {
         println!(

@@ -154,6 +154,15 @@ impl Scenario {
             .collect()
     }
 
+    /// Refuses a motion period too short for the sample rate `rate_hz` [Hz]
+    /// ([`Rocking::check_periods`]); the scenarios without one pass.
+    pub fn check_periods(&self, rate_hz: f64) -> Result<()> {
+        match self {
+            Self::ShipRocking(r) | Self::AuvBench(r) => r.check_periods(rate_hz),
+            Self::Static(_) | Self::Flight(_) | Self::LandVehicle(_) => Ok(()),
+        }
+    }
+
     /// The trajectory (checks the parameters).
     pub fn build(&self) -> Result<Box<dyn Trajectory>> {
         Ok(match self {
@@ -233,6 +242,34 @@ fn check_positive(key: &str, v: f64) -> Result<()> {
     // Infinity is a value here (a rocking that never stops, a period of no motion).
     if v.is_nan() || v <= 0.0 {
         bail!("{key} must be positive, not {}", Number(v));
+    }
+    Ok(())
+}
+
+/// Fewest samples a motion's period spans ([`Rocking::check_periods`]). Below 2 (Nyquist) a
+/// harmonic aliases into another motion. Above it the exact increments are right, but no IMU
+/// senses such a motion (its anti-aliasing filter passes well under its Nyquist frequency),
+/// and the navigator's coning and sculling corrections, series in the angle turned per
+/// sample, no longer hold. 10 samples (36 deg of phase a sample, a fifth of the Nyquist
+/// frequency) keep both; at 400 Hz it is 25 ms, far shorter than the rocking of any vehicle
+/// here (a ship's 5 to 8 s, the AUV bench's 11 s).
+pub const MIN_SAMPLES_PER_PERIOD: f64 = 10.0;
+
+/// A motion period `period_s` [s] at the sample rate `rate_hz` [Hz]: at least
+/// [`MIN_SAMPLES_PER_PERIOD`] samples and at most [`MAX_SECONDS`] (finite: the rocking's taper
+/// lasts one roll period).
+fn check_period(key: &str, period_s: f64, rate_hz: f64) -> Result<()> {
+    let min_s = MIN_SAMPLES_PER_PERIOD / rate_hz;
+    if !(min_s..=MAX_SECONDS).contains(&period_s) {
+        bail!(
+            "{key} {} is not within [{}, {}] s: at {} Hz a motion's period must span at least \
+             {MIN_SAMPLES_PER_PERIOD} samples (a shorter one aliases, or is faster than an IMU \
+             senses) and be finite",
+            Number(period_s),
+            Number(min_s),
+            Number(MAX_SECONDS),
+            Number(rate_hz)
+        );
     }
     Ok(())
 }
@@ -535,6 +572,24 @@ impl Rocking {
     /// (the alignment family's members) is refused like one given on the command line.
     pub fn check(&self) -> Result<()> {
         self.build().map(|_| ())
+    }
+
+    /// Refuses a period of the rocking or of the centre's translation that spans fewer than
+    /// [`MIN_SAMPLES_PER_PERIOD`] samples at `rate_hz` [Hz], or an infinite one: a roll period
+    /// of 1 ns at 400 Hz gave 1.4e6 rad in one sample's increment.
+    pub fn check_periods(&self, rate_hz: f64) -> Result<()> {
+        let t = &self.translation;
+        for (key, period_s) in [
+            ("roll_period_s", self.roll.period_s),
+            ("pitch_period_s", self.pitch.period_s),
+            ("yaw_period_s", self.yaw.period_s),
+            ("surge_period_s", t.surge.period_s),
+            ("sway_period_s", t.sway.period_s),
+            ("heave_period_s", t.heave.period_s),
+        ] {
+            check_period(key, period_s, rate_hz)?;
+        }
+        Ok(())
     }
 
     fn build(&self) -> Result<Self> {
