@@ -647,8 +647,8 @@ pub fn latency_line(e: &LatencyEstimate<f64>) -> String {
     if e.sigma_s.is_finite() {
         format!(
             "GNSS time tags: the fixes late by {:.4} s (1-sigma {:.4} s) over {} windows of \
-             fixes ({} left out as gross faults): {verdict}",
-            e.late_s, e.sigma_s, e.windows, e.gross_windows
+             fixes ({} left out as gross faults; their spread {:.2}): {verdict}",
+            e.late_s, e.sigma_s, e.windows, e.gross_windows, e.spread
         )
     } else {
         format!(
@@ -805,6 +805,7 @@ mod tests {
             sigma_s: 0.0353,
             windows: 13,
             gross_windows: 0,
+            spread: 1.0,
             detected: true,
         };
         let w = latency_warning(&late, Some(57.2)).unwrap();
