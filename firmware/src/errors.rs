@@ -17,7 +17,7 @@ use nav_core::alignment::machine::{
     MIN_RATE_HZ, SettingsError, bad_rate_reason, longer_window_s,
 };
 use nav_core::alignment::sway::MAX_YAW_SWAY_RAD;
-use nav_core::alignment::{AlignError, GravityMismatch, InertialAlignError};
+use nav_core::alignment::{AlignError, EarthRateMismatch, GravityMismatch, InertialAlignError};
 use nav_core::calibration::CalibrationError;
 use nav_core::navigator::config::ConfigError;
 use nav_core::navigator::{AIDED_COMPILED_IN, Counters, FlaggedCounts, NavError};
@@ -158,6 +158,7 @@ impl Format for Failure<'_> {
             AlignFailure::Static(e) => write!(f, "static alignment: {}", Static(e)),
             AlignFailure::Inertial(e) => write!(f, "inertial-frame alignment: {}", Inertial(e)),
             AlignFailure::Fine(e) => write!(f, "fine alignment: {}", Fine(e)),
+            AlignFailure::Latitude(m) => write!(f, "fine alignment: {}", EarthRate(m)),
             AlignFailure::BaseMoving(sc) => write!(
                 f,
                 "base not still: gyro and accelerometer outputs scatter {=f64}x and {=f64}x their noise (sway, heave or vibration; or an IMU noisier than its model)",
@@ -193,6 +194,7 @@ impl Format for Static<'_> {
                 f,
                 "horizontal Earth rate not measurable for gyrocompassing (near a pole, or gyros too coarse or biased)"
             ),
+            AlignError::LatitudeMismatch(m) => write!(f, "{}", EarthRate(m)),
         }
     }
 }
@@ -288,6 +290,20 @@ impl Format for NotCompiledIn {
 }
 
 /// A mean specific force that is not gravity.
+/// The gyros' Earth rate against the latitude's ([`EarthRateMismatch`]).
+struct EarthRate<'a>(&'a EarthRateMismatch);
+
+impl Format for EarthRate<'_> {
+    fn format(&self, f: Formatter<'_>) {
+        let [lat, up, level, up0, level0, tol] = self.0.figures_unrounded();
+        write!(
+            f,
+            "the gyros measure an Earth rate of {=f64} deg/h up and {=f64} deg/h level, latitude {=f64} deg's is {=f64} and {=f64}: the latitude wrong (its hemisphere?), or gyro biases beyond {=f64} deg/h",
+            up, level, lat, up0, level0, tol
+        )
+    }
+}
+
 struct Gravity<'a>(&'a GravityMismatch);
 
 impl Format for Gravity<'_> {

@@ -522,3 +522,38 @@ fn the_true_calibration_improves_the_alignment() {
         );
     }
 }
+
+/// A site latitude the gyros contradict (exact data at 45 deg): in the other hemisphere or at
+/// the equator, the static and the fine alignment refuse it with the rates measured and
+/// expected; at the true latitude both align. Was: both aligned, the heading then drifting at
+/// 21 deg/h on the wrong vertical Earth rate (at the equator, the height 10 m off in 30 s on
+/// the wrong gravity).
+#[test]
+fn a_latitude_the_gyros_contradict_is_refused() {
+    use host_tests::pipeline::sensor_noise;
+    use host_tests::sensor_model::Grade;
+    use nav_core::alignment::AlignMethod;
+    let s = scenario();
+    let fog = sensor_noise(&Grade::Fog.noise_spec());
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("rest.bin");
+    recording_io::write(&path, &s.recording().unwrap()).unwrap();
+    for method in [AlignMethod::Static, AlignMethod::Fine] {
+        for lat_deg in [-s.lat_deg, 0.0] {
+            let mut wrong = ReplayOptions::new(lat_deg, s.lon_deg, s.h_m, 30.0);
+            wrong.run.align_method = method;
+            wrong.run.noise = fog;
+            let e = common::replay_error(&path, &wrong);
+            assert!(
+                e.contains("the gyros measure an Earth rate of 10.6 deg/h up")
+                    && e.contains("the latitude wrong (its hemisphere?)"),
+                "{method:?} at {lat_deg} deg: {e}"
+            );
+        }
+        let mut right = ReplayOptions::new(s.lat_deg, s.lon_deg, s.h_m, 30.0);
+        right.run.align_method = method;
+        right.run.noise = fog;
+        let (report, _) = replay::<f64>(&path, &right);
+        assert!(report.report.nav_steps > 0, "{method:?}");
+    }
+}

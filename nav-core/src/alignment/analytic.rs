@@ -59,6 +59,52 @@ pub enum AlignError {
     /// levelled gyros measure less than half of `Omega cos(lat)` (a gyro too coarse or too
     /// biased to see the Earth's rotation).
     HeadingUnobservable,
+    /// The levelled gyros' Earth rate is not the one of the given latitude
+    /// ([`EARTH_RATE_TOLERANCE`]): the latitude is wrong (its hemisphere, or tens of degrees
+    /// off), or the gyro biases are beyond the tolerance.
+    LatitudeMismatch(EarthRateMismatch),
+}
+
+/// The Earth rate the levelled gyros measured against the given latitude's, for the message.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EarthRateMismatch {
+    /// The given latitude [rad].
+    pub lat_rad: f64,
+    /// Measured vertical (up) and horizontal Earth rate [rad/s].
+    pub measured_rad_s: [f64; 2],
+}
+
+impl EarthRateMismatch {
+    /// The message's figures, rounded: the latitude [deg], the measured vertical and
+    /// horizontal rates, the latitude's, and the tolerance [deg/h] (`+ 0.0`: no "-0.0" of a
+    /// rounded -1e-9).
+    pub fn figures(&self) -> [f64; 6] {
+        let round = |x: f64, per_unit: f64| libm::round(x * per_unit) / per_unit + 0.0;
+        let [lat, up, level, up0, level0, tol] = self.figures_unrounded();
+        let tenths = |x| round(x, 10.0);
+        [
+            round(lat, 100.0),
+            tenths(up),
+            tenths(level),
+            tenths(up0),
+            tenths(level0),
+            tenths(tol),
+        ]
+    }
+
+    /// [`Self::figures`] as computed (the firmware's log prints them so).
+    pub fn figures_unrounded(&self) -> [f64; 6] {
+        let omega = earth::OMEGA_IE * RAD_S_TO_DEG_H;
+        let [up, level] = self.measured_rad_s.map(|x| x * RAD_S_TO_DEG_H);
+        [
+            self.lat_rad.to_degrees(),
+            up,
+            level,
+            omega * libm::sin(self.lat_rad),
+            omega * libm::cos(self.lat_rad),
+            omega * EARTH_RATE_TOLERANCE,
+        ]
+    }
 }
 
 impl core::fmt::Display for AlignError {
@@ -76,9 +122,25 @@ impl core::fmt::Display for AlignError {
             Self::HeadingUnobservable => f.write_str(
                 "horizontal Earth rate not measurable for gyrocompassing (near a pole, or gyros too coarse or biased)",
             ),
+            Self::LatitudeMismatch(m) => {
+                let [lat, up, level, up0, level0, tol] = m.figures();
+                write!(
+                    f,
+                    "the gyros measure an Earth rate of {up:.1} deg/h up and {level:.1} deg/h level, latitude {lat:.2} deg's is {up0:.1} and {level0:.1}: the latitude wrong (its hemisphere?), or gyro biases beyond {tol:.1} deg/h"
+                )
+            }
         }
     }
 }
+
+/// Largest difference between the levelled gyros' vertical or horizontal rate and the given
+/// latitude's Earth rate, `Omega sin(lat)` and `Omega cos(lat)`, as a fraction of `Omega` [-]
+/// (7.5 deg/h: half the Earth rate, as the gyrocompass's own test of the horizontal rate). A
+/// FOG at 45 deg aligned at -45 deg: 21 deg/h off (its heading then drifting at that rate);
+/// at 0 deg, 11 deg/h (and the height 10 m off in 30 s on the wrong gravity).
+pub const EARTH_RATE_TOLERANCE: f64 = 0.5;
+
+const RAD_S_TO_DEG_H: f64 = 180.0 / core::f64::consts::PI * 3600.0;
 
 /// Largest relative difference between the mean specific force and normal gravity at rest [-]
 /// (2 %), for the static and the inertial-frame methods.
@@ -214,6 +276,19 @@ impl<T: Scalar> StaticAlignment<T> {
         // means the gyros cannot see it and the heading would be noise or a bias.
         if (east * east + north * north).sqrt() < T::c(0.5 * earth::OMEGA_IE) * lat.pcos() {
             return Err(AlignError::HeadingUnobservable);
+        }
+        // The levelled vertical rate (up) and the horizontal one must both be the latitude's
+        // [Groves, eq. 2.123] (the horizontal test above only says the gyros see one).
+        let up = w.x * sp - w.y * sr * cp - w.z * cr * cp;
+        let level = (east * east + north * north).sqrt();
+        let omega = T::c(earth::OMEGA_IE);
+        let expected = [omega * lat.psin(), omega * lat.pcos()];
+        let tolerance = T::c(EARTH_RATE_TOLERANCE) * omega;
+        if !((up - expected[0]).abs() <= tolerance && level - expected[1] <= tolerance) {
+            return Err(AlignError::LatitudeMismatch(EarthRateMismatch {
+                lat_rad: lat.to_f64(),
+                measured_rad_s: [up.to_f64(), level.to_f64()],
+            }));
         }
         let yaw = east.patan2(north);
         Ok(AlignmentResult {
@@ -352,5 +427,32 @@ mod tests {
             ));
         }
         assert_eq!(blind.solve(lat, 0.0), Err(AlignError::HeadingUnobservable));
+    }
+
+    /// Gyros at 45 deg aligned at a latitude in the other hemisphere, at the equator or near
+    /// the pole: refused with the rates; within the tolerance (30 deg), aligned.
+    #[test]
+    fn a_latitude_the_gyros_contradict_is_refused() {
+        let lat = 45f64.to_radians();
+        let a = feed::<f64>(0.02, -0.01, 1.0, lat, 24_000);
+        for wrong in [-45.0_f64, 0.0, 80.0] {
+            let e = a.solve(wrong.to_radians(), 0.0).unwrap_err();
+            let AlignError::LatitudeMismatch(m) = e else {
+                panic!("{wrong}: {e:?}");
+            };
+            let [lat_deg, up, ..] = m.figures();
+            assert!(
+                (up - 10.63).abs() < 0.06 && (lat_deg - wrong).abs() < 1e-9,
+                "{m:?}"
+            );
+            let text = std::format!("{e}");
+            assert!(
+                text.contains("the latitude wrong (its hemisphere?)"),
+                "{text}"
+            );
+        }
+        for right in [45.0_f64, 30.0, 60.0] {
+            assert!(a.solve(right.to_radians(), 0.0).is_ok(), "{right}");
+        }
     }
 }

@@ -19,7 +19,7 @@
 //! seconds) each stage took.
 
 use super::AttitudeEstimate;
-use super::analytic::{AlignError, GravityMismatch, StaticAlignment};
+use super::analytic::{AlignError, EarthRateMismatch, GravityMismatch, StaticAlignment};
 use super::fine::bank::Bank;
 use super::fine::base::Translation;
 use super::fine::model::FINE_STATES;
@@ -155,6 +155,9 @@ pub enum AlignFailure {
     Fine(FineRefusal),
     /// The base moved: the increments scatter beyond the IMU's noise ([`Stillness`]).
     BaseMoving(Scatter),
+    /// A still base's gyros over the fine stage contradict the latitude's Earth rate
+    /// ([`AlignError::LatitudeMismatch`], the static method's test).
+    Latitude(EarthRateMismatch),
     /// The window the increments cover is shorter than the method's minimum.
     WindowTooShort {
         /// Time covered [s].
@@ -173,6 +176,7 @@ impl core::fmt::Display for AlignFailure {
             Self::Static(e) => write!(f, "static alignment: {e}"),
             Self::Inertial(e) => write!(f, "inertial-frame alignment: {e}"),
             Self::Fine(e) => write!(f, "fine alignment: {e}"),
+            Self::Latitude(m) => write!(f, "fine alignment: {}", AlignError::LatitudeMismatch(*m)),
             Self::BaseMoving(sc) => write!(
                 f,
                 "base not still: gyro and accelerometer outputs scatter {:.1}x and {:.1}x their noise (sway, heave or vibration; or an IMU noisier than its model)",
@@ -212,6 +216,7 @@ impl AlignFailure {
                 AlignError::SpecificForceNotGravity(_) => "static: specific force not gravity",
                 AlignError::BaseRotating => "static: base rotating",
                 AlignError::HeadingUnobservable => "static: Earth rate not measurable",
+                AlignError::LatitudeMismatch(_) => "static: Earth rate not the latitude's",
             },
             Self::Inertial(e) => match e {
                 I::TooShort => "inertial: too short",
@@ -233,6 +238,7 @@ impl AlignFailure {
                 F::NonFinite => "fine: not finite",
             },
             Self::BaseMoving(_) => "base not still",
+            Self::Latitude(_) => "fine: Earth rate not the latitude's",
             Self::WindowTooShort { .. } => "window too short",
             Self::NotCompiledIn(_) => "method not in this build",
         }
@@ -863,6 +869,9 @@ pub struct Aligner<T: Scalar> {
     last_rate: Vector3<T>,
     /// Block scatter of the coarse stage's increments (is the base still?).
     still: Stillness,
+    /// The fine stage's mean increments: on a still base, their Earth rate against the
+    /// latitude's ([`AlignFailure::Latitude`]).
+    fine_means: StaticAlignment<T>,
 }
 
 impl<T: Scalar> Aligner<T> {
@@ -909,6 +918,7 @@ impl<T: Scalar> Aligner<T> {
             refused: 0,
             last_rate: Vector3::zeros(),
             still: Stillness::new(),
+            fine_means: StaticAlignment::new(),
         }
     }
 
@@ -1044,6 +1054,7 @@ impl<T: Scalar> Aligner<T> {
         if let Some(f) = self.sway_mut().filter(|f| f.model_in_use()) {
             let _ = f.add(inc);
         }
+        self.fine_means.add(inc);
         self.times.fine_samples += 1;
         self.times.fine_s += dt;
         if self.samples() >= self.settings.samples {
@@ -1103,6 +1114,23 @@ impl<T: Scalar> Aligner<T> {
         let Some(general) = &self.kalman else {
             return;
         };
+        // The filters take the latitude's Earth rate as given: gyros that contradict it on a
+        // still base (a FOG at 45 deg aligned at -45 or 0 deg) are refused as the static
+        // method refuses them (a swaying base's mean rates hold its sway: not tested).
+        let n = &self.settings.noise;
+        let still = self
+            .still
+            .check(n.arw_rad_per_sqrt_s.to_f64(), n.vrw_mps_per_sqrt_s.to_f64());
+        let position = self.settings.position;
+        if let (Some((true, _)), Err(AlignError::LatitudeMismatch(m))) = (
+            still,
+            self.fine_means
+                .solve(position.lat::<T>(), position.h::<T>()),
+        ) {
+            self.failure = Some(AlignFailure::Latitude(m));
+            self.stage = Stage::Failed;
+            return;
+        }
         // The sway model's answer where it holds; else the general filter's, with a note
         // (its refusal where it refuses too: the data support no answer).
         let (result, note) = match self.sway() {

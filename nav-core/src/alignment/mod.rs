@@ -27,7 +27,9 @@ pub mod machine;
 pub mod stillness;
 pub mod sway;
 
-pub use analytic::{AlignError, AlignmentResult, GravityMismatch, StaticAlignment, samples_for};
+pub use analytic::{
+    AlignError, AlignmentResult, EarthRateMismatch, GravityMismatch, StaticAlignment, samples_for,
+};
 pub use fine::{FineAlignment, FineConfig, FineStatus};
 pub use inertial::{InertialAlignError, InertialAlignment, SensorNoise};
 pub use level::{GainMode, LevelConfig, LevelConfigError, LevelFilter, LevelStatus};
