@@ -748,12 +748,14 @@ mod tests {
     /// does, and the reported doubt is the estimate's 1-sigma times the velocity.
     #[test]
     fn a_found_latency_retimes_the_fixes_once() {
-        let mut m = LatencyMonitor::<f64>::default();
-        m.information = 1e4;
-        m.b = 0.2 * 1e4;
-        m.last_v = Vector3::new(15.0, 0.0, 0.0);
-        m.peak_a = Vector3::new(0.0, 2.0, 0.0);
-        m.peak_w = Vector3::new(0.0, 0.0, 0.3);
+        let mut m = LatencyMonitor::<f64> {
+            information: 1e4,
+            b: 0.2 * 1e4,
+            last_v: Vector3::new(15.0, 0.0, 0.0),
+            peak_a: Vector3::new(0.0, 2.0, 0.0),
+            peak_w: Vector3::new(0.0, 0.0, 0.3),
+            ..Default::default()
+        };
         assert_eq!(m.applied(), (0.0, 0.0));
         assert!(m.retime().is_none() && !m.estimate().detected);
         m.passing = true;
