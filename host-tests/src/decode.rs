@@ -15,6 +15,7 @@
 use crate::atomic::AtomicFile;
 use anyhow::{Context, Result, bail};
 use hal_adapters::protocol::messages::EndOfRun;
+use hal_adapters::protocol::status::NavStatus;
 use hal_adapters::protocol::{DecodeStats, Decoder, Message, MessageId, Refusal, VERSION};
 use hal_adapters::recording::MAGIC;
 use nav_core::number::Number;
@@ -60,6 +61,13 @@ pub struct DecodeSummary {
     /// configuration (`DEFAULT_CONFIG`), or one that lost its IMU data (`IMU_LOST`), looked like
     /// any other.
     pub flags: Vec<(&'static str, u32)>,
+    /// Solution frames written, by the board's status in them (name, count; in the order
+    /// first seen).
+    pub statuses: Vec<(&'static str, u32)>,
+    /// Rows whose frame says DEGRADED or FAULT where the CSV does not (a free-inertial row has
+    /// no status column; an aided row's holds the filter's status): a FAULT board's rows
+    /// decoded as a clean log.
+    pub unsaid: u32,
     /// Frames refused for their protocol version (version, count; in the order first seen):
     /// a capture of a board running another version, refused whole, never misread.
     pub other_versions: Vec<(u8, u32)>,
@@ -206,6 +214,28 @@ impl fmt::Display for DecodeSummary {
                 f,
                 "status flags of the solution rows (frames with each): {}",
                 flags.join(", ")
+            )?;
+        }
+        if self.statuses.iter().any(|(name, _)| *name != "NAV") {
+            let statuses: Vec<String> = self
+                .statuses
+                .iter()
+                .map(|(name, n)| format!("{name} {n}"))
+                .collect();
+            writeln!(
+                f,
+                "board status of the solution rows (frames with each): {}",
+                statuses.join(", ")
+            )?;
+        }
+        if self.unsaid > 0 {
+            writeln!(
+                f,
+                "WARNING: {} of {} rows' frames say DEGRADED or FAULT (the board's own judgement: \
+                 aiding lost, a sensor or alignment failure) where the CSV does not (its status \
+                 column is the filter's; a free-inertial row has none): do not take those rows \
+                 as good",
+                self.unsaid, self.rows
             )?;
         }
         if let Some((_, n)) = self
@@ -375,6 +405,18 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
                     }
                     writeln!(out, "{}", s.row)?;
                     summary.rows += 1;
+                    let status = s.status.name();
+                    match summary.statuses.iter_mut().find(|(n, _)| *n == status) {
+                        Some((_, count)) => *count += 1,
+                        None => summary.statuses.push((status, 1)),
+                    }
+                    let said = match &s.row {
+                        Row::Aided(_, columns) => columns.status == status,
+                        Row::Free(_) => false,
+                    };
+                    if matches!(s.status, NavStatus::Degraded | NavStatus::Fault) && !said {
+                        summary.unsaid += 1;
+                    }
                     for (name, _) in s.flags.iter_names() {
                         match summary.flags.iter_mut().find(|(n, _)| *n == name) {
                             Some((_, count)) => *count += 1,
@@ -459,7 +501,7 @@ mod tests {
     use super::*;
     use hal_adapters::protocol::Encoder;
     use hal_adapters::protocol::messages::NavSolution;
-    use hal_adapters::protocol::status::{NavStatus, StatusFlags};
+    use hal_adapters::protocol::status::StatusFlags;
     use nav_core::output::{FilterColumns, Solution};
 
     fn frames(messages: &[Message]) -> Vec<u8> {
@@ -574,6 +616,48 @@ mod tests {
         ];
         let s = decode(&mut frames(&plain).as_slice(), &mut Vec::new()).unwrap();
         assert!(!s.to_string().contains("flags"), "{s}");
+        assert!(!s.to_string().contains("board status"), "{s}");
+    }
+
+    /// The board's status in each frame is counted, and rows whose frame says DEGRADED or
+    /// FAULT where the CSV does not are warned of (they decoded as a clean log, status NAV or
+    /// none).
+    #[test]
+    fn a_degraded_or_faulty_boards_rows_are_warned_of() {
+        let at = |k: u64, status: NavStatus, filter: &'static str| {
+            let solution = Solution {
+                t_us: S.t_us + k * 2500,
+                ..S
+            };
+            let columns = FilterColumns {
+                sigma_ned_m: [1.0; 3],
+                sigma_v_ned_m_s: [0.1; 3],
+                sigma_att_deg: [0.5; 3],
+                status: filter,
+            };
+            Message::NavSolution(NavSolution {
+                row: Row::Aided(solution, columns),
+                status,
+                flags: StatusFlags::empty(),
+            })
+        };
+        let messages = [
+            at(0, NavStatus::Nav, "NAV"),
+            at(1, NavStatus::Degraded, "DEGRADED"),
+            at(2, NavStatus::Degraded, "NAV"),
+            at(3, NavStatus::Fault, "NAV"),
+            Message::EndOfRun(EndOfRun { rows: 4 }),
+        ];
+        let s = decode(&mut frames(&messages).as_slice(), &mut Vec::new()).unwrap();
+        assert_eq!(s.statuses, [("NAV", 1), ("DEGRADED", 2), ("FAULT", 1)]);
+        assert_eq!(s.unsaid, 2);
+        let text = s.to_string();
+        assert!(
+            text.contains(
+                "board status of the solution rows (frames with each): NAV 1, DEGRADED 2, FAULT 1"
+            ) && text.contains("WARNING: 2 of 4 rows' frames say DEGRADED or FAULT"),
+            "{text}"
+        );
     }
 
     /// Frames whose CRC holds but whose content no navigator writes are refused, counted,
