@@ -77,6 +77,23 @@ pub struct DecodeSummary {
     pub line_feeds: (u64, u64),
 }
 
+/// Adds one to `name`'s count in `counts` (appended at 1 when first seen).
+fn count(counts: &mut Vec<(&'static str, u32)>, name: &'static str) {
+    match counts.iter_mut().find(|(n, _)| *n == name) {
+        Some((_, n)) => *n += 1,
+        None => counts.push((name, 1)),
+    }
+}
+
+/// `NAME n, NAME n, ...` of `counts`.
+fn counts_text(counts: &[(&'static str, u32)]) -> String {
+    let items: Vec<String> = counts
+        .iter()
+        .map(|(name, n)| format!("{name} {n}"))
+        .collect();
+    items.join(", ")
+}
+
 /// Line feeds from which a stream whose every line feed follows a carriage return is said to
 /// have passed a text-mode transfer (by chance: 256^-8).
 const CRLF_EVIDENCE: u64 = 8;
@@ -205,27 +222,17 @@ impl fmt::Display for DecodeSummary {
             writeln!(f, "last frame cut off: {} bytes", self.cut_off_bytes)?;
         }
         if !self.flags.is_empty() {
-            let flags: Vec<String> = self
-                .flags
-                .iter()
-                .map(|(name, n)| format!("{name} {n}"))
-                .collect();
             writeln!(
                 f,
                 "status flags of the solution rows (frames with each): {}",
-                flags.join(", ")
+                counts_text(&self.flags)
             )?;
         }
         if self.statuses.iter().any(|(name, _)| *name != "NAV") {
-            let statuses: Vec<String> = self
-                .statuses
-                .iter()
-                .map(|(name, n)| format!("{name} {n}"))
-                .collect();
             writeln!(
                 f,
                 "board status of the solution rows (frames with each): {}",
-                statuses.join(", ")
+                counts_text(&self.statuses)
             )?;
         }
         if self.unsaid > 0 {
@@ -406,10 +413,7 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
                     writeln!(out, "{}", s.row)?;
                     summary.rows += 1;
                     let status = s.status.name();
-                    match summary.statuses.iter_mut().find(|(n, _)| *n == status) {
-                        Some((_, count)) => *count += 1,
-                        None => summary.statuses.push((status, 1)),
-                    }
+                    count(&mut summary.statuses, status);
                     let said = match &s.row {
                         Row::Aided(_, columns) => columns.status == status,
                         Row::Free(_) => false,
@@ -418,10 +422,7 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
                         summary.unsaid += 1;
                     }
                     for (name, _) in s.flags.iter_names() {
-                        match summary.flags.iter_mut().find(|(n, _)| *n == name) {
-                            Some((_, count)) => *count += 1,
-                            None => summary.flags.push((name, 1)),
-                        }
+                        count(&mut summary.flags, name);
                     }
                 }
                 Message::EndOfRun(e) => summary.end = Some(e),
