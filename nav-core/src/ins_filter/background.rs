@@ -907,12 +907,12 @@ impl<T: Scalar> ErrorFilter<T> {
             // car's fixes, refused as a cluster before the latency was found, stayed refused
             // within 2 of their gate after it, the solution free-inertial). What the cluster
             // left doubtful (reported, not gated) joins the covariance the gate uses.
-            if let Some(c) = self.cluster.take().or(self.refused_unconfirmed.take()) {
+            let unconfirmed = self.refused_unconfirmed.take();
+            if let Some(c) = self.cluster.take().or(unconfirmed) {
                 let zero = Matrix3::zeros;
                 self.add_doubt(POS, &c.doubt().unwrap_or_else(zero));
                 self.add_doubt(VEL, &c.velocity_doubt().unwrap_or_else(zero));
             }
-            self.refused_unconfirmed = None;
             self.window.clear();
             // The retimed fixes' first pull, and the corrections the anchors of the coasting
             // test set before see, are the latency's doubt, taken above: no fault.
@@ -1005,8 +1005,7 @@ impl<T: Scalar> ErrorFilter<T> {
                 .into_iter()
                 .chain(self.pull.sensor_doubt());
             for (at, d) in [POS, VEL, ATT, BG, BA].into_iter().zip(doubts) {
-                let mut block = self.p.fixed_view_mut::<3, 3>(at, at);
-                block += d;
+                self.add_doubt(at, &d);
             }
             self.check_covariance();
             self.pull = Pull::none();

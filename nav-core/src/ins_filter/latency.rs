@@ -182,7 +182,8 @@ pub struct LatencyEstimate<T: Scalar> {
     pub spread: T,
     /// Beyond [`DETECTION_SIGMAS`] of its 1-sigma and beyond [`MIN_LATENCY_S`], within
     /// [`MAX_LATENCY_S`], the windows agreeing on it (`LatencyMonitor::passes`), at the last
-    /// window's close.
+    /// window's close; or the fixes retimed by it ([`LatencyMonitor::retime`]: until it has
+    /// failed that test at [`UNDO_WINDOWS`] closes in a row).
     pub detected: bool,
 }
 
@@ -511,7 +512,7 @@ impl<T: Scalar> LatencyMonitor<T> {
             windows: self.windows,
             gross_windows: self.gross,
             spread,
-            detected: self.passing,
+            detected: self.passing || self.applied_s != T::zero(),
         }
     }
 
@@ -576,10 +577,10 @@ impl<T: Scalar> LatencyMonitor<T> {
     /// and attitude it took from them); `None` when nothing moves.
     pub fn retime(&mut self) -> Option<(Matrix3<T>, Matrix3<T>, Matrix3<T>)> {
         let e = self.estimate();
-        let to = if e.detected {
-            e.late_s
-        } else if self.failed >= UNDO_WINDOWS {
+        let to = if self.failed >= UNDO_WINDOWS {
             T::zero()
+        } else if e.detected {
+            e.late_s
         } else {
             self.applied_s
         };
