@@ -274,7 +274,7 @@ impl<T: Scalar> Window<T> {
     /// the variances `var` [m^2] (an axis whose values are not finite is left out).
     ///
     /// The heading's regressor `r = [d x] integral(u)` (`d` down): a heading error `psi`
-    /// turns the velocity change and moves the position by `psi r` [Groves, eq. 14.66], and in
+    /// turns the velocity change and moves the position by `psi r` [Groves, §14.2.4], and in
     /// a turn `r` correlates with `u` (an apparent latency of `psi / omega`: a start 90 deg off
     /// gave 0.9 s at 5 sigma); it is fitted per window with the offsets.
     fn add(&mut self, t: T, dt: T, u: &Vector3<T>, y: &Vector3<T>, var: &Vector3<T>) {
