@@ -909,6 +909,11 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
     }
     let (code, log) = run_firmware(d, &["missing.bin", "out.csv", "45", "7.5", "150", "10"]);
     assert_eq!(code, 4, "missing file: {log}");
+    // The path as typed, not the bytes of its semihosting string (`b"missing.bin\x00"`).
+    assert!(
+        log.contains("cannot open the recording missing.bin\n"),
+        "missing file: expected its name as typed:\n{log}"
+    );
     let (code, log) = run_firmware(d, &["truncated.bin", "out.csv", "95", "7.5", "150", "10"]);
     assert_eq!(code, 3, "latitude 95 must be refused: {log}");
     // A window shorter than the method's minimum, refused naming it (as `nav replay` does).

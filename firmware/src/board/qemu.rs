@@ -84,16 +84,13 @@ pub fn init(
     args.run.calibration = read_calibration(&args);
     let run = args.run;
     let file = SemihostingFile::open(args.imu_cstr()).unwrap_or_else(|_| {
-        defmt::error!(
-            "cannot open the recording {=[u8]:a}",
-            args.imu_path.as_slice()
-        );
+        defmt::error!("cannot open the recording {=str}", shown(&args.imu_path));
         exit(ExitCode::Recording)
     });
     let source = Replay::new(Buffered::new(file)).unwrap_or_else(|e| {
         defmt::error!(
-            "recording {=[u8]:a}: {}",
-            args.imu_path.as_slice(),
+            "recording {=str}: {}",
+            shown(&args.imu_path),
             defmt::Display2Format(&e)
         );
         exit(ExitCode::Recording)
@@ -106,8 +103,8 @@ pub fn init(
     );
     if let Err(e) = hal_adapters::sim::check_source_rate(header.rate_hz) {
         defmt::error!(
-            "recording {=[u8]:a}: {}",
-            args.imu_path.as_slice(),
+            "recording {=str}: {}",
+            shown(&args.imu_path),
             defmt::Display2Format(&e)
         );
         exit(ExitCode::Recording)
@@ -127,8 +124,8 @@ pub fn init(
     }
     let out = SemihostingFile::create(args.out_cstr()).unwrap_or_else(|_| {
         defmt::error!(
-            "cannot create the solution log {=[u8]:a}",
-            args.out_path.as_slice()
+            "cannot create the solution log {=str}",
+            shown(&args.out_path)
         );
         exit(ExitCode::Output)
     });
@@ -152,8 +149,8 @@ pub fn init(
     let stream = args.stream_cstr().map(|path| {
         let file = SemihostingFile::create(path).unwrap_or_else(|_| {
             defmt::error!(
-                "cannot create the stream {=[u8]:a}",
-                args.stream_path.as_deref().unwrap_or_default()
+                "cannot create the stream {=str}",
+                shown(args.stream_path.as_deref().unwrap_or_default())
             );
             exit(ExitCode::Output)
         });
@@ -162,8 +159,8 @@ pub fn init(
     let config_in = ConfigInput(args.config_frame_cstr().map(|path| {
         SemihostingFile::open(path).unwrap_or_else(|_| {
             defmt::error!(
-                "cannot open the configuration frame {=[u8]:a}",
-                args.config_frame_path.as_deref().unwrap_or_default()
+                "cannot open the configuration frame {=str}",
+                shown(args.config_frame_path.as_deref().unwrap_or_default())
             );
             exit(ExitCode::Config)
         })
@@ -224,15 +221,21 @@ fn refuse_overwriting_data(path: &core::ffi::CStr, name: &str) {
         _ => return,
     };
     defmt::error!(
-        "bad arguments ({=str} {=[u8]:a} holds {=str}: refusing to overwrite it)",
+        "bad arguments ({=str} {=str} holds {=str}: refusing to overwrite it)",
         name,
-        path.to_bytes(),
+        shown(path.to_bytes()),
         kind
     );
     exit(ExitCode::Config)
 }
 
 /// Logs a refused run configuration and exits with [`ExitCode::Config`].
+/// A path of the command line as the user typed it: without the terminating NUL its
+/// semihosting call needs (a path that is not UTF-8 is named so).
+fn shown(path: &[u8]) -> &str {
+    core::str::from_utf8(path.strip_suffix(&[0]).unwrap_or(path)).unwrap_or("(a path not in UTF-8)")
+}
+
 fn bad_config(e: &dyn core::fmt::Display) -> ! {
     defmt::error!("invalid configuration: {}", defmt::Display2Format(e));
     exit(ExitCode::Config)
@@ -246,8 +249,8 @@ fn read_calibration(args: &Args) -> ImuCalibration {
     };
     let fail = |what: &dyn core::fmt::Display| -> ! {
         defmt::error!(
-            "calibration {=[u8]:a}: {}",
-            args.cal_path.as_deref().unwrap_or_default(),
+            "calibration {=str}: {}",
+            shown(args.cal_path.as_deref().unwrap_or_default()),
             defmt::Display2Format(what)
         );
         exit(ExitCode::Config)
