@@ -939,8 +939,8 @@ impl<T: Scalar> ErrorFilter<T> {
                     // As the fix's tag gives it, whatever the retiming.
                     z_m: m.z + retimed,
                     r_m2: fix.sigma_ned_m.component_mul(&fix.sigma_ned_m),
-                    v_eb_n: snap.state.v_eb_n - snap.a_eb_n * lag_s,
                     accel_var,
+                    v_eb_n: snap.state.v_eb_n - snap.a_eb_n * lag_s,
                     dt_s: since_last_s,
                     corrections,
                 };
@@ -1270,6 +1270,13 @@ impl<T: Scalar> ErrorFilter<T> {
                 m.r += a.component_mul(a) * (late_sigma_s * late_sigma_s);
                 m
             });
+        if let Some(m) = &m {
+            // As the fix's tag gives it, whatever the retiming; before its update (whose
+            // correction the test would undo).
+            let z = m.z + snap.a_eb_n * late_s;
+            let r = fix.sigma_ned_m_s.component_mul(&fix.sigma_ned_m_s);
+            self.latency.velocity(&z, &r);
+        }
         let out = match m {
             Some(m) => self.update(&m),
             None => (AidResult::Invalid, None),
