@@ -3199,10 +3199,7 @@ fn fixes_refused_far_beyond_the_gates_rate_are_warned_of() {
     // most refused; the warning names the time tags among the causes.
     let late = shifted_gnss(d, 0.2);
     let text = run_ok(&mut replay_gnss(&imu, &late, &out, &GIVEN));
-    assert!(
-        text.contains("time tags (a receiver's output latency"),
-        "{text}"
-    );
+    assert!(text.contains("time tags (a receiver's"), "{text}");
 }
 
 /// A 900 s flight (take-off, climb, cruise straight at 250 m/s) with a perfect IMU and 2 Hz

@@ -940,6 +940,16 @@ impl<T: Scalar> ErrorFilter<T> {
                     z_m: m.z + retimed,
                     r_m2: fix.sigma_ned_m.component_mul(&fix.sigma_ned_m),
                     accel_var,
+                    correlated: self
+                        .config
+                        .gnss_correlated_error
+                        .filter(|g| g.correlation_time_s > T::zero())
+                        .map(|g| {
+                            (
+                                g.sigma_ned_m.component_mul(&g.sigma_ned_m),
+                                g.correlation_time_s,
+                            )
+                        }),
                     v_eb_n: snap.state.v_eb_n - snap.a_eb_n * lag_s,
                     dt_s: since_last_s,
                     corrections,
@@ -1030,7 +1040,9 @@ impl<T: Scalar> ErrorFilter<T> {
                 Some(c) if c.continued_by(&m.z, &m.r, &drift, nis, gate) => {
                     c.followed_by(m.z, m.r, dt)
                 }
-                _ => RefusedCluster::start(m.z, m.r, nis, gate, false),
+                previous => {
+                    RefusedCluster::start(m.z, m.r, nis, gate, false).after(previous.as_ref(), dt)
+                }
             };
             if !self.degraded_by_refusals() || tracked.previous.is_none() {
                 self.refused_unconfirmed = Some(tracked);
@@ -1059,7 +1071,8 @@ impl<T: Scalar> ErrorFilter<T> {
                     gate,
                     self.window.len() == integrity::WINDOW,
                 )
-                .replacing(previous.as_ref()),
+                .replacing(previous.as_ref())
+                .after(previous.as_ref(), dt),
             };
             let cluster = self.judged(cluster);
             self.cluster = Some(cluster);

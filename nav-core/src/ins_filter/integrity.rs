@@ -669,6 +669,10 @@ pub struct RefusedCluster<T: Scalar> {
     /// position variance allows, as last [`Self::judged`] (latched): the filter, not the
     /// fixes, ran away (module docs).
     pub ran_away: bool,
+    /// For a lone refused fix, the refused fix just before it that it did not continue
+    /// (innovation [m], noise variance [m^2], the interval [s]): their offsets' rate is a
+    /// doubt on the velocity ([`Self::velocity_doubt`]).
+    pub refused_before: Option<(Vector3<T>, Vector3<T>, T)>,
 }
 
 impl<T: Scalar> RefusedCluster<T> {
@@ -692,6 +696,7 @@ impl<T: Scalar> RefusedCluster<T> {
             gate_3dof,
             carried_doubt: Matrix3::zeros(),
             ran_away: false,
+            refused_before: None,
         }
     }
 
@@ -701,6 +706,15 @@ impl<T: Scalar> RefusedCluster<T> {
             carried_doubt: previous
                 .and_then(Self::doubt)
                 .unwrap_or_else(Matrix3::zeros),
+            ..self
+        }
+    }
+
+    /// This lone refused fix, `dt_s` [s] after the last member of `previous`, a refused
+    /// cluster it did not continue ([`Self::refused_before`]).
+    pub fn after(self, previous: Option<&Self>, dt_s: T) -> Self {
+        Self {
+            refused_before: previous.map(|p| (p.z_ned_m, p.r_ned_m2, dt_s)),
             ..self
         }
     }
@@ -729,6 +743,7 @@ impl<T: Scalar> RefusedCluster<T> {
         Self {
             z_ned_m: self.z_ned_m - dr_ned_m,
             previous: self.previous.map(|(z, r, dt)| (z - dr_ned_m, r, dt)),
+            refused_before: self.refused_before.map(|(z, r, dt)| (z - dr_ned_m, r, dt)),
             first: (self.first.0 - dr_ned_m, self.first.1),
             sum_z_ned_m: self.sum_z_ned_m - dr_ned_m * T::c(f64::from(self.members)),
             ..*self
@@ -944,7 +959,8 @@ impl<T: Scalar> RefusedCluster<T> {
 
     /// The doubt on the solution's velocity while this cluster is refused [m^2/s^2], where
     /// its offset is a doubt on the position ([`Self::doubt`]: not a gross jump that stayed
-    /// put); `None` with one member, and while the members of a cluster that has not run
+    /// put); with one member, only the rate since the refused fix before it
+    /// ([`Self::refused_before`]); `None` while the members of a cluster that has not run
     /// away span less than [`MIN_DIFFERENCE_INTERVAL_S`] (the fixes' noise over a tenth of a
     /// second is tens of metres per second). The filter's velocity error is what moves a true
     /// offset (a given start's heading 90 deg off: the rows' velocity 15 m/s off under a
@@ -965,7 +981,13 @@ impl<T: Scalar> RefusedCluster<T> {
     /// differ at 28 m/s of noise, and a chance pair of refusals at 10 Hz reported 36 m/s of
     /// velocity doubt and 60 deg of heading doubt on a solution 1 cm/s off.
     fn doubted_rates(&self) -> Option<(Vector3<T>, Option<Vector3<T>>)> {
-        if (self.gross && !self.ran_away) || self.age_s <= T::zero() {
+        if self.gross && !self.ran_away {
+            return None;
+        }
+        if self.is_lone() {
+            return self.rate_since_refused_before().map(|u| (u, None));
+        }
+        if self.age_s <= T::zero() {
             return None;
         }
         if !self.ran_away && self.age_s < T::c(MIN_DIFFERENCE_INTERVAL_S) {
@@ -976,6 +998,22 @@ impl<T: Scalar> RefusedCluster<T> {
             .filter(|&(_, _, dt)| self.ran_away && dt > T::zero())
             .map(|(z, _, dt)| (self.z_ned_m - z) / dt);
         Some((self.drift_rate(), u))
+    }
+
+    /// For a lone refused fix after another it did not continue ([`Self::refused_before`]),
+    /// the rate at which their offsets moved [m/s], only its part beyond the gate of their
+    /// two noises ([`beyond_gate`], as [`Self::weight`]): a solution whose velocity is off
+    /// sees each fix refused on its own, the offset moving faster than the fixes' noise
+    /// explains (a given start at rest beside a car at 11 m/s: each RTK fix 12 m from the
+    /// one before, a new lone refusal each second, the velocity's 1-sigma 1 cm/s for 6 min).
+    fn rate_since_refused_before(&self) -> Option<Vector3<T>> {
+        let (z, r, dt) = self.refused_before?;
+        if !(dt > T::zero()) {
+            return None;
+        }
+        let d = self.z_ned_m - z;
+        let w = beyond_gate(normalised_square(&d, &(self.r_ned_m2 + r)), self.gate_3dof);
+        (w > T::zero()).then(|| d * (w / dt))
     }
 
     /// The doubt on the solution's heading while this cluster is refused [rad^2], at the
@@ -1038,6 +1076,28 @@ mod tests {
         let nis = (z.transpose() * s.try_inverse().unwrap() * z)[(0, 0)];
         assert!((w.norm_squared() - nis).abs() < 1e-12);
         assert!(whiten(&(-s), &z).is_none());
+    }
+
+    /// Each fix refused on its own, its offset 12 m from the refused one a second before (a
+    /// given start at rest beside a car at 12 m/s, RTK fixes): the velocity is doubtful by
+    /// that rate, `u u^T / 4`. Two 2 m fixes a tenth of a second apart whose offsets differ
+    /// within their noise leave no doubt (28 m/s of noise in their rate).
+    #[test]
+    fn a_lone_refusal_after_another_doubts_the_velocity_by_their_rate() {
+        let gate = crate::ins_filter::CHI2_3DOF_999;
+        let rtk = Vector3::repeat(1e-4);
+        let first = RefusedCluster::start(Vector3::new(200.0, 100.0, 0.0), rtk, 1e8, gate, false);
+        assert!(first.velocity_doubt().is_none());
+        let next = RefusedCluster::start(Vector3::new(200.0, 112.0, 0.0), rtk, 1e8, gate, false)
+            .after(Some(&first), 1.0);
+        let v = next.velocity_doubt().expect("a rate far beyond its noise");
+        assert!((v[(1, 1)].sqrt() - 6.0).abs() < 0.05, "{v}");
+        assert!(v[(0, 0)].abs() < 1e-6, "{v}");
+        let code = Vector3::repeat(4.0);
+        let a = RefusedCluster::start(Vector3::new(10.0, 0.0, 0.0), code, 20.0, gate, false);
+        let b = RefusedCluster::start(Vector3::new(13.0, 0.0, 0.0), code, 20.0, gate, false)
+            .after(Some(&a), 0.1);
+        assert!(b.velocity_doubt().is_none(), "{:?}", b.velocity_doubt());
     }
 
     /// A correction of the solution moves the members' innovations with it: a member taken

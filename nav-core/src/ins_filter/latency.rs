@@ -171,6 +171,9 @@ pub struct LatencyFix<T: Scalar> {
     /// Variance of the solution's acceleration error [m^2/s^4] (tilt and accelerometer
     /// bias): at a window's first fix, the prior of its acceleration nuisance.
     pub accel_var: T,
+    /// The receiver's declared time-correlated error ([`super::GnssCorrelatedError`]), if
+    /// any: its steady-state variances, NED [m^2], and correlation time [s].
+    pub correlated: Option<(Vector3<T>, T)>,
     /// The solution's velocity at the fix's epoch, NED [m/s].
     pub v_eb_n: Vector3<T>,
     /// Time since the previous position fix [s].
@@ -308,6 +311,9 @@ struct Window<T: Scalar> {
     /// The 1-sigma of the solution's acceleration error at its first fix [m/s^2]: the
     /// acceleration nuisance's column is scaled by it, its prior then of unit variance.
     accel_sigma: T,
+    /// The fixes' declared time-correlated error (variances [m^2], correlation time [s]):
+    /// what it moves by after the first fix is noise of the later ones.
+    correlated: Option<(Vector3<T>, T)>,
     /// Corrections since its first fix, times from it.
     undone: Corrections<T>,
     /// The velocity change's integral since its first fix [m] and the last fix's change
@@ -467,7 +473,14 @@ impl<T: Scalar> LatencyMonitor<T> {
                 let (dp, dv) = w.undone.at(t);
                 let u = f.v_eb_n + dv - w.v0;
                 let y = f.z_m - w.z0 + dp;
-                w.add(t, f.dt_s, &u, &y, &f.r_m2);
+                // A Gauss-Markov error moves from the first fix's value by a variance of
+                // `2 s^2 (1 - exp(-t / tau))` [Groves, §14.3.2]: the later fixes' noise (a
+                // code receiver's multipath, shared by the window's fixes, bends their offsets
+                // beyond the nuisance's quadratic).
+                let var = w.correlated.map_or(f.r_m2, |(s2, tau)| {
+                    f.r_m2 + s2 * (T::c(2.0) * (T::one() - (-t / tau).exp()))
+                });
+                w.add(t, f.dt_s, &u, &y, &var);
                 if t >= T::c(MAX_WINDOW_S) || (t >= T::c(WINDOW_S) && w.fixes >= WINDOW_FIXES) {
                     self.close();
                 }
@@ -478,6 +491,7 @@ impl<T: Scalar> LatencyMonitor<T> {
             age_s: T::zero(),
             v0: f.v_eb_n,
             z0: f.z_m,
+            correlated: f.correlated,
             accel_sigma: if f.accel_var > T::zero() && f.accel_var.finite() {
                 f.accel_var.sqrt()
             } else {
@@ -768,6 +782,7 @@ mod tests {
                             z_m: z,
                             r_m2: Vector3::repeat(self.sigma * self.sigma / 3.0),
                             accel_var: self.accel_sigma * self.accel_sigma,
+                            correlated: None,
                             v_eb_n: v_ins + v_err,
                             dt_s: 1.0 / self.rate,
                             corrections,
@@ -833,6 +848,7 @@ mod tests {
                     z_m: v * 0.2,
                     r_m2: Vector3::repeat(1e-4),
                     accel_var: 0.0,
+                    correlated: None,
                     v_eb_n: v,
                     dt_s: 1.0,
                     corrections: Corrections::default(),
