@@ -462,6 +462,7 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
                 }
             );
         }
+        crate::replay::check_refused_share(report.samples, report.rejected, "of the run")?;
         writeln!(
             w,
             "{}",
