@@ -11,7 +11,6 @@ use std::fmt;
 use std::io;
 use std::path::{Path, PathBuf};
 
-use crate::imu_csv::TEMPERATURE_RANGE_C;
 use crate::truth_csv::MAX_YAW_DEG;
 use nav_core::number::Shown;
 
@@ -275,7 +274,7 @@ pub enum TextErrorKind {
         /// The latitude found [deg].
         lat_deg: f64,
     },
-    /// A sensor temperature is outside [`TEMPERATURE_RANGE_C`] (or infinite).
+    /// A sensor temperature is outside [`crate::imu_csv::TEMPERATURE_RANGE_C`] (or infinite).
     BadTemperature {
         /// Column name.
         column: &'static str,
@@ -504,14 +503,11 @@ impl fmt::Display for TextErrorKind {
                     "column {column}: {what}{lat_deg} deg is outside [-90, 90]"
                 )
             }
-            Self::BadTemperature { column, temp_c } => {
-                let (low, high) = TEMPERATURE_RANGE_C;
-                write!(
-                    f,
-                    "column {column}: {temp_c} deg C is outside [{low}, {high}], not a sensor's \
-                     temperature (leave the field empty or write NaN when it is unknown)"
-                )
-            }
+            Self::BadTemperature { column, temp_c } => write!(
+                f,
+                "column {column}: {} (leave the field empty or write NaN when it is unknown)",
+                crate::imu_csv::BadTemperature(*temp_c)
+            ),
             Self::BadYaw { column, yaw_deg } => write!(
                 f,
                 "column {column}: yaw {yaw_deg} deg is outside [-{MAX_YAW_DEG}, {MAX_YAW_DEG}] \

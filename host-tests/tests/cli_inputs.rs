@@ -459,6 +459,53 @@ fn an_imu_csv_temperature_no_sensor_has_is_refused() {
     }
 }
 
+/// A binary record's temperature was not range-checked: 1e30 deg C replayed and converted
+/// silently where the CSV row's 500 deg C is refused. Refused by the same rule, with the
+/// record's byte offset; NaN is "unknown" in both.
+#[test]
+fn a_binary_temperature_no_sensor_has_is_refused_as_in_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (bin, odd, out) = (path("imu.bin"), path("odd.bin"), path("out.csv"));
+    common::generated_recording(std::path::Path::new(&bin), "11");
+    let clean = host_tests::recording_io::read(std::path::Path::new(&bin)).unwrap();
+    for temp in [1e30_f32, f32::NEG_INFINITY, 500.0, -101.0] {
+        let mut rec = clean.clone();
+        rec.records[4].temperature_c = temp;
+        host_tests::recording_io::write(std::path::Path::new(&odd), &rec).unwrap();
+        for args in [
+            vec!["convert", "--in", &odd, "--out", &out],
+            common::replay_args(&odd, &out, &[]),
+        ] {
+            let o = nav(&args);
+            let text = output_text(&o);
+            assert_eq!(o.status.code(), Some(1), "{text}");
+            assert!(
+                text.contains("byte offset 208 (record 4): temperature ")
+                    && text.contains(" deg C is outside [-100, 200], not a sensor's temperature"),
+                "{temp}: {text}"
+            );
+            assert!(!std::path::Path::new(&out).exists());
+        }
+    }
+    let o = nav(&common::replay_args(&odd, &out, &[]));
+    assert!(output_text(&o).contains("temperature -101 deg C"));
+    // Compact at any magnitude (it printed 31 digits).
+    let mut rec = clean.clone();
+    rec.records[4].temperature_c = 1e30;
+    host_tests::recording_io::write(std::path::Path::new(&odd), &rec).unwrap();
+    let o = nav(&common::replay_args(&odd, &out, &[]));
+    assert!(output_text(&o).contains("temperature 1e30 deg C"));
+    let mut rec = clean;
+    for r in &mut rec.records {
+        r.temperature_c = f32::NAN;
+    }
+    rec.records[5].temperature_c = 200.0;
+    host_tests::recording_io::write(std::path::Path::new(&odd), &rec).unwrap();
+    ok(&["convert", "--in", &odd, "--out", &out]);
+    ok(&common::replay_args(&odd, &out, &[]));
+}
+
 /// `nav sim --gnss-jump 1,1e9,...` (a jump of 1e9 s in a 5 s run) and a jump given twice (its
 /// offset added twice) were simulated silently. Refused, nothing written.
 #[test]
