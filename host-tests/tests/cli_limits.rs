@@ -889,6 +889,67 @@ fn refusals_name_the_option_the_key_and_the_cause() {
     );
 }
 
+/// `--base-translation` with the static alignment was taken silently (its log byte for byte
+/// the one without it: the static method takes a still base only). Refused with the reason;
+/// taken with a method that uses it.
+#[test]
+fn base_translation_with_the_static_alignment_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (imu, out) = (path("imu.bin"), path("out.csv"));
+    generated_recording(std::path::Path::new(&imu), "12");
+    refused(
+        &replay_args(&imu, &out, &["--base-translation", "3"]),
+        &["--base-translation is the base motion of the inertial, fine and sway alignments"],
+    );
+    refused(
+        &replay_args(
+            &imu,
+            &out,
+            &["--align-method", "static", "--base-translation", "0.5"],
+        ),
+        &["the static one takes a still base only"],
+    );
+    let o = nav(&replay_args(
+        &imu,
+        &out,
+        &["--align-method", "inertial", "--base-translation", "0"],
+    ));
+    // Taken (this still base's 10 s are too short for the inertial method's heading).
+    assert!(
+        !output_text(&o).contains("--base-translation"),
+        "{}",
+        output_text(&o)
+    );
+}
+
+/// An empty `--calibration` file (or one of comments) was taken as identity without a word,
+/// where `nav config` refuses an empty file: a truncated or wrong file passed unnoticed.
+/// Refused with the reason; a file with a key runs.
+#[test]
+fn an_empty_calibration_file_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (imu, out) = (path("imu.bin"), path("out.csv"));
+    generated_recording(std::path::Path::new(&imu), "12");
+    let cal = path("empty.cal");
+    for text in ["", "\u{feff}\r\n", "# gyro_bias_rad_s = 1e-6 0 0\n\n  \n"] {
+        std::fs::write(&cal, text).unwrap();
+        refused(
+            &replay_args(&imu, &out, &["--calibration", &cal]),
+            &[
+                "--calibration ",
+                "empty.cal: no 'key = values' line (an empty or truncated file, or the wrong \
+                 one): give the keys (gyro_bias_rad_s, gyro_scale,",
+            ],
+        );
+        assert!(!std::path::Path::new(&out).exists());
+    }
+    std::fs::write(&cal, "\u{feff}gyro_bias_rad_s = 0 0 0 # none\n").unwrap();
+    let o = nav(&replay_args(&imu, &out, &["--calibration", &cal]));
+    assert!(o.status.success(), "{}", output_text(&o));
+}
+
 /// Options that named the wrong thing or were taken silently: `sim --set speed=NaN` named a
 /// parameter `speed` the scenario does not have (the value was checked before the key); a
 /// `--set` key given twice kept the last (`nav config` refuses one); `bench filter --dir FILE`

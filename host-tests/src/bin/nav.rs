@@ -85,7 +85,7 @@ enum Command {
     /// Simulate a scenario: exact increments through a sensor grade's error model, written as
     /// DIR/imu.bin and DIR/imu.csv (recordings), DIR/truth.csv and DIR/scenario.txt.
     #[command(allow_negative_numbers = true)]
-    Sim(SimArgs),
+    Sim(Box<SimArgs>),
     /// Alignment benchmarks with their physical floors: the level filter on a rocking ship [Ship alignment]
     /// (sea states 3-6), fine alignment on the AUV bench [Vavilova et al.], heading repeatability on
     /// the real laser-gyro recording, and every method on a seeded family of still and swaying
@@ -322,7 +322,7 @@ enum Command {
     },
     /// Align and navigate over a recording (any format), writing the solution log as CSV.
     #[command(allow_negative_numbers = true)]
-    Replay(ReplayArgs),
+    Replay(Box<ReplayArgs>),
     /// Decode the board's binary output stream (docs/protocol.md) back to the solution CSV;
     /// report skipped bytes, CRC failures and frames by type on stderr.
     Decode(host_tests::decode::DecodeArgs),
@@ -557,9 +557,11 @@ struct ReplayArgs {
           default_value_t = nav_core::alignment::machine::DEFAULT_LEVER_ARM_SIGMA_M)]
     lever_arm_sigma: f64,
     /// The base's horizontal translation (waves' surge and sway of its centre), stationary
-    /// 1-sigma per axis [m]; 0 for a base that only turns (a motion table).
-    #[arg(long, value_name = "M", default_value_t = BaseMotion::<f64>::default().translation_sigma_m, conflicts_with_all = ["init_pos", "start_in_motion"])]
-    base_translation: f64,
+    /// 1-sigma per axis [m]; 0 for a base that only turns (a motion table). The inertial,
+    /// fine and sway alignments' (the static one refuses a base that moves).
+    /// (default 0.5).
+    #[arg(long, value_name = "M", conflicts_with_all = ["init_pos", "start_in_motion"])]
+    base_translation: Option<f64>,
 }
 
 impl ReplayArgs {
@@ -570,9 +572,24 @@ impl ReplayArgs {
             Some(path) => {
                 host_tests::atomic::refuse_same_file(&[path], &self.out)?;
                 let text = host_tests::text_error::read_text(path)?;
-                ImuCalibration::parse(&text).map_err(|e| {
+                let calibration = ImuCalibration::parse(&text).map_err(|e| {
                     anyhow::anyhow!("--calibration {}: {}", path.display(), e.in_text(&text))
-                })?
+                })?;
+                // Missing keys stay identity, but a file with none is an empty or truncated
+                // one, or the wrong one (as `nav config` refuses one).
+                let has_key = text
+                    .trim_start_matches('\u{feff}')
+                    .lines()
+                    .any(|l| !l.split('#').next().unwrap_or("").trim().is_empty());
+                anyhow::ensure!(
+                    has_key,
+                    "--calibration {}: no 'key = values' line (an empty or truncated file, or \
+                     the wrong one): give the keys ({}), or leave --calibration out for \
+                     identity",
+                    path.display(),
+                    nav_core::calibration::KEYS.join(", ")
+                );
+                calibration
             }
         };
         let noise = self
@@ -590,7 +607,7 @@ impl ReplayArgs {
             },
             log_every: self.log_every,
             base: BaseMotion {
-                translation_sigma_m: self.base_translation,
+                translation_sigma_m: self.base_translation(),
                 ..BaseMotion::default()
             },
             calibration,
@@ -608,10 +625,23 @@ impl ReplayArgs {
             )
         };
         self.check_geometry(&run)?;
+        // The static alignment takes a still base only (a moving one is refused): the base's
+        // translation was ignored without a word.
+        anyhow::ensure!(
+            self.base_translation.is_none() || self.align_method != AlignMethod::Static,
+            "--base-translation is the base motion of the inertial, fine and sway alignments \
+             (--align-method); the static one takes a still base only"
+        );
         Ok(ReplayOptions {
             run,
             device: self.device,
         })
+    }
+
+    /// `--base-translation`, or its default [m].
+    fn base_translation(&self) -> f64 {
+        self.base_translation
+            .unwrap_or(BaseMotion::<f64>::default().translation_sigma_m)
     }
 
     /// nav-core's check of the lever arm and the base's motion, its refusal named by the
@@ -630,7 +660,7 @@ impl ReplayArgs {
         };
         check_geometry(&run.lever_arm, &BaseMotion::default()).context(lever)?;
         check_geometry(&LeverArm::default(), &run.base)
-            .with_context(|| format!("--base-translation {}", Number(self.base_translation)))?;
+            .with_context(|| format!("--base-translation {}", Number(self.base_translation())))?;
         Ok(())
     }
 }
@@ -2121,7 +2151,7 @@ fn run(cli: Cli) -> Result<()> {
             print!("{text}");
             Ok(())
         }
-        Command::Sim(args) => sim(args),
+        Command::Sim(args) => sim(*args),
         Command::Oscillator {
             scenario,
             seconds,
@@ -2389,7 +2419,7 @@ fn run(cli: Cli) -> Result<()> {
             print!("{text}");
             Ok(())
         }
-        Command::Replay(args) => replay(args),
+        Command::Replay(args) => replay(*args),
         Command::Decode(args) => host_tests::decode::run(&args),
         Command::Config(args) => host_tests::config_cmd::run(&args),
         Command::KfGins {
