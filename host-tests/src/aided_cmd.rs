@@ -463,6 +463,7 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
             );
         }
         crate::replay::check_refused_share(report.samples, report.rejected, "of the run")?;
+        check_some_fix_used(&report.counters)?;
         writeln!(
             w,
             "{}",
@@ -606,6 +607,31 @@ pub fn realignment_line(r: &Realignments) -> Option<String> {
             )
         }
     })
+}
+
+/// Refuses an aided run whose filter refused every GNSS fix it was given and used none
+/// (`c` its counters): its solution is free-inertial from a start every fix contradicts (a
+/// KF-GINS `initpos` in radians, a `starttime` after the `initpos` epoch, fixes on a clock
+/// 30 s off), not the aided one asked for, and its file (a `.nav` has no status column) would
+/// not say so. The same for a given start, a start in motion, `nav kf-gins` and the
+/// navigator's aided phase. Fixes never given to it (all before the aided phase) leave the
+/// warning of [`position_warning`].
+pub fn check_some_fix_used(c: &nav_core::ins_filter::FilterCounters) -> Result<()> {
+    let (p, v) = (&c.position, &c.velocity);
+    if p.accepted + v.accepted > 0 || p.rejected + v.rejected == 0 {
+        return Ok(());
+    }
+    bail!(
+        "the filter refused every GNSS fix it was given (position: {} refused, {} invalid; \
+         velocity: {} refused, {} invalid) and used none: the solution would be free-inertial \
+         from a start the fixes contradict; check the start (--init-pos in degrees, KF-GINS's \
+         initpos and its starttime epoch, or the alignment's site) and its 1-sigma, the \
+         antenna lever arm, and the fixes' 1-sigma and time tags",
+        p.rejected,
+        p.invalid,
+        v.rejected,
+        v.invalid
+    )
 }
 
 /// Warnings for a run whose GNSS aiding did not work as the user meant: IMU time not

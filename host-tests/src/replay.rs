@@ -359,6 +359,9 @@ pub fn replay_aided<T: Scalar>(
             file.report.span_us,
         )
         .map_err(|e| file.report.lost.explain(e))?;
+        if let Some(a) = &file.report.aided {
+            crate::aided_cmd::check_some_fix_used(&a.counters)?;
+        }
         Ok::<_, ReplayFailure>(file)
     })?;
     Ok(AidedFileReport {

@@ -169,6 +169,57 @@ fn kf_gins_names_its_files_and_warns_of_two_folders() {
     assert!(!text.contains("warning"), "{text}");
 }
 
+/// `nav kf-gins` with `initpos` in radians: every fix refused, the solution free-inertial from
+/// a start 45 deg off, exit 0 and a `.nav` file (no status column) with a warning on stdout.
+/// Refused now with the counts and what to check, nothing written; the right start runs.
+#[test]
+fn kf_gins_that_refused_every_fix_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = host_tests::filter_bench::generate(
+        &dir.path().join("set"),
+        &host_tests::filter_bench::FilterBenchOptions {
+            seconds: 20.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let yaml = std::fs::read_to_string(&data.config).unwrap();
+    let line = yaml.lines().find(|l| l.starts_with("initpos:")).unwrap();
+    let values: Vec<f64> = line
+        .trim_start_matches("initpos: [")
+        .trim_end_matches(']')
+        .split(',')
+        .map(|v| v.trim().parse().unwrap())
+        .collect();
+    let radians = format!(
+        "initpos: [{}, {}, {}]",
+        values[0].to_radians(),
+        values[1].to_radians(),
+        values[2]
+    );
+    let config = data.config.with_file_name("radians.yaml");
+    std::fs::write(&config, yaml.replace(line, &radians)).unwrap();
+    let kf_gins = |config: &std::path::Path| {
+        nav(&[
+            "kf-gins",
+            config.to_str().unwrap(),
+            "--out",
+            data.out.to_str().unwrap(),
+        ])
+    };
+    let o = kf_gins(&config);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("the filter refused every GNSS fix it was given (position: ")
+            && text.contains("and used none: the solution would be free-inertial"),
+        "{text}"
+    );
+    assert!(!data.out.exists(), "{text}");
+    let o = kf_gins(&data.config);
+    assert!(o.status.success(), "{}", output_text(&o));
+}
+
 /// A repeated time tag and the second of a swapped pair were counted as "bad interval", the
 /// README's "time out of order" staying 0 (the rest of a step back was counted there).
 #[test]
