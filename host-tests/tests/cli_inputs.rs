@@ -220,6 +220,77 @@ fn kf_gins_that_refused_every_fix_fails() {
     assert!(o.status.success(), "{}", output_text(&o));
 }
 
+/// A start in motion that never started said "2 m positions without a velocity, differenced
+/// over a second: 11 m/s" whatever the fixes; the oscillator's refusals named parameters no
+/// option sets (`drive_time_constant_s`, `readout_noise_m`) or no cause ("0 epochs"). Each
+/// describes the user's fixes and options now.
+#[test]
+fn messages_describe_the_users_fixes_and_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let sim = path("sim");
+    ok(&[
+        "sim",
+        "static",
+        "--seconds",
+        "20",
+        "--gnss-rate",
+        "10",
+        "--gnss-sigma",
+        "0.1,0.1,0.1",
+        "--grade",
+        "mems-tactical",
+        "--out",
+        &sim,
+    ]);
+    let (imu, gnss, out) = (
+        format!("{sim}/imu.bin"),
+        format!("{sim}/gnss.csv"),
+        path("x.csv"),
+    );
+    let o = nav(&[
+        "replay",
+        "--imu",
+        &imu,
+        "--gnss",
+        &gnss,
+        "--imu-noise",
+        "mems-tactical",
+        "--start-in-motion",
+        "--out",
+        &out,
+    ]);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains(
+            "4 times the noise of its velocity (0.1000 m positions without a velocity, \
+             differenced over 0.1000 s: 5.657 m/s)"
+        ),
+        "{text}"
+    );
+    let refused = |args: &[&str], expected: &str| {
+        let o = nav(args);
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(1), "{text}");
+        assert!(text.contains(expected), "{args:?}: {text}");
+    };
+    let osc = ["oscillator", "static", "--seconds", "2"];
+    refused(
+        &[&osc[..], &["--f0-hz", "0.5"]].concat(),
+        "--f0-hz must be at least 1 Hz (the amplitude drive averages over 1 s, at least one \
+         period), not 0.5",
+    );
+    refused(
+        &[&osc[..], &["--noise-m", "-1"]].concat(),
+        "--noise-m must be a finite number >= 0, not -1",
+    );
+    refused(
+        &[&osc[..], &["--noise-m", "1e300"]].concat(),
+        "nothing to navigate on (readout noise 1e300 m against an oscillation of 2e-5 m",
+    );
+}
+
 /// A repeated time tag and the second of a swapped pair were counted as "bad interval", the
 /// README's "time out of order" staying 0 (the rest of a step back was counted there).
 #[test]
