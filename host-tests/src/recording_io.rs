@@ -782,7 +782,7 @@ fn check_header_rate(path: &Path, header: &Header) -> Result<()> {
         (median / nominal - 1.0).abs() <= RATE_TOLERANCE,
         "recording {}: the header's rate {} Hz contradicts the timestamps (median interval {median} s, {:.6} Hz over the first {} records)",
         path.display(),
-        header.rate_hz,
+        nav_core::number::Number(header.rate_hz),
         1.0 / median,
         n
     );

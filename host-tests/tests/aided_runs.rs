@@ -1565,19 +1565,19 @@ fn replay_refuses_an_impossible_start() {
     for (start, reason) in [
         (
             ["45,7.5,250", "0,0,0", "0,0,0", "0,0.1,1"],
-            "positive 1-sigmas",
+            "the position 1-sigma in \"0,0.1,1\" is 0: a zero claims",
         ),
         (
             ["45,7.5,250", "0,0,0", "0,0,0", "-1,1,1"],
-            "positive 1-sigmas",
+            "the position 1-sigma -1 m in \"-1,1,1\" must be above 0",
         ),
         (
             ["45,7.5,250", "0,0,0", "0,0,0", "1,0.1,1,1"],
-            "three or nine positive 1-sigmas",
+            "expected three or nine 1-sigmas",
         ),
         (
             ["45,7.5,250", "0,0,0", "0,0,0", "1,1,1,0.1,0.1,0.1,0.1,0,10"],
-            "three or nine positive 1-sigmas",
+            "the attitude 1-sigma in \"1,1,1,0.1,0.1,0.1,0.1,0,10\" is 0",
         ),
         (
             ["45,7.5,2e6", "0,0,0", "0,0,0", "1,0.1,1"],

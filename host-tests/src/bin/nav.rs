@@ -1435,30 +1435,48 @@ fn parse_sideslip_sigma(s: &str) -> Result<f64, String> {
 }
 
 fn parse_init_std(s: &str) -> Result<[[f64; 3]; 3], String> {
-    let bad = || {
-        format!(
-            "expected three or nine positive 1-sigmas (POS,VEL,ATT or N,E,D,VN,VE,VD,ROLL,PITCH,YAW), \
-             not {s:?}: a zero claims an exactly known state (every fix that disagrees would be \
-             refused)"
-        )
+    use nav_core::ins_filter::limits::{
+        MAX_ATTITUDE_SIGMA_RAD, MAX_POSITION_SIGMA_M, MAX_VELOCITY_SIGMA_M_S,
     };
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| {
-            x.trim()
-                .parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite() && *x > 0.0)
-        })
-        .collect::<Option<_>>()
-        .ok_or_else(bad)?;
-    match v[..] {
-        [p, v, a] => Ok([[p; 3], [v; 3], [a; 3]]),
-        [..] if v.len() == 9 => Ok(core::array::from_fn(|k| {
-            core::array::from_fn(|i| v[3 * k + i])
-        })),
-        _ => Err(bad()),
+    use nav_core::number::Number;
+    let values: Vec<&str> = s.split(',').map(str::trim).collect();
+    if !matches!(values.len(), 3 | 9) {
+        return Err(format!(
+            "expected three or nine 1-sigmas (POS,VEL,ATT or N,E,D,VN,VE,VD,ROLL,PITCH,YAW), \
+             not {s:?}"
+        ));
     }
+    // (what, unit, largest) of value `i` (three: one of each; nine: three of each).
+    let kinds = [
+        ("position", "m", MAX_POSITION_SIGMA_M),
+        ("velocity", "m/s", MAX_VELOCITY_SIGMA_M_S),
+        ("attitude", "deg", MAX_ATTITUDE_SIGMA_RAD.to_degrees()),
+    ];
+    let mut v = Vec::with_capacity(values.len());
+    for (i, text) in values.iter().enumerate() {
+        let (what, unit, max) = kinds[i * 3 / values.len()];
+        let x = text
+            .parse::<f64>()
+            .map_err(|_| format!("the {what} 1-sigma {text:?} in {s:?} is not a number"))?;
+        if x == 0.0 {
+            return Err(format!(
+                "the {what} 1-sigma in {s:?} is 0: a zero claims an exactly known state (every \
+                 fix that disagrees would be refused)"
+            ));
+        }
+        if !(x > 0.0 && x <= max) {
+            return Err(format!(
+                "the {what} 1-sigma {} {unit} in {s:?} must be above 0 and at most {} {unit}",
+                Number(x),
+                Number(max)
+            ));
+        }
+        v.push(x);
+    }
+    Ok(match v[..] {
+        [p, v, a] => [[p; 3], [v; 3], [a; 3]],
+        _ => core::array::from_fn(|k| core::array::from_fn(|i| v[3 * k + i])),
+    })
 }
 
 /// `nav sim`'s arguments.
@@ -2168,6 +2186,22 @@ fn run(cli: Cli) -> Result<()> {
             );
             opts.grade = grade;
             opts.compensate = !seed_method;
+            // Named by the options (the parameters' own names are no option's).
+            let number = nav_core::number::Number;
+            anyhow::ensure!(
+                noise_m.is_finite() && noise_m >= 0.0,
+                "--noise-m must be a finite number >= 0, not {}",
+                number(noise_m)
+            );
+            let min_f0_hz = 1.0 / opts.params.drive_time_constant_s;
+            anyhow::ensure!(
+                f0_hz.is_finite() && f0_hz >= min_f0_hz,
+                "--f0-hz must be at least {} Hz (the amplitude drive averages over {} s, at \
+                 least one period), not {}",
+                number(min_f0_hz),
+                number(opts.params.drive_time_constant_s),
+                number(f0_hz)
+            );
             opts.params.readout_noise_m = noise_m;
             opts.params.f0_hz = f0_hz;
             opts.params.sample_rate_hz = 50.0 * f0_hz;
