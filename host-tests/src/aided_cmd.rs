@@ -453,15 +453,18 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
                 match a.start {
                     AidedStart::Motion { min_speed_m_s, .. } => sparse_fixes(&fixes).unwrap_or_else(|| {
                         format!(
-                            "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold ({} m/s, --start-speed) and {} times the noise of its velocity (2 m positions without a velocity, differenced over a second: 11 m/s)",
+                            "no GNSS fix found the vehicle level (quasi-static) and then moving faster than the heading threshold ({} m/s, --start-speed) and {} times the noise of its velocity ({})",
                             nav_core::number::Number(min_speed_m_s),
-                            nav_core::number::Number(MIN_SPEED_SIGMAS)
+                            nav_core::number::Number(MIN_SPEED_SIGMAS),
+                            velocity_noise(&fixes)
                         )
                     }),
                     AidedStart::Given(_) => aided::no_usable_sample(&report),
                 }
             );
         }
+        crate::replay::check_refused_share(report.samples, report.rejected, "of the run")?;
+        check_some_fix_used(&report.counters)?;
         writeln!(
             w,
             "{}",
@@ -472,6 +475,46 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
         Ok((report, n_rows))
     })?;
     Ok(report)
+}
+
+/// The velocity noise of `fixes` as a start in motion sees it, for its refusal: the
+/// receiver's velocity 1-sigma (median of the horizontal ones), or, without velocities, the
+/// positions' horizontal 1-sigma differenced over their median interval (`sqrt(2) sigma /
+/// dt`), each with the speed [`MIN_SPEED_SIGMAS`] times it.
+fn velocity_noise(fixes: &[GnssFix]) -> String {
+    let median = |mut v: Vec<f64>| {
+        v.retain(|x| x.is_finite());
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied()
+    };
+    let horizontal = |s: &[f64; 3]| s[0].hypot(s[1]) / 2_f64.sqrt();
+    let velocity = median(
+        fixes
+            .iter()
+            .filter_map(|f| f.velocity.as_ref().map(|v| horizontal(&v.sigma_ned_m_s)))
+            .collect(),
+    );
+    if let Some(sigma) = velocity {
+        return format!(
+            "the fixes' velocity 1-sigma {} m/s: {} m/s",
+            Rounded(sigma),
+            Rounded(MIN_SPEED_SIGMAS * sigma)
+        );
+    }
+    let position = median(fixes.iter().map(|f| horizontal(&f.sigma_ned_m)).collect());
+    let interval = median(fixes.windows(2).map(|w| w[1].t_s - w[0].t_s).collect());
+    match (position, interval) {
+        (Some(sigma), Some(dt)) if dt > 0.0 => {
+            let noise = 2_f64.sqrt() * sigma / dt;
+            format!(
+                "{} m positions without a velocity, differenced over {} s: {} m/s",
+                Rounded(sigma),
+                Rounded(dt),
+                Rounded(MIN_SPEED_SIGMAS * noise)
+            )
+        }
+        _ => "positions without a velocity, differenced".to_owned(),
+    }
 }
 
 /// Why a start in motion cannot start on `fixes` whatever the motion: no two consecutive
@@ -605,6 +648,31 @@ pub fn realignment_line(r: &Realignments) -> Option<String> {
             )
         }
     })
+}
+
+/// Refuses an aided run whose filter refused every GNSS fix it was given and used none
+/// (`c` its counters): its solution is free-inertial from a start every fix contradicts (a
+/// KF-GINS `initpos` in radians, a `starttime` after the `initpos` epoch, fixes on a clock
+/// 30 s off), not the aided one asked for, and its file (a `.nav` has no status column) would
+/// not say so. The same for a given start, a start in motion, `nav kf-gins` and the
+/// navigator's aided phase. Fixes never given to it (all before the aided phase) leave the
+/// warning of [`position_warning`].
+pub fn check_some_fix_used(c: &nav_core::ins_filter::FilterCounters) -> Result<()> {
+    let (p, v) = (&c.position, &c.velocity);
+    if p.accepted + v.accepted > 0 || p.rejected + v.rejected == 0 {
+        return Ok(());
+    }
+    bail!(
+        "the filter refused every GNSS fix it was given (position: {} refused, {} invalid; \
+         velocity: {} refused, {} invalid) and used none: the solution would be free-inertial \
+         from a start the fixes contradict; check the start (--init-pos in degrees, KF-GINS's \
+         initpos and its starttime epoch, or the alignment's site) and its 1-sigma, the \
+         antenna lever arm, and the fixes' 1-sigma and time tags",
+        p.rejected,
+        p.invalid,
+        v.rejected,
+        v.invalid
+    )
 }
 
 /// Warnings for a run whose GNSS aiding did not work as the user meant: IMU time not

@@ -42,6 +42,35 @@ pub const TEMPERATURE_COLUMN: &str = "temp_c";
 /// is refused.
 pub const TEMPERATURE_RANGE_C: (f32, f32) = (-100.0, 200.0);
 
+/// Whether `temp_c` [deg C] may be a sensor's temperature: unknown (NaN) or within
+/// [`TEMPERATURE_RANGE_C`]. The rule of every recording format (CSV here, binary in
+/// [`crate::recording_io`]).
+pub fn temperature_is_plausible(temp_c: f32) -> bool {
+    let (low, high) = TEMPERATURE_RANGE_C;
+    temp_c.is_nan() || (low..=high).contains(&temp_c)
+}
+
+/// The refusal of a temperature [`temperature_is_plausible`] refuses [deg C]: `1e30 deg C is
+/// outside [-100, 200], not a sensor's temperature` (the value compact at any magnitude).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BadTemperature(pub f32);
+
+impl std::fmt::Display for BadTemperature {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (t, (low, high)) = (self.0, TEMPERATURE_RANGE_C);
+        // f32's own shortest digits: 1e30, not 1.0000000150474662e30 through f64.
+        if t == 0.0 || (1e-3..1e6).contains(&t.abs()) {
+            write!(f, "{t}")?;
+        } else {
+            write!(f, "{t:e}")?;
+        }
+        write!(
+            f,
+            " deg C is outside [{low}, {high}], not a sensor's temperature"
+        )
+    }
+}
+
 /// One row: the increments over the interval ending at `t_s`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CsvRow {
@@ -252,8 +281,7 @@ fn parse_row(
             })
         })?,
     };
-    let (low, high) = TEMPERATURE_RANGE_C;
-    if !temperature_c.is_nan() && !(low..=high).contains(&temperature_c) {
+    if !temperature_is_plausible(temperature_c) {
         return Err(at(CsvErrorKind::BadTemperature {
             column: TEMPERATURE_COLUMN,
             temp_c: temperature_c,

@@ -430,6 +430,9 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
             aided::no_usable_sample(&report)
         );
     }
+    crate::replay::check_refused_share(report.samples, report.rejected, "in the run's window")
+        .with_context(|| c.imu_path.display().to_string())?;
+    crate::aided_cmd::check_some_fix_used(&report.counters)?;
     // A wrong `imudatarate` marks every epoch a gap (or none): refused before the
     // trajectory is written.
     if intervals > 0 && off_rate * 10 > intervals {

@@ -210,6 +210,10 @@ pub struct Report {
     pub n_align: u32,
     /// Navigation steps integrated after the alignment.
     pub nav_steps: u32,
+    /// Samples taken after the alignment's hand-over (flagged, refused or navigated).
+    pub after_alignment: u32,
+    /// Of those, increments refused by nav-core's input limits.
+    pub rejected_after_alignment: u32,
     /// Solution rows written (after the header line).
     pub rows: u32,
     /// The source's own counters, when it is a replay (filled by [`crate::replay`]).
@@ -291,11 +295,13 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
     let mut next_fix = fixes.iter().peekable();
     let mut span_us: Option<(u64, u64)> = None;
     let mut lost = crate::aided::LostImuTime::default();
+    let (mut after_alignment, mut rejected_after_alignment) = (0_u32, 0_u32);
     while let Some(s) = source.read_sample().map_err(PipelineError::Source)? {
         let first_us = || nav_core::gap::data_span_us(s.t_us, f64::from(s.dt_s), 0).0;
         span_us = Some((span_us.map_or_else(first_us, |(a, _)| a), s.t_us));
         let usable = s.flags.usable();
-        lost.set_aligning(navigator.is_aligning());
+        let aligning = navigator.is_aligning();
+        lost.set_aligning(aligning);
         while let Some(f) = next_fix.next_if(|f| f.t_us <= s.t_us) {
             navigator.push_fix(crate::gnss_file::narrow::<T>(f));
         }
@@ -304,6 +310,10 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
         let logged = navigator
             .push_inline(&mut background, &s.nav_input())
             .map_err(PipelineError::Navigation)?;
+        if !aligning {
+            after_alignment += 1;
+            rejected_after_alignment += navigator.counters().rejected - rejected;
+        }
         // The navigator's word on the sample's time (nav_core::gap) and on its increment (a
         // refused one is lost time as an unusable one is).
         if navigator.counters().flagged_by.out_of_order > out_of_order {
@@ -343,6 +353,8 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
         rejected: c.rejected,
         n_align: setup.n_align(),
         nav_steps: c.nav_steps,
+        after_alignment,
+        rejected_after_alignment,
         rows: c.rows,
         source: None,
         driver: None,

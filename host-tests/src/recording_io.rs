@@ -321,7 +321,9 @@ fn scan(path: &Path, format: Format) -> Result<Scanned> {
                 Replay::new(reader).map_err(|e| in_file(path, SourceError::from(e)))?;
             while let Some(s) = replay
                 .read_sample()
-                .map_err(|e| in_file(path, SourceError::from(e)))?
+                .map_err(SourceError::from)
+                .and_then(check_temperature)
+                .map_err(|e| in_file(path, e))?
             {
                 has_temperature |= !s.temperature_c.is_nan();
             }
@@ -671,6 +673,28 @@ pub enum SourceError {
     /// The recording is invalid; `Display` gives e.g. `byte offset 1288 (record 31): record CRC
     /// mismatch (corrupt data)`.
     Format(FormatError),
+    /// A binary record's temperature [deg C] is no sensor's
+    /// ([`imu_csv::temperature_is_plausible`], the CSV format's rule): the record's index.
+    Temperature {
+        /// The record's index.
+        record: u32,
+        /// The temperature [deg C].
+        temp_c: f32,
+    },
+}
+
+/// Refuses a binary record's sample whose temperature is no sensor's, as the CSV reader
+/// refuses its field ([`imu_csv::temperature_is_plausible`]); `s.seq` is the record's index.
+fn check_temperature(s: Option<ImuSample>) -> Result<Option<ImuSample>, SourceError> {
+    match s {
+        Some(s) if !imu_csv::temperature_is_plausible(s.temperature_c) => {
+            Err(SourceError::Temperature {
+                record: s.seq,
+                temp_c: s.temperature_c,
+            })
+        }
+        s => Ok(s),
+    }
 }
 
 impl core::fmt::Display for SourceError {
@@ -678,6 +702,12 @@ impl core::fmt::Display for SourceError {
         match self {
             Self::Io(e) => write!(f, "read error: {e}"),
             Self::Format(e) => write!(f, "{e}"),
+            Self::Temperature { record, temp_c } => write!(
+                f,
+                "byte offset {} (record {record}): temperature {} (NaN when it is unknown)",
+                HEADER_LEN as u64 + RECORD_LEN as u64 * u64::from(*record),
+                imu_csv::BadTemperature(*temp_c)
+            ),
         }
     }
 }
@@ -752,7 +782,7 @@ fn check_header_rate(path: &Path, header: &Header) -> Result<()> {
         (median / nominal - 1.0).abs() <= RATE_TOLERANCE,
         "recording {}: the header's rate {} Hz contradicts the timestamps (median interval {median} s, {:.6} Hz over the first {} records)",
         path.display(),
-        header.rate_hz,
+        nav_core::number::Number(header.rate_hz),
         1.0 / median,
         n
     );
@@ -837,11 +867,16 @@ impl Imu for ReplaySource {
 
     fn read_sample(&mut self) -> Result<Option<ImuSample>, SourceError> {
         match self {
-            Self::File(r) => r.read_sample().map_err(SourceError::from),
+            Self::File(r) => r
+                .read_sample()
+                .map_err(SourceError::from)
+                .and_then(check_temperature),
+            // The CSV reader refused its temperatures.
             Self::Text(r, _) => r.read_sample().map_err(SourceError::from),
             Self::Memory(r) => r
                 .read_sample()
-                .map_err(|e| SourceError::Format(format_error(e))),
+                .map_err(|e| SourceError::Format(format_error(e)))
+                .and_then(check_temperature),
         }
     }
 }

@@ -197,11 +197,48 @@ pub fn replay_file_with_fixes<T: Scalar, W: Write>(
         out_of_order: stats.not_after_previous,
     });
     report.driver = driver;
+    check_refused_share(
+        report.after_alignment.into(),
+        report.rejected_after_alignment.into(),
+        "after the alignment",
+    )
+    .map_err(|e| ReplayFailure {
+        error: in_file(path, e),
+        driver,
+    })?;
     Ok(FileReport {
         format,
         rate_hz,
         report,
     })
+}
+
+/// Largest share of a run's navigation samples nav-core's input limits may refuse [-]: beyond
+/// it the recording's values are no IMU's (a wrong unit or scale, mg for m/s^2), and rows
+/// integrated over the few left and bridged across the rest are no solution (a run with 88 %
+/// refused ended `ok` with 481 m/s at rest). A few refused samples are bridged and counted.
+pub const MAX_REFUSED_SHARE: f64 = 0.5;
+
+/// Refuses a run whose input limits refused more than [`MAX_REFUSED_SHARE`] of its `samples`
+/// navigation samples (`rejected` of them; `which` names them in the message, e.g. "after the
+/// alignment"). The same for every replay, aided or not, and `nav kf-gins`.
+pub fn check_refused_share(samples: u64, rejected: u64, which: &str) -> Result<()> {
+    let (samples_f, rejected_f) = (samples as f64, rejected as f64);
+    if rejected_f <= MAX_REFUSED_SHARE * samples_f {
+        return Ok(());
+    }
+    let limits = nav_core::InputLimits::<f64>::default();
+    Err(anyhow!(
+        "the increment limits refused {rejected} of the {samples} samples {which} ({:.0} %, more \
+         than {:.0} %): an interval beyond {} s, a rate beyond {:.0} deg/s or a specific force \
+         beyond {:.0} m/s^2 is no IMU's (values in another unit or scale?), and the solution \
+         bridged across them is none",
+        100.0 * rejected_f / samples_f,
+        100.0 * MAX_REFUSED_SHARE,
+        limits.max_dt,
+        limits.max_rate.to_degrees(),
+        limits.max_specific_force
+    ))
 }
 
 /// Farthest a PSINS header's site may be from the run's `--lat/--lon` [m].
@@ -322,6 +359,9 @@ pub fn replay_aided<T: Scalar>(
             file.report.span_us,
         )
         .map_err(|e| file.report.lost.explain(e))?;
+        if let Some(a) = &file.report.aided {
+            crate::aided_cmd::check_some_fix_used(&a.counters)?;
+        }
         Ok::<_, ReplayFailure>(file)
     })?;
     Ok(AidedFileReport {

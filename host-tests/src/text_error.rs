@@ -11,9 +11,8 @@ use std::fmt;
 use std::io;
 use std::path::{Path, PathBuf};
 
-use crate::imu_csv::TEMPERATURE_RANGE_C;
 use crate::truth_csv::MAX_YAW_DEG;
-use nav_core::number::Shown;
+use nav_core::number::{Number, Shown};
 
 /// The largest time the recording clock holds [s]: `u64::MAX` nanoseconds (about 584 years).
 /// The binary format's `t_ns` and the samples' `t_us` derive from it.
@@ -275,7 +274,7 @@ pub enum TextErrorKind {
         /// The latitude found [deg].
         lat_deg: f64,
     },
-    /// A sensor temperature is outside [`TEMPERATURE_RANGE_C`] (or infinite).
+    /// A sensor temperature is outside [`crate::imu_csv::TEMPERATURE_RANGE_C`] (or infinite).
     BadTemperature {
         /// Column name.
         column: &'static str,
@@ -501,21 +500,20 @@ impl fmt::Display for TextErrorKind {
                 };
                 write!(
                     f,
-                    "column {column}: {what}{lat_deg} deg is outside [-90, 90]"
+                    "column {column}: {what}{} deg is outside [-90, 90]",
+                    Number(*lat_deg)
                 )
             }
-            Self::BadTemperature { column, temp_c } => {
-                let (low, high) = TEMPERATURE_RANGE_C;
-                write!(
-                    f,
-                    "column {column}: {temp_c} deg C is outside [{low}, {high}], not a sensor's \
-                     temperature (leave the field empty or write NaN when it is unknown)"
-                )
-            }
+            Self::BadTemperature { column, temp_c } => write!(
+                f,
+                "column {column}: {} (leave the field empty or write NaN when it is unknown)",
+                crate::imu_csv::BadTemperature(*temp_c)
+            ),
             Self::BadYaw { column, yaw_deg } => write!(
                 f,
-                "column {column}: yaw {yaw_deg} deg is outside [-{MAX_YAW_DEG}, {MAX_YAW_DEG}] \
-                 (a heading: the solution logs write it in (-180, 180], KF-GINS in [0, 360))"
+                "column {column}: yaw {} deg is outside [-{MAX_YAW_DEG}, {MAX_YAW_DEG}] \
+                 (a heading: the solution logs write it in (-180, 180], KF-GINS in [0, 360))",
+                Number(*yaw_deg)
             ),
             Self::BadLongitude { column, lon_deg } => {
                 let what = if *column == "longitude" {
@@ -525,8 +523,9 @@ impl fmt::Display for TextErrorKind {
                 };
                 write!(
                     f,
-                    "column {column}: {what}{lon_deg} deg is outside [-180, 180] (refused, not \
-                     wrapped: a converter's error)"
+                    "column {column}: {what}{} deg is outside [-180, 180] (refused, not \
+                     wrapped: a converter's error)",
+                    Number(*lon_deg)
                 )
             }
             Self::SampleTimeNotIncreasing { previous, found } => write!(
@@ -621,6 +620,36 @@ mod tests {
             text,
             "f.csv: line 2: malformed CSV: a row of 2 fields where the previous row has 3"
         );
+    }
+
+    /// A yaw, latitude, longitude or temperature of 1e300 printed 301 digits.
+    #[test]
+    fn huge_values_are_told_compact() {
+        let told = |kind| TextError::new(Path::new("t.csv"), Some(2), kind).to_string();
+        let column = "c";
+        assert_eq!(
+            told(TextErrorKind::BadYaw {
+                column,
+                yaw_deg: 1e300
+            }),
+            "t.csv: line 2: column c: yaw 1e300 deg is outside [-360, 360] (a heading: the \
+             solution logs write it in (-180, 180], KF-GINS in [0, 360))"
+        );
+        let lat = told(TextErrorKind::BadLatitude {
+            column,
+            lat_deg: -1e300,
+        });
+        assert!(lat.contains("latitude -1e300 deg is outside"), "{lat}");
+        let lon = told(TextErrorKind::BadLongitude {
+            column,
+            lon_deg: 1e300,
+        });
+        assert!(lon.contains("longitude 1e300 deg is outside"), "{lon}");
+        let temp = told(TextErrorKind::BadTemperature {
+            column,
+            temp_c: 1e30,
+        });
+        assert!(temp.contains("column c: 1e30 deg C is outside"), "{temp}");
     }
 
     #[test]

@@ -377,3 +377,48 @@ fn header_count_and_rate_are_checked_against_the_file() {
         }
     }
 }
+
+/// Accelerations of the navigation samples scaled by 1e6 (a wrong unit): the input limits
+/// refused most of them and the run ended `ok` with exit 0, its rows bridged across them
+/// hundreds of m/s off. More than half refused fails the run with the counts and the limits;
+/// a few are bridged and counted as before.
+#[test]
+fn a_run_whose_navigation_samples_are_mostly_refused_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scaled.bin");
+    let scaled = |from: usize, to: usize| {
+        let mut rec = clean();
+        for r in &mut rec.records[from..to] {
+            r.accel[0] *= 1e6;
+            r.accel[2] *= 1e6;
+        }
+        recording_io::write(&path, &rec).unwrap();
+    };
+    // 4000 aligned, then 2400 of the 4000 navigation samples refused.
+    scaled(5600, 8000);
+    let msg = replay_error(&path, &options());
+    assert!(
+        msg.ends_with(
+            "scaled.bin: the increment limits refused 2400 of the 4000 samples after the \
+             alignment (60 %, more than 50 %): an interval beyond 0.1 s, a rate beyond 2000 \
+             deg/s or a specific force beyond 490 m/s^2 is no IMU's (values in another unit or \
+             scale?), and the solution bridged across them is none"
+        ),
+        "{msg}"
+    );
+    let out = dir.path().join("log.csv");
+    let o = common::nav(&common::replay_args(
+        path.to_str().unwrap(),
+        out.to_str().unwrap(),
+        &[],
+    ));
+    let text = common::output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(text.contains("refused 2400 of the 4000 samples"), "{text}");
+    assert!(!out.exists(), "{text}");
+    // Half of them: bridged and counted, the run ends as before.
+    scaled(6000, 8000);
+    let (r, log) = replay::<f64>(&path, &options());
+    assert_eq!(r.report.rejected, 2000);
+    assert!(log.ends_with(" rows, ok\n"), "{log}");
+}

@@ -169,6 +169,128 @@ fn kf_gins_names_its_files_and_warns_of_two_folders() {
     assert!(!text.contains("warning"), "{text}");
 }
 
+/// `nav kf-gins` with `initpos` in radians: every fix refused, the solution free-inertial from
+/// a start 45 deg off, exit 0 and a `.nav` file (no status column) with a warning on stdout.
+/// Refused now with the counts and what to check, nothing written; the right start runs.
+#[test]
+fn kf_gins_that_refused_every_fix_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = host_tests::filter_bench::generate(
+        &dir.path().join("set"),
+        &host_tests::filter_bench::FilterBenchOptions {
+            seconds: 20.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let yaml = std::fs::read_to_string(&data.config).unwrap();
+    let line = yaml.lines().find(|l| l.starts_with("initpos:")).unwrap();
+    let values: Vec<f64> = line
+        .trim_start_matches("initpos: [")
+        .trim_end_matches(']')
+        .split(',')
+        .map(|v| v.trim().parse().unwrap())
+        .collect();
+    let radians = format!(
+        "initpos: [{}, {}, {}]",
+        values[0].to_radians(),
+        values[1].to_radians(),
+        values[2]
+    );
+    let config = data.config.with_file_name("radians.yaml");
+    std::fs::write(&config, yaml.replace(line, &radians)).unwrap();
+    let kf_gins = |config: &std::path::Path| {
+        nav(&[
+            "kf-gins",
+            config.to_str().unwrap(),
+            "--out",
+            data.out.to_str().unwrap(),
+        ])
+    };
+    let o = kf_gins(&config);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("the filter refused every GNSS fix it was given (position: ")
+            && text.contains("and used none: the solution would be free-inertial"),
+        "{text}"
+    );
+    assert!(!data.out.exists(), "{text}");
+    let o = kf_gins(&data.config);
+    assert!(o.status.success(), "{}", output_text(&o));
+}
+
+/// A start in motion that never started said "2 m positions without a velocity, differenced
+/// over a second: 11 m/s" whatever the fixes; the oscillator's refusals named parameters no
+/// option sets (`drive_time_constant_s`, `readout_noise_m`) or no cause ("0 epochs"). Each
+/// describes the user's fixes and options now.
+#[test]
+fn messages_describe_the_users_fixes_and_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let sim = path("sim");
+    ok(&[
+        "sim",
+        "static",
+        "--seconds",
+        "20",
+        "--gnss-rate",
+        "10",
+        "--gnss-sigma",
+        "0.1,0.1,0.1",
+        "--grade",
+        "mems-tactical",
+        "--out",
+        &sim,
+    ]);
+    let (imu, gnss, out) = (
+        format!("{sim}/imu.bin"),
+        format!("{sim}/gnss.csv"),
+        path("x.csv"),
+    );
+    let o = nav(&[
+        "replay",
+        "--imu",
+        &imu,
+        "--gnss",
+        &gnss,
+        "--imu-noise",
+        "mems-tactical",
+        "--start-in-motion",
+        "--out",
+        &out,
+    ]);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains(
+            "4 times the noise of its velocity (0.1000 m positions without a velocity, \
+             differenced over 0.1000 s: 5.657 m/s)"
+        ),
+        "{text}"
+    );
+    let refused = |args: &[&str], expected: &str| {
+        let o = nav(args);
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(1), "{text}");
+        assert!(text.contains(expected), "{args:?}: {text}");
+    };
+    let osc = ["oscillator", "static", "--seconds", "2"];
+    refused(
+        &[&osc[..], &["--f0-hz", "0.5"]].concat(),
+        "--f0-hz must be at least 1 Hz (the amplitude drive averages over 1 s, at least one \
+         period), not 0.5",
+    );
+    refused(
+        &[&osc[..], &["--noise-m", "-1"]].concat(),
+        "--noise-m must be a finite number >= 0, not -1",
+    );
+    refused(
+        &[&osc[..], &["--noise-m", "1e300"]].concat(),
+        "nothing to navigate on (readout noise 1e300 m against an oscillation of 2e-5 m",
+    );
+}
+
 /// A repeated time tag and the second of a swapped pair were counted as "bad interval", the
 /// README's "time out of order" staying 0 (the rest of a step back was counted there).
 #[test]
@@ -457,6 +579,53 @@ fn an_imu_csv_temperature_no_sensor_has_is_refused() {
         std::fs::write(&odd, with(3, temp)).unwrap();
         ok(&["convert", "--in", &odd, "--out", &out]);
     }
+}
+
+/// A binary record's temperature was not range-checked: 1e30 deg C replayed and converted
+/// silently where the CSV row's 500 deg C is refused. Refused by the same rule, with the
+/// record's byte offset; NaN is "unknown" in both.
+#[test]
+fn a_binary_temperature_no_sensor_has_is_refused_as_in_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (bin, odd, out) = (path("imu.bin"), path("odd.bin"), path("out.csv"));
+    common::generated_recording(std::path::Path::new(&bin), "11");
+    let clean = host_tests::recording_io::read(std::path::Path::new(&bin)).unwrap();
+    for temp in [1e30_f32, f32::NEG_INFINITY, 500.0, -101.0] {
+        let mut rec = clean.clone();
+        rec.records[4].temperature_c = temp;
+        host_tests::recording_io::write(std::path::Path::new(&odd), &rec).unwrap();
+        for args in [
+            vec!["convert", "--in", &odd, "--out", &out],
+            common::replay_args(&odd, &out, &[]),
+        ] {
+            let o = nav(&args);
+            let text = output_text(&o);
+            assert_eq!(o.status.code(), Some(1), "{text}");
+            assert!(
+                text.contains("byte offset 208 (record 4): temperature ")
+                    && text.contains(" deg C is outside [-100, 200], not a sensor's temperature"),
+                "{temp}: {text}"
+            );
+            assert!(!std::path::Path::new(&out).exists());
+        }
+    }
+    let o = nav(&common::replay_args(&odd, &out, &[]));
+    assert!(output_text(&o).contains("temperature -101 deg C"));
+    // Compact at any magnitude (it printed 31 digits).
+    let mut rec = clean.clone();
+    rec.records[4].temperature_c = 1e30;
+    host_tests::recording_io::write(std::path::Path::new(&odd), &rec).unwrap();
+    let o = nav(&common::replay_args(&odd, &out, &[]));
+    assert!(output_text(&o).contains("temperature 1e30 deg C"));
+    let mut rec = clean;
+    for r in &mut rec.records {
+        r.temperature_c = f32::NAN;
+    }
+    rec.records[5].temperature_c = 200.0;
+    host_tests::recording_io::write(std::path::Path::new(&odd), &rec).unwrap();
+    ok(&["convert", "--in", &odd, "--out", &out]);
+    ok(&common::replay_args(&odd, &out, &[]));
 }
 
 /// `nav sim --gnss-jump 1,1e9,...` (a jump of 1e9 s in a 5 s run) and a jump given twice (its

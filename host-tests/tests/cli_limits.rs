@@ -889,6 +889,141 @@ fn refusals_name_the_option_the_key_and_the_cause() {
     );
 }
 
+/// `--base-translation` with the static alignment was taken silently (its log byte for byte
+/// the one without it: the static method takes a still base only). Refused with the reason;
+/// taken with a method that uses it.
+#[test]
+fn base_translation_with_the_static_alignment_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (imu, out) = (path("imu.bin"), path("out.csv"));
+    generated_recording(std::path::Path::new(&imu), "12");
+    refused(
+        &replay_args(&imu, &out, &["--base-translation", "3"]),
+        &["--base-translation is the base motion of the inertial, fine and sway alignments"],
+    );
+    refused(
+        &replay_args(
+            &imu,
+            &out,
+            &["--align-method", "static", "--base-translation", "0.5"],
+        ),
+        &["the static one takes a still base only"],
+    );
+    let o = nav(&replay_args(
+        &imu,
+        &out,
+        &["--align-method", "inertial", "--base-translation", "0"],
+    ));
+    // Taken (this still base's 10 s are too short for the inertial method's heading).
+    assert!(
+        !output_text(&o).contains("--base-translation"),
+        "{}",
+        output_text(&o)
+    );
+}
+
+/// An empty `--calibration` file (or one of comments) was taken as identity without a word,
+/// where `nav config` refuses an empty file: a truncated or wrong file passed unnoticed.
+/// Refused with the reason; a file with a key runs.
+#[test]
+fn an_empty_calibration_file_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (imu, out) = (path("imu.bin"), path("out.csv"));
+    generated_recording(std::path::Path::new(&imu), "12");
+    let cal = path("empty.cal");
+    for text in ["", "\u{feff}\r\n", "# gyro_bias_rad_s = 1e-6 0 0\n\n  \n"] {
+        std::fs::write(&cal, text).unwrap();
+        refused(
+            &replay_args(&imu, &out, &["--calibration", &cal]),
+            &[
+                "--calibration ",
+                "empty.cal: no 'key = values' line (an empty or truncated file, or the wrong \
+                 one): give the keys (gyro_bias_rad_s, gyro_scale,",
+            ],
+        );
+        assert!(!std::path::Path::new(&out).exists());
+    }
+    std::fs::write(&cal, "\u{feff}gyro_bias_rad_s = 0 0 0 # none\n").unwrap();
+    let o = nav(&replay_args(&imu, &out, &["--calibration", &cal]));
+    assert!(o.status.success(), "{}", output_text(&o));
+}
+
+/// `--init-std` refusals said "a zero claims an exactly known state" of -1 and NaN, and "must
+/// be 0 to 6,400 km" of 1e300, where 0 is refused; a binary header's rate of 1e300 printed
+/// 301 digits. Each names its value compactly and the cause now.
+#[test]
+fn init_std_and_header_rate_refusals_say_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (imu, out) = (path("imu.bin"), path("out.csv"));
+    generated_recording(std::path::Path::new(&imu), "12");
+    for (std, expected) in [
+        (
+            "-1,0.1,1",
+            "the position 1-sigma -1 m in \"-1,0.1,1\" must be above 0 and at most 6.4e6 m",
+        ),
+        (
+            "NaN,1,1",
+            "the position 1-sigma NaN m in \"NaN,1,1\" must be above 0",
+        ),
+        (
+            "1e300,0.1,1",
+            "the position 1-sigma 1e300 m in \"1e300,0.1,1\" must be above 0 and at most 6.4e6 m",
+        ),
+        ("1,1,1,1,1e9,1,1,1,1", "the velocity 1-sigma 1e9 m/s in"),
+        ("1,0.1,400", "the attitude 1-sigma 400 deg in"),
+        (
+            "1,0,1",
+            "the velocity 1-sigma in \"1,0,1\" is 0: a zero claims an exactly known state",
+        ),
+        (
+            "1,x,1",
+            "the velocity 1-sigma \"x\" in \"1,x,1\" is not a number",
+        ),
+        ("1,1", "expected three or nine 1-sigmas"),
+    ] {
+        // clap's refusal of an option's value: status 2.
+        let o = nav(&[
+            "replay",
+            "--imu",
+            &imu,
+            "--gnss",
+            &imu,
+            "--out",
+            &out,
+            "--init-pos",
+            "45,7.5,150",
+            "--init-vel",
+            "0,0,0",
+            "--init-att",
+            "0,0,0",
+            "--init-std",
+            std,
+        ]);
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(2), "{text}");
+        assert!(text.contains(expected), "{std}: {text}");
+        if std != "1,0,1" {
+            assert!(!text.contains("a zero claims"), "{text}");
+        }
+    }
+    // The header's rate 1e300 against 400 Hz timestamps.
+    let mut bytes = std::fs::read(&imu).unwrap();
+    let mut head: [u8; 48] = bytes[..48].try_into().unwrap();
+    let mut header = hal_adapters::recording::Header::decode(&head).unwrap();
+    header.rate_hz = 1e300;
+    head = header.encode();
+    bytes[..48].copy_from_slice(&head);
+    let odd = path("rate.bin");
+    std::fs::write(&odd, bytes).unwrap();
+    refused(
+        &replay_args(&odd, &out, &[]),
+        &["the header's rate 1e300 Hz contradicts the timestamps"],
+    );
+}
+
 /// Options that named the wrong thing or were taken silently: `sim --set speed=NaN` named a
 /// parameter `speed` the scenario does not have (the value was checked before the key); a
 /// `--set` key given twice kept the last (`nav config` refuses one); `bench filter --dir FILE`

@@ -397,6 +397,11 @@ fn binary_counts(bytes: &[u8]) -> Result<BinCounts, String> {
         if u32::from_le_bytes(r[36..40].try_into().unwrap()) != CRC32.checksum(&r[..36]) {
             return Err(format!("record {k}: CRC"));
         }
+        // The host's reader refuses a temperature no sensor has, as the CSV reader does.
+        let temp_c = f32::from_le_bytes(r[32..36].try_into().unwrap());
+        if !(temp_c.is_nan() || (-100.0..=200.0).contains(&temp_c)) {
+            return Err(format!("record {k}: temperature {temp_c}"));
+        }
         let t_ns = u64_at(r, 0);
         let non_finite = r[8..32]
             .chunks_exact(4)

@@ -85,7 +85,7 @@ enum Command {
     /// Simulate a scenario: exact increments through a sensor grade's error model, written as
     /// DIR/imu.bin and DIR/imu.csv (recordings), DIR/truth.csv and DIR/scenario.txt.
     #[command(allow_negative_numbers = true)]
-    Sim(SimArgs),
+    Sim(Box<SimArgs>),
     /// Alignment benchmarks with their physical floors: the level filter on a rocking ship [Ship alignment]
     /// (sea states 3-6), fine alignment on the AUV bench [Vavilova et al.], heading repeatability on
     /// the real laser-gyro recording, and every method on a seeded family of still and swaying
@@ -322,7 +322,7 @@ enum Command {
     },
     /// Align and navigate over a recording (any format), writing the solution log as CSV.
     #[command(allow_negative_numbers = true)]
-    Replay(ReplayArgs),
+    Replay(Box<ReplayArgs>),
     /// Decode the board's binary output stream (docs/protocol.md) back to the solution CSV;
     /// report skipped bytes, CRC failures and frames by type on stderr.
     Decode(host_tests::decode::DecodeArgs),
@@ -557,9 +557,11 @@ struct ReplayArgs {
           default_value_t = nav_core::alignment::machine::DEFAULT_LEVER_ARM_SIGMA_M)]
     lever_arm_sigma: f64,
     /// The base's horizontal translation (waves' surge and sway of its centre), stationary
-    /// 1-sigma per axis [m]; 0 for a base that only turns (a motion table).
-    #[arg(long, value_name = "M", default_value_t = BaseMotion::<f64>::default().translation_sigma_m, conflicts_with_all = ["init_pos", "start_in_motion"])]
-    base_translation: f64,
+    /// 1-sigma per axis [m]; 0 for a base that only turns (a motion table). The inertial,
+    /// fine and sway alignments' (the static one refuses a base that moves).
+    /// (default 0.5).
+    #[arg(long, value_name = "M", conflicts_with_all = ["init_pos", "start_in_motion"])]
+    base_translation: Option<f64>,
 }
 
 impl ReplayArgs {
@@ -570,9 +572,24 @@ impl ReplayArgs {
             Some(path) => {
                 host_tests::atomic::refuse_same_file(&[path], &self.out)?;
                 let text = host_tests::text_error::read_text(path)?;
-                ImuCalibration::parse(&text).map_err(|e| {
+                let calibration = ImuCalibration::parse(&text).map_err(|e| {
                     anyhow::anyhow!("--calibration {}: {}", path.display(), e.in_text(&text))
-                })?
+                })?;
+                // Missing keys stay identity, but a file with none is an empty or truncated
+                // one, or the wrong one (as `nav config` refuses one).
+                let has_key = text
+                    .trim_start_matches('\u{feff}')
+                    .lines()
+                    .any(|l| !l.split('#').next().unwrap_or("").trim().is_empty());
+                anyhow::ensure!(
+                    has_key,
+                    "--calibration {}: no 'key = values' line (an empty or truncated file, or \
+                     the wrong one): give the keys ({}), or leave --calibration out for \
+                     identity",
+                    path.display(),
+                    nav_core::calibration::KEYS.join(", ")
+                );
+                calibration
             }
         };
         let noise = self
@@ -590,7 +607,7 @@ impl ReplayArgs {
             },
             log_every: self.log_every,
             base: BaseMotion {
-                translation_sigma_m: self.base_translation,
+                translation_sigma_m: self.base_translation(),
                 ..BaseMotion::default()
             },
             calibration,
@@ -608,10 +625,23 @@ impl ReplayArgs {
             )
         };
         self.check_geometry(&run)?;
+        // The static alignment takes a still base only (a moving one is refused): the base's
+        // translation was ignored without a word.
+        anyhow::ensure!(
+            self.base_translation.is_none() || self.align_method != AlignMethod::Static,
+            "--base-translation is the base motion of the inertial, fine and sway alignments \
+             (--align-method); the static one takes a still base only"
+        );
         Ok(ReplayOptions {
             run,
             device: self.device,
         })
+    }
+
+    /// `--base-translation`, or its default [m].
+    fn base_translation(&self) -> f64 {
+        self.base_translation
+            .unwrap_or(BaseMotion::<f64>::default().translation_sigma_m)
     }
 
     /// nav-core's check of the lever arm and the base's motion, its refusal named by the
@@ -630,7 +660,7 @@ impl ReplayArgs {
         };
         check_geometry(&run.lever_arm, &BaseMotion::default()).context(lever)?;
         check_geometry(&LeverArm::default(), &run.base)
-            .with_context(|| format!("--base-translation {}", Number(self.base_translation)))?;
+            .with_context(|| format!("--base-translation {}", Number(self.base_translation())))?;
         Ok(())
     }
 }
@@ -1405,30 +1435,48 @@ fn parse_sideslip_sigma(s: &str) -> Result<f64, String> {
 }
 
 fn parse_init_std(s: &str) -> Result<[[f64; 3]; 3], String> {
-    let bad = || {
-        format!(
-            "expected three or nine positive 1-sigmas (POS,VEL,ATT or N,E,D,VN,VE,VD,ROLL,PITCH,YAW), \
-             not {s:?}: a zero claims an exactly known state (every fix that disagrees would be \
-             refused)"
-        )
+    use nav_core::ins_filter::limits::{
+        MAX_ATTITUDE_SIGMA_RAD, MAX_POSITION_SIGMA_M, MAX_VELOCITY_SIGMA_M_S,
     };
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| {
-            x.trim()
-                .parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite() && *x > 0.0)
-        })
-        .collect::<Option<_>>()
-        .ok_or_else(bad)?;
-    match v[..] {
-        [p, v, a] => Ok([[p; 3], [v; 3], [a; 3]]),
-        [..] if v.len() == 9 => Ok(core::array::from_fn(|k| {
-            core::array::from_fn(|i| v[3 * k + i])
-        })),
-        _ => Err(bad()),
+    use nav_core::number::Number;
+    let values: Vec<&str> = s.split(',').map(str::trim).collect();
+    if !matches!(values.len(), 3 | 9) {
+        return Err(format!(
+            "expected three or nine 1-sigmas (POS,VEL,ATT or N,E,D,VN,VE,VD,ROLL,PITCH,YAW), \
+             not {s:?}"
+        ));
     }
+    // (what, unit, largest) of value `i` (three: one of each; nine: three of each).
+    let kinds = [
+        ("position", "m", MAX_POSITION_SIGMA_M),
+        ("velocity", "m/s", MAX_VELOCITY_SIGMA_M_S),
+        ("attitude", "deg", MAX_ATTITUDE_SIGMA_RAD.to_degrees()),
+    ];
+    let mut v = Vec::with_capacity(values.len());
+    for (i, text) in values.iter().enumerate() {
+        let (what, unit, max) = kinds[i * 3 / values.len()];
+        let x = text
+            .parse::<f64>()
+            .map_err(|_| format!("the {what} 1-sigma {text:?} in {s:?} is not a number"))?;
+        if x == 0.0 {
+            return Err(format!(
+                "the {what} 1-sigma in {s:?} is 0: a zero claims an exactly known state (every \
+                 fix that disagrees would be refused)"
+            ));
+        }
+        if !(x > 0.0 && x <= max) {
+            return Err(format!(
+                "the {what} 1-sigma {} {unit} in {s:?} must be above 0 and at most {} {unit}",
+                Number(x),
+                Number(max)
+            ));
+        }
+        v.push(x);
+    }
+    Ok(match v[..] {
+        [p, v, a] => [[p; 3], [v; 3], [a; 3]],
+        _ => core::array::from_fn(|k| core::array::from_fn(|i| v[3 * k + i])),
+    })
 }
 
 /// `nav sim`'s arguments.
@@ -2121,7 +2169,7 @@ fn run(cli: Cli) -> Result<()> {
             print!("{text}");
             Ok(())
         }
-        Command::Sim(args) => sim(args),
+        Command::Sim(args) => sim(*args),
         Command::Oscillator {
             scenario,
             seconds,
@@ -2138,6 +2186,22 @@ fn run(cli: Cli) -> Result<()> {
             );
             opts.grade = grade;
             opts.compensate = !seed_method;
+            // Named by the options (the parameters' own names are no option's).
+            let number = nav_core::number::Number;
+            anyhow::ensure!(
+                noise_m.is_finite() && noise_m >= 0.0,
+                "--noise-m must be a finite number >= 0, not {}",
+                number(noise_m)
+            );
+            let min_f0_hz = 1.0 / opts.params.drive_time_constant_s;
+            anyhow::ensure!(
+                f0_hz.is_finite() && f0_hz >= min_f0_hz,
+                "--f0-hz must be at least {} Hz (the amplitude drive averages over {} s, at \
+                 least one period), not {}",
+                number(min_f0_hz),
+                number(opts.params.drive_time_constant_s),
+                number(f0_hz)
+            );
             opts.params.readout_noise_m = noise_m;
             opts.params.f0_hz = f0_hz;
             opts.params.sample_rate_hz = 50.0 * f0_hz;
@@ -2389,7 +2453,7 @@ fn run(cli: Cli) -> Result<()> {
             print!("{text}");
             Ok(())
         }
-        Command::Replay(args) => replay(args),
+        Command::Replay(args) => replay(*args),
         Command::Decode(args) => host_tests::decode::run(&args),
         Command::Config(args) => host_tests::config_cmd::run(&args),
         Command::KfGins {

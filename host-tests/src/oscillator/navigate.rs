@@ -293,9 +293,13 @@ fn oscillator_run(opts: &NavCompareOptions) -> Result<(NavErrors, OscillatorStat
     }
     let (Some(nav), Some(t_end)) = (nav, last_t) else {
         bail!(
-            "the oscillator gave {} epochs in {} s: nothing to navigate on",
+            "the oscillator gave {} epochs in {} s: nothing to navigate on (readout noise {} m \
+             against an oscillation of {} m: a noise near the amplitude hides its periods; \
+             --noise-m)",
             stats.epochs,
-            opts.seconds
+            opts.seconds,
+            nav_core::number::Number(opts.params.readout_noise_m),
+            nav_core::number::Number(opts.params.major_m)
         );
     };
     finish(&nav, &t_end, &mut errors);
