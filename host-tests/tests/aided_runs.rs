@@ -264,16 +264,10 @@ fn an_undeclared_receiver_latency_is_found_and_flagged() {
         let last = log.lines().rfind(|l| !l.starts_with('#')).unwrap();
         last.rsplit(',').next().unwrap().to_string()
     };
-    const FOUND: &str = "lag their time tags by ";
     for start in [&GIVEN[..], &ALIGNED[..]] {
         let text = run_ok(&mut replay_gnss(&imu, &late, &out, start));
-        let found = text
-            .split(FOUND)
-            .nth(1)
-            .unwrap_or_else(|| panic!("{start:?}: no latency found: {text}"));
-        let first_number = |s: &str| -> f64 { s.split(' ').next().unwrap().parse().unwrap() };
-        let late_s = first_number(found);
-        let sigma_s = first_number(found.split("(1-sigma ").nth(1).unwrap());
+        let (late_s, sigma_s) =
+            found_latency(&text).unwrap_or_else(|| panic!("{start:?}: no latency found: {text}"));
         assert!(
             (late_s - 0.2).abs() < 4.0 * sigma_s && sigma_s < 0.05,
             "{start:?}: {late_s} s, 1-sigma {sigma_s} s"
@@ -318,7 +312,10 @@ fn an_undeclared_receiver_latency_is_found_and_flagged() {
                 &out,
                 &[start, latency].concat(),
             ));
-            assert!(!text.contains(FOUND), "{start:?} {latency:?}: {text}");
+            assert!(
+                found_latency(&text).is_none(),
+                "{start:?} {latency:?}: {text}"
+            );
             assert_eq!(last_status(), "NAV", "{start:?} {latency:?}");
         }
     }
@@ -365,22 +362,18 @@ fn a_late_receiver_with_velocity_is_found_on_a_consumer_part() {
             .arg(&out);
         run_ok(&mut cmd)
     };
-    const FOUND: &str = "lag their time tags by ";
     let text = replay(&late);
-    let found = text
-        .split(FOUND)
-        .nth(1)
-        .unwrap_or_else(|| panic!("no latency found: {text}"));
-    let first_number = |s: &str| -> f64 { s.split(' ').next().unwrap().parse().unwrap() };
-    let (late_s, sigma_s) = (
-        first_number(found),
-        first_number(found.split("(1-sigma ").nth(1).unwrap()),
-    );
+    let (late_s, sigma_s) =
+        found_latency(&text).unwrap_or_else(|| panic!("no latency found: {text}"));
     assert!(
         (late_s - 0.2).abs() < 4.0 * sigma_s && sigma_s < 0.03,
         "{late_s} s, 1-sigma {sigma_s} s"
     );
-    let found_at: f64 = first_number(text.split("until it was found at t = ").nth(1).unwrap());
+    let found_at = text
+        .split("until it was found at t = ")
+        .nth(1)
+        .and_then(first_number)
+        .unwrap_or_else(|| panic!("no time of finding: {text}"));
     assert!(found_at < 60.0, "found at {found_at} s: {text}");
     // From a minute on (10 rows a second), every channel within 3 sigma on 99 % of the rows.
     let rows = errors_over_sigma(d, &out);
@@ -391,7 +384,7 @@ fn a_late_receiver_with_velocity_is_found_on_a_consumer_part() {
     let (e_n, e_e) = (last[NORTH] * sigma_m.0, last[EAST] * sigma_m.1);
     assert!(e_n.hypot(e_e) < 0.5, "{e_n} m north, {e_e} m east");
     let text = replay(&on_time);
-    assert!(!text.contains(FOUND), "on time: {text}");
+    assert!(found_latency(&text).is_none(), "on time: {text}");
 }
 
 /// A given start 100 m off with a declared 1 m 1-sigma (a FOG land vehicle): every fix is
@@ -2708,6 +2701,19 @@ const ALIGNED: [&str; 8] = [
     "--align-seconds",
     "15",
 ];
+
+/// The latency a run's warning says its fixes lag by and its 1-sigma [s], if one was found.
+fn found_latency(text: &str) -> Option<(f64, f64)> {
+    let found = text.split("lag their time tags by ").nth(1)?;
+    let late_s = first_number(found)?;
+    let sigma_s = first_number(found.split("(1-sigma ").nth(1)?)?;
+    Some((late_s, sigma_s))
+}
+
+/// The number a text starts with (up to the first space).
+fn first_number(s: &str) -> Option<f64> {
+    s.split(' ').next()?.parse().ok()
+}
 
 /// The GNSS file with its times moved by `dt_s`.
 fn shifted_gnss(d: &Path, dt_s: f64) -> std::path::PathBuf {
