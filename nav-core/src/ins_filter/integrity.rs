@@ -710,11 +710,15 @@ impl<T: Scalar> RefusedCluster<T> {
         }
     }
 
-    /// This lone refused fix, `dt_s` [s] after the last member of `previous`, a refused
-    /// cluster it did not continue ([`Self::refused_before`]).
+    /// This lone refused fix, `dt_s` [s] after `previous`, a lone refused fix it did not
+    /// continue ([`Self::refused_before`]); not after a cluster of several, nor a gross one:
+    /// the rate from their offset to this fix's is a fault's ending, not the solution's
+    /// drift (the true fixes after a 50 m jump).
     pub fn after(self, previous: Option<&Self>, dt_s: T) -> Self {
         Self {
-            refused_before: previous.map(|p| (p.z_ned_m, p.r_ned_m2, dt_s)),
+            refused_before: previous
+                .filter(|p| p.is_lone() && !p.gross)
+                .map(|p| (p.z_ned_m, p.r_ned_m2, dt_s)),
             ..self
         }
     }
@@ -1098,6 +1102,12 @@ mod tests {
         let b = RefusedCluster::start(Vector3::new(13.0, 0.0, 0.0), code, 20.0, gate, false)
             .after(Some(&a), 0.1);
         assert!(b.velocity_doubt().is_none(), "{:?}", b.velocity_doubt());
+        // After a cluster of several refused fixes (a jump held), the next lone refusal's
+        // distance from it is the fault's end, not a rate of the solution.
+        let jump = first.followed_by(Vector3::new(200.0, 100.5, 0.0), rtk, 1.0);
+        let after_jump = RefusedCluster::start(Vector3::new(0.5, 0.0, 0.0), rtk, 1e4, gate, false)
+            .after(Some(&jump), 1.0);
+        assert!(after_jump.velocity_doubt().is_none());
     }
 
     /// A correction of the solution moves the members' innovations with it: a member taken
