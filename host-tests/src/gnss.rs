@@ -160,11 +160,15 @@ pub fn read_gnss_assuming(
         path
     };
     crate::text_error::refuse_a_stream(path)?;
-    let mut first = String::new();
+    // The first line as bytes: a file that is not UTF-8 text is refused by the text reader
+    // below, with its line and byte (read as a string here it was "stream did not contain
+    // valid UTF-8", naming neither).
+    let mut first = Vec::new();
     File::open(path)
         .map(BufReader::new)
-        .and_then(|mut r| r.read_line(&mut first))
+        .and_then(|mut r| r.read_until(b'\n', &mut first))
         .map_err(|e| TextError::io(path, e))?;
+    let first = String::from_utf8_lossy(&first);
     if crate::gnss_ins_sim::looks_like_gps(first.trim_start_matches('\u{feff}')) {
         let Some(assumed) = assumed else {
             anyhow::bail!(

@@ -731,6 +731,29 @@ fn a_recording_not_in_utf8_names_its_line_and_byte() {
     );
 }
 
+/// A GNSS file of binary garbage was "stream did not contain valid UTF-8", no line or byte
+/// (its first line was read as text to tell gnss-ins-sim's files from the others); now as the
+/// IMU readers say it.
+#[test]
+fn a_gnss_file_that_is_not_text_is_told_by_line_and_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (bin, gnss) = (path("imu.bin"), path("gnss.txt"));
+    common::generated_recording(std::path::Path::new(&bin), "1");
+    std::fs::write(&gnss, b"\xd2\x01\x7f garbage\n\x00\xff").unwrap();
+    let o = nav(&common::replay_args(
+        &bin,
+        &path("out.csv"),
+        &["--gnss", &gnss],
+    ));
+    let said = output_text(&o);
+    assert_eq!(o.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains("gnss.txt: line 1: not UTF-8 text (byte 0, 0xd2): save the file as UTF-8"),
+        "{said}"
+    );
+}
+
 /// IMU time tags in seconds of week that roll over to 0 made an aided run fail as "GNSS on
 /// another clock" with the IMU data covering "604780 .. 20 s", no word of the rollover; the
 /// step back of a week is named in the refusal.
