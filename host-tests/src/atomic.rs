@@ -96,6 +96,22 @@ fn temp_prefix(name: &str) -> String {
     format!(".{}.", &name[..end])
 }
 
+/// The error of creating the temporary file of `path` in `dir`, told of `path` (the temporary
+/// name is none the user gave: "No such file or directory (os error 2) at path
+/// \"/proc/.x.csv.JeItoH.part\"" for `--out /proc/x.csv`).
+fn not_created(path: &Path, dir: &Path, e: &io::Error) -> io::Error {
+    let why = if dir.is_dir() {
+        let text = e.to_string();
+        text.split(" at path ")
+            .next()
+            .unwrap_or_default()
+            .to_owned()
+    } else {
+        format!("its folder {} does not exist", dir.display())
+    };
+    io::Error::new(e.kind(), format!("cannot create {}: {why}", path.display()))
+}
+
 /// Writes `path` through `body`: a temporary `.NAME.*.part` beside it, flushed, synced and
 /// renamed over `path` only when `body` succeeded. On any error the temporary file is removed
 /// and `path` is as it was.
@@ -144,7 +160,10 @@ impl AtomicFile {
         // open(2) applies the umask; tempfile's own default is 0600.
         #[cfg(unix)]
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-        let (file, tmp) = builder.tempfile_in(dir)?.into_parts();
+        let (file, tmp) = builder
+            .tempfile_in(dir)
+            .map_err(|e| not_created(path, dir, &e))?
+            .into_parts();
         let live = Registered::new(&tmp);
         // The replaced file's bits exactly (fchmod, no umask).
         #[cfg(unix)]
@@ -373,6 +392,32 @@ mod tests {
 
     /// An output name the file system takes is written whatever its length, its temporary
     /// name cut to fit (one of 246 to 255 characters was refused for its `.part` name).
+    /// A file that cannot be created is told by its own name, not its temporary file's: a
+    /// missing folder as such, and otherwise the system's reason without the temporary path.
+    #[test]
+    fn a_file_that_cannot_be_created_is_named_as_given() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("no-such-folder").join("out.csv");
+        let e = write(&missing, |w| w.write_all(b"x")).unwrap_err();
+        let text = e.to_string();
+        assert!(
+            text.starts_with(&format!("cannot create {}: its folder ", missing.display()))
+                && text.ends_with("no-such-folder does not exist")
+                && !text.contains(".part"),
+            "{text}"
+        );
+        let proc_file = Path::new("/proc/out.csv");
+        if Path::new("/proc").is_dir() {
+            let text = write(proc_file, |w| w.write_all(b"x"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                text.starts_with("cannot create /proc/out.csv: ") && !text.contains(".part"),
+                "{text}"
+            );
+        }
+    }
+
     #[test]
     fn an_output_name_up_to_the_longest_is_written() {
         let dir = tempfile::tempdir().unwrap();
