@@ -538,6 +538,24 @@ fn two_emulator_outputs_in_one_file_are_named_as_outputs() {
     assert_eq!(std::fs::read_to_string(&out).unwrap(), "an earlier run\n");
 }
 
+/// `nav convert` and `nav replay` of the recording `input` each exit 1 with a message holding
+/// every one of `expected`, and leave no `out`.
+fn refused_by_convert_and_replay(input: &str, out: &str, expected: &[&str]) {
+    for args in [
+        vec!["convert", "--in", input, "--out", out],
+        common::replay_args(input, out, &[]),
+    ] {
+        let o = nav(&args);
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {text}");
+        assert!(
+            expected.iter().all(|e| text.contains(e)),
+            "{args:?}: expected {expected:?} in: {text}"
+        );
+        assert!(!std::path::Path::new(out).exists(), "{args:?}: {out} left");
+    }
+}
+
 /// `temp_c` was not range-checked: 1,000,000 deg C replayed silently and `nav convert` copied
 /// it. Refused with its line and column; an empty field and NaN are both "unknown".
 #[test]
@@ -560,20 +578,11 @@ fn an_imu_csv_temperature_no_sensor_has_is_refused() {
     let (odd, out) = (path("odd.csv"), path("out.bin"));
     for temp in ["1e6", "inf", "-300"] {
         std::fs::write(&odd, with(3, temp)).unwrap();
-        for args in [
-            vec!["convert", "--in", &odd, "--out", &out],
-            common::replay_args(&odd, &out, &[]),
-        ] {
-            let o = nav(&args);
-            let text = output_text(&o);
-            assert_eq!(o.status.code(), Some(1), "{text}");
-            assert!(
-                text.contains("line 5: column temp_c: ")
-                    && text.contains("deg C is outside [-100, 200]"),
-                "{temp}: {text}"
-            );
-            assert!(!std::path::Path::new(&out).exists());
-        }
+        refused_by_convert_and_replay(
+            &odd,
+            &out,
+            &["line 5: column temp_c: ", "deg C is outside [-100, 200]"],
+        );
     }
     for temp in ["", "NaN"] {
         std::fs::write(&odd, with(3, temp)).unwrap();
@@ -595,20 +604,14 @@ fn a_binary_temperature_no_sensor_has_is_refused_as_in_csv() {
         let mut rec = clean.clone();
         rec.records[4].temperature_c = temp;
         host_tests::recording_io::write(std::path::Path::new(&odd), &rec).unwrap();
-        for args in [
-            vec!["convert", "--in", &odd, "--out", &out],
-            common::replay_args(&odd, &out, &[]),
-        ] {
-            let o = nav(&args);
-            let text = output_text(&o);
-            assert_eq!(o.status.code(), Some(1), "{text}");
-            assert!(
-                text.contains("byte offset 208 (record 4): temperature ")
-                    && text.contains(" deg C is outside [-100, 200], not a sensor's temperature"),
-                "{temp}: {text}"
-            );
-            assert!(!std::path::Path::new(&out).exists());
-        }
+        refused_by_convert_and_replay(
+            &odd,
+            &out,
+            &[
+                "byte offset 208 (record 4): temperature ",
+                " deg C is outside [-100, 200], not a sensor's temperature",
+            ],
+        );
     }
     let o = nav(&common::replay_args(&odd, &out, &[]));
     assert!(output_text(&o).contains("temperature -101 deg C"));
