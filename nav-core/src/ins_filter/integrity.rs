@@ -79,7 +79,15 @@
 //! typical error of the filter (its normalised square within the median of `chi^2(3)`): the
 //! filter can then no longer tell which of the two is wrong, and a filter that was itself
 //! pulled off by a fault the window could not see (a MEMS filter follows a slow ramp with small
-//! innovations) re-acquires the true fixes from its own growing sigma. The first fix taken
+//! innovations) re-acquires the true fixes from its own growing sigma. A cluster that is not
+//! gross claims fixes the gate passes for at most [`WINDOW_REFUSALS_MAX`] members, for the
+//! window's reason: the members' offsets are not white (they share the filter's drift since
+//! its last fix), and a filter a little optimistic drifts beyond its sigma while it refuses,
+//! so its offset never becomes typical (an RTK car leaving a stop, its vertical 3 sigma off
+//! its 1 cm: a chance refusal, then 27-67 true fixes within 2.6 sigma claimed as its members
+//! while the solution drifted to 0.3-1 m). Past that count a fix the gate passes is taken,
+//! with the doubt below. A gross cluster claims on its chain for as long as it lasts (a jump
+//! of 50 m is no drift of the filter's). The first fix taken
 //! after a cluster adds its own offset `z z^T` to the position's covariance (fault recovery by
 //! covariance increase [Groves, ch. 17], as the window does): the filter had refused fixes
 //! that agree with it again, so its position is doubtful by that offset, a step it followed
@@ -869,7 +877,7 @@ impl<T: Scalar> RefusedCluster<T> {
     /// or with one member its [`Self::distance`] beyond the gate) claims every fix that stays
     /// on the chain. Otherwise a member is within [`Self::contains`], agrees better with the
     /// cluster than with the filter's prediction, and the cluster is not yet
-    /// [`Self::is_typical`].
+    /// [`Self::is_typical`], nor, if not gross, [`WINDOW_REFUSALS_MAX`] members long.
     pub fn claims(
         &self,
         z: &Vector3<T>,
@@ -894,7 +902,9 @@ impl<T: Scalar> RefusedCluster<T> {
                 _ => {}
             }
         }
-        q <= gate_3dof && q < nis && !self.is_typical(s)
+        // Not gross: held for at most a window of members (module docs).
+        let holds = self.gross || self.members < WINDOW_REFUSALS_MAX;
+        holds && q <= gate_3dof && q < nis && !self.is_typical(s)
     }
 
     /// The cluster judged against the filter's own position variances `p_pos_m2` [m^2] with
@@ -1280,6 +1290,27 @@ mod tests {
             var_m2: Vector3::repeat(v),
             curvature_var_m2: Vector3::repeat(k),
         }
+    }
+
+    /// A cluster that is not gross claims a fix the gate passes with fewer than a window of
+    /// members, and not with a window of them; a gross one still does.
+    #[test]
+    fn a_cluster_that_is_not_gross_claims_at_most_a_window_of_members() {
+        let r = Vector3::repeat(1e-4);
+        let gate = crate::ins_filter::CHI2_3DOF_999;
+        let still = drift(0.0, 0.0);
+        let z = Vector3::new(0.0, 0.05, 0.0);
+        let s = Matrix3::from_diagonal_element(2e-4);
+        let nis = z.norm_squared() / 2e-4;
+        let start = |nis0: f64| RefusedCluster::start(z, r, nis0, gate, true);
+        let grow = |c: RefusedCluster<f64>, n: u32| (1..n).fold(c, |c, _| c.followed_by(z, r, 1.0));
+        let plain = start(2.0 * gate);
+        assert!(!plain.gross && nis < gate);
+        let claims = |c: &RefusedCluster<f64>| c.claims(&z, &r, &still, nis, &s, gate);
+        assert!(claims(&grow(plain, WINDOW_REFUSALS_MAX - 1)));
+        assert!(!claims(&grow(plain, WINDOW_REFUSALS_MAX)));
+        let gross = start(20.0 * gate);
+        assert!(gross.gross && claims(&grow(gross, WINDOW_REFUSALS_MAX)));
     }
 
     #[test]
