@@ -104,8 +104,13 @@ pub fn generate(dir: &Path, o: &FilterBenchOptions) -> Result<DataSet> {
     let imu = dir.join("imu.txt");
     let records = &sim.recording.records;
     write_lines(&imu, |w| {
-        for r in records {
-            let t = t0 + r.t_ns as f64 * 1e-9;
+        // An epoch at `starttime`, the start's (KF-GINS takes the start at the first epoch at
+        // or after it, and integrates from there): the first interval's increments, not
+        // integrated.
+        let start = records.first().map(|r| (0, r));
+        let epochs = start.into_iter().chain(records.iter().map(|r| (r.t_ns, r)));
+        for (t_ns, r) in epochs {
+            let t = t0 + t_ns as f64 * 1e-9;
             let [gx, gy, gz] = r.gyro.map(f64::from);
             let [ax, ay, az] = r.accel.map(f64::from);
             writeln!(w, "{t:.6} {gx:e} {gy:e} {gz:e} {ax:e} {ay:e} {az:e}")?;

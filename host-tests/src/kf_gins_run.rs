@@ -101,6 +101,38 @@ pub struct SigmaRms {
     pub yaw_deg: f64,
 }
 
+/// Refuses a start whose epoch, the first IMU epoch at or after `starttime` `t_start_s` [s],
+/// is `start_epoch_s` [s], more than half an interval `dt_s` [s] later; `before_start`
+/// epochs came before `starttime`. `initpos`, `initvel` and `initatt` hold at `starttime`,
+/// and KF-GINS would take them at that later epoch whatever the vehicle did in between (it
+/// refuses a `starttime` before the file's first epoch, "Process time ERROR", not a gap in
+/// the file across it): a file that began 50 s late was navigated from the state of 50 s
+/// before, without a word.
+pub fn check_start_epoch(
+    t_start_s: f64,
+    start_epoch_s: f64,
+    dt_s: f64,
+    before_start: u64,
+) -> Result<()> {
+    let late = start_epoch_s - t_start_s;
+    if late <= 0.5 * dt_s {
+        return Ok(());
+    }
+    let gap = if before_start == 0 {
+        "the IMU file begins"
+    } else {
+        "the IMU file has no epoch from it until"
+    };
+    bail!(
+        "starttime {} s: {gap} {} s later, at {} s, and initpos, initvel and initatt hold at \
+         starttime (the vehicle may have moved since); set starttime to an epoch of the file \
+         whose state they are",
+        Number(t_start_s),
+        Number((late * 1e6).round() / 1e6),
+        Number(start_epoch_s)
+    )
+}
+
 /// The filter's settings of a KF-GINS configuration. KF-GINS gives the noise per axis; the
 /// filter's noise model is the same on all three axes: the largest axis is taken.
 pub fn filter_config(c: &KfGinsConfig) -> FilterConfig<f64> {
@@ -340,6 +372,8 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
     let mut prev_dv: Option<[f32; 3]> = None;
     let mut before_start = 0_u64;
     let mut stopped_after_end_s = None;
+    // The start's epoch (the first at or after `starttime`) was read.
+    let mut started = false;
     // Intervals off `imudatarate` by more than a quarter of its interval, of all intervals (a
     // rate off by a factor of 2 or 4/3 is caught; a receiver's jitter of a few percent is not).
     let (mut off_rate, mut intervals) = (0_u64, 0_u64);
@@ -382,19 +416,21 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
             // KF-GINS starts at the first epoch at or after `starttime`: its initpos, initvel
             // and initatt hold at that epoch, whose increment (over the interval before it)
             // is not integrated (`kf_gins.cpp` adds it as `imupre_` only) and which gets no
-            // row. An epoch at `starttime` is that epoch here too (the start holds at
-            // `starttime`, every later epoch is integrated from it); integrating it moved
-            // the whole trajectory one IMU interval ahead (6 cm at 12 m/s and 200 Hz).
+            // row. That epoch is the start here too (every later epoch is integrated from
+            // it); integrating it moved the whole trajectory one IMU interval ahead (6 cm at
+            // 12 m/s and 200 Hz).
             if row.t_s < t_start {
                 before_start += 1;
-                continue;
-            }
-            if row.t_s == t_start {
                 continue;
             }
             if row.t_s > t_end {
                 stopped_after_end_s = Some(row.t_s);
                 return Ok(None);
+            }
+            if !started {
+                check_start_epoch(t_start, row.t_s, nominal_dt, before_start)?;
+                started = true;
+                continue;
             }
             return Ok(Some(AidedSample {
                 t_us: (row.t_s * 1e6).round() as u64,
@@ -422,6 +458,17 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
             c.imu_path.display()
         );
     }
+    // A wrong `imudatarate` marks every epoch a gap (or none): refused before the
+    // trajectory is written, and before its flags are blamed on the data.
+    if intervals > 0 && off_rate * 10 > intervals {
+        bail!(
+            "imudatarate {} Hz does not match {}: {off_rate} of its {intervals} epoch intervals \
+             differ from {} s by more than a quarter",
+            Number(c.imu_rate_hz),
+            c.imu_path.display(),
+            Number(nominal_dt)
+        );
+    }
     if report.start_s.is_none() {
         // Epochs in the window, none navigated: not "no epoch".
         bail!(
@@ -433,17 +480,6 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
     crate::replay::check_refused_share(report.samples, report.rejected, "in the run's window")
         .with_context(|| c.imu_path.display().to_string())?;
     crate::aided_cmd::check_some_fix_used(&report.counters)?;
-    // A wrong `imudatarate` marks every epoch a gap (or none): refused before the
-    // trajectory is written.
-    if intervals > 0 && off_rate * 10 > intervals {
-        bail!(
-            "imudatarate {} Hz does not match {}: {off_rate} of its {intervals} epoch intervals \
-             differ from {} s by more than a quarter",
-            Number(c.imu_rate_hz),
-            c.imu_path.display(),
-            Number(nominal_dt)
-        );
-    }
     // Within that, a rate the file does not have is said: the intervals are the time
     // column's, `imudatarate` only judges them (and the first epoch's). Against the median
     // interval (the average counted a gap's time: a 7 s hole in 400 Hz data read as 353 Hz,

@@ -2593,7 +2593,8 @@ fn kf_gins_starts_at_the_epoch_at_starttime_without_integrating_it() {
     for (k, inc) in increments.iter().enumerate() {
         imu += &line(t_start_s + (k + 1) as f64 * dt, inc);
     }
-    std::fs::write(dir.path().join("imu.txt"), imu).unwrap();
+    std::fs::write(dir.path().join("imu.txt"), &imu).unwrap();
+    let imu_text = imu;
     // One fix, after the rows checked here.
     let fix = &truths[199];
     std::fs::write(
@@ -2628,9 +2629,38 @@ fn kf_gins_starts_at_the_epoch_at_starttime_without_integrating_it() {
              gbstd: [0.1, 0.1, 0.1]\n  abstd: [10, 10, 10]\n  gsstd: [10, 10, 10]\n  \
              asstd: [10, 10, 10]\n  corrtime: 1\nantlever: [0, 0, 0]\n";
     let config = dir.path().join("kf-gins.yaml");
-    std::fs::write(&config, yaml).unwrap();
+    std::fs::write(&config, &yaml).unwrap();
     let out = dir.path().join("result.nav");
-    run_ok(nav().arg("kf-gins").arg(&config).arg("--out").arg(&out));
+    let printed = run_ok(nav().arg("kf-gins").arg(&config).arg("--out").arg(&out));
+    assert!(printed.contains("GNSS position: "), "{printed}");
+    // A starttime 5 s before the file's first epoch: refused (KF-GINS refuses it too), not
+    // taken at the first epoch whatever the vehicle did in between; and so is a starttime
+    // in a gap of the file (an epoch before it, none for 0.5 s after).
+    let early = dir.path().join("early.yaml");
+    let before = format!("starttime: {t_start_s}\n");
+    let moved = format!("starttime: {}\n", t_start_s - 5.0);
+    std::fs::write(&early, yaml.replace(&before, &moved)).unwrap();
+    let e_nav = dir.path().join("e.nav");
+    let e = run_err(nav().arg("kf-gins").arg(&early).arg("--out").arg(&e_nav));
+    assert!(
+        e.contains("starttime 355995 s: the IMU file begins 5 s later, at 356000 s"),
+        "{e}"
+    );
+    assert!(!e_nav.exists());
+    let gap: String = imu_text
+        .lines()
+        .enumerate()
+        .filter(|(k, _)| !(2..=101).contains(k))
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    std::fs::write(dir.path().join("imu.txt"), gap).unwrap();
+    let inside = format!("starttime: {}\n", t_start_s + 0.01);
+    std::fs::write(&early, yaml.replace(&before, &inside)).unwrap();
+    let e = run_err(nav().arg("kf-gins").arg(&early).arg("--out").arg(&e_nav));
+    assert!(
+        e.contains("starttime 356000.01 s: the IMU file has no epoch from it until 0.5 s later"),
+        "{e}"
+    );
     let text = std::fs::read_to_string(&out).unwrap();
     let rows: Vec<Vec<f64>> = text
         .lines()
