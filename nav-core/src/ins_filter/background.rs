@@ -322,7 +322,7 @@ impl<T: Scalar> ErrorFilter<T> {
         }
         let pull = self.pull.carried(self.since_fix_s);
         let gate = self.config.gate_nis;
-        let pulled = pull.is_fault(gate).then(|| pull.doubt());
+        let pulled = pull.is_fault(gate).then(|| pull.reported_doubt(gate));
         match (pulled, self.coast.doubt()) {
             (Some(p), Some(c)) => Some(core::array::from_fn(|i| p[i] + c[i])),
             (p, c) => p.or(c),
