@@ -611,8 +611,9 @@ pub fn realignment_line(r: &Realignments) -> Option<String> {
             ),
             RealignCause::Diverged => (
                 format!(
-                    "the filter diverged (the last at t = {} s: it refused every fix while its \
-                     own 1-sigma grew beyond the limit",
+                    "the filter diverged (the last at t = {} s: it refused the fixes in a row \
+                     until DEGRADED, with its own 1-sigma beyond the limit or its position \
+                     never confirmed by a full window of fixes",
                     us(r.begun_us)
                 ),
                 "with the sensor errors known as at the start (the diverged filter's \

@@ -101,9 +101,10 @@ pub struct SigmaRms {
     pub yaw_deg: f64,
 }
 
-/// Refuses a start whose epoch, the first IMU epoch at or after `starttime` `t_start_s` [s],
-/// is `start_epoch_s` [s], more than half an interval `dt_s` [s] later; `before_start`
-/// epochs came before `starttime`. `initpos`, `initvel` and `initatt` hold at `starttime`,
+/// Refuses a start whose first IMU epoch at or after `starttime` `t_start_s` [s] is
+/// `start_epoch_s` [s], more than an interval and a half `dt_s` [s] later (within half an
+/// interval it is the start's epoch; within one and a half its increment spans the interval
+/// from `starttime`); `before_start` epochs came before `starttime`. `initpos`, `initvel` and `initatt` hold at `starttime`,
 /// and KF-GINS would take them at that later epoch whatever the vehicle did in between (it
 /// refuses a `starttime` before the file's first epoch, "Process time ERROR", not a gap in
 /// the file across it): a file that began 50 s late was navigated from the state of 50 s
@@ -115,7 +116,7 @@ pub fn check_start_epoch(
     before_start: u64,
 ) -> Result<()> {
     let late = start_epoch_s - t_start_s;
-    if late <= 0.5 * dt_s {
+    if late <= 1.5 * dt_s {
         return Ok(());
     }
     let gap = if before_start == 0 {
@@ -428,9 +429,14 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
                 return Ok(None);
             }
             if !started {
-                check_start_epoch(t_start, row.t_s, nominal_dt, before_start)?;
                 started = true;
-                continue;
+                if row.t_s - t_start <= 0.5 * nominal_dt {
+                    continue;
+                }
+                // One interval after `starttime`: its increment spans the interval from it,
+                // integrated from the start (a simulator's file that begins at its first
+                // increment); later, refused.
+                check_start_epoch(t_start, row.t_s, nominal_dt, before_start)?;
             }
             return Ok(Some(AidedSample {
                 t_us: (row.t_s * 1e6).round() as u64,

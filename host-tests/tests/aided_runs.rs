@@ -496,6 +496,40 @@ fn an_unconfirmed_filter_that_drifts_away_realigns() {
     assert!(e[NORTH].abs().max(e[EAST].abs()) < 3.0, "{e:?}");
 }
 
+/// The same start 111 m off, and its heading 90 deg off under a declared 1 deg, on a FOG car:
+/// no fix confirms it, and once the car drives each fix is refused alone. The FOG's own
+/// 1-sigma grows slowly (a KF-GINS `starttime` 100 s after its static start state took 361 s
+/// to pass the 50 m limit, the solution 10 km off by then). Now an unconfirmed filter has
+/// diverged once the refusals in a row make it DEGRADED (100 fixes), whatever its own
+/// 1-sigma: re-aligned by 110 s, and NAV, within 3 sigma, at the end.
+#[test]
+fn an_unconfirmed_filter_diverges_on_its_refusals_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    sim_fog_car(d, "300");
+    let mut start = GIVEN;
+    start[1] = "45.001,7.5,250";
+    start[5] = "0,0,90";
+    let (text, out) = replay_in(
+        d,
+        &[&start[..], &["--init-std", "1,0.1,1", "--imu-noise", "fog"]].concat(),
+    );
+    let said = "re-aligned in motion 1 time(s) after the filter diverged (the last at t = ";
+    let at: f64 = text
+        .split(said)
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(at <= 110.0, "diverged at {at} s: {text}");
+    let rows = errors_over_sigma(d, &out);
+    let log = std::fs::read_to_string(&out).unwrap();
+    let last = log.lines().rfind(|l| !l.starts_with('#')).unwrap();
+    assert!(last.ends_with("NAV"), "{last}");
+    let e = rows.last().unwrap();
+    assert!(e[NORTH].abs().max(e[EAST].abs()) < 3.0, "{e:?}");
+}
+
 /// A given start whose heading is 90 deg off under a declared 0.1 deg (a FOG land vehicle,
 /// still for its first 20 s): once the car drives, every fix is refused as the filter runs
 /// away from them at its speed. Before, its rows said NAV with a 3 m 1-sigma while they were

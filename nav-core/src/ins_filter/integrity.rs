@@ -469,7 +469,7 @@ impl<T: Scalar> Pull<T> {
 
     /// The part of the pull a fault holds [-]: of the position's and the velocity's sums,
     /// whitened with the covariance the fixes took away, the larger part beyond `gate_3dof`
-    /// ([`beyond_gate`], as a refused cluster's [`RefusedCluster::weight`]); zero within it.
+    /// (`beyond_gate`, as a refused cluster's [`RefusedCluster::weight`]); zero within it.
     pub fn weight(&self, gate_3dof: T) -> T {
         let part = |d: &Vector3<T>, c: &Matrix3<T>| {
             whiten(c, d).map_or_else(T::zero, |w| beyond_gate(w.norm_squared(), gate_3dof))
