@@ -104,11 +104,11 @@ pub struct SigmaRms {
 /// Refuses a start whose first IMU epoch at or after `starttime` `t_start_s` [s] is
 /// `start_epoch_s` [s], more than an interval and a half `dt_s` [s] later (within half an
 /// interval it is the start's epoch; within one and a half its increment spans the interval
-/// from `starttime`); `before_start` epochs came before `starttime`. `initpos`, `initvel` and `initatt` hold at `starttime`,
-/// and KF-GINS would take them at that later epoch whatever the vehicle did in between (it
-/// refuses a `starttime` before the file's first epoch, "Process time ERROR", not a gap in
-/// the file across it): a file that began 50 s late was navigated from the state of 50 s
-/// before, without a word.
+/// from `starttime`); `before_start` epochs came before `starttime`. `initpos`, `initvel`
+/// and `initatt` hold at `starttime`, and KF-GINS would take them at that later epoch
+/// whatever the vehicle did in between (it refuses a `starttime` before the file's first
+/// epoch, "Process time ERROR", not a gap in the file across it): a file that began 50 s
+/// late was navigated from the state of 50 s before, without a word.
 pub fn check_start_epoch(
     t_start_s: f64,
     start_epoch_s: f64,

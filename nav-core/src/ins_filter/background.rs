@@ -429,7 +429,8 @@ impl<T: Scalar> ErrorFilter<T> {
     /// [`integrity::WINDOW`] of them one refused cluster that is not gross (fixes that agree
     /// among themselves, not a jump seen while the filter knew its position), and the
     /// filter's own horizontal 1-sigma (its covariance, without the doubt) beyond
-    /// [`FilterConfig::max_horizontal_sigma_m`]. A filter pulled a few sigma off in a
+    /// [`FilterConfig::max_horizontal_sigma_m`] (before any full window of fixes confirmed
+    /// it, the refusals alone: below). A filter pulled a few sigma off in a
     /// direction its covariance holds tight (a start drawn in the tails: a tactical filter at
     /// rest took a 0.11 deg/s gyro bias, 3.6 sigma wrong, from its first 13 fixes) drifts as
     /// fast as its 1-sigma grows: the fixes' normalised squares stay just above the gate
