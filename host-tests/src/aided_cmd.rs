@@ -1,7 +1,7 @@
 //! The GNSS-aided commands: `nav replay --gnss` (a recording with GNSS fixes) and the filter's
 //! settings from the command line's units.
 
-use crate::aided::{self, AidedReport, AidedRow};
+use crate::aided::{self, AidedReport, AidedRow, UpdateRecord};
 use crate::atomic;
 use crate::gnss::{self, GnssFix};
 use crate::recording_io::ReplaySource;
@@ -13,7 +13,7 @@ use nav_core::ins_filter::limits::MIN_BIAS_INSTABILITY_TIME_S;
 use nav_core::ins_filter::model::FilterNoise;
 use nav_core::ins_filter::motion::{MAX_FIX_INTERVAL_S, MIN_SPEED_SIGMAS, MotionAlignConfig};
 use nav_core::ins_filter::sequencer::{RealignCause, Realignments, Sequencer, Start};
-use nav_core::ins_filter::{FilterConfig, FilterModel, InitialSigma, SensorErrors};
+use nav_core::ins_filter::{AidResult, FilterConfig, FilterModel, InitialSigma, SensorErrors};
 use nav_core::navigator::config::{MAX_HEIGHT_M, MIN_HEIGHT_M};
 use nav_core::number::{Number, Rounded};
 use nav_core::{NavState, Position, Scalar, Vector3, attitude};
@@ -586,11 +586,45 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
         ),
     ]
     .into_iter()
+    .chain(refused_run_line(&r.updates))
     .chain(r.gnss_latency.as_ref().map(latency_line))
     .chain(realignment_line(&r.realignments))
     .chain(aiding_warnings(r))
     .collect::<Vec<_>>()
     .join("\n")
+}
+
+/// Position fixes refused in a row from which the summary names the longest such run [-].
+pub const REFUSED_RUN_TOLD: usize = 5;
+
+/// The line naming the longest run of GNSS position fixes refused in a row (invalid ones
+/// within it do not break it), when it is [`REFUSED_RUN_TOLD`] fixes or more; `None`
+/// otherwise. The solution coasted on the IMU over it: the counts alone said nothing of 67
+/// RTK fixes refused in a row, the solution 1 m off at their end.
+pub fn refused_run_line(updates: &[UpdateRecord]) -> Option<String> {
+    // (fixes, first, last time [s]) of the run going on, and of the longest.
+    let mut run: Option<(usize, f64, f64)> = None;
+    let mut longest: Option<(usize, f64, f64)> = None;
+    for u in updates {
+        run = match u.position {
+            AidResult::Rejected { .. } => {
+                Some(run.map_or((1, u.t_s, u.t_s), |(n, first, _)| (n + 1, first, u.t_s)))
+            }
+            AidResult::Accepted { .. } => None,
+            AidResult::Invalid => run,
+        };
+        if let Some(r) = run
+            && longest.is_none_or(|l| r.0 > l.0)
+        {
+            longest = Some(r);
+        }
+    }
+    let (n, first, last) = longest.filter(|l| l.0 >= REFUSED_RUN_TOLD)?;
+    Some(format!(
+        "longest refusal: {n} GNSS position fixes in a row, from t = {first:.3} s to \
+         {last:.3} s (the solution coasted on the IMU over those {:.1} s)",
+        last - first
+    ))
 }
 
 /// The line of a run that re-aligned in motion after gaps in the IMU data too long to bridge
@@ -866,6 +900,36 @@ pub fn position_warning(p: &nav_core::ins_filter::AidCounters, unused: &str) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The longest run of refused position fixes is named from 5 of them, an invalid fix
+    /// within it not breaking it; shorter runs, and accepted fixes, are not.
+    #[test]
+    fn the_longest_run_of_refused_fixes_is_named() {
+        let fix = |t_s: f64, position: AidResult<f64>| UpdateRecord {
+            t_s,
+            position,
+            velocity: None,
+        };
+        let (ok, no) = (
+            AidResult::Accepted { nis: 1.0 },
+            AidResult::Rejected { nis: 20.0 },
+        );
+        let mut updates: Vec<_> = (0..4).map(|k| fix(f64::from(k), no)).collect();
+        updates.push(fix(4.0, ok));
+        assert_eq!(refused_run_line(&updates), None);
+        for k in 5..12 {
+            let r = if k == 8 { AidResult::Invalid } else { no };
+            updates.push(fix(f64::from(k), r));
+        }
+        updates.push(fix(12.0, ok));
+        let line = refused_run_line(&updates).unwrap();
+        assert!(
+            line.contains(
+                "longest refusal: 6 GNSS position fixes in a row, from t = 5.000 s to 11.000 s"
+            ) && line.contains("those 6.0 s"),
+            "{line}"
+        );
+    }
 
     /// The latency warning names the lag or the lead with its 1-sigma, when it was found and
     /// what to do; nothing when none was found.

@@ -407,6 +407,16 @@ fn a_wrong_given_start_is_reacquired_once_degraded() {
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("{text}"));
     assert!(accepted >= 100, "{accepted} fixes used: {text}");
+    // The summary names the refusals before the re-acquisition: 100 in a row at least.
+    let refused: u32 = text
+        .split("longest refusal: ")
+        .nth(1)
+        .and_then(|l| l.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(refused >= 100, "{text}");
+    // Re-acquired on its refused fixes, which agree among themselves: no divergence.
+    assert!(!text.contains("re-aligned in motion"), "{text}");
     let rows = errors_over_sigma(d, &out);
     assert_each_channel_within_3_sigma(&rows, 0.01, "a start 100 m off");
     let last = rows.last().unwrap();

@@ -430,7 +430,7 @@ impl<T: Scalar> ErrorFilter<T> {
     /// among themselves, not a jump seen while the filter knew its position), and the
     /// filter's own horizontal 1-sigma (its covariance, without the doubt) beyond
     /// [`FilterConfig::max_horizontal_sigma_m`] (before any full window of fixes confirmed
-    /// it, the refusals alone: below). A filter pulled a few sigma off in a
+    /// it, refusals each alone are enough: below). A filter pulled a few sigma off in a
     /// direction its covariance holds tight (a start drawn in the tails: a tactical filter at
     /// rest took a 0.11 deg/s gyro bias, 3.6 sigma wrong, from its first 13 fixes) drifts as
     /// fast as its 1-sigma grows: the fixes' normalised squares stay just above the gate
@@ -438,8 +438,10 @@ impl<T: Scalar> ErrorFilter<T> {
     /// drifted cluster re-acquires, and every fix of the run was refused. By then its sensor
     /// estimates are as doubtful as its solution [Groves, ch. 17, re-initialisation]. A
     /// filter that no full window of fixes has confirmed yet has no clusters: there, the
-    /// refusals in a row are enough, whatever its own 1-sigma, for it never knew its
-    /// position (a given start 111 m off under a declared 1 m, on a MEMS model: it
+    /// refusals in a row with its own 1-sigma beyond the limit are enough, and whatever its
+    /// own 1-sigma once the last of them was refused alone (it continued no refused fix
+    /// before it: the fixes move away from a solution that never knew its position; refused
+    /// fixes that agree among themselves re-acquire instead, [`integrity`]) (a given start 111 m off under a declared 1 m, on a MEMS model: it
     /// re-acquired once, then drifted away from fixes moving 11 m/s relative to it, each
     /// refused alone, and was 2.2 km off at the end of the run, never re-aligned; a KF-GINS
     /// `starttime` 100 s after its static start state, the car 240 m away at 11 m/s: its
@@ -451,8 +453,13 @@ impl<T: Scalar> ErrorFilter<T> {
             .cluster
             .as_ref()
             .is_some_and(|c| c.members as usize >= integrity::WINDOW && (!c.gross || c.ran_away));
-        let unconfirmed = !self.confirmed && self.refused_unconfirmed.is_some();
-        self.degraded_by_refusals() && (unconfirmed || (clustered && p_pos.x + p_pos.y > max * max))
+        let unconfirmed = self
+            .refused_unconfirmed
+            .as_ref()
+            .filter(|_| !self.confirmed);
+        let alone = unconfirmed.is_some_and(RefusedCluster::is_lone);
+        let beyond = p_pos.x + p_pos.y > max * max;
+        self.degraded_by_refusals() && (alone || ((clustered || unconfirmed.is_some()) && beyond))
     }
 
     /// Takes the counters of `diverged`, a filter of the same settings this one restarts
