@@ -14,6 +14,12 @@ for tool in qemu-system-arm defmt-print; do
 done
 semi="enable=on,target=native,arg=firmware"
 for a in "$@"; do
+  # The firmware reads its arguments as one semihosting command line split at white space: a
+  # path with a space in it would become two arguments and shift every one after it.
+  if [[ "$a" =~ [[:space:]] ]]; then
+    echo "qemu-run.sh: argument '$a' holds white space, which the firmware's semihosting command line cannot carry (rename the file or use a path without spaces)" >&2
+    exit 3
+  fi
   # QEMU's option syntax writes a comma inside a value as two (e.g. --lever-arm X,Y,Z).
   semi+=",arg=${a//,/,,}"
 done

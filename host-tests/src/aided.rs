@@ -16,6 +16,7 @@ use nav_core::ins_filter::sequencer::{
 use nav_core::ins_filter::{
     AidResult, AidedIns, FilterCounters, GnssPosition, GnssVelocity, POS, VEL,
 };
+use nav_core::navigator::config::{MAX_HEIGHT_M, MIN_HEIGHT_M};
 use nav_core::output::CSV_HEADER;
 use nav_core::{ImuIncrement, InputError, Scalar, Solution, Vector3};
 use std::fmt;
@@ -660,6 +661,7 @@ pub fn run<T: Scalar, E: fmt::Display>(
             });
         }
         let Some(ins) = seq.filter() else { continue };
+        check_within_earth_model(ins, s.t_us)?;
         if report.start_s.is_none() {
             report.start_s = Some(s.t_us as f64 * 1e-6);
             if matches!(seq.start(), Start::Motion(_)) {
@@ -692,6 +694,29 @@ pub fn run<T: Scalar, E: fmt::Display>(
     report.fixes = *seq.fix_counters();
     report.realignments = *seq.realignments();
     Ok(report)
+}
+
+/// Refuses a solution whose height left the Earth model's range ([`MIN_HEIGHT_M`],
+/// [`MAX_HEIGHT_M`]: a site's, as `nav replay` accepts one) at `t_us` [us]: no fix can bring
+/// it back, and the rows after it are not a solution. A KF-GINS IMU file with its gyro and
+/// accelerometer columns swapped ran to the end at -451 km (3 km/s down), exit 0.
+fn check_within_earth_model<T: Scalar>(ins: &AidedIns<T>, t_us: u64) -> Result<()> {
+    let h = ins.state().position.h_f64();
+    if (MIN_HEIGHT_M..=MAX_HEIGHT_M).contains(&h) {
+        return Ok(());
+    }
+    let p = &ins.counters().position;
+    Err(anyhow!(
+        "the solution diverged: height {:.0} m at t = {:.3} s, outside the Earth model's range \
+         [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m, with {} GNSS position fixes used and {} refused; \
+         the IMU data (its columns: angle increments [rad] before velocity increments [m/s], \
+         body front-right-down; their units), the start or the IMU noise do not match the \
+         fixes",
+        h,
+        t_us as f64 * 1e-6,
+        p.accepted,
+        p.rejected
+    ))
 }
 
 /// [`run`] over a replay source.

@@ -1982,3 +1982,29 @@ fn firmware_takes_the_gnss_correlated_error_like_the_harness() {
     assert_eq!(host.lines().count(), 1 + 1 + 100 + 1, "{host}");
     assert_same_lines(&fw, &host);
 }
+
+/// A path with a space in it: the firmware's semihosting command line is split at white space,
+/// so `"out/sol 45" 45 7.5 150 15` became `out/sol`, longitude 45 deg, height 7.5 m, a 150 s
+/// window and a row every 15 steps, and the run exited 0 at the wrong site. `qemu-run.sh`
+/// refuses it (exit 3, bad arguments) before QEMU starts, and writes nothing.
+#[test]
+fn a_path_with_white_space_is_refused_before_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (code, log) = run_firmware(
+        d,
+        &[
+            "--imu-noise",
+            "fog",
+            "imu.bin",
+            "sol 45",
+            "45",
+            "7.5",
+            "150",
+            "15",
+        ],
+    );
+    assert_eq!(code, 3, "{log}");
+    assert!(log.contains("holds white space"), "{log}");
+    assert!(!d.join("sol").exists() && !d.join("sol 45").exists());
+}

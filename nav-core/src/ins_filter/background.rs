@@ -1376,21 +1376,29 @@ impl<T: Scalar> ErrorFilter<T> {
             return (rv, AidResult::Invalid, None);
         }
         // Zero rate relative to the Earth: the window's mean rate minus the Earth rate in body
-        // axes is b_g + diag(omega) s_g (the velocity correction's attitude part, micro-
-        // radians, neglected here).
+        // axes the attitude predicts. With `C~_n_b = C_n_b (I + [phi x])` (`model`) it is
+        // `b_g + C_n_b [omega_ie_n x] phi` (diag(omega) s_g neglected at rest): the Earth
+        // rate's projection turns with the heading error, by `Omega cos(lat) sin(psi)`, 7.5
+        // deg/h for 30 deg at 45 deg latitude. Without that term a consumer part's stops took
+        // the heading's share for bias, known to a fraction of the Earth rate, and the heading
+        // the tilt drift then told was 5-10 sigma off [Groves, §14.2.1, §15.3].
         let c_n_b = snap
             .state
             .q_b_n
             .to_rotation_matrix()
             .into_inner()
             .transpose();
-        let mut z = w.omega_ib_b - c_n_b * snap.earth.omega_ie_n();
-        if let Some(c) = &cv {
-            z -= c.x.fixed_rows::<3>(BG);
-        }
+        let omega_ie_n = snap.earth.omega_ie_n();
         let mut h = SMatrix::<T, 3, N>::zeros();
         h.fixed_view_mut::<3, 3>(0, BG)
             .copy_from(&Matrix3::identity());
+        h.fixed_view_mut::<3, 3>(0, ATT)
+            .copy_from(&(c_n_b * model::skew(&omega_ie_n)));
+        // Relative to the state the zero-velocity update left.
+        let mut z = w.omega_ib_b - c_n_b * omega_ie_n;
+        if let Some(c) = &cv {
+            z -= h * c.x;
+        }
         let arw = self.config.noise.arw_rad_per_sqrt_s;
         // The bias instability is a consider state the measurement sees: its variance is
         // given to the measurement noise (the window is shorter than its correlation time).
