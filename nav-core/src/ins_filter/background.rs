@@ -1379,9 +1379,10 @@ impl<T: Scalar> ErrorFilter<T> {
         // axes the attitude predicts. With `C~_n_b = C_n_b (I + [phi x])` (`model`) it is
         // `b_g + C_n_b [omega_ie_n x] phi` (diag(omega) s_g neglected at rest): the Earth
         // rate's projection turns with the heading error, by `Omega cos(lat) sin(psi)`, 7.5
-        // deg/h for 30 deg at 45 deg latitude. Without that term a consumer part's stops took
-        // the heading's share for bias, known to a fraction of the Earth rate, and the heading
-        // the tilt drift then told was 5-10 sigma off [Groves, §14.2.1, §15.3].
+        // deg/h for 30 deg at 45 deg latitude. Without that term a stop took the heading's
+        // share for bias, and the heading's 1-sigma fell below what a stop can tell when the
+        // gyro bias is near the Earth rate (6.1 deg against 9.4; a consumer part at rest was
+        // 5-10 sigma off in heading) [Groves, §14.2.1, §15.3].
         let c_n_b = snap
             .state
             .q_b_n

@@ -683,10 +683,11 @@ impl<T: Scalar> MotionAlign<T> {
     /// since, levelled by `roll`, `pitch` [rad] (1-sigma `tilt_sigma` [rad]) and turned by
     /// the track's heading, points against the fixes' velocity change, which is beyond 2.5
     /// sigma of both (a tactical car reversing to 3 m/s was 2.6 sigma of the IMU's doubt
-    /// alone, 2.75 m/s against 1.05: a 3-sigma test on the IMU's change missed it). Integrated velocity vectors compared as in
-    /// [Silson, 2011], with two headings to choose from. Waiting for an undecided IMU does not
-    /// help: at a steady acceleration its change and its doubt grow alike (a wait of up to
-    /// 10 s, tried, only delayed the starts of vehicles driving forwards).
+    /// alone, 2.75 m/s against 1.05: a 3-sigma test on the IMU's change missed it).
+    /// Integrated velocity vectors compared as in [Silson, 2011], with two headings to choose
+    /// from. Waiting for an undecided IMU does not help: at a steady acceleration its change
+    /// and its doubt grow alike (a wait of up to 10 s, tried, only delayed the starts of
+    /// vehicles driving forwards).
     fn reversed_since_anchor(
         &self,
         roll: T,
