@@ -66,6 +66,8 @@ pub enum ArgError<'a> {
     UnknownOption(&'a str),
     /// `--lever-arm` and `--lever-arm-sigma` together.
     LeverArmTwice,
+    /// `--base-translation` with the static alignment, which takes a still base only.
+    BaseTranslationStatic,
     /// A run-configuration option was refused (its message).
     Option(OptionError),
     /// An option without its value.
@@ -116,6 +118,11 @@ impl fmt::Display for ArgError<'_> {
             ),
             Self::LeverArmTwice => f.write_str(
                 "--lever-arm (known) and --lever-arm-sigma (unknown) exclude each other",
+            ),
+            Self::BaseTranslationStatic => write!(
+                f,
+                "--base-translation: {}",
+                nav_core::alignment::machine::BASE_TRANSLATION_STATIC
             ),
             Self::Option(e) => write!(f, "{e}"),
             Self::NoValue(name) => write!(f, "--{name} has no value"),
@@ -176,6 +183,7 @@ impl Args {
         let mut imu_mounting = Mounting::IDENTITY;
         let mut noise: Option<NoiseSpec> = None;
         let mut lever_arm_given = (false, false);
+        let mut base_translation_given = false;
         let mut gnss_path = None;
         let mut stream_path: Option<heapless::Vec<u8, MAX_PATH>> = None;
         let mut config_frame_path = None;
@@ -210,6 +218,7 @@ impl Args {
                     match name {
                         "lever-arm" => lever_arm_given.0 = true,
                         "lever-arm-sigma" => lever_arm_given.1 = true,
+                        "base-translation" => base_translation_given = true,
                         _ => {}
                     }
                     run.set(name, value).map_err(|e| match e {
@@ -221,6 +230,9 @@ impl Args {
         }
         if lever_arm_given == (true, true) {
             return Err(ArgError::LeverArmTwice);
+        }
+        if base_translation_given && !run.align_method.takes_base_translation() {
+            return Err(ArgError::BaseTranslationStatic);
         }
         let mut next = |i: usize| args.next().ok_or(ArgError::Missing(NAMES[i]));
         let imu_path = c_path(next(0)?).ok_or(ArgError::Invalid(NAMES[0]))?;

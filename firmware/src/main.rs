@@ -312,7 +312,7 @@ mod app {
                     imu.decode.add(decode_instr.into());
                     (sample, t_ready_us)
                 }
-                DataReady::SourceError => exit(ExitCode::Recording),
+                DataReady::SourceError => stop(out, ExitCode::Recording),
                 DataReady::End { health } => {
                     imu.health = health;
                     break;
@@ -337,7 +337,7 @@ mod app {
                         Ok(None) => break,
                         Err(e) => {
                             defmt::error!("GNSS file: {}", defmt::Display2Format(&e));
-                            exit(ExitCode::Recording)
+                            stop(out, ExitCode::Recording)
                         }
                     }
                 }
@@ -402,7 +402,7 @@ mod app {
                     }
                 }
                 Step::Rejected(_) => {}
-                Step::Failed(e) => failed(&e, &imu),
+                Step::Failed(e) => failed(&e, &imu, out),
                 // Not reached: every answer is awaited before the next sample.
                 Step::NotReady => defmt::panic!("navigator not ready"),
             }
@@ -426,7 +426,7 @@ mod app {
         background_work(navigator, &mut to_filter, &mut from_background, out, &imu).await;
         let summary = navigator.finish().unwrap_or_else(|e| {
             log::health(&imu.health);
-            failed(&e, &imu)
+            failed(&e, &imu, out)
         });
         if let Some(row) = summary.final_row {
             out.row(row);
@@ -456,7 +456,7 @@ mod app {
                     s(data.1)
                 );
             }
-            exit(ExitCode::Recording)
+            stop(out, ExitCode::Recording)
         }
         if board::CSV_LOG {
             write_line(&mut out.out, summary.end_record());
@@ -582,6 +582,7 @@ mod app {
                 return samples;
             }
             if board::now_us() >= end_us {
+                config_in.none_taken();
                 run.use_default();
                 return samples;
             }
@@ -754,7 +755,7 @@ mod app {
             match row {
                 Ok(Some(row)) => out.row(row),
                 Ok(None) => {}
-                Err(e) => failed(&e, imu),
+                Err(e) => failed(&e, imu, out),
             }
         }
     }
@@ -812,24 +813,40 @@ mod app {
                 out.row(row);
             }
             Ok(None) => {}
-            Err(e) => failed(&e, imu),
+            Err(e) => failed(&e, imu, out),
         }
+    }
+
+    /// Exits with `code` after sending the frames the qemu board's stream still queues: an error
+    /// exit lost up to a chunk of them (the decoded stream ended a row before the log's last).
+    /// The real board's UART sends as it goes.
+    fn stop(out: &mut Outputs, code: ExitCode) -> ! {
+        #[cfg(feature = "qemu")]
+        if out.out.flush().is_err() {
+            defmt::error!("cannot write the output stream");
+        }
+        #[cfg(not(feature = "qemu"))]
+        let _ = out;
+        exit(code)
     }
 
     /// Logs why the run could not navigate (with the counts by cause) and exits with
     /// [`ExitCode::NothingNavigated`] or [`ExitCode::Alignment`]. The solution log is left
     /// without its end record.
     #[inline(never)]
-    fn failed(e: &NavError, imu: &ImuStats) -> ! {
+    fn failed(e: &NavError, imu: &ImuStats, out: &mut Outputs) -> ! {
         defmt::error!("{}", errors::Nav(e));
         log_imu_costs(imu);
-        exit(match e {
-            NavError::NothingNavigated { .. } => ExitCode::NothingNavigated,
-            NavError::Alignment { .. }
-            | NavError::EndedDuringAlignment { .. }
-            | NavError::GapDuringAlignment { .. }
-            | NavError::Filter(_) => ExitCode::Alignment,
-        })
+        stop(
+            out,
+            match e {
+                NavError::NothingNavigated { .. } => ExitCode::NothingNavigated,
+                NavError::Alignment { .. }
+                | NavError::EndedDuringAlignment { .. }
+                | NavError::GapDuringAlignment { .. }
+                | NavError::Filter(_) => ExitCode::Alignment,
+            },
+        )
     }
 
     /// Alignment, below navigation (RTIC's idle, the lowest priority): the navigator's

@@ -183,9 +183,16 @@ impl Telemetry {
     }
 
     /// A solution row (the one the solution log has), with the last evaluated status
-    /// (navigating, before the first health evaluation: `NAV`, free inertial unless aided).
+    /// (navigating, before the first health evaluation since the alignment: `NAV`, free
+    /// inertial unless aided; the first row once said the alignment's `ALIGN_COARSE`).
     pub fn row(&mut self, out: &mut Output, row: Row) {
-        let (status, flags) = self.status.unwrap_or((
+        let navigating = |s: &NavStatus| {
+            !matches!(
+                s,
+                NavStatus::Standby | NavStatus::AlignCoarse | NavStatus::AlignFine
+            )
+        };
+        let (status, flags) = self.status.filter(|(s, _)| navigating(s)).unwrap_or((
             NavStatus::Nav,
             match row {
                 Row::Free(_) => StatusFlags::FREE_INERTIAL,

@@ -525,3 +525,118 @@ fn a_source_at_another_rate_than_the_devices_is_refused() {
         );
     }
 }
+
+/// One record of a still increment recording whose time tag steps back two periods (its
+/// increment the true one period's), the next record's on time: through each simulated device
+/// and its driver, the record shows as a repeated sample (`STALE`), and the next sample spans
+/// both records' time with both increments. Before, the stale record's increment was dropped
+/// while the next sample's interval covered its time: the vertical velocity lost `g` times 5 ms
+/// and a still base's alignment was refused as "base not still". Over the whole recording the
+/// increments and the time a navigator takes add up to those of the same recording on time,
+/// through the same device, within a register count.
+#[test]
+fn a_time_tag_stepping_back_loses_no_increment_on_any_device() {
+    use hal_adapters::drivers::bmi088::{self, AccelRange, GyroRange};
+    use hal_adapters::sim::SimBmi088;
+    const BACK_AT: usize = 100;
+    let f = [0.02, -0.03, -9.80665];
+    let omega = [1e-4, -2e-4, 5e-5];
+    let recording_with = |back: bool| {
+        let records: Vec<Record> = (0..N)
+            .map(|i| {
+                let on_time = T0_NS + (i as u64 + 1) * PERIOD_NS;
+                Record {
+                    t_ns: if back && i == BACK_AT {
+                        on_time - 3 * PERIOD_NS
+                    } else {
+                        on_time
+                    },
+                    gyro: omega.map(|w| w * T_S),
+                    accel: f.map(|a| a * T_S),
+                    temperature_c: 25.0,
+                }
+            })
+            .collect();
+        recording(Kind::Increments, &records)
+    };
+    let (back, on_time) = (recording_with(true), recording_with(false));
+    // What a navigator takes (every sample but a repeated one): increments and time summed.
+    let sums = |got: &[ImuSample]| {
+        let (mut dtheta, mut dv, mut t) = ([0.0f64; 3], [0.0f64; 3], 0.0f64);
+        for s in got.iter().filter(|s| !s.flags.contains(SampleFlags::STALE)) {
+            let (g, a) = s.increments();
+            for k in 0..3 {
+                dtheta[k] += f64::from(g[k]);
+                dv[k] += f64::from(a[k]);
+            }
+            t += f64::from(s.dt_s);
+        }
+        (dtheta, dv, t)
+    };
+    // `samples` reads a recording's bytes through a device and its driver.
+    let check = |name: &str, samples: &dyn Fn(&[u8]) -> Vec<ImuSample>, count: [f32; 2]| {
+        let got = samples(&back);
+        let stale: Vec<usize> = (0..got.len())
+            .filter(|&i| got[i].flags.contains(SampleFlags::STALE))
+            .collect();
+        assert_eq!(stale, [BACK_AT], "{name}");
+        let after = &got[BACK_AT + 1];
+        assert!((after.dt_s - 2.0 * T_S).abs() < 1e-6, "{name}: {after:?}");
+        let (g, a, t) = sums(&got);
+        let (g0, a0, t0) = sums(&samples(&on_time));
+        assert!((t - t0).abs() < 1e-6, "{name}: time {t} vs {t0}");
+        for k in 0..3 {
+            // A register count over the two records' 5 ms, and rounding.
+            let [g_tol, a_tol] = count.map(|c| f64::from(c) * 2.0 * f64::from(T_S) + 1e-9);
+            assert!(
+                (a[k] - a0[k]).abs() <= a_tol,
+                "{name}: dv[{k}] {} vs {}",
+                a[k],
+                a0[k]
+            );
+            assert!(
+                (g[k] - g0[k]).abs() <= g_tol,
+                "{name}: dtheta[{k}] {} vs {}",
+                g[k],
+                g0[k]
+            );
+        }
+    };
+    let model = Model::Adis16505(Range::Dps500);
+    let adis = |bytes: &[u8]| {
+        all(&mut SimulatedImu::adis16505(replay(bytes), adis16505::Config::new(model)).unwrap())
+    };
+    // Delta outputs, as rates per count: 720 deg / 2^31 and 100 m/s / 2^31 per period.
+    let per_s = |lsb: f32| lsb / T_S;
+    check(
+        "ADIS16505",
+        &adis,
+        [
+            per_s(720.0 * DEG / 2f32.powi(31)),
+            per_s(100.0 / 2f32.powi(31)),
+        ],
+    );
+    let icm = |bytes: &[u8]| {
+        all(&mut SimulatedImu::icm42688(replay(bytes), icm42688::Config::default()).unwrap())
+    };
+    // 20-bit FIFO data: 2000 deg/s and 16 g over 2^19 counts.
+    check(
+        "ICM-42688-P",
+        &icm,
+        [2000.0 * DEG / 524_288.0, 16.0 * 9.80665 / 524_288.0],
+    );
+    let config = bmi088::Config {
+        gyro_range: GyroRange::Dps500,
+        accel_range: AccelRange::G3,
+        mounting: Mounting::IDENTITY,
+    };
+    let bmi = |bytes: &[u8]| {
+        let device = SimBmi088::new(replay(bytes));
+        all(&mut SimulatedImu::bmi088(&device, config).unwrap())
+    };
+    check(
+        "BMI088",
+        &bmi,
+        [500.0 * DEG / 32768.0, 3.0 * 9.80665 / 32768.0],
+    );
+}

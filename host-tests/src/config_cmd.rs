@@ -157,6 +157,15 @@ pub fn parse(name: &Path, text: &str) -> Result<DeviceConfig> {
             ),
         }
     }
+    // After the ranges: a translation the static alignment would ignore (the board took such a frame silently).
+    if let Some((n, _)) = given.get("base-translation")
+        && !config.run.align_method.takes_base_translation()
+    {
+        bail!(
+            "{file}:{n}: base-translation: {}",
+            nav_core::alignment::machine::BASE_TRANSLATION_STATIC
+        );
+    }
     Ok(config)
 }
 

@@ -380,7 +380,14 @@ pub fn decode(input: &mut impl Read, out: &mut impl Write) -> Result<DecodeSumma
                         *after += 1;
                     }
                     // A frame whose CRC holds but whose content no navigator writes.
-                    if let Some(why) = implausible(&s.row, last_t_us) {
+                    let contradiction = s.status.solution_contradiction(s.flags).map(|why| {
+                        format!(
+                            "board status {} with flags {:?}: {why} (no board writes it)",
+                            s.status.name(),
+                            s.flags
+                        )
+                    });
+                    if let Some(why) = implausible(&s.row, last_t_us).or(contradiction) {
                         summary.implausible += 1;
                         if summary.refused_rows.len() < MAX_LISTED {
                             summary.refused_rows.push((decoder.stats().bytes, why));
@@ -636,10 +643,15 @@ mod tests {
                 sigma_att_deg: [0.5; 3],
                 status: filter,
             };
+            let flags = match status {
+                NavStatus::Degraded => StatusFlags::AIDING_REJECTED,
+                NavStatus::Fault => StatusFlags::DEVICE_FAULT,
+                _ => StatusFlags::empty(),
+            };
             Message::NavSolution(NavSolution {
                 row: Row::Aided(solution, columns),
                 status,
-                flags: StatusFlags::empty(),
+                flags,
             })
         };
         let messages = [
@@ -659,6 +671,67 @@ mod tests {
             ) && text.contains("WARNING: 2 of 4 rows' frames say DEGRADED or FAULT"),
             "{text}"
         );
+    }
+
+    /// Frames whose board status contradicts its own flags or gives no solution (NAV with
+    /// IMU_LOST and NEAR_POLE, a STANDBY or ALIGN_COARSE row, FAULT without a failure, a
+    /// failure under DEGRADED) decoded as NAV rows of a complete log, without a word. Refused
+    /// now as content no board writes; the rows the status rule gives pass.
+    #[test]
+    fn solution_frames_whose_status_contradicts_the_rule_are_refused() {
+        let row = |k: u64| {
+            Row::Free(Solution {
+                t_us: S.t_us + k * 2500,
+                ..S
+            })
+        };
+        let frame = |k: u64, status: NavStatus, flags: StatusFlags| {
+            Message::NavSolution(NavSolution {
+                row: row(k),
+                status,
+                flags,
+            })
+        };
+        let free = StatusFlags::FREE_INERTIAL;
+        for (status, flags) in [
+            (
+                NavStatus::Nav,
+                free | StatusFlags::IMU_LOST | StatusFlags::NEAR_POLE,
+            ),
+            (NavStatus::Standby, free),
+            (NavStatus::AlignCoarse, free),
+            (NavStatus::AlignFine, free),
+            (NavStatus::Fault, free),
+            (NavStatus::Degraded, free | StatusFlags::BUS_ERRORS),
+            (NavStatus::Degraded, free),
+        ] {
+            let messages = [
+                frame(0, NavStatus::Nav, free),
+                frame(1, status, flags),
+                Message::EndOfRun(EndOfRun { rows: 2 }),
+            ];
+            let mut out = Vec::new();
+            let s = decode(&mut frames(&messages).as_slice(), &mut out).unwrap();
+            assert_eq!((s.rows, s.implausible), (1, 1), "{status:?} {flags:?}");
+            assert!(!s.complete());
+            assert!(s.to_string().contains("no board writes it"), "{s}");
+        }
+        for (status, flags) in [
+            (NavStatus::Nav, free | StatusFlags::CLIPPING),
+            (NavStatus::Degraded, free | StatusFlags::IMU_LOST),
+            (
+                NavStatus::Fault,
+                free | StatusFlags::DEVICE_FAULT | StatusFlags::NEAR_POLE,
+            ),
+        ] {
+            let messages = [
+                frame(0, NavStatus::Nav, free),
+                frame(1, status, flags),
+                Message::EndOfRun(EndOfRun { rows: 2 }),
+            ];
+            let s = decode(&mut frames(&messages).as_slice(), &mut Vec::new()).unwrap();
+            assert_eq!((s.rows, s.implausible), (2, 0), "{status:?} {flags:?}");
+        }
     }
 
     /// Frames whose CRC holds but whose content no navigator writes are refused, counted,

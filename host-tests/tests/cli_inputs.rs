@@ -278,8 +278,14 @@ fn messages_describe_the_users_fixes_and_options() {
     let osc = ["oscillator", "static", "--seconds", "2"];
     refused(
         &[&osc[..], &["--f0-hz", "0.5"]].concat(),
-        "--f0-hz must be at least 1 Hz (the amplitude drive averages over 1 s, at least one \
-         period), not 0.5",
+        "--f0-hz must be at least 30 Hz, not 0.5",
+    );
+    // 1 to 20 Hz passed the check and never gave an epoch, the failure blaming the readout
+    // noise (1e-9 m against 2e-5 m): refused with the measured limit.
+    refused(
+        &[&osc[..], &["--f0-hz", "20"]].concat(),
+        "--f0-hz must be at least 30 Hz, not 20: below it the estimator does not lock on the \
+         simulated oscillator, even without readout noise",
     );
     refused(
         &[&osc[..], &["--noise-m", "-1"]].concat(),

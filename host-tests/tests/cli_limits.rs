@@ -252,6 +252,42 @@ fn replay_alignment_options_beyond_range_are_refused_in_both_precisions() {
     }
 }
 
+/// A still recording aligned by the static method under a noise model whose gyro bias hides
+/// the Earth rate (a consumer part's, declared for a better one): the run said ALIGNED, then
+/// NAV, with a yaw 1-sigma of 9697 deg, and the aided run failed on the filter's own limit. Now
+/// refused before any sample, as the fine and sway methods refuse, in both precisions (the
+/// tactical preset's turn-on bias, 180 deg/h, too); the FOG's still aligns.
+#[test]
+fn a_static_alignment_whose_gyros_cannot_find_north_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = dir.path().join("imu.bin");
+    let out = dir.path().join("o.csv");
+    generated_recording(&imu, "12");
+    let (imu, out_s) = (imu.to_str().unwrap(), out.to_str().unwrap());
+    for precision in ["f32", "f64"] {
+        for grade in ["mems-consumer", "mems-tactical"] {
+            let args = replay_args(
+                imu,
+                out_s,
+                &["--precision", precision, "--imu-noise", grade],
+            );
+            refused(
+                &args,
+                &["gyros too coarse to find north", "give the heading"],
+            );
+            assert!(!out.exists());
+        }
+        let args = replay_args(
+            imu,
+            out_s,
+            &["--precision", precision, "--imu-noise", "fog"],
+        );
+        let o = nav(&args);
+        assert!(o.status.success(), "{}", output_text(&o));
+        std::fs::remove_file(&out).unwrap();
+    }
+}
+
 /// `nav config` (the board's f32 run): `base-translation = 1e300` was refused as "the lever
 /// arm must be finite and not negative", naming the lever-arm line too.
 #[test]
@@ -465,8 +501,8 @@ fn align_bench_window_reads_as_typed() {
 
 /// An option of another `nav align-bench` table was ignored without a word (`seed003 --seconds
 /// 5` ran its default 50 runs; `lasergyro --runs 5` the whole recording; `family --member 3
-/// --runs 200` one member), and `--threads 0` or 1000 ran on 1 or 64 threads. Refused now,
-/// before anything runs, as `nav bench` refuses its own.
+/// --runs 200` one member), `--threads 0` or 1000 ran on 1 or 64 threads, and `--runs` had no
+/// bound. Refused now, before anything runs, as `nav bench` refuses its own.
 #[test]
 fn align_bench_options_of_another_table_are_refused() {
     for (args, expected) in [
@@ -511,6 +547,15 @@ fn align_bench_options_of_another_table_are_refused() {
         (
             &["seed003", "--threads", "257"],
             "--threads must be from 1 to 256, not 257",
+        ),
+        // `--runs` had no bound: 99999999999999 ran silently until killed. `nav bench`'s.
+        (
+            &["seed003", "--runs", "99999999999999"],
+            "--runs must be from 1 to 100000, not 99999999999999",
+        ),
+        (
+            &["family", "--runs", "0"],
+            "--runs must be from 1 to 100000, not 0",
         ),
     ] {
         let mut argv = vec!["align-bench"];
@@ -890,8 +935,10 @@ fn refusals_name_the_option_the_key_and_the_cause() {
 }
 
 /// `--base-translation` with the static alignment was taken silently (its log byte for byte
-/// the one without it: the static method takes a still base only). Refused with the reason;
-/// taken with a method that uses it.
+/// the one without it: the static method takes a still base only), and so was `nav config`'s
+/// `base-translation` without a method that uses it. Refused with the reason (the rule is
+/// nav-core's `AlignMethod::takes_base_translation`, the firmware's command line refuses it
+/// too); taken with a method that uses it.
 #[test]
 fn base_translation_with_the_static_alignment_is_refused() {
     let dir = tempfile::tempdir().unwrap();
@@ -900,7 +947,9 @@ fn base_translation_with_the_static_alignment_is_refused() {
     generated_recording(std::path::Path::new(&imu), "12");
     refused(
         &replay_args(&imu, &out, &["--base-translation", "3"]),
-        &["--base-translation is the base motion of the inertial, fine and sway alignments"],
+        &[
+            "--base-translation: the base translation is the base motion of the inertial, fine and sway alignments",
+        ],
     );
     refused(
         &replay_args(
@@ -921,6 +970,26 @@ fn base_translation_with_the_static_alignment_is_refused() {
         "{}",
         output_text(&o)
     );
+    // `nav config` wrote a frame with it (the board took the frame and ignored the value).
+    let text = dir.path().join("run.txt");
+    let frame = path("run.bin");
+    let site = "lat-deg = 45\nlon-deg = 7\nh-m = 150\n";
+    std::fs::write(&text, format!("{site}base-translation = 0.5\n")).unwrap();
+    let msg = refused(
+        &["config", text.to_str().unwrap(), "--out", &frame],
+        &[
+            "run.txt:4: base-translation: ",
+            "the static one takes a still base only",
+        ],
+    );
+    assert!(!std::path::Path::new(&frame).exists(), "{msg}");
+    std::fs::write(
+        &text,
+        format!("{site}align-method = inertial\nbase-translation = 0.5\n"),
+    )
+    .unwrap();
+    let o = nav(&["config", text.to_str().unwrap(), "--out", &frame]);
+    assert!(o.status.success(), "{}", output_text(&o));
 }
 
 /// An empty `--calibration` file (or one of comments) was taken as identity without a word,

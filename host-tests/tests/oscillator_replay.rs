@@ -114,3 +114,34 @@ fn no_epoch_is_a_failure() {
         "{stderr}"
     );
 }
+
+/// Readouts in millimetres where metres belong (1000 times): the estimator locked on them and
+/// wrote a specific force of 1000 g on a still base, exit 0. Each period is now a fault whose
+/// force is beyond any IMU's 50 g, so no epoch comes out and the failure names the cause; the
+/// readouts in metres give their epochs.
+#[test]
+fn readouts_in_another_unit_give_no_epoch() {
+    let rows = readouts(3.0);
+    let good = replay::replay::<f64>(&rows, 100.0, true, None).unwrap();
+    assert!(good.epochs > 0 && !good.faults.contains_key("force beyond range"));
+    let mm: Vec<OscRow> = rows
+        .iter()
+        .map(|r| OscRow {
+            r_b_m: r.r_b_m.map(|v| v * 1000.0),
+            ..*r
+        })
+        .collect();
+    for msg in [
+        replay::replay::<f64>(&mm, 100.0, true, None),
+        replay::replay::<f32>(&mm, 100.0, true, None),
+    ]
+    .map(|r| r.unwrap_err().to_string())
+    {
+        assert!(
+            msg.contains("no attitude epoch")
+                && msg.contains("force beyond range")
+                && msg.contains("readouts in another unit than metres"),
+            "{msg}"
+        );
+    }
+}

@@ -632,6 +632,102 @@ fn firmware_takes_its_run_configuration_from_the_host() {
     );
 }
 
+/// A `--config-frame FILE` that gives no accepted frame (a byte flipped: CRC; empty; a frame
+/// the board refuses: latitude 95 deg) ran the compiled-in configuration at the command line's
+/// site with exit 0. The user named the file: the run is refused (exit 3), with the reason, and
+/// leaves no complete log. So is a `--base-translation` the static alignment would ignore.
+#[test]
+fn a_configuration_frame_file_that_gives_no_frame_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    recording_io::write(&d.join("rec.bin"), &static_recording(11.0, Grade::Fog)).unwrap();
+    let (lat, lon, h) = static_site();
+    let text = format!("lat-deg = {lat}\nlon-deg = {lon}\nh-m = {h}\nalign-seconds = 10\n");
+    std::fs::write(d.join("run.txt"), &text).unwrap();
+    let o = nav(d, &["config", "run.txt", "--out", "good.bin"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let good = std::fs::read(d.join("good.bin")).unwrap();
+    let mut flipped = good.clone();
+    flipped[good.len() / 2] ^= 0x10;
+    let mut config = DeviceConfig::default();
+    for line in text.lines() {
+        config.apply_line(line).unwrap();
+    }
+    config.run.lat_deg = 95.0;
+    let mut refused = Vec::new();
+    Encoder::new()
+        .append(&Message::Config(config), &mut refused)
+        .unwrap();
+    for (name, bytes, said) in [
+        ("flipped.bin", flipped, "frame refused"),
+        ("empty.bin", Vec::new(), ""),
+        (
+            "refused.bin",
+            refused,
+            "configuration frame 0 refused (reason 1)",
+        ),
+    ] {
+        std::fs::write(d.join(name), &bytes).unwrap();
+        let (code, log) = run_firmware(
+            d,
+            &[
+                "--config-frame",
+                name,
+                "rec.bin",
+                "out.csv",
+                &lat,
+                &lon,
+                &h,
+                "10",
+            ],
+        );
+        assert_eq!(code, 3, "{name}: exit code {code}; log:\n{log}");
+        for expect in [
+            said,
+            "--config-frame: the file gave no accepted configuration frame",
+        ] {
+            assert!(log.contains(expect), "{name}: no '{expect}' in:\n{log}");
+        }
+        let out = std::fs::read_to_string(d.join("out.csv")).unwrap_or_default();
+        assert!(!out.contains("# end"), "{name}: {out}");
+    }
+    // `--base-translation` with the static alignment: ignored before, refused as `nav replay`
+    // refuses it.
+    let (code, log) = run_firmware(
+        d,
+        &[
+            "--base-translation",
+            "0.5",
+            "rec.bin",
+            "out.csv",
+            &lat,
+            &lon,
+            &h,
+            "10",
+        ],
+    );
+    assert_eq!(code, 3, "log:\n{log}");
+    assert!(
+        log.contains("--base-translation: the base translation is the base motion of the inertial, fine and sway alignments"),
+        "{log}"
+    );
+    // The good frame runs.
+    let (code, log) = run_firmware(
+        d,
+        &[
+            "--config-frame",
+            "good.bin",
+            "rec.bin",
+            "out.csv",
+            &lat,
+            &lon,
+            &h,
+            "10",
+        ],
+    );
+    assert_eq!(code, 0, "good frame: log:\n{log}");
+}
+
 /// Recordings that navigate nothing: every sample NaN (the alignment never gets one), NaN after
 /// the alignment, and frozen time after the alignment (the simulated ADIS16505 repeats its
 /// DATA_CNTR: stale). The firmware and `nav replay --device adis16505` fail alike, with the same
@@ -742,7 +838,9 @@ fn firmware_and_host_fail_alike_when_nothing_is_navigated() {
 /// An output that is an input however its path is written is refused (exit 3) and the input
 /// left untouched: `rec.bin ./rec.bin` truncated the recording (the paths were compared as
 /// bytes), and OUT_FILE over the calibration or the configuration frame was not checked at all
-/// (the frame, truncated before it was read, left the compiled-in configuration running).
+/// (the frame, truncated before it was read, left the compiled-in configuration running); by
+/// an absolute path, the calibration was replaced by the solution log with exit 0 (an output
+/// that holds the same bytes as the calibration or the frame is refused now).
 #[test]
 fn an_output_over_an_input_is_refused_however_its_path_is_written() {
     let dir = tempfile::tempdir().unwrap();
@@ -758,6 +856,7 @@ fn an_output_over_an_input_is_refused_however_its_path_is_written() {
     std::fs::write(d.join("frame.bin"), &frame).unwrap();
     let abs = |name: &str| d.join(name).to_str().unwrap().to_owned();
     let (abs_rec, abs_fixes) = (abs("rec.bin"), abs("fixes.bin"));
+    let (abs_cal, abs_frame) = (abs("cal.txt"), abs("frame.bin"));
     let site = ["45", "7.5", "150", "10"];
     for (options, out, rest, expect) in [
         (&[][..], "./rec.bin", &[][..], "OUT_FILE is IMU_FILE"),
@@ -766,6 +865,25 @@ fn an_output_over_an_input_is_refused_however_its_path_is_written() {
         (&[], abs_rec.as_str(), &[], "holds an IMU recording"),
         (&[], abs_fixes.as_str(), &[], "holds a GNSS fix file"),
         (&[], "./cal.txt", &["40", "cal.txt"], "OUT_FILE is CAL_FILE"),
+        // Reached by an absolute path, the calibration was replaced by the log (exit 0).
+        (
+            &[],
+            abs_cal.as_str(),
+            &["40", "cal.txt"],
+            "holds the same bytes as CAL_FILE",
+        ),
+        (
+            &["--config-frame", "frame.bin"],
+            abs_frame.as_str(),
+            &[],
+            "holds the same bytes as the --config-frame FILE",
+        ),
+        (
+            &["--stream", abs_cal.as_str()],
+            "out.csv",
+            &["40", "cal.txt"],
+            "--stream FILE",
+        ),
         (
             &["--config-frame", "frame.bin"],
             "sub/../frame.bin",
@@ -907,6 +1025,39 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
             "{file}: expected an error with '{expect}':\n{log}"
         );
     }
+    // A recording that ends in a bad record after the alignment: the rows navigated before
+    // it are in the log, and the stream carries every one of them (it lost the chunk it still
+    // queued at the error exit: one row fewer than the log).
+    let long = static_recording(13.0, Grade::Ideal).to_bytes().unwrap();
+    let mut trailing = long.clone();
+    trailing.extend_from_slice(&[0; 7]);
+    std::fs::write(d.join("trailing.bin"), &trailing).unwrap();
+    let (code, log) = run_firmware(
+        d,
+        &[
+            "--stream",
+            "fw.bin",
+            "trailing.bin",
+            "fw.csv",
+            "45",
+            "7.5",
+            "150",
+            "10",
+            "40",
+        ],
+    );
+    assert_eq!(code, 4, "trailing bytes: {log}");
+    let csv = std::fs::read_to_string(d.join("fw.csv")).unwrap();
+    assert!(csv.lines().count() > 2 && !csv.contains("# end"), "{csv}");
+    let o = nav(d, &["decode", "fw.bin", "--out", "decoded.csv"]);
+    let decoded = std::fs::read_to_string(d.join("decoded.csv"))
+        .unwrap_or_else(|_| panic!("nav decode: {}", String::from_utf8_lossy(&o.stderr)));
+    assert!(
+        decoded == csv,
+        "the stream's {} lines against the log's {}",
+        decoded.lines().count(),
+        csv.lines().count()
+    );
     let (code, log) = run_firmware(d, &["missing.bin", "out.csv", "45", "7.5", "150", "10"]);
     assert_eq!(code, 4, "missing file: {log}");
     // The path as typed, not the bytes of its semihosting string (`b"missing.bin\x00"`).
@@ -1000,7 +1151,10 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
 
 /// The ICM-42688-P and BMI088 paths run in the firmware too; a consumer gyro's resolution
 /// (ICM: 1/131 deg/s per count over five packets; BMI088: 1/16.4 deg/s) does not see the Earth
-/// rate, so static gyrocompassing must fail loudly (exit 5) instead of reporting a heading of 0.
+/// rate, so gyrocompassing must fail loudly instead of reporting a heading of 0: the static
+/// method refuses the parts' declared bias before any sample (exit 3: their heading 1-sigma
+/// would be thousands of degrees), the inertial one runs the driver and finds no heading
+/// signal in the data (exit 5).
 #[test]
 fn firmware_runs_the_mems_drivers_and_refuses_a_blind_gyrocompass() {
     let dir = tempfile::tempdir().unwrap();
@@ -1008,18 +1162,21 @@ fn firmware_runs_the_mems_drivers_and_refuses_a_blind_gyrocompass() {
     let rec = static_recording(10.5, Grade::Ideal);
     recording_io::write(&d.join("rec.bin"), &rec).unwrap();
     for (device, name) in [("icm42688", "Icm42688"), ("bmi088", "Bmi088")] {
-        let (code, log) = run_firmware(
-            d,
-            &[
-                "--device", device, "rec.bin", "out.csv", "45", "7.5", "150", "10",
-            ],
-        );
+        let site = ["rec.bin", "out.csv", "45", "7.5", "150", "10"];
+        let mut args = vec!["--device", device];
+        args.extend_from_slice(&site);
+        let (code, log) = run_firmware(d, &args);
+        assert_eq!(code, 3, "{device}: exit code; log:\n{log}");
+        assert!(log.contains("gyros too coarse to find north"), "{log}");
+        let mut args = vec!["--device", device, "--align-method", "inertial"];
+        args.extend_from_slice(&site);
+        let (code, log) = run_firmware(d, &args);
         assert_eq!(code, 5, "{device}: exit code; log:\n{log}");
         assert!(
             log.contains(&format!("IMU: {name} over a simulated SPI device")),
             "{log}"
         );
-        assert!(log.contains("gyrocompassing"), "{log}");
+        assert!(log.contains("heading signal not resolved"), "{log}");
         assert!(log.contains("instructions per IMU read"), "{log}");
     }
     let (code, log) = run_firmware(

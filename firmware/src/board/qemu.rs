@@ -118,9 +118,9 @@ pub fn init(
         exit(ExitCode::Recording)
     });
     defmt::info!("IMU: {} over a simulated SPI device", device);
-    refuse_overwriting_data(args.out_cstr(), "OUT_FILE");
+    refuse_overwriting_data(args.out_cstr(), "OUT_FILE", &args);
     if let Some(path) = args.stream_cstr() {
-        refuse_overwriting_data(path, "--stream FILE");
+        refuse_overwriting_data(path, "--stream FILE", &args);
     }
     let out = SemihostingFile::create(args.out_cstr()).unwrap_or_else(|_| {
         defmt::error!(
@@ -200,21 +200,32 @@ fn read_args() -> Args {
 }
 
 /// Exits with [`ExitCode::Config`] when the output `path` (`name` in the usage) already holds
-/// a recording or a GNSS fix file (their magic): an input reached by a path that
-/// [`Args::parse`]'s comparison as written does not see (absolute against relative, a link)
-/// would be truncated before it is read.
-fn refuse_overwriting_data(path: &core::ffi::CStr, name: &str) {
+/// a recording or a GNSS fix file (their magic), or the same bytes as the calibration or the
+/// configuration frame file: an input reached by a path that [`Args::parse`]'s comparison as
+/// written does not see (absolute against relative, a link) would be truncated before it is
+/// read (a calibration was replaced by the solution log, exit 0).
+fn refuse_overwriting_data(path: &core::ffi::CStr, name: &str, args: &Args) {
     let Ok(mut file) = SemihostingFile::open(path) else {
         return;
     };
-    let mut head = [0_u8; 8];
-    let mut len = 0;
-    while len < head.len() {
-        match embedded_io::Read::read(&mut file, &mut head[len..]) {
-            Ok(0) | Err(_) => break,
-            Ok(n) => len += n,
+    for (input, input_name) in [
+        (args.cal_cstr(), "CAL_FILE"),
+        (args.config_frame_cstr(), "the --config-frame FILE"),
+    ] {
+        if let Some(input) = input
+            && same_bytes(path, input)
+        {
+            defmt::error!(
+                "bad arguments ({=str} {=str} holds the same bytes as {=str}: refusing to overwrite it)",
+                name,
+                shown(path.to_bytes()),
+                input_name
+            );
+            exit(ExitCode::Config)
         }
     }
+    let mut head = [0_u8; 8];
+    read_full(&mut file, &mut head);
     let kind = match head {
         hal_adapters::recording::MAGIC => "an IMU recording",
         hal_adapters::gnss_record::MAGIC => "a GNSS fix file",
@@ -227,6 +238,39 @@ fn refuse_overwriting_data(path: &core::ffi::CStr, name: &str) {
         kind
     );
     exit(ExitCode::Config)
+}
+
+/// Reads `file` into `buf` until it is full or the file ends; the bytes read.
+fn read_full(file: &mut SemihostingFile, buf: &mut [u8]) -> usize {
+    let mut len = 0;
+    while len < buf.len() {
+        match embedded_io::Read::read(file, &mut buf[len..]) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => len += n,
+        }
+    }
+    len
+}
+
+/// The files `a` and `b` both open and hold the same bytes, not none (one file reached two
+/// ways, or a copy: either way the output would destroy what the run reads; an empty file
+/// holds nothing to lose).
+fn same_bytes(a: &core::ffi::CStr, b: &core::ffi::CStr) -> bool {
+    let (Ok(mut fa), Ok(mut fb)) = (SemihostingFile::open(a), SemihostingFile::open(b)) else {
+        return false;
+    };
+    let (mut ba, mut bb) = ([0_u8; 64], [0_u8; 64]);
+    let mut total = 0;
+    loop {
+        let (na, nb) = (read_full(&mut fa, &mut ba), read_full(&mut fb, &mut bb));
+        if ba[..na] != bb[..nb] {
+            return false;
+        }
+        total += na;
+        if na < ba.len() {
+            return total > 0;
+        }
+    }
 }
 
 /// Logs a refused run configuration and exits with [`ExitCode::Config`].
@@ -443,6 +487,19 @@ impl ConfigInput {
                 defmt::error!("cannot read the configuration frame file");
                 exit(ExitCode::Config)
             }
+        }
+    }
+
+    /// The standby window ended without an accepted configuration frame. A file the user
+    /// named that gave none (empty, corrupt, refused) is an error: the run does not fall back
+    /// to the compiled-in configuration (it ran at another site, exit 0). Without the option,
+    /// nothing: the compiled-in configuration runs, as on the real board.
+    pub fn none_taken(&self) {
+        if self.0.is_some() {
+            defmt::error!(
+                "--config-frame: the file gave no accepted configuration frame (empty, corrupt or refused: see above); the compiled-in configuration does not run in its place"
+            );
+            exit(ExitCode::Config)
         }
     }
 }

@@ -373,6 +373,11 @@ pub struct ConfigInput {
 }
 
 impl ConfigInput {
+    /// The standby window ended without an accepted configuration frame: the compiled-in
+    /// configuration runs (flagged DEFAULT_CONFIG), as designed for a board with no host.
+    #[inline(always)]
+    pub fn none_taken(&self) {}
+
     /// Copies the bytes received up to the last idle line into `buf`; their number.
     pub fn read(&mut self, buf: &mut [u8]) -> usize {
         use stm32f4xx_hal::dma::traits::StreamISR as _;

@@ -58,6 +58,26 @@ impl NavStatus {
         Self::ALL.get(usize::from(code)).copied()
     }
 
+    /// Why a solution row's status and flags are not what [`StatusModel::update`]'s rule gives
+    /// a board that navigates (`None` when they are): a stage that gives no solution (STANDBY,
+    /// ALIGN_*), FAULT without a failure flag or a failure flag without FAULT, DEGRADED
+    /// without a flag that degrades, or NAV with one (IMU_LOST, NEAR_POLE: the solution not
+    /// to be trusted). The decoder refuses such rows: no board writes them.
+    pub fn solution_contradiction(self, flags: StatusFlags) -> Option<&'static str> {
+        let failed = flags.intersects(StatusFlags::FAILED);
+        let degraded = flags.intersects(StatusFlags::DEGRADED);
+        match self {
+            Self::Standby | Self::AlignCoarse | Self::AlignFine => {
+                Some("a status that gives no solution")
+            }
+            Self::Fault if !failed => Some("FAULT without a failure flag"),
+            Self::Nav | Self::Degraded if failed => Some("a failure flag without FAULT"),
+            Self::Degraded if !degraded => Some("DEGRADED without a flag that degrades"),
+            Self::Nav if degraded => Some("NAV with a flag that makes it DEGRADED"),
+            _ => None,
+        }
+    }
+
     /// Upper-case name (docs, logs).
     pub fn name(self) -> &'static str {
         match self {
@@ -112,6 +132,20 @@ bitflags! {
         /// not trusted for the rest of the run (nav-core's `ins_filter::model::near_pole`).
         const NEAR_POLE = 1 << 15;
     }
+}
+
+impl StatusFlags {
+    /// The flags that make the status FAULT ([`StatusModel::update`]).
+    pub const FAILED: Self = Self::ALIGN_FAILED
+        .union(Self::DEVICE_FAULT)
+        .union(Self::BUS_ERRORS);
+    /// The flags that make a navigating status DEGRADED ([`StatusModel::update`]).
+    pub const DEGRADED: Self = Self::AIDING_REJECTED
+        .union(Self::AIDING_LOST)
+        .union(Self::SIGMA_ABOVE_LIMIT)
+        .union(Self::COVARIANCE_FAULT)
+        .union(Self::IMU_LOST)
+        .union(Self::NEAR_POLE);
 }
 
 /// Accepted and refused measurements of one aid.
@@ -256,22 +290,16 @@ impl StatusModel {
             self.aiding_lost(t_us, nav, health),
         );
         self.previous = *health;
-        let failed =
-            StatusFlags::ALIGN_FAILED | StatusFlags::DEVICE_FAULT | StatusFlags::BUS_ERRORS;
-        let degraded = StatusFlags::AIDING_REJECTED
-            | StatusFlags::AIDING_LOST
-            | StatusFlags::SIGMA_ABOVE_LIMIT
-            | StatusFlags::COVARIANCE_FAULT
-            | StatusFlags::IMU_LOST
-            | StatusFlags::NEAR_POLE;
-        let status = if flags.intersects(failed) {
+        let status = if flags.intersects(StatusFlags::FAILED) {
             NavStatus::Fault
         } else {
             match nav.stage {
                 _ if nav.config == RunSource::Waiting => NavStatus::Standby,
                 Stage::Coarse => NavStatus::AlignCoarse,
                 Stage::Fine => NavStatus::AlignFine,
-                Stage::Aligned | Stage::Failed if flags.intersects(degraded) => NavStatus::Degraded,
+                Stage::Aligned | Stage::Failed if flags.intersects(StatusFlags::DEGRADED) => {
+                    NavStatus::Degraded
+                }
                 Stage::Aligned | Stage::Failed => NavStatus::Nav,
             }
         };
@@ -479,6 +507,52 @@ mod tests {
         );
         // The failure over, the status recovers.
         assert_eq!(model.update(0, aligning, &h).0, NavStatus::AlignCoarse);
+    }
+
+    /// Every status and flags the rule gives a board with a solution (aligned, free or aided,
+    /// any filter status, any sensor event, aiding lost or not) passes the decoder's check
+    /// ([`NavStatus::solution_contradiction`]); the alignment's and standby's stages do not.
+    #[test]
+    fn the_rules_solution_rows_never_contradict_it() {
+        let filters = [
+            None,
+            Some(FilterStatus::Nominal),
+            Some(FilterStatus::AidingRejected),
+            Some(FilterStatus::GnssLate),
+            Some(FilterStatus::SigmaAboveLimit),
+            Some(FilterStatus::CovarianceFault),
+            Some(FilterStatus::ImuLost),
+            Some(FilterStatus::NearPole),
+        ];
+        for filter in filters {
+            for events in 0u32..64 {
+                for t_s in [0u64, 100] {
+                    let mut model = StatusModel::new(5.0);
+                    let nav = state(Stage::Aligned, filter);
+                    model.update(0, nav, &HealthCounters::default());
+                    let bit = |k: u32| u32::from(events & (1 << k) != 0);
+                    let mut h = HealthCounters {
+                        device_faults: bit(0),
+                        bus_errors: bit(1),
+                        checksum_errors: bit(2),
+                        missed_data_ready: bit(3),
+                        channel_overruns: bit(4),
+                        ..HealthCounters::default()
+                    };
+                    h.gyro_clips[1] = bit(5);
+                    let (status, flags) = model.update(t_s * 1_000_000, nav, &h);
+                    assert_eq!(
+                        status.solution_contradiction(flags),
+                        None,
+                        "{filter:?} events {events:#b} at {t_s} s: {status:?} {flags:?}"
+                    );
+                }
+            }
+        }
+        let aligning = state(Stage::Coarse, None);
+        let (status, flags) =
+            StatusModel::default().update(0, aligning, &HealthCounters::default());
+        assert!(status.solution_contradiction(flags).is_some());
     }
 
     #[test]

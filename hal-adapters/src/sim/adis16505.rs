@@ -3,7 +3,7 @@
 use embedded_hal::spi::{ErrorType, Operation, SpiDevice};
 
 use super::{
-    SimError, SimulatedBus, for_each_byte, increments_per_period, is_finite, next_sample, periods,
+    Cadence, SimError, SimulatedBus, for_each_byte, increments_per_period, is_finite, next_sample,
     rates, round, to_counts, to_counts_carry,
 };
 use crate::drivers::Mounting;
@@ -65,6 +65,8 @@ pub struct SimAdis16505<S: Imu> {
     carry: [[f32; 3]; 2],
     last_sample: Option<ImuSample>,
     bursts: u32,
+    /// Samples carried over a time tag that does not advance ([`Cadence`]).
+    cadence: Cadence,
 }
 
 impl<S: Imu> SimAdis16505<S> {
@@ -93,6 +95,7 @@ impl<S: Imu> SimAdis16505<S> {
             },
             carry: [[0.0; 3]; 2],
             last_sample: None,
+            cadence: Cadence::default(),
             bursts: 0,
         };
         sim.reset();
@@ -211,10 +214,10 @@ impl<S: Imu> SimAdis16505<S> {
 
     /// The burst command: takes the next source sample and prepares the frame.
     fn start_burst(&mut self) -> Result<(), SimError<S::Error>> {
-        let sample = next_sample(&mut self.source)?;
+        let source = next_sample(&mut self.source)?;
         let dec_rate = self.reg(regs::DEC_RATE) & 0x07FF;
         let period_s = f32::from(dec_rate + 1) / INTERNAL_RATE_HZ as f32;
-        let periods = periods(&sample, period_s);
+        let (periods, sample) = self.cadence.take(source, period_s);
         self.data_cntr = self.data_cntr.wrapping_add(periods);
         self.fill_burst(&sample, periods);
         self.last_sample = Some(sample);

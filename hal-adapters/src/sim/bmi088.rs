@@ -7,7 +7,7 @@ use critical_section::Mutex;
 
 use embedded_hal::spi::{ErrorType, Operation, SpiDevice};
 
-use super::{SimError, SimulatedBus, for_each_byte, is_finite, next_sample, periods, rates, round};
+use super::{Cadence, SimError, SimulatedBus, for_each_byte, is_finite, next_sample, rates, round};
 use crate::drivers::Mounting;
 use crate::drivers::adis16505::STANDARD_GRAVITY_MPS2;
 use crate::drivers::bmi088::regs;
@@ -72,6 +72,8 @@ struct Core<S> {
     sensortime: u32,
     /// Output periods of held-back (non-finite) source samples, added to the next good one.
     pending_periods: u32,
+    /// Samples carried over a time tag that does not advance ([`Cadence`]).
+    cadence: Cadence,
     /// The source sample taken by the latest gyro data read, for the gyro device to copy.
     taken: Option<ImuSample>,
     served: u32,
@@ -172,8 +174,9 @@ impl<S: Imu> Core<S> {
 
     /// Takes the next source sample into the data registers and the sensor time.
     fn refill(&mut self) -> Result<(), SimError<S::Error>> {
-        let sample = next_sample(&mut self.source)?;
-        let periods = u32::from(periods(&sample, OUTPUT_PERIOD_S));
+        let source = next_sample(&mut self.source)?;
+        let (periods, sample) = self.cadence.take(source, OUTPUT_PERIOD_S);
+        let periods = u32::from(periods);
         if !is_finite(&sample) {
             // No number to give: data and sensor time held (the driver sees a repeated
             // sample), the time catches up with the next good sample (a gap).
@@ -248,6 +251,7 @@ impl<S: Imu> SimBmi088<S> {
             accel_spi: false,
             sensortime: 0,
             pending_periods: 0,
+            cadence: Cadence::default(),
             taken: None,
             served: 0,
         };

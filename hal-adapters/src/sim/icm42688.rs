@@ -2,7 +2,7 @@
 
 use embedded_hal::spi::{ErrorType, Operation, SpiDevice};
 
-use super::{SimError, SimulatedBus, for_each_byte, is_finite, next_sample, periods, rates, round};
+use super::{Cadence, SimError, SimulatedBus, for_each_byte, is_finite, next_sample, rates, round};
 use crate::drivers::Mounting;
 use crate::drivers::adis16505::STANDARD_GRAVITY_MPS2;
 use crate::drivers::icm42688::regs;
@@ -70,6 +70,8 @@ pub struct SimIcm42688<S: Imu> {
     accel_counts: f32,
     last_sample: Option<ImuSample>,
     groups: u32,
+    /// Samples carried over a time tag that does not advance ([`Cadence`]).
+    cadence: Cadence,
 }
 
 impl<S: Imu> SimIcm42688<S> {
@@ -89,6 +91,7 @@ impl<S: Imu> SimIcm42688<S> {
             gyro_counts: GYRO_COUNTS_19_PER_RAD_S as f32,
             accel_counts: ACCEL_COUNTS_18_PER_MPS2 as f32,
             last_sample: None,
+            cadence: Cadence::default(),
             groups: 0,
         };
         sim.reset();
@@ -238,8 +241,8 @@ impl<S: Imu> SimIcm42688<S> {
 
     /// Takes the next source sample into the FIFO as five packets.
     fn refill(&mut self) -> Result<(), SimError<S::Error>> {
-        let sample = next_sample(&mut self.source)?;
-        let periods = periods(&sample, OUTPUT_PERIOD_S);
+        let source = next_sample(&mut self.source)?;
+        let (periods, sample) = self.cadence.take(source, OUTPUT_PERIOD_S);
         let (gyro, accel, temp) = if is_finite(&sample) {
             let (omega, f) = rates(&sample);
             let gyro = super::to_counts(&self.mounting, omega, self.gyro_counts, 262_143);

@@ -18,7 +18,7 @@
 //! | source sample | ADIS16505 | ICM-42688-P |
 //! | --- | --- | --- |
 //! | interval of `k` periods (`dt_s / T` rounded; 2.5 ms) | `DATA_CNTR` advances by `k`: the driver flags `GAP` (`k` 2..=10) or `BAD_INTERVAL`, increments per period = sample / `k` | first packet's timestamp jumps by `k - 1` output periods: same flags, rates = sample / `dt_s` |
-//! | `dt_s <= 0` (`BAD_INTERVAL` in the replay) | `DATA_CNTR` repeated: `STALE` | timestamps repeated: `STALE` |
+//! | `dt_s <= 0` (`BAD_INTERVAL` in the replay) | `DATA_CNTR` repeated: `STALE`; its increments carried to the next sample, which spans the time since the last one shown (`Cadence`) | timestamps repeated: `STALE`; the same |
 //! | a NaN or infinite value (`NON_FINITE`) | [`NonFinite::BadChecksum`] (default): a frame with a wrong checksum, the driver returns [`Error::Checksum`], the next sample shows the lost one as a `GAP`; or [`NonFinite::ZeroFrame`]; either way the sample stream delivers the source sample, `NON_FINITE` ([`flag_unrepresentable`]) | the invalid-data marker in all five packets: `NON_FINITE`, zero increments |
 //! | NaN temperature (unknown) | `TEMP_OUT` = 0 (0 deg C) | invalid temperature: NaN |
 //! | value beyond the register range | clamped: the driver flags saturation | clamped to full scale: saturation |
@@ -387,6 +387,86 @@ fn next_sample<S: Imu>(source: &mut S) -> Result<ImuSample, SimError<S::Error>> 
         Ok(Some(sample)) => Ok(sample),
         Ok(None) => Err(SimError::End),
         Err(e) => Err(SimError::Source(e)),
+    }
+}
+
+/// The device's cadence over a source whose time may stand still or step back. A finite sample
+/// that ends no output period (the time since the last sample shown not positive: a recording's
+/// time tag repeated or stepped back) shows as a repeated sample (`STALE`), and its increments
+/// are carried to the next sample that ends one: that sample spans the time since the last one
+/// shown, with the carried increments added. Dropped, a record with a time tag 5 ms back lost
+/// its increment while the next one's interval covered it: the vertical velocity lost `g` times
+/// 5 ms (0.049 m/s), and a still base's alignment was refused as "base not still".
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Cadence {
+    /// Time of the last sample shown (that ended an output period) [us].
+    shown_t_us: Option<u64>,
+    /// Samples are carried: the next one shown spans the time since `shown_t_us`.
+    carrying: bool,
+    /// Increments of the carried samples [rad], [m/s].
+    carried: ([f32; 3], [f32; 3]),
+}
+
+impl Cadence {
+    /// The output periods of `period_s` [s] that `sample` ends (0: none, the device repeats its
+    /// last sample and `sample` is carried), and the sample the device shows. A non-finite
+    /// sample is the device's own case (it shows no number): neither carried nor merged.
+    pub(crate) fn take(&mut self, sample: ImuSample, period_s: f32) -> (u16, ImuSample) {
+        if !is_finite(&sample) || !sample.dt_s.is_finite() {
+            let periods = periods(&sample, period_s);
+            if periods > 0 {
+                self.shown_t_us = Some(sample.t_us);
+            }
+            return (periods, sample);
+        }
+        // The time since the last sample shown: the sample's own interval unless samples are
+        // carried (their time tags are the ones that did not advance).
+        let elapsed_s = match (self.carrying, self.shown_t_us) {
+            (true, Some(t0)) => (sample.t_us as i64).wrapping_sub(t0 as i64) as f32 * 1e-6,
+            _ => sample.dt_s,
+        };
+        let own = match sample.motion {
+            Motion::Increments {
+                delta_theta_ib_b,
+                delta_v_ib_b,
+            } => Some((delta_theta_ib_b, delta_v_ib_b)),
+            // Rates hold whatever the interval: nothing to carry.
+            Motion::Rates { .. } => None,
+        };
+        // Finite: `dt_s` is checked above, and the time tags are integers.
+        if elapsed_s <= 0.0 {
+            self.carrying = true;
+            if let Some((dtheta, dv)) = own {
+                let (g, a) = &mut self.carried;
+                add3(g, &dtheta);
+                add3(a, &dv);
+            }
+            return (0, sample);
+        }
+        let mut shown = ImuSample {
+            dt_s: elapsed_s,
+            ..sample
+        };
+        if let Some((mut dtheta, mut dv)) = own {
+            add3(&mut dtheta, &self.carried.0);
+            add3(&mut dv, &self.carried.1);
+            shown.motion = Motion::Increments {
+                delta_theta_ib_b: dtheta,
+                delta_v_ib_b: dv,
+            };
+        }
+        *self = Self {
+            shown_t_us: Some(sample.t_us),
+            ..Self::default()
+        };
+        (periods(&shown, period_s), shown)
+    }
+}
+
+/// `a += b`, element-wise.
+fn add3(a: &mut [f32; 3], b: &[f32; 3]) {
+    for (x, y) in a.iter_mut().zip(b) {
+        *x += y;
     }
 }
 

@@ -160,8 +160,14 @@ where
     s.frequency_hz = est.frequency_hz();
     // An estimator that gave no epoch answered nothing: a failure, with the counts by cause.
     if s.epochs == 0 {
+        let hint = if s.faults.contains_key("force beyond range") {
+            " (force beyond range: the ellipse's centre gave a specific force beyond 50 g: \
+             readouts in another unit than metres, or a wrong --f0-hz)"
+        } else {
+            ""
+        };
         return Err(anyhow!(
-            "no attitude epoch from {} readouts: {}",
+            "no attitude epoch from {} readouts: {}{hint}",
             s.readouts + s.missing,
             s.to_string().trim_end().replace('\n', "; ")
         ));

@@ -83,6 +83,13 @@ impl AlignMethod {
         }
     }
 
+    /// The method models a base that translates ([`BaseMotion::translation_sigma_m`]): all
+    /// but the static one, which takes a still base only (a moving one is refused). A front
+    /// end refuses a translation given with it ([`BASE_TRANSLATION_STATIC`]): it was ignored.
+    pub fn takes_base_translation(self) -> bool {
+        self != AlignMethod::Static
+    }
+
     /// The shortest window the method accepts [s].
     pub fn min_seconds(self) -> f64 {
         match self {
@@ -244,6 +251,18 @@ impl AlignFailure {
         }
     }
 }
+
+/// Why a base translation given with the static method is refused
+/// ([`AlignMethod::takes_base_translation`]).
+pub const BASE_TRANSLATION_STATIC: &str = "the base translation is the base motion of the \
+     inertial, fine and sway alignments (align-method); the static one takes a still base only";
+
+/// The largest heading 1-sigma the static method's gyros may leave [rad] (30 deg): beyond it
+/// its outcome is no heading (a FOG recording aligned under a consumer part's declared noise
+/// said ALIGNED with a yaw 1-sigma of 9697 deg), and the aided filter's linear model, which
+/// takes it over, no longer holds ([`SettingsError::GyrosTooCoarse`], refused before any
+/// sample).
+pub const MAX_STATIC_HEADING_SIGMA_RAD: f64 = 30.0 * core::f64::consts::PI / 180.0;
 
 /// Where the IMU sits relative to the given position (the base's centre of rotation, or its
 /// reference point).
@@ -451,7 +470,8 @@ pub enum SettingsError {
     /// the heading beyond the filter's limit: on a still base the east bias and the Earth
     /// rate's east tilt drift are the same signal, so the heading's 1-sigma is at least
     /// `sigma_b / (Omega cos(lat))` [Titterton & Weston, §10.3.2], and the filter's linear model
-    /// no longer holds at such errors (on the family the answers were 30-60 sigma off).
+    /// no longer holds at such errors (on the family the answers were 30-60 sigma off). The
+    /// same for [`AlignMethod::Static`] beyond [`MAX_STATIC_HEADING_SIGMA_RAD`].
     GyrosTooCoarse {
         /// Gyro bias 1-sigma [rad/s].
         bias_rad_s: f64,
@@ -645,10 +665,16 @@ impl<T: Scalar> AlignSettings<T> {
         if self.method == AlignMethod::Sway && matches!(self.lever_arm, LeverArm::Unknown { .. }) {
             return Err(SettingsError::SwayNeedsLeverArm);
         }
-        if matches!(self.method, AlignMethod::Fine | AlignMethod::Sway) {
+        let limit = match self.method {
+            AlignMethod::Fine | AlignMethod::Sway => {
+                Some(FineConfig::<f64>::default().max_heading_sigma_rad)
+            }
+            AlignMethod::Static => Some(MAX_STATIC_HEADING_SIGMA_RAD),
+            _ => None,
+        };
+        if let Some(limit) = limit {
             let bias_rad_s = self.noise.gyro_bias_rad_s.to_f64();
             let earth_rad_s = crate::earth::OMEGA_IE * libm::cos(self.position.lat_f64());
-            let limit = FineConfig::<f64>::default().max_heading_sigma_rad;
             if !(bias_rad_s <= limit * earth_rad_s) {
                 return Err(SettingsError::GyrosTooCoarse {
                     bias_rad_s,
@@ -1566,7 +1592,23 @@ mod tests {
         let given = sway.with_lever_arm(LeverArm::Known(Vector3::zeros()));
         assert_eq!(given.validate(), Ok(()));
         // Gyros whose bias alone puts the heading beyond 10 deg: the filters refuse them
-        // before any sample; the coarse methods answer or refuse from the data.
+        // before any sample; the coarse methods answer or refuse from the data, the static one
+        // up to a heading 1-sigma of 30 deg.
+        for method in AlignMethod::ALL {
+            let mut s = settings(method, 120.0).with_lever_arm(LeverArm::Known(Vector3::zeros()));
+            let earth = crate::earth::OMEGA_IE * libm::cos(s.position.lat_f64());
+            s.noise.gyro_bias_rad_s = 0.5 * earth;
+            let refused = matches!(s.validate(), Err(SettingsError::GyrosTooCoarse { .. }));
+            let filter = matches!(method, AlignMethod::Fine | AlignMethod::Sway);
+            assert_eq!(refused, filter, "{method:?} at 0.5");
+            s.noise.gyro_bias_rad_s = 0.55 * earth;
+            let refused = matches!(s.validate(), Err(SettingsError::GyrosTooCoarse { .. }));
+            assert_eq!(
+                refused,
+                method != AlignMethod::Inertial,
+                "{method:?} at 0.55"
+            );
+        }
         for method in AlignMethod::ALL {
             let mut s = settings(method, 120.0).with_lever_arm(LeverArm::Known(Vector3::zeros()));
             let earth = crate::earth::OMEGA_IE * libm::cos(s.position.lat_f64());

@@ -367,10 +367,17 @@ impl<T: Scalar> OscillatorEstimator<T> {
         }
         self.locked = true;
         let w0_2 = T::c(self.omega_int * self.omega_int);
+        let f_ib_b = -fit.centre * w0_2;
+        let limit = crate::increment::InputLimits::<T>::default().max_specific_force;
+        if !(f_ib_b.amax() <= limit) {
+            return Err(OscillatorFault::ForceBeyondRange {
+                f_mps2: f_ib_b.amax().to_f64(),
+            });
+        }
         let epoch = OscillatorEpoch {
             t_s: t,
             q_b_e,
-            f_ib_b: -fit.centre * w0_2,
+            f_ib_b,
             omega_ib_b: omega,
             sigma_rad: sigma,
             sigma_f_mps2: fit.residual_rms * fit.centre_gain * w0_2,

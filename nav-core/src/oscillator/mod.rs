@@ -200,6 +200,13 @@ pub enum OscillatorFault {
         /// The largest 1-sigma [rad].
         sigma_rad: f64,
     },
+    /// The specific force the ellipse's centre gives is beyond any IMU's range (an axis above
+    /// [`crate::increment::InputLimits`]'s 50 g): readouts in another unit than metres (mm
+    /// gave 1000 g on a still base), or a wrong natural frequency.
+    ForceBeyondRange {
+        /// The largest axis [m/s^2].
+        f_mps2: f64,
+    },
     /// A readout in the period was missing or not finite.
     Broken,
     /// Too few readouts for the fit.
@@ -215,6 +222,7 @@ impl OscillatorFault {
             Self::NearLine { .. } => "near-line",
             Self::NearCircle { .. } => "near-circle",
             Self::Noisy { .. } => "noisy",
+            Self::ForceBeyondRange { .. } => "force beyond range",
             Self::Broken => "broken",
             Self::Singular => "singular",
         }
@@ -241,6 +249,10 @@ impl core::fmt::Display for OscillatorFault {
             Self::Noisy { sigma_rad } => {
                 write!(f, "noisy oscillation: angle 1-sigma {sigma_rad:.2e} rad")
             }
+            Self::ForceBeyondRange { f_mps2 } => write!(
+                f,
+                "specific force {f_mps2:.3e} m/s^2 beyond 50 g: readouts in another unit than metres, or a wrong natural frequency"
+            ),
             Self::Broken => f.write_str("a readout in the period was missing or not finite"),
             Self::Singular => f.write_str("too few readouts in the period"),
         }
