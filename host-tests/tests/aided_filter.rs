@@ -66,6 +66,21 @@ fn z_scores(ins: &AidedIns<f64>, truth: &NavState<f64>) -> [f64; 9] {
     ]
 }
 
+/// A position fix of `truth` drawn with 0.5 m white noise per axis, declared so, given to `ins`.
+fn aid_half_metre_fix(ins: &mut AidedIns<f64>, truth: &NavState<f64>, rng: &mut ChaCha8Rng) {
+    let d = [0, 1, 2].map(|_| 0.5 * normal(rng));
+    let fix = truth.position.offset_ned(d);
+    ins.aid_position(
+        &GnssPosition {
+            lat_rad: fix.lat_f64(),
+            lon_rad: fix.lon_f64(),
+            h_m: fix.h_f64(),
+            sigma_ned_m: Vector3::repeat(0.5),
+        },
+        0.0,
+    );
+}
+
 /// A base standing still, levelled and headed a little off the axes, and its state.
 fn still_base() -> (Stationary, NavState<f64>) {
     let body = Stationary {
@@ -549,17 +564,7 @@ fn a_stop_tells_the_heading_error_from_the_gyro_bias() {
         for k in 1..=400 * 300 {
             ins.step(&inc).unwrap();
             if k % 400 == 0 {
-                let d = [0, 1, 2].map(|_| 0.5 * normal(&mut rng));
-                let fix = truth.position.offset_ned(d);
-                ins.aid_position(
-                    &GnssPosition {
-                        lat_rad: fix.lat_f64(),
-                        lon_rad: fix.lon_f64(),
-                        h_m: fix.h_f64(),
-                        sigma_ned_m: Vector3::repeat(0.5),
-                    },
-                    0.0,
-                );
+                aid_half_metre_fix(&mut ins, &truth, &mut rng);
             }
         }
         let what = format!(
@@ -655,17 +660,7 @@ fn a_still_part_that_cannot_find_north_keeps_its_heading_doubt() {
             };
             ins.step(&inc).unwrap();
             if k % 400 == 0 {
-                let d = [0, 1, 2].map(|_| 0.5 * normal(&mut rng));
-                let fix = truth.position.offset_ned(d);
-                ins.aid_position(
-                    &GnssPosition {
-                        lat_rad: fix.lat_f64(),
-                        lon_rad: fix.lon_f64(),
-                        h_m: fix.h_f64(),
-                        sigma_ned_m: Vector3::repeat(0.5),
-                    },
-                    0.0,
-                );
+                aid_half_metre_fix(&mut ins, &truth, &mut rng);
             }
         }
         let what = format!(

@@ -654,6 +654,12 @@ fn a_configuration_frame_file_that_gives_no_frame_is_refused() {
         config.apply_line(line).unwrap();
     }
     config.run.lat_deg = 95.0;
+    // The firmware on the recording at the site, with `options` before the positionals.
+    let run = |options: &[&str]| {
+        let mut args = options.to_vec();
+        args.extend_from_slice(&["rec.bin", "out.csv", &lat, &lon, &h, "10"]);
+        run_firmware(d, &args)
+    };
     let mut refused = Vec::new();
     Encoder::new()
         .append(&Message::Config(config), &mut refused)
@@ -668,19 +674,7 @@ fn a_configuration_frame_file_that_gives_no_frame_is_refused() {
         ),
     ] {
         std::fs::write(d.join(name), &bytes).unwrap();
-        let (code, log) = run_firmware(
-            d,
-            &[
-                "--config-frame",
-                name,
-                "rec.bin",
-                "out.csv",
-                &lat,
-                &lon,
-                &h,
-                "10",
-            ],
-        );
+        let (code, log) = run(&["--config-frame", name]);
         assert_eq!(code, 3, "{name}: exit code {code}; log:\n{log}");
         for expect in [
             said,
@@ -693,38 +687,14 @@ fn a_configuration_frame_file_that_gives_no_frame_is_refused() {
     }
     // `--base-translation` with the static alignment: ignored before, refused as `nav replay`
     // refuses it.
-    let (code, log) = run_firmware(
-        d,
-        &[
-            "--base-translation",
-            "0.5",
-            "rec.bin",
-            "out.csv",
-            &lat,
-            &lon,
-            &h,
-            "10",
-        ],
-    );
+    let (code, log) = run(&["--base-translation", "0.5"]);
     assert_eq!(code, 3, "log:\n{log}");
     assert!(
         log.contains("--base-translation: the base translation is the base motion of the inertial, fine and sway alignments"),
         "{log}"
     );
     // The good frame runs.
-    let (code, log) = run_firmware(
-        d,
-        &[
-            "--config-frame",
-            "good.bin",
-            "rec.bin",
-            "out.csv",
-            &lat,
-            &lon,
-            &h,
-            "10",
-        ],
-    );
+    let (code, log) = run(&["--config-frame", "good.bin"]);
     assert_eq!(code, 0, "good frame: log:\n{log}");
 }
 
