@@ -313,6 +313,47 @@ fn config_text_base_translation_beyond_range_names_its_key() {
     assert!(!out.exists());
 }
 
+/// `nav config` named the wrong keys of a refusal: a negative `lever-arm-sigma` or
+/// `align-seconds`, or a negative `base-translation`, was "keys lat-deg (line 1), ..." (every
+/// alignment key the file gave); and `imu-rate-hz = 1e300` was reported as "inf Hz" (the frame's
+/// f32). Each refusal now names its own line and key, a figure beyond f32 its value as typed.
+#[test]
+fn config_text_refusals_name_their_own_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = dir.path().join("run.txt");
+    let out = dir.path().join("run.bin");
+    let args = [
+        "config",
+        text.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let site = "lat-deg = 45\nlon-deg = 7\nh-m = 150\n";
+    for (line, expected) in [
+        (
+            "lever-arm-sigma = -1",
+            "run.txt:4: refused (reason code 8): the lever arm's 1-sigma must be finite and not negative\n",
+        ),
+        (
+            "align-seconds = -5",
+            "run.txt:4: refused (reason code 8): alignment window -5 s is shorter than the static method's minimum of 10 s\n",
+        ),
+        (
+            "align-method = inertial\nbase-translation = -1",
+            "run.txt:5: refused (reason code 8): the base motion's 1-sigma must be finite and not negative\n",
+        ),
+        (
+            "imu-rate-hz = 1e300",
+            "run.txt:4: imu-rate-hz: takes a finite number within f32's range (3.4e38), got 1e300",
+        ),
+    ] {
+        std::fs::write(&text, format!("{site}{line}\n")).unwrap();
+        let msg = refused(&args, &[expected]);
+        assert!(!msg.contains("lat-deg (line 1)"), "{msg}");
+        assert!(!out.exists());
+    }
+}
+
 /// Scenario lengths and angles of `nav sim --set`: the land vehicle's `seconds=1e300` (or inf) planned
 /// its route lap by lap until an allocation aborted; the flight's `climb_s` or `still_s` of
 /// 1e300 summed its ground distance second by second without end.
@@ -368,6 +409,12 @@ fn scenario_lengths_beyond_range_are_refused() {
             "ship-rocking",
             "roll_phase_deg=-1e300",
             "roll_phase_deg -1e300 is not within [-360, 360] deg",
+        ),
+        // The land vehicle's was not checked: its truth started at yaw -3.7 deg.
+        (
+            "land-vehicle",
+            "heading_deg=1e300",
+            "heading_deg 1e300 is not within [-360, 360] deg",
         ),
     ] {
         // A length given by --set alone (with --seconds too, two lengths are refused).

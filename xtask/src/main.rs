@@ -340,9 +340,16 @@ fn site_args() -> [&'static str; 6] {
 
 /// `(max, mean)` guest instructions of an IMU sample's decode and conversion with the simulated
 /// `device` on the demo recording (the run's exit status does not matter: the costs are logged
-/// even when the alignment fails).
+/// even when the alignment fails). The inertial method: the static one refuses a consumer
+/// part's declared gyro bias before any sample is read.
 fn device_costs(elf: &Path, device: &str) -> Result<(f64, f64)> {
-    let mut c = qemu_with_device(elf, device);
+    let mut c = Command::new("bash");
+    c.arg("firmware/qemu-run.sh")
+        .arg(elf)
+        .args(["--device", device, "--align-method", "inertial"])
+        .args([DEMO_IMU, "out/solution-firmware.csv"])
+        .args(DEMO_SITE)
+        .arg(DEMO_ALIGN_S);
     eprintln!("$ {}", show(&c));
     let out = c.output().context("run QEMU")?;
     imu_costs(&String::from_utf8_lossy(&out.stdout))

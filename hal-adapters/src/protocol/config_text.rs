@@ -140,6 +140,14 @@ impl DeviceConfig {
                 .filter(|v| v.is_finite())
                 .ok_or(bad("a finite number"))
         };
+        // A figure the frame carries in f32: 1e300 became "inf" in the refusal's text.
+        let number32 = || {
+            value
+                .parse::<f32>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or(bad("a finite number within f32's range (3.4e38)"))
+        };
         let count = || {
             value
                 .parse::<u16>()
@@ -151,7 +159,7 @@ impl DeviceConfig {
             "lon-deg" => run.lon_deg = number()?,
             "h-m" => run.h_m = number()?,
             "align-seconds" => run.align_seconds = number()?,
-            "imu-rate-hz" => self.imu_rate_hz = number()? as f32,
+            "imu-rate-hz" => self.imu_rate_hz = number32()?,
             "imu-model" => {
                 self.imu_model =
                     ImuModel::from_name(value).ok_or(bad("adis16505, icm42688 or bmi088"))?;
@@ -164,11 +172,11 @@ impl DeviceConfig {
                 run.noise = sensor_noise(&spec);
                 run.figures = spec.figures;
             }
-            "gyro-scale-sigma" => run.figures.gyro_scale = number()? as f32,
-            "accel-scale-sigma" => run.figures.accel_scale = number()? as f32,
-            "gyro-cross-coupling-rad" => run.figures.gyro_cross_coupling_rad = number()? as f32,
-            "accel-cross-coupling-rad" => run.figures.accel_cross_coupling_rad = number()? as f32,
-            "gyro-g-sensitivity" => run.figures.gyro_g_sensitivity = number()? as f32,
+            "gyro-scale-sigma" => run.figures.gyro_scale = number32()?,
+            "accel-scale-sigma" => run.figures.accel_scale = number32()?,
+            "gyro-cross-coupling-rad" => run.figures.gyro_cross_coupling_rad = number32()?,
+            "accel-cross-coupling-rad" => run.figures.accel_cross_coupling_rad = number32()?,
+            "gyro-g-sensitivity" => run.figures.gyro_g_sensitivity = number32()?,
             "gyro-arw-rad-per-sqrt-s" => run.noise.arw_rad_per_sqrt_s = number()?,
             "accel-vrw-mps-per-sqrt-s" => run.noise.vrw_mps_per_sqrt_s = number()?,
             "gyro-bias-rad-s" => run.noise.gyro_bias_rad_s = number()?,
@@ -230,7 +238,7 @@ pub fn keys_of(
         ACCEL_BIAS_OUT_OF_RANGE, ARW_OUT_OF_RANGE, GYRO_BIAS_OUT_OF_RANGE, SCALE_OUT_OF_RANGE,
         VRW_OUT_OF_RANGE,
     };
-    use nav_core::alignment::machine::SettingsError;
+    use nav_core::alignment::machine::{self, SettingsError};
     use nav_core::navigator::ConfigError as E;
     let (own, noise): (&'static [&'static str], bool) = match refusal {
         R::Run(E::Latitude(_)) => (&["lat-deg"], false),
@@ -252,6 +260,18 @@ pub fn keys_of(
             },
             false,
         ),
+        R::Run(E::Alignment(SettingsError::BadValue(what))) => match *what {
+            machine::LEVER_ARM_VALUE => (&["lever-arm"], false),
+            machine::LEVER_ARM_SIGMA_VALUE => (&["lever-arm-sigma"], false),
+            machine::BASE_MOTION_VALUE => (&["base-translation"], false),
+            _ => (&NOISE_KEYS, false),
+        },
+        R::Run(E::Alignment(SettingsError::WindowTooShort { .. })) => {
+            (&["align-seconds", "align-method"], false)
+        }
+        R::Run(E::Alignment(SettingsError::GyrosTooCoarse { .. })) => {
+            (&["align-method", "lat-deg"], true)
+        }
         R::Run(E::Alignment(SettingsError::BadRate(_))) => (&["imu-rate-hz"], false),
         R::Run(E::Alignment(SettingsError::WindowTooLong { .. })) => (&["align-seconds"], false),
         R::Run(E::Alignment(SettingsError::NearPole)) => (&["lat-deg"], false),

@@ -1220,6 +1220,8 @@ impl LandVehicle {
         check_lat(self.lat_deg)?;
         check_lon("lon_deg", self.lon_deg)?;
         check_height("h_m", self.h_m)?;
+        // 1e300 was taken: its truth started at yaw -3.7 deg, far from what was asked.
+        check_angle("heading_deg", self.heading_deg, 360.0)?;
         check_positive("speed_mps", self.speed_mps)?;
         check_seconds(self.seconds)?;
         if self.speed_mps > 70.0 {

@@ -252,6 +252,14 @@ impl AlignFailure {
     }
 }
 
+/// [`SettingsError::BadValue`]'s names of the values [`check_geometry`] refuses (a text
+/// form names its key by them).
+pub const LEVER_ARM_VALUE: &str = "the lever arm";
+/// See [`LEVER_ARM_VALUE`].
+pub const LEVER_ARM_SIGMA_VALUE: &str = "the lever arm's 1-sigma";
+/// See [`LEVER_ARM_VALUE`].
+pub const BASE_MOTION_VALUE: &str = "the base motion's 1-sigma";
+
 /// Why a base translation given with the static method is refused
 /// ([`AlignMethod::takes_base_translation`]).
 pub const BASE_TRANSLATION_STATIC: &str = "the base translation is the base motion of the \
@@ -746,7 +754,7 @@ pub fn check_geometry(
     match *lever_arm {
         LeverArm::Known(r) => {
             if !r.iter().all(|v| v.is_finite()) {
-                return Err(SettingsError::BadValue("the lever arm"));
+                return Err(SettingsError::BadValue(LEVER_ARM_VALUE));
             }
             // hypot: the squares of 1e300 m would overflow.
             let length_m = libm::hypot(libm::hypot(r.x, r.y), r.z);
@@ -756,7 +764,7 @@ pub fn check_geometry(
         }
         LeverArm::Unknown { sigma_m } => {
             if !ok(sigma_m) {
-                return Err(SettingsError::BadValue("the lever arm's 1-sigma"));
+                return Err(SettingsError::BadValue(LEVER_ARM_SIGMA_VALUE));
             }
             if sigma_m == 0.0 {
                 return Err(SettingsError::LeverArmSigmaZero);
@@ -767,7 +775,7 @@ pub fn check_geometry(
         }
     }
     if !(ok(base.position_sigma_m) && ok(base.translation_sigma_m)) {
-        return Err(SettingsError::BadValue("the base motion's 1-sigma"));
+        return Err(SettingsError::BadValue(BASE_MOTION_VALUE));
     }
     if !(base.translation_sigma_m <= MAX_LEVER_ARM_M) {
         return Err(SettingsError::OutOfRange(BASE_TRANSLATION_OUT_OF_RANGE));
