@@ -157,7 +157,8 @@ pub fn parse(name: &Path, text: &str) -> Result<DeviceConfig> {
             ),
         }
     }
-    // After the ranges: a translation the static alignment would ignore (the board took such a frame silently).
+    // After the ranges: a translation the static alignment would ignore (the board took such a
+    // frame silently).
     if let Some((n, _)) = given.get("base-translation")
         && !config.run.align_method.takes_base_translation()
     {

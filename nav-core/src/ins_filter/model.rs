@@ -252,17 +252,17 @@ pub fn system_matrix<T: Scalar>(
 pub const SIGNIFICANT: f64 = 3.0;
 
 /// Sets the velocity rows' attitude block of `f` ([`system_matrix`]) to `[f_n x]` with the
-/// horizontal part of the specific force shrunk by its own doubt: the coefficient of the
-/// attitude error is the true specific force, and the computed one carries the filter's
-/// horizontal error `g x phi + C_b_n b_a` (covariance `E` from `P`'s tilt and
-/// accelerometer-bias blocks; a heading error turns `f_h` without changing its size) and the interval mean's white noise (variance `mean_noise_var`
-/// [m^2/s^4] per axis). The horizontal part `f_h` is kept as `f_h max(0, 1 - k tr E_h /
-/// |f_h|^2)`, `k` = [`SIGNIFICANT`] [James & Stein, 1961, positive part, whose `k = 1` still
-/// let a fifth of pure noise's square through; `k = 3` lets 2 %]. Taken at face value, a still vehicle's
-/// `f_h` (that error, tens of milli-g on a consumer part) times the heading error told the
-/// heading from the accelerometer bias, which at rest nothing can: the heading's 1-sigma fell
-/// from 30 to 7 deg in 5 min with the errors beyond 3 sigma. Under a real acceleration
-/// (metres per second squared against centimetres) the factor is 1.
+/// horizontal part of the specific force shrunk by its own doubt: the coefficient of the attitude
+/// error is the true specific force, and the computed one carries the filter's horizontal error `g
+/// x phi + C_b_n b_a` (covariance `E` from `P`'s tilt and accelerometer-bias blocks; a heading
+/// error turns `f_h` without changing its size) and the interval mean's white noise (variance
+/// `mean_noise_var` [m^2/s^4] per axis). The horizontal part `f_h` is kept as `f_h max(0, 1 - k tr
+/// E_h / |f_h|^2)`, `k` = [`SIGNIFICANT`] [James & Stein, 1961, positive part, whose `k = 1` still
+/// let a fifth of pure noise's square through; `k = 3` lets 2 %]. Taken at face value, a still
+/// vehicle's `f_h` (that error, tens of milli-g on a consumer part) times the heading error told
+/// the heading from the accelerometer bias, which at rest nothing can: the heading's 1-sigma fell
+/// from 30 to 7 deg in 5 min with the errors beyond 3 sigma. Under a real acceleration (metres per
+/// second squared, against a doubt of centimetres per second squared) the factor is 1.
 pub fn couple_significant_specific_force<T: Scalar>(
     f: &mut Covariance<T>,
     p: &Covariance<T>,
