@@ -63,8 +63,10 @@ pub struct AlignmentDeg {
 impl AlignmentDeg {
     /// The outcome of `method` in output units.
     pub fn new<T: Scalar>(method: AlignMethod, o: &AlignOutcome<T>) -> Self {
+        // The singular band of the precision the attitude was computed in.
         let q = nav_core::attitude::quat_to_f64(&o.estimate.q_b_n);
-        let (roll, pitch, yaw) = nav_core::attitude::euler(&q);
+        let eps = T::default_epsilon().to_f64();
+        let (roll, pitch, yaw) = nav_core::attitude::euler_to_precision(&q, eps);
         let wide = |v: &nav_core::Vector3<T>| [v.x, v.y, v.z].map(T::to_f64);
         Self {
             method,

@@ -288,6 +288,52 @@ fn a_static_alignment_whose_gyros_cannot_find_north_is_refused() {
     }
 }
 
+/// An IMU standing on end (`generate --pitch 90 --roll 1.5 --yaw 30`, exact data) aligned in
+/// f32 said roll 0, pitch 89.972566, yaw 0 deg, and its last row roll 180, pitch 90, yaw 180:
+/// its yaw minus roll, 28.5 deg, lost (24 times the heading's 1-sigma), where f64 gave it. The
+/// angles of an f32 attitude are now taken within f32's singular band: the same rotation in
+/// both precisions.
+#[test]
+fn an_imu_on_end_keeps_its_heading_in_f32() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = dir.path().join("imu.bin");
+    let out = dir.path().join("o.csv");
+    let o = nav(&[
+        "generate",
+        "--out",
+        imu.to_str().unwrap(),
+        "--seconds",
+        "12",
+        "--pitch",
+        "90",
+        "--roll",
+        "1.5",
+        "--yaw",
+        "30",
+    ]);
+    assert!(o.status.success(), "{}", output_text(&o));
+    let (imu, out) = (imu.to_str().unwrap(), out.to_str().unwrap());
+    for precision in ["f32", "f64"] {
+        let o = nav(&replay_args(
+            imu,
+            out,
+            &["--precision", precision, "--imu-noise", "fog"],
+        ));
+        let text = output_text(&o);
+        assert!(o.status.success(), "{text}");
+        for line in ["alignment (static)", "final at t ="] {
+            let l = text.lines().find(|l| l.starts_with(line)).unwrap();
+            let angle = |name: &str| -> f64 {
+                let at = l.find(&format!("{name} ")).unwrap() + name.len() + 1;
+                l[at..].split(' ').next().unwrap().parse().unwrap()
+            };
+            let (roll, pitch, yaw) = (angle("roll"), angle("pitch"), angle("yaw"));
+            assert!(pitch > 89.999, "{precision}: {l}");
+            assert!((yaw - roll - 28.5).abs() < 0.01, "{precision}: {l}");
+        }
+    }
+}
+
 /// `nav config` (the board's f32 run): `base-translation = 1e300` was refused as "the lever
 /// arm must be finite and not negative", naming the lever-arm line too.
 #[test]

@@ -79,13 +79,24 @@ pub fn quat_to_f64<T: Scalar>(q: &UnitQuaternion<T>) -> UnitQuaternion<f64> {
 /// carries the rotation about the vertical, `yaw -+ roll`, from `C_01` and `C_11`.
 #[inline]
 pub fn euler<T: Scalar>(q_b_n: &UnitQuaternion<T>) -> (T, T, T) {
+    euler_to_precision(q_b_n, T::default_epsilon())
+}
+
+/// [`euler`] of a quaternion computed to the relative precision `eps` (an `f32` attitude
+/// widened to `f64`: its rounding, not `f64`'s, decides where roll and yaw are undefined; an
+/// IMU standing on end came out roll 0, yaw 0 where its yaw minus roll was 28.5 deg). Near
+/// pitch +-90 the pitch is `atan2(sin, cos)` with `cos = |(C_21, C_22)|`: the `asin` of a sine
+/// within rounding of 1 gave 89.97 deg for 90.
+#[inline]
+pub fn euler_to_precision<T: Scalar>(q_b_n: &UnitQuaternion<T>, eps: T) -> (T, T, T) {
     let (w, x, y, z) = (q_b_n.w, q_b_n.i, q_b_n.j, q_b_n.k);
     let (one, two) = (T::one(), T::c(2.0));
     let (c21, c22) = (two * (w * x + y * z), one - two * (x * x + y * y));
     let sin_pitch = (two * (w * y - z * x)).max(-one).min(one);
-    if c21 * c21 + c22 * c22 < T::default_epsilon() {
+    let cos2_pitch = c21 * c21 + c22 * c22;
+    if cos2_pitch < eps {
         let yaw = (two * (w * z - x * y)).patan2(one - two * (x * x + z * z));
-        return (T::zero(), sin_pitch.pasin(), yaw);
+        return (T::zero(), sin_pitch.patan2(cos2_pitch.sqrt()), yaw);
     }
     let roll = c21.patan2(c22);
     let yaw = (two * (w * z + x * y)).patan2(one - two * (y * y + z * z));
@@ -157,6 +168,33 @@ mod tests {
         // Away from vertical the angles are the ones given.
         let (r, p, y) = euler(&from_euler(0.3f32, 1.2, -2.0));
         assert!((r - 0.3).abs() < 1e-5 && (p - 1.2).abs() < 1e-5 && (y + 2.0).abs() < 1e-5);
+    }
+
+    /// An `f32` attitude widened to `f64` (the solution rows' and the alignment line's path):
+    /// `f64`'s singular band is far inside the `f32` quaternion's rounding, so an IMU on end
+    /// came out roll 0, pitch 89.97, yaw 0 where its yaw minus roll was 28.5 deg (28.5 deg
+    /// off). With the `f32` band, the angles describe the attitude, and the pitch is within
+    /// rounding of 90 deg, not 0.03 deg short.
+    #[test]
+    fn widened_f32_angles_at_vertical_describe_the_attitude() {
+        for pitch_deg in [90.0f32, -90.0, 89.999, -89.9999] {
+            for (roll_deg, yaw_deg) in [(1.5f32, 30.0), (-40.0, 130.0), (0.0, -179.0)] {
+                let [r, p, y] = [roll_deg, pitch_deg, yaw_deg].map(f32::to_radians);
+                let q = quat_to_f64(&from_euler(r, p, y));
+                let (r2, p2, y2) = euler_to_precision(&q, f64::from(f32::EPSILON));
+                let off_deg = from_euler(r2, p2, y2).angle_to(&q).to_degrees();
+                let what = (roll_deg, pitch_deg, yaw_deg);
+                assert!(off_deg < 0.01, "{what:?} deg: {off_deg} deg off");
+                let pitch_err = (p2.to_degrees() - f64::from(pitch_deg)).abs();
+                assert!(pitch_err < 0.005, "{what:?} deg: pitch {pitch_err} deg off");
+                // In f64's own band the audit's case was off by its yaw minus roll.
+                let (r3, p3, y3) = euler(&q);
+                if what == (1.5, 90.0, 30.0) {
+                    let off = from_euler(r3, p3, y3).angle_to(&q).to_degrees();
+                    assert!(off > 1.0, "{what:?} deg: {off} deg");
+                }
+            }
+        }
     }
 
     #[test]

@@ -157,7 +157,9 @@ impl Solution {
             position: state.position,
         };
         let (q_b_ned, v_eb_ned) = wide.ned();
-        let (roll, pitch, yaw) = crate::attitude::euler(&q_b_ned);
+        // The singular band of the precision the attitude was computed in.
+        let eps = T::default_epsilon().to_f64();
+        let (roll, pitch, yaw) = crate::attitude::euler_to_precision(&q_b_ned, eps);
         Self {
             t_us,
             lat_ndeg: state.position.lat_ndeg(),
