@@ -587,16 +587,20 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
             site("# quiet\nhealth-every = 0\n"),
             "bad-health.txt:2: refused (reason code 11)",
         ),
-        // A refusal about several keys names each one's line.
+        // A refusal names its own key's line (a short window named the latitude's too).
         (
             "window",
             "align-seconds = 5\n# c\n\nlat-deg = 45\nlon-deg = 7\nh-m = 0\n".to_string(),
-            "(keys align-seconds (line 1), lat-deg (line 4))",
+            "bad-window.txt:1: refused (reason code 8): alignment window 5 s",
         ),
+        // A refusal about several keys names each one's line.
         (
-            "window2",
-            "align-seconds = 5\n# c\n\nlat-deg = 45\nlon-deg = 7\nh-m = 0\n".to_string(),
-            "bad-window2.txt:1,4: refused (reason code 8): alignment window 5 s",
+            "coarse",
+            site("imu-noise = mems-consumer\n"),
+            "bad-coarse.txt:1,2: refused (reason code 8): gyros too coarse to find north: bias \
+             1-sigma 1800.000 deg/h against a horizontal Earth rate of 10.636 deg/h (heading \
+             1-sigma >= 9697 deg); give the heading or use better gyros (keys imu-noise (line 1), \
+             lat-deg (line 2))",
         ),
         // No key at all (an empty or truncated file, comments only): the frame would carry the
         // compiled-in configuration as the host's, without the DEFAULT_CONFIG flag.
