@@ -142,9 +142,9 @@ impl DeviceConfig {
         };
         // A figure the frame carries in f32: 1e300 became "inf" in the refusal's text.
         let number32 = || {
-            value
-                .parse::<f32>()
+            number()
                 .ok()
+                .map(|v| v as f32)
                 .filter(|v| v.is_finite())
                 .ok_or(bad("a finite number within f32's range (3.4e38)"))
         };
