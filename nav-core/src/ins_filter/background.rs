@@ -416,6 +416,29 @@ impl<T: Scalar> ErrorFilter<T> {
         Vector3::from_fn(|k, _| self.p[(POS + k, POS + k)])
     }
 
+    /// True when the innovation of `m` (covariance `s` [m^2]) is gross even against `s` plus
+    /// the blur a 3-sigma heading error leaves beyond the small-angle model over the track
+    /// since the last fix taken ([`integrity::heading_blur_m`]; at `v_eb_n` [m/s] for the `dt`
+    /// [s] since the previous fix and the refusals before it): only then can it start a gross
+    /// cluster (a consumer part's heading 108 deg off under a 60 deg 1-sigma, confirmed at
+    /// rest, refused every true fix once it drove off as a jump, and ended 21 km off).
+    fn beyond_heading_blur(
+        &self,
+        m: &Measurement<T, 3>,
+        s: &Matrix3<T>,
+        v_eb_n: &Vector3<T>,
+        dt: T,
+    ) -> bool {
+        let distance_m = v_eb_n.x.hypot(v_eb_n.y) * (dt + self.refused_for_s);
+        let blur = integrity::heading_blur_m(distance_m, self.p[(ATT + 2, ATT + 2)].sqrt());
+        let mut wide = *s;
+        wide[(0, 0)] += blur * blur;
+        wide[(1, 1)] += blur * blur;
+        integrity::whiten(&wide, &m.z).is_none_or(|w| {
+            w.norm_squared() > self.config.gate_nis * T::c(integrity::GROSS_NIS_FACTOR)
+        })
+    }
+
     /// `cluster` judged against the filter's own position variances and the gate, as
     /// DEGRADED by refusals or not ([`RefusedCluster::judged`]).
     fn judged(&self, cluster: RefusedCluster<T>) -> RefusedCluster<T> {
@@ -445,7 +468,11 @@ impl<T: Scalar> ErrorFilter<T> {
     /// re-acquired once, then drifted away from fixes moving 11 m/s relative to it, each
     /// refused alone, and was 2.2 km off at the end of the run, never re-aligned; a KF-GINS
     /// `starttime` 100 s after its static start state, the car 240 m away at 11 m/s: its
-    /// own 1-sigma passed the limit only after 361 s, the solution 10 km off by then).
+    /// own 1-sigma passed the limit only after 361 s, the solution 10 km off by then). A
+    /// confirmed filter whose last two refused fixes were each refused alone has the fixes
+    /// moving away from it as well: with its own 1-sigma beyond the limit, that is enough (a
+    /// consumer part's heading 74 deg off under a declared 30 deg, confirmed at rest, drove
+    /// off refusing every fix, each 12 m from the one before, and ended 12 km off).
     pub fn diverged(&self) -> bool {
         let max = self.config.max_horizontal_sigma_m;
         let p_pos = self.own_position_variances();
@@ -458,8 +485,14 @@ impl<T: Scalar> ErrorFilter<T> {
             .as_ref()
             .filter(|_| !self.confirmed);
         let alone = unconfirmed.is_some_and(RefusedCluster::is_lone);
+        // Refused alone after a fix refused alone: the fixes move away from the solution.
+        let moving_away = self
+            .cluster
+            .as_ref()
+            .is_some_and(|c| c.is_lone() && c.refused_before.is_some());
         let beyond = p_pos.x + p_pos.y > max * max;
-        self.degraded_by_refusals() && (alone || ((clustered || unconfirmed.is_some()) && beyond))
+        let refused = clustered || moving_away || unconfirmed.is_some();
+        self.degraded_by_refusals() && (alone || (refused && beyond))
     }
 
     /// Takes the counters of `diverged`, a filter of the same settings this one restarts
@@ -950,7 +983,7 @@ impl<T: Scalar> ErrorFilter<T> {
         let corrections = self.latency.take_corrections();
         let accel_var = self.accel_error_variance(snap.earth.g);
         let out = match &m {
-            Some(m) => self.screened_position_update(m, snap.earth.g),
+            Some(m) => self.screened_position_update(m, snap.earth.g, &snap.state.v_eb_n),
             None => (AidResult::Invalid, None),
         };
         match (&m, &out.0) {
@@ -996,11 +1029,12 @@ impl<T: Scalar> ErrorFilter<T> {
     }
 
     /// The position update with the integrity tests of [`super::integrity`]; `g` [m/s^2] the
-    /// gravity at the solution.
+    /// gravity at the solution, `v_eb_n` [m/s] its velocity.
     fn screened_position_update(
         &mut self,
         m: &Measurement<T, 3>,
         g: T,
+        v_eb_n: &Vector3<T>,
     ) -> (AidResult<T>, Option<Correction<T>>) {
         let Some((mut s, mut nis)) = self.innovation(m) else {
             return (AidResult::Invalid, None);
@@ -1089,7 +1123,8 @@ impl<T: Scalar> ErrorFilter<T> {
                     m.r,
                     nis,
                     gate,
-                    self.window.len() == integrity::WINDOW,
+                    self.window.len() == integrity::WINDOW
+                        && self.beyond_heading_blur(m, &s, v_eb_n, dt),
                 )
                 .replacing(previous.as_ref())
                 .after(previous.as_ref(), dt),
@@ -1173,6 +1208,15 @@ impl<T: Scalar> ErrorFilter<T> {
             };
             let mut pos = self.p.fixed_view_mut::<3, 3>(POS, POS);
             pos += z * z.transpose();
+            if agrees {
+                // And the heading's by the angle between the solution's track and the
+                // refused fixes' ([`RefusedCluster::heading_doubt`]), which the reported
+                // covariance alone carried: re-acquired without it, a tactical filter
+                // whose heading was 8 deg off under a 0.6 deg 1-sigma refused the fixes of
+                // each turn, re-acquired their offset and velocity, and kept the heading
+                // for 150 s, NAV.
+                self.p[(ATT + 2, ATT + 2)] += self.heading_doubt_rad2;
+            }
             let Some(again) = self.innovation(m) else {
                 return (AidResult::Invalid, None);
             };

@@ -251,6 +251,17 @@ pub const HEADING_DOUBT_MIN_SPEED_M_S: f64 = 2.0;
 /// optimistic (16 in variance) could see from its own error.
 pub const GROSS_NIS_FACTOR: f64 = 16.0;
 
+/// The horizontal position error [m] a heading error of 3 sigma (`yaw_sigma_rad` [rad], at
+/// most half a turn) leaves beyond its small-angle model over `distance_m` [m] travelled since
+/// the last fix taken: `d |exp(i psi) - 1 - i psi|`, the first-order term `d psi` being the
+/// filter's [Groves, ch. 14: a heading error beyond the small-angle model]. A prediction
+/// blurred by it cannot tell a jump from its own error (module docs, a gross cluster).
+pub fn heading_blur_m<T: Scalar>(distance_m: T, yaw_sigma_rad: T) -> T {
+    let psi = (yaw_sigma_rad * T::c(3.0)).min(T::c(core::f64::consts::PI));
+    let (sin, cos) = (psi.psin(), psi.pcos());
+    distance_m * ((T::one() - cos) * (T::one() - cos) + (psi - sin) * (psi - sin)).sqrt()
+}
+
 /// The chain of a gross cluster is judged against this factor times the gate [-]: chi-square
 /// with 3 degrees of freedom at about 65, which a member on the chain exceeds with a
 /// probability of 1e-13 (a false release would capture the cluster).
@@ -1100,6 +1111,23 @@ fn normalised_square<T: Scalar>(d: &Vector3<T>, den: &Vector3<T>) -> T {
 mod tests {
     use super::*;
     use crate::ins_filter::VEL;
+
+    #[test]
+    fn a_heading_blur_is_second_order_when_small_and_bounded_at_half_a_turn() {
+        // 3 sigma = 0.003 rad: (1 - cos) ~ psi^2 / 2 dominates, psi - sin ~ psi^3 / 6.
+        let small = heading_blur_m(1000.0, 0.001);
+        assert!(
+            (small / (1000.0 * 0.003f64.powi(2) / 2.0) - 1.0).abs() < 1e-3,
+            "{small}"
+        );
+        // Beyond 60 deg the 3 sigma is half a turn: the solution runs backwards.
+        let pi = core::f64::consts::PI;
+        for sigma in [1.1, 2.0, 10.0] {
+            let b = heading_blur_m(10.0, sigma);
+            assert!((b - 10.0 * (4.0 + pi * pi).sqrt()).abs() < 1e-9, "{b}");
+        }
+        assert_eq!(heading_blur_m(0.0, 1.0), 0.0);
+    }
 
     #[test]
     fn whitening_makes_the_covariance_the_identity() {
