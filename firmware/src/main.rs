@@ -56,7 +56,7 @@ mod app {
     use nav_core::alignment::{AlignOutcome, Stage};
     use nav_core::navigator::{
         AIDED_COMPILED_IN, Background, FromBackground, NavError, Navigator, Setup, Step, Summary,
-        ToBackground, Unusable,
+        ToBackground,
     };
     use nav_core::output::{AIDED_CSV_HEADER, CSV_HEADER, Row, Solution};
     use rtic_sync::channel::{Receiver, Sender};
@@ -376,14 +376,14 @@ mod app {
                         answer_from_background(navigator, answer, out, &imu);
                     }
                 }
-                Step::Flagged => {
+                Step::Flagged(cause) => {
                     let n = navigator.counters().flagged;
                     // The first ten, then every thousandth: a failing sensor must not flood the log.
                     if n <= 10 || n.is_multiple_of(1000) {
                         defmt::warn!(
                             "sample {=u32} flagged {=str}: not navigated ({=u32} so far)",
                             sample.seq,
-                            sample.flags.unusable().map_or("usable", Unusable::name),
+                            cause.name(),
                             n
                         );
                     }

@@ -739,6 +739,10 @@ pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
         .collect()
 }
 
+/// A latency test whose 1-sigma is beyond this [s] has not tested a receiver's output latency
+/// (tenths of a second): its line says so rather than print the estimate.
+const UNRESOLVED_LATENCY_S: f64 = 1.0;
+
 /// The summary's line of the test of the fixes' time tags (`nav_core::ins_filter::latency`):
 /// the estimate and its 1-sigma, whatever it found.
 pub fn latency_line(e: &LatencyEstimate<f64>) -> String {
@@ -747,7 +751,15 @@ pub fn latency_line(e: &LatencyEstimate<f64>) -> String {
     } else {
         "within their noise, or too small to matter"
     };
-    if e.sigma_s.is_finite() {
+    if !e.detected && e.sigma_s > UNRESOLVED_LATENCY_S {
+        // Says nothing of a receiver's latency (a tenth of a second): one window of fixes
+        // gave "late by -251.8974 s (1-sigma 239.8 s)".
+        format!(
+            "GNSS time tags: not tested ({} windows of fixes resolve a latency only to \
+             1-sigma {:.3e} s)",
+            e.windows, e.sigma_s
+        )
+    } else if e.sigma_s.is_finite() {
         format!(
             "GNSS time tags: the fixes late by {:.4} s (1-sigma {:.4} s) over {} windows of \
              fixes ({} left out as gross faults; their spread {:.2}): {verdict}",
@@ -976,6 +988,17 @@ mod tests {
             ..none
         };
         assert!(latency_line(&untested).contains("not tested"));
+        let unresolved = LatencyEstimate {
+            late_s: -251.9,
+            sigma_s: 239.8,
+            windows: 1,
+            ..none
+        };
+        let line = latency_line(&unresolved);
+        assert!(
+            line.contains("not tested (1 windows") && !line.contains("251"),
+            "{line}"
+        );
     }
 
     /// The summary's line names the cause of the last re-alignment and what the restarted

@@ -7,7 +7,7 @@ use common::{parse_log, replay, replay_error};
 use hal_adapters::recording::{HEADER_LEN, RECORD_LEN, Record};
 use host_tests::generate::Stationary;
 use host_tests::recording_io::{self, Recording};
-use host_tests::replay::ReplayOptions;
+use host_tests::replay::{ImuDevice, ReplayOptions};
 use std::path::{Path, PathBuf};
 
 fn scenario() -> Stationary {
@@ -96,6 +96,19 @@ fn corrupt_record() {
         )),
         "{msg}"
     );
+    // Through a simulated device's driver the same words: the file is corrupt, not the bus
+    // (was `SPI bus error: Source(Format(FormatError { kind: RecordCrc, .. }))`).
+    for device in [ImuDevice::Adis16505, ImuDevice::Icm42688, ImuDevice::Bmi088] {
+        let mut o = options();
+        o.device = device;
+        let msg = replay_error(&path, &o);
+        assert!(
+            msg.contains("byte offset 1288 (record 31): record CRC mismatch")
+                && !msg.contains("SPI bus")
+                && !msg.contains("Source("),
+            "{device:?}: {msg}"
+        );
+    }
 }
 
 #[test]

@@ -306,13 +306,35 @@ impl<D: ImuDriver> SimulatedImu<D> {
     }
 }
 
+/// A simulated IMU's failure ([`SimulatedImu`]): its driver's, or that of the sample source
+/// behind the simulated device (a corrupt recording is no bus error: it was shown as `SPI bus
+/// error: Source(Format(FormatError { .. }))`, and counted as one).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SimulatedImuError<E> {
+    /// The driver failed (the simulated device's checksum, frame or fault).
+    Driver(Error<SimError<E>>),
+    /// The sample source failed: its error.
+    Source(E),
+}
+
+impl<E: fmt::Debug + fmt::Display> fmt::Display for SimulatedImuError<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Driver(e) => write!(f, "{e}"),
+            Self::Source(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl<E: fmt::Debug + fmt::Display> core::error::Error for SimulatedImuError<E> {}
+
 impl<D, E> Imu for SimulatedImu<D>
 where
     D: ImuDriver<BusError = SimError<E>>,
     D::Bus: SimulatedBus,
-    E: fmt::Debug,
+    E: fmt::Debug + fmt::Display,
 {
-    type Error = Error<SimError<E>>;
+    type Error = SimulatedImuError<E>;
 
     /// The next sample; `Ok(None)` once the source has ended (and after that, without a
     /// further read).
@@ -334,10 +356,15 @@ where
                     self.ended = true;
                     return Ok(None);
                 }
+                Err(Error::Spi(SimError::Source(e))) => {
+                    // Not a bus error either ([`health_at_end`]); nothing is read after it.
+                    self.ended = true;
+                    return Err(SimulatedImuError::Source(e));
+                }
                 Err(e) if e.is_transient() && transient < MAX_CONSECUTIVE_TRANSIENT => {
                     transient += 1;
                 }
-                Err(e) => return Err(e),
+                Err(e) => return Err(SimulatedImuError::Driver(e)),
             }
         }
     }

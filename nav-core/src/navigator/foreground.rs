@@ -205,8 +205,8 @@ impl fmt::Display for Unused<'_> {
 /// What became of one sample ([`Navigator::push`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Step<T: Scalar> {
-    /// Skipped for its flags (counted in `flagged`).
-    Flagged,
+    /// Skipped for its flags, or out of time order: the cause (counted in `flagged`).
+    Flagged(Unusable),
     /// Refused by the input limits (counted in `rejected`).
     Rejected(InputError),
     /// Aligning: hand the increment to the background ([`ToBackground::Align`]). With
@@ -583,7 +583,7 @@ impl<T: Scalar> Navigator<T> {
         if let Some(cause) = input.unusable {
             self.counters.flagged = self.counters.flagged.saturating_add(1);
             self.counters.flagged_by.add(cause);
-            return Step::Flagged;
+            return Step::Flagged(cause);
         }
         let inc = self.compensated(&input.increment);
         if let Err(e) = inc.check(&self.limits) {
@@ -596,7 +596,7 @@ impl<T: Scalar> Navigator<T> {
             self.restart_increments();
             self.counters.flagged = self.counters.flagged.saturating_add(1);
             self.counters.flagged_by.add(Unusable::OutOfOrder);
-            return Step::Flagged;
+            return Step::Flagged(Unusable::OutOfOrder);
         }
         let gap = self.gaps.note(input.t_us, &inc);
         if let Some(gap) = &gap {
@@ -981,7 +981,7 @@ impl<T: Scalar> Navigator<T> {
                 Phase::Failed(e) => Err(e),
                 _ => Ok(None),
             },
-            Step::Flagged | Step::Rejected(_) => Ok(None),
+            Step::Flagged(_) | Step::Rejected(_) => Ok(None),
             Step::Failed(e) => Err(e),
         }
     }

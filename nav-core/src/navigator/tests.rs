@@ -972,6 +972,24 @@ fn a_gap_inside_an_integrating_alignment_ends_the_run() {
     assert!(s.is_ok(), "{s:?}");
 }
 
+/// A flagged sample's step names its cause, the navigator's own (out of time order) as well
+/// as its flags' (the firmware's log said "flagged usable" for a clock that stepped back).
+#[test]
+fn a_flagged_step_names_its_cause() {
+    let setup = Setup::<f64>::new(&config(10.0, 40), RATE_HZ).unwrap();
+    let mut nav = Navigator::new(&setup);
+    let mut inputs = still(3);
+    let (a, b, mut c) = (
+        inputs.next().unwrap(),
+        inputs.next().unwrap(),
+        inputs.next().unwrap(),
+    );
+    assert!(!matches!(nav.push(&b), Step::Flagged(_)));
+    assert_eq!(nav.push(&a), Step::Flagged(Unusable::OutOfOrder));
+    c.unusable = Some(Unusable::Stale);
+    assert_eq!(nav.push(&c), Step::Flagged(Unusable::Stale));
+}
+
 /// A clock that steps back for good while navigating: its samples are flagged out of order
 /// until their time passes the last navigated one, the rows stay in time order, and the time
 /// the skipped samples covered is a gap before the next navigated sample: bridged for 2 s,
