@@ -153,6 +153,38 @@ pub struct Header {
     pub sample_count: u32,
 }
 
+/// A file whose length is not its header's ([`Header::check_file_len`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LengthMismatch {
+    /// The header's sample count.
+    pub count: u32,
+    /// The length [bytes] the header gives.
+    pub expected: u64,
+    /// The file's length [bytes].
+    pub len: u64,
+}
+
+impl fmt::Display for LengthMismatch {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Self {
+            count,
+            expected,
+            len,
+        } = self;
+        let why = if len < expected {
+            "truncated"
+        } else {
+            "trailing bytes after the last record"
+        };
+        write!(
+            f,
+            "the header says {count} samples ({expected} bytes) but the file has {len} bytes ({why})"
+        )
+    }
+}
+
+impl core::error::Error for LengthMismatch {}
+
 impl Header {
     /// The 48 header bytes, CRC included. Does not validate: see [`Header::validate`].
     pub fn encode(&self) -> [u8; HEADER_LEN] {
@@ -223,6 +255,17 @@ impl Header {
             rate_hz,
             t0_ns: u64::from_le_bytes(array_at(bytes, H_T0_NS)),
             sample_count: u32_at(bytes, H_SAMPLE_COUNT),
+        })
+    }
+
+    /// Checks a file's length `len` [bytes] against [`Header::file_len`], before anything is
+    /// read past the header (a cut or a tail is found at once, not after the run).
+    pub fn check_file_len(&self, len: u64) -> Result<(), LengthMismatch> {
+        let expected = self.file_len();
+        (len == expected).then_some(()).ok_or(LengthMismatch {
+            count: self.sample_count,
+            expected,
+            len,
         })
     }
 

@@ -802,18 +802,10 @@ impl ReplaySource {
                 let replay =
                     Replay::new(reader).map_err(|e| in_file(path, SourceError::from(e)))?;
                 // The header's count against the file's length, before anything is navigated.
-                let count = u64::from(replay.header().sample_count);
-                let expected = HEADER_LEN as u64 + RECORD_LEN as u64 * count;
-                ensure!(
-                    len == expected,
-                    "recording {}: the header says {count} samples ({expected} bytes) but the file has {len} bytes ({})",
-                    path.display(),
-                    if len < expected {
-                        "truncated"
-                    } else {
-                        "trailing bytes after the last record"
-                    }
-                );
+                replay
+                    .header()
+                    .check_file_len(len)
+                    .map_err(|e| anyhow!("recording {}: {e}", path.display()))?;
                 check_header_rate(path, replay.header())?;
                 Self::File(replay)
             }

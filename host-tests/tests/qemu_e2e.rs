@@ -966,7 +966,8 @@ fn a_recording_not_at_the_devices_rate_is_refused() {
 }
 
 /// A truncated and a corrupt recording stop the firmware with the recording exit code (4) and a
-/// defmt error naming the byte offset.
+/// defmt error naming the byte offset, or, for a length the header does not give, the
+/// header's count against the file's length, before anything is navigated.
 #[test]
 fn firmware_rejects_truncated_and_corrupt_recordings() {
     let dir = tempfile::tempdir().unwrap();
@@ -984,7 +985,10 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
     .unwrap();
 
     for (file, expect) in [
-        ("truncated.bin", "byte offset"),
+        (
+            "truncated.bin",
+            "the header says 800 samples (32048 bytes) but the file has 32035 bytes (truncated)",
+        ),
         ("corrupt.bin", "record 300"),
         ("garbage.bin", "byte offset 0"),
     ] {
@@ -995,19 +999,33 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
             "{file}: expected an error with '{expect}':\n{log}"
         );
     }
-    // A recording that ends in a bad record after the alignment: the rows navigated before
-    // it are in the log, and the stream carries every one of them (it lost the chunk it still
-    // queued at the error exit: one row fewer than the log).
+    // Bytes after the last record: refused before anything is navigated (the firmware
+    // navigated the whole recording and failed only at its end, its log nearly complete), no
+    // log created.
     let long = static_recording(13.0, Grade::Ideal).to_bytes().unwrap();
     let mut trailing = long.clone();
     trailing.extend_from_slice(&[0; 7]);
     std::fs::write(d.join("trailing.bin"), &trailing).unwrap();
+    let (code, log) = run_firmware(d, &["trailing.bin", "tail.csv", "45", "7.5", "150", "10"]);
+    assert_eq!(code, 4, "trailing bytes: {log}");
+    assert!(
+        log.contains("(trailing bytes after the last record)") && !log.contains("aligned"),
+        "{log}"
+    );
+    assert!(!d.join("tail.csv").exists());
+    // A recording that ends in a bad record after the alignment: the rows navigated before
+    // it are in the log, and the stream carries every one of them (it lost the chunk it still
+    // queued at the error exit: one row fewer than the log).
+    let mut last_bad = long.clone();
+    let n = last_bad.len();
+    last_bad[n - 10] ^= 0x40;
+    std::fs::write(d.join("last_bad.bin"), &last_bad).unwrap();
     let (code, log) = run_firmware(
         d,
         &[
             "--stream",
             "fw.bin",
-            "trailing.bin",
+            "last_bad.bin",
             "fw.csv",
             "45",
             "7.5",
@@ -1016,7 +1034,7 @@ fn firmware_rejects_truncated_and_corrupt_recordings() {
             "40",
         ],
     );
-    assert_eq!(code, 4, "trailing bytes: {log}");
+    assert_eq!(code, 4, "a bad last record: {log}");
     let csv = std::fs::read_to_string(d.join("fw.csv")).unwrap();
     assert!(csv.lines().count() > 2 && !csv.contains("# end"), "{csv}");
     let o = nav(d, &["decode", "fw.bin", "--out", "decoded.csv"]);

@@ -87,6 +87,7 @@ pub fn init(
         defmt::error!("cannot open the recording {=str}", shown(&args.imu_path));
         exit(ExitCode::Recording)
     });
+    let len = file.0.metadata().map(|m| m.len());
     let source = Replay::new(Buffered::new(file)).unwrap_or_else(|e| {
         defmt::error!(
             "recording {=str}: {}",
@@ -96,6 +97,23 @@ pub fn init(
         exit(ExitCode::Recording)
     });
     let header = *source.header();
+    // The header's count against the file's length, before anything is navigated (the
+    // harness's rule: a cut or a tail was found only at the end, the log nearly complete).
+    let Ok(len) = len else {
+        defmt::error!(
+            "recording {=str}: its length cannot be read",
+            shown(&args.imu_path)
+        );
+        exit(ExitCode::Recording)
+    };
+    if let Err(e) = header.check_file_len(len) {
+        defmt::error!(
+            "recording {=str}: {}",
+            shown(&args.imu_path),
+            defmt::Display2Format(&e)
+        );
+        exit(ExitCode::Recording)
+    }
     defmt::info!(
         "recording: {=u32} samples at {=f64} Hz",
         header.sample_count,
