@@ -438,24 +438,7 @@ mod app {
             .as_ref()
             .and_then(|(f, _)| f.none_in_span(last_sample_us))
         {
-            let s = |t_us: u64| t_us as f64 * 1e-6;
-            if nav_core::gap::on_another_clock(fixes, data) {
-                defmt::error!(
-                    "GNSS file: no GNSS fix within the IMU data's time span: the fixes are at {=f64} .. {=f64} s, the IMU data cover {=f64} .. {=f64} s: the GNSS time tags are on another clock than the recording's (e.g. GNSS seconds of week against a recording that starts at 0); give the fixes the recording's time",
-                    s(fixes.0),
-                    s(fixes.1),
-                    s(data.0),
-                    s(data.1)
-                );
-            } else {
-                defmt::error!(
-                    "GNSS file: no GNSS fix within the IMU data's time span: the fixes are at {=f64} .. {=f64} s, the IMU data cover {=f64} .. {=f64} s: the run would be free-inertial",
-                    s(fixes.0),
-                    s(fixes.1),
-                    s(data.0),
-                    s(data.1)
-                );
-            }
+            log::no_fix_in_span(fixes, data);
             stop(out, ExitCode::Recording)
         }
         if board::CSV_LOG {

@@ -1611,9 +1611,10 @@ fn firmware_marks_a_lost_free_inertial_solution_like_the_harness() {
 }
 
 /// Fixes on another clock than the recording's (none within the IMU data's time span) end
-/// the firmware's run with the recording's exit code (4), named as the harness names them and
-/// without the end record; before, the run exited 0 with a complete-looking free-inertial log
-/// that said NAV. Fixes that all come before the aided phase are warned of in the harness's
+/// the firmware's run with the recording's exit code (4), named as the harness names them,
+/// before anything is navigated (from the header's start and the last record's time); before,
+/// the run exited 0 with a complete-looking free-inertial log that said NAV, then navigated
+/// it all and refused it at the end. Fixes that all come before the aided phase are warned of in the harness's
 /// words (the firmware said nothing).
 #[test]
 fn firmware_refuses_fixes_on_another_clock_and_warns_of_unused_ones() {
@@ -1657,18 +1658,17 @@ fn firmware_refuses_fixes_on_another_clock_and_warns_of_unused_ones() {
             ],
         )
     };
+    // Refused before anything is navigated (the firmware navigated the whole run, its rows
+    // NAV, and refused it at the end), no log created.
     let (code, log) = run("later.bin");
     assert_eq!(code, 4, "{log}");
     assert!(
         log.contains("no GNSS fix within the IMU data's time span")
-            && log.contains("another clock than the recording's"),
+            && log.contains("another clock than the recording's")
+            && !log.contains("aligned"),
         "{log}"
     );
-    assert!(
-        !std::fs::read_to_string(d.join("fw.csv"))
-            .unwrap()
-            .contains("# end")
-    );
+    assert!(!d.join("fw.csv").exists());
     let (code, log) = run("early.bin");
     assert_eq!(code, 0, "{log}");
     assert!(

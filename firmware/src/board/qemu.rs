@@ -25,7 +25,7 @@ use defmt_semihosting as _; // global defmt logger over semihosting stdout
 use hal_adapters::drivers::{Error as ImuError, Health};
 use hal_adapters::io::{Buffered, SemihostingFile};
 use hal_adapters::protocol::config::BoardIdentity;
-use hal_adapters::recording::Replay;
+use hal_adapters::recording::{Header, RECORD_LEN, Record, Replay, record_offset};
 use hal_adapters::sim::{SimBmi088, SimError, health_at_end};
 use nav_core::calibration::ImuCalibration;
 use nav_core::navigator::Setup;
@@ -140,13 +140,6 @@ pub fn init(
     if let Some(path) = args.stream_cstr() {
         refuse_overwriting_data(path, "--stream FILE", &args);
     }
-    let out = SemihostingFile::create(args.out_cstr()).unwrap_or_else(|_| {
-        defmt::error!(
-            "cannot create the solution log {=str}",
-            shown(&args.out_path)
-        );
-        exit(ExitCode::Output)
-    });
     let gnss = args.gnss_cstr().map(|path| {
         let fail = |e: &dyn core::fmt::Display| -> ! {
             let name = args.gnss_path.as_deref().unwrap_or_default();
@@ -160,9 +153,27 @@ pub fn init(
         };
         // Checked whole before anything is navigated, then read as the samples come.
         let summary = crate::gnss::check(path).unwrap_or_else(|e| fail(&e));
+        // Every fix before the first sample's interval or after the last record: refused
+        // before anything is navigated, as the harness does (the firmware navigated the run
+        // free-inertial, its rows NAV, and refused it only at its end). Fixes on both sides
+        // of the data are left to the end's test.
+        if let (Some(fixes), Some(data)) = (summary.span_us, data_span_us(&args, &header))
+            && (fixes.1 < data.0 || fixes.0 > data.1)
+        {
+            crate::log::no_fix_in_span(fixes, data);
+            exit(ExitCode::Recording)
+        }
         let fixes = Fixes::open(path, &summary).unwrap_or_else(|e| fail(&e));
         log::gnss(summary.count, &run, crate::FILTER_CAP);
         (fixes, summary.count)
+    });
+    // Created once the inputs are accepted: a refused GNSS file leaves no log.
+    let out = SemihostingFile::create(args.out_cstr()).unwrap_or_else(|_| {
+        defmt::error!(
+            "cannot create the solution log {=str}",
+            shown(&args.out_path)
+        );
+        exit(ExitCode::Output)
     });
     let stream = args.stream_cstr().map(|path| {
         let file = SemihostingFile::create(path).unwrap_or_else(|_| {
@@ -197,6 +208,19 @@ pub fn init(
         gnss,
         run,
     }
+}
+
+/// The IMU data's span [us]: from the header's start of the first sample's interval to the
+/// last record's time (read from the file); `None` when that record cannot be read.
+fn data_span_us(args: &Args, header: &Header) -> Option<(u64, u64)> {
+    use semihosting::io::{Read as _, Seek as _, SeekFrom};
+    let last = header.sample_count.checked_sub(1)?;
+    let mut file = semihosting::fs::File::open(args.imu_cstr()).ok()?;
+    file.seek(SeekFrom::Start(record_offset(last))).ok()?;
+    let mut bytes = [0; RECORD_LEN];
+    file.read_exact(&mut bytes).ok()?;
+    let record = Record::decode(&bytes, record_offset(last), last).ok()?;
+    Some((header.t0_ns / 1000, record.t_ns / 1000))
 }
 
 /// Parses the semihosting command line into the firmware's [`Args`]; exits with
