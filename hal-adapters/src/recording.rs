@@ -837,8 +837,8 @@ impl<W: Write> Writer<W> {
     }
 }
 
-/// Byte offset of record `index` (or, for `index == sample_count`, of the end of the file).
-/// The byte offset of record `index` in a file [bytes].
+/// Byte offset [bytes] of record `index` in a file (or, for `index == sample_count`, of the
+/// end of the file).
 pub fn record_offset(index: u32) -> u64 {
     HEADER_LEN as u64 + u64::from(index) * RECORD_LEN as u64
 }
