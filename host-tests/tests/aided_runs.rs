@@ -545,8 +545,9 @@ fn an_unconfirmed_filter_diverges_on_its_refusals_alone() {
 /// filter refused every fix to the end of the run, kilometres off (found by an audit: 21 km
 /// and 12 km; here the first member, 7 km off under a 7 km 1-sigma, DEGRADED). Now such a
 /// refusal is no jump, and a run of lone refusals with the filter's own 1-sigma beyond the
-/// limit is a divergence: each member ends NAV within 3 sigma, re-aligned in motion where its
-/// refusals reached the count that makes it DEGRADED.
+/// limit is a divergence once a window of fixes was refused in a row: each member ends NAV
+/// within 3 sigma, and no refusal run reaches 30 fixes (99 while the divergence waited for the
+/// count that makes the filter DEGRADED).
 #[test]
 fn a_wide_heading_confirmed_at_rest_does_not_lock_the_fixes_out() {
     for (seed, yaw_deg) in [("1", "150"), ("5", "-150"), ("2", "-108")] {
@@ -588,10 +589,9 @@ fn a_wide_heading_confirmed_at_rest_does_not_lock_the_fixes_out() {
             .nth(1)
             .and_then(|r| r.split(' ').next())
             .map_or(0, |n| n.parse().unwrap());
-        assert!(
-            longest < 100 || text.contains("after the filter diverged"),
-            "{what}"
-        );
+        // Refused alone, moving away, its own 1-sigma beyond the limit: re-aligned after a
+        // window of refusals (was 99, the count that makes it DEGRADED).
+        assert!(longest < 30, "{what}");
         ends_nav_within_3_sigma(d, &out);
     }
 }

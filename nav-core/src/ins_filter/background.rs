@@ -470,9 +470,13 @@ impl<T: Scalar> ErrorFilter<T> {
     /// `starttime` 100 s after its static start state, the car 240 m away at 11 m/s: its
     /// own 1-sigma passed the limit only after 361 s, the solution 10 km off by then). A
     /// confirmed filter whose last two refused fixes were each refused alone has the fixes
-    /// moving away from it as well: with its own 1-sigma beyond the limit, that is enough (a
-    /// consumer part's heading 74 deg off under a declared 30 deg, confirmed at rest, drove
-    /// off refusing every fix, each 12 m from the one before, and ended 12 km off).
+    /// moving away from it as well: with its own 1-sigma beyond the limit, that is enough once
+    /// a window ([`integrity::WINDOW`]) of fixes was refused in a row, without waiting for the
+    /// count that makes it DEGRADED (a consumer part's heading 74 deg off under a declared 30
+    /// deg, confirmed at rest, drove off refusing every fix, each 12 m from the one before,
+    /// and ended 12 km off; at 100 refusals, re-aligned after 100 s of kilometres). Fixes
+    /// refused alone beyond the limit of a filter's own 1-sigma are kilometres from it or
+    /// wild: the start in motion takes only fixes that agree with the IMU.
     pub fn diverged(&self) -> bool {
         let max = self.config.max_horizontal_sigma_m;
         let p_pos = self.own_position_variances();
@@ -492,7 +496,9 @@ impl<T: Scalar> ErrorFilter<T> {
             .is_some_and(|c| c.is_lone() && c.refused_before.is_some());
         let beyond = p_pos.x + p_pos.y > max * max;
         let refused = clustered || moving_away || unconfirmed.is_some();
-        self.degraded_by_refusals() && (alone || (refused && beyond))
+        let long = self.counters.position.consecutive_rejected as usize >= integrity::WINDOW;
+        (self.degraded_by_refusals() && (alone || (refused && beyond)))
+            || (moving_away && long && beyond)
     }
 
     /// Takes the counters of `diverged`, a filter of the same settings this one restarts
