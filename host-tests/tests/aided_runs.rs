@@ -553,36 +553,8 @@ fn a_wide_heading_confirmed_at_rest_does_not_lock_the_fixes_out() {
     for (seed, yaw_deg) in [("1", "150"), ("5", "-150"), ("2", "-108")] {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
-        sim_into(
-            d,
-            &[
-                "land-vehicle",
-                "--grade",
-                "mems-consumer",
-                "--seconds",
-                "300",
-                "--gnss-rate",
-                "1",
-                "--seed",
-                seed,
-            ],
-        );
-        let att = format!("0,0,{yaw_deg}");
-        let mut start: [&str; 6] = GIVEN;
-        start[5] = &att;
-        let (text, out) = replay_in(
-            d,
-            &[
-                &start[..],
-                &[
-                    "--init-std",
-                    "1,1,1,0.1,0.1,0.1,1,1,90",
-                    "--imu-noise",
-                    "mems-consumer",
-                ],
-            ]
-            .concat(),
-        );
+        sim_car(d, "mems-consumer", seed);
+        let (text, out) = given_heading_run(d, "mems-consumer", yaw_deg, "90");
         let what = format!("seed {seed}, heading {yaw_deg} deg off: {text}");
         let longest: usize = text
             .split("longest refusal: ")
@@ -609,27 +581,9 @@ fn a_reacquired_track_angle_joins_the_heading_doubt() {
     for seed in ["1", "2", "3", "4", "5", "6"] {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
-        sim_into(
-            d,
-            &[
-                "land-vehicle",
-                "--grade",
-                "mems-tactical",
-                "--seconds",
-                "300",
-                "--gnss-rate",
-                "1",
-                "--seed",
-                seed,
-            ],
-        );
+        sim_car(d, "mems-tactical", seed);
         for yaw_deg in ["-46", "40"] {
-            let att = format!("0,0,{yaw_deg}");
-            let mut start: [&str; 6] = GIVEN;
-            start[5] = &att;
-            let std = ["--init-std", "1,1,1,0.1,0.1,0.1,1,1,30"];
-            let noise = ["--imu-noise", "mems-tactical"];
-            let (_, out) = replay_in(d, &[&start[..], &std, &noise].concat());
+            let (_, out) = given_heading_run(d, "mems-tactical", yaw_deg, "30");
             let rows = errors_over_sigma(d, &out);
             let log = std::fs::read_to_string(&out).unwrap();
             let lines = solution_lines(&log);
@@ -647,6 +601,37 @@ fn a_reacquired_track_angle_joins_the_heading_doubt() {
             );
         }
     }
+}
+
+/// `nav sim` of a land vehicle of `grade` (its first 20 s at rest) over 300 s with 1 Hz fixes,
+/// `seed`, into `d`.
+fn sim_car(d: &Path, grade: &str, seed: &str) {
+    let sim = [
+        "land-vehicle",
+        "--grade",
+        grade,
+        "--seconds",
+        "300",
+        "--gnss-rate",
+        "1",
+    ];
+    sim_into(d, &[&sim[..], &["--seed", seed]].concat());
+}
+
+/// [`replay_in`] of the run in `d` from the true start at rest but its heading `yaw_deg` [deg]
+/// off, declared with a 1-sigma of `yaw_sigma_deg` [deg], under the `grade` noise model.
+fn given_heading_run(
+    d: &Path,
+    grade: &str,
+    yaw_deg: &str,
+    yaw_sigma_deg: &str,
+) -> (String, PathBuf) {
+    let att = format!("0,0,{yaw_deg}");
+    let std = format!("1,1,1,0.1,0.1,0.1,1,1,{yaw_sigma_deg}");
+    let mut start: [&str; 6] = GIVEN;
+    start[5] = &att;
+    let more = ["--init-std", &std, "--imu-noise", grade];
+    replay_in(d, &[&start[..], &more].concat())
 }
 
 /// A given start whose heading is 90 deg off under a declared 0.1 deg (a FOG land vehicle,
