@@ -648,7 +648,9 @@ pub fn realignment_line(r: &Realignments) -> Option<String> {
                     "the filter diverged (the last at t = {} s: it refused the fixes in a row \
                      until DEGRADED, with its own 1-sigma beyond the limit or its position \
                      never confirmed by a full window of fixes; or, its own 1-sigma beyond the \
-                     limit, for a window of fixes each refused alone, moving away from it",
+                     limit, for a window of fixes each refused alone, moving away from it; or, \
+                     for a window of fixes refused as a jump that ran away faster than any \
+                     GNSS fault moves (the IMU's fault)",
                     us(r.begun_us)
                 ),
                 "with the sensor errors known as at the start (the diverged filter's \

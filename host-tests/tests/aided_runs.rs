@@ -18,7 +18,7 @@ use host_tests::gnss_sim::{CorrelatedError, GnssSimOptions, Outlier};
 use host_tests::report::interpolate;
 use host_tests::sensor_model::Grade;
 use host_tests::truth::Truth;
-use nav_core::ins_filter::{AidedIns, FilterStatus};
+use nav_core::ins_filter::{AidedIns, FilterStatus, integrity};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -566,6 +566,70 @@ fn a_wide_heading_confirmed_at_rest_does_not_lock_the_fixes_out() {
         assert!(longest < 30, "{what}");
         ends_nav_within_3_sigma(d, &out);
     }
+}
+
+/// A tactical land vehicle whose yaw gyro reads zero for 5 s in its first turn (52-57 s; a
+/// fault within the recording's limits, nothing flagged): the filter comes out of the turn 79
+/// deg off in heading and refuses the fixes as a jump that runs away at the car's speed.
+/// Before, it refused them until the count that makes it DEGRADED (99 in a row, 3.8 km off)
+/// and re-aligned then; no GNSS fault shared by the fixes moves 15 m/s, so now it re-aligns
+/// after a window of refusals, and ends NAV within 3 sigma.
+#[test]
+fn an_imu_fault_the_fixes_run_away_from_realigns_after_a_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sim = [
+        "land-vehicle",
+        "--grade",
+        "mems-tactical",
+        "--seconds",
+        "200",
+    ];
+    run_ok(
+        nav()
+            .arg("sim")
+            .args(sim)
+            .args(["--gnss-rate", "1", "--out"])
+            .arg(d),
+    );
+    let csv = std::fs::read_to_string(d.join("imu.csv")).unwrap();
+    let faulty: String = csv
+        .lines()
+        .map(|l| {
+            match l
+                .split(',')
+                .map(str::parse::<f64>)
+                .collect::<Result<Vec<_>, _>>()
+            {
+                Ok(mut v) if v[0] > 52.0 && v[0] <= 57.0 => {
+                    v[3] = 0.0;
+                    v.iter().map(f64::to_string).collect::<Vec<_>>().join(",") + "\n"
+                }
+                _ => format!("{l}\n"),
+            }
+        })
+        .collect();
+    std::fs::write(d.join("fault.csv"), faulty).unwrap();
+    let out = d.join("sol.csv");
+    let text = run_ok(
+        nav()
+            .arg("replay")
+            .arg("--imu")
+            .arg(d.join("fault.csv"))
+            .arg("--gnss")
+            .arg(d.join("gnss.csv"))
+            .args(GIVEN)
+            .args(["--imu-noise", "mems-tactical", "--out"])
+            .arg(&out),
+    );
+    let longest: usize = text
+        .split("longest refusal: ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .map_or(0, |n| n.parse().unwrap());
+    assert!((integrity::WINDOW..30).contains(&longest), "{text}");
+    assert!(text.contains("re-aligned in motion 1 time"), "{text}");
+    ends_nav_within_3_sigma(d, &out);
 }
 
 /// A tactical part's given start at rest, its heading 46 deg off under a declared 30 deg, or

@@ -476,7 +476,14 @@ impl<T: Scalar> ErrorFilter<T> {
     /// deg, confirmed at rest, drove off refusing every fix, each 12 m from the one before,
     /// and ended 12 km off; at 100 refusals, re-aligned after 100 s of kilometres). Fixes
     /// refused alone beyond the limit of a filter's own 1-sigma are kilometres from it or
-    /// wild: the start in motion takes only fixes that agree with the IMU.
+    /// wild: the start in motion takes only fixes that agree with the IMU. A window of fixes
+    /// refused in a row as a jump that ran away ([`RefusedCluster::ran_away`]) faster than
+    /// [`integrity::FAULT_RATE_MAX_M_S`] and than the filter's own velocity covariance allows
+    /// ([`RefusedCluster::drift_is_plausible`]) is the filter's fault, whatever its own
+    /// 1-sigma: no GNSS fault shared by the fixes moves that fast (a tactical part's yaw gyro
+    /// stuck at zero for 5 s in a turn left it 79 deg off in heading; it refused the fixes as a
+    /// jump running away at 15 m/s for 99 s, 3.8 km off at the 100th, where it re-aligned). A
+    /// jump that stays put, or moves as the filter's own drift could, is held as before.
     pub fn diverged(&self) -> bool {
         let max = self.config.max_horizontal_sigma_m;
         let p_pos = self.own_position_variances();
@@ -497,8 +504,17 @@ impl<T: Scalar> ErrorFilter<T> {
         let beyond = p_pos.x + p_pos.y > max * max;
         let refused = clustered || moving_away || unconfirmed.is_some();
         let long = self.counters.position.consecutive_rejected as usize >= integrity::WINDOW;
+        let p_vel = self.p.fixed_view::<3, 3>(VEL, VEL).into_owned();
+        let filter_fault = self.cluster.as_ref().is_some_and(|c| {
+            c.members as usize >= integrity::WINDOW
+                && c.gross
+                && c.ran_away
+                && c.drift_rate().norm() > T::c(integrity::FAULT_RATE_MAX_M_S)
+                && !c.drift_is_plausible(&p_vel, self.config.gate_nis)
+        });
         (self.degraded_by_refusals() && (alone || (refused && beyond)))
             || (moving_away && long && beyond)
+            || (filter_fault && long)
     }
 
     /// Takes the counters of `diverged`, a filter of the same settings this one restarts

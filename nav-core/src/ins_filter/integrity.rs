@@ -262,6 +262,13 @@ pub fn heading_blur_m<T: Scalar>(distance_m: T, yaw_sigma_rad: T) -> T {
     distance_m * ((T::one() - cos) * (T::one() - cos) + (psi - sin) * (psi - sin)).sqrt()
 }
 
+/// The fastest a GNSS position fault shared by consecutive fixes moves [m/s]: code multipath
+/// and the atmosphere change the fixes by metres over tens of seconds (the outlier bench's
+/// ramp, 5 m over 30 s, moves at 0.17 m/s). A refused jump whose offset runs away faster than
+/// this, and faster than the filter's own velocity covariance allows, is the filter's fault
+/// [Groves, ch. 17] (`ErrorFilter::diverged`).
+pub const FAULT_RATE_MAX_M_S: f64 = 2.0;
+
 /// The chain of a gross cluster is judged against this factor times the gate [-]: chi-square
 /// with 3 degrees of freedom at about 65, which a member on the chain exceeds with a
 /// probability of 1e-13 (a false release would capture the cluster).

@@ -10,7 +10,7 @@ use crate::Scalar;
 use crate::alignment::{AlignMethod, SensorNoise};
 use crate::attitude::from_euler;
 use crate::ins_filter::sequencer::GnssFixInput;
-use crate::ins_filter::{FilterStatus, GnssPosition, GnssVelocity};
+use crate::ins_filter::{FilterStatus, GnssPosition, GnssVelocity, integrity};
 use crate::output::{Row, Solution};
 use crate::{Position, earth};
 use nalgebra::{UnitQuaternion, Vector3};
@@ -1225,8 +1225,7 @@ mod realign {
     /// Aligned at rest heading east, then 10 s at 1 m/s^2 east and driving at 10 m/s; fixes
     /// of position only from 11 s; a gyro transient of 1e-3 rad/s (a thousand times the
     /// model's bias 1-sigma) from 10 to 70 s. The filter runs away from its fixes and refuses
-    /// them; once DEGRADED by refusals with its own horizontal 1-sigma beyond the limit it is
-    /// set aside, and the re-alignment in motion on the fixes restarts it (NAV) with the
+    /// them; once it diverged it is set aside, and the re-alignment in motion on the fixes restarts it (NAV) with the
     /// sensors known as at the start, as the sequencer does to the last bit. Was: every fix
     /// refused to the end.
     #[test]
@@ -1269,7 +1268,8 @@ mod realign {
         assert!((70_000_000..=290_000_000).contains(&r.begun_us), "{r:?}");
         assert!(r.navigating_us < r.begun_us + 10_000_000, "{r:?}");
         let p = s.filter.unwrap().counters.position;
-        assert!(p.rejected >= 100 && p.consecutive_rejected == 0, "{p}");
+        let window = integrity::WINDOW as u32;
+        assert!(p.rejected >= window && p.consecutive_rejected == 0, "{p}");
         for row in rows.iter().filter(|row| row.solution().t_us > r.begun_us) {
             let t = row.solution().t_us;
             let status = row.filter().unwrap().status;
