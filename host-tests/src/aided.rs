@@ -355,6 +355,10 @@ pub struct AidedReport {
     pub gnss_latency: Option<LatencyEstimate<f64>>,
     /// When the fixes were first found lagging their time tags [s] (status DEGRADED).
     pub gnss_late_at_s: Option<f64>,
+    /// The learnt scales of the fixes' declared noise at the end
+    /// (`nav_core::ins_filter::noise_scale`; `None` when no filter ran): position and
+    /// velocity, now and their largest [-].
+    pub noise_scales: Option<[[f64; 2]; 2]>,
 }
 
 /// The attitude the filter started with in motion, as its user is told it.
@@ -690,6 +694,7 @@ pub fn run<T: Scalar, E: fmt::Display>(
         report.counters = *ins.counters();
         report.covariance_faults = ins.covariance_faults();
         report.gnss_latency = Some(ins.gnss_latency().cast());
+        report.noise_scales = Some(ins.noise_scales().map(|a| a.map(T::to_f64)));
     }
     report.fixes = *seq.fix_counters();
     report.realignments = *seq.realignments();

@@ -727,6 +727,7 @@ pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
         .start_s
         .and_then(|_| velocity_warning(&r.counters.velocity));
     let stops = r.start_s.and_then(|_| stop_warning(&r.counters));
+    let noisy = r.noise_scales.as_ref().and_then(noise_scale_warning);
     let late = r
         .gnss_latency
         .as_ref()
@@ -739,7 +740,34 @@ pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
         .chain(velocity)
         .chain(stops)
         .chain(late)
+        .chain(noisy)
         .collect()
+}
+
+/// The warning for fixes noisier than their declared 1-sigma: the learnt scales of the
+/// position and velocity fixes' declared variances, `[[now, largest]; 2]`
+/// (`nav_core::ins_filter::noise_scale`); `None` where neither was scaled.
+pub fn noise_scale_warning(scales: &[[f64; 2]; 2]) -> Option<String> {
+    let told: Vec<String> = ["position", "velocity"]
+        .iter()
+        .zip(scales)
+        .filter(|(_, [_, peak])| *peak > 1.0)
+        .map(|(name, [now, peak])| {
+            format!(
+                "the {name} fixes' variance as up to {peak:.1} times the declared (their 1-sigma \
+                 {:.1} times; {now:.1} at the end)",
+                peak.sqrt()
+            )
+        })
+        .collect();
+    (!told.is_empty()).then(|| {
+        format!(
+            "WARNING: the GNSS fixes were noisier than their declared 1-sigma: the filter took \
+             {}, as their innovations showed; the file's 1-sigma columns are too small for \
+             this receiver",
+            told.join(" and ")
+        )
+    })
 }
 
 /// A latency test whose 1-sigma is beyond this [s] has not tested a receiver's output latency

@@ -102,6 +102,9 @@ pub struct AidedOutcome {
     pub covariance_faults: u32,
     /// The test of the fixes' time tags at the end (`nav_core::ins_filter::latency`).
     pub gnss_latency: nav_core::ins_filter::latency::LatencyEstimate<f64>,
+    /// The learnt scales of the fixes' declared noise (`nav_core::ins_filter::noise_scale`):
+    /// position and velocity, now and their largest [-].
+    pub noise_scales: [[f64; 2]; 2],
     /// The fix queue's counters (received in the aided phase, refused, late).
     pub fixes: FixCounters,
     /// Fixes handed over before the aided phase (during the alignment).
@@ -129,6 +132,7 @@ impl AidedOutcome {
             counters: r.counters,
             covariance_faults: r.covariance_faults,
             gnss_latency: r.gnss_latency.cast(),
+            noise_scales: r.noise_scales.map(|a| a.map(T::to_f64)),
             fixes,
             fixes_unused: unused,
             fixes_after_data: after,

@@ -497,11 +497,13 @@ pub fn replay_aided_cli(
         let velocity = crate::aided_cmd::velocity_warning(&a.counters.velocity);
         let realigned = crate::aided_cmd::realignment_line(&a.realignments);
         let late = crate::aided_cmd::latency_warning(&a.gnss_latency, None);
+        let noisy = crate::aided_cmd::noise_scale_warning(&a.noise_scales);
         for w in realigned
             .into_iter()
             .chain(position)
             .chain(velocity)
             .chain(late)
+            .chain(noisy)
         {
             println!("{w}");
         }

@@ -15,6 +15,7 @@ use super::integrity::{
 use super::latency::{LatencyEstimate, LatencyFix, LatencyMonitor};
 use super::limits;
 use super::model;
+use super::noise_scale::NoiseScale;
 use super::stationarity::{StillWindow, Uncertainty};
 use super::{
     ATT, BA, BG, Covariance, FilterConfig, FilterError, FilterStatus, InitialSigma, N, POS, SA, SG,
@@ -158,6 +159,10 @@ pub struct ErrorFilter<T: Scalar> {
     coast: Coast<T>,
     /// The test of the fixes' time tags ([`super::latency`]).
     latency: LatencyMonitor<T>,
+    /// The learnt scales of the position and velocity fixes' declared noise
+    /// ([`super::noise_scale`]).
+    position_noise: NoiseScale<T, 3>,
+    velocity_noise: NoiseScale<T, 3>,
 }
 
 impl<T: Scalar> ErrorFilter<T> {
@@ -216,6 +221,8 @@ impl<T: Scalar> ErrorFilter<T> {
             },
             coast: Coast::none(),
             latency: LatencyMonitor::default(),
+            position_noise: NoiseScale::default(),
+            velocity_noise: NoiseScale::default(),
         })
     }
 
@@ -521,6 +528,7 @@ impl<T: Scalar> ErrorFilter<T> {
     /// after ([`Self::diverged`]); its refusals in a row end with it.
     pub fn take_counters_from(&mut self, diverged: &Self) {
         self.counters = diverged.counters;
+        self.take_noise_scales_from(diverged);
         self.counters.position.consecutive_rejected = 0;
         self.covariance_faults = diverged.covariance_faults;
     }
@@ -548,6 +556,7 @@ impl<T: Scalar> ErrorFilter<T> {
             }
         }
         self.counters = lost.counters;
+        self.take_noise_scales_from(lost);
         self.covariance_faults = lost.covariance_faults;
         self.fault_latched = lost.fault_latched;
         self.check_covariance();
@@ -793,6 +802,32 @@ impl<T: Scalar> ErrorFilter<T> {
         (nis.finite() && nis >= T::zero()).then_some((s, nis))
     }
 
+    /// `noise` having learnt from the measurement `m` before its update
+    /// ([`super::noise_scale`]).
+    fn learnt<const M: usize>(
+        &self,
+        mut noise: NoiseScale<T, M>,
+        m: &Measurement<T, M>,
+    ) -> NoiseScale<T, M> {
+        if let Some((s, _)) = self.innovation(m) {
+            noise.learn(&m.z, &s, &m.r, self.config.gate_nis);
+        }
+        noise
+    }
+
+    /// The learnt scales of the position and the velocity fixes' declared noise variances
+    /// now and their largest so far [-] ([`super::noise_scale`]): `[[now, peak]; 2]`.
+    pub fn noise_scales(&self) -> [[T; 2]; 2] {
+        [self.position_noise, self.velocity_noise].map(|n| [n.scale(), n.peak()])
+    }
+
+    /// Takes the learnt noise scales of `other`, a filter of the same fixes this one
+    /// restarts after (the receiver is the same).
+    fn take_noise_scales_from(&mut self, other: &Self) {
+        self.position_noise = other.position_noise;
+        self.velocity_noise = other.velocity_noise;
+    }
+
     /// A vector measurement `z = H x + v`, `v ~ N(0, diag(r))`, `z` "predicted minus
     /// measured": the chi-square gate on the whole vector, then scalar Joseph updates in
     /// sequence [Groves, eq. 3.58], and the estimate handed out for the feedback.
@@ -996,12 +1031,16 @@ impl<T: Scalar> ErrorFilter<T> {
         }
         let (late_s, late_sigma_s) = self.latency.applied();
         let retimed = retiming(snap, lag_s, late_s);
+        let scale = self.position_noise.scale();
         let m = self.position_measurement(snap, fix, lag_s).map(|mut m| {
             let v = &snap.state.v_eb_n;
             m.z -= retimed;
-            m.r += v.component_mul(v) * (late_sigma_s * late_sigma_s);
+            m.r = m.r * scale + v.component_mul(v) * (late_sigma_s * late_sigma_s);
             m
         });
+        if let Some(m) = &m {
+            self.position_noise = self.learnt(self.position_noise, m);
+        }
         let corrections = self.latency.take_corrections();
         let accel_var = self.accel_error_variance(snap.earth.g);
         let out = match &m {
@@ -1366,7 +1405,8 @@ impl<T: Scalar> ErrorFilter<T> {
             .velocity_measurement(snap, fix, lag_s + late_s)
             .map(|mut m| {
                 let a = &snap.a_eb_n;
-                m.r += a.component_mul(a) * (late_sigma_s * late_sigma_s);
+                m.r = m.r * self.velocity_noise.scale()
+                    + a.component_mul(a) * (late_sigma_s * late_sigma_s);
                 m
             });
         if let Some(m) = &m {
@@ -1375,6 +1415,9 @@ impl<T: Scalar> ErrorFilter<T> {
             let z = m.z + snap.a_eb_n * late_s;
             let r = fix.sigma_ned_m_s.component_mul(&fix.sigma_ned_m_s);
             self.latency.velocity(&z, &r);
+        }
+        if let Some(m) = &m {
+            self.velocity_noise = self.learnt(self.velocity_noise, m);
         }
         let out = match m {
             Some(m) => self.update(&m),

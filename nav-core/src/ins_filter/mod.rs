@@ -43,6 +43,7 @@ pub mod latency;
 pub mod limits;
 pub mod model;
 pub mod motion;
+pub mod noise_scale;
 pub mod restart;
 pub mod sequencer;
 pub mod span_fit;
@@ -436,6 +437,12 @@ impl<T: Scalar> AidedIns<T> {
     /// The aids' counters.
     pub fn counters(&self) -> &FilterCounters {
         self.filter.counters()
+    }
+
+    /// The learnt scales of the position and velocity fixes' declared noise variances, now
+    /// and their largest ([`ErrorFilter::noise_scales`]).
+    pub fn noise_scales(&self) -> [[T; 2]; 2] {
+        self.filter.noise_scales()
     }
 
     /// Times the covariance lost a positive variance and was reset to its diagonal.

@@ -100,6 +100,9 @@ pub struct FilterReport<T: Scalar> {
     pub covariance_faults: u32,
     /// The test of the fixes' time tags ([`crate::ins_filter::latency`]).
     pub gnss_latency: LatencyEstimate<T>,
+    /// The learnt scales of the position and velocity fixes' declared noise variances, now
+    /// and their largest [-] ([`crate::ins_filter::noise_scale`]).
+    pub noise_scales: [[T; 2]; 2],
 }
 
 impl<T: Scalar> FilterReport<T> {
@@ -113,6 +116,7 @@ impl<T: Scalar> FilterReport<T> {
             counters: *filter.counters(),
             covariance_faults: filter.covariance_faults(),
             gnss_latency: filter.gnss_latency(),
+            noise_scales: filter.noise_scales(),
         }
     }
 }
