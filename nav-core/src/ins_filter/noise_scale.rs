@@ -9,9 +9,9 @@
 //!
 //! The innovations of a consistent filter are white: three consecutive ones, `z_2`, `z_1`
 //! and `z` (innovation covariances `S_i = H P_i H^T + R_i`, declared noise `R_0i`), are
-//! uncorrelated, so their second difference `d = z - 2 z_1 + z_2` has `E|d|^2 = o +
-//! lambda r`, `o = tr(H P H^T) + 4 tr(H P_1 H^T) + tr(H P_2 H^T)` and `r = tr R_0 + 4 tr R_01
-//! + tr R_02`, when the true noise is `lambda` times the declared. Each triple's sample of
+//! uncorrelated, so their second difference `d = z - 2 z_1 + z_2` has
+//! `E|d|^2 = o + lambda r`, with `o = tr(H P H^T) + 4 tr(H P_1 H^T) + tr(H P_2 H^T)` and
+//! `r = tr R_0 + 4 tr R_01 + tr R_02`, when the true noise is `lambda` times the declared. Each triple's sample of
 //! `lambda` is that solved for `lambda`. Second differences, not the innovations: an offset
 //! that the fixes share and that holds or moves steadily cancels in them, while the noise
 //! grows six times. Taken on the innovations, a multipath ramp of 5 m over 30 s raised the
