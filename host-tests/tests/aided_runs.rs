@@ -404,13 +404,7 @@ fn a_wrong_given_start_is_reacquired_once_degraded() {
         .unwrap_or_else(|| panic!("{text}"));
     assert!(accepted >= 100, "{accepted} fixes used: {text}");
     // The summary names the refusals before the re-acquisition: 100 in a row at least.
-    let refused: u32 = text
-        .split("longest refusal: ")
-        .nth(1)
-        .and_then(|l| l.split(' ').next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("{text}"));
-    assert!(refused >= 100, "{text}");
+    assert!(longest_refusal(&text) >= 100, "{text}");
     // Re-acquired on its refused fixes, which agree among themselves: no divergence.
     assert!(!text.contains("re-aligned in motion"), "{text}");
     let rows = errors_over_sigma(d, &out);
@@ -556,11 +550,7 @@ fn a_wide_heading_confirmed_at_rest_does_not_lock_the_fixes_out() {
         sim_car(d, "mems-consumer", seed);
         let (text, out) = given_heading_run(d, "mems-consumer", yaw_deg, "90");
         let what = format!("seed {seed}, heading {yaw_deg} deg off: {text}");
-        let longest: usize = text
-            .split("longest refusal: ")
-            .nth(1)
-            .and_then(|r| r.split(' ').next())
-            .map_or(0, |n| n.parse().unwrap());
+        let longest = longest_refusal(&text);
         // Refused alone, moving away, its own 1-sigma beyond the limit: re-aligned after a
         // window of refusals (was 99, the count that makes it DEGRADED).
         assert!(longest < 30, "{what}");
@@ -578,20 +568,8 @@ fn a_wide_heading_confirmed_at_rest_does_not_lock_the_fixes_out() {
 fn an_imu_fault_the_fixes_run_away_from_realigns_after_a_window() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let sim = [
-        "land-vehicle",
-        "--grade",
-        "mems-tactical",
-        "--seconds",
-        "200",
-    ];
-    run_ok(
-        nav()
-            .arg("sim")
-            .args(sim)
-            .args(["--gnss-rate", "1", "--out"])
-            .arg(d),
-    );
+    let sim = "sim land-vehicle --grade mems-tactical --seconds 200 --gnss-rate 1 --out";
+    run_ok(nav().args(sim.split(' ')).arg(d));
     let csv = std::fs::read_to_string(d.join("imu.csv")).unwrap();
     let faulty: String = csv
         .lines()
@@ -622,11 +600,7 @@ fn an_imu_fault_the_fixes_run_away_from_realigns_after_a_window() {
             .args(["--imu-noise", "mems-tactical", "--out"])
             .arg(&out),
     );
-    let longest: usize = text
-        .split("longest refusal: ")
-        .nth(1)
-        .and_then(|r| r.split(' ').next())
-        .map_or(0, |n| n.parse().unwrap());
+    let longest = longest_refusal(&text);
     assert!((integrity::WINDOW..30).contains(&longest), "{text}");
     assert!(text.contains("re-aligned in motion 1 time"), "{text}");
     ends_nav_within_3_sigma(d, &out);
@@ -643,15 +617,9 @@ fn fixes_noisier_than_declared_are_learnt_not_refused() {
     for seed in ["1", "2", "3"] {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
-        let receiver = ["--gnss-rate", "1", "--gnss-sigma", "2,2,4", "--seed", seed];
-        let sim = [
-            "land-vehicle",
-            "--grade",
-            "mems-tactical",
-            "--seconds",
-            "300",
-        ];
-        sim_into(d, &[&sim[..], &receiver].concat());
+        let sim = "land-vehicle --grade mems-tactical --seconds 300 --gnss-rate 1 --gnss-sigma";
+        let sim: Vec<&str> = sim.split(' ').collect();
+        sim_into(d, &[&sim[..], &["2,2,4", "--seed", seed]].concat());
         let csv = std::fs::read_to_string(d.join("gnss.csv")).unwrap();
         let mut lines = csv.lines();
         let header = lines.next().unwrap();
@@ -669,11 +637,7 @@ fn fixes_noisier_than_declared_are_learnt_not_refused() {
             text.contains("noisier than their declared 1-sigma"),
             "{text}"
         );
-        let longest: usize = text
-            .split("longest refusal: ")
-            .nth(1)
-            .and_then(|r| r.split(' ').next())
-            .map_or(0, |n| n.parse().unwrap());
+        let longest = longest_refusal(&text);
         assert!(longest <= 15, "seed {seed}: {text}");
         for axis in [NORTH, EAST] {
             assert_nav_rows_within(d, &out, 30.0..=300.0, axis, 4.0);
@@ -2140,6 +2104,15 @@ fn sim_into(d: &Path, sim: &[&str]) {
             .args(["--format", "bin", "--out"])
             .arg(d),
     );
+}
+
+/// The longest run of GNSS position fixes refused in a row that a replay's summary `text`
+/// names (0 when it names none).
+fn longest_refusal(text: &str) -> usize {
+    text.split("longest refusal: ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .map_or(0, |n| n.parse().unwrap())
 }
 
 /// `nav sim` of a FOG land vehicle over `seconds` with 1 Hz fixes into `d`.
