@@ -1050,9 +1050,10 @@ impl<T: Scalar> ErrorFilter<T> {
         match (&m, &out.0) {
             (Some(m), AidResult::Accepted { .. } | AidResult::Rejected { .. }) => {
                 let f = LatencyFix {
-                    // As the fix's tag gives it, whatever the retiming.
+                    // As the fix's tag gives it, whatever the retiming; its noise as the update
+                    // takes it.
                     z_m: m.z + retimed,
-                    r_m2: fix.sigma_ned_m.component_mul(&fix.sigma_ned_m),
+                    r_m2: fix.sigma_ned_m.component_mul(&fix.sigma_ned_m) * scale,
                     accel_var,
                     correlated: self
                         .config
@@ -1401,22 +1402,20 @@ impl<T: Scalar> ErrorFilter<T> {
         lag_s: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
         let (late_s, late_sigma_s) = self.latency.applied();
+        let scale = self.velocity_noise.scale();
         let m = self
             .velocity_measurement(snap, fix, lag_s + late_s)
             .map(|mut m| {
                 let a = &snap.a_eb_n;
-                m.r = m.r * self.velocity_noise.scale()
-                    + a.component_mul(a) * (late_sigma_s * late_sigma_s);
+                m.r = m.r * scale + a.component_mul(a) * (late_sigma_s * late_sigma_s);
                 m
             });
         if let Some(m) = &m {
             // As the fix's tag gives it, whatever the retiming; before its update (whose
-            // correction the test would undo).
+            // correction the test would undo). Its noise as the update takes it.
             let z = m.z + snap.a_eb_n * late_s;
-            let r = fix.sigma_ned_m_s.component_mul(&fix.sigma_ned_m_s);
+            let r = fix.sigma_ned_m_s.component_mul(&fix.sigma_ned_m_s) * scale;
             self.latency.velocity(&z, &r);
-        }
-        if let Some(m) = &m {
             self.velocity_noise = self.learnt(self.velocity_noise, m);
         }
         let out = match m {
