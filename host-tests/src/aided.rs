@@ -355,6 +355,8 @@ pub struct AidedReport {
     pub gnss_latency: Option<LatencyEstimate<f64>>,
     /// When the fixes were first found lagging their time tags [s] (status DEGRADED).
     pub gnss_late_at_s: Option<f64>,
+    /// The solution log's rows by status (counted by the writer of the rows).
+    pub status: StatusTally,
     /// The learnt scales of the fixes' declared noise at the end
     /// (`nav_core::ins_filter::noise_scale`; `None` when no filter ran): position and
     /// velocity, now and their largest [-].
@@ -457,6 +459,43 @@ pub trait AidedSink<T: Scalar> {
     /// The run ended normally.
     fn finish(&mut self) -> Result<()> {
         Ok(())
+    }
+}
+
+/// The solution log's rows by status, for the summary: how many said DEGRADED of how many,
+/// and the first and last of them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StatusTally {
+    /// Rows written.
+    pub rows: u64,
+    /// Of those, rows whose status was DEGRADED.
+    pub degraded: u64,
+    /// Times of the first and the last DEGRADED row [s].
+    pub degraded_span_s: Option<(f64, f64)>,
+}
+
+impl StatusTally {
+    /// Counts a row at `t_s` [s] of status `status` (a status name).
+    pub fn add(&mut self, t_s: f64, status: &str) {
+        self.rows += 1;
+        if status == "DEGRADED" {
+            self.degraded += 1;
+            let first = self.degraded_span_s.map_or(t_s, |(a, _)| a);
+            self.degraded_span_s = Some((first, t_s));
+        }
+    }
+
+    /// The summary's line: the rows that said DEGRADED (an aided run's status column), or
+    /// that none did; `None` without rows counted.
+    pub fn line(&self) -> Option<String> {
+        (self.rows > 0).then(|| match self.degraded_span_s {
+            Some((a, b)) => format!(
+                "status: DEGRADED on {} of {} rows, the first at t = {a:.3} s, the last at t = \
+                 {b:.3} s",
+                self.degraded, self.rows
+            ),
+            None => format!("status: NAV on all {} rows", self.rows),
+        })
     }
 }
 
@@ -741,7 +780,30 @@ pub fn run_source<T: Scalar, S: Imu>(
 
 #[cfg(test)]
 mod tests {
-    use super::LostImuTime;
+    use super::{LostImuTime, StatusTally};
+
+    /// The summary's status line: none without rows, the DEGRADED rows' count and span, or
+    /// that every row said NAV.
+    #[test]
+    fn the_status_line_counts_the_degraded_rows() {
+        let mut tally = StatusTally::default();
+        assert_eq!(tally.line(), None);
+        for (t_s, status) in [
+            (1.0, "NAV"),
+            (2.0, "DEGRADED"),
+            (3.0, "NAV"),
+            (4.5, "DEGRADED"),
+        ] {
+            tally.add(t_s, status);
+        }
+        assert_eq!(
+            tally.line().unwrap(),
+            "status: DEGRADED on 2 of 4 rows, the first at t = 2.000 s, the last at t = 4.500 s"
+        );
+        let mut nav = StatusTally::default();
+        nav.add(1.0, "NAV");
+        assert_eq!(nav.line().unwrap(), "status: NAV on all 1 rows");
+    }
 
     const P_US: u64 = 2_500;
     const P_S: f64 = 0.0025;

@@ -441,12 +441,15 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
     let (mut source, _format) = ReplaySource::open(&a.imu)?;
     let report = atomic::write(&a.out, |w| -> Result<(AidedReport, u64)> {
         writeln!(w, "{}", aided::header())?;
+        let mut tally = aided::StatusTally::default();
         let mut rows = aided::CsvRows::new(a.log_every, |row: &AidedRow| {
+            tally.add(row.solution.t_us as f64 * 1e-6, row.status);
             writeln!(w, "{row}")?;
             Ok(())
         });
-        let report = aided::run_source(&mut source, &fixes, seq, &mut rows)?;
+        let mut report = aided::run_source(&mut source, &fixes, seq, &mut rows)?;
         let n_rows = rows.rows();
+        report.status = tally;
         if report.start_s.is_none() {
             bail!(
                 "the filter never started: {}",
@@ -586,6 +589,7 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
         ),
     ]
     .into_iter()
+    .chain(r.status.line())
     .chain(refused_run_line(&r.updates))
     .chain(r.gnss_latency.as_ref().map(latency_line))
     .chain(realignment_line(&r.realignments))
@@ -814,7 +818,8 @@ pub fn latency_warning(e: &LatencyEstimate<f64>, found_at_s: Option<f64>) -> Opt
             format!(
                 "lag their time tags by {:.3} s (1-sigma {:.3} s) beyond any declared latency: \
                  the receiver's output latency (a logger that tags fixes on arrival); declare \
-                 it (--gnss-latency, added to any declared)",
+                 it (nav replay --gnss-latency, added to any declared; for nav kf-gins, whose \
+                 configuration has no such key, subtract it from the GNSS file's time tags)",
                 e.late_s, e.sigma_s
             )
         } else {
@@ -993,6 +998,11 @@ mod tests {
         );
         assert!(
             w.contains("--gnss-latency") && w.contains("until it was found at t = 57.200 s"),
+            "{w}"
+        );
+        // `nav kf-gins` takes no such option: its user is told what to do instead.
+        assert!(
+            w.contains("subtract it from the GNSS file's time tags"),
             "{w}"
         );
         let early = LatencyEstimate {

@@ -222,6 +222,8 @@ pub struct Report {
     pub rejected_after_alignment: u32,
     /// Solution rows written (after the header line).
     pub rows: u32,
+    /// The aided rows by status (none in a free-inertial run).
+    pub status: crate::aided::StatusTally,
     /// The source's own counters, when it is a replay (filled by [`crate::replay`]).
     pub source: Option<SourceCounters>,
     /// The driver's counters, when the samples came through a simulated IMU's driver (filled
@@ -291,7 +293,13 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
     let mut navigator = Navigator::new(&setup);
     // Boxed: the fine filters make it large.
     let mut background = Box::new(Background::new(&setup));
-    let row = |out: &mut W, r: &Row| writeln!(out, "{r}").map_err(PipelineError::Output);
+    let mut status = crate::aided::StatusTally::default();
+    let mut row = |out: &mut W, r: &Row| {
+        if let Some(c) = r.filter() {
+            status.add(r.solution().t_us as f64 * 1e-6, c.status);
+        }
+        writeln!(out, "{r}").map_err(PipelineError::Output)
+    };
     let header = if config.aiding.is_some() {
         AIDED_CSV_HEADER
     } else {
@@ -362,6 +370,7 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
         after_alignment,
         rejected_after_alignment,
         rows: c.rows,
+        status,
         source: None,
         driver: None,
         alignment: AlignmentDeg::new(config.align_method, &summary.alignment),

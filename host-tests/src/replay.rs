@@ -431,6 +431,9 @@ pub fn summary(imu: &Path, out: &Path, precision: &str, fr: &FileReport) -> Stri
     if let Some(aided) = &r.aided {
         let _ = writeln!(s, "{aided}");
     }
+    if let Some(line) = r.status.line() {
+        let _ = writeln!(s, "{line}");
+    }
     let _ = writeln!(
         s,
         "final at t = {:.6} s: lat {:.9} deg, lon {:.9} deg, h {:.3} m; v_NED {:.6} {:.6} {:.6} m/s; roll {:.6} pitch {:.6} yaw {:.6} deg",

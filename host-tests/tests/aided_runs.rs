@@ -603,6 +603,8 @@ fn an_imu_fault_the_fixes_run_away_from_realigns_after_a_window() {
     let longest = longest_refusal(&text);
     assert!((integrity::WINDOW..30).contains(&longest), "{text}");
     assert!(text.contains("re-aligned in motion 1 time"), "{text}");
+    // The summary counts the rows that said DEGRADED.
+    assert!(text.contains("status: DEGRADED on "), "{text}");
     ends_nav_within_3_sigma(d, &out);
 }
 
