@@ -7,32 +7,30 @@
 //! of them, coasted, diverged and re-aligned again and again, and ended hundreds of metres to
 //! 100 km from white 2 m fixes declared at 0.7-1 m (a tactical part; a FOG 133 m).
 //!
-//! The innovations of a consistent filter are white: three consecutive ones, `z_2`, `z_1`
-//! and `z` (innovation covariances `S_i = H P_i H^T + R_i`, declared noise `R_0i`), are
-//! uncorrelated, so their second difference `d = z - 2 z_1 + z_2` has
-//! `E|d|^2 = o + lambda r`, with `o = tr(H P H^T) + 4 tr(H P_1 H^T) + tr(H P_2 H^T)` and
-//! `r = tr R_0 + 4 tr R_01 + tr R_02`, when the true noise is `lambda` times the declared. Each triple's sample of
-//! `lambda` is that solved for `lambda`. Second differences, not the innovations: an offset
-//! that the fixes share and that holds or moves steadily cancels in them, while the noise
-//! grows six times. Taken on the innovations, a multipath ramp of 5 m over 30 s raised the
-//! scale, and the FOG filter it then pulled was 6.3 sigma off (from 3.8); taken on first
-//! differences, the fixes a FOG filter with its heading 90 deg off refused as they ran away
-//! from it at 11 m/s did, and its reported 1-sigma lost their offset (13 sigma). A sample's
-//! spread grows with the share of `o + lambda r` that is the filter's own, so each joins an
-//! exponential mean of [`MEMORY_FIXES`] samples with the weight `(lambda r / (o + lambda
-//! r))^2` at the scale in use (its memory the samples taken plus [`START_SAMPLES`] until
-//! then): a filter that has just coasted through an outage learns next to nothing from its
-//! first fixes. Each sample is clamped to the gate over the dimension, times the scale, either
-//! way (a sample at the per-fix gate's tail): a lone outlier, in the three samples it enters,
-//! moves the mean by about half, within the dead band. Fixes ten times noisier than declared
-//! pass the gate only where they fall near the prediction: the clamped samples of the others
-//! raise the scale until the gate passes them. The scale applied to the declared noise is the
-//! mean once it exceeds 1 by [`DEAD_BAND`], else 1 (a fix is never taken as better than
-//! declared), at most [`SCALE_MAX`]: the mean of a declared noise that is right has a 1-sigma
-//! of about 0.14 (consecutive samples share two fixes), so the dead band holds the scale at 1
-//! (seven of its sigma; over 40 seeded runs of an hour, fixes at 1 Hz, it never left 1), and
-//! the scale of fixes three times noisier than declared reaches 70 % of their variance in
-//! about 30 fixes.
+//! The innovations of a consistent filter are white: three consecutive ones, `z_2`, `z_1` and `z`
+//! (innovation covariances `S_i = H P_i H^T + R_i`, declared noise `R_0i`), are uncorrelated, so
+//! their second difference `d = z - 2 z_1 + z_2` has `E|d|^2 = o + lambda r`, with
+//! `o = tr(H P H^T) + 4 tr(H P_1 H^T) + tr(H P_2 H^T)` and `r = tr R_0 + 4 tr R_01 + tr R_02`,
+//! when the true noise is `lambda` times the declared. Each triple's sample of `lambda` is that
+//! solved for `lambda`. Second differences, not the innovations: an offset that the fixes share and
+//! that holds or moves steadily cancels in them, while the noise grows six times. Taken on the
+//! innovations, a multipath ramp of 5 m over 30 s raised the scale, and the FOG filter it then
+//! pulled was 6.3 sigma off (from 3.8); taken on first differences, the fixes a FOG filter with its
+//! heading 90 deg off refused as they ran away from it at 11 m/s did, and its reported 1-sigma lost
+//! their offset (13 sigma). A sample's spread grows with the share of `o + lambda r` that is the
+//! filter's own, so each joins an exponential mean of [`MEMORY_FIXES`] samples with the weight
+//! `(lambda r / (o + lambda r))^2` at the scale in use (its memory the samples taken plus
+//! [`START_SAMPLES`] until then): a filter that has just coasted through an outage learns next to
+//! nothing from its first fixes. Each sample is clamped to the gate over the dimension, times the
+//! scale, either way (a sample at the per-fix gate's tail): a lone outlier, in the three samples it
+//! enters, moves the mean by about half, within the dead band. Fixes ten times noisier than
+//! declared pass the gate only where they fall near the prediction: the clamped samples of the
+//! others raise the scale until the gate passes them. The scale applied to the declared noise is
+//! the mean once it exceeds 1 by [`DEAD_BAND`], else 1 (a fix is never taken as better than
+//! declared), at most [`SCALE_MAX`]: the mean of a declared noise that is right has a 1-sigma of
+//! about 0.14 (consecutive samples share two fixes), so the dead band holds the scale at 1 (seven
+//! of its sigma; over 40 seeded runs of an hour, fixes at 1 Hz, it never left 1), and the scale of
+//! fixes three times noisier than declared reaches 70 % of their variance in about 30 fixes.
 
 use crate::Scalar;
 use nalgebra::{SMatrix, SVector};
