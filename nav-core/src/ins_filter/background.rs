@@ -130,6 +130,10 @@ pub struct ErrorFilter<T: Scalar> {
     refused_unconfirmed: Option<RefusedCluster<T>>,
     /// Propagated time since the last position fix [s].
     since_fix_s: T,
+    /// Per aid (GNSS position, GNSS velocity): propagated time since its last fix, when that
+    /// fix was refused as a gross disagreement ([`integrity::SUSPECT_NIS_FACTOR`]) [s];
+    /// `None` once a fix of the aid is taken.
+    suspect_s: [Option<T>; 2],
     /// Propagated time from the first to the last of the position fixes refused in a row
     /// [s] (zero with fewer than two).
     refused_for_s: T,
@@ -206,6 +210,7 @@ impl<T: Scalar> ErrorFilter<T> {
             cluster: None,
             refused_unconfirmed: None,
             since_fix_s: T::zero(),
+            suspect_s: [None; 2],
             refused_for_s: T::zero(),
             heading_doubt_rad2: T::zero(),
             reacquired: None,
@@ -388,8 +393,9 @@ impl<T: Scalar> ErrorFilter<T> {
 
     /// The health: a latched covariance fault, a lost IMU gap, the vicinity of a pole
     /// ([`Self::near_pole`]), [`FilterConfig::rejections_to_degrade`] position fixes refused
-    /// in a row or refusals in a row over [`FilterConfig::refused_time_to_degrade_s`], or a
-    /// horizontal 1-sigma beyond [`FilterConfig::max_horizontal_sigma_m`].
+    /// in a row or refusals in a row over [`FilterConfig::refused_time_to_degrade_s`], a fix
+    /// refused as a gross disagreement ([`integrity::SUSPECT_NIS_FACTOR`]), or a horizontal
+    /// 1-sigma beyond [`FilterConfig::max_horizontal_sigma_m`].
     pub fn status(&self) -> FilterStatus {
         if self.fault_latched {
             FilterStatus::CovarianceFault
@@ -399,6 +405,7 @@ impl<T: Scalar> ErrorFilter<T> {
             FilterStatus::NearPole
         } else if self.degraded_by_refusals()
             || self.refused_for_s >= self.config.refused_time_to_degrade_s
+            || self.suspect()
         {
             FilterStatus::AidingRejected
         } else if self.latency.estimate().detected {
@@ -409,6 +416,26 @@ impl<T: Scalar> ErrorFilter<T> {
             FilterStatus::SigmaAboveLimit
         } else {
             FilterStatus::Nominal
+        }
+    }
+
+    /// The last fix of an aid was refused as a gross disagreement with the solution, within
+    /// [`FilterConfig::refused_time_to_degrade_s`] (the data contradict the solution, whichever
+    /// is wrong: [`integrity::SUSPECT_NIS_FACTOR`]).
+    fn suspect(&self) -> bool {
+        self.suspect_s
+            .iter()
+            .flatten()
+            .any(|&s| s < self.config.refused_time_to_degrade_s)
+    }
+
+    /// Notes the outcome of a fix of aid `aid` (0 position, 1 velocity) for [`Self::suspect`].
+    fn note_suspect(&mut self, aid: usize, result: &AidResult<T>) {
+        let gross = self.config.gate_nis * T::c(integrity::SUSPECT_NIS_FACTOR);
+        match result {
+            AidResult::Accepted { .. } => self.suspect_s[aid] = None,
+            AidResult::Rejected { nis } if *nis > gross => self.suspect_s[aid] = Some(T::zero()),
+            _ => {}
         }
     }
 
@@ -670,6 +697,9 @@ impl<T: Scalar> ErrorFilter<T> {
         }
         self.counters.propagations = self.counters.propagations.wrapping_add(1);
         self.since_fix_s += prop.dt;
+        for s in self.suspect_s.iter_mut().flatten() {
+            *s += prop.dt;
+        }
         self.check_covariance();
         // A gap's unknown motion is not in the coasting test's error model.
         if b.lost.is_some() || b.attitude_var_rad2 > T::zero() || b.velocity_var_m2_s2 > T::zero() {
@@ -1075,6 +1105,7 @@ impl<T: Scalar> ErrorFilter<T> {
             _ => self.latency.broken(),
         }
         let out = Self::counted(&mut self.counters.position, out);
+        self.note_suspect(0, &out.0);
         self.refused_for_s = match (&out.0, self.counters.position.consecutive_rejected) {
             (AidResult::Rejected { .. }, 1) | (AidResult::Accepted { .. }, _) => T::zero(),
             (AidResult::Rejected { .. }, _) => self.refused_for_s + since_last_s,
@@ -1422,7 +1453,9 @@ impl<T: Scalar> ErrorFilter<T> {
             Some(m) => self.update(&m),
             None => (AidResult::Invalid, None),
         };
-        Self::counted(&mut self.counters.velocity, out)
+        let out = Self::counted(&mut self.counters.velocity, out);
+        self.note_suspect(1, &out.0);
+        out
     }
 
     /// The measurement of a velocity fix: `v_ant = v + C (omega_ib_b x l) - omega_ie_n x (C l)`

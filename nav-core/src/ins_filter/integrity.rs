@@ -1,6 +1,15 @@
 //! Integrity of the GNSS position fixes beyond the per-fix gate: a windowed innovation test for
 //! slow faults and the refusal of a consistent cluster of wrong fixes.
 //!
+//! **A gross refusal ends NAV at once** [Groves, ch. 17: fault detection]. A fix refused far
+//! beyond the gate ([`SUSPECT_NIS_FACTOR`]) says that the fixes or the solution are faulty,
+//! and one fix cannot tell which: a GNSS spike or jump, or an IMU fault (an axis stuck in a
+//! turn, a spike in the rates) that left the solution hundreds of its sigma off. The status
+//! is DEGRADED from that fix until a fix of the same aid (position or velocity) is taken
+//! again, or for [`super::FilterConfig::refused_time_to_degrade_s`] without a fix of it,
+//! where the refusals in a row take over. Before, such rows stayed NAV until the refusals in
+//! a row spanned that time.
+//!
 //! **Windowed test** [Groves, ch. 17; Teunissen, 1990]. A multipath bias that grows slowly
 //! passes the per-fix chi-square gate on every fix while the filter follows it. Over the last
 //! [`WINDOW`] position fixes that passed the gate, each innovation `z_k` is whitened with its
@@ -250,6 +259,15 @@ pub const HEADING_DOUBT_MIN_SPEED_M_S: f64 = 2.0;
 /// [-] is gross (module docs): beyond what a filter whose 1-sigma were up to 4 times
 /// optimistic (16 in variance) could see from its own error.
 pub const GROSS_NIS_FACTOR: f64 = 16.0;
+
+/// A GNSS fix refused with a normalised innovation squared beyond this factor times the gate
+/// [-] (65 for 3 dof: 8 sigma, a chance of 1e-13 for a consistent filter and honest fix) is a
+/// gross disagreement between the fixes and the solution: one of them is faulty, and until a
+/// fix of that aid is taken again the status is not NAV
+/// ([`super::FilterStatus::AidingRejected`], module docs). An IMU fault (an axis stuck in a turn, a spike) made the velocity fixes'
+/// innovations 100-150,000 at the first refusal, while the rows stayed NAV for the 5 s the
+/// refusals in a row took, 100-600 sigma off [Groves, ch. 17: fault detection].
+pub const SUSPECT_NIS_FACTOR: f64 = 4.0;
 
 /// The horizontal position error [m] a heading error of 3 sigma (`yaw_sigma_rad` [rad], at
 /// most half a turn) leaves beyond its small-angle model over `distance_m` [m] travelled since

@@ -307,7 +307,8 @@ pub enum FilterStatus {
     /// Aided (or free inertial within its limits).
     Nominal,
     /// [`FilterConfig::rejections_to_degrade`] position fixes in a row refused, or refused in
-    /// a row over [`FilterConfig::refused_time_to_degrade_s`].
+    /// a row over [`FilterConfig::refused_time_to_degrade_s`], or the last fix of an aid
+    /// refused as a gross disagreement within that time ([`integrity::SUSPECT_NIS_FACTOR`]).
     AidingRejected,
     /// Horizontal position 1-sigma above [`FilterConfig::max_horizontal_sigma_m`].
     SigmaAboveLimit,

@@ -780,20 +780,27 @@ pub(crate) mod tests {
             assert!(e < 3.0 * sigma, "{e} m against {sigma} m");
         }
 
-        /// Fixes 50 m north of the car for 15 s: refused from the first, the filter says
-        /// DEGRADED once the refusals in a row span 5 s (6 fixes at 1 Hz, not the 100 of the
-        /// count), and NAV again from the first true fix after them.
-        #[test]
-        fn refusals_over_5_s_degrade_the_status_before_their_count_does() {
+        /// Fixes `offset(sigma)` [m] north of the car from 61 s to 75 s (`sigma` the 1-sigma
+        /// of the first one's north innovation [m]), then true ones: every one refused, the
+        /// status NAV before `from_s` [s], `while_refused` from `to_s` [s] to 75 s, either in
+        /// between, and NAV again after the first true fix.
+        fn north_offset(
+            offset: impl Fn(f64) -> f64,
+            from_s: f64,
+            to_s: f64,
+            while_refused: FilterStatus,
+        ) {
             let mut seq = sequencer();
             drive(&mut seq, 0.0, 60.0, |_| true);
             let status = |seq: &Sequencer<f64>| seq.filter().unwrap().status();
             assert_eq!(status(&seq), FilterStatus::Nominal);
+            let sigma_n = seq.filter().unwrap().sigma(crate::ins_filter::POS).x;
+            let north_m = offset(sigma_n.hypot(0.5));
             for k in 6_001..=7_500u64 {
                 let t_us = k * DT_US;
                 if t_us.is_multiple_of(1_000_000) {
                     let mut f = fix(t_us / 1_000_000);
-                    f.position.lat_rad += 50.0 / 6.37e6;
+                    f.position.lat_rad += north_m / 6.37e6;
                     seq.push_fix(f);
                 }
                 seq.on_sample(t_us, &increment()).unwrap();
@@ -802,11 +809,9 @@ pub(crate) mod tests {
                 if t_s > 61.0 {
                     assert!(c.consecutive_rejected >= 1, "{c}");
                 }
-                // The 6th refusal, at 66 s, ends 5 s of propagated time (summed intervals):
-                // either way.
                 let expected = match t_s {
-                    t if t >= 67.0 => FilterStatus::AidingRejected,
-                    t if t < 66.0 => FilterStatus::Nominal,
+                    t if t >= to_s => while_refused,
+                    t if t < from_s => FilterStatus::Nominal,
                     _ => status(&seq),
                 };
                 assert_eq!(status(&seq), expected, "at {t_s} s: {c}");
@@ -814,6 +819,25 @@ pub(crate) mod tests {
             drive(&mut seq, 75.0, 77.0, |_| true);
             assert_eq!(status(&seq), FilterStatus::Nominal);
             assert_eq!(seq.filter().unwrap().counters().position.rejected, 15);
+        }
+
+        /// Fixes 6.5 sigma north of the car for 15 s (refused, but not a gross disagreement):
+        /// refused from the first, the filter says DEGRADED once the refusals in a row span
+        /// 5 s (6 fixes at 1 Hz, not the 100 of the count), and NAV again from the first true
+        /// fix after them. The 6th refusal, at 66 s, ends 5 s of propagated time (summed
+        /// intervals): either way.
+        #[test]
+        fn refusals_over_5_s_degrade_the_status_before_their_count_does() {
+            north_offset(|s| 6.5 * s, 66.0, 67.0, FilterStatus::AidingRejected);
+        }
+
+        /// Fixes 50 m north of the car for 15 s, 100 sigma: DEGRADED from the first refusal
+        /// (a gross disagreement: the fixes or the solution faulty,
+        /// [`crate::ins_filter::integrity::SUSPECT_NIS_FACTOR`]), and NAV again from the
+        /// first true fix after them. Was: NAV for the first 5 s of refusals.
+        #[test]
+        fn a_gross_refusal_degrades_the_status_at_once() {
+            north_offset(|_| 50.0, 61.0, 61.0, FilterStatus::AidingRejected);
         }
 
         /// A gyro bias of 0.06 deg/s for the first 60 s, a hundred times the 1-sigma the filter
