@@ -4,9 +4,11 @@
 //! at a time, and handed to the navigator before the first sample at or after each fix's time
 //! (the harness's pipeline does the same).
 //!
-//! The whole file is checked when the run starts ([`check`]: every record's CRC and flags,
-//! increasing times, the count), so a damaged file is refused before anything is navigated, as
-//! a damaged recording is.
+//! The whole file is checked when the run starts ([`check`]: every record's CRC and flags, the
+//! count), so a damaged file is refused before anything is navigated, as a damaged recording
+//! is. A fix whose time is not later than the previous one's (a receiver's log that repeats or
+//! swaps an epoch) is handed over in its turn, and the navigator skips and counts it as out of
+//! order, as the harness's does.
 
 use core::ffi::CStr;
 use hal_adapters::gnss_record::{GnssReadError, GnssReader, GnssRecord};
@@ -50,7 +52,7 @@ fn open(path: &CStr) -> Result<Reader, GnssFileError> {
 pub struct FileSummary {
     /// The number of fixes.
     pub count: u32,
-    /// The first and the last fix's time [us] (`None`: no fix).
+    /// The earliest and the latest fix's time [us] (`None`: no fix).
     pub span_us: Option<(u64, u64)>,
 }
 
@@ -61,8 +63,8 @@ pub fn check(path: &CStr) -> Result<FileSummary, GnssFileError> {
     let mut summary = FileSummary::default();
     while let Some(r) = reader.next_fix().map_err(GnssFileError::Read)? {
         summary.count += 1;
-        let first = summary.span_us.map_or(r.t_us, |(a, _)| a);
-        summary.span_us = Some((first, r.t_us));
+        let (a, b) = summary.span_us.unwrap_or((r.t_us, r.t_us));
+        summary.span_us = Some((a.min(r.t_us), b.max(r.t_us)));
     }
     Ok(summary)
 }
@@ -86,7 +88,7 @@ pub fn fix_of(r: &GnssRecord) -> GnssFixInput<f32> {
     }
 }
 
-/// The fixes of the file in time order, one read ahead.
+/// The fixes of the file in its order, one read ahead.
 pub struct Fixes {
     reader: Reader,
     next: Option<GnssFixInput<f32>>,

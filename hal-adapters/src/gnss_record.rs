@@ -40,11 +40,13 @@
 //! # Validation
 //!
 //! [`decode_header`] checks the magic, the version, the header CRC, the lengths and the
-//! reserved bytes; [`GnssReader`] each record's CRC and flags, that the times increase
-//! strictly, that the file holds `fix_count` complete records and nothing after them. All are
-//! hard errors ([`GnssFormatError`]). A value that is not finite, or a 1-sigma that is not
-//! positive, is not a format error: the fix is delivered as it is, for the navigation filter
-//! to refuse and count (receivers do output such fixes).
+//! reserved bytes; [`GnssReader`] each record's CRC and flags, that the file holds
+//! `fix_count` complete records and nothing after them. All are hard errors
+//! ([`GnssFormatError`]). A value that is not finite, or a 1-sigma that is not positive, is not
+//! a format error: the fix is delivered as it is, for the navigation filter to refuse and count
+//! (receivers do output such fixes). Nor is a time not later than the previous fix's (a
+//! receiver's log that repeats or swaps an epoch): the navigator skips and counts it as out of
+//! order (`nav_core::ins_filter::sequencer::FixQueue::push`).
 
 use core::fmt;
 
@@ -234,8 +236,6 @@ pub enum GnssFormatErrorKind {
     RecordCrc,
     /// A record's flags (carried) have bits other than bit 0.
     BadFlags(u32),
-    /// A record's time is not later than the previous record's.
-    TimeNotIncreasing,
     /// The file ends inside the header or before `fix_count` complete records.
     Truncated,
     /// There are bytes after the last record.
@@ -256,9 +256,6 @@ impl fmt::Display for GnssFormatErrorKind {
             Self::HeaderCrc => f.write_str("header CRC mismatch (corrupt header)"),
             Self::RecordCrc => f.write_str("record CRC mismatch (corrupt data)"),
             Self::BadFlags(flags) => write!(f, "unknown flags {flags:#x}"),
-            Self::TimeNotIncreasing => {
-                f.write_str("the fix's time is not later than the previous fix's")
-            }
             Self::Truncated => f.write_str("file ends early (truncated)"),
             Self::TrailingData => f.write_str("unexpected data after the last record"),
         }
@@ -317,7 +314,6 @@ pub struct GnssReader<R: Read> {
     reader: R,
     count: u32,
     next: u32,
-    last_t_us: Option<u64>,
     ended: bool,
 }
 
@@ -359,7 +355,6 @@ impl<R: Read> GnssReader<R> {
             reader,
             count,
             next: 0,
-            last_t_us: None,
             ended: false,
         })
     }
@@ -389,10 +384,6 @@ impl<R: Read> GnssReader<R> {
             return Err(error(GnssFormatErrorKind::Truncated, Some(index)));
         }
         let r = GnssRecord::decode(&b).map_err(|k| error(k, Some(index)))?;
-        if self.last_t_us.is_some_and(|t| r.t_us <= t) {
-            return Err(error(GnssFormatErrorKind::TimeNotIncreasing, Some(index)));
-        }
-        self.last_t_us = Some(r.t_us);
         self.next += 1;
         Ok(Some(r))
     }
@@ -503,17 +494,19 @@ mod tests {
             read_all(&header).unwrap_err().kind,
             GnssFormatErrorKind::HeaderCrc
         );
-        // Times must increase.
-        let same = file(&[
+        // A repeated or earlier time is delivered: the navigator skips and counts it.
+        let unordered = [
             fix(1_000_000, true),
             fix(1_000_000, true),
-            fix(2_000_000, true),
-        ]);
-        let e = read_all(&same).unwrap_err();
-        assert_eq!(
-            (e.kind, e.fix),
-            (GnssFormatErrorKind::TimeNotIncreasing, Some(1))
-        );
+            fix(500_000, false),
+        ];
+        let bytes = file(&unordered);
+        let mut r = GnssReader::new(&bytes[..]).unwrap();
+        for f in unordered {
+            let read = r.next_fix().unwrap().unwrap();
+            assert_eq!((read.t_us, read.velocity), (f.t_us, f.velocity));
+        }
+        assert_eq!(r.next_fix().unwrap(), None);
         // Unknown flags.
         let mut r = fix(1, false).encode();
         r[R_FLAGS] = 2;

@@ -6,6 +6,7 @@
 //! module converts the file types, feeds fixes ahead of the samples they belong to, and writes
 //! rows.
 
+use crate::aided_cmd::SensorEstimate;
 use crate::gnss::GnssFix;
 use anyhow::{Result, anyhow};
 use hal_adapters::{Imu, ImuSample, SampleFlags};
@@ -361,6 +362,8 @@ pub struct AidedReport {
     /// (`nav_core::ins_filter::noise_scale`; `None` when no filter ran): position and
     /// velocity, now and their largest [-].
     pub noise_scales: Option<[[f64; 2]; 2]>,
+    /// The sensor errors estimated by the end (`None` when no filter ran).
+    pub sensors: Option<SensorEstimate>,
 }
 
 /// The attitude the filter started with in motion, as its user is told it.
@@ -560,9 +563,12 @@ pub fn check_fixes_in_span(
     imu_span_us: Option<(u64, u64)>,
 ) -> Result<()> {
     let times: Vec<f64> = fix_times_s.into_iter().collect();
-    let (Some(first), Some(last)) = (times.first(), times.last()) else {
+    if times.is_empty() {
         return Ok(());
-    };
+    }
+    // The earliest and the latest (a receiver's log may repeat or swap epochs).
+    let first = &times.iter().copied().fold(f64::INFINITY, f64::min);
+    let last = &times.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let Some((a_us, b_us)) = imu_span_us else {
         return Ok(());
     };
@@ -617,8 +623,9 @@ pub fn no_usable_sample(r: &AidedReport) -> String {
     )
 }
 
-/// Runs `samples` with `fixes` (time order) through `seq` into `sink`; refused when no fix
-/// lies within the samples' time span ([`check_fixes_in_span`]).
+/// Runs `samples` with `fixes` (in the file's order: one not later than the fix before it is
+/// the sequencer's to skip and count) through `seq` into `sink`; refused when no fix lies
+/// within the samples' time span ([`check_fixes_in_span`]).
 pub fn run<T: Scalar, E: fmt::Display>(
     mut samples: impl FnMut() -> Result<Option<AidedSample<T>>, E>,
     fixes: &[GnssFix],
@@ -734,6 +741,7 @@ pub fn run<T: Scalar, E: fmt::Display>(
         report.covariance_faults = ins.covariance_faults();
         report.gnss_latency = Some(ins.gnss_latency().cast());
         report.noise_scales = Some(ins.noise_scales().map(|a| a.map(T::to_f64)));
+        report.sensors = Some(SensorEstimate::of(ins.sensor_errors(), |at| ins.sigma(at)));
     }
     report.fixes = *seq.fix_counters();
     report.realignments = *seq.realignments();

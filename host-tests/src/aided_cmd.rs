@@ -4,6 +4,7 @@
 use crate::aided::{self, AidedReport, AidedRow, UpdateRecord};
 use crate::atomic;
 use crate::gnss::{self, GnssFix};
+use crate::kf_gins_run::sensor_fields;
 use crate::recording_io::ReplaySource;
 use crate::sensor_model::Grade;
 use anyhow::{Result, anyhow, bail};
@@ -13,7 +14,9 @@ use nav_core::ins_filter::limits::MIN_BIAS_INSTABILITY_TIME_S;
 use nav_core::ins_filter::model::FilterNoise;
 use nav_core::ins_filter::motion::{MAX_FIX_INTERVAL_S, MIN_SPEED_SIGMAS, MotionAlignConfig};
 use nav_core::ins_filter::sequencer::{RealignCause, Realignments, Sequencer, Start};
-use nav_core::ins_filter::{AidResult, FilterConfig, FilterModel, InitialSigma, SensorErrors};
+use nav_core::ins_filter::{
+    AidResult, BA, BG, FilterConfig, FilterModel, InitialSigma, SA, SG, SensorErrors,
+};
 use nav_core::navigator::config::{MAX_HEIGHT_M, MIN_HEIGHT_M};
 use nav_core::number::{Number, Rounded};
 use nav_core::{NavState, Position, Scalar, Vector3, attitude};
@@ -590,6 +593,7 @@ pub fn summary(r: &AidedReport, rows: u64, imu: &Path, out: &Path) -> String {
     ]
     .into_iter()
     .chain(r.status.line())
+    .chain(r.sensors.map(|e| e.line()))
     .chain(refused_run_line(&r.updates))
     .chain(r.gnss_latency.as_ref().map(latency_line))
     .chain(realignment_line(&r.realignments))
@@ -732,6 +736,7 @@ pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
         .and_then(|_| velocity_warning(&r.counters.velocity));
     let stops = r.start_s.and_then(|_| stop_warning(&r.counters));
     let noisy = r.noise_scales.as_ref().and_then(noise_scale_warning);
+    let unordered = out_of_order_warning(r.fixes.out_of_order);
     let late = r
         .gnss_latency
         .as_ref()
@@ -745,7 +750,79 @@ pub fn aiding_warnings(r: &AidedReport) -> Vec<String> {
         .chain(stops)
         .chain(late)
         .chain(noisy)
+        .chain(unordered)
         .collect()
+}
+
+/// The sensor errors a filter had estimated by the end of a run, and their 1-sigma (SI).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SensorEstimate {
+    /// The estimates.
+    pub errors: SensorErrors<f64>,
+    /// Their 1-sigma: gyro bias [rad/s], accelerometer bias [m/s^2], gyro and accelerometer
+    /// scale factors [-] (zero when the filter does not estimate them).
+    pub sigma: [Vector3<f64>; 4],
+}
+
+impl SensorEstimate {
+    /// Of a filter whose estimates are `errors` and whose state block at offset `at` has the
+    /// 1-sigma `sigma(at)`.
+    pub fn of<T: Scalar>(errors: &SensorErrors<T>, sigma: impl Fn(usize) -> Vector3<T>) -> Self {
+        Self {
+            errors: errors.cast(),
+            sigma: [BG, BA, SG, SA].map(|at| sigma(at).map(T::to_f64)),
+        }
+    }
+
+    /// The summary's line, in KF-GINS's units (`nav kf-gins --imu-err`): biases [deg/h] and
+    /// [mGal], scale factors [ppm] when the filter estimated them.
+    pub fn line(&self) -> String {
+        let e = &self.errors;
+        let v = sensor_fields(
+            &e.gyro_bias_rad_s,
+            &e.accel_bias_mps2,
+            &e.gyro_scale,
+            &e.accel_scale,
+        );
+        let [gb, ab, gs, sa] = &self.sigma;
+        let s = sensor_fields(gb, ab, gs, sa);
+        let names = [
+            "gyro bias [deg/h]",
+            "accelerometer bias [mGal]",
+            "gyro scale factor [ppm]",
+            "accelerometer scale factor [ppm]",
+        ];
+        let parts: Vec<String> = names
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| s[3 * k..3 * k + 3].iter().any(|x| *x > 0.0))
+            .map(|(k, name)| {
+                let axes: Vec<String> = (3 * k..3 * k + 3)
+                    .map(|i| {
+                        // Three significant digits of the 1-sigma, the estimate to match.
+                        let d = (2.0 - s[i].log10().floor()).clamp(0.0, 9.0) as usize;
+                        format!("{:.d$} ({:.d$})", v[i], s[i])
+                    })
+                    .collect();
+                format!("{name} {}", axes.join(", "))
+            })
+            .collect();
+        format!(
+            "sensor errors estimated at the end, x, y, z (1-sigma): {}",
+            parts.join("; ")
+        )
+    }
+}
+
+/// The warning for `n` GNSS fixes whose time was not later than the fix before them (a
+/// receiver's log that repeats an epoch or swaps two): the navigator skipped them
+/// (`nav_core::ins_filter::sequencer::FixQueue::push`); `None` for none.
+pub fn out_of_order_warning(n: u32) -> Option<String> {
+    (n > 0).then(|| {
+        format!(
+            "WARNING: {n} GNSS fix(es) not later than the fix before them (an epoch the              receiver's log repeats, or fixes out of time order) were skipped"
+        )
+    })
 }
 
 /// The warning for fixes noisier than their declared 1-sigma: the learnt scales of the

@@ -22,11 +22,14 @@
 //! position sigmas from columns 8-10 of a 13-column line). Lines of 7 and 13 columns may mix.
 //!
 //! **Rules** (both formats): a wrong number of fields, a field that is not a number, a time that
-//! is not finite, negative or not strictly increasing, a finite latitude outside [-90, 90] deg or
+//! is not finite or negative, a finite latitude outside [-90, 90] deg or
 //! longitude outside [-180, 180] deg, and a last line cut off inside a field ([`crate::text_stream`]) are errors naming the file, the
 //! line and the column; so is a file without a fix. A NaN or infinite position or velocity value,
 //! and a sigma that is zero, negative, NaN or infinite, are **not** file errors: the fix is kept
 //! as read, for the navigation filter to reject and count (a receiver does output such fixes).
+//! Nor is a time not later than the previous fix's (a receiver's log that repeats an epoch, or
+//! swaps two): the fix is kept, and the navigator skips and counts it as out of order
+//! (`nav_core::ins_filter::sequencer::FixQueue::push`), in the firmware and the harness alike.
 //! A file none of whose fixes is usable so (neither its position, nav-core's
 //! `GnssPosition::is_valid`, nor its velocity, `GnssVelocity::is_valid`) is an error: no
 //! receiver records only those, and a KF-GINS IMU text file, 7 columns too, reads so.
@@ -38,7 +41,7 @@
 use crate::kf_gins::{
     DataLines, Fields, FileKind, GNSS_COLUMNS, GNSS_VELOCITY_COLUMNS, LineError, check_time,
 };
-use crate::text_error::{Record, TextError, TextErrorKind, seconds_to_ns};
+use crate::text_error::{TextError, TextErrorKind, seconds_to_ns};
 use crate::text_stream::{CsvRecords, CutCheck, LineReader};
 use nav_core::ins_filter::aiding::{GnssPosition, GnssVelocity as NavGnssVelocity};
 use nav_core::number::Number;
@@ -276,8 +279,7 @@ pub fn read_kf_gins_from<R: BufRead>(reader: R, path: &Path) -> Result<Vec<GnssF
     let mut lines = DataLines::new(reader, path, FileKind::Gnss);
     let mut fixes: Vec<GnssFix> = Vec::new();
     loop {
-        let previous_t_s = fixes.last().map(|f| f.t_s);
-        let fix = lines.next_with(|fields, at| kf_gins_fix(fields, at, previous_t_s));
+        let fix = lines.next_with(kf_gins_fix);
         match fix {
             None => return Ok(fixes),
             Some(fix) => fixes.push(fix?),
@@ -286,11 +288,7 @@ pub fn read_kf_gins_from<R: BufRead>(reader: R, path: &Path) -> Result<Vec<GnssF
 }
 
 /// One KF-GINS GNSS line of 7 or 13 fields (the count is checked by [`DataLines`]).
-fn kf_gins_fix(
-    fields: &Fields,
-    at: LineError,
-    previous_t_s: Option<f64>,
-) -> Result<GnssFix, TextError> {
+fn kf_gins_fix(fields: &Fields, at: LineError) -> Result<GnssFix, TextError> {
     let names: &[&'static str] = if fields.len() == GNSS_COLUMNS.len() {
         &GNSS_COLUMNS
     } else {
@@ -301,7 +299,6 @@ fn kf_gins_fix(
         *slot = fields.number(i, names[i]).map_err(at)?;
     }
     check_time(v[0], || fields.text(0)).map_err(at)?;
-    check_increasing(v[0], previous_t_s, names[0], Record::Line).map_err(at)?;
     check_latitude(v[1], names[1]).map_err(at)?;
     check_longitude(v[2], names[2]).map_err(at)?;
     let (sigma_ned_m, velocity) = if fields.len() == GNSS_COLUMNS.len() {
@@ -321,24 +318,6 @@ fn kf_gins_fix(
         sigma_ned_m,
         velocity,
     })
-}
-
-/// Time must increase strictly from fix to fix.
-fn check_increasing(
-    t_s: f64,
-    previous_t_s: Option<f64>,
-    column: &'static str,
-    record: Record,
-) -> Result<(), TextErrorKind> {
-    match previous_t_s {
-        Some(previous) if t_s <= previous => Err(TextErrorKind::TimeNotIncreasing {
-            column,
-            t_s,
-            previous_t_s: previous,
-            record,
-        }),
-        _ => Ok(()),
-    }
 }
 
 /// A finite latitude must be within [-90, 90] deg (a NaN one is a bad fix, kept).
@@ -414,8 +393,7 @@ pub fn read_csv_from<R: Read>(reader: R, path: &Path) -> Result<Vec<GnssFix>, Te
             cut.note(record.iter());
         }
         let at = |kind| TextError::new(path, Some(line.line), kind);
-        let previous_t_s = fixes.last().map(|f| f.t_s);
-        fixes.push(csv_fix(record, width, previous_t_s).map_err(at)?);
+        fixes.push(csv_fix(record, width).map_err(at)?);
     }
     if fixes.is_empty() {
         let kind = TextErrorKind::NoData {
@@ -427,11 +405,7 @@ pub fn read_csv_from<R: Read>(reader: R, path: &Path) -> Result<Vec<GnssFix>, Te
 }
 
 /// One CSV row of `width` fields (7, or 13 with velocity).
-fn csv_fix(
-    record: &csv::StringRecord,
-    width: usize,
-    previous_t_s: Option<f64>,
-) -> Result<GnssFix, TextErrorKind> {
+fn csv_fix(record: &csv::StringRecord, width: usize) -> Result<GnssFix, TextErrorKind> {
     if record.len() < width {
         return Err(TextErrorKind::MissingColumn {
             column: csv_column(record.len()),
@@ -462,7 +436,6 @@ fn csv_fix(
             t_s,
         });
     }
-    check_increasing(t_s, previous_t_s, CSV_COLUMNS[0], Record::Row)?;
     let lat_deg = number(1)?;
     check_latitude(lat_deg, CSV_COLUMNS[1])?;
     let (lon_deg, h_m) = (number(2)?, number(3)?);
@@ -600,11 +573,8 @@ mod tests {
         assert!(f[0].lat_rad.is_nan());
         assert_eq!(f[0].sigma_ned_m[..2], [0.0, -1.0]);
         let msg = |text: &str| kf(text).unwrap_err().to_string();
-        assert_eq!(
-            msg("1 45 7 100 1 1 1\n1 45 7 100 1 1 1\n"),
-            "mem.txt: line 2: column seconds of week: time does not increase: 1 s after 1 s on \
-             the previous line"
-        );
+        // A repeated time is kept, for the navigator to skip and count.
+        assert_eq!(kf("1 45 7 100 1 1 1\n1 45 7 100 1 1 1\n").unwrap().len(), 2);
         assert_eq!(
             msg("1 45 7 100 1 x 1\n"),
             "mem.txt: line 1: column sigma east: expected a number, found 'x'"
@@ -754,10 +724,8 @@ mod tests {
             msg(&format!("{h7}\n1,45,7,100,1,1\n")),
             "mem.csv: line 2: column sigma_d_m: missing (the line has only 6 columns)"
         );
-        assert_eq!(
-            msg(&format!("{h7}\n2,45,7,100,1,1,1\n1,45,7,100,1,1,1\n")),
-            "mem.csv: line 3: column t_s: time does not increase: 1 s after 2 s on the previous row"
-        );
+        let back = csv(&format!("{h7}\n2,45,7,100,1,1,1\n1,45,7,100,1,1,1\n")).unwrap();
+        assert_eq!((back[0].t_s, back[1].t_s), (2.0, 1.0));
         assert!(msg(&format!("{h7}\n")).contains("no data"));
         assert_eq!(
             msg(&format!("{h7}\n1,45,-352.5,100,1,1,1\n")),

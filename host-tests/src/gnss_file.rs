@@ -24,7 +24,8 @@ use std::path::Path;
 /// The fixes of a file, in `f64` ([`narrow`] gives them in the run's precision).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct GnssFixes {
-    /// The fixes, time increasing.
+    /// The fixes, in the file's order (a time not later than the previous fix's is the
+    /// navigator's to skip and count, [`gnss`] module docs).
     pub fixes: Vec<GnssFixInput<f64>>,
     /// Fixes of a text file whose time tag is not a time on the IMU clock (left out).
     pub bad_time_tags: u32,
@@ -214,13 +215,14 @@ fn record_of(f: &GnssFixInput<f64>) -> GnssRecord {
 }
 
 /// Writes `fixes` as a binary fix file at `path`, atomically ([`atomic::write`]). Refused: a
-/// fix whose time tag is not on the IMU clock, times that do not increase.
+/// fix whose time tag is not on the IMU clock.
 pub fn write_record_file(path: &Path, fixes: &[GnssFix]) -> Result<()> {
     write_inputs(path, &record_inputs(fixes)?)
 }
 
-/// The fixes as the binary file stores them. Refused: a fix whose time tag is not on the IMU
-/// clock, times that do not increase.
+/// The fixes as the binary file stores them, in their order (one not later than the previous
+/// is the navigator's to skip and count). Refused: a fix whose time tag is not on the IMU
+/// clock.
 fn record_inputs(fixes: &[GnssFix]) -> Result<Vec<GnssFixInput<f64>>> {
     let mut inputs = Vec::with_capacity(fixes.len());
     for (i, f) in fixes.iter().enumerate() {
@@ -230,15 +232,6 @@ fn record_inputs(fixes: &[GnssFix]) -> Result<Vec<GnssFixInput<f64>>> {
                 f.t_s
             )
         })?;
-        if inputs
-            .last()
-            .is_some_and(|p: &GnssFixInput<f64>| fix.t_us <= p.t_us)
-        {
-            bail!(
-                "fix {i}: time {} s is not later than the previous fix's",
-                f.t_s
-            );
-        }
         inputs.push(fix);
     }
     Ok(inputs)
@@ -413,10 +406,20 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let bin = dir.path().join("gnss.bin");
         let mut f = fixes();
-        f[3].t_s = f[2].t_s;
+        f[3].t_s = -1.0;
         let e = write_record_file(&bin, &f).unwrap_err();
         assert!(format!("{e:#}").contains("fix 3: time"), "{e:#}");
         assert!(!bin.exists());
+        // A repeated time is written and read back: the navigator skips and counts it.
+        f[3].t_s = f[2].t_s;
+        write_record_file(&bin, &f).unwrap();
+        let times: Vec<u64> = read_fixes(&bin, None)
+            .unwrap()
+            .fixes
+            .iter()
+            .map(|f| f.t_us)
+            .collect();
+        assert_eq!(times[2], times[3]);
         write_record_file(&bin, &fixes()).unwrap();
         let mut bytes = std::fs::read(&bin).unwrap();
         bytes[32 + 112 * 2 + 9] ^= 0x10;

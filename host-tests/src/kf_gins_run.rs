@@ -209,7 +209,7 @@ const PPM: f64 = 1e6;
 
 /// The 12 sensor-error fields of KF-GINS's files in its units: gyro biases [deg/h],
 /// accelerometer biases [mGal], gyro and accelerometer scale factors [ppm].
-fn sensor_fields(
+pub(crate) fn sensor_fields(
     gb: &Vector3<f64>,
     ab: &Vector3<f64>,
     gs: &Vector3<f64>,

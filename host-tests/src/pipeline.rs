@@ -11,6 +11,7 @@
 //! IMU gap lost its solution (the navigator's, [`nav_core::navigator::Navigator::take_lost_record`]), and the end record ([`nav_core::output::EndRecord`]), and
 //! reports in output units.
 
+use crate::aided_cmd::SensorEstimate;
 use hal_adapters::Imu;
 use hal_adapters::drivers::Health;
 use nav_core::alignment::{AlignMethod, AlignNote, AlignOutcome};
@@ -113,6 +114,8 @@ pub struct AidedOutcome {
     pub fixes_after_data: u32,
     /// Re-alignments in motion after a lost IMU gap or a divergence.
     pub realignments: Realignments,
+    /// The sensor errors estimated by the end (`None` when the run ended re-aligning).
+    pub sensors: Option<SensorEstimate>,
 }
 
 impl AidedOutcome {
@@ -137,6 +140,7 @@ impl AidedOutcome {
             fixes_unused: unused,
             fixes_after_data: after,
             realignments,
+            sensors: None,
         }
     }
 }
@@ -182,7 +186,11 @@ impl fmt::Display for AidedOutcome {
             f,
             "  final 1-sigma: position {:.3} {:.3} {:.3} m, velocity {:.4} {:.4} {:.4} m/s (N E D), roll {:.4} pitch {:.4} yaw {:.4} deg",
             p[0], p[1], p[2], v[0], v[1], v[2], a[0], a[1], a[2]
-        )
+        )?;
+        match &self.sensors {
+            Some(e) => write!(f, "\n  {}", e.line()),
+            None => Ok(()),
+        }
     }
 }
 
@@ -351,6 +359,11 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
     {
         row(&mut out, &r)?;
     }
+    // The sensor errors of the aided phase (read before `finish` takes the navigator).
+    let sensors = navigator
+        .aided()
+        .zip(background.filter())
+        .map(|(m, f)| SensorEstimate::of(m.sensor_errors(), |at| f.sigma(at)));
     let summary = navigator.finish().map_err(PipelineError::Navigation)?;
     if let Some(r) = summary.final_row {
         row(&mut out, &r)?;
@@ -375,8 +388,9 @@ pub fn run_with_fixes<T: Scalar, I: Imu, W: Write>(
         driver: None,
         alignment: AlignmentDeg::new(config.align_method, &summary.alignment),
         final_solution: summary.last_solution,
-        aided: summary.filter.map(|r| {
-            AidedOutcome::new(
+        aided: summary.filter.map(|r| AidedOutcome {
+            sensors,
+            ..AidedOutcome::new(
                 &r,
                 summary.fixes,
                 summary.realignments,

@@ -19,6 +19,7 @@ use hal_adapters::drivers::{NoiseSpec, bmi088, icm42688, noise};
 use hal_adapters::sim::{SimBmi088, SimulatedImu};
 use nav_core::Scalar;
 use nav_core::ins_filter::sequencer::GnssFixInput;
+use nav_core::navigator::Unusable;
 use std::fmt;
 use std::io::Write;
 use std::path::Path;
@@ -390,14 +391,32 @@ pub fn summary(imu: &Path, out: &Path, precision: &str, fr: &FileReport) -> Stri
         fr.format,
         fr.rate_hz
     );
+    // The navigator's causes, which add up to `flagged`. The reader flags a record whose
+    // time is not after the previous one's as a bad interval, which the summary calls out of
+    // order, as the navigator's own; a simulated part shows it as stale instead (counted so).
+    let n = &r.flagged_by;
+    let behind = if r.driver.is_some() {
+        0
+    } else {
+        c.out_of_order
+    };
+    let device_causes: String = [
+        (Unusable::Stale, n.stale),
+        (Unusable::DeviceFault, n.device_fault),
+        (Unusable::Other, n.other),
+    ]
+    .iter()
+    .filter(|(_, k)| *k > 0)
+    .map(|(cause, k)| format!(", {} {k}", cause.name()))
+    .collect();
     let _ = writeln!(
         s,
-        "samples {}: flagged {} (non-finite {}, bad interval {}, time out of order {}), rejected {}, missed {}; navigation steps {}",
+        "samples {}: flagged {} (non-finite {}, bad interval {}, time out of order {}{device_causes}), rejected {}, missed {}; navigation steps {}",
         r.samples,
         r.flagged,
-        c.non_finite,
-        c.bad_interval,
-        r.flagged_by.out_of_order + c.out_of_order,
+        n.non_finite,
+        n.bad_interval.saturating_sub(behind),
+        n.out_of_order + behind,
         r.rejected,
         c.missed,
         r.nav_steps
@@ -501,12 +520,14 @@ pub fn replay_aided_cli(
         let realigned = crate::aided_cmd::realignment_line(&a.realignments);
         let late = crate::aided_cmd::latency_warning(&a.gnss_latency, None);
         let noisy = crate::aided_cmd::noise_scale_warning(&a.noise_scales);
+        let unordered = crate::aided_cmd::out_of_order_warning(a.fixes.out_of_order);
         for w in realigned
             .into_iter()
             .chain(position)
             .chain(velocity)
             .chain(late)
             .chain(noisy)
+            .chain(unordered)
         {
             println!("{w}");
         }
