@@ -820,7 +820,8 @@ impl SensorEstimate {
 pub fn out_of_order_warning(n: u32) -> Option<String> {
     (n > 0).then(|| {
         format!(
-            "WARNING: {n} GNSS fix(es) not later than the fix before them (an epoch the              receiver's log repeats, or fixes out of time order) were skipped"
+            "WARNING: {n} GNSS fix(es) not later than the fix before them (an epoch the \
+             receiver's log repeats, or fixes out of time order) were skipped"
         )
     })
 }

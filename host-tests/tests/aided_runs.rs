@@ -635,7 +635,10 @@ fn a_repeated_or_swapped_fix_is_skipped_and_counted() {
         let (text, out) = replay_in(d, &[start, &["--imu-noise", "fog"]].concat());
         assert!(text.contains(" 2 out of order"), "{text}");
         assert!(
-            text.contains("WARNING: 2 GNSS fix(es) not later than the fix before them"),
+            text.contains(
+                "WARNING: 2 GNSS fix(es) not later than the fix before them (an epoch the \
+                 receiver's log repeats, or fixes out of time order) were skipped"
+            ),
             "{text}"
         );
         // Both paths report the sensor errors the filter estimated, with their 1-sigma.
