@@ -212,6 +212,35 @@ impl<S: Imu> SimAdis16505<S> {
         }
     }
 
+    /// The output counts at the model's measurement range, gyro then accelerometer: of the
+    /// rates, or of the deltas over one output period (`DEC_RATE`), in the 16-bit word's
+    /// counts times `scale` (2^16 for the 32-bit burst); rounded up, so at or beyond the
+    /// driver's clip threshold (the same range in `f64`).
+    fn range_counts(&self, deltas: bool, scale: f32) -> [i32; 2] {
+        let m = self.model;
+        let gyro_rad_s = m.range().gyro_range_dps() * (core::f64::consts::PI / 180.0);
+        let accel_mps2 = m.accel_range_mps2();
+        let counts = if deltas {
+            let dec_rate = self.reg(regs::DEC_RATE) & 0x07FF;
+            let period_s = f64::from(dec_rate + 1) / f64::from(INTERNAL_RATE_HZ);
+            [
+                gyro_rad_s * period_s / m.delta_angle_rad_per_lsb(),
+                accel_mps2 * period_s / m.delta_velocity_mps_per_lsb(),
+            ]
+        } else {
+            [
+                gyro_rad_s / m.gyro_rad_s_per_lsb(),
+                accel_mps2 / m.accel_mps2_per_lsb(),
+            ]
+        };
+        counts.map(|c| {
+            let x = (c * f64::from(scale)).min(f64::from(i32::MAX));
+            // Rounded up (core has no f64::ceil).
+            let t = x as i32;
+            if f64::from(t) < x { t + 1 } else { t }
+        })
+    }
+
     /// The burst command: takes the next source sample and prepares the frame.
     fn start_burst(&mut self) -> Result<(), SimError<S::Error>> {
         let source = next_sample(&mut self.source)?;
@@ -255,16 +284,34 @@ impl<S: Imu> SimAdis16505<S> {
         } else {
             (1.0, i32::from(i16::MAX))
         };
+        // A part senses no rate beyond its measurement range: each sensor axis saturates there
+        // (a delta output at the range times the output period), at the count its driver
+        // flags as clipped (the simulated part used to deliver 1000 deg/s from a 500 deg/s
+        // part, and flag it).
+        let range = self.range_counts(deltas, scale);
+        let (gyro_limit, accel_limit) = (limit.min(range[0]), limit.min(range[1]));
         let (gyro, accel) = if deltas && finite {
             let [carry_g, carry_a] = &mut self.carry;
             (
-                to_counts_carry(&self.mounting, gyro, counts.gyro * scale, limit, carry_g),
-                to_counts_carry(&self.mounting, accel, counts.accel * scale, limit, carry_a),
+                to_counts_carry(
+                    &self.mounting,
+                    gyro,
+                    counts.gyro * scale,
+                    gyro_limit,
+                    carry_g,
+                ),
+                to_counts_carry(
+                    &self.mounting,
+                    accel,
+                    counts.accel * scale,
+                    accel_limit,
+                    carry_a,
+                ),
             )
         } else {
             (
-                to_counts(&self.mounting, gyro, counts.gyro * scale, limit),
-                to_counts(&self.mounting, accel, counts.accel * scale, limit),
+                to_counts(&self.mounting, gyro, counts.gyro * scale, gyro_limit),
+                to_counts(&self.mounting, accel, counts.accel * scale, accel_limit),
             )
         };
         let temp = if sample.temperature_c.is_finite() {

@@ -21,7 +21,7 @@
 //! | `dt_s <= 0` (`BAD_INTERVAL` in the replay) | `DATA_CNTR` repeated: `STALE`; its increments carried to the next sample, which spans the time since the last one shown (`Cadence`) | timestamps repeated: `STALE`; the same |
 //! | a NaN or infinite value (`NON_FINITE`) | [`NonFinite::BadChecksum`] (default): a frame with a wrong checksum, the driver returns [`Error::Checksum`], the next sample shows the lost one as a `GAP`; or [`NonFinite::ZeroFrame`]; either way the sample stream delivers the source sample, `NON_FINITE` ([`flag_unrepresentable`]) | the invalid-data marker in all five packets: `NON_FINITE`, zero increments |
 //! | NaN temperature (unknown) | `TEMP_OUT` = 0 (0 deg C) | invalid temperature: NaN |
-//! | value beyond the register range | clamped: the driver flags saturation | clamped to full scale: saturation |
+//! | value beyond the measurement range (the model's: +-500 deg/s for the -2 part; a delta output at the range times the output period) | saturated at the range, its remainder dropped: the driver flags saturation | clamped to full scale: saturation |
 //! | end of the source | every bus transaction fails with [`SimError::End`] | the same |
 //!
 //! The BMI088 ([`SimBmi088`]) takes the next source sample at each gyro data read (the driver
@@ -576,9 +576,15 @@ fn to_counts_carry(
     let mut out = [0; 3];
     for ((o, v), c) in out.iter_mut().zip(v_s).zip(carry.iter_mut()) {
         let x = v * counts_per_unit + *c;
-        *o = round(x).clamp(-limit, limit);
-        // |x - o| <= 0.5 unless clamped; keep the remainder bounded either way.
-        *c = (x - *o as f32).clamp(-1.0, 1.0);
+        let rounded = round(x);
+        *o = rounded.clamp(-limit, limit);
+        // |x - o| <= 0.5 unless clamped; a clamped (saturated) output carries nothing: what
+        // was beyond the range is lost, as a part's is.
+        *c = if *o == rounded {
+            (x - *o as f32).clamp(-1.0, 1.0)
+        } else {
+            0.0
+        };
     }
     out
 }
