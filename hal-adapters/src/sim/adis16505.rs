@@ -63,6 +63,9 @@ pub struct SimAdis16505<S: Imu> {
     deltas: Counts,
     /// Rounding remainders of the delta outputs [counts], gyro then accelerometer.
     carry: [[f32; 3]; 2],
+    /// [`Self::range_counts`] for its arguments `(deltas, scale)` and `DEC_RATE` (computed in
+    /// `f64`, which the Cortex-M4 emulates: once, not at every burst).
+    range: Option<((bool, u32, u16), [i32; 2])>,
     last_sample: Option<ImuSample>,
     bursts: u32,
     /// Samples carried over a time tag that does not advance ([`Cadence`]).
@@ -94,6 +97,7 @@ impl<S: Imu> SimAdis16505<S> {
                 accel: (1.0 / model.delta_velocity_mps_per_lsb()) as f32,
             },
             carry: [[0.0; 3]; 2],
+            range: None,
             last_sample: None,
             cadence: Cadence::default(),
             bursts: 0,
@@ -280,7 +284,7 @@ impl<S: Imu> SimAdis16505<S> {
             (g, a, self.rates)
         };
         let (scale, limit) = if wide {
-            (65536.0, i32::MAX)
+            (65536.0_f32, i32::MAX)
         } else {
             (1.0, i32::from(i16::MAX))
         };
@@ -288,7 +292,15 @@ impl<S: Imu> SimAdis16505<S> {
         // (a delta output at the range times the output period), at the count its driver
         // flags as clipped (the simulated part used to deliver 1000 deg/s from a 500 deg/s
         // part, and flag it).
-        let range = self.range_counts(deltas, scale);
+        let key = (deltas, scale.to_bits(), self.reg(regs::DEC_RATE));
+        let range = match self.range {
+            Some((k, r)) if k == key => r,
+            _ => {
+                let r = self.range_counts(deltas, scale);
+                self.range = Some((key, r));
+                r
+            }
+        };
         let (gyro_limit, accel_limit) = (limit.min(range[0]), limit.min(range[1]));
         let (gyro, accel) = if deltas && finite {
             let [carry_g, carry_a] = &mut self.carry;
