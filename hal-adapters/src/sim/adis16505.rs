@@ -63,9 +63,9 @@ pub struct SimAdis16505<S: Imu> {
     deltas: Counts,
     /// Rounding remainders of the delta outputs [counts], gyro then accelerometer.
     carry: [[f32; 3]; 2],
-    /// [`Self::range_counts`] for its arguments `(deltas, scale)` and `DEC_RATE` (computed in
-    /// `f64`, which the Cortex-M4 emulates: once, not at every burst).
-    range: Option<((bool, u32, u16), [i32; 2])>,
+    /// [`Self::range_counts`] of the configured burst (computed in `f64`, which the Cortex-M4
+    /// emulates: at each configuration write, not in the burst).
+    range: [i32; 2],
     last_sample: Option<ImuSample>,
     bursts: u32,
     /// Samples carried over a time tag that does not advance ([`Cadence`]).
@@ -97,7 +97,7 @@ impl<S: Imu> SimAdis16505<S> {
                 accel: (1.0 / model.delta_velocity_mps_per_lsb()) as f32,
             },
             carry: [[0.0; 3]; 2],
-            range: None,
+            range: [i32::MAX; 2],
             last_sample: None,
             cadence: Cadence::default(),
             bursts: 0,
@@ -150,6 +150,22 @@ impl<S: Imu> SimAdis16505<S> {
         self.regs[usize::from(regs::PROD_ID / 2)] = self.model.prod_id();
         self.pending_read = 0;
         self.carry = [[0.0; 3]; 2];
+        self.refresh_range();
+    }
+
+    /// The configured burst: delta outputs, and the 32-bit words.
+    fn burst_mode(&self) -> (bool, bool) {
+        let msc = self.reg(regs::MSC_CTRL);
+        (
+            self.model.has_delta_burst() && msc & regs::MSC_CTRL_BURST_SEL != 0,
+            self.model.has_burst32() && msc & regs::MSC_CTRL_BURST32 != 0,
+        )
+    }
+
+    /// [`Self::range`] for the configured burst.
+    fn refresh_range(&mut self) {
+        let (deltas, wide) = self.burst_mode();
+        self.range = self.range_counts(deltas, if wide { 65536.0 } else { 1.0 });
     }
 
     fn reg(&self, addr: u8) -> u16 {
@@ -212,6 +228,7 @@ impl<S: Imu> SimAdis16505<S> {
                 let mut bytes = reg.to_le_bytes();
                 bytes[usize::from(addr % 2)] = value;
                 *reg = u16::from_le_bytes(bytes);
+                self.refresh_range();
             }
         }
     }
@@ -261,9 +278,7 @@ impl<S: Imu> SimAdis16505<S> {
 
     /// Writes the burst frame of `sample` (spanning `periods` output periods) into `burst`.
     fn fill_burst(&mut self, sample: &ImuSample, periods: u16) {
-        let msc = self.reg(regs::MSC_CTRL);
-        let deltas = self.model.has_delta_burst() && msc & regs::MSC_CTRL_BURST_SEL != 0;
-        let wide = self.model.has_burst32() && msc & regs::MSC_CTRL_BURST32 != 0;
+        let (deltas, wide) = self.burst_mode();
         let len = if wide {
             regs::BURST32_LEN
         } else {
@@ -284,7 +299,7 @@ impl<S: Imu> SimAdis16505<S> {
             (g, a, self.rates)
         };
         let (scale, limit) = if wide {
-            (65536.0_f32, i32::MAX)
+            (65536.0, i32::MAX)
         } else {
             (1.0, i32::from(i16::MAX))
         };
@@ -292,16 +307,7 @@ impl<S: Imu> SimAdis16505<S> {
         // (a delta output at the range times the output period), at the count its driver
         // flags as clipped (the simulated part used to deliver 1000 deg/s from a 500 deg/s
         // part, and flag it).
-        let key = (deltas, scale.to_bits(), self.reg(regs::DEC_RATE));
-        let range = match self.range {
-            Some((k, r)) if k == key => r,
-            _ => {
-                let r = self.range_counts(deltas, scale);
-                self.range = Some((key, r));
-                r
-            }
-        };
-        let (gyro_limit, accel_limit) = (limit.min(range[0]), limit.min(range[1]));
+        let (gyro_limit, accel_limit) = (limit.min(self.range[0]), limit.min(self.range[1]));
         let (gyro, accel) = if deltas && finite {
             let [carry_g, carry_a] = &mut self.carry;
             (
