@@ -609,13 +609,13 @@ fn an_imu_fault_the_fixes_run_away_from_realigns_after_a_window() {
     // The first fixes refused disagree grossly with the solution (their innovations 100
     // times the gate and more): DEGRADED from the first (`integrity::SUSPECT_NIS_FACTOR`),
     // not NAV for the 5 s the refusals in a row take (was: to 61 s, the heading hundreds of
-    // sigma off). The fault starts at 52 s; the fixes at 53 and 54 s are taken.
+    // sigma off). The fault starts at 52 s; the first fixes after it may still be taken.
     for axis in [NORTH, EAST, YAW] {
         assert_nav_rows_within(d, &out, 55.0..=200.0, axis, 4.0);
     }
 }
 
-/// A receiver's log that repeats an epoch and swaps two (a tactical car): before, both
+/// A receiver's log that repeats an epoch and swaps two (a FOG car): before, both
 /// programs refused the whole file ("time does not increase"). Now each such fix is read, then
 /// skipped and counted as out of order with a warning, in the run from a given start (the
 /// sequencer) and in the aligned run (the navigator, the firmware's twin), which end NAV
