@@ -130,9 +130,9 @@ pub struct ErrorFilter<T: Scalar> {
     refused_unconfirmed: Option<RefusedCluster<T>>,
     /// Propagated time since the last position fix [s].
     since_fix_s: T,
-    /// Per aid (GNSS position, GNSS velocity): propagated time since its last fix, when that
-    /// fix was refused as a gross disagreement ([`integrity::SUSPECT_NIS_FACTOR`]) [s];
-    /// `None` once a fix of the aid is taken.
+    /// Per aid ([`POSITION_AID`], [`VELOCITY_AID`]): propagated time since its last fix,
+    /// when that fix was refused as a gross disagreement ([`integrity::SUSPECT_NIS_FACTOR`])
+    /// [s]; `None` once a fix of the aid is taken.
     suspect_s: [Option<T>; 2],
     /// Propagated time from the first to the last of the position fixes refused in a row
     /// [s] (zero with fewer than two).
@@ -168,6 +168,11 @@ pub struct ErrorFilter<T: Scalar> {
     position_noise: NoiseScale<T, 3>,
     velocity_noise: NoiseScale<T, 3>,
 }
+
+/// The GNSS position fixes' index in the per-aid arrays.
+const POSITION_AID: usize = 0;
+/// The GNSS velocity fixes' index in the per-aid arrays.
+const VELOCITY_AID: usize = 1;
 
 impl<T: Scalar> ErrorFilter<T> {
     /// The filter at its start: covariance from `sigma` at heading `yaw` [rad].
@@ -429,7 +434,8 @@ impl<T: Scalar> ErrorFilter<T> {
             .any(|&s| s < self.config.refused_time_to_degrade_s)
     }
 
-    /// Notes the outcome of a fix of aid `aid` (0 position, 1 velocity) for [`Self::suspect`].
+    /// Notes the outcome of a fix of aid `aid` ([`POSITION_AID`], [`VELOCITY_AID`]) for
+    /// [`Self::suspect`].
     fn note_suspect(&mut self, aid: usize, result: &AidResult<T>) {
         let gross = self.config.gate_nis * T::c(integrity::SUSPECT_NIS_FACTOR);
         match result {
@@ -833,16 +839,18 @@ impl<T: Scalar> ErrorFilter<T> {
     }
 
     /// `noise` having learnt from the measurement `m` before its update
-    /// ([`super::noise_scale`]).
+    /// ([`super::noise_scale`]), and `m`'s innovation covariance and NIS
+    /// ([`Self::innovation`]), for the update to take.
     fn learnt<const M: usize>(
         &self,
         mut noise: NoiseScale<T, M>,
         m: &Measurement<T, M>,
-    ) -> NoiseScale<T, M> {
-        if let Some((s, _)) = self.innovation(m) {
-            noise.learn(&m.z, &s, &m.r, self.config.gate_nis);
+    ) -> (NoiseScale<T, M>, Option<(SMatrix<T, M, M>, T)>) {
+        let innovation = self.innovation(m);
+        if let Some((s, _)) = &innovation {
+            noise.learn(&m.z, s, &m.r, self.config.gate_nis);
         }
-        noise
+        (noise, innovation)
     }
 
     /// The learnt scales of the position and the velocity fixes' declared noise variances
@@ -865,7 +873,17 @@ impl<T: Scalar> ErrorFilter<T> {
         &mut self,
         m: &Measurement<T, M>,
     ) -> (AidResult<T>, Option<Correction<T>>) {
-        let Some((s, nis)) = self.innovation(m) else {
+        self.update_with(m, self.innovation(m))
+    }
+
+    /// [`Self::update`] of `m` whose innovation covariance and NIS are `innovation`
+    /// ([`Self::innovation`], computed before by the caller).
+    fn update_with<const M: usize>(
+        &mut self,
+        m: &Measurement<T, M>,
+        innovation: Option<(SMatrix<T, M, M>, T)>,
+    ) -> (AidResult<T>, Option<Correction<T>>) {
+        let Some((s, nis)) = innovation else {
             return (AidResult::Invalid, None);
         };
         if nis > self.config.gate_nis {
@@ -1068,13 +1086,16 @@ impl<T: Scalar> ErrorFilter<T> {
             m.r = m.r * scale + v.component_mul(v) * (late_sigma_s * late_sigma_s);
             m
         });
+        let mut innovation = None;
         if let Some(m) = &m {
-            self.position_noise = self.learnt(self.position_noise, m);
+            (self.position_noise, innovation) = self.learnt(self.position_noise, m);
         }
         let corrections = self.latency.take_corrections();
         let accel_var = self.accel_error_variance(snap.earth.g);
         let out = match &m {
-            Some(m) => self.screened_position_update(m, snap.earth.g, &snap.state.v_eb_n),
+            Some(m) => {
+                self.screened_position_update(m, innovation, snap.earth.g, &snap.state.v_eb_n)
+            }
             None => (AidResult::Invalid, None),
         };
         match (&m, &out.0) {
@@ -1105,7 +1126,7 @@ impl<T: Scalar> ErrorFilter<T> {
             _ => self.latency.broken(),
         }
         let out = Self::counted(&mut self.counters.position, out);
-        self.note_suspect(0, &out.0);
+        self.note_suspect(POSITION_AID, &out.0);
         self.refused_for_s = match (&out.0, self.counters.position.consecutive_rejected) {
             (AidResult::Rejected { .. }, 1) | (AidResult::Accepted { .. }, _) => T::zero(),
             (AidResult::Rejected { .. }, _) => self.refused_for_s + since_last_s,
@@ -1121,15 +1142,17 @@ impl<T: Scalar> ErrorFilter<T> {
         out
     }
 
-    /// The position update with the integrity tests of [`super::integrity`]; `g` [m/s^2] the
+    /// The position update of `m` (its innovation covariance and NIS `innovation`,
+    /// [`Self::innovation`]) with the integrity tests of [`super::integrity`]; `g` [m/s^2] the
     /// gravity at the solution, `v_eb_n` [m/s] its velocity.
     fn screened_position_update(
         &mut self,
         m: &Measurement<T, 3>,
+        innovation: Option<(Matrix3<T>, T)>,
         g: T,
         v_eb_n: &Vector3<T>,
     ) -> (AidResult<T>, Option<Correction<T>>) {
-        let Some((mut s, mut nis)) = self.innovation(m) else {
+        let Some((mut s, mut nis)) = innovation else {
             return (AidResult::Invalid, None);
         };
         let gate = self.config.gate_nis;
@@ -1441,20 +1464,21 @@ impl<T: Scalar> ErrorFilter<T> {
                 m.r = m.r * scale + a.component_mul(a) * (late_sigma_s * late_sigma_s);
                 m
             });
+        let mut innovation = None;
         if let Some(m) = &m {
             // As the fix's tag gives it, whatever the retiming; before its update (whose
             // correction the test would undo). Its noise as the update takes it.
             let z = m.z + snap.a_eb_n * late_s;
             let r = fix.sigma_ned_m_s.component_mul(&fix.sigma_ned_m_s) * scale;
             self.latency.velocity(&z, &r);
-            self.velocity_noise = self.learnt(self.velocity_noise, m);
+            (self.velocity_noise, innovation) = self.learnt(self.velocity_noise, m);
         }
         let out = match m {
-            Some(m) => self.update(&m),
+            Some(m) => self.update_with(&m, innovation),
             None => (AidResult::Invalid, None),
         };
         let out = Self::counted(&mut self.counters.velocity, out);
-        self.note_suspect(1, &out.0);
+        self.note_suspect(VELOCITY_AID, &out.0);
         out
     }
 
