@@ -17,8 +17,11 @@
 //! acceleration and jerk errors the attitude and sensor errors give at the anchor's specific
 //! force; its variance per axis comes from the anchor's covariance with all its correlations
 //! (the tilt and the accelerometer bias an aided filter cannot tell apart cancel here), plus
-//! the sensor noise over `tau` and, as a bound added to the 1-sigma, what a change of the
-//! specific force since the anchor does with the attitude and cross-coupling errors. The
+//! the sensor noise over `tau` and, as bounds added to the 1-sigma, what a change of the
+//! specific force since the anchor does with the attitude and cross-coupling errors, and what
+//! the sensor corrections since the anchor beyond [`SENSOR_CHANGE_SIGMAS`] of its 1-sigma do
+//! over its age (a sensor that changed beyond its error model, which the coasting solution
+//! keeps and the fixes do not: a sensor's change, not a fault's pull). The
 //! difference between the two solutions is the coasting error minus the filter's own; its
 //! 1-sigma per axis is bounded by the sum of theirs (whatever their correlation). Over the
 //! three axes the position difference, and the velocity difference, are tested against the
@@ -52,6 +55,11 @@ pub const ANCHOR_KEPT_S: f64 = 120.0;
 /// fault the difference passes it more often than 99 % of the time (over the consistency
 /// bench's 360 runs it moved one cell's mean NEES by 0.01).
 pub const GATE_3DOF: f64 = 11.345;
+
+/// The sensor corrections since an anchor beyond this many of its 1-sigma are taken as the
+/// sensor's change, not as the anchor's error (the coasting's 1-sigma allows for them;
+/// module docs) [-].
+pub const SENSOR_CHANGE_SIGMAS: f64 = 3.0;
 
 /// The errors carried from an anchor: position, velocity, acceleration, jerk.
 const TERMS: usize = 4;
@@ -122,8 +130,9 @@ struct Anchor<T: Scalar> {
     f0_n: Vector3<T>,
     /// The attitude variances' sum at the anchor [rad^2].
     attitude_var_rad2: T,
-    /// The largest specific force since the anchor [m/s^2].
+    /// The largest specific force [m/s^2] and body rate [rad/s] since the anchor.
     f_max: T,
+    omega_max: T,
     /// The angle turned since the anchor [rad], and the change of the specific force from the
     /// anchor's integrated over the time since [m/s].
     turned_rad: T,
@@ -146,6 +155,8 @@ struct Anchor<T: Scalar> {
     /// covariances.
     c0_b_n: Matrix3<T>,
     sensor_sigmas: [T; 3],
+    /// The 1-sigma per axis of the anchor's sensor errors, in the order of `sensors`.
+    sensor_sigma: [Vector3<T>; 4],
     /// What the anchor's gyro bias, turned with the body away from the anchor's attitude,
     /// adds to the attitude error, a bound [rad].
     turned_bias_rad: T,
@@ -180,6 +191,7 @@ impl<T: Scalar> Anchor<T> {
             f0_n,
             attitude_var_rad2: (0..3).fold(T::zero(), |s, k| s + p[(ATT + k, ATT + k)]),
             f_max: f0_n.norm(),
+            omega_max: motion.omega_ib_b.norm(),
             turned_rad: T::zero(),
             df_integral_m_s: T::zero(),
             maneuver_m_s: T::zero(),
@@ -194,6 +206,8 @@ impl<T: Scalar> Anchor<T> {
                     .fold(T::zero(), |s, k| s + p[(at + k, at + k)])
                     .sqrt()
             }),
+            sensor_sigma: [BG, BA, SG, SA]
+                .map(|at| Vector3::from_fn(|k, _| p[(at + k, at + k)].max(T::zero()).sqrt())),
             turned_bias_rad: T::zero(),
             failing: false,
             claimed: [T::zero(); 2],
@@ -218,6 +232,7 @@ impl<T: Scalar> Anchor<T> {
         // largest specific force as well.
         let df = (f_n - self.f0_n).norm();
         self.f_max = self.f_max.max(f_n.norm());
+        self.omega_max = self.omega_max.max(motion.omega_ib_b.norm());
         self.turned_rad += motion.omega_ib_b.norm() * dt;
         self.df_integral_m_s += df * dt;
         let turn = (T::c(3.0) - motion.c_b_n.component_mul(&self.c0_b_n).sum())
@@ -267,7 +282,25 @@ impl<T: Scalar> Anchor<T> {
             + (bi * t3 * sixth) * (bi * t3 * sixth);
         let noise_vel =
             vrw2 * t + f2 * arw2 * t3 * T::c(1.0 / 3.0) + (bi * t2 * half) * (bi * t2 * half);
-        let (extra_pos, extra_vel) = (self.maneuver_m, self.maneuver_m_s);
+        // The part of the sensor errors the corrections took out since the anchor beyond
+        // [`SENSOR_CHANGE_SIGMAS`] of the anchor's 1-sigma, had it been there from the anchor
+        // on (a bound over the attitudes and motions since): a sensor that changed beyond its
+        // error model (a bias step) moves the coasting solution away by its own drift, which
+        // the filter, following the fixes, rightly does not share; taken as a fault's pull it
+        // was reported as 200 m of doubt on a solution 0.3 m off. What the corrections took
+        // within the anchor's 1-sigma is the anchor's own error, which its spread carries
+        // (a ramp the filter follows moves them so; all of it allowed for hid the ramp).
+        let k = T::c(SENSOR_CHANGE_SIGMAS);
+        let beyond = |at: usize| {
+            (self.sensors[at].abs() - self.sensor_sigma[at] * k)
+                .map(|v| v.max(T::zero()))
+                .norm()
+        };
+        let [bg, ba, sg, sa] = [0, 1, 2, 3].map(beyond);
+        let acc = ba + self.f_max * sa;
+        let jerk = self.f_max * (bg + self.omega_max * sg);
+        let extra_pos = self.maneuver_m + acc * t2 * half + jerk * t3 * sixth;
+        let extra_vel = self.maneuver_m_s + acc * t + jerk * t2 * half;
         let sigma = |c: &nalgebra::SVector<T, TERMS>, q: T, extra: T| {
             Vector3::from_fn(|axis, _| {
                 let v = (c.transpose() * self.spread[axis] * c)[(0, 0)];
@@ -586,6 +619,30 @@ mod tests {
         assert!((3.5..=5.01).contains(&east), "{east} m east");
         assert!(run(2e-5, 0.0).is_none());
         assert!(run(1e-3, 5.0 / 300.0).is_none());
+    }
+
+    /// A sensor that changed (a step of 50 deg/h on a horizontal gyro) and the corrections
+    /// that took the change out of the compensation at once: the solution moves away from
+    /// the coasting one by the drift the change gives the coasting (25 m in 40 s, as a
+    /// cube of the time), and that is not a fault's pull: no doubt. Was: the anchors failed
+    /// and claimed the drift as doubt (200 m on a solution 0.3 m off).
+    #[test]
+    fn a_sensor_change_the_corrections_took_out_is_no_fault() {
+        let p = settled(2e-5);
+        let mut c = Coast::none();
+        fed(&mut c, &p, 0.0, ANCHOR_SPACING_S as usize + 5);
+        let mut x = StateVector::zeros();
+        x[BG] = -(50.0f64 / 3600.0).to_radians();
+        c.taken(&x);
+        fed(&mut c, &p, 0.0, 40);
+        let moved = c
+            .anchors
+            .iter()
+            .flatten()
+            .map(|a| a.dr.norm())
+            .fold(0.0, f64::max);
+        assert!(moved > 20.0, "{moved} m");
+        assert!(c.doubt().is_none());
     }
 
     /// A position difference whose statistic is `k` times the gate claims the part of itself

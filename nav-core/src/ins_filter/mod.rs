@@ -308,7 +308,9 @@ pub enum FilterStatus {
     Nominal,
     /// [`FilterConfig::rejections_to_degrade`] position fixes in a row refused, or refused in
     /// a row over [`FilterConfig::refused_time_to_degrade_s`], or the last fix of an aid
-    /// refused as a gross disagreement within that time ([`integrity::SUSPECT_NIS_FACTOR`]).
+    /// refused as a gross disagreement within that time ([`integrity::SUSPECT_NIS_FACTOR`]),
+    /// or the last velocity fixes taken share a bias beyond their covariance
+    /// ([`integrity::INCONSISTENT_GATE_FACTOR`]).
     AidingRejected,
     /// Horizontal position 1-sigma above [`FilterConfig::max_horizontal_sigma_m`].
     SigmaAboveLimit,
