@@ -156,6 +156,10 @@ pub struct ErrorFilter<T: Scalar> {
     /// A full window of fixes has passed the tests since the start: the position is the
     /// filter's own, and a fix the gate refuses may start a refused cluster ([`integrity`]).
     confirmed: bool,
+    /// The last position fix's place (latitude, longitude [rad], height [m]), and how many
+    /// fixes in a row repeated the one before exactly ([`Self::diverged`]).
+    last_fix_llh: Option<[f64; 3]>,
+    repeated_fixes: u32,
     /// The consider states' model and cross-covariance `P_ac` ([`consider`]).
     consider: ConsiderModel<T>,
     p_ac: CrossCovariance<T>,
@@ -226,6 +230,8 @@ impl<T: Scalar> ErrorFilter<T> {
             restart: None,
             pull: Pull::none(),
             confirmed: false,
+            last_fix_llh: None,
+            repeated_fixes: 0,
             consider,
             p_ac,
             motion: Motion {
@@ -544,7 +550,11 @@ impl<T: Scalar> ErrorFilter<T> {
     /// 1-sigma: no GNSS fault shared by the fixes moves that fast (a tactical part's yaw gyro
     /// stuck at zero for 5 s in a turn left it 79 deg off in heading; it refused the fixes as a
     /// jump running away at 15 m/s for 99 s, 3.8 km off at the 100th, where it re-aligned). A
-    /// jump that stays put, or moves as the filter's own drift could, is held as before.
+    /// jump that stays put, or moves as the filter's own drift could, is held as before; so
+    /// are fixes that repeat one place exactly, a window of them in a row: a receiver that
+    /// stopped and sends its last record again runs away from a moving solution as fast
+    /// (a car's receiver frozen for 30 s at 15 m/s: the filter re-aligned on the frozen
+    /// place, 195 m off, and refused the true fixes after it for 80 s).
     pub fn diverged(&self) -> bool {
         let max = self.config.max_horizontal_sigma_m;
         let p_pos = self.own_position_variances();
@@ -566,13 +576,17 @@ impl<T: Scalar> ErrorFilter<T> {
         let refused = clustered || moving_away || unconfirmed.is_some();
         let long = self.counters.position.consecutive_rejected as usize >= integrity::WINDOW;
         let p_vel = self.p.fixed_view::<3, 3>(VEL, VEL).into_owned();
-        let filter_fault = self.cluster.as_ref().is_some_and(|c| {
-            c.members as usize >= integrity::WINDOW
-                && c.gross
-                && c.ran_away
-                && c.drift_rate().norm() > T::c(integrity::FAULT_RATE_MAX_M_S)
-                && !c.drift_is_plausible(&p_vel, self.config.gate_nis)
-        });
+        // Fixes that repeat one place exactly are a receiver that stopped (its last record
+        // sent again), whose offset runs away at the vehicle's speed: the fixes' fault.
+        let stale = self.repeated_fixes as usize >= integrity::WINDOW;
+        let filter_fault = !stale
+            && self.cluster.as_ref().is_some_and(|c| {
+                c.members as usize >= integrity::WINDOW
+                    && c.gross
+                    && c.ran_away
+                    && c.drift_rate().norm() > T::c(integrity::FAULT_RATE_MAX_M_S)
+                    && !c.drift_is_plausible(&p_vel, self.config.gate_nis)
+            });
         (self.degraded_by_refusals() && (alone || (refused && beyond)))
             || (moving_away && long && beyond)
             || (filter_fault && long)
@@ -1077,6 +1091,12 @@ impl<T: Scalar> ErrorFilter<T> {
         lag_s: T,
     ) -> (AidResult<T>, Option<Correction<T>>) {
         let since_last_s = self.since_fix_s;
+        let llh = [fix.lat_rad, fix.lon_rad, fix.h_m];
+        self.repeated_fixes = match self.last_fix_llh {
+            Some(last) if last == llh => self.repeated_fixes.saturating_add(1),
+            _ => 0,
+        };
+        self.last_fix_llh = Some(llh);
         if let Some((p, v, a)) = self.latency.retime() {
             self.add_doubt(POS, &p);
             self.add_doubt(VEL, &v);
