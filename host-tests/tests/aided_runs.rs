@@ -558,18 +558,10 @@ fn a_wide_heading_confirmed_at_rest_does_not_lock_the_fixes_out() {
     }
 }
 
-/// A tactical land vehicle whose yaw gyro reads zero for 5 s in its first turn (52-57 s; a
-/// fault within the recording's limits, nothing flagged): the filter comes out of the turn 79
-/// deg off in heading and refuses the fixes as a jump that runs away at the car's speed.
-/// Before, it refused them until the count that makes it DEGRADED (99 in a row, 3.8 km off)
-/// and re-aligned then; no GNSS fault shared by the fixes moves 15 m/s, so now it re-aligns
-/// after a window of refusals, and ends NAV within 3 sigma.
-#[test]
-fn an_imu_fault_the_fixes_run_away_from_realigns_after_a_window() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    let sim = "sim land-vehicle --grade mems-tactical --seconds 200 --gnss-rate 1 --out";
-    run_ok(nav().args(sim.split(' ')).arg(d));
+/// The recording `d/imu.csv` with `fault` applied to each sample's values (time, increments,
+/// temperature), written to `d/fault.csv` and replayed from the given start with the GNSS
+/// file `d/gnss.csv` (tactical noise): the summary and the solution log's path.
+fn replay_with_imu_fault(d: &Path, mut fault: impl FnMut(&mut Vec<f64>)) -> (String, PathBuf) {
     let csv = std::fs::read_to_string(d.join("imu.csv")).unwrap();
     let faulty: String = csv
         .lines()
@@ -579,8 +571,8 @@ fn an_imu_fault_the_fixes_run_away_from_realigns_after_a_window() {
                 .map(str::parse::<f64>)
                 .collect::<Result<Vec<_>, _>>()
             {
-                Ok(mut v) if v[0] > 52.0 && v[0] <= 57.0 => {
-                    v[3] = 0.0;
+                Ok(mut v) => {
+                    fault(&mut v);
                     v.iter().map(f64::to_string).collect::<Vec<_>>().join(",") + "\n"
                 }
                 _ => format!("{l}\n"),
@@ -600,6 +592,26 @@ fn an_imu_fault_the_fixes_run_away_from_realigns_after_a_window() {
             .args(["--imu-noise", "mems-tactical", "--out"])
             .arg(&out),
     );
+    (text, out)
+}
+
+/// A tactical land vehicle whose yaw gyro reads zero for 5 s in its first turn (52-57 s; a
+/// fault within the recording's limits, nothing flagged): the filter comes out of the turn 79
+/// deg off in heading and refuses the fixes as a jump that runs away at the car's speed.
+/// Before, it refused them until the count that makes it DEGRADED (99 in a row, 3.8 km off)
+/// and re-aligned then; no GNSS fault shared by the fixes moves 15 m/s, so now it re-aligns
+/// after a window of refusals, and ends NAV within 3 sigma.
+#[test]
+fn an_imu_fault_the_fixes_run_away_from_realigns_after_a_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sim = "sim land-vehicle --grade mems-tactical --seconds 200 --gnss-rate 1 --out";
+    run_ok(nav().args(sim.split(' ')).arg(d));
+    let (text, out) = replay_with_imu_fault(d, |v| {
+        if v[0] > 52.0 && v[0] <= 57.0 {
+            v[3] = 0.0;
+        }
+    });
     let longest = longest_refusal(&text);
     assert!((integrity::WINDOW..30).contains(&longest), "{text}");
     assert!(text.contains("re-aligned in motion 1 time"), "{text}");
@@ -631,41 +643,14 @@ fn a_gyro_bias_step_is_followed_without_false_doubt_or_false_nav() {
     let sim = "sim land-vehicle --grade mems-tactical --seconds 200 --gnss-rate 1 \
                --gnss-velocity-sigma 0.05,0.05,0.05 --out";
     run_ok(nav().args(sim.split_whitespace()).arg(d));
-    let csv = std::fs::read_to_string(d.join("imu.csv")).unwrap();
     let step_rad_s = (50.0f64 / 3600.0).to_radians();
     let mut previous_t = 0.0;
-    let faulty: String = csv
-        .lines()
-        .map(|l| {
-            match l
-                .split(',')
-                .map(str::parse::<f64>)
-                .collect::<Result<Vec<_>, _>>()
-            {
-                Ok(mut v) => {
-                    if v[0] > 60.0 {
-                        v[2] += step_rad_s * (v[0] - previous_t);
-                    }
-                    previous_t = v[0];
-                    v.iter().map(f64::to_string).collect::<Vec<_>>().join(",") + "\n"
-                }
-                _ => format!("{l}\n"),
-            }
-        })
-        .collect();
-    std::fs::write(d.join("fault.csv"), faulty).unwrap();
-    let out = d.join("sol.csv");
-    let text = run_ok(
-        nav()
-            .arg("replay")
-            .arg("--imu")
-            .arg(d.join("fault.csv"))
-            .arg("--gnss")
-            .arg(d.join("gnss.csv"))
-            .args(GIVEN)
-            .args(["--imu-noise", "mems-tactical", "--out"])
-            .arg(&out),
-    );
+    let (text, out) = replay_with_imu_fault(d, |v| {
+        if v[0] > 60.0 {
+            v[2] += step_rad_s * (v[0] - previous_t);
+        }
+        previous_t = v[0];
+    });
     assert!(text.contains("status: DEGRADED on "), "{text}");
     let truth = host_tests::truth_csv::read(&d.join("truth.csv")).unwrap();
     let log = std::fs::read_to_string(&out).unwrap();

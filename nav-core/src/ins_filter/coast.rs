@@ -156,7 +156,7 @@ struct Anchor<T: Scalar> {
     c0_b_n: Matrix3<T>,
     sensor_sigmas: [T; 3],
     /// The 1-sigma per axis of the anchor's sensor errors, in the order of `sensors`.
-    sensor_sigma: [Vector3<T>; 4],
+    sensor_sigma_axes: [Vector3<T>; 4],
     /// What the anchor's gyro bias, turned with the body away from the anchor's attitude,
     /// adds to the attitude error, a bound [rad].
     turned_bias_rad: T,
@@ -206,7 +206,7 @@ impl<T: Scalar> Anchor<T> {
                     .fold(T::zero(), |s, k| s + p[(at + k, at + k)])
                     .sqrt()
             }),
-            sensor_sigma: [BG, BA, SG, SA]
+            sensor_sigma_axes: [BG, BA, SG, SA]
                 .map(|at| Vector3::from_fn(|k, _| p[(at + k, at + k)].max(T::zero()).sqrt())),
             turned_bias_rad: T::zero(),
             failing: false,
@@ -292,7 +292,7 @@ impl<T: Scalar> Anchor<T> {
         // (a ramp the filter follows moves them so; all of it allowed for hid the ramp).
         let k = T::c(SENSOR_CHANGE_SIGMAS);
         let beyond = |at: usize| {
-            (self.sensors[at].abs() - self.sensor_sigma[at] * k)
+            (self.sensors[at].abs() - self.sensor_sigma_axes[at] * k)
                 .map(|v| v.max(T::zero()))
                 .norm()
         };
