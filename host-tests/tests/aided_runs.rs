@@ -558,6 +558,13 @@ fn a_wide_heading_confirmed_at_rest_does_not_lock_the_fixes_out() {
     }
 }
 
+/// A tactical car's 200 s recording in `d` with position and velocity fixes at 1 Hz.
+fn sim_tactical_car_with_velocity_fixes(d: &Path) {
+    let sim = "sim land-vehicle --grade mems-tactical --seconds 200 --gnss-rate 1 \
+               --gnss-velocity-sigma 0.05,0.05,0.05 --out";
+    run_ok(nav().args(sim.split_whitespace()).arg(d));
+}
+
 /// The recording `d/imu.csv` with `fault` applied to each sample's values (time, increments,
 /// temperature), written to `d/fault.csv` and replayed from the given start with the GNSS
 /// file `d/gnss.csv` (tactical noise): the summary and the solution log's path.
@@ -640,9 +647,7 @@ fn an_imu_fault_the_fixes_run_away_from_realigns_after_a_window() {
 fn a_gyro_bias_step_is_followed_without_false_doubt_or_false_nav() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let sim = "sim land-vehicle --grade mems-tactical --seconds 200 --gnss-rate 1 \
-               --gnss-velocity-sigma 0.05,0.05,0.05 --out";
-    run_ok(nav().args(sim.split_whitespace()).arg(d));
+    sim_tactical_car_with_velocity_fixes(d);
     let step_rad_s = (50.0f64 / 3600.0).to_radians();
     let mut previous_t = 0.0;
     let (text, out) = replay_with_imu_fault(d, |v| {
@@ -681,9 +686,7 @@ fn a_gyro_bias_step_is_followed_without_false_doubt_or_false_nav() {
 fn a_receiver_that_repeats_its_last_fix_is_not_followed() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let sim = "sim land-vehicle --grade mems-tactical --seconds 200 --gnss-rate 1 \
-               --gnss-velocity-sigma 0.05,0.05,0.05 --out";
-    run_ok(nav().args(sim.split_whitespace()).arg(d));
+    sim_tactical_car_with_velocity_fixes(d);
     let csv = std::fs::read_to_string(d.join("gnss.csv")).unwrap();
     let mut frozen = None;
     let rows: Vec<String> = csv
