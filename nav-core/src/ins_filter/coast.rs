@@ -150,12 +150,10 @@ struct Anchor<T: Scalar> {
     dv: Vector3<T>,
     dphi: Vector3<T>,
     sensors: [Vector3<T>; 4],
-    /// The anchor's attitude `C_b_n` [-], and the square roots of the traces of its gyro
-    /// bias [rad/s], accelerometer bias [m/s^2] and accelerometer scale-factor [-]
-    /// covariances.
+    /// The anchor's attitude `C_b_n` [-].
     c0_b_n: Matrix3<T>,
-    sensor_sigmas: [T; 3],
-    /// The 1-sigma per axis of the anchor's sensor errors, in the order of `sensors`.
+    /// The 1-sigma per axis of the anchor's sensor errors, in the order of `sensors` (the
+    /// norm of one: the square root of that covariance block's trace).
     sensor_sigma_axes: [Vector3<T>; 4],
     /// What the anchor's gyro bias, turned with the body away from the anchor's attitude,
     /// adds to the attitude error, a bound [rad].
@@ -201,11 +199,6 @@ impl<T: Scalar> Anchor<T> {
             dphi: Vector3::zeros(),
             sensors: [Vector3::zeros(); 4],
             c0_b_n: motion.c_b_n,
-            sensor_sigmas: [BG, BA, SA].map(|at| {
-                (0..3)
-                    .fold(T::zero(), |s, k| s + p[(at + k, at + k)])
-                    .sqrt()
-            }),
             sensor_sigma_axes: [BG, BA, SG, SA]
                 .map(|at| Vector3::from_fn(|k, _| p[(at + k, at + k)].max(T::zero()).sqrt())),
             turned_bias_rad: T::zero(),
@@ -238,7 +231,7 @@ impl<T: Scalar> Anchor<T> {
         let turn = (T::c(3.0) - motion.c_b_n.component_mul(&self.c0_b_n).sum())
             .max(T::zero())
             .sqrt();
-        let [sigma_bg, sigma_ba, sigma_sa] = self.sensor_sigmas;
+        let [sigma_bg, sigma_ba, _, sigma_sa] = self.sensor_sigma_axes.map(|v| v.norm());
         self.turned_bias_rad += sigma_bg * turn * dt;
         let gained_rad = noise.gyro_cross_coupling_rad * self.turned_rad
             + noise.gyro_g_sensitivity * self.df_integral_m_s

@@ -589,19 +589,16 @@ pub enum WindowVerdict {
 /// The last [`WINDOW`] whitened position innovations (module docs); fixed-size.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct InnovationWindow<T: Scalar> {
-    w: [Vector3<T>; WINDOW],
+    w: BiasWindow<T, WINDOW>,
+    /// The correction each fix applied, in the slot of its innovation.
     corrections: [StateVector<T>; WINDOW],
-    len: usize,
-    next: usize,
 }
 
 impl<T: Scalar> Default for InnovationWindow<T> {
     fn default() -> Self {
         Self {
-            w: [Vector3::zeros(); WINDOW],
+            w: BiasWindow::default(),
             corrections: [StateVector::zeros(); WINDOW],
-            len: 0,
-            next: 0,
         }
     }
 }
@@ -609,16 +606,14 @@ impl<T: Scalar> Default for InnovationWindow<T> {
 impl<T: Scalar> InnovationWindow<T> {
     /// Adds a whitened innovation `w` [-], dropping the oldest when full.
     pub fn push(&mut self, w: Vector3<T>) {
-        self.w[self.next] = w;
-        self.corrections[self.next] = StateVector::zeros();
-        self.next = (self.next + 1) % WINDOW;
-        self.len = (self.len + 1).min(WINDOW);
+        let slot = self.w.push(w);
+        self.corrections[slot] = StateVector::zeros();
     }
 
     /// Records the correction `x` the last pushed fix applied to the error state.
     pub fn set_last_correction(&mut self, x: &StateVector<T>) {
-        if self.len > 0 {
-            self.corrections[(self.next + WINDOW - 1) % WINDOW] = *x;
+        if let Some(slot) = self.w.last_slot() {
+            self.corrections[slot] = *x;
         }
     }
 
@@ -640,28 +635,23 @@ impl<T: Scalar> InnovationWindow<T> {
 
     /// Fixes held.
     pub fn len(&self) -> usize {
-        self.len
+        self.w.len
     }
 
     /// True when empty.
     pub fn is_empty(&self) -> bool {
-        self.len == 0
+        self.w.len == 0
     }
 
     /// The local statistic `|sum w|^2 / n` [-] (`chi^2(3)` under no fault; 0 when empty).
     pub fn bias_statistic(&self) -> T {
-        if self.len == 0 {
-            return T::zero();
-        }
-        let sum = self.w[..self.len]
-            .iter()
-            .fold(Vector3::zeros(), |a, w| a + w);
-        sum.norm_squared() / T::c(self.len as f64)
+        self.w.mean_statistic()
     }
 
     /// The global statistic `sum |w|^2` [-] (`chi^2(3 n)` under no fault).
     pub fn spread_statistic(&self) -> T {
-        self.w[..self.len]
+        self.w
+            .held()
             .iter()
             .fold(T::zero(), |a, w| a + w.norm_squared())
     }
@@ -691,7 +681,7 @@ impl<T: Scalar> InnovationWindow<T> {
         };
         if !correlated && self.bias_statistic() > gate_3dof {
             WindowVerdict::Bias
-        } else if self.len == WINDOW && spread {
+        } else if self.w.len == WINDOW && spread {
             WindowVerdict::Spread
         } else {
             WindowVerdict::Consistent
@@ -699,8 +689,9 @@ impl<T: Scalar> InnovationWindow<T> {
     }
 }
 
-/// The last `L` whitened innovations of an aid, for a bias common to them alone (the local
-/// statistic of [`InnovationWindow`], without its corrections); fixed-size.
+/// The last `L` whitened innovations of an aid and their local statistic, a ring of fixed size
+/// (the velocity fixes' inconsistency test; [`InnovationWindow`] keeps the position fixes'
+/// in one).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BiasWindow<T: Scalar, const L: usize> {
     w: [Vector3<T>; L],
@@ -719,20 +710,39 @@ impl<T: Scalar, const L: usize> Default for BiasWindow<T, L> {
 }
 
 impl<T: Scalar, const L: usize> BiasWindow<T, L> {
-    /// Adds a whitened innovation `w` [-], dropping the oldest when full.
-    pub fn push(&mut self, w: Vector3<T>) {
-        self.w[self.next] = w;
+    /// Adds a whitened innovation `w` [-], dropping the oldest when full; the slot it took.
+    pub fn push(&mut self, w: Vector3<T>) -> usize {
+        let slot = self.next;
+        self.w[slot] = w;
         self.next = (self.next + 1) % L;
         self.len = (self.len + 1).min(L);
+        slot
+    }
+
+    /// The slot of the last innovation pushed, if any.
+    fn last_slot(&self) -> Option<usize> {
+        (self.len > 0).then(|| (self.next + L - 1) % L)
+    }
+
+    /// The innovations held (in slot order).
+    fn held(&self) -> &[Vector3<T>] {
+        &self.w[..self.len]
+    }
+
+    /// The local statistic `|sum w|^2 / n` [-] over the `n` held (`chi^2(3)` under no fault;
+    /// 0 when empty).
+    fn mean_statistic(&self) -> T {
+        if self.len == 0 {
+            return T::zero();
+        }
+        let sum = self.held().iter().fold(Vector3::zeros(), |a, w| a + w);
+        sum.norm_squared() / T::c(self.len as f64)
     }
 
     /// The local statistic `|sum w|^2 / L` [-] once full (`chi^2(3)` under no fault), else
     /// `None`.
     pub fn bias_statistic(&self) -> Option<T> {
-        (self.len == L).then(|| {
-            let sum = self.w.iter().fold(Vector3::zeros(), |a, w| a + w);
-            sum.norm_squared() / T::c(L as f64)
-        })
+        (self.len == L).then(|| self.mean_statistic())
     }
 }
 
