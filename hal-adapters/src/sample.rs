@@ -1,6 +1,7 @@
 //! The IMU sample type.
 
 use bitflags::bitflags;
+use nav_core::ins_filter::Clipped;
 use nav_core::navigator::{ImuInput, Unusable};
 
 /// The inertial measurement of one sample, body axes forward-right-down (FRD).
@@ -171,6 +172,10 @@ impl ImuSample {
             self.flags.unusable(),
             self.flags.contains(SampleFlags::GAP),
         )
+        .with_clipped(Clipped {
+            gyro: self.flags.contains(SampleFlags::GYRO_SATURATED),
+            accel: self.flags.contains(SampleFlags::ACCEL_SATURATED),
+        })
     }
 }
 

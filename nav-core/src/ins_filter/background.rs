@@ -8,7 +8,7 @@ use super::aiding::{AidCounters, AidResult, FilterCounters, GnssPosition, GnssVe
 use super::coast::{Coast, Motion};
 use super::consider::{self, ConsiderModel, CrossCovariance};
 use super::covariance::{self, Transition};
-use super::foreground::{LostGap, Propagation};
+use super::foreground::{ClipDoubt, LostGap, Propagation};
 use super::integrity::{
     self, BiasWindow, InnovationWindow, Pull, Reacquisition, RefusedCluster, Restart,
     WindowVerdict, whiten,
@@ -726,6 +726,7 @@ impl<T: Scalar> ErrorFilter<T> {
             .is_active()
             .then(|| consider::transition_columns(&f, &prop.lin, &self.consider, prop.dt));
         covariance::propagate(&mut self.p, &phi, &q, prop.dt);
+        self.add_clip_doubt(&prop.clipped, &prop.lin.c_b_n);
         if let Some(phi_ac) = &phi_ac {
             consider::propagate(
                 &mut self.p,
@@ -743,12 +744,30 @@ impl<T: Scalar> ErrorFilter<T> {
         }
         self.check_covariance();
         // A gap's unknown motion is not in the coasting test's error model.
-        if b.lost.is_some() || b.attitude_var_rad2 > T::zero() || b.velocity_var_m2_s2 > T::zero() {
+        let unknown_motion = b.attitude_var_rad2 > T::zero() || b.velocity_var_m2_s2 > T::zero();
+        if b.lost.is_some() || unknown_motion || prop.clipped.any() {
             self.coast.clear();
         }
         let sf = self.config.scale_factors;
         self.coast
             .carried(prop.dt, &self.motion, &self.p, &self.config.noise, sf);
+    }
+
+    /// Adds what clipped samples could have missed ([`ClipDoubt`], per body axis) to the
+    /// attitude and velocity covariance, turned into the navigation frame by `c_b_n`:
+    /// `P += C_b_n diag(var_b) C_b_n^T`.
+    fn add_clip_doubt(&mut self, doubt: &ClipDoubt<T>, c_b_n: &Matrix3<T>) {
+        if !doubt.any() {
+            return;
+        }
+        for (at, var_b) in [
+            (ATT, &doubt.attitude_var_b_rad2),
+            (VEL, &doubt.velocity_var_b_m2_s2),
+        ] {
+            let add = c_b_n * Matrix3::from_diagonal(var_b) * c_b_n.transpose();
+            let mut block = self.p.fixed_view_mut::<3, 3>(at, at);
+            block += (add + add.transpose()) * T::c(0.5);
+        }
     }
 
     /// The covariance across a gap too long to bridge ([`LostGap`]): the position carried at

@@ -21,6 +21,8 @@ pub struct Propagation<T: Scalar> {
     pub dt: T,
     /// The gaps in the IMU data the interval bridged.
     pub bridged: Bridged<T>,
+    /// What the clipped samples in the interval could have missed.
+    pub clipped: ClipDoubt<T>,
 }
 
 /// What the gaps bridged in a propagation interval leave ([`crate::gap`]): the variances the
@@ -60,6 +62,45 @@ impl<T: Scalar> Bridged<T> {
     }
 }
 
+/// The sensor axes a sample's driver found at full scale ([`AidedMechanization::step_clipped`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Clipped {
+    /// A gyro axis read its full scale: the rate beyond it is not in the increment.
+    pub gyro: bool,
+    /// An accelerometer axis read its full scale.
+    pub accel: bool,
+}
+
+/// The variances clipped samples add, per body axis ([`AidedMechanization::step_clipped`]),
+/// to add to the covariance turned into the navigation frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClipDoubt<T: Scalar> {
+    /// Attitude variance per body axis [rad^2].
+    pub attitude_var_b_rad2: Vector3<T>,
+    /// Velocity variance per body axis [m^2/s^2].
+    pub velocity_var_b_m2_s2: Vector3<T>,
+}
+
+impl<T: Scalar> ClipDoubt<T> {
+    /// No clipped sample.
+    pub fn none() -> Self {
+        Self {
+            attitude_var_b_rad2: Vector3::zeros(),
+            velocity_var_b_m2_s2: Vector3::zeros(),
+        }
+    }
+
+    /// True when a clipped sample left a doubt.
+    pub fn any(&self) -> bool {
+        self.attitude_var_b_rad2.iter().any(|v| *v > T::zero())
+            || self.velocity_var_b_m2_s2.iter().any(|v| *v > T::zero())
+    }
+}
+
+/// Largest velocity doubt a run of clipped samples adds per axis [m/s]: beyond any vehicle's
+/// speed.
+const MAX_CLIP_RUN_MPS: f64 = 1e4;
+
 /// What one sample asks of the background.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Events<T: Scalar> {
@@ -82,6 +123,10 @@ pub struct AidedMechanization<T: Scalar> {
     acc_v: Vector3<T>,
     acc_dt: T,
     acc_bridged: Bridged<T>,
+    acc_clipped: ClipDoubt<T>,
+    /// The current runs of clipped samples, per body axis: `sum |increment|` of the gyro's
+    /// [rad] and the accelerometer's [m/s].
+    clip_run: [Vector3<T>; 2],
     gap_dynamics: GapDynamics<T>,
     current: Current<T>,
     detector: Option<Stationarity<T>>,
@@ -137,6 +182,8 @@ impl<T: Scalar> AidedMechanization<T> {
             acc_v: Vector3::zeros(),
             acc_dt: T::zero(),
             acc_bridged: Bridged::none(),
+            acc_clipped: ClipDoubt::none(),
+            clip_run: [Vector3::zeros(); 2],
             gap_dynamics: config.gap_dynamics,
             current: Current {
                 state: st,
@@ -251,9 +298,28 @@ impl<T: Scalar> AidedMechanization<T> {
     /// Integrates one increment, compensated with the estimated sensor errors (`true =
     /// (measured - b dt) / (1 + s)`); a refused increment leaves everything unchanged.
     pub fn step(&mut self, inc: &ImuIncrement<T>) -> Result<Events<T>, InputError> {
+        self.step_clipped(inc, Clipped::default())
+    }
+
+    /// [`Self::step`] for a sample whose driver found an axis at full scale (`clipped`). The
+    /// rate or specific force beyond the range is not in the increment, and no model knows
+    /// it: the doubt taken is that the true value was up to twice the range, as 1-sigma
+    /// (3 sigma: four times), i.e. the clipped reading again, `|increment|` per body axis and
+    /// sample (the driver's axes are the body's unless mounted otherwise: then the reading
+    /// spreads over the body axes it turns into). The excess keeps its sign over a run of
+    /// clipped samples, so the run's doubts add as 1-sigma, not as variances: the run's
+    /// variance is `(sum |increment|)^2` per axis (the attitude's at most
+    /// [`MAX_ATTITUDE_VAR_RAD2`], beyond which the linear error model says nothing more). It
+    /// joins the propagation interval ([`ClipDoubt`]), turned into the navigation frame there.
+    pub fn step_clipped(
+        &mut self,
+        inc: &ImuIncrement<T>,
+        clipped: Clipped,
+    ) -> Result<Events<T>, InputError> {
         let dt = inc.dt;
         let v_before = self.nav.state().v_eb_n;
         let comp = self.integrate(inc)?;
+        self.add_clip_doubt(inc, clipped);
         let st = *self.nav.state();
         self.current = Current {
             state: st,
@@ -274,14 +340,44 @@ impl<T: Scalar> AidedMechanization<T> {
         };
         // A stop's updates flush the interval themselves (Events::still). A lost gap is
         // flushed at once: the filter's status says so from the first sample after it (it said
-        // NAV for up to an interval).
-        let due = self.acc_dt >= self.interval_s || self.acc_bridged.lost.is_some();
+        // NAV for up to an interval). So is a run of clipped samples once it ends: the rows
+        // after it carry its doubt.
+        let clip_run_ended = self.acc_clipped.any() && clipped == Clipped::default();
+        let due =
+            self.acc_dt >= self.interval_s || self.acc_bridged.lost.is_some() || clip_run_ended;
         let propagation = if still.is_none() && due {
             self.flush()
         } else {
             None
         };
         Ok(Events { propagation, still })
+    }
+
+    /// The variance a clipped sample adds ([`Self::step_clipped`]); a sample not clipped ends
+    /// its sensor's run.
+    fn add_clip_doubt(&mut self, inc: &ImuIncrement<T>, clipped: Clipped) {
+        let max_theta = T::c(MAX_ATTITUDE_VAR_RAD2).sqrt();
+        let sensors = [
+            (clipped.gyro, &inc.delta_theta_ib_b, max_theta),
+            (clipped.accel, &inc.delta_v_ib_b, T::c(MAX_CLIP_RUN_MPS)),
+        ];
+        let doubts = [
+            &mut self.acc_clipped.attitude_var_b_rad2,
+            &mut self.acc_clipped.velocity_var_b_m2_s2,
+        ];
+        for (((on, d, max), run), var) in sensors.into_iter().zip(&mut self.clip_run).zip(doubts) {
+            if !on {
+                *run = Vector3::zeros();
+                continue;
+            }
+            for k in 0..3 {
+                // The run's variance grows from `before^2` to `after^2`.
+                let before = run[k];
+                let after = (before + d[k].abs()).min(max);
+                run[k] = after;
+                var[k] += after * after - before * before;
+            }
+        }
     }
 
     /// The propagation of the increments accumulated so far (`None` when there are none).
@@ -300,6 +396,7 @@ impl<T: Scalar> AidedMechanization<T> {
             },
             dt: self.acc_dt,
             bridged: core::mem::replace(&mut self.acc_bridged, Bridged::none()),
+            clipped: core::mem::replace(&mut self.acc_clipped, ClipDoubt::none()),
         };
         self.acc_theta = Vector3::zeros();
         self.acc_v = Vector3::zeros();
@@ -329,5 +426,127 @@ impl<T: Scalar> AidedMechanization<T> {
         self.nav.set_state(st);
         self.current.state = *self.nav.state();
         self.allow_for(c.uncertainty);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::ins_filter::model::tests::noise;
+    use crate::ins_filter::{ErrorFilter, InitialSigma};
+    use crate::{Position, attitude};
+    use std::vec;
+    use std::vec::Vec;
+
+    const DT: f64 = 0.0025;
+
+    /// A car at 10 m/s, level at heading 30 deg (`rolled`: on its side, rolled 90 deg).
+    fn car(rolled: bool) -> NavState<f64> {
+        let roll = if rolled { 90f64.to_radians() } else { 0.0 };
+        NavState {
+            q_b_n: attitude::from_euler(roll, 0.0, 30f64.to_radians()),
+            v_eb_n: Vector3::new(10.0, 0.0, 0.0),
+            position: Position::from_radians(0.8, 0.1, 100.0),
+        }
+    }
+
+    /// A sample turning about the body's z axis at `rate` [rad/s], the specific force 1 g
+    /// along its z axis.
+    fn yawing(rate: f64) -> ImuIncrement<f64> {
+        ImuIncrement::new([0.0, 0.0, rate * DT], [0.0, 0.0, -9.8 * DT], DT)
+    }
+
+    /// The attitude variance [rad^2] per navigation axis that `samples` (each with its
+    /// clipped flags) add beyond the same samples unflagged, through the covariance of a
+    /// filter started on `state`; and the sum of the propagations' body-axis doubts.
+    fn doubt_added(
+        state: NavState<f64>,
+        samples: &[(ImuIncrement<f64>, Clipped)],
+    ) -> (Vector3<f64>, ClipDoubt<f64>) {
+        let config = FilterConfig::new(noise());
+        let mut mech = AidedMechanization::new(state, SensorErrors::default(), &config).unwrap();
+        let sigma = InitialSigma::new(
+            Vector3::repeat(0.1),
+            Vector3::repeat(0.01),
+            Vector3::repeat(1e-3),
+            &config.start_sensor_sigma(),
+        );
+        let mut filter = ErrorFilter::new(&sigma, state.euler().2, config).unwrap();
+        let mut twin = filter.clone();
+        let mut total = ClipDoubt::none();
+        for (inc, clipped) in samples {
+            let Some(p) = mech.step_clipped(inc, *clipped).unwrap().propagation else {
+                continue;
+            };
+            total.attitude_var_b_rad2 += p.clipped.attitude_var_b_rad2;
+            total.velocity_var_b_m2_s2 += p.clipped.velocity_var_b_m2_s2;
+            filter.propagate(&p);
+            twin.propagate(&Propagation {
+                clipped: ClipDoubt::none(),
+                ..p
+            });
+        }
+        let var = |f: &ErrorFilter<f64>| f.sigma(ATT).map(|s| s * s);
+        (var(&filter) - var(&twin), total)
+    }
+
+    /// Five yaw-gyro samples clipped at 500 deg/s (a 1000 deg/s burst on a +-500 deg/s part
+    /// misses 6.25 deg): the run's doubt is its summed reading as one 1-sigma, `(5 a)^2` in
+    /// the body's z axis, not `5 a^2`; it reaches the covariance with the sample that ends the
+    /// run (not up to a propagation interval later), in the navigation axis the body's z
+    /// axis lies along: down for a level car, horizontal for one on its side. A sample not
+    /// flagged adds nothing, and a run's attitude doubt stops at 1 rad.
+    #[test]
+    fn a_clipped_run_doubts_its_summed_reading_about_its_axis() {
+        let rate = 500f64.to_radians();
+        let gyro = Clipped {
+            gyro: true,
+            accel: false,
+        };
+        let mut burst = vec![(yawing(0.0), Clipped::default()); 8];
+        burst.extend([(yawing(rate), gyro); 5]);
+        burst.push((yawing(0.0), Clipped::default()));
+        let run = (5.0 * rate * DT).powi(2);
+        let (added, total) = doubt_added(car(false), &burst);
+        assert!(
+            (total.attitude_var_b_rad2.z - run).abs() < 1e-12 * run,
+            "{total:?}"
+        );
+        assert_eq!(total.attitude_var_b_rad2.xy(), nalgebra::Vector2::zeros());
+        assert_eq!(total.velocity_var_b_m2_s2, Vector3::zeros());
+        assert!((added.z - run).abs() < 1e-3 * run, "{added}");
+        assert!(added.xy().amax() < 1e-6 * run, "{added}");
+        // On its side, the body's z axis is horizontal: the doubt is in the level, not in
+        // the heading.
+        let (added, _) = doubt_added(car(true), &burst);
+        assert!((added.x + added.y - run).abs() < 1e-3 * run, "{added}");
+        assert!(added.z.abs() < 1e-6 * run, "{added}");
+        // Unflagged, the same samples add nothing.
+        let plain: Vec<_> = burst
+            .iter()
+            .map(|(i, _)| (*i, Clipped::default()))
+            .collect();
+        let (added, total) = doubt_added(car(false), &plain);
+        assert_eq!((added, total.any()), (Vector3::zeros(), false));
+        // A clipped accelerometer doubts the velocity the same way.
+        let accel = Clipped {
+            gyro: false,
+            accel: true,
+        };
+        let mut bump = vec![(yawing(0.0), accel); 4];
+        bump.push((yawing(0.0), Clipped::default()));
+        let (_, total) = doubt_added(car(false), &bump);
+        let v = (4.0 * 9.8 * DT).powi(2);
+        assert!(
+            (total.velocity_var_b_m2_s2.z - v).abs() < 1e-9 * v,
+            "{total:?}"
+        );
+        // Two seconds clipped at 2000 deg/s: 17 rad of reading, 1 rad of doubt.
+        let mut long = vec![(yawing(4.0 * rate), gyro); 800];
+        long.push((yawing(0.0), Clipped::default()));
+        let (_, total) = doubt_added(car(false), &long);
+        assert!((total.attitude_var_b_rad2.z - MAX_ATTITUDE_VAR_RAD2).abs() < 1e-9);
     }
 }

@@ -57,7 +57,9 @@ pub use aiding::{
 };
 pub use background::{Correction, ErrorFilter, Snapshot};
 pub use consider::GnssCorrelatedError;
-pub use foreground::{AidedMechanization, Bridged, Events, LostGap, Propagation};
+pub use foreground::{
+    AidedMechanization, Bridged, ClipDoubt, Clipped, Events, LostGap, Propagation,
+};
 use model::FilterNoise;
 use nalgebra::{Matrix3, Vector3};
 use restart::Restart;

@@ -17,8 +17,8 @@ use crate::ins_filter::sequencer::{
 };
 use crate::ins_filter::stationarity::StillWindow;
 use crate::ins_filter::{
-    AidedMechanization, FilterConfig, FilterError, FilterStatus, GnssVelocity, Propagation,
-    SensorErrors,
+    AidedMechanization, Clipped, FilterConfig, FilterError, FilterStatus, GnssVelocity,
+    Propagation, SensorErrors,
 };
 use crate::output::{EndRecord, FilterColumns, LostRecord, Row, Solution};
 use crate::strapdown::{MechanizationConfig, Strapdown};
@@ -38,6 +38,9 @@ pub struct ImuInput {
     pub unusable: Option<Unusable>,
     /// Samples were lost just before this one.
     pub gap: bool,
+    /// Sensor axes the driver found at full scale: navigated, with the doubt of what the
+    /// range cut off ([`AidedMechanization::step_clipped`]).
+    pub clipped: Clipped,
 }
 
 /// Why a source flagged a sample as not usable: the first of these causes that applies (a
@@ -151,7 +154,13 @@ impl ImuInput {
             increment: ImuIncrement::new(delta_theta_ib_b, delta_v_ib_b, dt_s),
             unusable,
             gap,
+            clipped: Clipped::default(),
         }
+    }
+
+    /// The sample with the axes its driver found at full scale.
+    pub fn with_clipped(self, clipped: Clipped) -> Self {
+        Self { clipped, ..self }
     }
 }
 
@@ -629,7 +638,7 @@ impl<T: Scalar> Navigator<T> {
                 Step::Navigated(Some(row))
             }
             Phase::Aided(_) if super::config::AIDED_COMPILED_IN => {
-                self.step_aided(input.t_us, &inc)
+                self.step_aided(input.t_us, &inc, input.clipped)
             }
             // Not reached: without the aided filter the phase is never entered.
             Phase::Aided(_) => Step::NotReady,
@@ -652,11 +661,11 @@ impl<T: Scalar> Navigator<T> {
     /// Not inlined into [`Self::push`]: its temporaries must not deepen the stack of a push
     /// that preempts the background's alignment on the MCU.
     #[inline(never)]
-    fn step_aided(&mut self, t_us: u64, inc: &ImuIncrement<T>) -> Step<T> {
+    fn step_aided(&mut self, t_us: u64, inc: &ImuIncrement<T>, clipped: Clipped) -> Step<T> {
         let Phase::Aided(mech) = &mut self.phase else {
             return Step::NotReady;
         };
-        let events = match mech.step(inc) {
+        let events = match mech.step_clipped(inc, clipped) {
             Ok(events) => events,
             Err(e) => {
                 // Not reached: the mechanization checks the same limits.
