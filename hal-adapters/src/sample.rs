@@ -105,6 +105,70 @@ pub struct ImuSample {
     pub flags: SampleFlags,
 }
 
+/// An IMU's full scale, where its axes clip: the largest rate [rad/s] and specific force
+/// [m/s^2] it reads. A driver knows its part's; a recording carries none, so its user gives it
+/// (`nav replay --imu-range`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FullScale {
+    /// Gyro full scale [rad/s].
+    pub gyro_rad_s: f32,
+    /// Accelerometer full scale [m/s^2].
+    pub accel_mps2: f32,
+}
+
+impl FullScale {
+    /// The share of the full scale from which a recorded reading is taken as clipped [-]: a
+    /// clipped axis reads the full scale, in a recording to its last printed digits.
+    pub const CLIPPED_FROM: f32 = 0.999;
+
+    /// `sample` with [`SampleFlags::GYRO_SATURATED`] or [`SampleFlags::ACCEL_SATURATED`] set
+    /// when an axis reads at (or beyond) this full scale, as a driver flags its part's clips.
+    pub fn mark(&self, sample: ImuSample) -> ImuSample {
+        let (omega_ib_b, f_ib_b) = match sample.motion {
+            Motion::Rates { omega_ib_b, f_ib_b } => (omega_ib_b, f_ib_b),
+            Motion::Increments {
+                delta_theta_ib_b,
+                delta_v_ib_b,
+            } if sample.dt_s > 0.0 => (
+                delta_theta_ib_b.map(|d| d / sample.dt_s),
+                delta_v_ib_b.map(|d| d / sample.dt_s),
+            ),
+            // No interval, no rate (the sample is flagged for it).
+            Motion::Increments { .. } => return sample,
+        };
+        let at = |v: [f32; 3], fs: f32| v.iter().any(|x| x.abs() >= fs * Self::CLIPPED_FROM);
+        let mut flags = sample.flags;
+        if at(omega_ib_b, self.gyro_rad_s) {
+            flags |= SampleFlags::GYRO_SATURATED;
+        }
+        if at(f_ib_b, self.accel_mps2) {
+            flags |= SampleFlags::ACCEL_SATURATED;
+        }
+        ImuSample { flags, ..sample }
+    }
+}
+
+/// A source whose samples are marked clipped at a full scale ([`FullScale::mark`]; `None`:
+/// passed on as they are).
+pub struct ClipMarked<'a, I> {
+    /// The source.
+    pub source: &'a mut I,
+    /// Where its axes clip.
+    pub full_scale: Option<FullScale>,
+}
+
+impl<I: crate::Imu> crate::Imu for ClipMarked<'_, I> {
+    type Error = I::Error;
+
+    fn read_sample(&mut self) -> Result<Option<ImuSample>, Self::Error> {
+        let sample = self.source.read_sample()?;
+        Ok(match self.full_scale {
+            Some(fs) => sample.map(|s| fs.mark(s)),
+            None => sample,
+        })
+    }
+}
+
 /// Whether a velocity increment `delta_v` [m/s] read after an interval of `periods` nominal
 /// periods (a gap) covers the whole interval, as an increment recording's records are defined
 /// to (a sensor that accumulates between reads), rather than its last period alone (a logger
@@ -172,14 +236,19 @@ impl ImuSample {
             self.flags.unusable(),
             self.flags.contains(SampleFlags::GAP),
         )
-        .with_clipped(Clipped {
-            gyro: self.flags.contains(SampleFlags::GYRO_SATURATED),
-            accel: self.flags.contains(SampleFlags::ACCEL_SATURATED),
-        })
+        .with_clipped(self.flags.clipped())
     }
 }
 
 impl SampleFlags {
+    /// The sensors these flags say were at full scale, in nav-core's terms.
+    pub fn clipped(self) -> Clipped {
+        Clipped {
+            gyro: self.contains(Self::GYRO_SATURATED),
+            accel: self.contains(Self::ACCEL_SATURATED),
+        }
+    }
+
     /// Why these flags make a sample unusable, in nav-core's terms ([`Self::unusable_cause`];
     /// `None`: usable).
     pub fn unusable(self) -> Option<Unusable> {
@@ -201,6 +270,46 @@ impl SampleFlags {
 #[cfg(test)]
 mod tests {
     use super::{ImuSample, Motion, SampleFlags, increment_spans_interval};
+
+    /// A recorded reading at the full scale (to 0.1 %) or beyond it is marked clipped, per
+    /// sensor, from increments or rates; one below it, or a sample without an interval, is not.
+    #[test]
+    fn a_reading_at_the_full_scale_is_marked_clipped() {
+        use super::FullScale;
+        let fs = FullScale {
+            gyro_rad_s: 500f32.to_radians(),
+            accel_mps2: 80.0,
+        };
+        let dt = 0.0025;
+        let sample = |w_deg_s: f32, f: f32, dt_s: f32| ImuSample {
+            t_us: 1,
+            seq: 0,
+            dt_s,
+            motion: Motion::Increments {
+                delta_theta_ib_b: [0.0, w_deg_s.to_radians() * dt, 0.0],
+                delta_v_ib_b: [0.0, 0.0, f * dt],
+            },
+            temperature_c: f32::NAN,
+            flags: SampleFlags::empty(),
+        };
+        let marked = |s: ImuSample| fs.mark(s).flags;
+        let gyro = SampleFlags::GYRO_SATURATED;
+        let accel = SampleFlags::ACCEL_SATURATED;
+        assert_eq!(marked(sample(499.6, -9.8, dt)), gyro);
+        assert_eq!(marked(sample(-1000.0, -9.8, dt)), gyro);
+        assert_eq!(marked(sample(499.0, -9.8, dt)), SampleFlags::empty());
+        assert_eq!(marked(sample(10.0, -80.0, dt)), accel);
+        assert_eq!(marked(sample(600.0, 81.0, dt)), gyro | accel);
+        assert_eq!(marked(sample(600.0, 81.0, 0.0)), SampleFlags::empty());
+        let rates = ImuSample {
+            motion: Motion::Rates {
+                omega_ib_b: [0.0, 0.0, -9.0],
+                f_ib_b: [0.0, 0.0, -9.8],
+            },
+            ..sample(0.0, 0.0, dt)
+        };
+        assert_eq!(marked(rates), gyro);
+    }
 
     /// One period's increment after a 3-period interval is short; three periods' covers it;
     /// in free fall, or for a NaN, the definition (covering) stands.

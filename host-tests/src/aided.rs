@@ -15,7 +15,7 @@ use nav_core::ins_filter::sequencer::{
     FixCounters, GnssFixInput, Phase, Realignments, Sequencer, Start,
 };
 use nav_core::ins_filter::{
-    AidResult, AidedIns, FilterCounters, GnssPosition, GnssVelocity, POS, VEL,
+    AidResult, AidedIns, Clipped, FilterCounters, GnssPosition, GnssVelocity, POS, VEL,
 };
 use nav_core::navigator::config::{MAX_HEIGHT_M, MIN_HEIGHT_M};
 use nav_core::output::CSV_HEADER;
@@ -435,6 +435,8 @@ pub struct AidedSample<T: Scalar> {
     pub behind: bool,
     /// A gap precedes it.
     pub gap: bool,
+    /// Axes at full scale (its source's flags).
+    pub clipped: Clipped,
 }
 
 /// The aided run's sample of a replay source's sample.
@@ -450,6 +452,7 @@ pub fn sample_of<T: Scalar>(s: &ImuSample) -> AidedSample<T> {
         unusable: s.flags.unusable_cause().is_some(),
         behind: s.flags.unusable_cause() == Some(SampleFlags::BAD_INTERVAL) && s.dt_s <= 0.0,
         gap: s.flags.contains(SampleFlags::GAP),
+        clipped: s.flags.clipped(),
     }
 }
 
@@ -675,7 +678,7 @@ pub fn run<T: Scalar, E: fmt::Display>(
         if s.gap {
             seq.restart_increments();
         }
-        let navigated = seq.on_sample(s.t_us, &s.increment);
+        let navigated = seq.on_sample_clipped(s.t_us, &s.increment, s.clipped);
         // Before the first start no solution exists to lose (a re-alignment has the lost one).
         report.lost.set_aligning(report.start_s.is_none());
         if navigated == Err(InputError::OutOfOrder) {

@@ -318,6 +318,7 @@ pub fn recording_samples<T: Scalar>(
             unusable: false,
             behind: false,
             gap: false,
+            clipped: Default::default(),
         }))
     }
 }

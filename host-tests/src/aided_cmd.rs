@@ -9,6 +9,7 @@ use crate::recording_io::ReplaySource;
 use crate::sensor_model::Grade;
 use anyhow::{Result, anyhow, bail};
 use hal_adapters::drivers::NoiseSpec;
+use hal_adapters::sample::{ClipMarked, FullScale};
 use nav_core::ins_filter::latency::LatencyEstimate;
 use nav_core::ins_filter::limits::MIN_BIAS_INSTABILITY_TIME_S;
 use nav_core::ins_filter::model::FilterNoise;
@@ -401,6 +402,8 @@ pub struct AidedReplay {
     pub start: AidedStart,
     /// Samples between logged rows.
     pub log_every: u32,
+    /// Where the IMU's axes clip (`--imu-range`; `None`: no sample is taken as clipped).
+    pub full_scale: Option<FullScale>,
 }
 
 /// The sequencer of a start in precision `T`.
@@ -450,7 +453,11 @@ pub fn replay_aided<T: Scalar>(a: &AidedReplay) -> Result<(AidedReport, u64)> {
             writeln!(w, "{row}")?;
             Ok(())
         });
-        let mut report = aided::run_source(&mut source, &fixes, seq, &mut rows)?;
+        let mut marked = ClipMarked {
+            source: &mut source,
+            full_scale: a.full_scale,
+        };
+        let mut report = aided::run_source(&mut marked, &fixes, seq, &mut rows)?;
         let n_rows = rows.rows();
         report.status = tally;
         if report.start_s.is_none() {

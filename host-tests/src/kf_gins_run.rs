@@ -445,6 +445,7 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
                 // The reader refuses a time that does not increase.
                 behind: false,
                 gap,
+                clipped: Default::default(),
             }));
         }
     };

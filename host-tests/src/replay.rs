@@ -16,6 +16,7 @@ use hal_adapters::Imu;
 use hal_adapters::drivers::adis16505::{self, Model};
 use hal_adapters::drivers::{Health, Mounting};
 use hal_adapters::drivers::{NoiseSpec, bmi088, icm42688, noise};
+use hal_adapters::sample::{ClipMarked, FullScale};
 use hal_adapters::sim::{SimBmi088, SimulatedImu};
 use nav_core::Scalar;
 use nav_core::ins_filter::sequencer::GnssFixInput;
@@ -58,6 +59,9 @@ pub struct ReplayOptions {
     pub run: RunConfig,
     /// The sample path (default: the recording as it is).
     pub device: ImuDevice,
+    /// Where the recording's axes clip (`--imu-range`; `None`: no sample is taken as clipped;
+    /// a simulated device's driver knows its own).
+    pub full_scale: Option<FullScale>,
 }
 
 impl ReplayOptions {
@@ -75,6 +79,7 @@ impl ReplayOptions {
                 sensor_noise(&device.noise()),
             ),
             device,
+            full_scale: None,
         }
     }
 }
@@ -163,7 +168,11 @@ pub fn replay_file_with_fixes<T: Scalar, W: Write>(
     let config = (&options.run, rate_hz, fixes);
     let (run, driver, stats) = match options.device {
         ImuDevice::Recording => {
-            let run = run_source::<T, _, _>(path, config, &mut source, out);
+            let mut marked = ClipMarked {
+                source: &mut source,
+                full_scale: options.full_scale,
+            };
+            let run = run_source::<T, _, _>(path, config, &mut marked, out);
             (run, None, source.stats())
         }
         ImuDevice::Adis16505 => {

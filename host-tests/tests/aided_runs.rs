@@ -609,6 +609,66 @@ fn write_imu_fault(d: &Path, mut fault: impl FnMut(&mut Vec<f64>)) -> PathBuf {
     path
 }
 
+/// A tactical car's recording (CSV, no driver) whose yaw gyro reads 1000 deg/s for 5 samples
+/// at 60 s, twice its part's +-500 deg/s: over-range garbage, a 12.5 deg heading step. From a
+/// given start, as it is, the rows after it are NAV with a 0.1 deg heading 1-sigma 12 deg off
+/// (the car drives straight: no fix sees the heading for 20 s). Given the part's range
+/// (`--imu-range 500,8`), the samples beyond it are taken as clipped and doubted: every row
+/// within 4 sigma and NAV, the fixes taken throughout.
+#[test]
+fn samples_beyond_a_given_range_are_doubted_as_clipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sim = "sim land-vehicle --grade mems-tactical --seconds 100 --gnss-rate 1 --out";
+    run_ok(nav().args(sim.split(' ')).arg(d));
+    let burst_rad = 1000f64.to_radians() / 400.0;
+    let fault = write_imu_fault(d, |v| {
+        if v[0] > 60.0 && v[0] < 60.0 + 5.5 / 400.0 {
+            v[3] = burst_rad;
+        }
+    });
+    let out = d.join("sol.csv");
+    let worst_nav_z = |range: &[&str]| {
+        run_ok(
+            nav()
+                .arg("replay")
+                .arg("--imu")
+                .arg(&fault)
+                .arg("--gnss")
+                .arg(d.join("gnss.csv"))
+                .args(GIVEN)
+                .args(["--imu-noise", "mems-tactical"])
+                .args(range)
+                .arg("--out")
+                .arg(&out),
+        );
+        let log = std::fs::read_to_string(&out).unwrap();
+        let lines = log.lines().skip(1).filter(|l| !l.starts_with('#'));
+        lines
+            .zip(errors_over_sigma(d, &out))
+            .filter(|(l, _)| l.ends_with(",NAV"))
+            .map(|(_, z)| z.iter().fold(0.0f64, |m, z| m.max(z.abs())))
+            .fold(0.0, f64::max)
+    };
+    assert!(worst_nav_z(&[]) > 20.0);
+    assert!(worst_nav_z(&["--imu-range", "500,8"]) < 4.0);
+    // Not a range a part has: refused with the reason.
+    for bad in ["500", "500,1", "0.5,8", "nan,8", "500,8,1"] {
+        let o = nav()
+            .args(["replay", "--imu"])
+            .arg(&fault)
+            .args(["--imu-range", bad, "--out"])
+            .arg(d.join("x.csv"))
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && text.contains("GYRO_DEG_S,ACCEL_G"),
+            "{bad}: {text}"
+        );
+    }
+}
+
 /// A FOG car's yaw gyro reads 1000 deg/s for 5 samples at 60 s (a 12.5 deg turn in 12.5 ms),
 /// through the simulated ADIS16505-2 (+-500 deg/s, as the firmware reads it): the driver
 /// clips the burst, so the heading comes out 6.25 deg off. The clip was only counted: NAV with

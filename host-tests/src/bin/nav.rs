@@ -18,6 +18,7 @@
 //!              [--attitude rotation-vector|euler|heun|rk4|abm4] [--vertical free|hold]
 //!              [--align-method static|inertial|fine|sway] [--imu-noise GRADE]
 //!              [--bias-prior K] [--lever-arm X,Y,Z | --lever-arm-sigma S]
+//!              [--imu-range GYRO_DEG_S,ACCEL_G]
 //! nav report   --solution FILE --truth FILE [--at 60,300] [--plots DIR]
 //! nav decode   STREAM --out FILE
 //! nav config   FILE.txt --out FILE
@@ -32,6 +33,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
+use hal_adapters::sample::FullScale;
 use host_tests::generate::Stationary;
 use host_tests::pipeline::{DEFAULT_LOG_EVERY, MechanizationChoices, RunConfig, sensor_noise};
 use host_tests::recording_io;
@@ -524,6 +526,13 @@ struct ReplayArgs {
     /// alignment only (a given start or a start in motion replays the recording as it is).
     #[arg(long, value_enum, default_value_t = ImuDevice::Recording, conflicts_with_all = ["init_pos", "start_in_motion"])]
     device: ImuDevice,
+    /// The recorded IMU's full scale, gyro [deg/s] and accelerometer [g], e.g. 500,8. A sample
+    /// with an axis at it (to 0.1 %) or beyond is taken as clipped: the GNSS-aided filter
+    /// doubts what the range cut off, as for a driver's clip (README). A recording carries no
+    /// range: without this option no sample is taken as clipped. Any start; not with
+    /// --device (the driver knows its part's).
+    #[arg(long, value_name = "DEG_S,G", value_parser = parse_full_scale, conflicts_with = "device")]
+    imu_range: Option<FullScale>,
     /// Navigation frame of the mechanization, wander or ned (outputs are NED either way).
     #[arg(long, default_value = "wander", value_parser = named(&config::FRAMES), conflicts_with_all = ["init_pos", "start_in_motion"])]
     frame: NavFrame,
@@ -634,6 +643,7 @@ impl ReplayArgs {
         Ok(ReplayOptions {
             run,
             device: self.device,
+            full_scale: self.imu_range,
         })
     }
 
@@ -1300,6 +1310,7 @@ fn replay_aided(a: &ReplayArgs, gnss: &std::path::Path) -> Result<()> {
         config,
         start,
         log_every: a.log_every,
+        full_scale: a.imu_range,
     };
     let started = std::time::Instant::now();
     let (report, rows) = match a.precision {
@@ -1426,6 +1437,27 @@ fn parse_vector3(s: &str) -> Result<[f64; 3], String> {
 /// (an IMU turned 45 deg in its mount: yaw within its 1-sigma as an unturned one's), not much
 /// more (60 deg: 17 % of the rows beyond 3 sigma; 90 deg: the fixes refused, DEGRADED).
 const MAX_SIDESLIP_SIGMA_DEG: f64 = 45.0;
+
+/// `--imu-range GYRO_DEG_S,ACCEL_G`: a gyro full scale of 1 to 100,000 deg/s and an
+/// accelerometer's above 1 g (gravity alone would clip it at rest) to 10,000 g.
+fn parse_full_scale(s: &str) -> Result<FullScale, String> {
+    let values: Vec<f64> = s.split(',').filter_map(|v| v.trim().parse().ok()).collect();
+    match values[..] {
+        [gyro_deg_s, accel_g]
+            if (1.0..=1e5).contains(&gyro_deg_s) && accel_g > 1.0 && accel_g <= 1e4 =>
+        {
+            Ok(FullScale {
+                gyro_rad_s: gyro_deg_s.to_radians() as f32,
+                accel_mps2: (accel_g * host_tests::emulate::G0_M_S2) as f32,
+            })
+        }
+        _ => Err(format!(
+            "expected GYRO_DEG_S,ACCEL_G: the gyro full scale, 1 to 100000 deg/s, and the \
+             accelerometer's, above 1 g (gravity alone would clip it at rest) and at most \
+             10000 g; not {s:?}"
+        )),
+    }
+}
 
 fn parse_sideslip_sigma(s: &str) -> Result<f64, String> {
     s.trim()

@@ -124,9 +124,9 @@ pub struct AidedMechanization<T: Scalar> {
     acc_dt: T,
     acc_bridged: Bridged<T>,
     acc_clipped: ClipDoubt<T>,
-    /// The current runs of clipped samples, per body axis: `sum |increment|` of the gyro's
-    /// [rad] and the accelerometer's [m/s].
-    clip_run: [Vector3<T>; 2],
+    /// The current run of clipped samples (`None`: the last sample was not clipped), per body
+    /// axis: `sum |increment|` of the gyro's [rad] and the accelerometer's [m/s].
+    clip_run: Option<[Vector3<T>; 2]>,
     gap_dynamics: GapDynamics<T>,
     current: Current<T>,
     detector: Option<Stationarity<T>>,
@@ -183,7 +183,7 @@ impl<T: Scalar> AidedMechanization<T> {
             acc_dt: T::zero(),
             acc_bridged: Bridged::none(),
             acc_clipped: ClipDoubt::none(),
-            clip_run: [Vector3::zeros(); 2],
+            clip_run: None,
             gap_dynamics: config.gap_dynamics,
             current: Current {
                 state: st,
@@ -319,7 +319,7 @@ impl<T: Scalar> AidedMechanization<T> {
         let dt = inc.dt;
         let v_before = self.nav.state().v_eb_n;
         let comp = self.integrate(inc)?;
-        self.add_clip_doubt(inc, clipped);
+        let clip_run_edge = self.add_clip_doubt(inc, clipped);
         let st = *self.nav.state();
         self.current = Current {
             state: st,
@@ -340,11 +340,10 @@ impl<T: Scalar> AidedMechanization<T> {
         };
         // A stop's updates flush the interval themselves (Events::still). A lost gap is
         // flushed at once: the filter's status says so from the first sample after it (it said
-        // NAV for up to an interval). So is a run of clipped samples once it ends: the rows
-        // after it carry its doubt.
-        let clip_run_ended = self.acc_clipped.any() && clipped == Clipped::default();
+        // NAV for up to an interval). So is a run of clipped samples as it begins and ends: the
+        // rows from its first sample on carry its doubt.
         let due =
-            self.acc_dt >= self.interval_s || self.acc_bridged.lost.is_some() || clip_run_ended;
+            self.acc_dt >= self.interval_s || self.acc_bridged.lost.is_some() || clip_run_edge;
         let propagation = if still.is_none() && due {
             self.flush()
         } else {
@@ -354,8 +353,13 @@ impl<T: Scalar> AidedMechanization<T> {
     }
 
     /// The variance a clipped sample adds ([`Self::step_clipped`]); a sample not clipped ends
-    /// its sensor's run.
-    fn add_clip_doubt(&mut self, inc: &ImuIncrement<T>, clipped: Clipped) {
+    /// its sensor's run. True when a run began or ended at this sample.
+    fn add_clip_doubt(&mut self, inc: &ImuIncrement<T>, clipped: Clipped) -> bool {
+        if clipped == Clipped::default() {
+            return self.clip_run.take().is_some();
+        }
+        let began = self.clip_run.is_none();
+        let runs = self.clip_run.get_or_insert([Vector3::zeros(); 2]);
         let max_theta = T::c(MAX_ATTITUDE_VAR_RAD2).sqrt();
         let sensors = [
             (clipped.gyro, &inc.delta_theta_ib_b, max_theta),
@@ -365,7 +369,7 @@ impl<T: Scalar> AidedMechanization<T> {
             &mut self.acc_clipped.attitude_var_b_rad2,
             &mut self.acc_clipped.velocity_var_b_m2_s2,
         ];
-        for (((on, d, max), run), var) in sensors.into_iter().zip(&mut self.clip_run).zip(doubts) {
+        for (((on, d, max), run), var) in sensors.into_iter().zip(runs).zip(doubts) {
             if !on {
                 *run = Vector3::zeros();
                 continue;
@@ -378,6 +382,7 @@ impl<T: Scalar> AidedMechanization<T> {
                 var[k] += after * after - before * before;
             }
         }
+        began
     }
 
     /// The propagation of the increments accumulated so far (`None` when there are none).
@@ -494,8 +499,8 @@ mod tests {
 
     /// Five yaw-gyro samples clipped at 500 deg/s (a 1000 deg/s burst on a +-500 deg/s part
     /// misses 6.25 deg): the run's doubt is its summed reading as one 1-sigma, `(5 a)^2` in
-    /// the body's z axis, not `5 a^2`; it reaches the covariance with the sample that ends the
-    /// run (not up to a propagation interval later), in the navigation axis the body's z
+    /// the body's z axis, not `5 a^2`; it reaches the covariance as the run begins and as it
+    /// ends (not up to a propagation interval later), in the navigation axis the body's z
     /// axis lies along: down for a level car, horizontal for one on its side. A sample not
     /// flagged adds nothing, and a run's attitude doubt stops at 1 rad.
     #[test]
@@ -509,6 +514,24 @@ mod tests {
         burst.extend([(yawing(rate), gyro); 5]);
         burst.push((yawing(0.0), Clipped::default()));
         let run = (5.0 * rate * DT).powi(2);
+        let config = FilterConfig::new(noise());
+        let mut mech = AidedMechanization::new(car(false), SensorErrors::default(), &config);
+        let mech = mech.as_mut().unwrap();
+        let flushed = |e: Events<f64>| e.propagation.map(|p| p.clipped.attitude_var_b_rad2.z);
+        for (k, (inc, clipped)) in burst.iter().enumerate() {
+            let first = (rate * DT).powi(2);
+            let want = match k {
+                8 => Some(first),
+                9..=12 => None,
+                13 => Some(run - first),
+                _ => None,
+            };
+            let got = flushed(mech.step_clipped(inc, *clipped).unwrap());
+            assert_eq!(
+                got.map(|v| (v * 1e12).round()),
+                want.map(|v| (v * 1e12).round())
+            );
+        }
         let (added, total) = doubt_added(car(false), &burst);
         assert!(
             (total.attitude_var_b_rad2.z - run).abs() < 1e-12 * run,

@@ -494,7 +494,17 @@ impl<T: Scalar> AidedIns<T> {
     /// propagates the covariance when the interval is full; at a stop, the zero-velocity and
     /// zero-rate updates. A refused increment leaves everything unchanged.
     pub fn step(&mut self, inc: &ImuIncrement<T>) -> Result<(), InputError> {
-        let events = self.mech.step(inc)?;
+        self.step_clipped(inc, Clipped::default())
+    }
+
+    /// [`Self::step`] for a sample with axes at full scale
+    /// ([`AidedMechanization::step_clipped`]).
+    pub fn step_clipped(
+        &mut self,
+        inc: &ImuIncrement<T>,
+        clipped: Clipped,
+    ) -> Result<(), InputError> {
+        let events = self.mech.step_clipped(inc, clipped)?;
         if let Some(w) = events.still {
             self.propagate();
             let (_, _, c) = self.filter.zero_motion(&self.mech.snapshot(), &w);

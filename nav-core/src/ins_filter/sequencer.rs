@@ -45,7 +45,7 @@
 use super::aiding::{AidResult, GnssPosition, GnssVelocity};
 use super::motion::{MotionAlign, MotionAlignConfig, MotionStart};
 use super::restart::{Carried, Restart};
-use super::{AidedIns, FilterConfig, FilterError, InitialSigma, SensorErrors};
+use super::{AidedIns, Clipped, FilterConfig, FilterError, InitialSigma, SensorErrors};
 use crate::gap::ImuGap;
 use crate::gap::{GapCounters, GapDetector};
 use crate::{ImuIncrement, InputError, NavState, Scalar};
@@ -411,6 +411,17 @@ impl<T: Scalar> Sequencer<T> {
     /// order ([`InputError::OutOfOrder`], [`crate::gap`]: its interval is lost time before
     /// the next); the fixes wait for the next sample.
     pub fn on_sample(&mut self, t_us: u64, inc: &ImuIncrement<T>) -> Result<Phase, InputError> {
+        self.on_sample_clipped(t_us, inc, Clipped::default())
+    }
+
+    /// [`Self::on_sample`] for a sample with axes at full scale
+    /// ([`super::AidedMechanization::step_clipped`]).
+    pub fn on_sample_clipped(
+        &mut self,
+        t_us: u64,
+        inc: &ImuIncrement<T>,
+        clipped: Clipped,
+    ) -> Result<Phase, InputError> {
         self.last_results = [None; QUEUE];
         inc.check(&self.config.mechanization.limits)?;
         if self.gaps.out_of_order(t_us, inc.dt) {
@@ -432,7 +443,7 @@ impl<T: Scalar> Sequencer<T> {
                     self.lost = Some(self.lost.unwrap_or_else(T::zero) + gap.lost_s);
                     self.realignments.cause(gap, t_us);
                 }
-                ins.step(inc)?;
+                ins.step_clipped(inc, clipped)?;
             }
             None => {
                 if let Some(lost) = &mut self.set_aside {
@@ -444,7 +455,7 @@ impl<T: Scalar> Sequencer<T> {
                         lost.unpropagated_s += gap.lost_s;
                     }
                     // Checked above against the same limits.
-                    let _ = lost.ins.step(inc);
+                    let _ = lost.ins.step_clipped(inc, clipped);
                 }
                 if let Some(gap) = &lost_gap {
                     // The level's span would cross the gap: the start begins again.
