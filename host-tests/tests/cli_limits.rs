@@ -66,6 +66,34 @@ fn oscillator_bench_ratio_out_of_range_is_refused() {
     }
 }
 
+/// `osc-bench` too short for an epoch (0.01 s, 0.3 s): the first table said "no epochs" but the
+/// noise table's rows and the damped run's line printed `0.00e0` errors, a perfect score from no
+/// data. Every row and the line now say there was no epoch.
+#[test]
+fn oscillator_bench_without_epochs_prints_no_errors() {
+    for seconds in ["0.01", "0.3"] {
+        let o = nav(&["osc-bench", "--seconds", seconds]);
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(0), "{text}");
+        assert!(!text.contains("0.00e0"), "--seconds {seconds}: {text}");
+        let noise_rows: Vec<&str> = text
+            .lines()
+            .skip_while(|l| !l.starts_with("| noise [m]"))
+            .skip(2)
+            .take_while(|l| l.starts_with('|'))
+            .collect();
+        assert_eq!(noise_rows.len(), 5, "{text}");
+        for row in noise_rows {
+            assert!(row.contains("| no epochs | no epochs | - | - |"), "{row}");
+        }
+        let damped = text
+            .lines()
+            .find(|l| l.starts_with("With damping ratio"))
+            .unwrap_or_else(|| panic!("no damped line in {text}"));
+        assert!(damped.contains("): no epochs ("), "{damped}");
+    }
+}
+
 /// `generate` and `sim` lengths: 1e300 s said "18446744073709551615 samples do not fit the
 /// binary format" (a saturated count), 1e7 s aborted allocating 160 GB.
 #[test]

@@ -2303,10 +2303,7 @@ fn run(cli: Cli) -> Result<()> {
             };
             let traj = bench::coning_for(noise_ratio, params.f0_hz, seconds + 1.0);
             let d = bench::measure(&traj, &damped, seconds)?.compensated;
-            println!(
-                "\nWith damping ratio 1e-3 and the drive (noise 1e-9 m, w0/|omega| = {noise_ratio:.0}): compensated rms / max {:.2e} / {:.2e} deg, 1-sigma {:.2e} deg, f rms {:.1e} m/s^2",
-                d.attitude_rms_deg, d.attitude_max_deg, d.sigma_deg, d.f_rms_mps2
-            );
+            println!("\n{}", bench::render_damped(&d, noise_ratio));
             Ok(())
         }
         Command::Emulate {

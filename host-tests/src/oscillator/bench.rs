@@ -332,17 +332,41 @@ pub fn render(by_ratio: &[Row], by_noise: &[Row]) -> String {
     );
     let _ = writeln!(s, "|---|---|---|---|---|---|");
     for r in by_noise {
+        let seed = if r.seed.epochs == 0 {
+            "no epochs".to_string()
+        } else {
+            format!("{:.2e}", r.seed.attitude_rms_deg)
+        };
+        let c = &r.compensated;
+        let compensated = if c.epochs == 0 {
+            "no epochs | - | -".to_string()
+        } else {
+            format!(
+                "{:.2e} / {:.2e} | {:.2e} | {:.1e}",
+                c.attitude_rms_deg, c.attitude_max_deg, c.sigma_deg, c.f_rms_mps2
+            )
+        };
         let _ = writeln!(
             s,
-            "| {:.0e} | {:.2e} | {:.2e} / {:.2e} | {:.2e} | {:.1e} | {} |",
-            r.noise_m,
-            r.seed.attitude_rms_deg,
-            r.compensated.attitude_rms_deg,
-            r.compensated.attitude_max_deg,
-            r.compensated.sigma_deg,
-            r.compensated.f_rms_mps2,
-            r.compensated.faults
+            "| {:.0e} | {seed} | {compensated} | {} |",
+            r.noise_m, c.faults
         );
     }
     s
+}
+
+/// The line of the damped run with the drive (`d`: its compensated estimator; noise 1e-9 m at
+/// `noise_ratio`); says so when the run gave no epoch rather than printing zero errors.
+pub fn render_damped(d: &Accuracy, noise_ratio: f64) -> String {
+    let errors = if d.epochs == 0 {
+        format!("no epochs ({} periods refused)", d.faults)
+    } else {
+        format!(
+            "compensated rms / max {:.2e} / {:.2e} deg, 1-sigma {:.2e} deg, f rms {:.1e} m/s^2",
+            d.attitude_rms_deg, d.attitude_max_deg, d.sigma_deg, d.f_rms_mps2
+        )
+    };
+    format!(
+        "With damping ratio 1e-3 and the drive (noise 1e-9 m, w0/|omega| = {noise_ratio:.0}): {errors}"
+    )
 }
