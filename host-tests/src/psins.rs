@@ -11,9 +11,10 @@
 //! the project's forward-right-down (FRD) body axes: `x_frd = y_rfu, y_frd = x_rfu, z_frd =
 //! -z_rfu`.
 //!
-//! The header is checked before any sample: interval, `g` and every scale factor positive, the
-//! interval at least 1 ns, `t0` and each sample's time `t0 + k * interval` within the recording
-//! clock's range, latitude within [-90, 90] deg and longitude within [-180, 180] deg. Samples are
+//! The header is checked before any sample: interval, `g` and every scale factor positive, no
+//! count worth more than the largest increment nav-core accepts, the interval at least 1 ns,
+//! `t0` and each sample's time `t0 + k * interval` within the recording clock's range, latitude
+//! within [-90, 90] deg and longitude within [-180, 180] deg. Samples are
 //! read one line at a time ([`PsinsReader`]); a last line that no newline ends is checked for a
 //! cut inside a field ([`crate::text_stream`]).
 
@@ -26,6 +27,15 @@ use std::path::{Path, PathBuf};
 
 /// Radians per arcsecond.
 const RAD_PER_ARCSEC: f64 = std::f64::consts::PI / (180.0 * 3600.0);
+
+/// Largest gyro scale factor [arcsec per count]: one count worth 200 deg, the largest angle
+/// increment nav-core accepts (its default input limits: 2000 deg/s over its longest interval,
+/// 0.1 s). A coarser count makes every sample but zero one nav-core refuses.
+pub const MAX_GYRO_SCALE_ARCSEC: f64 = 720_000.0;
+
+/// Largest accelerometer scale factor [micro-g * s per count]: one count worth 5 g * s, the
+/// largest velocity increment nav-core accepts (its default input limits: 50 g over 0.1 s).
+pub const MAX_ACCEL_SCALE_UG_S: f64 = 5e6;
 
 /// The three header lines of a PSINS file.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -164,6 +174,15 @@ pub enum PsinsErrorKind {
         /// The scale found.
         found: f64,
     },
+    /// A scale factor is beyond [`MAX_GYRO_SCALE_ARCSEC`] or [`MAX_ACCEL_SCALE_UG_S`].
+    ScaleTooLarge {
+        /// The sensor axis, e.g. `gyro x`.
+        sensor: &'static str,
+        /// The scale found.
+        found: f64,
+        /// The largest accepted scale, in the scale's unit.
+        max: f64,
+    },
     /// A sample's time `t0 + k * interval` is beyond the recording clock's range.
     TimeOutOfRange {
         /// The sample's number `k` (1 for the first).
@@ -230,6 +249,21 @@ impl fmt::Display for PsinsError {
                  positive (gyro [arcsec/count], accel [ug*s/count])",
                 number_text(*found)
             ),
+            PsinsErrorKind::ScaleTooLarge { sensor, found, max } => {
+                let (unit, one_count) = if sensor.starts_with("gyro") {
+                    ("arcsec/count", "200 deg")
+                } else {
+                    ("ug*s/count", "5 g*s")
+                };
+                write!(
+                    f,
+                    "header line 3: PSINS scale factor {} {unit} for {sensor} is beyond {} \
+                     {unit} (one count worth more than {one_count}, the largest increment over \
+                     0.1 s the navigator accepts)",
+                    number_text(*found),
+                    number_text(*max)
+                )
+            }
             PsinsErrorKind::TimeOutOfRange { sample, t_s } => write!(
                 f,
                 "sample {sample} ends at t0 + {sample} * interval = {} s, beyond the \
@@ -443,15 +477,23 @@ fn check_line_2(v: &[f64; 6]) -> Result<(), PsinsErrorKind> {
 }
 
 /// Domain check of header line 3: every scale factor positive (a zero scale turns every count
-/// into 0, a negative one flips an axis).
+/// into 0, a negative one flips an axis) and at most [`MAX_GYRO_SCALE_ARCSEC`] or
+/// [`MAX_ACCEL_SCALE_UG_S`] (1e300 turned every count into an infinite increment).
 fn check_line_3(v: &[f64; 6]) -> Result<(), PsinsErrorKind> {
-    match v.iter().position(|&x| x <= 0.0) {
-        Some(i) => Err(PsinsErrorKind::BadScale {
-            sensor: COUNT_NAMES[i],
-            found: v[i],
-        }),
-        None => Ok(()),
+    for (i, (&found, sensor)) in v.iter().zip(COUNT_NAMES).enumerate() {
+        let max = if i < 3 {
+            MAX_GYRO_SCALE_ARCSEC
+        } else {
+            MAX_ACCEL_SCALE_UG_S
+        };
+        if found <= 0.0 {
+            return Err(PsinsErrorKind::BadScale { sensor, found });
+        }
+        if found > max {
+            return Err(PsinsErrorKind::ScaleTooLarge { sensor, found, max });
+        }
     }
+    Ok(())
 }
 
 /// The sampling interval `interval_ms` [ms] in whole nanoseconds, or `None` when it rounds to
@@ -519,6 +561,16 @@ mod tests {
 
     fn parse(text: &str) -> Result<PsinsRecording, PsinsError> {
         read_from(text.as_bytes(), Path::new("mem.imu"))
+    }
+
+    /// The scale bounds are one count worth nav-core's largest accepted increment.
+    #[test]
+    fn scale_bounds_are_the_largest_accepted_increments() {
+        let l = nav_core::increment::InputLimits::<f64>::default();
+        let theta_rad = MAX_GYRO_SCALE_ARCSEC * RAD_PER_ARCSEC;
+        assert!((theta_rad / (l.max_rate * l.max_dt) - 1.0).abs() < 1e-12);
+        let dv_mps = MAX_ACCEL_SCALE_UG_S * 1e-6 * 9.806_65;
+        assert!((dv_mps / (l.max_specific_force * l.max_dt) - 1.0).abs() < 1e-12);
     }
 
     #[test]

@@ -690,6 +690,37 @@ fn psins_header_values_are_refused_naming_the_cause() {
     );
     let msg = replay_error(&p, &options);
     assert!(msg.contains("PSINS scale factor -125 for accel z"), "{msg}");
+    // Scale factors beyond one count worth nav-core's largest increment: 1e300 converted to
+    // infinite increments; the bounds themselves are accepted.
+    for (line_3, expected) in [
+        (
+            "1e300 1 1 1 1 1",
+            "header line 3: PSINS scale factor 1e300 arcsec/count for gyro x is beyond 720000 \
+             arcsec/count",
+        ),
+        (
+            "0.1 0.1 0.1 125 5000001 125",
+            "header line 3: PSINS scale factor 5000001 ug*s/count for accel y is beyond 5000000 \
+             ug*s/count",
+        ),
+    ] {
+        let p = write(
+            "coarse.imu",
+            &psins_text(&format!("{site} 0 10 9.780327"), line_3, 10),
+        );
+        let msg = replay_error(&p, &options);
+        assert!(msg.contains("coarse.imu: line 4: "), "{msg}");
+        assert!(msg.contains(expected), "{msg}");
+    }
+    let p = write(
+        "bounds.imu",
+        &psins_text(
+            &format!("{site} 0 10 9.780327"),
+            "720000 720000 720000 5e6 5e6 5e6",
+            1,
+        ),
+    );
+    host_tests::psins::read(&p).unwrap();
     // A sub-nanosecond interval would give every sample the same time.
     let p = write(
         "fast.imu",
