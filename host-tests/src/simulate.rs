@@ -145,6 +145,25 @@ pub(crate) fn plan(rate_hz: f64, truth_rate_hz: f64, seconds: f64) -> Result<(Sa
     );
     let sampling = Sampling::new(rate_hz, seconds);
     check_sample_count(sampling, seconds)?;
+    // Truth rows at the start and after every `every` samples: 1e-300 Hz or a run of 0.004 s
+    // wrote a truth of its start alone, which no report can compare with.
+    let every_text = if every < 1e15 {
+        format!("{every}")
+    } else {
+        Rounded(every).to_string()
+    };
+    ensure!(
+        every <= sampling.n as f64,
+        "{} s at {} Hz gives {} samples, fewer than the {} between truth rows at {} Hz: the \
+         truth needs at least 2 rows (the start and one more), so the run must be at least {} s \
+         or the truth rate higher",
+        Number(seconds),
+        Number(rate_hz),
+        sampling.n,
+        every_text,
+        Number(truth_rate_hz),
+        Rounded(every / rate_hz)
+    );
     Ok((sampling, every as u64))
 }
 

@@ -154,6 +154,43 @@ fn recording_lengths_beyond_memory_are_refused() {
     );
 }
 
+/// `sim` with a truth of one row: `--truth-rate 1e-300` (a truth interval of 1e300 s) and a
+/// 0.004 s run (2 samples, a truth row every 8) wrote the start alone as the truth, and
+/// `scenario.txt` printed the rate in 300 digits. The truth needs 2 rows.
+#[test]
+fn sim_truth_of_one_row_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s");
+    let out = out.to_str().unwrap();
+    refused(
+        &[
+            "sim",
+            "static",
+            "--seconds",
+            "2",
+            "--rate",
+            "400",
+            "--truth-rate",
+            "1e-300",
+            "--out",
+            out,
+        ],
+        &[
+            "2 s at 400 Hz gives 800 samples, fewer than the 4.000e302 between truth rows at \
+             1e-300 Hz: the truth needs at least 2 rows",
+            "the run must be at least 1.000e300 s",
+        ],
+    );
+    refused(
+        &["sim", "static", "--seconds", "0.004", "--out", out],
+        &[
+            "0.004 s at 400 Hz gives 2 samples, fewer than the 8 between truth rows at 50 Hz",
+            "the run must be at least 0.02000 s or the truth rate higher",
+        ],
+    );
+    assert!(!dir.path().join("s").exists());
+}
+
 /// `generate --roll/--pitch/--yaw 1e300` wrote a recording of a meaningless orientation (and
 /// printed the angle in 301 digits).
 #[test]
