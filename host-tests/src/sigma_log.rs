@@ -3,9 +3,12 @@
 //!
 //! A log without those columns (a free-inertial or alignment run, a truth file) has none: the
 //! reader answers `None`. A log with only some of them, or with a value that is not a finite
-//! number >= 0, is refused with its line; so is a status word none of the logs write.
+//! number >= 0, is refused with its line; so is a status word none of the logs write, and a header
+//! naming one of the columns read twice.
 
 use crate::aided::SIGMA_COLUMNS;
+use crate::text_error::{TextError, TextErrorKind};
+use crate::text_stream::column_position;
 use anyhow::{Context, Result, bail};
 use hal_adapters::protocol::status::NavStatus;
 use std::fs::File;
@@ -38,8 +41,8 @@ pub fn read(path: &Path) -> Result<Option<Vec<Sigma>>> {
     let names = columns();
     let index: Vec<Option<usize>> = names
         .iter()
-        .map(|name| header.iter().position(|h| h == *name))
-        .collect();
+        .map(|name| position(path, &header, name))
+        .collect::<Result<_>>()?;
     if index.iter().all(Option::is_none) {
         check_status_words(path, &header, reader.records())?;
         return Ok(None);
@@ -52,7 +55,7 @@ pub fn read(path: &Path) -> Result<Option<Vec<Sigma>>> {
         );
     }
     let index: Vec<usize> = index.into_iter().flatten().collect();
-    let status = header.iter().position(|h| h == STATUS);
+    let status = position(path, &header, STATUS)?;
     let mut rows = Vec::new();
     for record in reader.records() {
         let record = record.with_context(|| format!("{}", path.display()))?;
@@ -72,6 +75,19 @@ pub fn read(path: &Path) -> Result<Option<Vec<Sigma>>> {
         rows.push(sigma);
     }
     Ok(Some(rows))
+}
+
+/// The position of column `name` in `header`, refusing a header that names it twice.
+fn position(path: &Path, header: &csv::StringRecord, name: &'static str) -> Result<Option<usize>> {
+    let names: Vec<&str> = header.iter().collect();
+    column_position(&names, name).map_err(|positions| {
+        let line = header.position().map(|p| p.line());
+        let kind = TextErrorKind::HeaderDuplicateColumn {
+            column: name,
+            positions,
+        };
+        TextError::new(path, line, kind).into()
+    })
 }
 
 /// The status column's name.
@@ -100,7 +116,7 @@ fn check_status_words<R: std::io::Read>(
     header: &csv::StringRecord,
     records: csv::StringRecordsIter<'_, R>,
 ) -> Result<()> {
-    let Some(status) = header.iter().position(|h| h == STATUS) else {
+    let Some(status) = position(path, header, STATUS)? else {
         return Ok(());
     };
     for record in records {
@@ -158,6 +174,20 @@ sigma_pitch_deg,sigma_yaw_deg,status";
             let e = format!("{:#}", read(f.path()).unwrap_err());
             assert!(e.contains("line 2: sigma_n_m"), "{bad}: {e}");
         }
+    }
+
+    /// A header naming a column twice: the first one was read silently.
+    #[test]
+    fn refuses_a_column_named_twice() {
+        let f = file(&format!("{HEADER},sigma_e_m\n"));
+        let e = read(f.path()).unwrap_err().to_string();
+        assert!(
+            e.contains("line 1: the header names column sigma_e_m twice, as fields 12 and 21"),
+            "{e}"
+        );
+        let f = file("t_s,status,lat_deg,status\n1,NAV,45,FOO\n");
+        let e = read(f.path()).unwrap_err().to_string();
+        assert!(e.contains("column status twice, as fields 2 and 4"), "{e}");
     }
 
     /// A status "FOO" was read and compared as a solution.

@@ -191,6 +191,13 @@ pub enum TextErrorKind {
         /// The header row found.
         found: String,
     },
+    /// The header names a column the reader maps by name twice (which one is meant is unknown).
+    HeaderDuplicateColumn {
+        /// The column's name.
+        column: &'static str,
+        /// 1-based positions of its first two occurrences.
+        positions: (usize, usize),
+    },
     /// The file holds no data line (headerless formats).
     NoData {
         /// The columns of a line.
@@ -427,6 +434,12 @@ impl fmt::Display for TextErrorKind {
                 f,
                 "the header has no column {column}: expected the columns '{expected}', found '{}'",
                 Shown(found)
+            ),
+            Self::HeaderDuplicateColumn { column, positions } => write!(
+                f,
+                "the header names column {column} twice, as fields {} and {}: which one holds \
+                 the values is unknown",
+                positions.0, positions.1
             ),
             Self::NoData { columns } => write!(
                 f,

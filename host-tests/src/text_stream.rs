@@ -13,6 +13,24 @@ use crate::text_error::{Cut, TextError, TextErrorKind};
 use std::io::{self, BufRead, Read};
 use std::path::{Path, PathBuf};
 
+/// The 0-based position of column `name` in the header `names`: `Ok(None)` when absent,
+/// `Err((first, second))` (1-based field positions) when the header names it twice, for readers
+/// that find their columns by name (the first match would otherwise win silently).
+pub fn column_position<S: AsRef<str>>(
+    names: &[S],
+    name: &str,
+) -> Result<Option<usize>, (usize, usize)> {
+    let mut at = names
+        .iter()
+        .enumerate()
+        .filter(|(_, h)| h.as_ref() == name)
+        .map(|(i, _)| i);
+    match (at.next(), at.next()) {
+        (Some(first), Some(second)) => Err((first + 1, second + 1)),
+        (first, _) => Ok(first),
+    }
+}
+
 /// Keeps the last byte read from `inner`: whether the file ended with a newline.
 #[derive(Debug)]
 pub struct LastByte<R> {
@@ -344,6 +362,14 @@ impl CutCheck {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn column_position_refuses_a_name_given_twice() {
+        let names = ["t_s", "lat_deg", "h_m", "lat_deg"];
+        assert_eq!(column_position(&names, "t_s"), Ok(Some(0)));
+        assert_eq!(column_position(&names, "lon_deg"), Ok(None));
+        assert_eq!(column_position(&names, "lat_deg"), Err((2, 4)));
+    }
 
     fn csv_lines(text: &str) -> Vec<(Vec<String>, u64, bool)> {
         let (mut r, header) = CsvRecords::new(text.as_bytes(), Path::new("m.csv"), "a,b").unwrap();

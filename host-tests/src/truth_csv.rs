@@ -8,7 +8,7 @@
 //! The header is nav-core's [`CSV_HEADER`]: time [s], geodetic latitude and longitude [deg],
 //! ellipsoidal height [m], velocity `v_eb_n` north, east, down [m/s], and the z-y-x Euler angles
 //! of `q_b_ned` (FRD body axes to NED; roll, pitch, yaw) [deg]. Columns are found by name, so
-//! columns appended later (or in another order) are ignored.
+//! columns appended later (or in another order) are ignored; a column named twice is refused.
 //!
 //! Every value must be a finite number, the latitude within [-90, 90] deg, the yaw within
 //! [-360, 360] deg ([`MAX_YAW_DEG`]), and time must not go backwards (equal times are allowed). Rows are read one at a time ([`TruthReader`]); a last
@@ -20,7 +20,7 @@
 //! Euler angles, which round to within a few ulp (below 1e-12 deg).
 
 use crate::text_error::{Record, TextError, TextErrorKind};
-use crate::text_stream::{CsvRecords, CutCheck};
+use crate::text_stream::{CsvRecords, CutCheck, column_position};
 use crate::truth::Truth;
 use nav_core::Vector3;
 use nav_core::attitude::{euler, from_euler};
@@ -165,17 +165,23 @@ impl<R: Read> TruthReader<R> {
             .collect();
         let mut index = [0_usize; COLUMNS.len()];
         for (slot, &name) in index.iter_mut().zip(&COLUMNS) {
-            *slot = names.iter().position(|h| h == name).ok_or_else(|| {
-                TextError::new(
-                    path,
-                    header_line,
-                    TruthCsvErrorKind::HeaderMissingColumn {
+            let at = |kind| TextError::new(path, header_line, kind);
+            *slot = match column_position(&names, name) {
+                Ok(Some(i)) => i,
+                Ok(None) => {
+                    return Err(at(TruthCsvErrorKind::HeaderMissingColumn {
                         column: name,
                         expected: CSV_HEADER.to_owned(),
                         found: header.iter().collect::<Vec<_>>().join(","),
-                    },
-                )
-            })?;
+                    }));
+                }
+                Err(positions) => {
+                    return Err(at(TruthCsvErrorKind::HeaderDuplicateColumn {
+                        column: name,
+                        positions,
+                    }));
+                }
+            };
         }
         Ok(Self {
             records,

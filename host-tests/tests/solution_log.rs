@@ -135,3 +135,86 @@ fn rows_after_a_lost_imu_gap_are_marked_and_not_compared() {
         "{stdout}"
     );
 }
+
+/// A trajectory header naming a column twice (two `lat_deg`): the first one was read silently,
+/// here the zeros, putting the truth on the equator. Refused for the truth and the solution,
+/// naming the column and its positions; the solution's 1-sigma and status columns too.
+#[test]
+fn report_refuses_a_column_named_twice() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let header = nav_core::output::CSV_HEADER;
+    let rows = |extra: &str| {
+        (0..3)
+            .map(|k| format!("{k},45,7.5,250,0,0,0,0,0,0{extra}\n"))
+            .collect::<String>()
+    };
+    std::fs::write(
+        d.join("sol.csv"),
+        format!("{header}\n{}# end: 3 rows, ok\n", rows("")),
+    )
+    .unwrap();
+    std::fs::write(d.join("truth.csv"), format!("{header}\n{}", rows(""))).unwrap();
+    let o = nav(
+        d,
+        &["report", "--solution", "sol.csv", "--truth", "truth.csv"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    std::fs::write(
+        d.join("dup.csv"),
+        format!(
+            "lat_deg,{header}\n{}",
+            rows("")
+                .lines()
+                .map(|l| format!("0,{l}\n"))
+                .collect::<String>()
+        ),
+    )
+    .unwrap();
+    let expected = "dup.csv: line 1: the header names column lat_deg twice, as fields 1 and 3";
+    let o = nav(
+        d,
+        &["report", "--solution", "sol.csv", "--truth", "dup.csv"],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains(expected), "{}", stderr(&o));
+    std::fs::write(
+        d.join("dup.csv"),
+        format!(
+            "lat_deg,{header}\n{}# end: 3 rows, ok\n",
+            rows("")
+                .lines()
+                .map(|l| format!("0,{l}\n"))
+                .collect::<String>()
+        ),
+    )
+    .unwrap();
+    let o = nav(
+        d,
+        &["report", "--solution", "dup.csv", "--truth", "truth.csv"],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains(expected), "{}", stderr(&o));
+
+    std::fs::write(
+        d.join("status.csv"),
+        format!(
+            "{header},status,status\n{}# end: 3 rows, ok\n",
+            rows(",NAV,FOO")
+        ),
+    )
+    .unwrap();
+    let o = nav(
+        d,
+        &["report", "--solution", "status.csv", "--truth", "truth.csv"],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(
+            "status.csv: line 1: the header names column status twice, as fields 11 and 12"
+        ),
+        "{}",
+        stderr(&o)
+    );
+}
