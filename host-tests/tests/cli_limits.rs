@@ -465,6 +465,69 @@ fn config_text_refusals_name_their_own_key() {
     }
 }
 
+/// `nav config` refused the documented bound 0.1 of the IMU's other figures (0.1 in f32
+/// widened to f64 is 0.10000000149, beyond 0.1), with aiding off and on; the next value beyond
+/// is still refused. With aiding off, a figure's refusal said "GNSS aiding:".
+#[test]
+fn config_text_figures_accept_their_documented_bound() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = dir.path().join("run.txt");
+    let out = dir.path().join("run.bin");
+    let args = [
+        "config",
+        text.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let site = "lat-deg = 45\nlon-deg = 7\nh-m = 150\n";
+    for key in [
+        "gyro-scale-sigma",
+        "accel-scale-sigma",
+        "gyro-cross-coupling-rad",
+        "accel-cross-coupling-rad",
+        "gyro-g-sensitivity",
+    ] {
+        for aiding in ["off", "on"] {
+            std::fs::write(&text, format!("{site}aiding = {aiding}\n{key} = 0.1\n")).unwrap();
+            let o = nav(&args);
+            assert!(
+                o.status.success(),
+                "{key} = 0.1, aiding {aiding}: {}",
+                output_text(&o)
+            );
+            std::fs::remove_file(&out).unwrap();
+            std::fs::write(
+                &text,
+                format!("{site}aiding = {aiding}\n{key} = 0.1000001\n"),
+            )
+            .unwrap();
+            let msg = refused(&args, &["run.txt:5: refused (reason code 9): "]);
+            assert!(
+                msg.contains("must be 0 to 0.1") || msg.contains("at most 0.1"),
+                "{msg}"
+            );
+            assert!(!out.exists());
+        }
+    }
+    std::fs::write(&text, format!("{site}aiding = off\ngyro-scale-sigma = 0\n")).unwrap();
+    let msg = refused(
+        &args,
+        &["run.txt:5: refused (reason code 9): IMU error figures: a scale-factor 1-sigma"],
+    );
+    assert!(!msg.contains("GNSS aiding"), "{msg}");
+    std::fs::write(
+        &text,
+        format!("{site}aiding = off\ngyro-g-sensitivity = 1\n"),
+    )
+    .unwrap();
+    refused(
+        &args,
+        &[
+            "run.txt:5: refused (reason code 9): IMU error figures: a cross-coupling or g-sensitivity 1-sigma must be 0 to 0.1",
+        ],
+    );
+}
+
 /// Scenario lengths and angles of `nav sim --set`: the land vehicle's `seconds=1e300` (or inf) planned
 /// its route lap by lap until an allocation aborted; the flight's `climb_s` or `still_s` of
 /// 1e300 summed its ground distance second by second without end.

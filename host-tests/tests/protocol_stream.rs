@@ -676,7 +676,7 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
         (
             "scale0",
             site("gyro-scale-sigma = 0\n"),
-            "bad-scale0.txt:1: refused (reason code 9): GNSS aiding: a scale-factor 1-sigma \
+            "bad-scale0.txt:1: refused (reason code 9): IMU error figures: a scale-factor 1-sigma \
              (gyro-scale-sigma, accel-scale-sigma) must be above 0",
         ),
         // An unknown lever arm of 1-sigma 0 (accepted before): a known zero lever arm.

@@ -322,8 +322,9 @@ pub const SCALE_OUT_OF_RANGE: &str = "a scale-factor 1-sigma (gyro-scale-sigma, 
 /// none, applies to both); a scale factor's 1-sigma is never "none" (it is the aided filter's
 /// state's initial and driving 1-sigma), so a frame is refused for it whatever its aiding.
 fn check_scale_factors(figures: &SensorFigures) -> Result<(), ConfigRefusal> {
-    // NaN fails the comparison.
-    let ok = |v: f32| f64::from(v) > 0.0 && f64::from(v) <= MAX_SCALE;
+    // NaN fails the comparison. In f32, the figure's precision: 0.1 widened to f64 is
+    // 0.10000000149, and the documented bound itself was refused.
+    let ok = |v: f32| v > 0.0 && v <= MAX_SCALE as f32;
     if ok(figures.gyro_scale) && ok(figures.accel_scale) {
         Ok(())
     } else {

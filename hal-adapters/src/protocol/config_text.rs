@@ -26,6 +26,7 @@ use super::config::{DeviceConfig, ImuModel, sensor_noise};
 use crate::drivers::Mounting;
 use crate::drivers::noise::grade;
 use core::fmt;
+use nav_core::ins_filter::limits::{COUPLING_SIGMA_OUT_OF_RANGE, SCALE_SIGMA_OUT_OF_RANGE};
 use nav_core::navigator::OptionError;
 use nav_core::navigator::config::AidingConfig;
 
@@ -305,6 +306,16 @@ pub fn keys_of(
             ],
             false,
         ),
+        R::Run(E::Aiding(why)) if *why == COUPLING_SIGMA_OUT_OF_RANGE => (
+            &[
+                "gyro-cross-coupling-rad",
+                "accel-cross-coupling-rad",
+                "gyro-g-sensitivity",
+                "imu-model",
+                "imu-noise",
+            ],
+            false,
+        ),
         R::Run(E::Aiding(_)) => (
             &[
                 "aiding",
@@ -322,6 +333,18 @@ pub fn keys_of(
     };
     let noise: &'static [&'static str] = if noise { &NOISE_KEYS } else { &[] };
     own.iter().chain(noise).copied()
+}
+
+/// `true` for nav-core's refusal of the IMU's other figures (scale factor, cross-coupling,
+/// g-sensitivity), which [`ConfigError::Aiding`](nav_core::navigator::ConfigError::Aiding)
+/// carries with or without aiding.
+fn is_figures_refusal(why: &str) -> bool {
+    [
+        super::config::SCALE_OUT_OF_RANGE,
+        SCALE_SIGMA_OUT_OF_RANGE,
+        COUPLING_SIGMA_OUT_OF_RANGE,
+    ]
+    .contains(&why)
 }
 
 /// A refusal in the text form's words: the refusal's own text, but a file's key where
@@ -344,6 +367,11 @@ impl fmt::Display for InText<'_> {
                  name: give it as known (lever-arm = 0,0,0), or a 1-sigma above 0",
             ),
             R::Run(E::LogEvery) => f.write_str("log-every must be at least 1"),
+            // Checked with aiding on or off (a frame carries them): named by their own group,
+            // not "GNSS aiding", which the file may have switched off.
+            R::Run(E::Aiding(why)) if is_figures_refusal(why) => {
+                write!(f, "IMU error figures: {why}")
+            }
             r => write!(f, "{r}"),
         }
     }

@@ -95,14 +95,22 @@ pub fn noise_out_of_range<T: Scalar>(n: &FilterNoise<T>) -> Option<&'static str>
     }
 }
 
+/// The refusal of a scale-factor 1-sigma out of range ([`figures_out_of_range`]).
+pub const SCALE_SIGMA_OUT_OF_RANGE: &str = "a scale-factor 1-sigma must be 0 to 0.1 (100,000 ppm)";
+
+/// The refusal of a cross-coupling or g-sensitivity 1-sigma out of range
+/// ([`figures_out_of_range`]).
+pub const COUPLING_SIGMA_OUT_OF_RANGE: &str =
+    "a cross-coupling or g-sensitivity 1-sigma must be 0 to 0.1 (rad, rad/s per m/s^2)";
+
 /// Why an IMU's scale-factor 1-sigmas `scale` [-] (gyro, accelerometer) or its
 /// cross-coupling and g-sensitivity 1-sigmas `coupling` (gyro, accelerometer [rad]; gyro
 /// g-sensitivity [rad/s per m/s^2]) are out of range (the refusal's text).
 pub fn figures_out_of_range<T: Scalar>(scale: [T; 2], coupling: [T; 3]) -> Option<&'static str> {
     if !scale.iter().all(|v| sigma_within(*v, MAX_SCALE)) {
-        Some("a scale-factor 1-sigma must be 0 to 0.1 (100,000 ppm)")
+        Some(SCALE_SIGMA_OUT_OF_RANGE)
     } else if !coupling.iter().all(|v| sigma_within(*v, MAX_COUPLING)) {
-        Some("a cross-coupling or g-sensitivity 1-sigma must be 0 to 0.1 (rad, rad/s per m/s^2)")
+        Some(COUPLING_SIGMA_OUT_OF_RANGE)
     } else {
         None
     }
@@ -150,14 +158,19 @@ pub fn initial_sigma_out_of_range<T: Scalar>(s: &InitialSigma<T>) -> Option<&'st
 }
 
 /// A 1-sigma or noise figure `v` within `[0, max]` (and finite).
+///
+/// Compared in `T`, the precision of the value: the bound `0.1` in `f32` is the `f32` that
+/// `0.1` reads as (0.10000000149), which the figure `0.1` in `f32` equals; widened to `f64`
+/// it was beyond the `f64` bound, and the documented bound itself was refused.
 fn sigma_within<T: Scalar>(v: T, max: f64) -> bool {
-    v.finite() && v >= T::zero() && v.to_f64() <= max
+    v.finite() && v >= T::zero() && v <= T::c(max)
 }
 
 /// Which known sensor error at the start is out of range (the same bounds as the 1-sigmas,
 /// on its magnitude), with its range (the refusal's text).
 pub fn sensor_errors_out_of_range<T: Scalar>(e: &SensorErrors<T>) -> Option<&'static str> {
-    let within = |v: &Vector3<T>, max: f64| v.iter().all(|x| x.finite() && x.to_f64().abs() <= max);
+    // In `T`, as `sigma_within`.
+    let within = |v: &Vector3<T>, max: f64| v.iter().all(|x| x.finite() && x.abs() <= T::c(max));
     if !within(&e.gyro_bias_rad_s, MAX_GYRO_BIAS_RAD_S) {
         Some("the initial gyro bias must be within +-0.1 rad/s (20,600 deg/h)")
     } else if !within(&e.accel_bias_mps2, MAX_ACCEL_BIAS_MPS2) {
@@ -301,5 +314,34 @@ mod tests {
             gyro_bias_instability_time_s: 0.0,
         };
         assert!(noise_out_of_range(&n).is_some_and(|w| w.contains("ARW")));
+    }
+
+    /// The documented bounds are accepted in f32 as typed (`0.1` reads as 0.10000000149 in
+    /// f32, which widened to f64 was beyond 0.1 and refused); the next f32 beyond is refused.
+    #[test]
+    fn the_bounds_themselves_pass_in_f32() {
+        let (scale, coupling) = (MAX_SCALE as f32, MAX_COUPLING as f32);
+        assert_eq!(
+            figures_out_of_range([scale, scale], [coupling, coupling, coupling]),
+            None
+        );
+        let beyond = f32::from_bits(scale.to_bits() + 1);
+        assert_eq!(
+            figures_out_of_range([beyond, 0.0], [0.0; 3]),
+            Some(SCALE_SIGMA_OUT_OF_RANGE)
+        );
+        assert_eq!(
+            figures_out_of_range([0.0; 2], [0.0, 0.0, beyond]),
+            Some(COUPLING_SIGMA_OUT_OF_RANGE)
+        );
+        let mut e = SensorErrors::<f32> {
+            gyro_bias_rad_s: Vector3::repeat(-(MAX_GYRO_BIAS_RAD_S as f32)),
+            accel_bias_mps2: Vector3::zeros(),
+            gyro_scale: Vector3::repeat(scale),
+            accel_scale: Vector3::repeat(-scale),
+        };
+        assert_eq!(sensor_errors_out_of_range(&e), None);
+        e.gyro_scale.z = beyond;
+        assert!(sensor_errors_out_of_range(&e).is_some());
     }
 }
