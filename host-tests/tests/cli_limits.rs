@@ -215,6 +215,27 @@ fn generate_angles_out_of_range_are_refused() {
     assert!(!dir.path().join("g.bin").exists());
 }
 
+/// `replay --imu-noise ideal` on a perfectly still, noise-free recording failed with "base not
+/// still: ... scatter infx and infx their noise": the alignment divided by the zero noise.
+/// Refused now with the reason; a real grade aligns the same recording.
+#[test]
+fn replay_with_a_noise_free_model_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let imu = dir.path().join("imu.bin");
+    let out = dir.path().join("o.csv");
+    generated_recording(&imu, "12");
+    let (imu, out_text) = (imu.to_str().unwrap(), out.to_str().unwrap());
+    let text = refused(
+        &replay_args(imu, out_text, &["--imu-noise", "ideal"]),
+        &["--imu-noise ideal: the alignment judges whether the base is still, and weighs its \
+           measurements, by the IMU's noise, and a noise-free model has none; give the grade"],
+    );
+    assert!(!text.contains("inf"), "{text}");
+    assert!(!out.exists());
+    let o = nav(&replay_args(imu, out_text, &["--imu-noise", "fog"]));
+    assert!(o.status.success(), "{}", output_text(&o));
+}
+
 /// `replay`'s site and window: 1e300 printed 301 digits; `--align-seconds -1` (or 0, -0) was
 /// reported as "alignment window 0.0025 s", the one sample it rounded to.
 #[test]

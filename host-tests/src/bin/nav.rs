@@ -549,7 +549,8 @@ struct ReplayArgs {
     #[arg(long, default_value = "static", value_parser = parse_align_method, conflicts_with_all = ["init_pos", "start_in_motion"])]
     align_method: AlignMethod,
     /// IMU noise assumed by the alignment and by the GNSS-aided filter, as a simulator grade
-    /// (fog, rlg, mems-tactical, mems-consumer); default: the device's datasheet (the board's
+    /// (fog, rlg, mems-tactical, mems-consumer; not ideal where an alignment runs: a
+    /// noise-free model cannot judge stillness); default: the device's datasheet (the board's
     /// ADIS16505 for a plain recording). A filter that assumes a better IMU than the
     /// recording's refuses the fixes it should use: give the grade of the sensor.
     #[arg(long, value_name = "GRADE")]
@@ -601,6 +602,14 @@ impl ReplayArgs {
                 calibration
             }
         };
+        // Zero noise made the stillness test's scatter "infx" its noise.
+        anyhow::ensure!(
+            self.imu_noise != Some(host_tests::sensor_model::Grade::Ideal),
+            "--imu-noise ideal: the alignment judges whether the base is still, and weighs its \
+             measurements, by the IMU's noise, and a noise-free model has none; give the grade \
+             of the recording's IMU (fog, rlg, mems-tactical, mems-consumer), or leave \
+             --imu-noise out for the device's datasheet"
+        );
         let noise = self
             .imu_noise
             .map_or(self.device.noise(), |g| g.noise_spec());
