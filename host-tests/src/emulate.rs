@@ -493,6 +493,9 @@ pub enum EmulateError {
         key: &'static str,
         /// Its size: the largest component (with its sign) or the norm [the key's unit].
         value: f64,
+        /// The vector whose norm `value` is (`None`: `value` is its largest component) [the
+        /// key's unit].
+        vector: Option<[f64; 3]>,
         /// The largest accepted [the key's unit].
         limit: f64,
         /// Why the limit.
@@ -518,13 +521,31 @@ pub enum EmulateError {
     Row(RowError),
 }
 
-/// "KEY VALUE is beyond +-LIMIT: REASON" ([`EmulateError::BeyondLinearRange`]).
-fn beyond_linear_range(key: &str, value: f64, limit: f64, reason: &str) -> String {
-    format!(
-        "{key} {} is beyond +-{}: {reason}",
-        Rounded(value),
-        Rounded(limit)
-    )
+/// "KEY VALUE is beyond +-LIMIT: REASON" for a component, "KEY: the magnitude of (X, Y, Z) is
+/// VALUE, beyond LIMIT: REASON" for a vector's norm ([`EmulateError::BeyondLinearRange`]; the
+/// norm read as a component was "680 680 680 arcmin: 1178 is beyond +-687.5").
+fn beyond_linear_range(
+    key: &str,
+    value: f64,
+    vector: Option<[f64; 3]>,
+    limit: f64,
+    reason: &str,
+) -> String {
+    match vector {
+        None => format!(
+            "{key} {} is beyond +-{}: {reason}",
+            Rounded(value),
+            Rounded(limit)
+        ),
+        Some([x, y, z]) => format!(
+            "{key}: the magnitude of ({}, {}, {}) is {}, beyond {}: {reason}",
+            Rounded(x),
+            Rounded(y),
+            Rounded(z),
+            Rounded(value),
+            Rounded(limit)
+        ),
+    }
 }
 
 impl fmt::Display for EmulateError {
@@ -566,9 +587,10 @@ impl fmt::Display for EmulateError {
             Self::BeyondLinearRange {
                 key,
                 value,
+                vector,
                 limit,
                 reason,
-            } => f.write_str(&beyond_linear_range(key, *value, *limit, reason)),
+            } => f.write_str(&beyond_linear_range(key, *value, *vector, *limit, reason)),
             Self::LeftLinearRange {
                 row,
                 t_s,
@@ -819,56 +841,65 @@ fn check_linear_range(truth: &[Truth], errors: &EmulatorErrors) -> Result<(), Em
             m
         }
     };
+    let of = |v: &Vector3<f64>| Some([v.x, v.y, v.z]);
     let checks = [
         (
             "attitude_error_rad",
             norm(&errors.euler_error_rad),
+            of(&errors.euler_error_rad),
             MAX_MISALIGNMENT_RAD,
             "beyond the linear error model's small-angle range (0.2 rad)",
         ),
         (
             "gyro_drift_rad_s",
             norm(&errors.gyro_drift_rad_s),
+            of(&errors.gyro_drift_rad_s),
             MAX_MISALIGNMENT_RAD / duration_s,
             "over the truth's length the drift turns the attitude beyond the linear error model's small-angle range (0.2 rad)",
         ),
         (
             "gyro_scale",
             largest(&errors.gyro_scale),
+            None,
             MAX_MISALIGNMENT_RAD / turned_rad,
             "times the angle the body turns over the truth it turns the attitude beyond the linear error model's small-angle range (0.2 rad)",
         ),
         (
             "accel_bias_m_s2",
             norm(&errors.accel_bias_m_s2),
+            of(&errors.accel_bias_m_s2),
             MAX_MISALIGNMENT_RAD * G0_M_S2,
             "the tilt bias/g that balances it is beyond the linear error model's small-angle range (0.2 rad)",
         ),
         (
             "accel_scale",
             largest(&errors.accel_scale),
+            None,
             MAX_MISALIGNMENT_RAD,
             "on gravity it is a bias of scale x g, balanced by a tilt beyond the linear error model's small-angle range (0.2 rad)",
         ),
         (
             "velocity_error_m_s",
             norm(&errors.dv_eb_n_m_s),
+            of(&errors.dv_eb_n_m_s),
             MAX_VELOCITY_ERROR_M_S,
             "the transport-rate products the linear error model drops are no longer small",
         ),
         (
             "position_error_m",
             norm(&errors.dr_n_m),
+            of(&errors.dr_n_m),
             MAX_POSITION_ERROR_M,
             "the linear error model takes the radii, Earth rate and gravity at the true position; 100 km is 1.6 % of the Earth's radius",
         ),
     ];
-    for (key, value, limit, reason) in checks {
+    for (key, value, vector, limit, reason) in checks {
         // Finite values only reach here (validated above): `>` refuses what is beyond.
         if value.abs() > limit {
             return Err(EmulateError::BeyondLinearRange {
                 key,
                 value,
+                vector,
                 limit,
                 reason,
             });
@@ -1109,6 +1140,7 @@ impl EmulateJob<'_> {
         let EmulateError::BeyondLinearRange {
             key,
             value,
+            vector,
             limit,
             reason,
         } = error
@@ -1123,7 +1155,13 @@ impl EmulateJob<'_> {
             Some(g) => anyhow::anyhow!(
                 "{}: {}",
                 g.place,
-                beyond_linear_range(g.key, value / g.unit, limit / g.unit, reason)
+                beyond_linear_range(
+                    g.key,
+                    value / g.unit,
+                    vector.map(|v| v.map(|x| x / g.unit)),
+                    limit / g.unit,
+                    reason
+                )
             ),
             None => anyhow::anyhow!("the preset's {}", error),
         }

@@ -227,8 +227,10 @@ fn replay_with_a_noise_free_model_is_refused() {
     let (imu, out_text) = (imu.to_str().unwrap(), out.to_str().unwrap());
     let text = refused(
         &replay_args(imu, out_text, &["--imu-noise", "ideal"]),
-        &["--imu-noise ideal: the alignment judges whether the base is still, and weighs its \
-           measurements, by the IMU's noise, and a noise-free model has none; give the grade"],
+        &[
+            "--imu-noise ideal: the alignment judges whether the base is still, and weighs its \
+           measurements, by the IMU's noise, and a noise-free model has none; give the grade",
+        ],
     );
     assert!(!text.contains("inf"), "{text}");
     assert!(!out.exists());

@@ -418,24 +418,41 @@ fn emulate_refuses_errors_beyond_the_linear_model_and_writes_nothing() {
     for (set, msg) in [
         (
             "gyro_drift_deg_h = 1e300 0 0",
-            "--set #1 `gyro_drift_deg_h = 1e300 0 0`: gyro_drift_deg_h 1.000e300 is beyond +-68.75: \
-             over the truth's length",
+            "--set #1 `gyro_drift_deg_h = 1e300 0 0`: gyro_drift_deg_h: the magnitude of \
+             (1.000e300, 0, 0) is 1.000e300, beyond 68.75: over the truth's length",
         ),
         (
             "accel_bias_g = 1e6 0 0",
-            "accel_bias_g 1.000e6 is beyond +-0.2000: the tilt bias/g",
+            "accel_bias_g: the magnitude of (1.000e6, 0, 0) is 1.000e6, beyond 0.2000: the tilt \
+             bias/g",
         ),
         (
             "position_error_m = 1e12 0 0",
-            "position_error_m 1.000e12 is beyond +-100000",
+            "position_error_m: the magnitude of (1.000e12, 0, 0) is 1.000e12, beyond 100000",
         ),
         (
             "attitude_error_deg = 20 0 0",
-            "attitude_error_deg 20.00 is beyond +-11.46",
+            "attitude_error_deg: the magnitude of (20.00, 0, 0) is 20.00, beyond 11.46",
         ),
         (
             "velocity_error_m_s = 1e3 0 0",
-            "velocity_error_m_s 1000 is beyond +-100.0",
+            "velocity_error_m_s: the magnitude of (1000, 0, 0) is 1000, beyond 100.0",
+        ),
+        // Each component within the bound, the vector beyond it: its norm was given as the
+        // value ("attitude_error_arcmin 1178 is beyond +-687.5"), read as a component.
+        (
+            "attitude_error_arcmin = 680 680 680",
+            "attitude_error_arcmin: the magnitude of (680.0, 680.0, 680.0) is 1178, beyond \
+             687.5: beyond the linear error model's small-angle range",
+        ),
+        (
+            "velocity_error_m_s = 80 -80 0",
+            "velocity_error_m_s: the magnitude of (80.00, -80.00, 0) is 113.1, beyond 100.0",
+        ),
+        // A scale factor's bound is per component: its largest, with its sign.
+        (
+            "gyro_scale_ppm = 0 -1e10 0",
+            "gyro_scale_ppm -1.000e10 is beyond +-",
         ),
     ] {
         let o = emulate(&truth, &out, &errors_out, set);
