@@ -172,7 +172,8 @@ pub fn parse(name: &Path, text: &str) -> Result<DeviceConfig> {
 
 /// Encodes the configuration of the text file `file` as a frame into `out`.
 pub fn encode_file(file: &Path, out: &Path) -> Result<DeviceConfig> {
-    atomic::refuse_same_file(&[file], out).with_context(|| format!("output {}", out.display()))?;
+    // Its text names the output already ("output X: output X is the input X" before).
+    atomic::refuse_same_file(&[file], out)?;
     let text = crate::text_error::read_text(file)?;
     let config = parse(file, &text)?;
     let mut frame = Vec::new();

@@ -910,6 +910,17 @@ fn configuration_inputs_are_not_overwritten_by_the_output() {
     let args = replay_args(&imu, &calibration, &["--calibration", &calibration]);
     refused(&args, &["is the input", "cal.txt"]);
     unchanged();
+    // `nav config`: the prefix was given twice ("output X: output X is the input X").
+    let text_config = path("run.txt");
+    std::fs::write(&text_config, "lat-deg = 45\n").unwrap();
+    let msg = refused(
+        &["config", &text_config, "--out", &text_config],
+        &[&format!(
+            "error: output {text_config} is the input {text_config}: refusing to overwrite it"
+        )],
+    );
+    assert_eq!(msg.matches("output ").count(), 1, "{msg}");
+    assert_eq!(std::fs::read_to_string(&text_config).unwrap(), "lat-deg = 45\n");
 }
 
 /// `nav kf-gins` whose output folder is a file (outputpath, or `--out`'s folder) said the
