@@ -198,3 +198,25 @@ pub fn gap_run(case: &Case, at_s: f64, lost_s: f64) -> Result<GapOutcome> {
         lost_max_error_per_sigma: sink.lost_max_ratio,
     })
 }
+
+/// A table cell "median / max" with `decimals` decimals, or "-" when no run gave the figure
+/// (`NaN`, as [`GapOutcome`]'s figures of a gap that lost nothing): "NaN / NaN" was printed.
+pub fn median_max_cell((median, max): (f64, f64), decimals: usize) -> String {
+    if median.is_nan() || max.is_nan() {
+        "-".to_owned()
+    } else {
+        format!("{median:.decimals$} / {max:.decimals$}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_figure_no_run_gave_is_a_dash() {
+        assert_eq!(median_max_cell((f64::NAN, f64::NAN), 2), "-");
+        assert_eq!(median_max_cell((0.071, 0.73), 2), "0.07 / 0.73");
+        assert_eq!(median_max_cell((6.94, 6.94), 1), "6.9 / 6.9");
+    }
+}

@@ -920,7 +920,10 @@ fn configuration_inputs_are_not_overwritten_by_the_output() {
         )],
     );
     assert_eq!(msg.matches("output ").count(), 1, "{msg}");
-    assert_eq!(std::fs::read_to_string(&text_config).unwrap(), "lat-deg = 45\n");
+    assert_eq!(
+        std::fs::read_to_string(&text_config).unwrap(),
+        "lat-deg = 45\n"
+    );
 }
 
 /// `nav kf-gins` whose output folder is a file (outputpath, or `--out`'s folder) said the
