@@ -94,6 +94,39 @@ fn oscillator_bench_without_epochs_prints_no_errors() {
     }
 }
 
+/// A negative number given to a numeric option was taken for a flag by clap ("unexpected
+/// argument '-1' found"): it now reaches the option's own range check.
+#[test]
+fn negative_numbers_reach_the_range_checks() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.bin");
+    let out = out.to_str().unwrap();
+    refused(
+        &[
+            "convert",
+            "--gnss",
+            "--in",
+            "fixes.csv",
+            "--out",
+            out,
+            "--gnss-latency",
+            "-1",
+        ],
+        &["--gnss-latency must be within 0 to 1 s (the receiver's output latency), not -1"],
+    );
+    refused(
+        &["bench", "outages", "--outage-seconds", "-5"],
+        &["--outage-seconds must be from 1 to 170 s", "not -5"],
+    );
+    // Counts and seeds are unsigned: clap names the value and the option.
+    let o = nav(&["align-bench", "family", "--runs", "-1"]);
+    let text = output_text(&o);
+    assert!(
+        text.contains("invalid value '-1' for '--runs <RUNS>'"),
+        "{text}"
+    );
+}
+
 /// `generate` and `sim` lengths: 1e300 s said "18446744073709551615 samples do not fit the
 /// binary format" (a saturated count), 1e7 s aborted allocating 160 GB.
 #[test]

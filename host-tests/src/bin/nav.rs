@@ -92,6 +92,7 @@ enum Command {
     /// (sea states 3-6), fine alignment on the AUV bench [Vavilova et al.], heading repeatability on
     /// the real laser-gyro recording, and every method on a seeded family of still and swaying
     /// bases (family).
+    #[command(allow_negative_numbers = true)]
     AlignBench {
         /// seed002, seed003, lasergyro or family.
         which: AlignBenchKind,
@@ -183,6 +184,7 @@ enum Command {
     /// thread, f32 and f64, over 10 min of exact 400 Hz increments of a 900 km/h flight), `nav
     /// kf-gins` speed and accuracy, the aided filter's NEES/NIS consistency, GNSS outages,
     /// GNSS outliers and gaps in the IMU data.
+    #[command(allow_negative_numbers = true)]
     Bench {
         /// What to measure: mechanization (steps/s, no I/O), filter (`nav kf-gins` speed and
         /// accuracy on a generated 1-hour KF-GINS data set), consistency (NEES/NIS Monte Carlo
@@ -277,6 +279,7 @@ enum Command {
     /// to binary, or to CSV when the output ends in .csv; with --gnss, a GNSS file (the
     /// project's CSV, KF-GINS's text, or gnss-ins-sim's GPS file with --gnss-sigma) to the
     /// binary fix file the firmware's --gnss reads.
+    #[command(allow_negative_numbers = true)]
     Convert {
         /// Input recording (or GNSS file, with --gnss).
         #[arg(long = "in", value_name = "FILE")]
@@ -1423,11 +1426,11 @@ struct GnssSigmaArgs {
     /// 1-sigma of the fixes' position north, east, down [m], for gnss-ins-sim's GPS file
     /// (gps-K.csv, which holds none; its default receiver: 5,5,7); refused for a file with its
     /// own.
-    #[arg(long, value_name = "N,E,D", value_parser = parse_vector3)]
+    #[arg(long, value_name = "N,E,D", allow_hyphen_values = true, value_parser = parse_vector3)]
     gnss_sigma: Option<[f64; 3]>,
     /// 1-sigma of the fixes' velocity north, east, down [m/s], to use gnss-ins-sim's GPS
     /// velocity (its default receiver: 0.05,0.05,0.05); without it, positions only.
-    #[arg(long, value_name = "VN,VE,VD", requires = "gnss_sigma", value_parser = parse_vector3)]
+    #[arg(long, value_name = "VN,VE,VD", requires = "gnss_sigma", allow_hyphen_values = true, value_parser = parse_vector3)]
     gnss_velocity_sigma: Option<[f64; 3]>,
 }
 
