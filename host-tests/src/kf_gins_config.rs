@@ -39,8 +39,9 @@
 //! a rate that is not positive, `corrtime` <= 0, `imudatalen` other than 7 or 8, a latitude
 //! outside [-90, 90] deg, a time outside a GNSS week (0 to 604800 s), `endtime` before
 //! `starttime` (a negative `endtime` means "to the end of the IMU file", as KF-GINS takes any
-//! negative value), an empty path. YAML syntax and type errors carry the parser's line and
-//! column. Keys KF-GINS does not read are ignored and listed in the returned warnings.
+//! negative value), an empty path, a file of no keys. Where 3 numbers are expected, what was
+//! found instead is named with the key; other YAML syntax and type errors carry the parser's
+//! line and column. Keys KF-GINS does not read are ignored and listed in the returned warnings.
 
 use anyhow::{Result, bail};
 use nav_core::number::Number;
@@ -138,37 +139,174 @@ struct RawConfig {
     imudatarate: Option<f64>,
     starttime: Option<f64>,
     endtime: Option<f64>,
-    initpos: Option<Vec<f64>>,
-    initvel: Option<Vec<f64>>,
-    initatt: Option<Vec<f64>>,
-    initgyrbias: Option<Vec<f64>>,
-    initaccbias: Option<Vec<f64>>,
-    initgyrscale: Option<Vec<f64>>,
-    initaccscale: Option<Vec<f64>>,
-    initposstd: Option<Vec<f64>>,
-    initvelstd: Option<Vec<f64>>,
-    initattstd: Option<Vec<f64>>,
-    initbgstd: Option<Vec<f64>>,
-    initbastd: Option<Vec<f64>>,
-    initsgstd: Option<Vec<f64>>,
-    initsastd: Option<Vec<f64>>,
+    initpos: Option<Numbers>,
+    initvel: Option<Numbers>,
+    initatt: Option<Numbers>,
+    initgyrbias: Option<Numbers>,
+    initaccbias: Option<Numbers>,
+    initgyrscale: Option<Numbers>,
+    initaccscale: Option<Numbers>,
+    initposstd: Option<Numbers>,
+    initvelstd: Option<Numbers>,
+    initattstd: Option<Numbers>,
+    initbgstd: Option<Numbers>,
+    initbastd: Option<Numbers>,
+    initsgstd: Option<Numbers>,
+    initsastd: Option<Numbers>,
     imunoise: Option<RawNoise>,
-    antlever: Option<Vec<f64>>,
+    antlever: Option<Numbers>,
     #[serde(flatten)]
     unknown: BTreeMap<String, IgnoredAny>,
 }
 
 #[derive(Debug, Deserialize)]
 struct RawNoise {
-    arw: Option<Vec<f64>>,
-    vrw: Option<Vec<f64>>,
-    gbstd: Option<Vec<f64>>,
-    abstd: Option<Vec<f64>>,
-    gsstd: Option<Vec<f64>>,
-    asstd: Option<Vec<f64>>,
+    arw: Option<Numbers>,
+    vrw: Option<Numbers>,
+    gbstd: Option<Numbers>,
+    abstd: Option<Numbers>,
+    gsstd: Option<Numbers>,
+    asstd: Option<Numbers>,
     corrtime: Option<f64>,
     #[serde(flatten)]
     unknown: BTreeMap<String, IgnoredAny>,
+}
+
+/// A value where numbers are expected, as written: the numbers, or what was found instead
+/// (the parser's "expected sequence start" named neither the key nor what it wanted).
+#[derive(Debug)]
+struct Numbers(std::result::Result<Vec<f64>, String>);
+
+impl<'de> Deserialize<'de> for Numbers {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        d.deserialize_any(NumbersVisitor)
+    }
+}
+
+struct NumbersVisitor;
+
+impl<'de> serde::de::Visitor<'de> for NumbersVisitor {
+    type Value = Numbers;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("a sequence of numbers")
+    }
+
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(
+        self,
+        mut seq: A,
+    ) -> std::result::Result<Numbers, A::Error> {
+        let (mut numbers, mut bad) = (Vec::new(), None);
+        let mut k = 0;
+        while let Some(Element(e)) = seq.next_element::<Element>()? {
+            k += 1;
+            match e {
+                Ok(x) => numbers.push(x),
+                Err(what) => {
+                    bad.get_or_insert_with(|| format!("{what} as value {k}"));
+                }
+            }
+        }
+        Ok(Numbers(bad.map_or(Ok(numbers), Err)))
+    }
+
+    fn visit_f64<E>(self, x: f64) -> std::result::Result<Numbers, E> {
+        Ok(Numbers(Err(format!("a single number ({})", Number(x)))))
+    }
+
+    fn visit_i64<E>(self, x: i64) -> std::result::Result<Numbers, E> {
+        Ok(Numbers(Err(format!("a single number ({x})"))))
+    }
+
+    fn visit_u64<E>(self, x: u64) -> std::result::Result<Numbers, E> {
+        Ok(Numbers(Err(format!("a single number ({x})"))))
+    }
+
+    fn visit_str<E>(self, text: &str) -> std::result::Result<Numbers, E> {
+        Ok(Numbers(Err(match text.trim().parse::<f64>() {
+            Ok(_) => format!("a single number ({text})"),
+            Err(_) => format!("the text '{text}'"),
+        })))
+    }
+
+    fn visit_bool<E>(self, b: bool) -> std::result::Result<Numbers, E> {
+        Ok(Numbers(Err(format!("'{b}'"))))
+    }
+
+    fn visit_unit<E>(self) -> std::result::Result<Numbers, E> {
+        Ok(Numbers(Err("nothing".to_owned())))
+    }
+
+    fn visit_map<A: serde::de::MapAccess<'de>>(
+        self,
+        mut map: A,
+    ) -> std::result::Result<Numbers, A::Error> {
+        while map.next_entry::<IgnoredAny, IgnoredAny>()?.is_some() {}
+        Ok(Numbers(Err("a mapping (keys and values)".to_owned())))
+    }
+}
+
+/// One element of [`Numbers`]: a number, or what was found instead.
+struct Element(std::result::Result<f64, String>);
+
+impl<'de> Deserialize<'de> for Element {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        d.deserialize_any(ElementVisitor)
+    }
+}
+
+struct ElementVisitor;
+
+impl<'de> serde::de::Visitor<'de> for ElementVisitor {
+    type Value = Element;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("a number")
+    }
+
+    fn visit_f64<E>(self, x: f64) -> std::result::Result<Element, E> {
+        Ok(Element(Ok(x)))
+    }
+
+    fn visit_i64<E>(self, x: i64) -> std::result::Result<Element, E> {
+        Ok(Element(Ok(x as f64)))
+    }
+
+    fn visit_u64<E>(self, x: u64) -> std::result::Result<Element, E> {
+        Ok(Element(Ok(x as f64)))
+    }
+
+    fn visit_str<E>(self, text: &str) -> std::result::Result<Element, E> {
+        Ok(Element(
+            text.trim()
+                .parse::<f64>()
+                .map_err(|_| format!("the text '{text}'")),
+        ))
+    }
+
+    fn visit_bool<E>(self, b: bool) -> std::result::Result<Element, E> {
+        Ok(Element(Err(format!("'{b}'"))))
+    }
+
+    fn visit_unit<E>(self) -> std::result::Result<Element, E> {
+        Ok(Element(Err("nothing".to_owned())))
+    }
+
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(
+        self,
+        mut seq: A,
+    ) -> std::result::Result<Element, A::Error> {
+        while seq.next_element::<IgnoredAny>()?.is_some() {}
+        Ok(Element(Err("a sequence".to_owned())))
+    }
+
+    fn visit_map<A: serde::de::MapAccess<'de>>(
+        self,
+        mut map: A,
+    ) -> std::result::Result<Element, A::Error> {
+        while map.next_entry::<IgnoredAny, IgnoredAny>()?.is_some() {}
+        Ok(Element(Err("a mapping".to_owned())))
+    }
 }
 
 /// deg/h -> rad/s.
@@ -194,7 +332,23 @@ pub fn load(path: &Path) -> Result<(KfGinsConfig, Vec<String>)> {
 /// Parses configuration `text`; `path` names it in messages, relative paths are resolved
 /// against the current directory or `dir` (module docs).
 pub fn parse(text: &str, path: &Path, dir: &Path) -> Result<(KfGinsConfig, Vec<String>)> {
-    let raw: RawConfig = serde_saphyr::from_str(text).map_err(|e| {
+    // An empty file (or comments only) read as a configuration of no keys: "missing key
+    // 'imunoise'" blamed one key of many.
+    if let Ok(None) = serde_saphyr::from_str::<Option<BTreeMap<String, IgnoredAny>>>(text)
+        .map(|keys| keys.filter(|k| !k.is_empty()))
+    {
+        bail!(
+            "{}: no keys (an empty file, or comments only): a KF-GINS configuration gives \
+             imupath, gnsspath, outputpath, imudatalen, imudatarate, starttime, endtime, the \
+             initial state and its 1-sigma, imunoise and antlever",
+            path.display()
+        );
+    }
+    // `.nan` and `.inf` reach the checks, which name the key (the parser refuses them in a
+    // value read as any type, as the numbers of [`Numbers`] are, with no key).
+    let mut options = serde_saphyr::Options::default();
+    options.non_finite_float_policy = serde_saphyr::NonFiniteFloatPolicy::PassThrough;
+    let raw: RawConfig = serde_saphyr::from_str_with_options(text, options).map_err(|e| {
         let inner = match &e {
             serde_saphyr::Error::WithSnippet { error, .. } => error.as_ref(),
             e => e,
@@ -400,8 +554,11 @@ impl Check<'_> {
     }
 
     /// Three finite numbers.
-    fn array3(&self, key: &str, value: Option<Vec<f64>>, what: &str) -> Result<[f64; 3]> {
+    fn array3(&self, key: &str, value: Option<Numbers>, what: &str) -> Result<[f64; 3]> {
         let v = self.required(key, value, &format!("3 numbers {what}"))?;
+        let v = v.0.map_err(|found| {
+            anyhow::anyhow!(self.key(key, format!("expected 3 numbers {what}, found {found}")))
+        })?;
         let Ok(v) = <[f64; 3]>::try_from(v.as_slice()) else {
             bail!(self.key(key, format!("expected 3 numbers {what}, found {}", v.len())));
         };
@@ -415,7 +572,7 @@ impl Check<'_> {
     }
 
     /// Three non-negative standard deviations in `unit`, times `to_si`.
-    fn std3(&self, key: &str, value: Option<Vec<f64>>, unit: &str, to_si: f64) -> Result<[f64; 3]> {
+    fn std3(&self, key: &str, value: Option<Numbers>, unit: &str, to_si: f64) -> Result<[f64; 3]> {
         let v = self.array3(key, value, &format!("[{unit}]"))?;
         if let Some(i) = v.iter().position(|x| *x < 0.0) {
             bail!(self.key(
@@ -435,7 +592,7 @@ impl Check<'_> {
     fn start_std3(
         &self,
         key: &str,
-        value: Option<Vec<f64>>,
+        value: Option<Numbers>,
         unit: &str,
         to_si: f64,
     ) -> Result<[f64; 3]> {
@@ -453,7 +610,7 @@ impl Check<'_> {
     fn density3(
         &self,
         key: &str,
-        value: Option<Vec<f64>>,
+        value: Option<Numbers>,
         unit: &str,
         to_si: f64,
     ) -> Result<[f64; 3]> {
@@ -471,7 +628,7 @@ impl Check<'_> {
     fn positive3(
         &self,
         key: &str,
-        value: Option<Vec<f64>>,
+        value: Option<Numbers>,
         unit: &str,
         to_si: f64,
         why: &str,
@@ -768,10 +925,46 @@ odolever: [ 1, 2, 3 ]
             assert!(m.starts_with("kf.yaml: "), "{m}");
             assert!(m.contains(expected), "{expected}: {m}");
         }
+        // Where 3 numbers are expected: the key and what was found ("line 19 column 8:
+        // expected sequence start" before).
+        for (to, found) in [
+            ("arw: 0.2", "found a single number (0.2)"),
+            ("arw: fast", "found the text 'fast'"),
+            ("arw: [0.2, x, 0.2]", "found the text 'x' as value 2"),
+            ("arw: {x: 1}", "found a mapping"),
+        ] {
+            let m = msg("arw: [0.003, 0.003, 0.003]", to);
+            assert!(
+                m.contains(&format!(
+                    "kf.yaml: key 'imunoise.arw': expected 3 numbers [deg/sqrt(h)], {found}"
+                )),
+                "{to}: {m}"
+            );
+        }
         // Type and syntax errors: the parser's position.
         let m = msg("imudatarate: 200", "imudatarate: fast");
         assert!(m.starts_with("kf.yaml: not a KF-GINS configuration"), "{m}");
         assert!(m.contains("line 13"), "{m}");
+    }
+
+    /// An empty file said "missing key 'imunoise'", one key of many.
+    #[test]
+    fn an_empty_file_is_told_as_such() {
+        for text in [
+            "",
+            "\n\n",
+            "# KF-GINS configuration file\n",
+            "---\n",
+            "{}\n",
+        ] {
+            let m = format!("{:#}", parse_text(text).unwrap_err());
+            assert!(
+                m.starts_with("kf.yaml: no keys (an empty file, or comments only)"),
+                "{text:?}: {m}"
+            );
+        }
+        let m = format!("{:#}", parse_text("imudatarate: 200\n").unwrap_err());
+        assert!(m.contains("missing key"), "{m}");
     }
 
     /// A second YAML document was refused in the parser's words ("use from_str_multiple or

@@ -1310,6 +1310,27 @@ fn an_empty_calibration_file_is_refused() {
     assert!(o.status.success(), "{}", output_text(&o));
 }
 
+/// `nav kf-gins` of an empty configuration said "missing key 'imunoise'", one key of many;
+/// a scalar where 3 numbers belong said "line 19 column 8: expected sequence start".
+#[test]
+fn kf_gins_configuration_shapes_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("kf.yaml");
+    let config = config.to_str().unwrap();
+    std::fs::write(config, "# KF-GINS configuration file\n\n").unwrap();
+    refused(
+        &["kf-gins", config],
+        &["kf.yaml: no keys (an empty file, or comments only)"],
+    );
+    std::fs::write(config, "imunoise:\n  arw: 0.2\n").unwrap();
+    refused(
+        &["kf-gins", config],
+        &[
+            "kf.yaml: key 'imunoise.arw': expected 3 numbers [deg/sqrt(h)], found a single number (0.2)",
+        ],
+    );
+}
+
 /// `--init-std` refusals said "a zero claims an exactly known state" of -1 and NaN, and "must
 /// be 0 to 6,400 km" of 1e300, where 0 is refused; a binary header's rate of 1e300 printed
 /// 301 digits. Each names its value compactly and the cause now.
