@@ -158,19 +158,23 @@ pub fn initial_sigma_out_of_range<T: Scalar>(s: &InitialSigma<T>) -> Option<&'st
 }
 
 /// A 1-sigma or noise figure `v` within `[0, max]` (and finite).
-///
-/// Compared in `T`, the precision of the value: the bound `0.1` in `f32` is the `f32` that
-/// `0.1` reads as (0.10000000149), which the figure `0.1` in `f32` equals; widened to `f64`
-/// it was beyond the `f64` bound, and the documented bound itself was refused.
 fn sigma_within<T: Scalar>(v: T, max: f64) -> bool {
-    v.finite() && v >= T::zero() && v <= T::c(max)
+    v.finite() && v >= T::zero() && v.to_f64() <= max * F32_ROUNDING
 }
+
+/// A bound's allowance for the figures' carried precision, f32 [-]: a figure typed as the
+/// bound `0.1` reads as 0.10000000149 in f32, beyond the f64 bound, and the documented bound
+/// itself was refused. Half an f32 epsilon of the bound (f32 rounds within it) lets it through,
+/// and no f32 beyond it.
+const F32_ROUNDING: f64 = 1.0 + f32::EPSILON as f64 * 0.5;
 
 /// Which known sensor error at the start is out of range (the same bounds as the 1-sigmas,
 /// on its magnitude), with its range (the refusal's text).
 pub fn sensor_errors_out_of_range<T: Scalar>(e: &SensorErrors<T>) -> Option<&'static str> {
-    // In `T`, as `sigma_within`.
-    let within = |v: &Vector3<T>, max: f64| v.iter().all(|x| x.finite() && x.abs() <= T::c(max));
+    let within = |v: &Vector3<T>, max: f64| {
+        v.iter()
+            .all(|x| x.finite() && x.to_f64().abs() <= max * F32_ROUNDING)
+    };
     if !within(&e.gyro_bias_rad_s, MAX_GYRO_BIAS_RAD_S) {
         Some("the initial gyro bias must be within +-0.1 rad/s (20,600 deg/h)")
     } else if !within(&e.accel_bias_mps2, MAX_ACCEL_BIAS_MPS2) {

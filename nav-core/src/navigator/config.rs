@@ -107,38 +107,6 @@ impl Default for SensorFigures {
     }
 }
 
-/// `x` as the `f64` of its shortest decimal (the fewest significant digits that read back as
-/// `x` in `f32`): the figures are typed as decimals and carried in `f32`, so `0.1` reaches an
-/// `f64` filter as 0.1, not as 0.10000000149, which is beyond the documented bound 0.1 and was
-/// refused. In `f32` the result is `x` again (checked; else `x` widened exactly). Arithmetic,
-/// not formatting: the board links no float formatting for it.
-fn widen_decimal(x: f32) -> f64 {
-    let exact = f64::from(x);
-    if !x.is_finite() || x == 0.0 {
-        return exact;
-    }
-    let magnitude = libm::floor(libm::log10(libm::fabs(exact))) as i32;
-    // f32 needs at most 9 significant digits to read back.
-    for digits in 1..=9 {
-        // Decimals after the point; powers of ten up to 1e22 are exact in f64, so the
-        // quotient (product) below is the f64 nearest the decimal.
-        let k = digits - 1 - magnitude;
-        if k.unsigned_abs() > 22 {
-            break;
-        }
-        let scale = (0..k.unsigned_abs()).fold(1.0, |p, _| p * 10.0);
-        let decimal = if k >= 0 {
-            libm::round(exact * scale) / scale
-        } else {
-            libm::round(exact / scale) * scale
-        };
-        if decimal as f32 == x {
-            return decimal;
-        }
-    }
-    exact
-}
-
 /// The aided filter's noise model of an IMU's noise figures `n` and its other errors
 /// `figures`, with [`DEFAULT_CORRELATION_TIME_S`].
 pub fn filter_noise_of<T: Scalar>(n: &SensorNoise<f64>, figures: &SensorFigures) -> FilterNoise<T> {
@@ -147,12 +115,12 @@ pub fn filter_noise_of<T: Scalar>(n: &SensorNoise<f64>, figures: &SensorFigures)
         vrw_mps_per_sqrt_s: T::c(n.vrw_mps_per_sqrt_s),
         gyro_bias_rad_s: T::c(n.gyro_bias_rad_s),
         accel_bias_mps2: T::c(n.accel_bias_mps2),
-        gyro_scale: T::c(widen_decimal(figures.gyro_scale)),
-        accel_scale: T::c(widen_decimal(figures.accel_scale)),
+        gyro_scale: T::c(f64::from(figures.gyro_scale)),
+        accel_scale: T::c(f64::from(figures.accel_scale)),
         correlation_time_s: T::c(DEFAULT_CORRELATION_TIME_S),
-        gyro_cross_coupling_rad: T::c(widen_decimal(figures.gyro_cross_coupling_rad)),
-        accel_cross_coupling_rad: T::c(widen_decimal(figures.accel_cross_coupling_rad)),
-        gyro_g_sensitivity: T::c(widen_decimal(figures.gyro_g_sensitivity)),
+        gyro_cross_coupling_rad: T::c(f64::from(figures.gyro_cross_coupling_rad)),
+        accel_cross_coupling_rad: T::c(f64::from(figures.accel_cross_coupling_rad)),
+        gyro_g_sensitivity: T::c(f64::from(figures.gyro_g_sensitivity)),
         // A data sheet's noise figures give no correlation time: the bias instability is in
         // the bias figure.
         gyro_bias_instability_rad_s: T::zero(),
@@ -652,30 +620,8 @@ mod tests {
         RunConfig::new(45.0, 7.5, 150.0, 10.0, SensorNoise::seed003())
     }
 
-    /// The figures reach an f64 filter as typed, an f32 one as carried.
-    #[test]
-    fn figures_widen_to_their_decimal() {
-        for x in [
-            0.1_f32,
-            1e-6,
-            3.3e-5,
-            0.0,
-            -0.25,
-            f32::MAX,
-            f32::MIN_POSITIVE,
-            1e-45,
-        ] {
-            let wide = widen_decimal(x);
-            assert_eq!(wide as f32, x, "{x:e}");
-        }
-        assert_eq!(widen_decimal(0.1), 0.1);
-        assert_eq!(widen_decimal(1e-6), 1e-6);
-        assert!(widen_decimal(f32::NAN).is_nan());
-        assert_eq!(widen_decimal(f32::INFINITY), f64::INFINITY);
-    }
-
     /// The documented bound 0.1 of every figure is accepted, with aiding on and off (0.1 in
-    /// f32 widened to f64 was beyond 0.1); the next f32 beyond is refused.
+    /// f32 widened to f64 was beyond 0.1, and refused); the next f32 beyond is refused.
     #[test]
     fn the_figures_bound_itself_is_accepted() {
         let at_bound = SensorFigures {
