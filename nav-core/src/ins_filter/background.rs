@@ -726,7 +726,9 @@ impl<T: Scalar> ErrorFilter<T> {
             .is_active()
             .then(|| consider::transition_columns(&f, &prop.lin, &self.consider, prop.dt));
         covariance::propagate(&mut self.p, &phi, &q, prop.dt);
-        self.add_clip_doubt(&prop.clipped, &prop.lin.c_b_n);
+        if prop.clipped.any() {
+            self.add_clip_doubt(&prop.clipped, &prop.lin.c_b_n);
+        }
         if let Some(phi_ac) = &phi_ac {
             consider::propagate(
                 &mut self.p,
@@ -756,10 +758,9 @@ impl<T: Scalar> ErrorFilter<T> {
     /// Adds what clipped samples could have missed ([`ClipDoubt`], per body axis) to the
     /// attitude and velocity covariance, turned into the navigation frame by `c_b_n`:
     /// `P += C_b_n diag(var_b) C_b_n^T`.
+    #[cold]
+    #[inline(never)]
     fn add_clip_doubt(&mut self, doubt: &ClipDoubt<T>, c_b_n: &Matrix3<T>) {
-        if !doubt.any() {
-            return;
-        }
         for (at, var_b) in [
             (ATT, &doubt.attitude_var_b_rad2),
             (VEL, &doubt.velocity_var_b_m2_s2),
