@@ -609,6 +609,27 @@ fn write_imu_fault(d: &Path, mut fault: impl FnMut(&mut Vec<f64>)) -> PathBuf {
     path
 }
 
+/// `nav sim` of a land vehicle of `grade` over `seconds` with 1 Hz fixes into `d`, its yaw
+/// gyro reading 1000 deg/s for the 5 samples from 60 s (a 12.5 deg turn in 12.5 ms, on a
+/// straight leg): the faulty recording's path (`write_imu_fault`).
+fn car_with_a_yaw_burst(d: &Path, grade: &str, seconds: &str) -> PathBuf {
+    let sim = [
+        "sim",
+        "land-vehicle",
+        "--grade",
+        grade,
+        "--seconds",
+        seconds,
+    ];
+    run_ok(nav().args(sim).args(["--gnss-rate", "1", "--out"]).arg(d));
+    let burst_rad = 1000f64.to_radians() / 400.0;
+    write_imu_fault(d, |v| {
+        if v[0] > 60.0 && v[0] < 60.0 + 5.5 / 400.0 {
+            v[3] = burst_rad;
+        }
+    })
+}
+
 /// A tactical car's recording (CSV, no driver) whose yaw gyro reads 1000 deg/s for 5 samples
 /// at 60 s, twice its part's +-500 deg/s: over-range garbage, a 12.5 deg heading step. From a
 /// given start, as it is, the rows after it are NAV with a 0.1 deg heading 1-sigma 12 deg off
@@ -619,14 +640,7 @@ fn write_imu_fault(d: &Path, mut fault: impl FnMut(&mut Vec<f64>)) -> PathBuf {
 fn samples_beyond_a_given_range_are_doubted_as_clipped() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let sim = "sim land-vehicle --grade mems-tactical --seconds 100 --gnss-rate 1 --out";
-    run_ok(nav().args(sim.split(' ')).arg(d));
-    let burst_rad = 1000f64.to_radians() / 400.0;
-    let fault = write_imu_fault(d, |v| {
-        if v[0] > 60.0 && v[0] < 60.0 + 5.5 / 400.0 {
-            v[3] = burst_rad;
-        }
-    });
+    let fault = car_with_a_yaw_burst(d, "mems-tactical", "100");
     let out = d.join("sol.csv");
     let worst_nav_z = |range: &[&str]| {
         run_ok(
@@ -680,14 +694,7 @@ fn samples_beyond_a_given_range_are_doubted_as_clipped() {
 fn a_gyro_burst_the_driver_clips_is_doubted_not_believed() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let sim = "sim land-vehicle --grade fog --seconds 120 --gnss-rate 1 --out";
-    run_ok(nav().args(sim.split(' ')).arg(d));
-    let burst_rad = 1000f64.to_radians() / 400.0;
-    let fault = write_imu_fault(d, |v| {
-        if v[0] > 60.0 && v[0] < 60.0 + 5.5 / 400.0 {
-            v[3] = burst_rad;
-        }
-    });
+    let fault = car_with_a_yaw_burst(d, "fog", "120");
     let out = d.join("sol.csv");
     let text = run_ok(
         nav()

@@ -480,21 +480,44 @@ fn config_text_base_translation_beyond_range_names_its_key() {
     assert!(!out.exists());
 }
 
+/// A `nav config` run in a folder of its own: the text file `run.txt` it reads and the frame
+/// `run.bin` it writes.
+struct ConfigRun {
+    _dir: tempfile::TempDir,
+    text: std::path::PathBuf,
+    out: std::path::PathBuf,
+}
+
+impl ConfigRun {
+    fn new() -> Self {
+        let dir = tempfile::tempdir().unwrap();
+        let (text, out) = (dir.path().join("run.txt"), dir.path().join("run.bin"));
+        Self {
+            _dir: dir,
+            text,
+            out,
+        }
+    }
+
+    /// `config TEXT --out OUT`.
+    fn args(&self) -> [&str; 4] {
+        [
+            "config",
+            self.text.to_str().unwrap(),
+            "--out",
+            self.out.to_str().unwrap(),
+        ]
+    }
+}
+
 /// `nav config` named the wrong keys of a refusal: a negative `lever-arm-sigma` or
 /// `align-seconds`, or a negative `base-translation`, was "keys lat-deg (line 1), ..." (every
 /// alignment key the file gave); and `imu-rate-hz = 1e300` was reported as "inf Hz" (the frame's
 /// f32). Each refusal now names its own line and key, a figure beyond f32 its value as typed.
 #[test]
 fn config_text_refusals_name_their_own_key() {
-    let dir = tempfile::tempdir().unwrap();
-    let text = dir.path().join("run.txt");
-    let out = dir.path().join("run.bin");
-    let args = [
-        "config",
-        text.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ];
+    let run = ConfigRun::new();
+    let (text, out, args) = (&run.text, &run.out, run.args());
     let site = "lat-deg = 45\nlon-deg = 7\nh-m = 150\n";
     for (line, expected) in [
         (
@@ -514,7 +537,7 @@ fn config_text_refusals_name_their_own_key() {
             "run.txt:4: imu-rate-hz: takes a finite number within f32's range (3.4e38), got 1e300",
         ),
     ] {
-        std::fs::write(&text, format!("{site}{line}\n")).unwrap();
+        std::fs::write(text, format!("{site}{line}\n")).unwrap();
         let msg = refused(&args, &[expected]);
         assert!(!msg.contains("lat-deg (line 1)"), "{msg}");
         assert!(!out.exists());
@@ -526,15 +549,8 @@ fn config_text_refusals_name_their_own_key() {
 /// is still refused. With aiding off, a figure's refusal said "GNSS aiding:".
 #[test]
 fn config_text_figures_accept_their_documented_bound() {
-    let dir = tempfile::tempdir().unwrap();
-    let text = dir.path().join("run.txt");
-    let out = dir.path().join("run.bin");
-    let args = [
-        "config",
-        text.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ];
+    let run = ConfigRun::new();
+    let (text, out, args) = (&run.text, &run.out, run.args());
     let site = "lat-deg = 45\nlon-deg = 7\nh-m = 150\n";
     for key in [
         "gyro-scale-sigma",
@@ -544,16 +560,16 @@ fn config_text_figures_accept_their_documented_bound() {
         "gyro-g-sensitivity",
     ] {
         for aiding in ["off", "on"] {
-            std::fs::write(&text, format!("{site}aiding = {aiding}\n{key} = 0.1\n")).unwrap();
+            std::fs::write(text, format!("{site}aiding = {aiding}\n{key} = 0.1\n")).unwrap();
             let o = nav(&args);
             assert!(
                 o.status.success(),
                 "{key} = 0.1, aiding {aiding}: {}",
                 output_text(&o)
             );
-            std::fs::remove_file(&out).unwrap();
+            std::fs::remove_file(out).unwrap();
             std::fs::write(
-                &text,
+                text,
                 format!("{site}aiding = {aiding}\n{key} = 0.1000001\n"),
             )
             .unwrap();
@@ -565,14 +581,14 @@ fn config_text_figures_accept_their_documented_bound() {
             assert!(!out.exists());
         }
     }
-    std::fs::write(&text, format!("{site}aiding = off\ngyro-scale-sigma = 0\n")).unwrap();
+    std::fs::write(text, format!("{site}aiding = off\ngyro-scale-sigma = 0\n")).unwrap();
     let msg = refused(
         &args,
         &["run.txt:5: refused (reason code 9): IMU error figures: a scale-factor 1-sigma"],
     );
     assert!(!msg.contains("GNSS aiding"), "{msg}");
     std::fs::write(
-        &text,
+        text,
         format!("{site}aiding = off\ngyro-g-sensitivity = 1\n"),
     )
     .unwrap();
