@@ -687,9 +687,10 @@ fn samples_beyond_a_given_range_are_doubted_as_clipped() {
 /// through the simulated ADIS16505-2 (+-500 deg/s, as the firmware reads it): the driver
 /// clips the burst, so the heading comes out 6.25 deg off. The clip was only counted: NAV with
 /// a 0.1 deg heading 1-sigma for 25 s (the error 96 of it before the fixes were refused),
-/// DEGRADED and a re-alignment. Now the clipped samples' doubt joins the covariance (the
-/// rate cut off taken as up to the range again): the heading 1-sigma covers the step from the
-/// row after it, every row is within 4 sigma and NAV, and the fixes are taken throughout.
+/// then a third of the fixes refused and DEGRADED to the end. Now the clipped samples' doubt
+/// joins the covariance (the rate cut off taken as up to the range again): the heading
+/// 1-sigma covers the step from the row after it, every row is within 4 sigma and NAV, and
+/// the fixes are taken throughout.
 #[test]
 fn a_gyro_burst_the_driver_clips_is_doubted_not_believed() {
     let dir = tempfile::tempdir().unwrap();
