@@ -666,20 +666,34 @@ fn samples_beyond_a_given_range_are_doubted_as_clipped() {
     };
     assert!(worst_nav_z(&[]) > 20.0);
     assert!(worst_nav_z(&["--imu-range", "500,8"]) < 4.0);
-    // Not a range a part has: refused with the reason.
-    for bad in ["500", "500,1", "0.5,8", "nan,8", "500,8,1"] {
-        let o = nav()
-            .args(["replay", "--imu"])
-            .arg(&fault)
-            .args(["--imu-range", bad, "--out"])
+    // Not a range a part has: refused with the reason; and without fixes, where nothing
+    // would use it (a free-inertial run has no covariance), refused rather than ignored.
+    for (range, gnss, reason) in [
+        ("500", true, "GYRO_DEG_S,ACCEL_G"),
+        ("500,1", true, "GYRO_DEG_S,ACCEL_G"),
+        ("0.5,8", true, "GYRO_DEG_S,ACCEL_G"),
+        ("nan,8", true, "GYRO_DEG_S,ACCEL_G"),
+        ("500,8,1", true, "GYRO_DEG_S,ACCEL_G"),
+        ("500,8", false, "--gnss"),
+    ] {
+        let mut cmd = nav();
+        cmd.args(["replay", "--imu"]).arg(&fault);
+        if gnss {
+            cmd.arg("--gnss").arg(d.join("gnss.csv")).args(GIVEN);
+        } else {
+            cmd.args(ALIGNED);
+        }
+        let o = cmd
+            .args(["--imu-range", range, "--out"])
             .arg(d.join("x.csv"))
             .output()
             .unwrap();
         let text = String::from_utf8_lossy(&o.stderr);
         assert!(
-            !o.status.success() && text.contains("GYRO_DEG_S,ACCEL_G"),
-            "{bad}: {text}"
+            !o.status.success() && text.contains(reason),
+            "{range}: {text}"
         );
+        assert!(!d.join("x.csv").exists());
     }
 }
 

@@ -532,9 +532,10 @@ struct ReplayArgs {
     /// The recorded IMU's full scale, gyro [deg/s] and accelerometer [g], e.g. 500,8. A sample
     /// with an axis at it (to 0.1 %) or beyond is taken as clipped: the GNSS-aided filter
     /// doubts what the range cut off, as for a driver's clip (README). A recording carries no
-    /// range: without this option no sample is taken as clipped. Any start; not with
-    /// --device (the driver knows its part's).
-    #[arg(long, value_name = "DEG_S,G", value_parser = parse_full_scale, conflicts_with = "device")]
+    /// range: without this option no sample is taken as clipped. Any start, with --gnss (a
+    /// free-inertial run has no covariance to doubt); not with --device (the driver knows
+    /// its part's).
+    #[arg(long, value_name = "DEG_S,G", value_parser = parse_full_scale, requires = "gnss", conflicts_with = "device")]
     imu_range: Option<FullScale>,
     /// Navigation frame of the mechanization, wander or ned (outputs are NED either way).
     #[arg(long, default_value = "wander", value_parser = named(&config::FRAMES), conflicts_with_all = ["init_pos", "start_in_motion"])]
