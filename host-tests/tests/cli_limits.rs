@@ -1212,6 +1212,11 @@ fn refusals_name_the_option_the_key_and_the_cause() {
         &["/nonexistent: No such file or directory"],
     );
     assert_eq!(text.matches("No such file").count(), 1, "{text}");
+    // "/nonexistent: No such file or directory": one of a replay's inputs, not named.
+    refused(
+        &replay_args(&imu, &out, &["--calibration", "/nonexistent"]),
+        &["--calibration /nonexistent: /nonexistent: No such file or directory"],
+    );
     // "line 1: expected 7 numbers ..., found 1": an IMU recording given as GNSS fixes.
     refused(
         &["convert", "--gnss", "--in", &imu, "--out", &path("g.bin")],

@@ -585,7 +585,8 @@ impl ReplayArgs {
             None => ImuCalibration::default(),
             Some(path) => {
                 host_tests::atomic::refuse_same_file(&[path], &self.out)?;
-                let text = host_tests::text_error::read_text(path)?;
+                let text = host_tests::text_error::read_text(path)
+                    .with_context(|| format!("--calibration {}", path.display()))?;
                 let calibration = ImuCalibration::parse(&text).map_err(|e| {
                     anyhow::anyhow!("--calibration {}: {}", path.display(), e.in_text(&text))
                 })?;
