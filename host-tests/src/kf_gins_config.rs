@@ -179,133 +179,130 @@ struct Numbers(std::result::Result<Vec<f64>, String>);
 
 impl<'de> Deserialize<'de> for Numbers {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        d.deserialize_any(NumbersVisitor)
+        Ok(Numbers(match Written::deserialize(d)? {
+            Written::Sequence(items) => items
+                .into_iter()
+                .enumerate()
+                .map(|(k, e)| {
+                    e.number()
+                        .map_err(|what| format!("{what} as value {}", k + 1))
+                })
+                .collect(),
+            Written::Number { text, .. } => Err(format!("a single number ({text})")),
+            Written::Mapping => Err("a mapping (keys and values)".to_owned()),
+            other => Err(other.number().map_or_else(
+                |what| what,
+                |_| format!("a single number ({})", other.text()),
+            )),
+        }))
     }
 }
 
-struct NumbersVisitor;
+/// A YAML value as written, as far as [`Numbers`] tells it.
+#[derive(Debug)]
+enum Written {
+    /// A number, and its text for a message.
+    Number {
+        value: f64,
+        text: String,
+    },
+    Text(String),
+    Bool(bool),
+    Nothing,
+    Sequence(Vec<Written>),
+    Mapping,
+}
 
-impl<'de> serde::de::Visitor<'de> for NumbersVisitor {
-    type Value = Numbers;
+impl Written {
+    /// The number it is (text that reads as one too), or what it is instead.
+    fn number(&self) -> std::result::Result<f64, String> {
+        match self {
+            Written::Number { value, .. } => Ok(*value),
+            Written::Text(text) => text
+                .trim()
+                .parse::<f64>()
+                .map_err(|_| format!("the text '{text}'")),
+            Written::Bool(b) => Err(format!("'{b}'")),
+            Written::Nothing => Err("nothing".to_owned()),
+            Written::Sequence(_) => Err("a sequence".to_owned()),
+            Written::Mapping => Err("a mapping".to_owned()),
+        }
+    }
+
+    /// The text of a number or a text.
+    fn text(&self) -> &str {
+        match self {
+            Written::Number { text, .. } | Written::Text(text) => text,
+            _ => "",
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Written {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        d.deserialize_any(WrittenVisitor)
+    }
+}
+
+struct WrittenVisitor;
+
+impl<'de> serde::de::Visitor<'de> for WrittenVisitor {
+    type Value = Written;
 
     fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str("a sequence of numbers")
     }
 
+    fn visit_f64<E>(self, x: f64) -> std::result::Result<Written, E> {
+        let text = Number(x).to_string();
+        Ok(Written::Number { value: x, text })
+    }
+
+    fn visit_i64<E>(self, x: i64) -> std::result::Result<Written, E> {
+        let text = x.to_string();
+        Ok(Written::Number {
+            value: x as f64,
+            text,
+        })
+    }
+
+    fn visit_u64<E>(self, x: u64) -> std::result::Result<Written, E> {
+        let text = x.to_string();
+        Ok(Written::Number {
+            value: x as f64,
+            text,
+        })
+    }
+
+    fn visit_str<E>(self, text: &str) -> std::result::Result<Written, E> {
+        Ok(Written::Text(text.to_owned()))
+    }
+
+    fn visit_bool<E>(self, b: bool) -> std::result::Result<Written, E> {
+        Ok(Written::Bool(b))
+    }
+
+    fn visit_unit<E>(self) -> std::result::Result<Written, E> {
+        Ok(Written::Nothing)
+    }
+
     fn visit_seq<A: serde::de::SeqAccess<'de>>(
         self,
         mut seq: A,
-    ) -> std::result::Result<Numbers, A::Error> {
-        let (mut numbers, mut bad) = (Vec::new(), None);
-        let mut k = 0;
-        while let Some(Element(e)) = seq.next_element::<Element>()? {
-            k += 1;
-            match e {
-                Ok(x) => numbers.push(x),
-                Err(what) => {
-                    bad.get_or_insert_with(|| format!("{what} as value {k}"));
-                }
-            }
+    ) -> std::result::Result<Written, A::Error> {
+        let mut items = Vec::new();
+        while let Some(e) = seq.next_element::<Written>()? {
+            items.push(e);
         }
-        Ok(Numbers(bad.map_or(Ok(numbers), Err)))
-    }
-
-    fn visit_f64<E>(self, x: f64) -> std::result::Result<Numbers, E> {
-        Ok(Numbers(Err(format!("a single number ({})", Number(x)))))
-    }
-
-    fn visit_i64<E>(self, x: i64) -> std::result::Result<Numbers, E> {
-        Ok(Numbers(Err(format!("a single number ({x})"))))
-    }
-
-    fn visit_u64<E>(self, x: u64) -> std::result::Result<Numbers, E> {
-        Ok(Numbers(Err(format!("a single number ({x})"))))
-    }
-
-    fn visit_str<E>(self, text: &str) -> std::result::Result<Numbers, E> {
-        Ok(Numbers(Err(match text.trim().parse::<f64>() {
-            Ok(_) => format!("a single number ({text})"),
-            Err(_) => format!("the text '{text}'"),
-        })))
-    }
-
-    fn visit_bool<E>(self, b: bool) -> std::result::Result<Numbers, E> {
-        Ok(Numbers(Err(format!("'{b}'"))))
-    }
-
-    fn visit_unit<E>(self) -> std::result::Result<Numbers, E> {
-        Ok(Numbers(Err("nothing".to_owned())))
+        Ok(Written::Sequence(items))
     }
 
     fn visit_map<A: serde::de::MapAccess<'de>>(
         self,
         mut map: A,
-    ) -> std::result::Result<Numbers, A::Error> {
+    ) -> std::result::Result<Written, A::Error> {
         while map.next_entry::<IgnoredAny, IgnoredAny>()?.is_some() {}
-        Ok(Numbers(Err("a mapping (keys and values)".to_owned())))
-    }
-}
-
-/// One element of [`Numbers`]: a number, or what was found instead.
-struct Element(std::result::Result<f64, String>);
-
-impl<'de> Deserialize<'de> for Element {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        d.deserialize_any(ElementVisitor)
-    }
-}
-
-struct ElementVisitor;
-
-impl<'de> serde::de::Visitor<'de> for ElementVisitor {
-    type Value = Element;
-
-    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("a number")
-    }
-
-    fn visit_f64<E>(self, x: f64) -> std::result::Result<Element, E> {
-        Ok(Element(Ok(x)))
-    }
-
-    fn visit_i64<E>(self, x: i64) -> std::result::Result<Element, E> {
-        Ok(Element(Ok(x as f64)))
-    }
-
-    fn visit_u64<E>(self, x: u64) -> std::result::Result<Element, E> {
-        Ok(Element(Ok(x as f64)))
-    }
-
-    fn visit_str<E>(self, text: &str) -> std::result::Result<Element, E> {
-        Ok(Element(
-            text.trim()
-                .parse::<f64>()
-                .map_err(|_| format!("the text '{text}'")),
-        ))
-    }
-
-    fn visit_bool<E>(self, b: bool) -> std::result::Result<Element, E> {
-        Ok(Element(Err(format!("'{b}'"))))
-    }
-
-    fn visit_unit<E>(self) -> std::result::Result<Element, E> {
-        Ok(Element(Err("nothing".to_owned())))
-    }
-
-    fn visit_seq<A: serde::de::SeqAccess<'de>>(
-        self,
-        mut seq: A,
-    ) -> std::result::Result<Element, A::Error> {
-        while seq.next_element::<IgnoredAny>()?.is_some() {}
-        Ok(Element(Err("a sequence".to_owned())))
-    }
-
-    fn visit_map<A: serde::de::MapAccess<'de>>(
-        self,
-        mut map: A,
-    ) -> std::result::Result<Element, A::Error> {
-        while map.next_entry::<IgnoredAny, IgnoredAny>()?.is_some() {}
-        Ok(Element(Err("a mapping".to_owned())))
+        Ok(Written::Mapping)
     }
 }
 
