@@ -29,6 +29,10 @@ pub trait Scalar: RealField + Copy + ToFixed + FromFixed {
     fn patan2(self, x: Self) -> Self;
     /// `asin` from the `libm` crate.
     fn pasin(self) -> Self;
+    /// The natural logarithm, `ln` from the `libm` crate.
+    fn pln(self) -> Self;
+    /// `2^self`, `exp2` from the `libm` crate.
+    fn pexp2(self) -> Self;
     /// The value of a 64-bit fixed-point number (the position's `I2F62`, `I32F32`), rounded
     /// to nearest, ties to even: `fixed`'s `to_num`, bit for bit.
     fn of_fixed<F: Fixed<Bits = i64>>(x: F) -> Self;
@@ -67,6 +71,14 @@ impl Scalar for f32 {
     #[inline]
     fn pasin(self) -> Self {
         libm::asinf(self)
+    }
+    #[inline]
+    fn pln(self) -> Self {
+        libm::logf(self)
+    }
+    #[inline]
+    fn pexp2(self) -> Self {
+        libm::exp2f(self)
     }
     #[inline]
     fn of_fixed<F: Fixed<Bits = i64>>(x: F) -> Self {
@@ -113,6 +125,14 @@ impl Scalar for f64 {
     #[inline]
     fn pasin(self) -> Self {
         libm::asin(self)
+    }
+    #[inline]
+    fn pln(self) -> Self {
+        libm::log(self)
+    }
+    #[inline]
+    fn pexp2(self) -> Self {
+        libm::exp2(self)
     }
     // The two below give `fixed`'s results with a fraction of its generic conversion's work (a
     // fixed-point component was converted a dozen times per step: 6 % of a host run).
