@@ -1116,6 +1116,9 @@ impl EmulateJob<'_> {
             })
             .context(place.clone())?;
         }
+        // The `--set` that gave each quantity: a second one was silently taken over the first,
+        // where an error file refuses a quantity given twice, and so does `nav sim --set`.
+        let mut set_by: [Option<usize>; Quantity::COUNT] = Default::default();
         for (i, line) in self.set.iter().enumerate() {
             let place = format!("--set #{} `{line}`", i + 1);
             // An empty `--set ''` was accepted without a word.
@@ -1123,13 +1126,25 @@ impl EmulateJob<'_> {
                 !line.trim().is_empty(),
                 "{place}: empty; give `key = v1 v2 v3`"
             );
+            let mut twice = None;
             e.apply_text_noting(line, |g| {
+                if let Some(first) = set_by[g.quantity as usize].replace(i) {
+                    twice = Some((first, g.key));
+                }
                 given[g.quantity as usize] = Some(Given {
                     place: place.clone(),
                     ..g
                 });
             })
             .context(place.clone())?;
+            if let Some((first, key)) = twice {
+                anyhow::bail!(
+                    "{place}: `{key}` gives a quantity --set #{} `{}` gave already: give each \
+                     quantity once",
+                    first + 1,
+                    self.set[first]
+                );
+            }
         }
         Ok((e, given))
     }

@@ -226,7 +226,7 @@ fn refuse_without_a_usable_fix(path: &Path, fixes: &[GnssFix]) -> anyhow::Result
     let s = first.sigma_ned_m;
     anyhow::bail!(
         "{}: none of its {} fixes is usable (a finite place with latitude within +-90 deg and \
-         height within 10000 km, every 1-sigma positive and finite; or such a velocity): the \
+         height within 10000 km, every 1-sigma positive and at most 1e7 m; or such a velocity): the \
          first, at t = {} s, is at {} deg, {} deg, {} m with 1-sigma {}, {}, {} m; not a \
          receiver's fixes (a KF-GINS IMU file has the GNSS text's 7 columns: its increments read \
          as a place near latitude 0 and as 1-sigmas)",
@@ -642,6 +642,18 @@ mod tests {
         );
         let m = read_gnss(&csv).unwrap_err().to_string();
         assert!(m.contains("none of its 3 fixes is usable"), "{m}");
+        // A receiver's "no fix" 1-sigma (1e30 m, or just beyond nav-core's bound) is no fix:
+        // before, such a file was read and run free-inertial with a warning, while the
+        // same file with 1-sigma 0 was refused.
+        let csv = file(
+            "huge.csv",
+            &format!("{header}\n1,45,7,100,1e30,1e30,1e30\n2,45,7,100,1,1.1e7,1\n"),
+        );
+        let m = read_gnss(&csv).unwrap_err().to_string();
+        assert!(
+            m.contains("none of its 2 fixes is usable") && m.contains("at most 1e7 m"),
+            "{m}"
+        );
         // One usable fix among bad ones: the file is read, the bad fixes kept for the filter.
         let csv = file(
             "one.csv",

@@ -269,7 +269,7 @@ pub fn convert_at_epochs(
     check_latency(latency_s)?;
     // The output is binary: a text file's name would hide it.
     if let Some(ext) = output.extension().and_then(|e| e.to_str())
-        && ["csv", "txt", "pos"].contains(&ext.to_ascii_lowercase().as_str())
+        && ["csv", "txt", "pos", "nav"].contains(&ext.to_ascii_lowercase().as_str())
     {
         bail!(
             "{}: the binary fix file would carry a text file's name (.{ext}); name it .bin",

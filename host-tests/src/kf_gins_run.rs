@@ -458,10 +458,15 @@ pub fn run_with(config_path: &Path, outputs: &Outputs, stops: bool) -> Result<Kf
     };
     let report = aided::run(samples, &fixes, seq, &mut sink)?;
     if report.samples == 0 {
+        // KF-GINS's `endtime: -1` ("to the end") is infinite here.
+        let end = if t_end.is_finite() {
+            format!("endtime {} s", Number(t_end))
+        } else {
+            "the end of the file (endtime -1)".to_owned()
+        };
         bail!(
-            "no IMU epoch between starttime {} s and endtime {} s in {}",
-            t_start,
-            t_end,
+            "no IMU epoch between starttime {} s and {end} in {}",
+            Number(t_start),
             c.imu_path.display()
         );
     }

@@ -483,7 +483,8 @@ impl Converted {
 }
 
 /// Converts the recording `input` (any format, [`detect`]) to `out`: CSV when its name ends in
-/// `.csv`, binary otherwise (refused under a PSINS or KF-GINS text name, `.imu`, `.txt`); the same bytes as [`write`] of [`read`]'s recording, in memory
+/// `.csv`, binary otherwise (refused under a PSINS or KF-GINS text name, `.imu`, `.txt`, `.nav`);
+/// the same bytes as [`write`] of [`read`]'s recording, in memory
 /// independent of the file's length. A first pass checks `input` and finds the header (a text
 /// file's count and rate, a binary file's own; whether a record has a temperature, for the CSV
 /// header), the second streams the records into `out`. `out` is written whole or not at all
@@ -496,6 +497,17 @@ pub fn convert(input: &Path, out: &Path) -> Result<Converted> {
              (or .csv for the CSV format)",
             out.display(),
             out.extension().unwrap_or_default().to_string_lossy()
+        );
+    }
+    // Nor a KF-GINS trajectory's (`.nav`, text that `nav kf-gins` and `nav report` read).
+    if out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("nav"))
+    {
+        bail!(
+            "{}: the binary recording would carry a KF-GINS trajectory's name (.nav); name it \
+             .bin (or .csv for the CSV format)",
+            out.display()
         );
     }
     let format = detect(input)?;

@@ -121,7 +121,11 @@ pub fn describe_member(
     )?;
     writeln!(s, "scenario = family")?;
     writeln!(s, "rate_hz = {}", opts.rate_hz)?;
-    writeln!(s, "truth_rate_hz = {}", opts.truth_rate_hz)?;
+    writeln!(
+        s,
+        "truth_rate_hz = {}",
+        nav_core::number::Number(opts.truth_rate_hz)
+    )?;
     writeln!(s, "samples = {samples}")?;
     writeln!(s, "seconds = {}", samples as f64 / opts.rate_hz)?;
     writeln!(s, "gyro_saturated_samples = {}", c.gyro_saturated)?;

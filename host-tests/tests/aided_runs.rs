@@ -3252,6 +3252,15 @@ fn kf_gins_starts_at_the_epoch_at_starttime_without_integrating_it() {
         e.contains("starttime 356000.01 s: the IMU file has no epoch from it until 0.5 s later"),
         "{e}"
     );
+    // A starttime beyond the file's end, with KF-GINS's `endtime: -1`, was told "endtime inf
+    // s" (audit L7).
+    let beyond = format!("starttime: {}\n", t_start_s + 100.0);
+    std::fs::write(&early, yaml.replace(&before, &beyond)).unwrap();
+    let e = run_err(nav().arg("kf-gins").arg(&early).arg("--out").arg(&e_nav));
+    assert!(
+        e.contains("no IMU epoch between starttime 356100 s and the end of the file (endtime -1)"),
+        "{e}"
+    );
     let text = std::fs::read_to_string(&out).unwrap();
     let rows: Vec<Vec<f64>> = text
         .lines()

@@ -295,6 +295,12 @@ fn messages_describe_the_users_fixes_and_options() {
         &[&osc[..], &["--noise-m", "1e300"]].concat(),
         "nothing to navigate on (readout noise 1e300 m against an oscillation of 2e-5 m",
     );
+    // A run too short for the loop to lock blamed the readout noise too (audit M6).
+    refused(
+        &["oscillator", "static", "--seconds", "0.1"],
+        "nothing to navigate on (its phase-locked loop did not lock in the run's 9 periods of \
+         the 100 Hz oscillation",
+    );
 }
 
 /// A repeated time tag and the second of a swapped pair were counted as "bad interval", the

@@ -1056,13 +1056,19 @@ fn receiver_and_kf_gins_figures_read_as_typed() {
 }
 
 /// `convert --in imu.bin --out c1.txt` wrote the binary format under a name the readers take
-/// for KF-GINS text (`.imu`: PSINS); refused as `convert --gnss` refuses it, nothing written.
+/// for KF-GINS text (`.imu`: PSINS; `.nav`: a KF-GINS trajectory); refused as `convert --gnss`
+/// refuses it, nothing written.
 #[test]
 fn a_binary_recording_under_a_text_name_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let imu = dir.path().join("imu.bin");
     generated_recording(&imu, "1");
-    for (name, format) in [("c1.txt", "KF-GINS"), ("c1.IMU", "PSINS")] {
+    for (name, format) in [
+        ("c1.txt", "KF-GINS text file's name"),
+        ("c1.IMU", "PSINS text file's name"),
+        // A KF-GINS trajectory's name was taken (audit L13).
+        ("c1.nav", "KF-GINS trajectory's name (.nav)"),
+    ] {
         let out = dir.path().join(name);
         refused(
             &[
@@ -1072,7 +1078,7 @@ fn a_binary_recording_under_a_text_name_is_refused() {
                 "--out",
                 out.to_str().unwrap(),
             ],
-            &[&format!("{format} text file's name"), "name it .bin"],
+            &[format, "name it .bin"],
         );
         assert!(!out.exists());
     }
@@ -1244,6 +1250,50 @@ fn refusals_name_the_option_the_key_and_the_cause() {
         ],
         &["--set #1 ``: empty; give `key = v1 v2 v3`"],
     );
+    // A 301-digit member number was printed in full (audit L7).
+    refused(
+        &[
+            "sim",
+            "family",
+            "--set",
+            "member=1e300",
+            "--out",
+            &path("fam"),
+        ],
+        &["member must be a whole number from 0 to 9e15, not 1e300"],
+    );
+    // A quantity given by two `--set`s silently took the second (audit L10); a `--set` over
+    // the error file's quantity is its documented override.
+    refused(
+        &[
+            "emulate",
+            "--truth",
+            &truth,
+            "--out",
+            &emulated,
+            "--set",
+            "gyro_drift_deg_h = 1 1 1",
+            "--set",
+            "gyro_drift_rad_s = 0 0 1e-6",
+        ],
+        &[
+            "--set #2 `gyro_drift_rad_s = 0 0 1e-6`: `gyro_drift_rad_s` gives a quantity \
+             --set #1 `gyro_drift_deg_h = 1 1 1` gave already",
+        ],
+    );
+    std::fs::write(&errors, "gyro_drift_deg_h = 1 1 1\n").unwrap();
+    let o = common::nav(&[
+        "emulate",
+        "--truth",
+        &truth,
+        "--out",
+        &emulated,
+        "--errors",
+        &errors,
+        "--set",
+        "gyro_drift_deg_h = 2 2 2",
+    ]);
+    assert!(o.status.success(), "{}", output_text(&o));
 }
 
 /// `--base-translation` with the static alignment was taken silently (its log byte for byte

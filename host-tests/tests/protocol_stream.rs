@@ -660,12 +660,12 @@ fn config_files_encode_or_are_refused_with_line_and_reason() {
         (
             "arw0",
             site("log-every = 4\ngyro-arw-rad-per-sqrt-s = 0\n"),
-            "bad-arw0.txt:2: refused (reason code 8): gyro-arw-rad-per-sqrt-s must be above 0",
+            "bad-arw0.txt:2: refused (reason code 8): gyro-arw-rad-per-sqrt-s must be 1e-9 (less",
         ),
         (
             "vrw",
             site("accel-vrw-mps-per-sqrt-s = 1e9\n"),
-            "bad-vrw.txt:1: refused (reason code 8): accel-vrw-mps-per-sqrt-s must be above 0",
+            "bad-vrw.txt:1: refused (reason code 8): accel-vrw-mps-per-sqrt-s must be 1e-8 (less",
         ),
         (
             "bias",

@@ -291,17 +291,17 @@ impl BoardIdentity {
 // The ranges are nav-core's, the filter's own (one place for the rule).
 pub use nav_core::ins_filter::limits::{
     MAX_ACCEL_BIAS_MPS2, MAX_ARW_RAD_PER_SQRT_S, MAX_GYRO_BIAS_RAD_S, MAX_SCALE,
-    MAX_VRW_MPS_PER_SQRT_S,
+    MAX_VRW_MPS_PER_SQRT_S, MIN_ARW_RAD_PER_SQRT_S, MIN_VRW_MPS_PER_SQRT_S,
 };
 
 /// The refusal of a gyro ARW out of range ([`SettingsError::OutOfRange`], reason
 /// [`ReasonCode::Alignment`]).
-pub const ARW_OUT_OF_RANGE: &str = "gyro-arw-rad-per-sqrt-s must be above 0 (zero makes the \
-     filters overconfident) and at most 0.1 rad/sqrt(s) (more than any IMU's)";
+pub const ARW_OUT_OF_RANGE: &str = "gyro-arw-rad-per-sqrt-s must be 1e-9 (less makes the \
+     filters overconfident) to 0.1 rad/sqrt(s) (more than any IMU's)";
 
 /// The refusal of an accelerometer VRW out of range.
-pub const VRW_OUT_OF_RANGE: &str = "accel-vrw-mps-per-sqrt-s must be above 0 (zero makes the \
-     filters overconfident) and at most 10 m/s/sqrt(s) (more than any IMU's)";
+pub const VRW_OUT_OF_RANGE: &str = "accel-vrw-mps-per-sqrt-s must be 1e-8 (less makes the \
+     filters overconfident) to 10 m/s/sqrt(s) (more than any IMU's)";
 
 /// The refusal of a gyro bias 1-sigma out of range.
 pub const GYRO_BIAS_OUT_OF_RANGE: &str =
@@ -333,17 +333,26 @@ fn check_scale_factors(figures: &SensorFigures) -> Result<(), ConfigRefusal> {
 }
 
 /// `Err` when the noise figures of `noise` are out of an IMU's range: the white noise
-/// densities not above zero (a zero density makes the filters overconfident) or beyond
-/// [`MAX_ARW_RAD_PER_SQRT_S`], [`MAX_VRW_MPS_PER_SQRT_S`]; the bias 1-sigmas negative or
+/// densities below [`MIN_ARW_RAD_PER_SQRT_S`], [`MIN_VRW_MPS_PER_SQRT_S`] (a zero density, or
+/// 1e-300, makes the filters overconfident) or beyond [`MAX_ARW_RAD_PER_SQRT_S`],
+/// [`MAX_VRW_MPS_PER_SQRT_S`]; the bias 1-sigmas negative or
 /// beyond [`MAX_GYRO_BIAS_RAD_S`], [`MAX_ACCEL_BIAS_MPS2`]. The refusal is the alignment's
 /// noise refusal.
 fn check_noise_densities(noise: &SensorNoise<f64>) -> Result<(), ConfigRefusal> {
     // NaN fails every comparison.
-    let density = |v: f64, max: f64| v > 0.0 && v <= max;
+    let density = |v: f64, min: f64, max: f64| (min..=max).contains(&v);
     let sigma = |v: f64, max: f64| (0.0..=max).contains(&v);
-    let why = if !density(noise.arw_rad_per_sqrt_s, MAX_ARW_RAD_PER_SQRT_S) {
+    let why = if !density(
+        noise.arw_rad_per_sqrt_s,
+        MIN_ARW_RAD_PER_SQRT_S,
+        MAX_ARW_RAD_PER_SQRT_S,
+    ) {
         ARW_OUT_OF_RANGE
-    } else if !density(noise.vrw_mps_per_sqrt_s, MAX_VRW_MPS_PER_SQRT_S) {
+    } else if !density(
+        noise.vrw_mps_per_sqrt_s,
+        MIN_VRW_MPS_PER_SQRT_S,
+        MAX_VRW_MPS_PER_SQRT_S,
+    ) {
         VRW_OUT_OF_RANGE
     } else if !sigma(noise.gyro_bias_rad_s, MAX_GYRO_BIAS_RAD_S) {
         GYRO_BIAS_OUT_OF_RANGE

@@ -361,13 +361,17 @@ fn defaults_are_valid_and_each_refusal_has_its_code() {
     assert_eq!(ReasonCode::from_code(0), None);
 }
 
-/// A zero, negative or absurd gyro ARW or accelerometer VRW, or a negative or absurd bias
-/// 1-sigma, is refused with the alignment's reason and a message naming the figure and its
-/// range; the grades' and parts' figures and the range's ends pass.
+/// A zero, negative, vanishing (1e-300 was taken: audit L12) or absurd gyro ARW or
+/// accelerometer VRW, or a negative or absurd bias 1-sigma, is refused with the alignment's
+/// reason and a message naming the figure and its range; the grades' and parts' figures and the
+/// range's ends pass.
 #[test]
 fn noise_figures_beyond_an_imu_are_refused() {
     for (line, density) in [
         ("gyro-arw-rad-per-sqrt-s = 0", true),
+        ("gyro-arw-rad-per-sqrt-s = 1e-300", true),
+        ("gyro-arw-rad-per-sqrt-s = 9e-10", true),
+        ("accel-vrw-mps-per-sqrt-s = 1e-300", true),
         ("gyro-arw-rad-per-sqrt-s = -1e-4", true),
         ("gyro-arw-rad-per-sqrt-s = 1e9", true),
         ("accel-vrw-mps-per-sqrt-s = 0", true),
@@ -395,7 +399,9 @@ fn noise_figures_beyond_an_imu_are_refused() {
         "imu-noise = fog",
         "imu-model = bmi088",
         "gyro-arw-rad-per-sqrt-s = 0.1",
+        "gyro-arw-rad-per-sqrt-s = 1e-9",
         "accel-vrw-mps-per-sqrt-s = 10",
+        "accel-vrw-mps-per-sqrt-s = 1e-8",
         "gyro-bias-rad-s = 0",
         "gyro-bias-rad-s = 0.1",
         "accel-bias-mps2 = 10",

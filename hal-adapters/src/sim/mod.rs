@@ -147,14 +147,24 @@ pub struct RateMismatch {
 
 impl fmt::Display for RateMismatch {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // Each output period takes the next sample, whatever the recording's rate.
+        let rate = nav_core::number::Number(self.rate_hz);
         write!(
             f,
-            "the recording's rate {} Hz is not the simulated IMU's output rate of {} Hz: each \
-             sample would reach the driver as a gap of several output periods (a recording read \
-             through a device must be at its rate)",
-            nav_core::number::Number(self.rate_hz),
+            "the recording's rate {rate} Hz is not the simulated IMU's output rate of {} Hz: ",
             DEVICE_RATE_HZ
-        )
+        )?;
+        if self.rate_hz > DEVICE_RATE_HZ {
+            write!(
+                f,
+                "each output period would take the next sample, so the motion would be played \
+                 {} times slower than it was recorded",
+                nav_core::number::Number(self.rate_hz / DEVICE_RATE_HZ)
+            )?;
+        } else {
+            f.write_str("each sample would reach the driver as a gap of several output periods")?;
+        }
+        f.write_str(" (a recording read through a device must be at its rate)")
     }
 }
 
@@ -595,4 +605,25 @@ fn to_counts(mounting: &Mounting, v_b: [f32; 3], counts_per_unit: f32, limit: i3
     mounting
         .to_sensor(v_b)
         .map(|v| round(v * counts_per_unit).clamp(-limit, limit))
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::check_source_rate;
+    use std::string::ToString;
+
+    /// A 4 kHz recording read through a device was told its samples would arrive as gaps of
+    /// several output periods, the effect of a slower one (audit L3).
+    #[test]
+    fn a_recording_off_the_devices_rate_is_told_what_it_would_do() {
+        let m = check_source_rate(4000.0).unwrap_err().to_string();
+        assert!(
+            m.contains("played 10 times slower") && !m.contains("gap"),
+            "{m}"
+        );
+        let m = check_source_rate(100.0).unwrap_err().to_string();
+        assert!(m.contains("a gap of several output periods"), "{m}");
+        assert!(check_source_rate(401.0).is_ok());
+    }
 }

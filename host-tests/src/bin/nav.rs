@@ -1735,7 +1735,10 @@ fn sim_family(a: SimArgs) -> Result<()> {
     for (k, v) in key_values(&a.set)? {
         match k {
             "member" if v >= 0.0 && v.fract() == 0.0 && v < 9.0e15 => member = v as u64,
-            "member" => anyhow::bail!("member must be a whole number >= 0, not {v}"),
+            "member" => anyhow::bail!(
+                "member must be a whole number from 0 to 9e15, not {}",
+                nav_core::number::Number(v)
+            ),
             _ => anyhow::bail!("unknown parameter {k:?}; family has member"),
         }
     }

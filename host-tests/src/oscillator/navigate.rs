@@ -205,6 +205,7 @@ fn oscillator_run(opts: &NavCompareOptions) -> Result<(NavErrors, OscillatorStat
     let mut cfg = OscillatorConfig::<f64>::new(p.sample_rate_hz, p.f0_hz);
     cfg.start_s = 1.0 / p.sample_rate_hz;
     cfg.compensate = opts.compensate;
+    let lock_periods = cfg.lock_periods;
     let mut est =
         OscillatorEstimator::new(cfg).map_err(|e| anyhow!("oscillator estimator: {e}"))?;
     let mut incs = OscillatorIncrements::<f64>::new();
@@ -292,6 +293,22 @@ fn oscillator_run(opts: &NavCompareOptions) -> Result<(NavErrors, OscillatorStat
         return Err(e);
     }
     let (Some(nav), Some(t_end)) = (nav, last_t) else {
+        // A loop that never locked, its readouts clean: the run was too short (0.1 s was blamed
+        // on a readout noise 1e4 times below the amplitude).
+        let acquiring_only = !kinds.is_empty() && kinds.keys().all(|k| *k == "acquiring");
+        if acquiring_only && p.readout_noise_m < 0.1 * p.major_m {
+            bail!(
+                "the oscillator gave {} epochs in {} s: nothing to navigate on (its phase-locked \
+                 loop did not lock in the run's {} periods of the {} Hz oscillation: it must \
+                 hold the phase for {} periods in a row, and an increment takes two epochs; a \
+                 longer --seconds)",
+                stats.epochs,
+                opts.seconds,
+                est.counters().periods,
+                nav_core::number::Number(p.f0_hz),
+                lock_periods
+            );
+        }
         bail!(
             "the oscillator gave {} epochs in {} s: nothing to navigate on (readout noise {} m \
              against an oscillation of {} m: a noise near the amplitude hides its periods; \

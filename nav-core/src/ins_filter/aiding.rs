@@ -18,8 +18,8 @@ pub struct GnssPosition<T: Scalar> {
 }
 
 impl<T: Scalar> GnssPosition<T> {
-    /// True when the place is finite (latitude within +-90 deg) and every 1-sigma finite and
-    /// positive.
+    /// True when the place is finite (latitude within +-90 deg) and every 1-sigma positive and
+    /// at most [`MAX_FIX_SIGMA`].
     pub fn is_valid(&self) -> bool {
         self.lat_rad.is_finite()
             && self.lat_rad.abs() <= core::f64::consts::FRAC_PI_2
@@ -40,14 +40,21 @@ pub struct GnssVelocity<T: Scalar> {
 }
 
 impl<T: Scalar> GnssVelocity<T> {
-    /// True when every value is finite and every 1-sigma positive.
+    /// True when every value is finite and every 1-sigma positive and at most
+    /// [`MAX_FIX_SIGMA`].
     pub fn is_valid(&self) -> bool {
         self.v_ned_m_s.iter().all(|v| v.finite()) && sigmas_valid(&self.sigma_ned_m_s)
     }
 }
 
+/// The largest 1-sigma of a usable fix [m, m/s]: a receiver that states more (the Earth's
+/// radius is 6.4e6 m) is saying it has no fix, so the fix is counted invalid, and a file of
+/// nothing else is refused as one without a usable fix.
+pub const MAX_FIX_SIGMA: f64 = 1e7;
+
 pub(crate) fn sigmas_valid<T: Scalar>(s: &Vector3<T>) -> bool {
-    s.iter().all(|v| v.finite() && *v > T::zero())
+    s.iter()
+        .all(|v| v.finite() && *v > T::zero() && *v <= T::c(MAX_FIX_SIGMA))
 }
 
 /// What became of one aiding measurement.

@@ -13,6 +13,17 @@ use nalgebra::Vector3;
 /// consumer MEMS gyro's).
 pub const MAX_ARW_RAD_PER_SQRT_S: f64 = 0.1;
 
+/// Smallest gyro angle random walk an IMU's configuration may state [rad/sqrt(s)] (about
+/// 3.4e-6 deg/sqrt(h), a thirtieth of a strategic-grade gyro's): below it a figure is a zero
+/// written otherwise, which makes the alignment filters overconfident. The aided filter's own
+/// check allows 0, an ideal IMU's.
+pub const MIN_ARW_RAD_PER_SQRT_S: f64 = 1e-9;
+
+/// Smallest accelerometer velocity random walk an IMU's configuration may state
+/// [m/s/sqrt(s)] (about 1 ng/sqrt(Hz), a thousandth of a navigation-grade accelerometer's), as
+/// [`MIN_ARW_RAD_PER_SQRT_S`].
+pub const MIN_VRW_MPS_PER_SQRT_S: f64 = 1e-8;
+
 /// Largest accelerometer velocity random walk [m/s/sqrt(s)] (about 1 g/sqrt(Hz): thousands
 /// of times a consumer MEMS accelerometer's).
 pub const MAX_VRW_MPS_PER_SQRT_S: f64 = 10.0;
