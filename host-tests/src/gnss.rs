@@ -226,8 +226,8 @@ fn refuse_without_a_usable_fix(path: &Path, fixes: &[GnssFix]) -> anyhow::Result
     let s = first.sigma_ned_m;
     anyhow::bail!(
         "{}: none of its {} fixes is usable (a finite place with latitude within +-90 deg and \
-         height within 10000 km, every 1-sigma positive and at most 1e7 m; or such a velocity): the \
-         first, at t = {} s, is at {} deg, {} deg, {} m with 1-sigma {}, {}, {} m; not a \
+         height within 10000 km, every 1-sigma positive and at most 1e7 m; or such a velocity): \
+         the first, at t = {} s, is at {} deg, {} deg, {} m with 1-sigma {}, {}, {} m; not a \
          receiver's fixes (a KF-GINS IMU file has the GNSS text's 7 columns: its increments read \
          as a place near latitude 0 and as 1-sigmas)",
         path.display(),
