@@ -1034,6 +1034,25 @@ pub fn position_warning(p: &nav_core::ins_filter::AidCounters, unused: &str) -> 
 mod tests {
     use super::*;
 
+    /// Fixes refused on more than 5 % of them are warned of with the causes, fewer are not (a
+    /// run's test of it, a receiver declaring 1 mm for 0.5 m, is now learnt by the noise
+    /// scale, so the rule is held here).
+    #[test]
+    fn fixes_refused_beyond_the_gates_rate_are_warned_of() {
+        let counters = |accepted, rejected| nav_core::ins_filter::AidCounters {
+            accepted,
+            rejected,
+            ..Default::default()
+        };
+        let told = many_refused("position", &counters(260, 40)).unwrap();
+        assert!(
+            told.starts_with("WARNING: 40 of 300 GNSS position fixes refused (13 %)")
+                && told.contains("the fixes' 1-sigma may be too small"),
+            "{told}"
+        );
+        assert_eq!(many_refused("position", &counters(286, 14)), None);
+    }
+
     /// The longest run of refused position fixes is named from 5 of them, an invalid fix
     /// within it not breaking it; shorter runs, and accepted fixes, are not.
     #[test]
